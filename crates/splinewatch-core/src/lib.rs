@@ -1,0 +1,14 @@
+//! splinewatch-core: the pure numerics of splinewatch.
+//!
+//! A B-spline (isogeometric) degenerate-shell finite element model after
+//! Carminelli & Catania (2011), with distributed B-spline spring supports,
+//! rigid edge constraints and modal analysis. No I/O, no async, no network:
+//! every function here is a deterministic computation on its arguments.
+#![forbid(unsafe_code)]
+
+pub mod knots;
+pub mod material;
+pub mod quadrature;
+pub mod shell;
+pub mod surface;
+pub mod vec3;
