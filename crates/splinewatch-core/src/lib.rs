@@ -5,10 +5,16 @@
 //! rigid edge constraints and modal analysis. No I/O, no async, no network:
 //! every function here is a deterministic computation on its arguments.
 #![forbid(unsafe_code)]
+// Index loops mirror the summations of the paper; iterator chains would hide them.
+#![allow(clippy::needless_range_loop)]
 
+pub mod constraints;
 pub mod knots;
 pub mod material;
+pub mod modal;
+pub mod model;
 pub mod quadrature;
 pub mod shell;
+pub mod springs;
 pub mod surface;
 pub mod vec3;

@@ -92,7 +92,7 @@ pub struct DofShape {
 }
 
 impl ShellPoint {
-    fn empty() -> Self {
+    pub fn new_empty() -> Self {
         Self {
             count: 0,
             control_points: [0; MAX_LOCAL],
@@ -264,7 +264,7 @@ impl Shell {
 
     /// Eq. (2): position of the material point `(ξ, η, τ)`.
     pub fn position(&self, xi: f64, eta: f64, tau: f64) -> Vec3 {
-        let mut pt = ShellPoint::empty();
+        let mut pt = ShellPoint::new_empty();
         self.evaluate_into(xi, eta, tau, &mut pt);
         let mut r = [0.0; 3];
         for k in 0..pt.count {
@@ -314,7 +314,7 @@ impl Shell {
 
     /// Eq. (3) at one point: the non-zero columns of `N` as `(dof, N column)`.
     pub fn shape_functions(&self, xi: f64, eta: f64, tau: f64) -> Vec<(usize, Vec3)> {
-        let mut pt = ShellPoint::empty();
+        let mut pt = ShellPoint::new_empty();
         self.evaluate_into(xi, eta, tau, &mut pt);
         (0..pt.count)
             .flat_map(|k| self.dof_shapes(&pt, k))
@@ -386,7 +386,7 @@ pub fn assemble(
     let mut eb = Mat::<f64>::zeros(6, nloc);
     let mut nmat = Mat::<f64>::zeros(3, nloc);
     let mut dofs = vec![0usize; nloc];
-    let mut pt = ShellPoint::empty();
+    let mut pt = ShellPoint::new_empty();
     let mut failure = None;
     shell.for_each_span(|(xa, xb), (ea, eb_)| {
         if failure.is_some() {
