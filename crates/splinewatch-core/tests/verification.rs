@@ -183,13 +183,8 @@ fn thin_simply_supported_plate_matches_kirchhoff() {
 /// Ω² are the eigenvalues of the symmetric 3×3 matrix below, in units of
 /// E / (ρ (1 - ν²) R²).
 fn donnell_panel_hz(
-    e: f64,
-    nu: f64,
-    rho: f64,
-    length: f64,
-    radius: f64,
-    angle: f64,
-    h: f64,
+    (e, nu, rho): (f64, f64, f64),
+    (length, radius, angle, h): (f64, f64, f64, f64),
     count: usize,
 ) -> Vec<f64> {
     let kk = h * h / (12.0 * radius * radius);
