@@ -1,1 +1,31 @@
-fn main() {}
+//! Assembly and eigen-solve of the bundled Sinello model (13 × 5 net, 325
+//! dofs) and of a refined 40 × 16 net (3 200 dofs). Run: `cargo bench --bench model`.
+
+use splinewatch::config::Config;
+use splinewatch_core::model::ShellModel;
+
+const SINELLO: &str = include_str!("../config/sinello.toml");
+
+fn model(net: [usize; 2]) -> ShellModel {
+    let text = SINELLO.replace(
+        "control_points = [13, 5]",
+        &format!("control_points = [{}, {}]", net[0], net[1]),
+    );
+    Config::from_toml(&text).unwrap().build_model().unwrap()
+}
+
+#[divan::bench(args = [[13, 5], [40, 16]], sample_count = 5, sample_size = 1)]
+fn assemble(bencher: divan::Bencher, net: [usize; 2]) {
+    let m = model(net);
+    bencher.bench(|| m.assemble().unwrap());
+}
+
+#[divan::bench(args = [[13, 5], [40, 16]], sample_count = 3, sample_size = 1)]
+fn eigen_solve(bencher: divan::Bencher, net: [usize; 2]) {
+    let assembled = model(net).assemble().unwrap();
+    bencher.bench(|| assembled.modes().unwrap());
+}
+
+fn main() {
+    divan::main();
+}

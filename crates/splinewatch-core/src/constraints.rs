@@ -68,11 +68,7 @@ impl DofReduction {
                 let f = shell.frames()[cp];
                 match c.kind {
                     SupportKind::Clamped => {
-                        fixed_translations[cp].extend([
-                            [1.0, 0.0, 0.0],
-                            [0.0, 1.0, 0.0],
-                            [0.0, 0.0, 1.0],
-                        ]);
+                        fixed_translations[cp].extend([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
                         fixed_rotations[cp] = [true, true];
                     }
                     SupportKind::SimplySupported | SupportKind::ShearDiaphragm => {
@@ -89,12 +85,7 @@ impl DofReduction {
         for cp in 0..cps {
             let base = DOFS_PER_CONTROL_POINT * cp;
             for dir in free_directions(&fixed_translations[cp]) {
-                columns.push(
-                    (0..3)
-                        .filter(|&d| dir[d] != 0.0)
-                        .map(|d| (base + d, dir[d]))
-                        .collect(),
-                );
+                columns.push((0..3).filter(|&d| dir[d] != 0.0).map(|d| (base + d, dir[d])).collect());
             }
             for r in 0..2 {
                 if !fixed_rotations[cp][r] {
@@ -209,13 +200,7 @@ mod tests {
             free_directions(&[[0.0, 0.0, 1.0]]),
             vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]
         );
-        assert!(free_directions(&[
-            [1.0, 0.0, 0.0],
-            [0.0, 1.0, 0.0],
-            [0.0, 0.0, 1.0],
-            [0.0, 0.0, 1.0]
-        ])
-        .is_empty());
+        assert!(free_directions(&[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]]).is_empty());
         let tilted = normalize([0.0, 1.0, 1.0]).unwrap();
         let free = free_directions(&[tilted]);
         assert_eq!(free.len(), 2);

@@ -22,37 +22,29 @@ pub enum KnotError {
     #[error("degree {degree} exceeds the supported maximum {MAX_DEGREE}")]
     DegreeTooHigh { degree: usize },
     #[error("{len} knots cannot carry degree {degree}: at least {min} are needed")]
-    TooShort {
-        len: usize,
-        degree: usize,
-        min: usize,
-    },
+    TooShort { len: usize, degree: usize, min: usize },
     #[error("knot at index {index} is not finite")]
     NotFinite { index: usize },
     #[error("not non-decreasing at index {index}")]
     Decreasing { index: usize },
     #[error("first and last knot are equal: the parametric domain is empty")]
     EmptyDomain,
-    #[error("not clamped at the {end} end: the end knot must appear exactly {expected} times (degree + 1), found {found}")]
+    #[error(
+        "not clamped at the {end} end: the end knot must appear exactly {expected} times (degree + 1), found {found}"
+    )]
     NotClamped {
         end: &'static str,
         expected: usize,
         found: usize,
     },
-    #[error(
-        "interior knot {value} has multiplicity {multiplicity}, more than the allowed {allowed}"
-    )]
+    #[error("interior knot {value} has multiplicity {multiplicity}, more than the allowed {allowed}")]
     InteriorMultiplicity {
         value: f64,
         multiplicity: usize,
         allowed: usize,
     },
     #[error("{count} basis functions requested for degree {degree}: at least {min} are needed")]
-    TooFewBasisFunctions {
-        count: usize,
-        degree: usize,
-        min: usize,
-    },
+    TooFewBasisFunctions { count: usize, degree: usize, min: usize },
     #[error("domain [{start}, {end}] is not a finite, non-empty interval")]
     BadDomain { start: f64, end: f64 },
 }
@@ -203,10 +195,7 @@ impl KnotVector {
     }
 
     fn basis_of_degree(&self, degree: usize, span: usize, u: f64, values: &mut [f64]) {
-        assert!(
-            values.len() > degree,
-            "basis buffer shorter than degree + 1"
-        );
+        assert!(values.len() > degree, "basis buffer shorter than degree + 1");
         let u = u.clamp(self.domain().0, self.domain().1);
         let mut left = [0.0; MAX_DEGREE + 1];
         let mut right = [0.0; MAX_DEGREE + 1];
@@ -228,18 +217,9 @@ impl KnotVector {
     /// Basis values and first derivatives at `u` in span `span` (eq. 2.7 of
     /// Piegl & Tiller), written to `values[..=p]` and `derivatives[..=p]`.
     #[track_caller]
-    pub fn basis_with_derivatives(
-        &self,
-        span: usize,
-        u: f64,
-        values: &mut [f64],
-        derivatives: &mut [f64],
-    ) {
+    pub fn basis_with_derivatives(&self, span: usize, u: f64, values: &mut [f64], derivatives: &mut [f64]) {
         let p = self.degree;
-        assert!(
-            derivatives.len() > p,
-            "derivative buffer shorter than degree + 1"
-        );
+        assert!(derivatives.len() > p, "derivative buffer shorter than degree + 1");
         if p == 0 {
             self.basis(span, u, values);
             derivatives[0] = 0.0;
@@ -291,19 +271,10 @@ impl KnotVector {
     /// value `u` once: returns the refined knot vector and, for control values
     /// of dimension `dim` stored contiguously per basis function, the new
     /// control values. The represented function is unchanged.
-    pub fn insert_knot(
-        &self,
-        u: f64,
-        values: &[f64],
-        dim: usize,
-    ) -> Result<(Self, Vec<f64>), KnotError> {
+    pub fn insert_knot(&self, u: f64, values: &[f64], dim: usize) -> Result<(Self, Vec<f64>), KnotError> {
         let p = self.degree;
         let n = self.basis_count();
-        assert_eq!(
-            values.len(),
-            n * dim,
-            "control values do not match the basis count"
-        );
+        assert_eq!(values.len(), n * dim, "control values do not match the basis count");
         let (a, b) = self.domain();
         if !(u > a && u < b) {
             return Err(KnotError::BadDomain { start: u, end: u });
@@ -323,11 +294,7 @@ impl KnotVector {
             };
             for d in 0..dim {
                 let here = if i < n { values[i * dim + d] } else { 0.0 };
-                let before = if i > 0 {
-                    values[(i - 1) * dim + d]
-                } else {
-                    0.0
-                };
+                let before = if i > 0 { values[(i - 1) * dim + d] } else { 0.0 };
                 out[i * dim + d] = alpha * here + (1.0 - alpha) * before;
             }
         }
@@ -356,10 +323,7 @@ mod tests {
         ));
         assert!(matches!(
             KnotVector::new(vec![0.0, 0.0, 0.5, 0.5, 0.5, 1.0, 1.0], 1),
-            Err(KnotError::InteriorMultiplicity {
-                multiplicity: 3,
-                ..
-            })
+            Err(KnotError::InteriorMultiplicity { multiplicity: 3, .. })
         ));
         assert_eq!(
             KnotVector::new(vec![0.0, 1.0], 1),
@@ -373,10 +337,7 @@ mod tests {
             KnotVector::new(vec![0.0, f64::NAN], 0),
             Err(KnotError::NotFinite { index: 1 })
         );
-        assert_eq!(
-            KnotVector::new(vec![1.0, 1.0], 0),
-            Err(KnotError::EmptyDomain)
-        );
+        assert_eq!(KnotVector::new(vec![1.0, 1.0], 0), Err(KnotError::EmptyDomain));
     }
 
     #[test]
@@ -408,9 +369,7 @@ mod tests {
                                 0.0
                             } else {
                                 let k = k as usize;
-                                binomial(p - 1, k)
-                                    * u.powi(k as i32)
-                                    * (1.0 - u).powi((p - 1 - k) as i32)
+                                binomial(p - 1, k) * u.powi(k as i32) * (1.0 - u).powi((p - 1 - k) as i32)
                             }
                         };
                         p as f64 * (lower(i as isize - 1) - lower(i as isize))
@@ -440,27 +399,14 @@ mod tests {
 
     #[test]
     fn knot_insertion_preserves_function() {
-        let kv =
-            KnotVector::new(vec![0.0, 0.0, 0.0, 0.0, 0.3, 0.6, 1.0, 1.0, 1.0, 1.0], 3).unwrap();
-        let coeffs: Vec<f64> = (0..kv.basis_count())
-            .map(|i| (i as f64 * 1.7).sin())
-            .collect();
+        let kv = KnotVector::new(vec![0.0, 0.0, 0.0, 0.0, 0.3, 0.6, 1.0, 1.0, 1.0, 1.0], 3).unwrap();
+        let coeffs: Vec<f64> = (0..kv.basis_count()).map(|i| (i as f64 * 1.7).sin()).collect();
         let (refined, new) = kv.insert_knot(0.45, &coeffs, 1).unwrap();
         assert_eq!(refined.basis_count(), kv.basis_count() + 1);
         for k in 0..=50 {
             let u = k as f64 / 50.0;
-            let f0: f64 = kv
-                .dense_basis(u)
-                .iter()
-                .zip(&coeffs)
-                .map(|(b, c)| b * c)
-                .sum();
-            let f1: f64 = refined
-                .dense_basis(u)
-                .iter()
-                .zip(&new)
-                .map(|(b, c)| b * c)
-                .sum();
+            let f0: f64 = kv.dense_basis(u).iter().zip(&coeffs).map(|(b, c)| b * c).sum();
+            let f1: f64 = refined.dense_basis(u).iter().zip(&new).map(|(b, c)| b * c).sum();
             assert!((f0 - f1).abs() < 1e-14, "u={u}");
         }
     }

@@ -23,9 +23,7 @@ use thiserror::Error;
 pub enum MaterialError {
     #[error("{name} must be finite and positive, got {value}")]
     NotPositive { name: &'static str, value: f64 },
-    #[error(
-        "nu12 = {nu12} violates 1 - nu12·nu21 > 0 (|nu12| must be below sqrt(e1/e2) = {limit})"
-    )]
+    #[error("nu12 = {nu12} violates 1 - nu12·nu21 > 0 (|nu12| must be below sqrt(e1/e2) = {limit})")]
     NotPositiveDefinite { nu12: f64, limit: f64 },
     #[error("shear_correction must lie in (0, 1], got {0}")]
     ShearCorrection(f64),
@@ -79,10 +77,7 @@ impl OrthotropicMaterial {
         }
         let limit = (p.e1 / p.e2).sqrt();
         if !(p.nu12.is_finite() && p.nu12.abs() < limit) {
-            return Err(MaterialError::NotPositiveDefinite {
-                nu12: p.nu12,
-                limit,
-            });
+            return Err(MaterialError::NotPositiveDefinite { nu12: p.nu12, limit });
         }
         if !(p.shear_correction > 0.0 && p.shear_correction <= 1.0) {
             return Err(MaterialError::ShearCorrection(p.shear_correction));

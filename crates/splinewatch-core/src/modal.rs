@@ -61,9 +61,7 @@ impl Modes {
     }
 
     pub fn frequencies_hz(&self) -> Vec<f64> {
-        (0..self.omega2.len())
-            .map(|i| self.frequency_hz(i))
-            .collect()
+        (0..self.omega2.len()).map(|i| self.frequency_hz(i)).collect()
     }
 
     pub fn len(&self) -> usize {
@@ -126,11 +124,7 @@ pub fn solve(
     }
     let shapes = reduction.expand(&y);
     let kinds = classify(&omega2, &shapes, mass, shell);
-    Ok(Modes {
-        omega2,
-        shapes,
-        kinds,
-    })
+    Ok(Modes { omega2, shapes, kinds })
 }
 
 /// Eigenvalues (ascending) and orthonormal eigenvectors of a symmetric matrix
@@ -172,9 +166,7 @@ fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, shell: &Shell) -
     let lumped: Vec<f64> = (0..cps)
         .map(|cp| {
             let r = DOFS_PER_CONTROL_POINT * cp;
-            (0..cps)
-                .map(|c| mass[(r, DOFS_PER_CONTROL_POINT * c)])
-                .sum()
+            (0..cps).map(|c| mass[(r, DOFS_PER_CONTROL_POINT * c)]).sum()
         })
         .collect();
     (0..omega2.len())

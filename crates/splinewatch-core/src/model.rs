@@ -69,11 +69,7 @@ impl ShellModel {
             free_stiffness: mats.stiffness,
             mass: mats.mass,
             spring_blocks,
-            spring_stiffness: self
-                .springs
-                .iter()
-                .map(|s| s.stiffness().to_vec())
-                .collect(),
+            spring_stiffness: self.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
             reduction: DofReduction::new(&self.shell, &self.constraints),
         })
     }

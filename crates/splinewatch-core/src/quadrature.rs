@@ -99,10 +99,7 @@ mod tests {
             for k in 0..2 * n {
                 let exact = (2.0f64.powi(k as i32 + 1) - 0.0) / (k as f64 + 1.0);
                 let approx: f64 = g.mapped(0.0, 2.0).map(|(x, w)| w * x.powi(k as i32)).sum();
-                assert!(
-                    (approx - exact).abs() < 1e-13 * exact.max(1.0),
-                    "n={n} k={k}"
-                );
+                assert!((approx - exact).abs() < 1e-13 * exact.max(1.0), "n={n} k={k}");
             }
         }
     }

@@ -129,10 +129,8 @@ impl Shell {
             for (j, &v) in ge.iter().enumerate() {
                 let index = i * n + j;
                 let e = surface.evaluate(u, v);
-                let v3 = normalize(cross(e.r_xi, e.r_eta))
-                    .ok_or(ShellError::DegenerateNormal { index })?;
-                let v1 = normalize(axpy(e.r_xi, -dot(e.r_xi, v3), v3))
-                    .ok_or(ShellError::DegenerateNormal { index })?;
+                let v3 = normalize(cross(e.r_xi, e.r_eta)).ok_or(ShellError::DegenerateNormal { index })?;
+                let v1 = normalize(axpy(e.r_xi, -dot(e.r_xi, v3), v3)).ok_or(ShellError::DegenerateNormal { index })?;
                 let v2 = cross(v3, v1);
                 frames.push(Frame { v1, v2, v3 });
             }
@@ -185,11 +183,7 @@ impl Shell {
         let eta = KnotVector::uniform(degree[1], control_points[1], 0.0, 1.0)?;
         let surface = BSplineSurface::interpolate(xi, eta, |u, v| {
             let theta = (v - 0.5) * angle;
-            [
-                length * u,
-                radius * theta.sin(),
-                radius * (theta.cos() - 1.0),
-            ]
+            [length * u, radius * theta.sin(), radius * (theta.cos() - 1.0)]
         })?;
         let count = control_points[0] * control_points[1];
         Self::new(surface, vec![thickness; count])
@@ -364,10 +358,7 @@ fn lamina_frame(jac: &[Vec3; 3], angle: f64) -> Option<[Vec3; 3]> {
 }
 
 /// Assembles eq. (16) and eq. (17) over every knot span.
-pub fn assemble(
-    shell: &Shell,
-    material: &OrthotropicMaterial,
-) -> Result<ShellMatrices, ShellError> {
+pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMatrices, ShellError> {
     let ndof = shell.dof_count();
     let mut stiffness = Mat::<f64>::zeros(ndof, ndof);
     let mut mass = Mat::<f64>::zeros(ndof, ndof);
@@ -431,14 +422,7 @@ pub fn assemble(
                             }
                         }
                     }
-                    matmul(
-                        k_loc.as_mut(),
-                        Accum::Add,
-                        b.transpose(),
-                        eb.as_ref(),
-                        w,
-                        Par::Seq,
-                    );
+                    matmul(k_loc.as_mut(), Accum::Add, b.transpose(), eb.as_ref(), w, Par::Seq);
                     matmul(
                         m_loc.as_mut(),
                         Accum::Add,
@@ -474,11 +458,7 @@ mod tests {
     #[test]
     fn plate_directors_are_the_global_axes() {
         for f in plate().frames() {
-            assert!(
-                (f.v1[0] - 1.0).abs() < 1e-14
-                    && (f.v2[1] - 1.0).abs() < 1e-14
-                    && (f.v3[2] - 1.0).abs() < 1e-14
-            );
+            assert!((f.v1[0] - 1.0).abs() < 1e-14 && (f.v2[1] - 1.0).abs() < 1e-14 && (f.v3[2] - 1.0).abs() < 1e-14);
         }
     }
 
@@ -496,10 +476,7 @@ mod tests {
                     total += mats.mass[(a, b)];
                 }
             }
-            assert!(
-                (total - exact).abs() < 1e-10 * exact,
-                "dir {dir}: {total} vs {exact}"
-            );
+            assert!((total - exact).abs() < 1e-10 * exact, "dir {dir}: {total} vs {exact}");
         }
     }
 
@@ -512,13 +489,7 @@ mod tests {
         let mats = assemble(&shell, &mat).unwrap();
         let theta = [0.3, -0.2, 0.5];
         let mut x = vec![0.0; shell.dof_count()];
-        for (cp, (pt, f)) in shell
-            .surface()
-            .points()
-            .iter()
-            .zip(shell.frames())
-            .enumerate()
-        {
+        for (cp, (pt, f)) in shell.surface().points().iter().zip(shell.frames()).enumerate() {
             let u = cross(theta, *pt);
             // v3 turns by θ × v3 = -α v2 + β v1  ⇒  α = -(θ×v3)·v2, β = (θ×v3)·v1.
             let dv3 = cross(theta, f.v3);
@@ -528,16 +499,9 @@ mod tests {
             x[b + 4] = dot(dv3, f.v1);
         }
         let kx: f64 = (0..x.len())
-            .map(|i| {
-                (0..x.len())
-                    .map(|j| mats.stiffness[(i, j)] * x[j])
-                    .sum::<f64>()
-                    * x[i]
-            })
+            .map(|i| (0..x.len()).map(|j| mats.stiffness[(i, j)] * x[j]).sum::<f64>() * x[i])
             .sum();
-        let kdiag: f64 = (0..x.len())
-            .map(|i| mats.stiffness[(i, i)] * x[i] * x[i])
-            .sum();
+        let kdiag: f64 = (0..x.len()).map(|i| mats.stiffness[(i, i)] * x[i] * x[i]).sum();
         // Directors are interpolated, not exactly rotated with the arc, so the
         // energy is small rather than zero: bounded relative to the diagonal.
         assert!(kx.abs() < 1e-6 * kdiag, "{kx} vs {kdiag}");

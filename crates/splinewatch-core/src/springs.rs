@@ -25,9 +25,7 @@ use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum SpringError {
-    #[error(
-        "{found} stiffness coefficients given, the knot vectors define {expected} basis functions"
-    )]
+    #[error("{found} stiffness coefficients given, the knot vectors define {expected} basis functions")]
     CoefficientCount { found: usize, expected: usize },
     #[error("stiffness coefficient {index} must be finite and non-negative, got {value}")]
     Coefficient { index: usize, value: f64 },
@@ -75,9 +73,7 @@ pub enum SpringDirection {
 
 impl SpringDirection {
     pub fn fixed(v: Vec3) -> Result<Self, SpringError> {
-        normalize(v)
-            .map(SpringDirection::Fixed)
-            .ok_or(SpringError::Direction)
+        normalize(v).map(SpringDirection::Fixed).ok_or(SpringError::Direction)
     }
 }
 
@@ -177,11 +173,7 @@ impl SpringField {
         let ne = be.len();
         bx.iter()
             .enumerate()
-            .flat_map(|(i, &a)| {
-                be.iter()
-                    .enumerate()
-                    .map(move |(j, &b)| (i * ne + j, a * b))
-            })
+            .flat_map(|(i, &a)| be.iter().enumerate().map(move |(j, &b)| (i * ne + j, a * b)))
             .map(|(k, w)| w * kappa[k])
             .sum()
     }
@@ -213,16 +205,11 @@ impl SpringField {
             for &(j, _) in basis {
                 for k in 0..pt.count {
                     let cp = pt.control_points[k];
-                    touched[j].extend(
-                        (0..DOFS_PER_CONTROL_POINT).map(|d| DOFS_PER_CONTROL_POINT * cp + d),
-                    );
+                    touched[j].extend((0..DOFS_PER_CONTROL_POINT).map(|d| DOFS_PER_CONTROL_POINT * cp + d));
                 }
             }
         });
-        let dof_lists: Vec<Vec<usize>> = touched
-            .into_iter()
-            .map(|s| s.into_iter().collect())
-            .collect();
+        let dof_lists: Vec<Vec<usize>> = touched.into_iter().map(|s| s.into_iter().collect()).collect();
         let mut blocks: Vec<LowRankBlock> = dof_lists
             .iter()
             .map(|d| LowRankBlock {
@@ -260,29 +247,19 @@ impl SpringField {
     /// Visits every quadrature point of the field's rectangle with the shell
     /// point at the face, the area weight `dS`, the force direction and the
     /// non-zero spring basis values `(j, B_j)`.
-    fn for_each_point(
-        &self,
-        shell: &Shell,
-        mut f: impl FnMut(&ShellPoint, f64, Vec3, &[(usize, f64)]),
-    ) {
+    fn for_each_point(&self, shell: &Shell, mut f: impl FnMut(&ShellPoint, f64, Vec3, &[(usize, f64)])) {
         let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
         let split = |own: &KnotVector, of_shell: &KnotVector| {
             let (a, b) = own.domain();
             let mut cuts: Vec<f64> = own.breakpoints();
-            cuts.extend(
-                of_shell
-                    .breakpoints()
-                    .into_iter()
-                    .filter(|&k| k > a && k < b),
-            );
+            cuts.extend(of_shell.breakpoints().into_iter().filter(|&k| k > a && k < b));
             cuts.sort_by(f64::total_cmp);
             cuts.dedup();
             cuts
         };
         let (cx, ce) = (split(&self.xi, kx), split(&self.eta, ke));
-        let points = |shell_degree: usize, spring_degree: usize| {
-            GaussLegendre::new(shell_degree + spring_degree / 2 + 1)
-        };
+        let points =
+            |shell_degree: usize, spring_degree: usize| GaussLegendre::new(shell_degree + spring_degree / 2 + 1);
         let (gx, ge) = (
             points(kx.degree(), self.xi.degree()),
             points(ke.degree(), self.eta.degree()),
@@ -311,8 +288,7 @@ impl SpringField {
                             for b in 0..=self.eta.degree() {
                                 let v = bx[a] * be[b];
                                 if v != 0.0 {
-                                    let j = (si - self.xi.degree() + a) * ne
-                                        + (sj - self.eta.degree() + b);
+                                    let j = (si - self.xi.degree() + a) * ne + (sj - self.eta.degree() + b);
                                     basis.push((j, v));
                                 }
                             }
@@ -328,14 +304,10 @@ impl SpringField {
 /// Removes rows and columns whose diagonal is zero (for a positive
 /// semi-definite block those rows are zero).
 fn drop_zero_rows(block: LowRankBlock) -> LowRankBlock {
-    let keep: Vec<usize> = (0..block.dofs.len())
-        .filter(|&i| block.values[(i, i)] > 0.0)
-        .collect();
+    let keep: Vec<usize> = (0..block.dofs.len()).filter(|&i| block.values[(i, i)] > 0.0).collect();
     LowRankBlock {
         dofs: keep.iter().map(|&i| block.dofs[i]).collect(),
-        values: Mat::from_fn(keep.len(), keep.len(), |r, c| {
-            block.values[(keep[r], keep[c])]
-        }),
+        values: Mat::from_fn(keep.len(), keep.len(), |r, c| block.values[(keep[r], keep[c])]),
     }
 }
 
@@ -373,12 +345,8 @@ mod tests {
         }
         // ∫ over ξ∈[0,0.03] (length 0.48 m) and η (width 9 m): the quadratic
         // B-splines on {0,0,0,.5,1,1,1} integrate to (1/6, 1/3, 1/3, 1/6).
-        let exact =
-            0.03 * 16.0 * 9.0 * (kappa[0] / 6.0 + kappa[1] / 3.0 + kappa[2] / 3.0 + kappa[3] / 6.0);
-        assert!(
-            (energy - exact).abs() < 1e-12 * exact,
-            "{energy} vs {exact}"
-        );
+        let exact = 0.03 * 16.0 * 9.0 * (kappa[0] / 6.0 + kappa[1] / 3.0 + kappa[2] / 3.0 + kappa[3] / 6.0);
+        assert!((energy - exact).abs() < 1e-12 * exact, "{energy} vs {exact}");
         // Only w dofs of the first five ξ control-point columns are touched.
         for b in &blocks {
             assert!(b.dofs.iter().all(|d| d % 5 == 2 && (d / 5) / 5 < 5));
@@ -391,18 +359,12 @@ mod tests {
         let dir = SpringDirection::fixed([0.0, 0.0, 1.0]).unwrap();
         assert_eq!(
             SpringField::new(kv(), kv(), vec![1.0; 3], dir, Face::Bottom),
-            Err(SpringError::CoefficientCount {
-                found: 3,
-                expected: 4
-            })
+            Err(SpringError::CoefficientCount { found: 3, expected: 4 })
         );
         assert!(matches!(
             SpringField::new(kv(), kv(), vec![1.0, -1.0, 1.0, 1.0], dir, Face::Bottom),
             Err(SpringError::Coefficient { index: 1, .. })
         ));
-        assert_eq!(
-            SpringDirection::fixed([0.0; 3]),
-            Err(SpringError::Direction)
-        );
+        assert_eq!(SpringDirection::fixed([0.0; 3]), Err(SpringError::Direction));
     }
 }

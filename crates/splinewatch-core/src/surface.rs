@@ -64,11 +64,7 @@ impl BSplineSurface {
     /// The surface interpolating `map` at the tensor grid of Greville
     /// abscissae. Linear maps are reproduced exactly; smooth maps converge
     /// at order `p + 1`.
-    pub fn interpolate(
-        xi: KnotVector,
-        eta: KnotVector,
-        map: impl Fn(f64, f64) -> Vec3,
-    ) -> Result<Self, SurfaceError> {
+    pub fn interpolate(xi: KnotVector, eta: KnotVector, map: impl Fn(f64, f64) -> Vec3) -> Result<Self, SurfaceError> {
         let gx = xi.greville();
         let ge = eta.greville();
         let mut values = vec![[0.0; 3]; gx.len() * ge.len()];
@@ -184,8 +180,7 @@ impl BSplineSurface {
                 };
                 let idx = i * n2 + j;
                 points[idx] = [col[k * dim], col[k * dim + 1], col[k * dim + 2]];
-                extra_out[idx * extra_dim..(idx + 1) * extra_dim]
-                    .copy_from_slice(&col[k * dim + 3..(k + 1) * dim]);
+                extra_out[idx * extra_dim..(idx + 1) * extra_dim].copy_from_slice(&col[k * dim + 3..(k + 1) * dim]);
             }
         }
         Ok((Self::new(xi, eta, points)?, extra_out))
@@ -251,8 +246,7 @@ mod tests {
     fn knot_insertion_keeps_the_surface() {
         let xi = KnotVector::uniform(3, 5, 0.0, 1.0).unwrap();
         let eta = KnotVector::uniform(2, 4, 0.0, 1.0).unwrap();
-        let s =
-            BSplineSurface::interpolate(xi, eta, |u, v| [u, v, (3.0 * u).sin() * v * v]).unwrap();
+        let s = BSplineSurface::interpolate(xi, eta, |u, v| [u, v, (3.0 * u).sin() * v * v]).unwrap();
         let thickness: Vec<f64> = (0..20).map(|k| 1.0 + 0.01 * k as f64).collect();
         let (r1, t1) = s.insert_knot(Direction::Xi, 0.37, &thickness, 1).unwrap();
         let (r2, _) = r1.insert_knot(Direction::Eta, 0.81, &t1, 1).unwrap();
@@ -266,11 +260,7 @@ mod tests {
         }
         assert!(matches!(
             BSplineSurface::new(s.xi().clone(), s.eta().clone(), vec![[0.0; 3]; 3]),
-            Err(SurfaceError::ControlPointCount {
-                found: 3,
-                m: 5,
-                n: 4
-            })
+            Err(SurfaceError::ControlPointCount { found: 3, m: 5, n: 4 })
         ));
     }
 }

@@ -59,21 +59,10 @@ fn mindlin_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: u
             let (al, be) = (m as f64 * PI / a, n as f64 * PI / b);
             let k = [
                 [a55 * al * al + a44 * be * be, a55 * al, a44 * be],
-                [
-                    a55 * al,
-                    d11 * al * al + d66 * be * be + a55,
-                    (d12 + d66) * al * be,
-                ],
-                [
-                    a44 * be,
-                    (d12 + d66) * al * be,
-                    d66 * al * al + d22 * be * be + a44,
-                ],
+                [a55 * al, d11 * al * al + d66 * be * be + a55, (d12 + d66) * al * be],
+                [a44 * be, (d12 + d66) * al * be, d66 * al * al + d22 * be * be + a44],
             ];
-            let w2 = smallest_generalised_eigenvalue(
-                k,
-                [rho * h, rho * h.powi(3) / 12.0, rho * h.powi(3) / 12.0],
-            );
+            let w2 = smallest_generalised_eigenvalue(k, [rho * h, rho * h.powi(3) / 12.0, rho * h.powi(3) / 12.0]);
             out.push(w2.sqrt() / (2.0 * PI));
         }
     }
@@ -83,13 +72,7 @@ fn mindlin_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: u
 }
 
 /// Kirchhoff solution: ω² = (D11 α⁴ + 2(D12 + 2D66) α²β² + D22 β⁴) / (ρh).
-fn kirchhoff_navier_hz(
-    mat: &OrthotropicMaterial,
-    a: f64,
-    b: f64,
-    h: f64,
-    count: usize,
-) -> Vec<f64> {
+fn kirchhoff_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: usize) -> Vec<f64> {
     let den = 1.0 - mat.nu12() * mat.nu21();
     let d11 = mat.e1() * h.powi(3) / (12.0 * den);
     let d22 = mat.e2() * h.powi(3) / (12.0 * den);
@@ -99,9 +82,8 @@ fn kirchhoff_navier_hz(
     for m in 1..=12 {
         for n in 1..=12 {
             let (al, be) = (m as f64 * PI / a, n as f64 * PI / b);
-            let w2 =
-                (d11 * al.powi(4) + 2.0 * (d12 + 2.0 * d66) * al * al * be * be + d22 * be.powi(4))
-                    / (mat.density() * h);
+            let w2 = (d11 * al.powi(4) + 2.0 * (d12 + 2.0 * d66) * al * al * be * be + d22 * be.powi(4))
+                / (mat.density() * h);
             out.push(w2.sqrt() / (2.0 * PI));
         }
     }
@@ -121,11 +103,7 @@ fn bending_frequencies(model: &ShellModel, count: usize) -> Vec<f64> {
 
 fn assert_close(fe: &[f64], exact: &[f64], tol: f64, what: &str) {
     assert_eq!(fe.len(), exact.len(), "{what}: mode count");
-    let worst = fe
-        .iter()
-        .zip(exact)
-        .map(|(f, e)| (f - e).abs() / e)
-        .fold(0.0, f64::max);
+    let worst = fe.iter().zip(exact).map(|(f, e)| (f - e).abs() / e).fold(0.0, f64::max);
     eprintln!(
         "{what}: worst relative frequency error over {} modes: {worst:.2e}",
         fe.len()
@@ -156,10 +134,7 @@ fn simply_supported_orthotropic_mindlin_plate_matches_navier() {
     let fe = bending_frequencies(&model, 10);
     assert_close(&fe, &exact, 5e-3, "Mindlin Navier");
     let kirchhoff = kirchhoff_navier_hz(&mat, a, b, h, 10);
-    assert!(
-        kirchhoff[9] > 1.05 * exact[9],
-        "the case must be shear-sensitive"
-    );
+    assert!(kirchhoff[9] > 1.05 * exact[9], "the case must be shear-sensitive");
 }
 
 #[test]
@@ -247,11 +222,7 @@ fn free_plate_has_six_rigid_modes() {
         constraints: vec![],
     };
     let modes = model.assemble().unwrap().modes().unwrap();
-    let rigid = modes
-        .kinds
-        .iter()
-        .filter(|k| **k == ModeKind::Rigid)
-        .count();
+    let rigid = modes.kinds.iter().filter(|k| **k == ModeKind::Rigid).count();
     assert_eq!(rigid, 6);
     assert!(modes.kinds[..6].iter().all(|k| *k == ModeKind::Rigid));
 }
@@ -298,9 +269,7 @@ fn vertical_springs_leave_three_in_plane_rigid_modes() {
             .step_by(5)
             .map(|d| modes.shapes[(d, i)].powi(2))
             .sum();
-        let all: f64 = (0..modes.shapes.nrows())
-            .map(|d| modes.shapes[(d, i)].powi(2))
-            .sum();
+        let all: f64 = (0..modes.shapes.nrows()).map(|d| modes.shapes[(d, i)].powi(2)).sum();
         assert!(w < 1e-12 * all);
     }
 }
@@ -316,28 +285,15 @@ fn sinello_deck_has_thirty_modes_below_80_hz() {
         constraints: vec![],
     };
     let modes = model.assemble().unwrap().modes().unwrap();
-    let below: Vec<usize> = (0..modes.len())
-        .filter(|&i| modes.frequency_hz(i) < 80.0)
-        .collect();
-    let bending = below
-        .iter()
-        .filter(|&&i| modes.kinds[i] == ModeKind::Bending)
-        .count();
-    let rigid = below
-        .iter()
-        .filter(|&&i| modes.kinds[i] == ModeKind::Rigid)
-        .count();
+    let below: Vec<usize> = (0..modes.len()).filter(|&i| modes.frequency_hz(i) < 80.0).collect();
+    let bending = below.iter().filter(|&&i| modes.kinds[i] == ModeKind::Bending).count();
+    let rigid = below.iter().filter(|&&i| modes.kinds[i] == ModeKind::Rigid).count();
     eprintln!(
         "modes below 80 Hz: {} ({rigid} rigid in-plane), bending: {bending}",
         below.len()
     );
     for &i in &below {
-        eprintln!(
-            "  {:3} {:9.4} Hz {:?}",
-            i + 1,
-            modes.frequency_hz(i),
-            modes.kinds[i]
-        );
+        eprintln!("  {:3} {:9.4} Hz {:?}", i + 1, modes.frequency_hz(i), modes.kinds[i]);
     }
     // 30 modes in [0, 80] Hz as the paper says (its Fig. 4 damps "the first
     // 30 eigen-modes"), counting the 3 in-plane rigid-body modes that purely
@@ -364,17 +320,11 @@ fn modes_are_mass_orthonormal() {
     let gram = phi.transpose() * &asm.mass * phi;
     let kgram = phi.transpose() * asm.stiffness() * phi;
     let n = gram.nrows();
-    assert!(
-        modes.omega2[0] > 0.0,
-        "a clamped edge leaves no rigid modes"
-    );
+    assert!(modes.omega2[0] > 0.0, "a clamped edge leaves no rigid modes");
     for i in 0..n {
         for j in 0..n {
             let id = if i == j { 1.0 } else { 0.0 };
-            assert!(
-                (gram[(i, j)] - id).abs() < 1e-9,
-                "M-orthonormality ({i},{j})"
-            );
+            assert!((gram[(i, j)] - id).abs() < 1e-9, "M-orthonormality ({i},{j})");
             // Backward-stable eigenvectors: errors scale with the eigenvalues involved.
             let kd = if i == j { modes.omega2[i] } else { 0.0 };
             let tol = 1e-8 * (modes.omega2[i] * modes.omega2[j]).sqrt();

@@ -1,0 +1,9 @@
+//! splinewatch: the application shell around `splinewatch-core`.
+//!
+//! This library holds what the binary needs and tests reuse: configuration
+//! loading and validation, and the command implementations. The numerics
+//! live in `splinewatch-core`, which does no I/O.
+#![forbid(unsafe_code)]
+
+pub mod commands;
+pub mod config;
