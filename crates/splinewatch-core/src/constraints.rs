@@ -139,6 +139,15 @@ impl DofReduction {
         out
     }
 
+    /// `Tᵀ v` for full-length column vectors `v`.
+    #[track_caller]
+    pub fn reduce_vector(&self, v: &Mat<f64>) -> Mat<f64> {
+        assert_eq!(v.nrows(), self.full);
+        Mat::from_fn(self.free_count(), v.ncols(), |r, k| {
+            self.columns[r].iter().map(|&(d, t)| t * v[(d, k)]).sum()
+        })
+    }
+
     /// `T Q` for a matrix of reduced vectors stored by columns.
     #[track_caller]
     pub fn expand(&self, q: &Mat<f64>) -> Mat<f64> {

@@ -9,7 +9,10 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod constraints;
+pub mod damping;
+pub mod frf;
 pub mod knots;
+pub mod linalg;
 pub mod material;
 pub mod modal;
 pub mod model;
@@ -17,4 +20,5 @@ pub mod quadrature;
 pub mod shell;
 pub mod springs;
 pub mod surface;
+pub mod updating;
 pub mod vec3;

@@ -1,30 +1,14 @@
-//! Verification ladder for the shell model: closed-form plate and shell
-//! frequencies, rigid-body counts and the paper's Sinello deck.
+//! The shell model: closed-form plate and shell frequencies, rigid-body
+//! counts and the paper's Sinello deck.
 
+use super::common::{sinello_material, sinello_springs};
 use faer::{Mat, Side};
 use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::knots::KnotVector;
-use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::material::OrthotropicMaterial;
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::shell::Shell;
-use splinewatch_core::springs::{Face, SpringDirection, SpringField};
 use std::f64::consts::PI;
-
-fn sinello_material() -> OrthotropicMaterial {
-    OrthotropicMaterial::new(OrthotropicParameters {
-        e1: 5.5e9,
-        e2: 9.6e8,
-        g12: 4.3e8,
-        g13: 4.3e8,
-        g23: 4.3e8,
-        nu12: 0.3,
-        density: 975.0,
-        angle_deg: 0.0,
-        shear_correction: 5.0 / 6.0,
-    })
-    .unwrap()
-}
 
 fn all_edges(kind: SupportKind) -> Vec<EdgeConstraint> {
     [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1]
@@ -225,29 +209,6 @@ fn free_plate_has_six_rigid_modes() {
     let rigid = modes.kinds.iter().filter(|k| **k == ModeKind::Rigid).count();
     assert_eq!(rigid, 6);
     assert!(modes.kinds[..6].iter().all(|k| *k == ModeKind::Rigid));
-}
-
-fn sinello_springs() -> Vec<SpringField> {
-    let eta = || KnotVector::new(vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0], 2).unwrap();
-    let z = SpringDirection::fixed([0.0, 0.0, 1.0]).unwrap();
-    vec![
-        SpringField::new(
-            KnotVector::new(vec![0.0, 0.03], 0).unwrap(),
-            eta(),
-            vec![0.4e9, 1.5e9, 1.8e9, 0.6e9],
-            z,
-            Face::Bottom,
-        )
-        .unwrap(),
-        SpringField::new(
-            KnotVector::new(vec![0.97, 1.0], 0).unwrap(),
-            eta(),
-            vec![1.5e9, 0.4e9, 0.5e9, 1.8e9],
-            z,
-            Face::Bottom,
-        )
-        .unwrap(),
-    ]
 }
 
 #[test]

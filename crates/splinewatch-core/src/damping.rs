@@ -1,0 +1,140 @@
+//! B-spline modal damping curve (paper §2.3, eq. 25–29).
+//!
+//! `ζ(f) = Σ_z B_z(u) γ_z` with `u = (f - f_start) / (f_end - f_start)` on a
+//! uniform clamped knot vector over `[0, 1]` (eq. 29); outside the band `u`
+//! is clamped, so ζ keeps its end values. Mode `i` gets `ζ_i = ζ(f_i)` with
+//! `f_i = ω_i / 2π` (eq. 28 prints `2π·ω_i`, a typo). The damping matrix of
+//! eq. (25), `C = Φ⁻ᵀ diag(2 ζ_i ω_i) Φ⁻¹`, is diagonal in modal coordinates,
+//! so the FRF code never forms it except for the direct verification path.
+
+use crate::knots::{KnotError, KnotVector, MAX_DEGREE};
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum DampingError {
+    #[error("band [{f_start}, {f_end}] Hz must be finite with f_start < f_end")]
+    Band { f_start: f64, f_end: f64 },
+    #[error("{0}")]
+    Knots(#[from] KnotError),
+    #[error("coefficient {index} must be finite and non-negative, got {value}")]
+    Coefficient { index: usize, value: f64 },
+}
+
+/// A validated damping curve ζ(f).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DampingCurve {
+    knots: KnotVector,
+    f_start: f64,
+    f_end: f64,
+    gamma: Vec<f64>,
+}
+
+impl DampingCurve {
+    /// Degree `degree`, coefficients `gamma` (their count sets `n_z`), band in Hz.
+    pub fn new(degree: usize, gamma: Vec<f64>, f_start: f64, f_end: f64) -> Result<Self, DampingError> {
+        if !(f_start.is_finite() && f_end.is_finite() && f_start < f_end) {
+            return Err(DampingError::Band { f_start, f_end });
+        }
+        let knots = KnotVector::uniform(degree, gamma.len(), 0.0, 1.0)?;
+        let curve = Self {
+            knots,
+            f_start,
+            f_end,
+            gamma: Vec::new(),
+        };
+        curve.with_coefficients(gamma)
+    }
+
+    /// The same curve with other coefficients (same count).
+    #[track_caller]
+    pub fn with_coefficients(&self, gamma: Vec<f64>) -> Result<Self, DampingError> {
+        if !self.gamma.is_empty() {
+            assert_eq!(gamma.len(), self.gamma.len(), "coefficient count is fixed");
+        }
+        if let Some(index) = gamma.iter().position(|g| !(g.is_finite() && *g >= 0.0)) {
+            return Err(DampingError::Coefficient {
+                index,
+                value: gamma[index],
+            });
+        }
+        Ok(Self { gamma, ..self.clone() })
+    }
+
+    pub fn coefficients(&self) -> &[f64] {
+        &self.gamma
+    }
+
+    pub fn degree(&self) -> usize {
+        self.knots.degree()
+    }
+
+    pub fn band(&self) -> (f64, f64) {
+        (self.f_start, self.f_end)
+    }
+
+    fn parameter(&self, f: f64) -> f64 {
+        ((f - self.f_start) / (self.f_end - self.f_start)).clamp(0.0, 1.0)
+    }
+
+    /// `∂ζ/∂γ_z` at `f`: the basis values, written densely to `out` (length `n_z`).
+    #[track_caller]
+    pub fn basis_at(&self, f: f64, out: &mut [f64]) {
+        assert_eq!(out.len(), self.gamma.len());
+        out.fill(0.0);
+        let u = self.parameter(f);
+        let span = self.knots.span(u);
+        let mut values = [0.0; MAX_DEGREE + 1];
+        self.knots.basis(span, u, &mut values);
+        let p = self.knots.degree();
+        for r in 0..=p {
+            out[span - p + r] = values[r];
+        }
+    }
+
+    /// Eq. (29): ζ(f).
+    pub fn zeta(&self, f: f64) -> f64 {
+        let mut b = vec![0.0; self.gamma.len()];
+        self.basis_at(f, &mut b);
+        b.iter().zip(&self.gamma).map(|(b, g)| b * g).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constant_coefficients_give_constant_damping_and_clamp_outside() {
+        let c = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
+        for f in [-5.0, 0.0, 13.3, 79.9, 80.0, 200.0] {
+            assert!((c.zeta(f) - 0.02).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn linear_coefficients_reproduce_a_line() {
+        // Greville-placed linear coefficients reproduce ζ linear in f.
+        let kv = KnotVector::uniform(2, 7, 0.0, 1.0).unwrap();
+        let gamma: Vec<f64> = kv.greville().iter().map(|u| 0.01 + 0.02 * u).collect();
+        let c = DampingCurve::new(2, gamma, 10.0, 90.0).unwrap();
+        assert!((c.zeta(50.0) - 0.02).abs() < 1e-15);
+        assert!((c.zeta(5.0) - 0.01).abs() < 1e-15);
+        assert!((c.zeta(95.0) - 0.03).abs() < 1e-15);
+    }
+
+    #[test]
+    fn rejects_bad_input() {
+        assert!(matches!(
+            DampingCurve::new(2, vec![0.01; 7], 80.0, 0.0),
+            Err(DampingError::Band { .. })
+        ));
+        assert!(matches!(
+            DampingCurve::new(2, vec![0.01; 2], 0.0, 80.0),
+            Err(DampingError::Knots(_))
+        ));
+        assert!(matches!(
+            DampingCurve::new(2, vec![0.01, f64::NAN, 0.01], 0.0, 80.0),
+            Err(DampingError::Coefficient { index: 1, .. })
+        ));
+    }
+}

@@ -1,0 +1,393 @@
+//! Model FRFs at physical points and their sensitivities (paper §3,
+//! eq. 31–33).
+//!
+//! With mass-normalised modes `φ_i` and the damping of eq. (25), the
+//! receptance matrix is exactly `H(ω) = Σ_i φ_i φ_iᵀ / D_i(ω)`,
+//! `D_i = ω_i² - ω² + 2j ζ_i ω_i ω`, when every mode is kept (this module
+//! keeps every mode). At physical points (eq. 32), with the sensor rows
+//! `N_ψ(P_r)` of the shell shape functions and modal amplitudes
+//! `a_{r,i} = N_ψ(P_r) φ_i`: `H_rs(ω) = Σ_i a_{r,i} a_{s,i} / D_i(ω)`.
+//!
+//! Sensitivities:
+//! - spring coefficients, eq. (33) with `∂C/∂κ ≈ 0` as in the paper:
+//!   `∂H_rs/∂κ_j = -g_rᵀ (∂K/∂κ_j) g_s`, `g_s = H N_sᵀ`, evaluated only on the
+//!   few dofs where the low-rank `∂K/∂κ_j` lives;
+//! - damping coefficients, exact: `∂H_rs/∂γ_z = Σ_i a_{r,i} a_{s,i}
+//!   (-2j ω_i ω / D_i²) B_z(f_i)`.
+//!
+//! Mobility and accelerance are `jω H` and `-ω² H`; their sensitivities
+//! scale the same way.
+
+use crate::damping::DampingCurve;
+use crate::linalg::{complex_solve, dense_rows};
+use crate::modal::{ModalError, ModeKind, Modes};
+use crate::model::{AssembledModel, ModelError};
+use crate::vec3::{dot, normalize, Vec3};
+use faer::linalg::matmul::matmul;
+use faer::{c64, Accum, Mat, Par};
+use std::f64::consts::PI;
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum FrfError {
+    #[error("sensor {index}: (ξ, η, τ) = ({xi}, {eta}, {tau}) lies outside the shell's parameter domain")]
+    SensorOutside { index: usize, xi: f64, eta: f64, tau: f64 },
+    #[error("sensor {index}: direction must be a finite non-zero vector")]
+    SensorDirection { index: usize },
+    #[error("{0}")]
+    Model(#[from] ModelError),
+    #[error("{0}")]
+    Modal(#[from] ModalError),
+    #[error("damping curve has {found} coefficients, {expected} expected")]
+    DampingCount { found: usize, expected: usize },
+    #[error("the direct FRF solve failed at {frequency_hz} Hz: Z(ω) is singular")]
+    SingularImpedance { frequency_hz: f64 },
+}
+
+/// Which FRF is measured: displacement, velocity or acceleration per force.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quantity {
+    Receptance,
+    Mobility,
+    Accelerance,
+}
+
+impl Quantity {
+    /// Factor turning receptance into this quantity at `ω` rad/s.
+    pub fn factor(self, omega: f64) -> c64 {
+        match self {
+            Quantity::Receptance => c64::new(1.0, 0.0),
+            Quantity::Mobility => c64::new(0.0, omega),
+            Quantity::Accelerance => c64::new(-omega * omega, 0.0),
+        }
+    }
+}
+
+/// A measurement point `P = s(ξ, η, τ)` and direction (eq. 32).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorPoint {
+    pub xi: f64,
+    pub eta: f64,
+    pub tau: f64,
+    pub direction: Vec3,
+}
+
+/// What to evaluate: the frequency lines and `(output, input)` sensor pairs.
+#[derive(Debug, Clone, Copy)]
+pub struct FrfRequest<'a> {
+    pub frequencies_hz: &'a [f64],
+    pub pairs: &'a [(usize, usize)],
+    pub quantity: Quantity,
+}
+
+/// FRFs and sensitivities, each stored pair-major: `[pair * n_f + line]`.
+#[derive(Debug, Clone)]
+pub struct FrfEvaluation {
+    pub h: Vec<c64>,
+    /// One vector per spring coefficient, fields in order, coefficients flattened.
+    pub dh_dkappa: Vec<Vec<c64>>,
+    /// One vector per damping coefficient.
+    pub dh_dgamma: Vec<Vec<c64>>,
+}
+
+/// The modal model at one parameter point.
+#[derive(Debug, Clone)]
+pub struct ModalState {
+    pub modes: Modes,
+    /// ζ_i of every mode (eq. 28), zero for rigid modes.
+    pub zeta: Vec<f64>,
+    /// `∂ζ_i/∂γ_z`: `n_modes × n_z`.
+    zeta_basis: Mat<f64>,
+    /// `a_{s,i}`: `n_sensors × n_modes`.
+    amplitudes: Mat<f64>,
+    /// Mode shapes on the spring dofs `U`: `|U| × n_modes`.
+    phi_springs: Mat<f64>,
+    omega: Vec<f64>,
+}
+
+impl ModalState {
+    /// Modal amplitude of mode `i` at sensor `s` along its direction.
+    pub fn amplitude(&self, sensor: usize, mode: usize) -> f64 {
+        self.amplitudes[(sensor, mode)]
+    }
+}
+
+/// An assembled model with sensors: evaluates FRFs and sensitivities.
+#[derive(Debug, Clone)]
+pub struct FrfModel {
+    assembled: AssembledModel,
+    /// Sparse rows `N_ψ(P_s)`.
+    sensor_rows: Vec<Vec<(usize, f64)>>,
+    /// Union `U` of the dofs of all `∂K/∂κ_j`.
+    spring_dofs: Vec<usize>,
+    /// Positions in `U` of each block's dofs, blocks flattened over fields.
+    block_positions: Vec<Vec<usize>>,
+}
+
+impl FrfModel {
+    pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
+        let shell = &assembled.shell;
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+        let mut sensor_rows = Vec::with_capacity(sensors.len());
+        for (index, s) in sensors.iter().enumerate() {
+            if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
+                return Err(FrfError::SensorOutside {
+                    index,
+                    xi: s.xi,
+                    eta: s.eta,
+                    tau: s.tau,
+                });
+            }
+            let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
+            let row = shell
+                .shape_functions(s.xi, s.eta, s.tau)
+                .into_iter()
+                .map(|(dof, col)| (dof, dot(dir, col)))
+                .filter(|(_, v)| *v != 0.0)
+                .collect();
+            sensor_rows.push(row);
+        }
+        let mut spring_dofs: Vec<usize> = assembled
+            .spring_blocks
+            .iter()
+            .flatten()
+            .flat_map(|b| b.dofs.iter().copied())
+            .collect();
+        spring_dofs.sort_unstable();
+        spring_dofs.dedup();
+        let block_positions = assembled
+            .spring_blocks
+            .iter()
+            .flatten()
+            .map(|b| {
+                b.dofs
+                    .iter()
+                    .map(|d| spring_dofs.binary_search(d).expect("in the union"))
+                    .collect()
+            })
+            .collect();
+        Ok(Self {
+            assembled,
+            sensor_rows,
+            spring_dofs,
+            block_positions,
+        })
+    }
+
+    pub fn assembled(&self) -> &AssembledModel {
+        &self.assembled
+    }
+
+    pub fn sensor_count(&self) -> usize {
+        self.sensor_rows.len()
+    }
+
+    /// Total number of spring coefficients over all fields.
+    pub fn spring_coefficient_count(&self) -> usize {
+        self.block_positions.len()
+    }
+
+    /// Solves the modes for spring coefficients `kappa` (one vector per
+    /// field) and evaluates ζ_i on `damping`.
+    pub fn modal_state(&self, kappa: &[Vec<f64>], damping: &DampingCurve) -> Result<ModalState, FrfError> {
+        let modes = self.assembled.modes_with(kappa)?;
+        Ok(self.modal_state_from(modes, damping))
+    }
+
+    /// Builds the modal state from already computed modes.
+    pub fn modal_state_from(&self, modes: Modes, damping: &DampingCurve) -> ModalState {
+        let nm = modes.len();
+        let nz = damping.coefficients().len();
+        let omega: Vec<f64> = modes.omega2.iter().map(|w2| w2.max(0.0).sqrt()).collect();
+        let mut zeta = vec![0.0; nm];
+        let mut zeta_basis = Mat::<f64>::zeros(nm, nz);
+        let mut b = vec![0.0; nz];
+        for i in 0..nm {
+            if modes.kinds[i] == ModeKind::Rigid {
+                continue;
+            }
+            damping.basis_at(omega[i] / (2.0 * PI), &mut b);
+            for z in 0..nz {
+                zeta_basis[(i, z)] = b[z];
+            }
+            zeta[i] = b.iter().zip(damping.coefficients()).map(|(b, g)| b * g).sum();
+        }
+        let amplitudes = Mat::from_fn(self.sensor_rows.len(), nm, |s, i| {
+            self.sensor_rows[s].iter().map(|&(d, v)| v * modes.shapes[(d, i)]).sum()
+        });
+        let phi_springs = dense_rows(&modes.shapes, &self.spring_dofs);
+        ModalState {
+            modes,
+            zeta,
+            zeta_basis,
+            amplitudes,
+            phi_springs,
+            omega,
+        }
+    }
+
+    /// FRFs (and, if asked, sensitivities) by modal superposition.
+    #[track_caller]
+    pub fn evaluate(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> FrfEvaluation {
+        let nf = request.frequencies_hz.len();
+        let nm = state.modes.len();
+        let np = request.pairs.len();
+        for &(r, s) in request.pairs {
+            assert!(
+                r < self.sensor_count() && s < self.sensor_count(),
+                "sensor index out of range"
+            );
+        }
+        let w: Vec<f64> = request.frequencies_hz.iter().map(|f| 2.0 * PI * f).collect();
+        // q_{i,f} = 1 / D_i(ω_f), split into real and imaginary parts for real GEMMs.
+        let mut q_re = Mat::<f64>::zeros(nm, nf);
+        let mut q_im = Mat::<f64>::zeros(nm, nf);
+        for f in 0..nf {
+            for i in 0..nm {
+                let d = c64::new(
+                    state.omega[i] * state.omega[i] - w[f] * w[f],
+                    2.0 * state.zeta[i] * state.omega[i] * w[f],
+                );
+                let q = d.inv();
+                q_re[(i, f)] = q.re;
+                q_im[(i, f)] = q.im;
+            }
+        }
+        // H_p = Σ_i a_r a_s q_i for every pair p = (r, s).
+        let coupling = Mat::from_fn(np, nm, |p, i| {
+            let (r, s) = request.pairs[p];
+            state.amplitudes[(r, i)] * state.amplitudes[(s, i)]
+        });
+        let h_mat = complex_product(&coupling, &q_re, &q_im);
+        let factor: Vec<c64> = w.iter().map(|&wf| request.quantity.factor(wf)).collect();
+        let scaled = |m: &(Mat<f64>, Mat<f64>), row: usize| -> Vec<c64> {
+            (0..nf)
+                .map(|f| c64::new(m.0[(row, f)], m.1[(row, f)]) * factor[f])
+                .collect()
+        };
+        let h: Vec<c64> = (0..np).flat_map(|p| scaled(&h_mat, p)).collect();
+        if !sensitivities {
+            return FrfEvaluation {
+                h,
+                dh_dkappa: Vec::new(),
+                dh_dgamma: Vec::new(),
+            };
+        }
+        // Damping: ∂H_p/∂γ_z = Σ_i a_r a_s B_z(f_i) e_i, e_i = -2j ω_i ω q_i².
+        let nz = state.zeta_basis.ncols();
+        let mut e_re = Mat::<f64>::zeros(nm, nf);
+        let mut e_im = Mat::<f64>::zeros(nm, nf);
+        for f in 0..nf {
+            for i in 0..nm {
+                let q = c64::new(q_re[(i, f)], q_im[(i, f)]);
+                let e = c64::new(0.0, -2.0 * state.omega[i] * w[f]) * q * q;
+                e_re[(i, f)] = e.re;
+                e_im[(i, f)] = e.im;
+            }
+        }
+        let weighted = Mat::from_fn(np * nz, nm, |row, i| {
+            coupling[(row / nz, i)] * state.zeta_basis[(i, row % nz)]
+        });
+        let dg = complex_product(&weighted, &e_re, &e_im);
+        let dh_dgamma = (0..nz)
+            .map(|z| (0..np).flat_map(|p| scaled(&dg, p * nz + z)).collect())
+            .collect();
+        // Springs: g_s on U for every sensor involved, then -g_rᵀ B_j g_s.
+        let mut involved: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
+        involved.sort_unstable();
+        involved.dedup();
+        let g: Vec<(Mat<f64>, Mat<f64>)> = involved
+            .iter()
+            .map(|&s| {
+                let scaled_q_re = Mat::from_fn(nm, nf, |i, f| state.amplitudes[(s, i)] * q_re[(i, f)]);
+                let scaled_q_im = Mat::from_fn(nm, nf, |i, f| state.amplitudes[(s, i)] * q_im[(i, f)]);
+                complex_product(&state.phi_springs, &scaled_q_re, &scaled_q_im)
+            })
+            .collect();
+        let g_of = |sensor: usize| &g[involved.binary_search(&sensor).expect("involved")];
+        let blocks: Vec<_> = self.assembled.spring_blocks.iter().flatten().collect();
+        let mut dh_dkappa = Vec::with_capacity(blocks.len());
+        for (block, pos) in blocks.iter().zip(&self.block_positions) {
+            let mut out = vec![c64::new(0.0, 0.0); np * nf];
+            let nb = pos.len();
+            for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                let (gr, gs) = (g_of(r), g_of(s));
+                for f in 0..nf {
+                    let mut acc = c64::new(0.0, 0.0);
+                    for a in 0..nb {
+                        let mut bg = c64::new(0.0, 0.0);
+                        for b in 0..nb {
+                            bg += block.values[(a, b)] * c64::new(gs.0[(pos[b], f)], gs.1[(pos[b], f)]);
+                        }
+                        acc += c64::new(gr.0[(pos[a], f)], gr.1[(pos[a], f)]) * bg;
+                    }
+                    out[p * nf + f] = -acc * factor[f];
+                }
+            }
+            dh_dkappa.push(out);
+        }
+        FrfEvaluation {
+            h,
+            dh_dkappa,
+            dh_dgamma,
+        }
+    }
+
+    /// The direct path of eq. (31)–(32): solves `Z(ω) x = N_sᵀ` with
+    /// `Z = K - ω²M + jωC`, `C = M Φ diag(2ζω) Φᵀ M` (eq. 25 with
+    /// `Φ⁻¹ = Φᵀ M`), and returns `N_r x` in the requested quantity.
+    /// `C` comes from `state`; `kappa` sets `K`. For verification: `O(n³)`
+    /// per frequency.
+    pub fn direct(
+        &self,
+        kappa: &[Vec<f64>],
+        state: &ModalState,
+        frequency_hz: f64,
+        pair: (usize, usize),
+        quantity: Quantity,
+    ) -> Result<c64, FrfError> {
+        let k = self.assembled.stiffness_with(kappa)?;
+        let m = &self.assembled.mass;
+        let n = m.nrows();
+        let phi = &state.modes.shapes;
+        let d = Mat::from_fn(phi.ncols(), phi.ncols(), |i, j| {
+            if i == j {
+                2.0 * state.zeta[i] * state.omega[i]
+            } else {
+                0.0
+            }
+        });
+        let mphi = m * phi;
+        let c = &mphi * &d * mphi.transpose();
+        let w = 2.0 * PI * frequency_hz;
+        let red = &self.assembled.reduction;
+        let z_re = red.reduce(&Mat::from_fn(n, n, |i, j| k[(i, j)] - w * w * m[(i, j)]));
+        let z_im = red.reduce(&Mat::from_fn(n, n, |i, j| w * c[(i, j)]));
+        let full_rhs = |s: usize| {
+            let mut v = Mat::<f64>::zeros(n, 1);
+            for &(dof, val) in &self.sensor_rows[s] {
+                v[(dof, 0)] += val;
+            }
+            v
+        };
+        let rhs = red.reduce_vector(&full_rhs(pair.1));
+        let x = complex_solve(&z_re, &z_im, &rhs).ok_or(FrfError::SingularImpedance { frequency_hz })?;
+        let (x_re, x_im) = (red.expand(&x.0), red.expand(&x.1));
+        let response = self.sensor_rows[pair.0]
+            .iter()
+            .fold(c64::new(0.0, 0.0), |acc, &(dof, v)| {
+                acc + c64::new(x_re[(dof, 0)], x_im[(dof, 0)]) * v
+            });
+        Ok(response * quantity.factor(w))
+    }
+}
+
+/// `A (B_re + j B_im)` for real `A`: two real GEMMs.
+fn complex_product(a: &Mat<f64>, b_re: &Mat<f64>, b_im: &Mat<f64>) -> (Mat<f64>, Mat<f64>) {
+    let mut re = Mat::<f64>::zeros(a.nrows(), b_re.ncols());
+    let mut im = Mat::<f64>::zeros(a.nrows(), b_re.ncols());
+    matmul(re.as_mut(), Accum::Replace, a.as_ref(), b_re.as_ref(), 1.0, Par::Seq);
+    matmul(im.as_mut(), Accum::Replace, a.as_ref(), b_im.as_ref(), 1.0, Par::Seq);
+    (re, im)
+}

@@ -1,0 +1,23 @@
+//! Small dense helpers shared by the FRF and updating code.
+
+use faer::prelude::Solve;
+use faer::{c64, Mat};
+
+/// The rows `rows` of `a`, in order.
+pub fn dense_rows(a: &Mat<f64>, rows: &[usize]) -> Mat<f64> {
+    Mat::from_fn(rows.len(), a.ncols(), |r, c| a[(rows[r], c)])
+}
+
+/// Solves `(A_re + j A_im) x = b` for real `b` (one or more columns) by
+/// partial-pivoting LU on the complex matrix. `None` if the result is not
+/// finite (singular system).
+pub fn complex_solve(a_re: &Mat<f64>, a_im: &Mat<f64>, b: &Mat<f64>) -> Option<(Mat<f64>, Mat<f64>)> {
+    let n = a_re.nrows();
+    let a = Mat::from_fn(n, n, |i, j| c64::new(a_re[(i, j)], a_im[(i, j)]));
+    let rhs = Mat::from_fn(n, b.ncols(), |i, j| c64::new(b[(i, j)], 0.0));
+    let x = a.partial_piv_lu().solve(&rhs);
+    let re = Mat::from_fn(n, b.ncols(), |i, j| x[(i, j)].re);
+    let im = Mat::from_fn(n, b.ncols(), |i, j| x[(i, j)].im);
+    let finite = (0..n).all(|i| (0..b.ncols()).all(|j| re[(i, j)].is_finite() && im[(i, j)].is_finite()));
+    finite.then_some((re, im))
+}

@@ -1,0 +1,186 @@
+//! Model FRFs: direct vs modal, reciprocity, phase through a resonance, and
+//! sensitivities against central finite differences.
+
+use super::common::{sinello_model, sinello_sensors, true_kappa};
+use faer::c64;
+use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity, SensorPoint};
+use splinewatch_core::material::OrthotropicMaterial;
+use splinewatch_core::model::ShellModel;
+use splinewatch_core::shell::Shell;
+
+fn damping() -> DampingCurve {
+    DampingCurve::new(2, vec![0.03, 0.012, 0.02, 0.015, 0.025, 0.018, 0.03], 0.0, 80.0).unwrap()
+}
+
+fn sinello_frf_model() -> FrfModel {
+    FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap()
+}
+
+fn rel(a: c64, b: c64) -> f64 {
+    (a - b).norm() / b.norm()
+}
+
+#[test]
+fn direct_and_modal_superposition_agree() {
+    let model = sinello_frf_model();
+    let kappa = true_kappa();
+    let state = model.modal_state(&kappa, &damping()).unwrap();
+    let freqs = [0.7, 3.3, 6.68, 17.7, 41.2, 66.6, 79.9];
+    let pairs = [(0, 0), (1, 0), (5, 0), (11, 3)];
+    let mut worst: f64 = 0.0;
+    for quantity in [Quantity::Receptance, Quantity::Mobility, Quantity::Accelerance] {
+        let eval = model.evaluate(
+            &state,
+            FrfRequest {
+                frequencies_hz: &freqs,
+                pairs: &pairs,
+                quantity,
+            },
+            false,
+        );
+        for (p, &pair) in pairs.iter().enumerate() {
+            for (l, &f) in freqs.iter().enumerate() {
+                let direct = model.direct(&kappa, &state, f, pair, quantity).unwrap();
+                let e = rel(eval.h[p * freqs.len() + l], direct);
+                worst = worst.max(e);
+                assert!(
+                    e < 1e-8,
+                    "{quantity:?} {pair:?} {f} Hz: modal {} vs direct {direct} ({e:e})",
+                    eval.h[p * freqs.len() + l]
+                );
+            }
+        }
+    }
+    eprintln!("direct vs modal: worst relative difference {worst:.1e}");
+}
+
+#[test]
+fn reciprocity_of_the_direct_path() {
+    let model = sinello_frf_model();
+    let kappa = true_kappa();
+    let state = model.modal_state(&kappa, &damping()).unwrap();
+    for f in [2.0, 9.1, 55.5] {
+        for (r, s) in [(1, 0), (7, 4), (11, 2)] {
+            let a = model.direct(&kappa, &state, f, (r, s), Quantity::Receptance).unwrap();
+            let b = model.direct(&kappa, &state, f, (s, r), Quantity::Receptance).unwrap();
+            assert!(rel(a, b) < 1e-9, "H_{r}{s} = {a} vs H_{s}{r} = {b} at {f} Hz");
+        }
+    }
+}
+
+#[test]
+fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
+    // A simply supported square plate: the first mode (1,1) is 2.5 times
+    // below the next ones, so near it the driving-point FRF is SDOF-like.
+    let plate = ShellModel {
+        shell: Shell::rectangular_plate(4.0, 4.0, 0.1, [3, 3], [10, 10]).unwrap(),
+        material: OrthotropicMaterial::isotropic(30e9, 0.2, 2400.0).unwrap(),
+        springs: vec![],
+        constraints: [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1]
+            .into_iter()
+            .map(|edge| EdgeConstraint {
+                edge,
+                kind: SupportKind::SimplySupported,
+            })
+            .collect(),
+    };
+    let sensor = SensorPoint {
+        xi: 0.41,
+        eta: 0.37,
+        tau: 0.5,
+        direction: [0.0, 0.0, 1.0],
+    };
+    let model = FrfModel::new(plate.assemble().unwrap(), &[sensor]).unwrap();
+    let state = model
+        .modal_state(&[], &DampingCurve::new(1, vec![0.02, 0.02], 0.0, 100.0).unwrap())
+        .unwrap();
+    let first_bending = (0..state.modes.len())
+        .find(|&i| state.amplitude(0, i).abs() > 1e-6)
+        .expect("a mode moves the sensor");
+    let f1 = state.modes.frequency_hz(first_bending);
+    let freqs = [0.3 * f1, f1, 1.4 * f1];
+    let eval = model.evaluate(
+        &state,
+        FrfRequest {
+            frequencies_hz: &freqs,
+            pairs: &[(0, 0)],
+            quantity: Quantity::Receptance,
+        },
+        false,
+    );
+    let phase: Vec<f64> = eval.h.iter().map(|h| h.arg().to_degrees()).collect();
+    assert!(phase[0] <= 0.0 && phase[0] > -2.0, "below resonance: {}", phase[0]);
+    assert!((phase[1] + 90.0).abs() < 2.0, "at resonance: {}", phase[1]);
+    assert!(phase[2] < -170.0 || phase[2] > 179.9, "above resonance: {}", phase[2]);
+    // Receptance below resonance is positive (stiffness-controlled).
+    assert!(eval.h[0].re > 0.0);
+}
+
+#[test]
+fn sensitivities_match_central_differences() {
+    let model = sinello_frf_model();
+    let kappa = true_kappa();
+    let curve = damping();
+    let state = model.modal_state(&kappa, &curve).unwrap();
+    let freqs = [4.1, 6.5, 23.0, 47.3, 71.9];
+    let pairs = [(0, 0), (3, 0)];
+    let quantity = Quantity::Accelerance;
+    let request = FrfRequest {
+        frequencies_hz: &freqs,
+        pairs: &pairs,
+        quantity,
+    };
+    let eval = model.evaluate(&state, request, true);
+    let column_error = |analytic: &[c64], fd: &[c64]| {
+        let num: f64 = analytic.iter().zip(fd).map(|(a, b)| (a - b).norm_sqr()).sum();
+        let den: f64 = fd.iter().map(|b| b.norm_sqr()).sum();
+        (num / den).sqrt()
+    };
+    // Spring coefficients: eq. (33) holds C fixed, so the reference is the
+    // direct path with the damping matrix of the base state.
+    let mut worst: f64 = 0.0;
+    let mut flat = 0;
+    for field in 0..kappa.len() {
+        for j in 0..kappa[field].len() {
+            let h = 1e-4 * kappa[field][j];
+            let at = |delta: f64| -> Vec<c64> {
+                let mut k = kappa.clone();
+                k[field][j] += delta;
+                pairs
+                    .iter()
+                    .flat_map(|&pair| freqs.iter().map(move |&f| (pair, f)))
+                    .map(|(pair, f)| model.direct(&k, &state, f, pair, quantity).unwrap())
+                    .collect()
+            };
+            let (plus, minus) = (at(h), at(-h));
+            let fd: Vec<c64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
+            let e = column_error(&eval.dh_dkappa[flat], &fd);
+            worst = worst.max(e);
+            assert!(e < 1e-5, "∂H/∂κ field {field} coefficient {j}: relative error {e:e}");
+            flat += 1;
+        }
+    }
+    // Damping coefficients: exact, checked on the modal path (modes fixed).
+    for z in 0..curve.coefficients().len() {
+        let h = 1e-6;
+        let at = |delta: f64| {
+            let mut g = curve.coefficients().to_vec();
+            g[z] += delta;
+            let s = model.modal_state_from(state.modes.clone(), &curve.with_coefficients(g).unwrap());
+            model.evaluate(&s, request, false).h
+        };
+        let (plus, minus) = (at(h), at(-h));
+        let fd: Vec<c64> = plus.iter().zip(&minus).map(|(p, m)| (p - m) / (2.0 * h)).collect();
+        if fd.iter().all(|v| v.norm() == 0.0) {
+            // γ_z whose support holds no mode of the band: both must vanish.
+            assert!(eval.dh_dgamma[z].iter().all(|v| v.norm() == 0.0));
+            continue;
+        }
+        let e = column_error(&eval.dh_dgamma[z], &fd);
+        worst = worst.max(e);
+        assert!(e < 1e-5, "∂H/∂γ_{z}: relative error {e:e}");
+    }
+    eprintln!("sensitivities vs central differences: worst relative column error {worst:.1e}");
+}

@@ -1,0 +1,5 @@
+//! Verification ladder of splinewatch-core: one test binary, shared fixtures.
+
+mod common;
+mod frf;
+mod shell;
