@@ -7,12 +7,15 @@
 
 use serde::Deserialize;
 use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::SensorPoint;
 use splinewatch_core::knots::KnotVector;
 use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::shell::Shell;
 use splinewatch_core::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::surface::Direction;
+use splinewatch_core::updating::{LineSelection, Method, Parameter, ParameterKind, UpdateSettings, Weighting};
 use std::fmt::Display;
 use thiserror::Error;
 
@@ -36,6 +39,10 @@ fn err(path: impl Into<String>, message: impl Display) -> ConfigError {
 pub struct Config {
     pub structure: StructureConfig,
     pub model: ModelConfig,
+    #[serde(default)]
+    pub sensors: Vec<SensorConfig>,
+    #[serde(default)]
+    pub updating: UpdatingConfig,
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -56,6 +63,124 @@ pub struct ModelConfig {
     pub springs: Vec<SpringConfig>,
     #[serde(default)]
     pub constraints: Vec<ConstraintConfig>,
+    pub damping: Option<DampingConfig>,
+}
+
+/// `[model.damping]`: the B-spline ζ(f) of eq. (29).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingConfig {
+    pub degree: usize,
+    /// Start values γ_z; their count is n_z.
+    pub coefficients: Vec<f64>,
+    /// Band [f_start, f_end] in Hz over which the curve is defined.
+    pub f_start: f64,
+    pub f_end: f64,
+    /// `[lower, upper]` for every γ_z when updating.
+    pub bounds: Option<[f64; 2]>,
+    #[serde(default = "default_true")]
+    pub update: bool,
+}
+
+/// A measurement point: parametric `xi`/`eta` or physical `x`/`y`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorConfig {
+    pub name: String,
+    pub xi: Option<f64>,
+    pub eta: Option<f64>,
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+    pub direction: DirectionConfig,
+    /// What is measured there: one of, or a list of, "acceleration",
+    /// "force", "displacement", "velocity".
+    #[serde(default = "default_quantity")]
+    pub quantity: QuantityList,
+    /// Face the sensor sits on (default: the mid-surface).
+    #[serde(default = "default_face")]
+    pub surface: FaceConfig,
+}
+
+fn default_quantity() -> QuantityList {
+    QuantityList::One("acceleration".into())
+}
+
+fn default_face() -> FaceConfig {
+    FaceConfig::Middle
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum QuantityList {
+    One(String),
+    Many(Vec<String>),
+}
+
+impl QuantityList {
+    pub fn as_slice(&self) -> &[String] {
+        match self {
+            QuantityList::One(q) => std::slice::from_ref(q),
+            QuantityList::Many(v) => v,
+        }
+    }
+}
+
+fn default_max_iterations() -> usize {
+    50
+}
+fn default_cost_tolerance() -> f64 {
+    1e-8
+}
+fn default_step_tolerance() -> f64 {
+    1e-9
+}
+fn default_initial_damping() -> f64 {
+    1e-3
+}
+fn default_decimation() -> usize {
+    1
+}
+
+/// `[updating]`: solver and data selection.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UpdatingConfig {
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// Stop when an accepted step lowers the cost by less than this fraction.
+    #[serde(default = "default_cost_tolerance")]
+    pub cost_tolerance: f64,
+    /// Stop when the step in the transformed variables is this small.
+    #[serde(default = "default_step_tolerance")]
+    pub step_tolerance: f64,
+    #[serde(default = "default_method")]
+    pub method: Method,
+    #[serde(default = "default_weighting")]
+    pub weighting: Weighting,
+    /// Frequency band [f_min, f_max] in Hz used for the residues.
+    pub band: Option<[f64; 2]>,
+    /// Keep every n-th line of the band.
+    #[serde(default = "default_decimation")]
+    pub decimation: usize,
+    /// Bands [a, b] in Hz left out.
+    #[serde(default)]
+    pub exclude: Vec<[f64; 2]>,
+    /// Initial Levenberg–Marquardt damping, relative to max diag(JᵀJ).
+    #[serde(default = "default_initial_damping")]
+    pub initial_damping: f64,
+}
+
+fn default_method() -> Method {
+    Method::LevenbergMarquardt
+}
+fn default_weighting() -> Weighting {
+    Weighting::Uniform
+}
+
+impl Default for UpdatingConfig {
+    fn default() -> Self {
+        toml::from_str("").expect("every key has a default")
+    }
 }
 
 #[derive(Debug, Clone, Deserialize)]
@@ -189,6 +314,18 @@ impl Config {
     fn validate_names(&self) -> Result<(), ConfigError> {
         if self.structure.name.trim().is_empty() {
             return Err(err("structure.name", "must not be empty"));
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, s) in self.sensors.iter().enumerate() {
+            if s.name.trim().is_empty() || s.name.contains('/') || s.name.contains(char::is_whitespace) {
+                return Err(err(
+                    format!("sensors[{i}].name"),
+                    format!("{:?} must be non-empty without '/' or spaces", s.name),
+                ));
+            }
+            if !seen.insert(s.name.as_str()) {
+                return Err(err(format!("sensors[{i}].name"), format!("{:?} is used twice", s.name)));
+            }
         }
         let mut seen = std::collections::BTreeSet::new();
         for (i, s) in self.model.springs.iter().enumerate() {
@@ -340,6 +477,205 @@ fn build_spring(i: usize, s: &SpringConfig) -> Result<SpringField, ConfigError> 
         }
     }
     SpringField::new(xi, eta, s.stiffness.clone(), direction, face).map_err(|e| err(key("stiffness"), e))
+}
+
+impl Config {
+    /// The sensors as model points, in config order, with their names.
+    pub fn build_sensors(&self, shell: &Shell) -> Result<Vec<(String, SensorPoint)>, ConfigError> {
+        let mut out = Vec::with_capacity(self.sensors.len());
+        for (i, s) in self.sensors.iter().enumerate() {
+            let key = |k: &str| format!("sensors[{i}].{k}");
+            for q in s.quantity.as_slice() {
+                if !matches!(q.as_str(), "acceleration" | "force" | "displacement" | "velocity") {
+                    return Err(err(
+                        key("quantity"),
+                        format!("{q:?} is not one of acceleration, force, displacement, velocity"),
+                    ));
+                }
+            }
+            let (xi, eta) = match (s.xi, s.eta, s.x, s.y) {
+                (Some(xi), Some(eta), None, None) => (xi, eta),
+                (None, None, Some(x), Some(y)) => shell.surface().locate_xy(x, y).ok_or_else(|| {
+                    err(
+                        key("x"),
+                        format!("point ({x}, {y}) m is not on the deck (outside the model's plan)"),
+                    )
+                })?,
+                _ => {
+                    return Err(err(
+                        format!("sensors[{i}]"),
+                        "give either both xi and eta (parametric) or both x and y (metres)",
+                    ))
+                }
+            };
+            let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+            if !kx.contains(xi) || !ke.contains(eta) {
+                return Err(err(
+                    key("xi"),
+                    format!("({xi}, {eta}) lies outside the parameter domain"),
+                ));
+            }
+            let direction = match &s.direction {
+                DirectionConfig::Named(n) => match n.as_str() {
+                    "x" => [1.0, 0.0, 0.0],
+                    "y" => [0.0, 1.0, 0.0],
+                    "z" => [0.0, 0.0, 1.0],
+                    "normal" => {
+                        let e = shell.surface().evaluate(xi, eta);
+                        splinewatch_core::vec3::cross(e.r_xi, e.r_eta)
+                    }
+                    other => {
+                        return Err(err(
+                            key("direction"),
+                            format!("{other:?} is not one of \"x\", \"y\", \"z\", \"normal\" or a 3-vector"),
+                        ))
+                    }
+                },
+                DirectionConfig::Vector(v) => *v,
+            };
+            if splinewatch_core::vec3::normalize(direction).is_none() {
+                return Err(err(key("direction"), "must be a finite non-zero vector"));
+            }
+            let tau = match s.surface {
+                FaceConfig::Bottom => 0.0,
+                FaceConfig::Middle => 0.5,
+                FaceConfig::Top => 1.0,
+            };
+            out.push((
+                s.name.clone(),
+                SensorPoint {
+                    xi,
+                    eta,
+                    tau,
+                    direction,
+                },
+            ));
+        }
+        Ok(out)
+    }
+
+    /// Builds every section, so all errors surface at load time.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let model = self.build_model()?;
+        self.build_sensors(&model.shell)?;
+        if self.model.damping.is_some() {
+            self.build_damping()?;
+        }
+        self.build_parameters()?;
+        self.update_settings()?;
+        Ok(())
+    }
+
+    /// `[model.damping]` as a curve; an error if it is missing.
+    pub fn build_damping(&self) -> Result<DampingCurve, ConfigError> {
+        let d = self
+            .model
+            .damping
+            .as_ref()
+            .ok_or_else(|| err("model.damping", "is required for FRFs and updating"))?;
+        if let Some([lo, hi]) = d.bounds {
+            if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+                return Err(err(
+                    "model.damping.bounds",
+                    format!("[{lo}, {hi}] must satisfy 0 <= lower < upper"),
+                ));
+            }
+            if let Some((j, g)) = d.coefficients.iter().enumerate().find(|(_, &g)| !(g >= lo && g <= hi)) {
+                return Err(err(
+                    "model.damping.coefficients",
+                    format!("coefficient {} = {g} lies outside bounds [{lo}, {hi}]", j + 1),
+                ));
+            }
+        }
+        DampingCurve::new(d.degree, d.coefficients.clone(), d.f_start, d.f_end).map_err(|e| err("model.damping", e))
+    }
+
+    /// The updating parameters: `<spring>.k<j>` for spring fields with
+    /// `update = true` (j from 1, η fastest) and `damping.g<z>`.
+    pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
+        let mut out = Vec::new();
+        for (field, s) in self.model.springs.iter().enumerate() {
+            if !s.update {
+                continue;
+            }
+            let [lower, upper] = s
+                .bounds
+                .ok_or_else(|| err(format!("model.springs[{field}].bounds"), "required when update = true"))?;
+            for coefficient in 0..s.stiffness.len() {
+                out.push(Parameter {
+                    name: format!("{}.k{}", s.name, coefficient + 1),
+                    kind: ParameterKind::Spring { field, coefficient },
+                    lower,
+                    upper,
+                });
+            }
+        }
+        if let Some(d) = self.model.damping.as_ref().filter(|d| d.update) {
+            let [lower, upper] = d
+                .bounds
+                .ok_or_else(|| err("model.damping.bounds", "required when update = true"))?;
+            for coefficient in 0..d.coefficients.len() {
+                out.push(Parameter {
+                    name: format!("damping.g{}", coefficient + 1),
+                    kind: ParameterKind::Damping { coefficient },
+                    lower,
+                    upper,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// `[updating]` as solver settings.
+    pub fn update_settings(&self) -> Result<UpdateSettings, ConfigError> {
+        let u = &self.updating;
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(err(
+                    format!("updating.{key}"),
+                    format!("must be finite and positive, got {v}"),
+                ))
+            }
+        };
+        positive("cost_tolerance", u.cost_tolerance)?;
+        positive("step_tolerance", u.step_tolerance)?;
+        positive("initial_damping", u.initial_damping)?;
+        if u.max_iterations == 0 {
+            return Err(err("updating.max_iterations", "must be at least 1"));
+        }
+        if u.decimation == 0 {
+            return Err(err("updating.decimation", "must be at least 1"));
+        }
+        let interval = |key: String, [a, b]: [f64; 2]| {
+            if a.is_finite() && b.is_finite() && a >= 0.0 && a <= b {
+                Ok((a, b))
+            } else {
+                Err(err(key, format!("[{a}, {b}] must satisfy 0 <= a <= b")))
+            }
+        };
+        let band = u.band.map(|b| interval("updating.band".into(), b)).transpose()?;
+        let exclude = u
+            .exclude
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| interval(format!("updating.exclude[{i}]"), b))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(UpdateSettings {
+            method: u.method,
+            max_iterations: u.max_iterations,
+            cost_tolerance: u.cost_tolerance,
+            step_tolerance: u.step_tolerance,
+            weighting: u.weighting,
+            lines: LineSelection {
+                band,
+                decimation: u.decimation,
+                exclude,
+            },
+            initial_damping: u.initial_damping,
+        })
+    }
 }
 
 /// "line L, column C" of a byte offset, for parse errors.

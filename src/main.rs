@@ -1,9 +1,11 @@
 //! The `splinewatch` command line.
 #![forbid(unsafe_code)]
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use splinewatch::commands;
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::updating::IterationRecord;
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -33,11 +35,66 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Model FRFs at sensors, optionally with the paper's noise model, as FRF JSON.
+    Synth {
+        #[arg(long)]
+        config: PathBuf,
+        /// Input (force) sensors, comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        inputs: Vec<String>,
+        /// Output (response) sensors, comma-separated.
+        #[arg(long, value_delimiter = ',', required = true)]
+        outputs: Vec<String>,
+        /// receptance, mobility or accelerance.
+        #[arg(long, default_value = "accelerance", value_parser = parse_quantity)]
+        quantity: Quantity,
+        /// Lowest frequency line, Hz.
+        #[arg(long, default_value_t = 0.5)]
+        from: f64,
+        /// Highest frequency line, Hz.
+        #[arg(long, default_value_t = 80.0)]
+        to: f64,
+        /// Line spacing, Hz.
+        #[arg(long, default_value_t = 0.1)]
+        step: f64,
+        /// Complex Gaussian noise, standard deviation as a fraction of each FRF's RMS.
+        #[arg(long, default_value_t = 0.0)]
+        noise: f64,
+        /// Seed of the noise generator (ChaCha8).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Output file (FRF JSON).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// FRF-based model updating of the configured model against measured FRFs.
+    Update {
+        #[arg(long)]
+        config: PathBuf,
+        /// Measured FRFs (FRF JSON).
+        #[arg(long)]
+        frf: PathBuf,
+        /// Start from a previous result (`update --json` output) instead of the config's values.
+        #[arg(long)]
+        start: Option<PathBuf>,
+        /// Print the result as JSON on stdout.
+        #[arg(long)]
+        json: bool,
+    },
     /// Validate a configuration file without running anything.
     CheckConfig {
         /// Configuration file (TOML).
         config: PathBuf,
     },
+}
+
+fn parse_quantity(s: &str) -> Result<Quantity, String> {
+    match s {
+        "receptance" => Ok(Quantity::Receptance),
+        "mobility" => Ok(Quantity::Mobility),
+        "accelerance" => Ok(Quantity::Accelerance),
+        other => Err(format!("{other:?} is not receptance, mobility or accelerance")),
+    }
 }
 
 fn main() -> ExitCode {
@@ -62,6 +119,70 @@ fn run(cli: Cli) -> Result<()> {
             let stdout = std::io::stdout();
             let mut out = stdout.lock();
             commands::write_modes(&report, json, &mut out)?;
+            out.flush()?;
+        }
+        Command::Synth {
+            config,
+            inputs,
+            outputs,
+            quantity,
+            from,
+            to,
+            step,
+            noise,
+            seed,
+            out,
+        } => {
+            let cfg = commands::load_config(&config)?;
+            let options = commands::SynthOptions {
+                inputs,
+                outputs,
+                quantity,
+                f_min: from,
+                f_max: to,
+                step,
+                noise,
+                seed,
+            };
+            let file = commands::synth(&cfg, &options)?;
+            let text = serde_json::to_string(&file)?;
+            std::fs::write(&out, text).with_context(|| format!("cannot write {}", out.display()))?;
+            eprintln!(
+                "wrote {} FRFs × {} lines to {}",
+                file.frfs.len(),
+                file.frequency_hz.len(),
+                out.display()
+            );
+        }
+        Command::Update {
+            config,
+            frf,
+            start,
+            json,
+        } => {
+            let cfg = commands::load_config(&config)?;
+            let frf_text =
+                std::fs::read_to_string(&frf).with_context(|| format!("cannot read FRF file {}", frf.display()))?;
+            let start_text = start
+                .as_ref()
+                .map(|p| std::fs::read_to_string(p).with_context(|| format!("cannot read start file {}", p.display())))
+                .transpose()?;
+            let mut progress = |it: &IterationRecord| {
+                eprintln!(
+                    "iteration {:3}  relative residual {:.4e}  step {:.3e}  damping {:.3e}  rejected {}",
+                    it.iteration, it.relative_residual, it.step_norm, it.damping, it.rejected_steps
+                );
+            };
+            let result = commands::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
+                .with_context(|| format!("updating against {}", frf.display()))?;
+            let stdout = std::io::stdout();
+            let mut out = stdout.lock();
+            if json {
+                serde_json::to_writer(&mut out, &result)?;
+                writeln!(out)?;
+            } else {
+                commands::write_update_table(&result, &mut out)?;
+            }
             out.flush()?;
         }
         Command::CheckConfig { config } => {

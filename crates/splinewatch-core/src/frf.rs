@@ -307,20 +307,29 @@ impl FrfModel {
             .collect();
         let g_of = |sensor: usize| &g[involved.binary_search(&sensor).expect("involved")];
         let blocks: Vec<_> = self.assembled.spring_blocks.iter().flatten().collect();
+        let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| s).collect();
+        inputs.sort_unstable();
+        inputs.dedup();
         let mut dh_dkappa = Vec::with_capacity(blocks.len());
         for (block, pos) in blocks.iter().zip(&self.block_positions) {
+            // B_j g_s on the block's dofs, once per input sensor s (two real GEMMs).
+            let b_g: Vec<(Mat<f64>, Mat<f64>)> = inputs
+                .iter()
+                .map(|&s| {
+                    let gs = g_of(s);
+                    let rows_re = Mat::from_fn(pos.len(), nf, |a, f| gs.0[(pos[a], f)]);
+                    let rows_im = Mat::from_fn(pos.len(), nf, |a, f| gs.1[(pos[a], f)]);
+                    complex_product(&block.values, &rows_re, &rows_im)
+                })
+                .collect();
             let mut out = vec![c64::new(0.0, 0.0); np * nf];
-            let nb = pos.len();
             for (p, &(r, s)) in request.pairs.iter().enumerate() {
-                let (gr, gs) = (g_of(r), g_of(s));
+                let gr = g_of(r);
+                let bg = &b_g[inputs.binary_search(&s).expect("an input")];
                 for f in 0..nf {
                     let mut acc = c64::new(0.0, 0.0);
-                    for a in 0..nb {
-                        let mut bg = c64::new(0.0, 0.0);
-                        for b in 0..nb {
-                            bg += block.values[(a, b)] * c64::new(gs.0[(pos[b], f)], gs.1[(pos[b], f)]);
-                        }
-                        acc += c64::new(gr.0[(pos[a], f)], gr.1[(pos[a], f)]) * bg;
+                    for (a, &row) in pos.iter().enumerate() {
+                        acc += c64::new(gr.0[(row, f)], gr.1[(row, f)]) * c64::new(bg.0[(a, f)], bg.1[(a, f)]);
                     }
                     out[p * nf + f] = -acc * factor[f];
                 }

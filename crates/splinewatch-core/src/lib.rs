@@ -22,3 +22,6 @@ pub mod springs;
 pub mod surface;
 pub mod updating;
 pub mod vec3;
+
+/// Complex scalar used for FRFs (re-exported so callers need not depend on faer).
+pub use faer::c64;

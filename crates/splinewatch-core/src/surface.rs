@@ -125,6 +125,34 @@ impl BSplineSurface {
         out
     }
 
+    /// Parameters `(ξ, η)` whose point projects onto `(x, y)` in the xy
+    /// plane (Newton's method on the first two coordinates of eq. 1), or
+    /// `None` when no such point lies in the parameter domain.
+    pub fn locate_xy(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+        let (a, b) = self.xi.domain();
+        let (c, d) = self.eta.domain();
+        let (mut u, mut v) = (0.5 * (a + b), 0.5 * (c + d));
+        for _ in 0..50 {
+            let e = self.evaluate(u, v);
+            let (fx, fy) = (e.r[0] - x, e.r[1] - y);
+            let det = e.r_xi[0] * e.r_eta[1] - e.r_xi[1] * e.r_eta[0];
+            if !(det.is_finite() && det.abs() > 0.0) {
+                return None;
+            }
+            let du = (fx * e.r_eta[1] - fy * e.r_eta[0]) / det;
+            let dv = (e.r_xi[0] * fy - e.r_xi[1] * fx) / det;
+            u = (u - du).clamp(a, b);
+            v = (v - dv).clamp(c, d);
+            let scale = e.r_xi[0].abs() + e.r_xi[1].abs() + e.r_eta[0].abs() + e.r_eta[1].abs();
+            if fx.abs() + fy.abs() <= 1e-12 * scale.max(1.0) && du.abs() + dv.abs() < 1e-14 {
+                break;
+            }
+        }
+        let e = self.evaluate(u, v);
+        let scale = (e.r_xi[0].abs() + e.r_eta[1].abs()).max(1.0);
+        ((e.r[0] - x).abs() + (e.r[1] - y).abs() <= 1e-9 * scale).then_some((u, v))
+    }
+
     /// The same surface with the knot `u` inserted once along `direction`
     /// (h-refinement); `extra` carries further per-control-point values of
     /// dimension `extra_dim` (e.g. thickness) refined the same way.
@@ -240,6 +268,22 @@ mod tests {
             assert!((e.r_xi[0] - 16.0).abs() < 1e-11 && (e.r_eta[1] - 9.0).abs() < 1e-11);
             assert!((e.r_xi[2] - 0.5 * v).abs() < 1e-11 && (e.r_eta[2] - 0.5 * u).abs() < 1e-11);
         }
+    }
+
+    #[test]
+    fn locate_xy_inverts_the_map() {
+        let xi = KnotVector::uniform(3, 6, 0.0, 1.0).unwrap();
+        let eta = KnotVector::uniform(3, 5, 0.0, 1.0).unwrap();
+        let s = BSplineSurface::interpolate(xi, eta, |u, v| [16.0 * u + 0.3 * v * v, 9.0 * v, u * v]).unwrap();
+        for &(u, v) in &[(0.2, 0.7), (0.0, 0.0), (1.0, 0.35), (0.61, 1.0)] {
+            let r = s.evaluate(u, v).r;
+            let (u2, v2) = s.locate_xy(r[0], r[1]).unwrap();
+            assert!(
+                (u - u2).abs() < 1e-10 && (v - v2).abs() < 1e-10,
+                "({u}, {v}) -> ({u2}, {v2})"
+            );
+        }
+        assert_eq!(s.locate_xy(-5.0, 3.0), None);
     }
 
     #[test]

@@ -21,7 +21,7 @@
 //! value flags a parameter combination the data cannot identify.
 
 use crate::damping::{DampingCurve, DampingError};
-use crate::frf::{FrfError, FrfModel, FrfRequest, Quantity};
+use crate::frf::{FrfError, FrfModel, FrfRequest, ModalState, Quantity};
 use faer::{c64, Mat, Side};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -239,7 +239,7 @@ impl Default for UpdateSettings {
         Self {
             method: Method::LevenbergMarquardt,
             max_iterations: 50,
-            cost_tolerance: 1e-10,
+            cost_tolerance: 1e-8,
             step_tolerance: 1e-9,
             weighting: Weighting::Uniform,
             lines: LineSelection::default(),
@@ -473,16 +473,29 @@ impl<'a> UpdateProblem<'a> {
         self.measured.frfs()[frf].values[self.lines[line]]
     }
 
-    /// Weighted residual `r = √w (h_x - h_a)` and `∂r/∂p`.
-    fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluation, UpdateError> {
+    /// The modal model at parameter values `p`.
+    fn state_at(&self, p: &[f64]) -> Result<ModalState, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
-        let state = self.model.modal_state(&kappa, &damping)?;
-        let request = FrfRequest {
+        Ok(self.model.modal_state(&kappa, &damping)?)
+    }
+
+    fn request(&self) -> FrfRequest<'_> {
+        FrfRequest {
             frequencies_hz: &self.frequencies,
             pairs: &self.pairs,
             quantity: self.measured.quantity(),
-        };
-        let eval = self.model.evaluate(&state, request, jacobian);
+        }
+    }
+
+    /// Weighted residual `r = √w (h_x - h_a)` at `p`; no Jacobian.
+    fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluation, UpdateError> {
+        let state = self.state_at(p)?;
+        self.evaluate_state(p, &state, jacobian)
+    }
+
+    /// Weighted residual and, if asked, `∂r/∂p` for a computed modal state.
+    fn evaluate_state(&self, p: &[f64], state: &ModalState, jacobian: bool) -> Result<Evaluation, UpdateError> {
+        let eval = self.model.evaluate(state, self.request(), jacobian);
         let nl = self.lines.len();
         let nb = self.pairs.len();
         let mut residual = Vec::with_capacity(2 * nl * nb);
@@ -553,6 +566,17 @@ impl<'a> UpdateProblem<'a> {
     /// derivative.
     #[track_caller]
     pub fn solve(&self, start: &[f64]) -> Result<UpdateResult, UpdateError> {
+        self.solve_observed(start, &mut |_| {})
+    }
+
+    /// [`solve`](Self::solve), calling `observer` with the start and every
+    /// accepted iterate as it happens (progress reporting).
+    #[track_caller]
+    pub fn solve_observed(
+        &self,
+        start: &[f64],
+        observer: &mut dyn FnMut(&IterationRecord),
+    ) -> Result<UpdateResult, UpdateError> {
         assert_eq!(start.len(), self.parameters.len(), "one start value per parameter");
         let bounds: Vec<(f64, f64)> = self.parameters.iter().map(|p| (p.lower, p.upper)).collect();
         let to_p = |y: &[f64]| -> Vec<f64> {
@@ -582,6 +606,7 @@ impl<'a> UpdateProblem<'a> {
             damping: 0.0,
             rejected_steps: 0,
         }];
+        observer(&iterations[0]);
         let chain = |jp: &Mat<f64>, y: &[f64]| -> Mat<f64> {
             Mat::from_fn(jp.nrows(), n, |r, c| {
                 jp[(r, c)] * bounded_derivative(y[c], bounds[c].0, bounds[c].1)
@@ -616,11 +641,15 @@ impl<'a> UpdateProblem<'a> {
             };
             let y_new: Vec<f64> = y.iter().zip(&step).map(|(y, s)| y + s).collect();
             evaluations += 1;
-            let trial = self.evaluate(&to_p(&y_new), true);
+            // Residual only: the Jacobian is computed once a step is accepted.
+            let p_new = to_p(&y_new);
+            let trial = self
+                .state_at(&p_new)
+                .and_then(|state| self.evaluate_state(&p_new, &state, false).map(|e| (state, e)));
             // A trial that fails to evaluate counts as a rejected step.
             let (trial, new_cost) = match trial {
                 Ok(t) => {
-                    let c = 0.5 * norm2(&t.residual);
+                    let c = 0.5 * norm2(&t.1.residual);
                     (Some(t), c)
                 }
                 Err(UpdateError::NonFinite(_)) | Err(UpdateError::Model(_)) => (None, f64::INFINITY),
@@ -643,7 +672,8 @@ impl<'a> UpdateProblem<'a> {
                 }
                 continue;
             }
-            let trial = trial.expect("accepted steps evaluated");
+            let (state, _) = trial.expect("accepted steps evaluated");
+            let trial = self.evaluate_state(&p_new, &state, true)?;
             iteration += 1;
             let step_norm = norm2(&step).sqrt();
             let relative_decrease = (cost - new_cost) / cost;
@@ -660,6 +690,7 @@ impl<'a> UpdateProblem<'a> {
                 damping: lambda,
                 rejected_steps: rejected,
             });
+            observer(iterations.last().expect("just pushed"));
             rejected = 0;
             jy = chain(&current.jacobian, &y);
             (a, g) = normal_equations(&jy, &current.residual);

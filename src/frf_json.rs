@@ -1,0 +1,92 @@
+//! The FRF JSON format, shared by `synth`, `update` and (later) `frf`:
+//!
+//! ```json
+//! {"quantity":"receptance|mobility|accelerance","frequency_hz":[…],
+//!  "frfs":[{"input":"P1","output":"P2","re":[…],"im":[…],
+//!           "coherence":[…],"n_averages":N}]}
+//! ```
+//! `coherence` and `n_averages` are optional. Sensor names refer to the
+//! config's `[[sensors]]`.
+
+use serde::{Deserialize, Serialize};
+use splinewatch_core::c64;
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::updating::{MeasuredFrf, MeasuredSet, UpdateError};
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrfFile {
+    pub quantity: Quantity,
+    pub frequency_hz: Vec<f64>,
+    pub frfs: Vec<FrfEntry>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrfEntry {
+    pub input: String,
+    pub output: String,
+    pub re: Vec<f64>,
+    pub im: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coherence: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n_averages: Option<f64>,
+}
+
+#[derive(Debug, Error)]
+pub enum FrfFileError {
+    #[error("not valid FRF JSON: {0}")]
+    Json(#[from] serde_json::Error),
+    #[error("frfs[{index}].{field}: unknown sensor {name:?} (config sensors: {known})")]
+    UnknownSensor {
+        index: usize,
+        field: &'static str,
+        name: String,
+        known: String,
+    },
+    #[error("frfs[{index}]: re has {re} values, im has {im}")]
+    Lengths { index: usize, re: usize, im: usize },
+    #[error("{0}")]
+    Data(#[from] UpdateError),
+}
+
+impl FrfFile {
+    pub fn parse(text: &str) -> Result<Self, FrfFileError> {
+        Ok(serde_json::from_str(text)?)
+    }
+
+    /// Resolves sensor names against `sensor_names` and validates the data.
+    pub fn to_measured(&self, sensor_names: &[String]) -> Result<MeasuredSet, FrfFileError> {
+        let index_of = |index: usize, field: &'static str, name: &str| {
+            sensor_names
+                .iter()
+                .position(|n| n == name)
+                .ok_or_else(|| FrfFileError::UnknownSensor {
+                    index,
+                    field,
+                    name: name.to_string(),
+                    known: sensor_names.join(", "),
+                })
+        };
+        let mut frfs = Vec::with_capacity(self.frfs.len());
+        for (index, e) in self.frfs.iter().enumerate() {
+            if e.re.len() != e.im.len() {
+                return Err(FrfFileError::Lengths {
+                    index,
+                    re: e.re.len(),
+                    im: e.im.len(),
+                });
+            }
+            frfs.push(MeasuredFrf {
+                output: index_of(index, "output", &e.output)?,
+                input: index_of(index, "input", &e.input)?,
+                values: e.re.iter().zip(&e.im).map(|(&r, &i)| c64::new(r, i)).collect(),
+                coherence: e.coherence.clone(),
+                n_averages: e.n_averages,
+            });
+        }
+        Ok(MeasuredSet::new(self.quantity, self.frequency_hz.clone(), frfs)?)
+    }
+}
