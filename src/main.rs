@@ -81,6 +81,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Reproduce the paper's §4 experiments on the bundled Sinello model and
+    /// write a Markdown report and ζ(f) plots to a folder.
+    Paper {
+        /// Output folder.
+        #[arg(long, default_value = "docs/paper")]
+        out: PathBuf,
+    },
     /// Validate a configuration file without running anything.
     CheckConfig {
         /// Configuration file (TOML).
@@ -184,6 +191,21 @@ fn run(cli: Cli) -> Result<()> {
                 commands::write_update_table(&result, &mut out)?;
             }
             out.flush()?;
+        }
+        Command::Paper { out } => {
+            let (truth, model) = splinewatch::paper::bundled_configs(std::path::Path::new("."))?;
+            std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+            let mut outcomes = Vec::new();
+            for (k, e) in splinewatch::paper::EXPERIMENTS.iter().enumerate() {
+                eprintln!("running {} (paper §{})", e.name, e.section);
+                let o = splinewatch::paper::run(&truth, &model, e)?;
+                let svg = out.join(format!("damping-{}.svg", k + 1));
+                splinewatch::paper::plot_damping(&o, &svg)?;
+                outcomes.push(o);
+            }
+            let report = splinewatch::paper::report_markdown(&outcomes);
+            std::fs::write(out.join("report.md"), &report)?;
+            print!("{report}");
         }
         Command::CheckConfig { config } => {
             let cfg = commands::load_config(&config)?;

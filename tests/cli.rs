@@ -85,3 +85,136 @@ fn bad_config_is_a_clear_error_not_a_panic() {
         }
     }
 }
+
+#[test]
+fn synth_then_update_round_trip_json() {
+    let dir = std::env::temp_dir().join(format!("splinewatch-cli-rt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let frf = dir.join("frf.json");
+    let out = splinewatch(&[
+        "synth",
+        "--config",
+        "config/sinello-truth.toml",
+        "--inputs",
+        "P1",
+        "--outputs",
+        "P1,P2,P3,P4",
+        "--from",
+        "1",
+        "--to",
+        "60",
+        "--step",
+        "0.25",
+        "--out",
+        frf.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = splinewatch(&[
+        "update",
+        "--config",
+        "config/sinello.toml",
+        "--frf",
+        frf.to_str().unwrap(),
+        "--json",
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("iteration   0"), "progress lines: {stderr}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["converged"], true);
+    let params = v["parameters"].as_array().unwrap();
+    assert_eq!(params.len(), 15);
+    assert_eq!(params[0]["name"], "west.k1");
+    assert_eq!(params[14]["name"], "damping.g7");
+    for p in params {
+        assert!(p["value"].is_f64() && p["lower"].is_f64() && p["upper"].is_f64() && p["std"].is_f64());
+    }
+    assert!(v["iterations"][0]["relative_residual"].is_f64());
+    assert!(v["relative_residual"].as_f64().unwrap() < 0.01);
+    // Warm start from the result: converges again, in fewer iterations.
+    let start = dir.join("result.json");
+    std::fs::write(&start, &out.stdout).unwrap();
+    let again = splinewatch(&[
+        "update",
+        "--config",
+        "config/sinello.toml",
+        "--frf",
+        frf.to_str().unwrap(),
+        "--start",
+        start.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(again.status.success());
+    let w: serde_json::Value = serde_json::from_slice(&again.stdout).unwrap();
+    assert!(w["iterations"].as_array().unwrap().len() < v["iterations"].as_array().unwrap().len());
+}
+
+#[test]
+fn bad_frf_files_are_clear_errors_not_panics() {
+    let dir = std::env::temp_dir().join(format!("splinewatch-cli-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = serde_json::json!({
+        "quantity": "accelerance",
+        "frequency_hz": [1.0, 2.0, 3.0],
+        "frfs": [{"input": "P1", "output": "P2", "re": [0.1, 0.2, 0.3], "im": [0.0, 0.1, 0.2]}]
+    });
+    let variant = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = good.clone();
+        f(&mut v);
+        v.to_string()
+    };
+    let cases: Vec<(&str, String, &str)> = vec![
+        (
+            "unknown-sensor",
+            variant(&|v| v["frfs"][0]["output"] = "P99".into()),
+            "unknown sensor \"P99\"",
+        ),
+        (
+            "lengths",
+            variant(&|v| v["frfs"][0]["re"] = serde_json::json!([0.1, 0.2])),
+            "re has 2 values, im has 3",
+        ),
+        (
+            "freq-lengths",
+            variant(&|v| v["frequency_hz"] = serde_json::json!([1.0, 2.0])),
+            "has 3 values, frequency_hz has 2",
+        ),
+        (
+            "non-increasing",
+            variant(&|v| v["frequency_hz"] = serde_json::json!([1.0, 3.0, 2.0])),
+            "not strictly increasing at index 2",
+        ),
+        (
+            "empty-band",
+            variant(&|v| v["frequency_hz"] = serde_json::json!([90.0, 91.0, 92.0])),
+            "no frequency line is left",
+        ),
+        ("nan", good.to_string().replace("0.2]", "NaN]"), "not valid FRF JSON"),
+        (
+            "infinite",
+            good.to_string().replace("0.3]", "1e999]"),
+            "not valid FRF JSON",
+        ),
+        (
+            "quantity",
+            variant(&|v| v["quantity"] = "compliance".into()),
+            "unknown variant `compliance`",
+        ),
+        ("not-json", "{{{".to_string(), "not valid FRF JSON"),
+    ];
+    for (name, text, expected) in cases {
+        let path = dir.join(format!("{name}.json"));
+        std::fs::write(&path, text).unwrap();
+        let out = splinewatch(&[
+            "update",
+            "--config",
+            "config/sinello.toml",
+            "--frf",
+            path.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(stderr.contains(expected), "{name}: expected {expected:?} in {stderr}");
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    }
+}
