@@ -9,6 +9,7 @@ use crate::config::Config;
 use anyhow::{Context, Result};
 use plotters::prelude::*;
 use splinewatch_core::frf::Quantity;
+use splinewatch_core::knots::KnotVector;
 use splinewatch_core::updating::UpdateResult;
 use std::fmt::Write as _;
 use std::path::Path;
@@ -71,6 +72,8 @@ pub struct Outcome {
     pub zeta: Vec<(f64, f64, f64)>,
     /// `(f_i, ζ_true(f_i))` at the true model's modes in the band.
     pub modal_zeta: Vec<(f64, f64)>,
+    /// Identified control coefficients γ_z at their Greville frequencies.
+    pub coefficients: Vec<(f64, f64)>,
 }
 
 impl Outcome {
@@ -137,8 +140,11 @@ pub fn run(truth: &Config, model: &Config, experiment: &Experiment) -> Result<Ou
         .collect();
     let identified = model
         .build_damping()?
-        .with_coefficients(gamma)
+        .with_coefficients(gamma.clone())
         .context("identified damping")?;
+    let (f_start, f_end) = identified.band();
+    let greville = KnotVector::uniform(identified.degree(), gamma.len(), f_start, f_end)?.greville();
+    let coefficients = greville.into_iter().zip(gamma).collect();
     let zeta = (0..=160)
         .map(|k| {
             let f = 0.5 * k as f64;
@@ -158,6 +164,7 @@ pub fn run(truth: &Config, model: &Config, experiment: &Experiment) -> Result<Ou
         seconds,
         zeta,
         modal_zeta,
+        coefficients,
     })
 }
 
@@ -278,7 +285,18 @@ pub fn plot_damping(outcome: &Outcome, path: &Path) -> Result<()> {
         .label("identified ζ(f)")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK));
     chart
+        .draw_series(
+            outcome
+                .coefficients
+                .iter()
+                .map(|&(f, g)| Rectangle::new([(f - 0.6, g - 0.0005), (f + 0.6, g + 0.0005)], GREEN.filled())),
+        )
+        .map_err(|e| anyhow::anyhow!("{e}"))?
+        .label("identified coefficients γ_z")
+        .legend(|(x, y)| Rectangle::new([(x + 6, y - 4), (x + 14, y + 4)], GREEN.filled()));
+    chart
         .configure_series_labels()
+        .position(SeriesLabelPosition::LowerLeft)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()

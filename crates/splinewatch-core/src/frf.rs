@@ -297,12 +297,19 @@ impl FrfModel {
         let mut involved: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
         involved.sort_unstable();
         involved.dedup();
-        let g: Vec<(Mat<f64>, Mat<f64>)> = involved
-            .iter()
-            .map(|&s| {
-                let scaled_q_re = Mat::from_fn(nm, nf, |i, f| state.amplitudes[(s, i)] * q_re[(i, f)]);
-                let scaled_q_im = Mat::from_fn(nm, nf, |i, f| state.amplitudes[(s, i)] * q_im[(i, f)]);
-                complex_product(&state.phi_springs, &scaled_q_re, &scaled_q_im)
+        // One stacked GEMM: rows (sensor, u) of Φ_U diag(a_s), times Q.
+        let nu = state.phi_springs.nrows();
+        let stacked = Mat::from_fn(involved.len() * nu, nm, |row, i| {
+            state.phi_springs[(row % nu, i)] * state.amplitudes[(involved[row / nu], i)]
+        });
+        let (all_re, all_im) = complex_product(&stacked, &q_re, &q_im);
+        let g: Vec<(Mat<f64>, Mat<f64>)> = (0..involved.len())
+            .map(|k| {
+                let rows = k * nu..(k + 1) * nu;
+                (
+                    all_re.subrows(rows.start, nu).to_owned(),
+                    all_im.subrows(rows.start, nu).to_owned(),
+                )
             })
             .collect();
         let g_of = |sensor: usize| &g[involved.binary_search(&sensor).expect("involved")];

@@ -1,0 +1,49 @@
+//! The updating loop on the paper's 12-sensor case: one model evaluation
+//! (modes + 12 FRFs × 796 lines + 15 sensitivities) and a whole updating.
+//! Run: `cargo bench --bench updating`.
+
+use splinewatch::commands;
+use splinewatch::paper::{bundled_configs, run, EXPERIMENTS};
+use splinewatch_core::frf::{FrfRequest, Quantity};
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[divan::bench(sample_count = 20)]
+fn eigen_solve(bencher: divan::Bencher) {
+    let (_, model) = bundled_configs(root()).unwrap();
+    let setup = commands::frf_setup(&model).unwrap();
+    bencher.bench(|| setup.model.modal_state(&setup.kappa, &setup.damping).unwrap());
+}
+
+#[divan::bench(sample_count = 20)]
+fn frfs_and_sensitivities(bencher: divan::Bencher) {
+    let (_, model) = bundled_configs(root()).unwrap();
+    let setup = commands::frf_setup(&model).unwrap();
+    let state = setup.model.modal_state(&setup.kappa, &setup.damping).unwrap();
+    let freqs: Vec<f64> = (0..796).map(|k| 0.5 + 0.1 * k as f64).collect();
+    let pairs: Vec<(usize, usize)> = (0..12).map(|r| (r, 0)).collect();
+    bencher.bench(|| {
+        setup.model.evaluate(
+            &state,
+            FrfRequest {
+                frequencies_hz: &freqs,
+                pairs: &pairs,
+                quantity: Quantity::Accelerance,
+            },
+            true,
+        )
+    });
+}
+
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn whole_updating_12_sensors(bencher: divan::Bencher) {
+    let (truth, model) = bundled_configs(root()).unwrap();
+    bencher.bench(|| run(&truth, &model, &EXPERIMENTS[0]).unwrap());
+}
+
+fn main() {
+    divan::main();
+}
