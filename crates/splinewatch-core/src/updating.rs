@@ -664,6 +664,15 @@ impl<'a> UpdateProblem<'a> {
             };
             if !accept {
                 rejected += 1;
+                // As in MINPACK, a trust region shrunk below the step tolerance
+                // means no better point is resolvable: converged.
+                if norm2(&step).sqrt()
+                    <= self.settings.step_tolerance * (norm2(&y).sqrt() + self.settings.step_tolerance)
+                {
+                    stop = StopReason::StepTolerance;
+                    converged = true;
+                    break;
+                }
                 lambda *= nu;
                 nu *= 2.0;
                 if lambda > 1e16 * max_diag.max(1.0) {
@@ -697,13 +706,16 @@ impl<'a> UpdateProblem<'a> {
             if self.settings.method == Method::LevenbergMarquardt {
                 lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
-            } else if diverged {
-                stop = StopReason::Diverged;
-                break;
             }
+            // A change within the tolerance, up or down, is convergence; only a
+            // real increase means Gauss–Newton diverged.
             if relative_decrease.abs() < self.settings.cost_tolerance {
                 stop = StopReason::CostTolerance;
                 converged = true;
+                break;
+            }
+            if diverged {
+                stop = StopReason::Diverged;
                 break;
             }
             if step_norm <= self.settings.step_tolerance * (norm2(&y).sqrt() + self.settings.step_tolerance) {

@@ -3,3 +3,4 @@
 mod common;
 mod frf;
 mod shell;
+mod updating;

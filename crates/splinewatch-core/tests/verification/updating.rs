@@ -1,0 +1,168 @@
+//! The updating loop on the Sinello deck: weighting and error paths.
+
+use super::common::{sinello_model, sinello_sensors, true_kappa};
+use splinewatch_core::c64;
+use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity};
+use splinewatch_core::updating::{
+    LineSelection, MeasuredFrf, MeasuredSet, Parameter, ParameterKind, UpdateError, UpdateProblem, UpdateSettings,
+    Weighting,
+};
+
+fn spring_parameters() -> Vec<Parameter> {
+    (0..2)
+        .flat_map(|field| {
+            (0..4).map(move |coefficient| Parameter {
+                name: format!("f{field}.k{}", coefficient + 1),
+                kind: ParameterKind::Spring { field, coefficient },
+                lower: 1e7,
+                upper: 5e9,
+            })
+        })
+        .collect()
+}
+
+/// Noise-free accelerances of the true model at P1..P4 for input P1, with a
+/// band of lines (30–40 Hz) corrupted by a 30 % error and flagged by low
+/// coherence, as a shaker drop-out or a disturbance would.
+fn corrupted_measurements(model: &FrfModel, damping: &DampingCurve) -> MeasuredSet {
+    let freqs: Vec<f64> = (0..300).map(|k| 1.0 + 0.25 * k as f64).collect();
+    let pairs: Vec<(usize, usize)> = (0..4).map(|r| (r, 0)).collect();
+    let state = model.modal_state(&true_kappa(), damping).unwrap();
+    let eval = model.evaluate(
+        &state,
+        FrfRequest {
+            frequencies_hz: &freqs,
+            pairs: &pairs,
+            quantity: Quantity::Accelerance,
+        },
+        false,
+    );
+    let nf = freqs.len();
+    let frfs = pairs
+        .iter()
+        .enumerate()
+        .map(|(p, &(r, s))| {
+            let bad = |f: f64| (30.0..=40.0).contains(&f);
+            MeasuredFrf {
+                output: r,
+                input: s,
+                values: (0..nf)
+                    .map(|l| {
+                        let h = eval.h[p * nf + l];
+                        if bad(freqs[l]) {
+                            h * c64::new(1.3, 0.0)
+                        } else {
+                            h
+                        }
+                    })
+                    .collect(),
+                coherence: Some(freqs.iter().map(|&f| if bad(f) { 0.2 } else { 0.999 }).collect()),
+                n_averages: Some(40.0),
+            }
+        })
+        .collect();
+    MeasuredSet::new(Quantity::Accelerance, freqs, frfs).unwrap()
+}
+
+fn worst_kappa_error(values: &[f64]) -> f64 {
+    let truth: Vec<f64> = true_kappa().into_iter().flatten().collect();
+    values
+        .iter()
+        .zip(&truth)
+        .map(|(v, t)| (v - t).abs() / t)
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn h1_variance_weighting_discounts_low_coherence_lines() {
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
+    let measured = corrupted_measurements(&model, &damping);
+    let solve = |weighting| {
+        let settings = UpdateSettings {
+            weighting,
+            ..UpdateSettings::default()
+        };
+        let problem = UpdateProblem::new(
+            &model,
+            true_kappa(),
+            damping.clone(),
+            spring_parameters(),
+            &measured,
+            settings,
+        )
+        .unwrap();
+        let result = problem.solve(&[1e9; 8]).unwrap();
+        assert!(result.converged, "{:?}", result.stop_reason);
+        worst_kappa_error(&result.parameters.iter().map(|p| p.value).collect::<Vec<_>>())
+    };
+    let uniform = solve(Weighting::Uniform);
+    let weighted = solve(Weighting::H1Variance);
+    eprintln!("worst κ error: uniform {uniform:.2e}, H1-variance weighted {weighted:.2e}");
+    assert!(weighted < 1e-3, "weighted {weighted}");
+    assert!(uniform > 10.0 * weighted, "uniform {uniform} vs weighted {weighted}");
+}
+
+#[test]
+fn excluding_the_corrupted_band_recovers_the_truth() {
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
+    let measured = corrupted_measurements(&model, &damping);
+    let settings = UpdateSettings {
+        lines: LineSelection {
+            band: Some((2.0, 70.0)),
+            decimation: 2,
+            exclude: vec![(29.9, 40.1)],
+        },
+        ..UpdateSettings::default()
+    };
+    let problem = UpdateProblem::new(&model, true_kappa(), damping, spring_parameters(), &measured, settings).unwrap();
+    let result = problem.solve(&[1e9; 8]).unwrap();
+    let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
+    assert!(worst_kappa_error(&values) < 1e-6, "{values:?}");
+    assert!(result.relative_residual < 1e-6);
+    assert!(result.condition_number.is_finite() && result.singular_values.len() == 8);
+}
+
+#[test]
+fn h1_weighting_without_coherence_is_an_error() {
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
+    let measured = MeasuredSet::new(
+        Quantity::Accelerance,
+        vec![1.0, 2.0, 3.0, 4.0, 5.0],
+        vec![MeasuredFrf {
+            output: 1,
+            input: 0,
+            values: vec![c64::new(1.0, 0.0); 5],
+            coherence: None,
+            n_averages: None,
+        }],
+    )
+    .unwrap();
+    let settings = UpdateSettings {
+        weighting: Weighting::H1Variance,
+        ..UpdateSettings::default()
+    };
+    let err = UpdateProblem::new(
+        &model,
+        true_kappa(),
+        damping.clone(),
+        spring_parameters(),
+        &measured,
+        settings,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("needs coherence and n_averages"), "{err}");
+    let err = UpdateProblem::new(
+        &model,
+        true_kappa(),
+        damping,
+        vec![],
+        &measured,
+        UpdateSettings::default(),
+    )
+    .unwrap_err();
+    assert_eq!(err, UpdateError::NoParameters);
+}
