@@ -25,3 +25,4 @@ pub mod vec3;
 
 /// Complex scalar used for FRFs (re-exported so callers need not depend on faer).
 pub use faer::c64;
+pub mod welch;

@@ -4,3 +4,4 @@ mod common;
 mod frf;
 mod shell;
 mod updating;
+mod welch;

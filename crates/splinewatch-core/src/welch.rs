@@ -1,0 +1,672 @@
+//! Welch cross-spectral estimation and FRF estimators.
+//!
+//! Segments of `n` samples start at the first sample and advance by
+//! `n - overlap`, an incomplete tail being left for later (streaming) or
+//! dropped (batch), exactly as `scipy.signal.csd`. Each segment is
+//! detrended, windowed and transformed with a real FFT; the one-sided
+//! density `S_ab = 2 conj(A) B / (fs Σw²)` (not doubled at DC and, for even
+//! `n`, at Nyquist) is averaged linearly or exponentially.
+//!
+//! With input (force) `f` and output (response) `x`, `S_fx = E[F* X]`:
+//! - `H1 = S_fx / S_ff` (noise on the output),
+//! - `H2 = S_xx / S_xf`, `S_xf = conj(S_fx)` (noise on the input; the
+//!   conjugation matters: `S_xx / S_fx` would be `conj(H)`),
+//! - `Hv`, the total-least-squares estimator of a single input: the
+//!   principal eigenvector of `[[S_ff, S_xf], [S_fx, S_xx]]`,
+//!   `Hv = (S_xx - S_ff + √((S_xx - S_ff)² + 4|S_fx|²)) / (2 S_xf)`,
+//! - ordinary coherence `γ² = |S_fx|² / (S_ff S_xx)`.
+//!
+//! Exponential averaging with weight `α` keeps
+//! `S_k = S_{k-1} + (P_k - S_{k-1}) / W_k`, `W_k = (1 - α) W_{k-1} + 1`, and
+//! reports the effective number of averages `W² / Σ w²`, which tends to
+//! `(2 - α) / α`.
+
+use faer::c64;
+use realfft::{RealFftPlanner, RealToComplex};
+use std::f64::consts::PI;
+use std::sync::Arc;
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum WelchError {
+    #[error("sampling frequency must be finite and positive, got {0}")]
+    SampleRate(f64),
+    #[error("segment length {0} must be at least 4 samples")]
+    SegmentLength(usize),
+    #[error("overlap of {overlap} samples must be smaller than the segment ({segment})")]
+    Overlap { overlap: usize, segment: usize },
+    #[error("exponential averaging weight must be in (0, 1], got {0}")]
+    Alpha(f64),
+    #[error("window parameter {name} = {value} is out of range")]
+    WindowParameter { name: &'static str, value: f64 },
+    #[error("{found} output channels given, the estimator has {expected}")]
+    ChannelCount { found: usize, expected: usize },
+    #[error("channel lengths differ: input has {input}, output {channel} has {found}")]
+    ChannelLength { input: usize, channel: usize, found: usize },
+}
+
+/// Segment window.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Window {
+    Rectangular,
+    /// Periodic Hann, as `scipy.signal.get_window("hann", n)`.
+    Hann,
+    Hamming,
+    Blackman,
+    /// scipy's five-term flat-top.
+    FlatTop,
+    /// Impact testing: ones over the first `width` fraction, zero after.
+    Force {
+        width: f64,
+    },
+    /// Impact testing: `exp(-k/n · ln(1/end))`, decaying to `end` at the segment end.
+    Exponential {
+        end: f64,
+    },
+}
+
+impl Window {
+    pub fn validate(self) -> Result<(), WelchError> {
+        match self {
+            Window::Force { width } if !(width > 0.0 && width <= 1.0) => Err(WelchError::WindowParameter {
+                name: "force width",
+                value: width,
+            }),
+            Window::Exponential { end } if !(end > 0.0 && end <= 1.0) => Err(WelchError::WindowParameter {
+                name: "exponential end",
+                value: end,
+            }),
+            _ => Ok(()),
+        }
+    }
+
+    /// The `n` window samples (periodic, "DFT-even", like scipy's default).
+    pub fn samples(self, n: usize) -> Vec<f64> {
+        let cosine = |a: &[f64]| -> Vec<f64> {
+            (0..n)
+                .map(|k| {
+                    let x = 2.0 * PI * k as f64 / n as f64;
+                    a.iter()
+                        .enumerate()
+                        .map(|(j, &c)| if j % 2 == 0 { c } else { -c } * (j as f64 * x).cos())
+                        .sum()
+                })
+                .collect()
+        };
+        match self {
+            Window::Rectangular => vec![1.0; n],
+            Window::Hann => cosine(&[0.5, 0.5]),
+            Window::Hamming => cosine(&[0.54, 0.46]),
+            Window::Blackman => cosine(&[0.42, 0.5, 0.08]),
+            Window::FlatTop => cosine(&[0.21557895, 0.41663158, 0.277263158, 0.083578947, 0.006947368]),
+            Window::Force { width } => {
+                let m = ((width * n as f64).round() as usize).clamp(1, n);
+                (0..n).map(|k| if k < m { 1.0 } else { 0.0 }).collect()
+            }
+            Window::Exponential { end } => {
+                let rate = (1.0 / end).ln() / n as f64;
+                (0..n).map(|k| (-rate * k as f64).exp()).collect()
+            }
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Detrend {
+    None,
+    /// Subtract each segment's mean (scipy's "constant", the default).
+    Constant,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Averaging {
+    Linear,
+    Exponential { alpha: f64 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Estimator {
+    H1,
+    H2,
+    Hv,
+}
+
+/// Data-quality gates applied to every segment.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Gates {
+    /// Reject a segment in which any sample reaches this magnitude (overload).
+    pub full_scale: Option<f64>,
+    /// Impact tests: reject a segment whose force has a second hit above
+    /// this fraction of its peak, after the force first fell below it.
+    pub double_impact_fraction: Option<f64>,
+}
+
+/// Estimator settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WelchSettings {
+    pub fs: f64,
+    pub segment: usize,
+    pub overlap: usize,
+    /// Window of the input (force) channel.
+    pub input_window: Window,
+    /// Window of the output (response) channels.
+    pub output_window: Window,
+    pub detrend: Detrend,
+    pub averaging: Averaging,
+    pub gates: Gates,
+}
+
+impl WelchSettings {
+    pub fn validate(&self) -> Result<(), WelchError> {
+        if !(self.fs.is_finite() && self.fs > 0.0) {
+            return Err(WelchError::SampleRate(self.fs));
+        }
+        if self.segment < 4 {
+            return Err(WelchError::SegmentLength(self.segment));
+        }
+        if self.overlap >= self.segment {
+            return Err(WelchError::Overlap {
+                overlap: self.overlap,
+                segment: self.segment,
+            });
+        }
+        if let Averaging::Exponential { alpha } = self.averaging {
+            if !(alpha > 0.0 && alpha <= 1.0) {
+                return Err(WelchError::Alpha(alpha));
+            }
+        }
+        self.input_window.validate()?;
+        self.output_window.validate()
+    }
+
+    pub fn step(&self) -> usize {
+        self.segment - self.overlap
+    }
+
+    /// Frequencies of the one-sided spectrum, `k fs / n`.
+    pub fn frequencies(&self) -> Vec<f64> {
+        (0..self.segment / 2 + 1)
+            .map(|k| k as f64 * self.fs / self.segment as f64)
+            .collect()
+    }
+}
+
+/// Why segments were rejected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct SegmentCounts {
+    pub accepted: u64,
+    pub non_finite: u64,
+    pub clipped: u64,
+    pub double_impact: u64,
+}
+
+impl SegmentCounts {
+    pub fn rejected(&self) -> u64 {
+        self.non_finite + self.clipped + self.double_impact
+    }
+}
+
+/// Averaged one-sided densities for one input and several outputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrossSpectra {
+    pub frequencies: Vec<f64>,
+    pub s_ff: Vec<f64>,
+    /// `S_fx = E[F* X]` per output.
+    pub s_fx: Vec<Vec<c64>>,
+    pub s_xx: Vec<Vec<f64>>,
+    /// Effective number of averages (segments for linear averaging).
+    pub effective_averages: f64,
+}
+
+/// FRFs estimated from cross spectra.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrfEstimate {
+    pub frequencies: Vec<f64>,
+    /// Per output: output / input at every line.
+    pub h: Vec<Vec<c64>>,
+    pub coherence: Vec<Vec<f64>>,
+    pub effective_averages: f64,
+}
+
+impl CrossSpectra {
+    pub fn frf(&self, estimator: Estimator) -> FrfEstimate {
+        let nl = self.frequencies.len();
+        let mut h = Vec::with_capacity(self.s_fx.len());
+        let mut coherence = Vec::with_capacity(self.s_fx.len());
+        for (sfx, sxx) in self.s_fx.iter().zip(&self.s_xx) {
+            let mut hr = Vec::with_capacity(nl);
+            let mut cr = Vec::with_capacity(nl);
+            for l in 0..nl {
+                let (ff, fx, xx) = (self.s_ff[l], sfx[l], sxx[l]);
+                let value = match estimator {
+                    Estimator::H1 => fx / ff,
+                    Estimator::H2 => xx / fx.conj(),
+                    Estimator::Hv => {
+                        let d = xx - ff;
+                        (d + (d * d + 4.0 * fx.norm_sqr()).sqrt()) / (2.0 * fx.conj())
+                    }
+                };
+                hr.push(value);
+                cr.push(fx.norm_sqr() / (ff * xx));
+            }
+            h.push(hr);
+            coherence.push(cr);
+        }
+        FrfEstimate {
+            frequencies: self.frequencies.clone(),
+            h,
+            coherence,
+            effective_averages: self.effective_averages,
+        }
+    }
+}
+
+/// Streaming Welch estimator: feed aligned samples as they arrive; memory is
+/// bounded by one segment per channel plus the spectra.
+pub struct WelchEstimator {
+    settings: WelchSettings,
+    fft: Arc<dyn RealToComplex<f64>>,
+    input_window: Vec<f64>,
+    output_window: Vec<f64>,
+    scale: f64,
+    /// Pending samples: channel 0 is the input.
+    pending: Vec<Vec<f64>>,
+    s_ff: Vec<f64>,
+    s_fx: Vec<Vec<c64>>,
+    s_xx: Vec<Vec<f64>>,
+    weight_sum: f64,
+    weight_square_sum: f64,
+    counts: SegmentCounts,
+    scratch_in: Vec<f64>,
+    spectra: Vec<Vec<c64>>,
+    fft_scratch: Vec<c64>,
+}
+
+impl std::fmt::Debug for WelchEstimator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("WelchEstimator")
+            .field("settings", &self.settings)
+            .field("counts", &self.counts)
+            .finish_non_exhaustive()
+    }
+}
+
+impl WelchEstimator {
+    pub fn new(settings: WelchSettings, outputs: usize) -> Result<Self, WelchError> {
+        settings.validate()?;
+        let n = settings.segment;
+        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+        let input_window = settings.input_window.samples(n);
+        let output_window = settings.output_window.samples(n);
+        // Density scaling per channel pair uses √(Σw_a² Σw_b²); equal windows give fs Σw².
+        let sum_in: f64 = input_window.iter().map(|w| w * w).sum();
+        let sum_out: f64 = output_window.iter().map(|w| w * w).sum();
+        let scale = 1.0 / (settings.fs * (sum_in * sum_out).sqrt());
+        let bins = n / 2 + 1;
+        let fft_scratch = fft.make_scratch_vec();
+        Ok(Self {
+            fft,
+            input_window,
+            output_window,
+            scale,
+            pending: vec![Vec::with_capacity(2 * n); outputs + 1],
+            s_ff: vec![0.0; bins],
+            s_fx: vec![vec![c64::new(0.0, 0.0); bins]; outputs],
+            s_xx: vec![vec![0.0; bins]; outputs],
+            weight_sum: 0.0,
+            weight_square_sum: 0.0,
+            counts: SegmentCounts::default(),
+            scratch_in: vec![0.0; n],
+            spectra: vec![vec![c64::new(0.0, 0.0); bins]; outputs + 1],
+            fft_scratch,
+            settings,
+        })
+    }
+
+    pub fn settings(&self) -> &WelchSettings {
+        &self.settings
+    }
+
+    pub fn counts(&self) -> SegmentCounts {
+        self.counts
+    }
+
+    /// Samples buffered and not yet part of a segment, per channel.
+    pub fn pending_samples(&self) -> usize {
+        self.pending[0].len()
+    }
+
+    /// Starts a new analysis window: spectra, counts and pending samples cleared.
+    pub fn reset(&mut self) {
+        for p in &mut self.pending {
+            p.clear();
+        }
+        self.s_ff.fill(0.0);
+        for v in &mut self.s_fx {
+            v.fill(c64::new(0.0, 0.0));
+        }
+        for v in &mut self.s_xx {
+            v.fill(0.0);
+        }
+        self.weight_sum = 0.0;
+        self.weight_square_sum = 0.0;
+        self.counts = SegmentCounts::default();
+    }
+
+    /// Appends time-aligned samples (same length on every channel) and
+    /// processes every segment that became complete.
+    pub fn push(&mut self, input: &[f64], outputs: &[&[f64]]) -> Result<(), WelchError> {
+        if outputs.len() != self.s_fx.len() {
+            return Err(WelchError::ChannelCount {
+                found: outputs.len(),
+                expected: self.s_fx.len(),
+            });
+        }
+        if let Some((channel, o)) = outputs.iter().enumerate().find(|(_, o)| o.len() != input.len()) {
+            return Err(WelchError::ChannelLength {
+                input: input.len(),
+                channel,
+                found: o.len(),
+            });
+        }
+        let n = self.settings.segment;
+        let step = self.settings.step();
+        let mut offset = 0;
+        while offset < input.len() {
+            // Fill up to one segment, process it, drop `step` samples.
+            let take = (n - self.pending[0].len()).min(input.len() - offset);
+            self.pending[0].extend_from_slice(&input[offset..offset + take]);
+            for (c, o) in outputs.iter().enumerate() {
+                self.pending[c + 1].extend_from_slice(&o[offset..offset + take]);
+            }
+            offset += take;
+            if self.pending[0].len() == n {
+                self.process_segment();
+                for p in &mut self.pending {
+                    p.drain(..step);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn gate(&self) -> Option<fn(&mut SegmentCounts)> {
+        if self.pending.iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+            return Some(|c| c.non_finite += 1);
+        }
+        if let Some(fs) = self.settings.gates.full_scale {
+            if self.pending.iter().any(|c| c.iter().any(|v| v.abs() >= fs)) {
+                return Some(|c| c.clipped += 1);
+            }
+        }
+        if let Some(fraction) = self.settings.gates.double_impact_fraction {
+            let force = &self.pending[0];
+            let peak = force.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            let threshold = fraction * peak;
+            let mut hits = 0;
+            let mut above = false;
+            for v in force {
+                let now = v.abs() >= threshold;
+                if now && !above {
+                    hits += 1;
+                }
+                above = now;
+            }
+            if peak > 0.0 && hits > 1 {
+                return Some(|c| c.double_impact += 1);
+            }
+        }
+        None
+    }
+
+    fn process_segment(&mut self) {
+        if let Some(count) = self.gate() {
+            count(&mut self.counts);
+            return;
+        }
+        self.counts.accepted += 1;
+        let n = self.settings.segment;
+        for c in 0..self.pending.len() {
+            let window = if c == 0 {
+                &self.input_window
+            } else {
+                &self.output_window
+            };
+            let data = &self.pending[c];
+            let mean = match self.settings.detrend {
+                Detrend::None => 0.0,
+                Detrend::Constant => data.iter().sum::<f64>() / n as f64,
+            };
+            for k in 0..n {
+                self.scratch_in[k] = (data[k] - mean) * window[k];
+            }
+            self.fft
+                .process_with_scratch(&mut self.scratch_in, &mut self.spectra[c], &mut self.fft_scratch)
+                .expect("buffers sized by the plan");
+        }
+        // One-sided density of this segment, then the running average.
+        let bins = n / 2 + 1;
+        let doubled = |k: usize| {
+            if k == 0 || (n % 2 == 0 && k == bins - 1) {
+                1.0
+            } else {
+                2.0
+            }
+        };
+        let w = match self.settings.averaging {
+            Averaging::Linear => {
+                self.weight_sum += 1.0;
+                self.weight_square_sum += 1.0;
+                1.0 / self.weight_sum
+            }
+            Averaging::Exponential { alpha } => {
+                self.weight_sum = (1.0 - alpha) * self.weight_sum + 1.0;
+                self.weight_square_sum = (1.0 - alpha) * (1.0 - alpha) * self.weight_square_sum + 1.0;
+                1.0 / self.weight_sum
+            }
+        };
+        let f = &self.spectra[0];
+        for k in 0..bins {
+            let s = self.scale * doubled(k);
+            let pff = f[k].norm_sqr() * s;
+            self.s_ff[k] += (pff - self.s_ff[k]) * w;
+            for o in 0..self.s_fx.len() {
+                let x = self.spectra[o + 1][k];
+                let pfx = f[k].conj() * x * s;
+                let pxx = x.norm_sqr() * s;
+                let (old_fx, old_xx) = (self.s_fx[o][k], self.s_xx[o][k]);
+                self.s_fx[o][k] = old_fx + (pfx - old_fx) * w;
+                self.s_xx[o][k] = old_xx + (pxx - old_xx) * w;
+            }
+        }
+    }
+
+    /// The averaged spectra so far.
+    pub fn spectra(&self) -> CrossSpectra {
+        CrossSpectra {
+            frequencies: self.settings.frequencies(),
+            s_ff: self.s_ff.clone(),
+            s_fx: self.s_fx.clone(),
+            s_xx: self.s_xx.clone(),
+            effective_averages: if self.weight_square_sum > 0.0 {
+                self.weight_sum * self.weight_sum / self.weight_square_sum
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn settings(n: usize, overlap: usize, window: Window) -> WelchSettings {
+        WelchSettings {
+            fs: 100.0,
+            segment: n,
+            overlap,
+            input_window: window,
+            output_window: window,
+            detrend: Detrend::Constant,
+            averaging: Averaging::Linear,
+            gates: Gates::default(),
+        }
+    }
+
+    #[test]
+    fn hann_matches_closed_form_and_scipy_periodicity() {
+        let w = Window::Hann.samples(8);
+        let expected = [
+            0.0,
+            0.1464466094067262,
+            0.5,
+            0.8535533905932737,
+            1.0,
+            0.8535533905932737,
+            0.5,
+            0.1464466094067262,
+        ];
+        for (a, b) in w.iter().zip(expected) {
+            assert!((a - b).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn streaming_in_odd_chunks_equals_one_push() {
+        let x: Vec<f64> = (0..1000)
+            .map(|k| (k as f64 * 0.37).sin() + 0.1 * (k as f64 * 1.3).cos())
+            .collect();
+        let y: Vec<f64> = (0..1000).map(|k| (k as f64 * 0.37 + 0.4).sin()).collect();
+        let mut one = WelchEstimator::new(settings(64, 32, Window::Hann), 1).unwrap();
+        one.push(&x, &[&y]).unwrap();
+        let mut many = WelchEstimator::new(settings(64, 32, Window::Hann), 1).unwrap();
+        let mut k = 0;
+        for len in [1, 7, 63, 64, 65, 100, 3].iter().cycle() {
+            if k >= x.len() {
+                break;
+            }
+            let end = (k + len).min(x.len());
+            many.push(&x[k..end], &[&y[k..end]]).unwrap();
+            k = end;
+        }
+        assert_eq!(one.counts().accepted, ((1000 - 32) / 32) as u64);
+        assert_eq!(one.spectra(), many.spectra());
+        assert!(many.pending_samples() < 64);
+    }
+
+    #[test]
+    fn noiseless_siso_estimators_recover_the_system() {
+        // x = 2 f delayed by 3 samples: H = 2 e^{-jω 3/fs} exactly for a
+        // circular shift; with a rectangular window and non-overlapping
+        // segments of a periodic input, H1 = H2 = Hv = H to round-off.
+        let n = 128;
+        let f: Vec<f64> = (0..n * 8).map(|k| ((k * 7919) % 97) as f64 / 97.0 - 0.5).collect();
+        // Periodic input with period n, so each segment is a circular shift.
+        let f: Vec<f64> = (0..n * 8).map(|k| f[k % n]).collect();
+        let x: Vec<f64> = (0..n * 8).map(|k| 2.0 * f[(k + n - 3) % n]).collect();
+        let mut s = settings(n, 0, Window::Rectangular);
+        s.detrend = Detrend::None;
+        let mut est = WelchEstimator::new(s.clone(), 1).unwrap();
+        est.push(&f, &[&x]).unwrap();
+        let spectra = est.spectra();
+        for estimator in [Estimator::H1, Estimator::H2, Estimator::Hv] {
+            let frf = spectra.frf(estimator);
+            for (k, h) in frf.h[0].iter().enumerate() {
+                if spectra.s_ff[k] < 1e-12 {
+                    continue;
+                }
+                let w = 2.0 * PI * k as f64 / n as f64;
+                let exact = c64::new(2.0 * (3.0 * w).cos(), -2.0 * (3.0 * w).sin());
+                assert!((h - exact).norm() < 1e-9, "{estimator:?} bin {k}: {h} vs {exact}");
+                assert!((frf.coherence[0][k] - 1.0).abs() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn h2_and_hv_reject_output_noise_differently() {
+        // Output noise biases H2 upward in magnitude, leaves H1 unbiased;
+        // Hv lies between them.
+        let n = 64;
+        let mut seed = 7u64;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64) / ((1u64 << 53) as f64) - 0.5
+        };
+        let f: Vec<f64> = (0..n * 400).map(|_| rnd()).collect();
+        let x: Vec<f64> = f.iter().map(|v| 3.0 * v + 1.5 * rnd()).collect();
+        let mut est = WelchEstimator::new(settings(n, 32, Window::Hann), 1).unwrap();
+        est.push(&f, &[&x]).unwrap();
+        let sp = est.spectra();
+        let mean = |e: Estimator| {
+            let h = &sp.frf(e).h[0];
+            h[1..n / 2].iter().map(|v| v.norm()).sum::<f64>() / (n / 2 - 1) as f64
+        };
+        let (h1, h2, hv) = (mean(Estimator::H1), mean(Estimator::H2), mean(Estimator::Hv));
+        assert!((h1 - 3.0).abs() < 0.05, "H1 {h1}");
+        // E|H2| = 3 (1 + σ²/(9 σf²)) = 3 · 1.25 for σ = 1.5 σf.
+        assert!((h2 - 3.75).abs() < 0.1, "H2 {h2}");
+        assert!(hv > h1 && hv < h2, "Hv {hv}");
+    }
+
+    #[test]
+    fn exponential_averaging_effective_count() {
+        let alpha = 0.1;
+        let mut s = settings(32, 0, Window::Hann);
+        s.averaging = Averaging::Exponential { alpha };
+        let mut est = WelchEstimator::new(s, 1).unwrap();
+        let x: Vec<f64> = (0..32 * 500).map(|k| (k as f64 * 0.7).sin()).collect();
+        est.push(&x, &[&x]).unwrap();
+        let n_eff = est.spectra().effective_averages;
+        assert!((n_eff - (2.0 - alpha) / alpha).abs() < 1e-9, "{n_eff}");
+        let mut short = WelchEstimator::new(settings(32, 0, Window::Hann), 1).unwrap();
+        short.push(&x[..32 * 3], &[&x[..32 * 3]]).unwrap();
+        assert_eq!(short.spectra().effective_averages, 3.0);
+    }
+
+    #[test]
+    fn gates_reject_bad_segments_and_count_them() {
+        let mut s = settings(16, 0, Window::Hann);
+        s.gates.full_scale = Some(10.0);
+        s.gates.double_impact_fraction = Some(0.5);
+        let mut est = WelchEstimator::new(s, 1).unwrap();
+        let mut f = vec![0.0; 16 * 4];
+        f[0] = 1.0; // segment 0: single impact
+        f[16] = 1.0; // segment 1: double impact
+        f[24] = 0.8;
+        f[32] = f64::NAN; // segment 2: non-finite
+        f[48] = 12.0; // segment 3: clipped
+        est.push(&f, &[&f.clone()]).unwrap();
+        let c = est.counts();
+        assert_eq!((c.accepted, c.double_impact, c.non_finite, c.clipped), (1, 1, 1, 1));
+        assert_eq!(c.rejected(), 3);
+    }
+
+    #[test]
+    fn invalid_settings_are_typed_errors() {
+        let mut s = settings(16, 16, Window::Hann);
+        assert!(matches!(
+            WelchEstimator::new(s.clone(), 1),
+            Err(WelchError::Overlap { .. })
+        ));
+        s.overlap = 0;
+        s.fs = 0.0;
+        assert_eq!(
+            WelchEstimator::new(s.clone(), 1).unwrap_err(),
+            WelchError::SampleRate(0.0)
+        );
+        s.fs = 10.0;
+        s.averaging = Averaging::Exponential { alpha: 0.0 };
+        assert_eq!(WelchEstimator::new(s, 1).unwrap_err(), WelchError::Alpha(0.0));
+        let mut est = WelchEstimator::new(settings(16, 0, Window::Hann), 2).unwrap();
+        assert!(matches!(
+            est.push(&[0.0; 4], &[&[0.0; 4]]),
+            Err(WelchError::ChannelCount { .. })
+        ));
+        assert!(matches!(
+            est.push(&[0.0; 4], &[&[0.0; 4], &[0.0; 3]]),
+            Err(WelchError::ChannelLength { .. })
+        ));
+    }
+}
