@@ -25,4 +25,8 @@ pub mod vec3;
 
 /// Complex scalar used for FRFs (re-exported so callers need not depend on faer).
 pub use faer::c64;
+pub mod simulate;
 pub mod welch;
+
+/// Dense matrix type used in the public API (re-exported from faer).
+pub use faer::Mat;

@@ -3,5 +3,6 @@
 mod common;
 mod frf;
 mod shell;
+mod simulate;
 mod updating;
 mod welch;
