@@ -9,3 +9,4 @@ pub mod commands;
 pub mod config;
 pub mod frf_json;
 pub mod paper;
+pub mod wire;
