@@ -7,6 +7,9 @@
 
 pub mod commands;
 pub mod config;
+pub mod estimate;
 pub mod frf_json;
 pub mod paper;
+pub mod recording;
+pub mod simulation;
 pub mod wire;

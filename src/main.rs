@@ -88,6 +88,62 @@ enum Command {
         #[arg(long, default_value = "docs/paper")]
         out: PathBuf,
     },
+    /// Simulate the configured bridge under excitation and write a raw-input MCAP recording.
+    Simulate {
+        #[arg(long)]
+        config: PathBuf,
+        /// Length of the recording, seconds.
+        #[arg(long)]
+        duration: f64,
+        /// Sampling frequency of the recorded channels, Hz.
+        #[arg(long, default_value_t = 256.0)]
+        fs: f64,
+        /// Time-varying scenario (TOML), e.g. a bearing losing stiffness.
+        #[arg(long)]
+        scenario: Option<PathBuf>,
+        /// Seed of the force and noise generators (ChaCha8): same seed, same bytes.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        #[arg(long, value_enum, default_value = "random")]
+        excitation: splinewatch::simulation::Excitation,
+        /// RMS of the force, N.
+        #[arg(long, default_value_t = 1000.0)]
+        force_rms: f64,
+        /// Measurement noise, fraction of each channel's RMS.
+        #[arg(long, default_value_t = 0.02)]
+        noise: f64,
+        /// Samples per message, seconds.
+        #[arg(long, default_value_t = 1.0)]
+        block_seconds: f64,
+        /// Timestamp of the first sample (RFC 3339).
+        #[arg(long, default_value = "2026-11-21T10:00:00Z")]
+        start: String,
+        /// Message encoding: cbor or json.
+        #[arg(long, default_value = "cbor", value_parser = parse_encoding)]
+        encoding: splinewatch::wire::Encoding,
+        /// Output recording (MCAP).
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Estimate FRFs (Welch, [frf] settings) from a raw-input MCAP recording.
+    Frf {
+        #[arg(long)]
+        config: PathBuf,
+        /// Recording (MCAP).
+        input: PathBuf,
+        /// Start of the analysed span: seconds from the recording's start, or RFC 3339.
+        #[arg(long)]
+        from: Option<String>,
+        /// End of the analysed span: seconds from the recording's start, or RFC 3339.
+        #[arg(long)]
+        to: Option<String>,
+        /// Write the FRF JSON here instead of stdout.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print the FRF JSON on stdout (the default without --out).
+        #[arg(long)]
+        json: bool,
+    },
     /// Validate a configuration file without running anything.
     CheckConfig {
         /// Configuration file (TOML).
@@ -102,6 +158,10 @@ fn parse_quantity(s: &str) -> Result<Quantity, String> {
         "accelerance" => Ok(Quantity::Accelerance),
         other => Err(format!("{other:?} is not receptance, mobility or accelerance")),
     }
+}
+
+fn parse_encoding(s: &str) -> Result<splinewatch::wire::Encoding, String> {
+    splinewatch::wire::Encoding::from_name(s).ok_or_else(|| format!("{s:?} is not cbor or json"))
 }
 
 fn main() -> ExitCode {
@@ -206,6 +266,108 @@ fn run(cli: Cli) -> Result<()> {
             let report = splinewatch::paper::report_markdown(&outcomes);
             std::fs::write(out.join("report.md"), &report)?;
             print!("{report}");
+        }
+        Command::Simulate {
+            config,
+            duration,
+            fs,
+            scenario,
+            seed,
+            excitation,
+            force_rms,
+            noise,
+            block_seconds,
+            start,
+            encoding,
+            out,
+        } => {
+            let cfg = commands::load_config(&config)?;
+            let scenario = scenario
+                .map(|p| {
+                    let text =
+                        std::fs::read_to_string(&p).with_context(|| format!("cannot read scenario {}", p.display()))?;
+                    splinewatch::simulation::parse_scenario(&text).with_context(|| format!("scenario {}", p.display()))
+                })
+                .transpose()?;
+            let start_ns = splinewatch::wire::parse_timestamp(&start)
+                .with_context(|| format!("--start {start:?} is not an RFC 3339 timestamp"))?;
+            let options = splinewatch::simulation::SimulationOptions {
+                duration_seconds: duration,
+                fs,
+                seed,
+                excitation,
+                force_rms,
+                noise,
+                block_seconds,
+                start_ns,
+                band: (cfg.frf.band[0].max(0.1), cfg.frf.band[1] * 1.1),
+                oversample: 16,
+                scenario,
+            };
+            let prefix = cfg.topic_prefix();
+            let mut writer = splinewatch::recording::RecordingWriter::create(&out, encoding)?;
+            let summary =
+                splinewatch::simulation::simulate(&cfg, &options, &mut |block| writer.write_block(&prefix, &block))?;
+            writer.finish()?;
+            eprintln!(
+                "wrote {} blocks ({} samples per channel, {} model updates) to {}",
+                summary.blocks,
+                summary.samples_per_channel,
+                summary.model_updates,
+                out.display()
+            );
+        }
+        Command::Frf {
+            config,
+            input,
+            from,
+            to,
+            out,
+            json: _,
+        } => {
+            let cfg = commands::load_config(&config)?;
+            let bytes = std::fs::read(&input).with_context(|| format!("cannot read {}", input.display()))?;
+            let limits = splinewatch::wire::Limits {
+                max_samples: cfg.frf.max_block_samples,
+                ..Default::default()
+            };
+            let (blocks, rejected) = splinewatch::recording::read_recording(&bytes, &limits)
+                .with_context(|| format!("reading {}", input.display()))?;
+            for r in &rejected {
+                eprintln!("skipped a message on {} at {} ns: {}", r.topic, r.log_time, r.error);
+            }
+            let origin = blocks
+                .iter()
+                .map(|b| b.block.start_ns)
+                .min()
+                .context("the recording holds no channel blocks")?;
+            let when = |s: &Option<String>| -> Result<Option<i128>> {
+                s.as_ref()
+                    .map(|t| match t.parse::<f64>() {
+                        Ok(sec) => Ok(origin + (sec * 1e9).round() as i128),
+                        Err(_) => splinewatch::wire::parse_timestamp(t)
+                            .with_context(|| format!("{t:?} is neither seconds nor an RFC 3339 timestamp")),
+                    })
+                    .transpose()
+            };
+            let report = splinewatch::estimate::estimate(&cfg, &blocks, when(&from)?, when(&to)?)?;
+            eprintln!(
+                "{} samples from {}: {} segments used, {} rejected, {:.1} effective averages, {} FRFs × {} lines",
+                report.samples,
+                splinewatch::wire::format_timestamp(report.start_ns),
+                report.segments.accepted,
+                report.segments.rejected(),
+                report.effective_averages,
+                report.frf.frfs.len(),
+                report.frf.frequency_hz.len()
+            );
+            let text = serde_json::to_string(&report.frf)?;
+            match out {
+                Some(path) => {
+                    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?
+                }
+                None => println!("{text}"),
+            }
         }
         Command::CheckConfig { config } => {
             let cfg = commands::load_config(&config)?;

@@ -1,0 +1,212 @@
+//! FRF estimation from recorded blocks: per-channel time alignment, Welch
+//! cross spectra, estimator and quantity conversion, FRF JSON out.
+
+use crate::config::Config;
+use crate::frf_json::{FrfEntry, FrfFile};
+use crate::recording::RecordedBlock;
+use crate::wire::{format_timestamp, ChannelQuantity};
+use anyhow::{bail, Result};
+use splinewatch_core::c64;
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::welch::{SegmentCounts, WelchEstimator};
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+
+/// One channel's samples on a regular grid.
+#[derive(Debug, Clone)]
+pub struct ContinuousChannel {
+    pub start_ns: i128,
+    pub fs: f64,
+    pub data: Vec<f64>,
+}
+
+/// What the estimate used.
+#[derive(Debug, Clone)]
+pub struct EstimateReport {
+    pub frf: FrfFile,
+    pub segments: SegmentCounts,
+    pub start_ns: i128,
+    pub samples: usize,
+    pub effective_averages: f64,
+}
+
+/// Concatenates one channel's blocks, requiring a constant rate and no gaps
+/// or overlaps (tolerance: half a sample).
+pub fn concatenate(name: &str, quantity: ChannelQuantity, blocks: &[&RecordedBlock]) -> Result<ContinuousChannel> {
+    let mut sorted: Vec<&RecordedBlock> = blocks.to_vec();
+    sorted.sort_by_key(|b| b.block.start_ns);
+    let Some(first) = sorted.first() else {
+        bail!("no {quantity:?} data for channel {name:?}");
+    };
+    let fs = first.block.fs;
+    let mut out = ContinuousChannel {
+        start_ns: first.block.start_ns,
+        fs,
+        data: Vec::new(),
+    };
+    for b in sorted {
+        if (b.block.fs - fs).abs() > 1e-9 * fs {
+            bail!(
+                "channel {name:?}: sample rate changes from {fs} Hz to {} Hz at {}",
+                b.block.fs,
+                format_timestamp(b.block.start_ns)
+            );
+        }
+        let expected = out.start_ns + (out.data.len() as f64 * 1e9 / fs).round() as i128;
+        let offset_samples = (b.block.start_ns - expected) as f64 * fs / 1e9;
+        if offset_samples.abs() > 0.5 {
+            let what = if offset_samples > 0.0 { "gap" } else { "overlap" };
+            bail!(
+                "channel {name:?}: {what} of {:.3} s at {} (expected {}); split the analysis around it with --from/--to",
+                offset_samples.abs() / fs,
+                format_timestamp(b.block.start_ns),
+                format_timestamp(expected)
+            );
+        }
+        out.data.extend_from_slice(&b.block.data);
+    }
+    Ok(out)
+}
+
+/// Estimates FRFs (force sensor → every acceleration sensor) over
+/// `[from_ns, to_ns)` of the recording.
+pub fn estimate(
+    config: &Config,
+    blocks: &[RecordedBlock],
+    from_ns: Option<i128>,
+    to_ns: Option<i128>,
+) -> Result<EstimateReport> {
+    let (force, accels) = config.channel_roles()?;
+    let names: Vec<&str> = config.sensors.iter().map(|s| s.name.as_str()).collect();
+    let mut by_channel: BTreeMap<(String, ChannelQuantity), Vec<&RecordedBlock>> = BTreeMap::new();
+    for b in blocks {
+        by_channel
+            .entry((b.block.name.clone(), b.block.quantity))
+            .or_default()
+            .push(b);
+    }
+    let channel = |name: &str, q: ChannelQuantity| -> Result<ContinuousChannel> {
+        let list = by_channel
+            .get(&(name.to_string(), q))
+            .map(|v| v.as_slice())
+            .unwrap_or(&[]);
+        concatenate(name, q, list)
+    };
+    let f = channel(names[force], ChannelQuantity::Force)?;
+    let xs: Vec<ContinuousChannel> = accels
+        .iter()
+        .map(|&i| channel(names[i], ChannelQuantity::Acceleration))
+        .collect::<Result<_>>()?;
+    let fs = f.fs;
+    for (x, &i) in xs.iter().zip(&accels) {
+        if (x.fs - fs).abs() > 1e-9 * fs {
+            bail!(
+                "sample-rate mismatch: force {} at {fs} Hz, {} at {} Hz",
+                names[force],
+                names[i],
+                x.fs
+            );
+        }
+    }
+    // Common span on the force channel's sample grid.
+    let end = |c: &ContinuousChannel| c.start_ns + (c.data.len() as f64 * 1e9 / c.fs).round() as i128;
+    let mut start = std::iter::once(&f)
+        .chain(&xs)
+        .map(|c| c.start_ns)
+        .max()
+        .expect("one channel");
+    let mut stop = std::iter::once(&f).chain(&xs).map(end).min().expect("one channel");
+    if let Some(t) = from_ns {
+        start = start.max(t);
+    }
+    if let Some(t) = to_ns {
+        stop = stop.min(t);
+    }
+    let index = |c: &ContinuousChannel, t: i128| -> Result<usize> {
+        let k = (t - c.start_ns) as f64 * c.fs / 1e9;
+        let r = k.round();
+        if (k - r).abs() > 0.01 {
+            bail!("channels are not sample-aligned (offset {:.3} samples)", k - r);
+        }
+        Ok(r.max(0.0) as usize)
+    };
+    // Snap the start to the force grid.
+    let k0 = ((start - f.start_ns) as f64 * fs / 1e9).ceil() as usize;
+    let start = f.start_ns + (k0 as f64 * 1e9 / fs).round() as i128;
+    if stop <= start {
+        bail!("the channels have no common time span in the requested interval");
+    }
+    let samples = ((stop - start) as f64 * fs / 1e9).floor() as usize;
+    let (settings, estimator) = config.welch_settings(fs)?;
+    if samples < settings.segment {
+        bail!(
+            "{samples} common samples are fewer than one Welch segment ({})",
+            settings.segment
+        );
+    }
+    let slice = |c: &ContinuousChannel| -> Result<Vec<f64>> {
+        let a = index(c, start)?;
+        Ok(c.data[a..a + samples].to_vec())
+    };
+    let f_data = slice(&f)?;
+    let x_data: Vec<Vec<f64>> = xs.iter().map(slice).collect::<Result<_>>()?;
+    let mut welch = WelchEstimator::new(settings, xs.len())?;
+    let refs: Vec<&[f64]> = x_data.iter().map(|v| v.as_slice()).collect();
+    welch.push(&f_data, &refs)?;
+    let counts = welch.counts();
+    if counts.accepted == 0 {
+        bail!(
+            "every Welch segment was rejected ({} non-finite, {} clipped, {} double impacts)",
+            counts.non_finite,
+            counts.clipped,
+            counts.double_impact
+        );
+    }
+    let spectra = welch.spectra();
+    let est = spectra.frf(estimator);
+    let [lo, hi] = config.frf.band;
+    let lines: Vec<usize> = (0..est.frequencies.len())
+        .filter(|&k| est.frequencies[k] > 0.0 && est.frequencies[k] >= lo && est.frequencies[k] <= hi)
+        .collect();
+    if lines.is_empty() {
+        bail!("no spectral line in frf.band [{lo}, {hi}] Hz");
+    }
+    let quantity = config.frf.quantity;
+    let convert = |a: c64, f_hz: f64| -> c64 {
+        let w = 2.0 * PI * f_hz;
+        match quantity {
+            Quantity::Accelerance => a,
+            Quantity::Mobility => a / c64::new(0.0, w),
+            Quantity::Receptance => a / c64::new(-w * w, 0.0),
+        }
+    };
+    let frfs = accels
+        .iter()
+        .enumerate()
+        .map(|(o, &i)| FrfEntry {
+            input: names[force].to_string(),
+            output: names[i].to_string(),
+            re: lines
+                .iter()
+                .map(|&k| convert(est.h[o][k], est.frequencies[k]).re)
+                .collect(),
+            im: lines
+                .iter()
+                .map(|&k| convert(est.h[o][k], est.frequencies[k]).im)
+                .collect(),
+            coherence: Some(lines.iter().map(|&k| est.coherence[o][k].clamp(0.0, 1.0)).collect()),
+            n_averages: Some(est.effective_averages),
+        })
+        .collect();
+    Ok(EstimateReport {
+        frf: FrfFile {
+            quantity,
+            frequency_hz: lines.iter().map(|&k| est.frequencies[k]).collect(),
+            frfs,
+        },
+        segments: counts,
+        start_ns: start,
+        samples,
+        effective_averages: est.effective_averages,
+    })
+}

@@ -1,0 +1,156 @@
+//! MCAP recordings of raw input: one channel per topic
+//! (`<prefix>/accel/<name>`, `<prefix>/force/<name>`), message encoding
+//! `cbor` or `json` (the wire format), `log_time` = block start in ns since
+//! the epoch, zstd-compressed chunks. JSON channels carry a JSON Schema so
+//! Foxglove can plot them.
+
+use crate::wire::{self, ChannelBlock, Encoding, Limits, WireError};
+use anyhow::{Context, Result};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+
+/// JSON Schema of a channel block (for `json` channels).
+pub const BLOCK_JSON_SCHEMA: &str = r#"{
+  "$schema": "https://json-schema.org/draft/2020-12/schema",
+  "title": "splinewatch channel block (SEP005 style)",
+  "type": "object",
+  "required": ["name", "quantity", "fs", "start_timestamp", "data"],
+  "properties": {
+    "name": {"type": "string"},
+    "quantity": {"enum": ["acceleration", "force"]},
+    "unit_str": {"type": "string"},
+    "fs": {"type": "number", "exclusiveMinimum": 0},
+    "start_timestamp": {"type": "string", "format": "date-time"},
+    "data": {"type": "array", "items": {"type": "number"}}
+  }
+}"#;
+
+/// Writes raw-input recordings.
+pub struct RecordingWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    encoding: Encoding,
+    schema_id: u16,
+    channels: BTreeMap<String, u16>,
+    sequence: u32,
+}
+
+impl RecordingWriter<BufWriter<File>> {
+    pub fn create(path: &Path, encoding: Encoding) -> Result<Self> {
+        let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        Self::new(BufWriter::new(file), encoding)
+    }
+}
+
+impl<W: Write + Seek> RecordingWriter<W> {
+    pub fn new(w: W, encoding: Encoding) -> Result<Self> {
+        let mut writer = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("splinewatch")
+            .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
+            .create(w)
+            .context("cannot start the MCAP file")?;
+        let schema_id = match encoding {
+            Encoding::Json => writer
+                .add_schema("splinewatch.ChannelBlock", "jsonschema", BLOCK_JSON_SCHEMA.as_bytes())
+                .context("cannot add the MCAP schema")?,
+            Encoding::Cbor => 0,
+        };
+        Ok(Self {
+            writer,
+            encoding,
+            schema_id,
+            channels: BTreeMap::new(),
+            sequence: 0,
+        })
+    }
+
+    /// Appends one block on its topic under `prefix`.
+    pub fn write_block(&mut self, prefix: &str, block: &ChannelBlock) -> Result<()> {
+        let topic = block.topic(prefix);
+        let channel_id = match self.channels.get(&topic) {
+            Some(&id) => id,
+            None => {
+                let metadata = BTreeMap::from([
+                    ("quantity".to_string(), format!("{:?}", block.quantity).to_lowercase()),
+                    ("unit".to_string(), block.unit.clone()),
+                    ("fs".to_string(), block.fs.to_string()),
+                ]);
+                let id = self
+                    .writer
+                    .add_channel(self.schema_id, &topic, self.encoding.mcap_name(), &metadata)
+                    .with_context(|| format!("cannot add MCAP channel {topic}"))?;
+                self.channels.insert(topic.clone(), id);
+                id
+            }
+        };
+        let log_time = u64::try_from(block.start_ns).context("block timestamps before 1970 cannot be recorded")?;
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer
+            .write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id,
+                    sequence: self.sequence,
+                    log_time,
+                    publish_time: log_time,
+                },
+                &wire::encode(block, self.encoding),
+            )
+            .with_context(|| format!("cannot write to {topic}"))?;
+        Ok(())
+    }
+
+    /// Writes the summary and index; the file is complete after this.
+    pub fn finish(mut self) -> Result<W> {
+        self.writer.finish().context("cannot finish the MCAP file")?;
+        Ok(self.writer.into_inner())
+    }
+}
+
+/// A block read back from a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordedBlock {
+    pub topic: String,
+    pub log_time: u64,
+    pub block: ChannelBlock,
+}
+
+/// A message that could not be used, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RejectedMessage {
+    pub topic: String,
+    pub log_time: u64,
+    pub error: WireError,
+}
+
+/// Reads every raw-input block of a recording, in file order. Messages on
+/// topics that are not `…/accel/…` or `…/force/…`, or with another encoding,
+/// are skipped; undecodable ones are returned in the second list.
+pub fn read_recording(bytes: &[u8], limits: &Limits) -> Result<(Vec<RecordedBlock>, Vec<RejectedMessage>)> {
+    let mut blocks = Vec::new();
+    let mut rejected = Vec::new();
+    for message in mcap::MessageStream::new(bytes).context("not a readable MCAP file")? {
+        let message = message.context("corrupt MCAP record")?;
+        let topic = &message.channel.topic;
+        if !(topic.contains("/accel/") || topic.contains("/force/")) {
+            continue;
+        }
+        let Some(encoding) = Encoding::from_name(&message.channel.message_encoding) else {
+            continue;
+        };
+        match wire::decode(&message.data, encoding, limits) {
+            Ok(decoded) => blocks.extend(decoded.into_iter().map(|block| RecordedBlock {
+                topic: topic.clone(),
+                log_time: message.log_time,
+                block,
+            })),
+            Err(error) => rejected.push(RejectedMessage {
+                topic: topic.clone(),
+                log_time: message.log_time,
+                error,
+            }),
+        }
+    }
+    Ok((blocks, rejected))
+}
