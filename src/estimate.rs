@@ -79,7 +79,13 @@ pub fn estimate(
     let (force, accels) = config.channel_roles()?;
     let names: Vec<&str> = config.sensors.iter().map(|s| s.name.as_str()).collect();
     let mut by_channel: BTreeMap<(String, ChannelQuantity), Vec<&RecordedBlock>> = BTreeMap::new();
-    for b in blocks {
+    // Only blocks overlapping the requested span take part, so a gap outside
+    // it does not matter.
+    let overlaps = |b: &RecordedBlock| {
+        let end = b.block.start_ns + (b.block.data.len() as f64 * 1e9 / b.block.fs).round() as i128;
+        from_ns.is_none_or(|t| end > t) && to_ns.is_none_or(|t| b.block.start_ns < t)
+    };
+    for b in blocks.iter().filter(|b| overlaps(b)) {
         by_channel
             .entry((b.block.name.clone(), b.block.quantity))
             .or_default()
