@@ -46,6 +46,20 @@ pub struct Config {
     pub updating: UpdatingConfig,
     #[serde(default)]
     pub frf: FrfConfig,
+    #[serde(default)]
+    pub schedule: crate::pipeline::ScheduleConfig,
+    #[serde(default)]
+    pub output: OutputConfig,
+}
+
+/// `[output]`: where results go.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputConfig {
+    /// Folder for results MCAP files and the state file (default `out/<structure.name>`).
+    pub dir: Option<std::path::PathBuf>,
+    /// State file (default `<dir>/state.json`).
+    pub state_file: Option<std::path::PathBuf>,
 }
 
 /// `[frf]`: Welch FRF estimation from time series.
@@ -614,6 +628,14 @@ impl Config {
             ));
         }
         Ok(out)
+    }
+
+    /// Results folder: `[output] dir`, default `out/<structure.name>`.
+    pub fn output_dir(&self) -> std::path::PathBuf {
+        self.output
+            .dir
+            .clone()
+            .unwrap_or_else(|| std::path::Path::new("out").join(&self.structure.name))
     }
 
     /// Topic / key-expression prefix: `bridge/<structure.name>`.

@@ -144,6 +144,19 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the monitoring pipeline over a raw-input recording as fast as the CPU allows.
+    Replay {
+        #[arg(long)]
+        config: PathBuf,
+        /// Recording (MCAP).
+        input: PathBuf,
+        /// Results MCAP (default: <output.dir>/replay-results.mcap).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Warm-start from this state file if it exists, and keep it up to date.
+        #[arg(long)]
+        state: Option<PathBuf>,
+    },
     /// Validate a configuration file without running anything.
     CheckConfig {
         /// Configuration file (TOML).
@@ -367,6 +380,67 @@ fn run(cli: Cli) -> Result<()> {
                     std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?
                 }
                 None => println!("{text}"),
+            }
+        }
+        Command::Replay {
+            config,
+            input,
+            out,
+            state,
+        } => {
+            let cfg = commands::load_config(&config)?;
+            let out = out.unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
+            let bytes = std::fs::read(&input).with_context(|| format!("cannot read {}", input.display()))?;
+            let initial = match &state {
+                Some(p) => splinewatch::results::load_state(p)?,
+                None => None,
+            };
+            let mut writer = splinewatch::results::ResultsWriter::create(&out, &cfg.topic_prefix())?;
+            let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+            let bar = indicatif::ProgressBar::new(0);
+            if !terminal {
+                bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+            }
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} messages {msg}")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            );
+            let t0 = std::time::Instant::now();
+            let summary =
+                splinewatch::replay::replay(&cfg, &bytes, initial, &mut writer, state.as_deref(), &mut |p, note| {
+                    bar.set_length(p.total);
+                    bar.set_position(p.messages);
+                    if let Some(n) = note {
+                        if terminal {
+                            bar.set_message(n.to_string());
+                        } else {
+                            eprintln!("{n}");
+                        }
+                    }
+                })?;
+            bar.finish_and_clear();
+            writer.finish()?;
+            let seconds = t0.elapsed().as_secs_f64();
+            let span = summary.windows.len() as f64 * cfg.frf.window_seconds;
+            eprintln!(
+                "replayed {} messages: {} windows ({} accepted), {} updates in {seconds:.2} s ({:.0}× real time); results in {}",
+                summary.messages,
+                summary.windows.len(),
+                summary.windows.iter().filter(|w| w.skipped.is_none()).count(),
+                summary.updates.len(),
+                span / seconds.max(1e-9),
+                out.display()
+            );
+            if let Some(acc) = &summary.accepted {
+                for p in &acc.parameters {
+                    println!(
+                        "{:<14} {:>14.6e} {:>12}",
+                        p.name,
+                        p.value,
+                        p.std.map_or("-".into(), |s| format!("{s:.3e}"))
+                    );
+                }
             }
         }
         Command::CheckConfig { config } => {

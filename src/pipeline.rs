@@ -1,0 +1,623 @@
+//! The monitoring pipeline shared by the live daemon and offline replay:
+//! decoded channel blocks in, windowed FRFs and warm-started updates out.
+//!
+//! - **Alignment.** The sample grid is anchored at the first accepted block;
+//!   every channel must sit on it (within 1 % of a sample). A missing stretch
+//!   (gap, late or silent channel) is filled with NaN so that the Welch gates
+//!   reject exactly the segments it touches; a block that goes back in time
+//!   is rejected. Nothing is buffered beyond `max_lag_seconds` per channel.
+//! - **Windows.** Aligned samples stream into a Welch estimator; at each
+//!   window end the FRFs are estimated and the window is accepted, or
+//!   skipped with a reason (too few clean segments, low coherence).
+//! - **Updating.** Every `update_every_windows` accepted windows an update
+//!   job is produced (warm-started from the last accepted parameters, the
+//!   config's values at first). The caller runs it (inline for replay, on a
+//!   blocking worker live) and hands the outcome back; a failed or
+//!   non-converged run keeps the last good parameters.
+
+use crate::commands::{self, FrfSetup};
+use crate::config::Config;
+use crate::frf_json::{FrfEntry, FrfFile};
+use crate::wire::{ChannelBlock, ChannelQuantity, WireError};
+use anyhow::{bail, Result};
+use serde::{Deserialize, Serialize};
+use splinewatch_core::c64;
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::modal::ModeKind;
+use splinewatch_core::updating::{Parameter, UpdateProblem, UpdateResult, UpdateSettings};
+use splinewatch_core::welch::{Estimator, WelchEstimator, WelchSettings};
+use std::collections::{BTreeMap, VecDeque};
+use std::f64::consts::PI;
+use std::sync::Arc;
+
+/// Scheduling and quality settings (`[schedule]`).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScheduleConfig {
+    /// Run the updating after this many accepted windows.
+    pub update_every_windows: u64,
+    /// Skip a window whose FRFs have a mean coherence in the band below this.
+    pub min_coherence: f64,
+    /// Skip a window with fewer clean segments than this fraction of the possible ones.
+    pub min_segment_fraction: f64,
+    /// A channel may lag the others by at most this; beyond, its missing samples count as a gap.
+    pub max_lag_seconds: f64,
+}
+
+impl Default for ScheduleConfig {
+    fn default() -> Self {
+        Self {
+            update_every_windows: 1,
+            min_coherence: 0.6,
+            min_segment_fraction: 0.5,
+            max_lag_seconds: 30.0,
+        }
+    }
+}
+
+/// Counters published on `<prefix>/health`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Health {
+    pub blocks: u64,
+    pub samples: u64,
+    /// Rejected messages and blocks by reason.
+    pub rejected: BTreeMap<String, u64>,
+    pub gaps: u64,
+    pub gap_samples: u64,
+    pub segments_accepted: u64,
+    pub segments_rejected: u64,
+    pub windows_accepted: u64,
+    pub windows_skipped: BTreeMap<String, u64>,
+    pub update_runs: u64,
+    pub update_failures: u64,
+    pub queue_drops: u64,
+}
+
+impl Health {
+    pub fn reject(&mut self, reason: &str) {
+        *self.rejected.entry(reason.to_string()).or_insert(0) += 1;
+    }
+}
+
+/// The last accepted parameters (persisted in the state file).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AcceptedParameters {
+    pub window: u64,
+    pub time: String,
+    pub parameters: Vec<StateParameter>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateParameter {
+    pub name: String,
+    pub value: f64,
+    pub std: Option<f64>,
+}
+
+/// A closed analysis window.
+#[derive(Debug, Clone)]
+pub struct WindowReport {
+    pub index: u64,
+    pub start_ns: i128,
+    pub end_ns: i128,
+    pub segments_accepted: u64,
+    pub segments_rejected: u64,
+    /// Mean coherence in the band per FRF.
+    pub mean_coherence: Vec<f64>,
+    /// `None` when accepted.
+    pub skipped: Option<String>,
+    pub frf: Option<FrfFile>,
+}
+
+/// An updating run to do: owns everything it needs, so it can run on
+/// another thread.
+pub struct UpdateJob {
+    pub window: u64,
+    pub time_ns: i128,
+    pub measured: FrfFile,
+    setup: Arc<FrfSetup>,
+    parameters: Vec<Parameter>,
+    settings: UpdateSettings,
+    start: Vec<f64>,
+}
+
+/// What an update produced.
+#[derive(Debug, Clone)]
+pub struct UpdateOutcome {
+    pub window: u64,
+    pub time_ns: i128,
+    pub measured: FrfFile,
+    pub result: Result<UpdateReport, String>,
+}
+
+#[derive(Debug, Clone)]
+pub struct UpdateReport {
+    pub result: UpdateResult,
+    /// Model FRFs at the identified parameters, on the measured lines.
+    pub model: FrfFile,
+    /// `(frequency Hz, damping ratio, kind)` of the updated model below the band's top.
+    pub modes: Vec<(f64, f64, ModeKind)>,
+    /// `|h_x - h_a| / |h_x|` per FRF and line.
+    pub residue: Vec<Vec<f64>>,
+}
+
+impl UpdateJob {
+    pub fn run(self) -> UpdateOutcome {
+        let result = self.compute().map_err(|e| format!("{e:#}"));
+        UpdateOutcome {
+            window: self.window,
+            time_ns: self.time_ns,
+            measured: self.measured,
+            result,
+        }
+    }
+
+    fn compute(&self) -> Result<UpdateReport> {
+        let measured = self.measured.to_measured(&self.setup.sensor_names)?;
+        let problem = UpdateProblem::new(
+            &self.setup.model,
+            self.setup.kappa.clone(),
+            self.setup.damping.clone(),
+            self.parameters.clone(),
+            &measured,
+            self.settings.clone(),
+        )?;
+        let result = problem.solve(&self.start)?;
+        if result.parameters.iter().any(|p| !p.value.is_finite()) {
+            bail!("non-finite parameters");
+        }
+        if !result.converged {
+            bail!("the updating did not converge ({:?})", result.stop_reason);
+        }
+        let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
+        let h = problem.model_frfs(&values)?;
+        let lines = problem.line_frequencies().to_vec();
+        let nl = lines.len();
+        let mut model_entries = Vec::new();
+        let mut residue = Vec::new();
+        for (b, m) in measured.frfs().iter().enumerate() {
+            let hs = &h[b * nl..(b + 1) * nl];
+            model_entries.push(FrfEntry {
+                input: self.setup.sensor_names[m.input].clone(),
+                output: self.setup.sensor_names[m.output].clone(),
+                re: hs.iter().map(|v| v.re).collect(),
+                im: hs.iter().map(|v| v.im).collect(),
+                coherence: None,
+                n_averages: None,
+            });
+            let sel = problem_lines(&self.measured.frequency_hz, &lines);
+            residue.push(
+                sel.iter()
+                    .zip(hs)
+                    .map(|(&i, a)| {
+                        let x = m.values[i];
+                        (x - a).norm() / x.norm().max(f64::MIN_POSITIVE)
+                    })
+                    .collect(),
+            );
+        }
+        let (kappa, damping) = problem.model_at(&values)?;
+        let state = self.setup.model.modal_state(&kappa, &damping)?;
+        let top = lines.last().copied().unwrap_or(0.0);
+        let modes = (0..state.modes.len())
+            .filter(|&i| state.modes.frequency_hz(i) <= top)
+            .map(|i| (state.modes.frequency_hz(i), state.zeta[i], state.modes.kinds[i]))
+            .collect();
+        Ok(UpdateReport {
+            result,
+            model: FrfFile {
+                quantity: self.measured.quantity,
+                frequency_hz: lines,
+                frfs: model_entries,
+            },
+            modes,
+            residue,
+        })
+    }
+}
+
+/// Indices of `lines` within `all` (both ascending, lines ⊂ all).
+fn problem_lines(all: &[f64], lines: &[f64]) -> Vec<usize> {
+    let mut out = Vec::with_capacity(lines.len());
+    let mut k = 0;
+    for &f in lines {
+        while k < all.len() && all[k] < f {
+            k += 1;
+        }
+        out.push(k.min(all.len().saturating_sub(1)));
+    }
+    out
+}
+
+struct ChannelQueue {
+    /// Grid index of the first buffered sample.
+    first: i64,
+    data: VecDeque<f64>,
+    seen: bool,
+}
+
+impl ChannelQueue {
+    fn end(&self) -> i64 {
+        self.first + self.data.len() as i64
+    }
+}
+
+/// The pipeline state machine.
+pub struct Pipeline {
+    config: Config,
+    schedule: ScheduleConfig,
+    setup: Arc<FrfSetup>,
+    parameters: Vec<Parameter>,
+    settings: UpdateSettings,
+    names: Vec<String>,
+    force: usize,
+    accels: Vec<usize>,
+    /// Channel identities in queue order: force first.
+    channels: Vec<(String, ChannelQuantity)>,
+    queues: Vec<ChannelQueue>,
+    fs: Option<f64>,
+    t0: Option<i128>,
+    welch: Option<(WelchEstimator, Estimator)>,
+    window_samples: i64,
+    /// Grid index fed to the estimator so far.
+    fed: i64,
+    window_index: u64,
+    accepted_since_update: u64,
+    last: Option<AcceptedParameters>,
+    health: Health,
+}
+
+impl Pipeline {
+    pub fn new(config: &Config, schedule: ScheduleConfig, state: Option<AcceptedParameters>) -> Result<Self> {
+        let setup = Arc::new(commands::frf_setup(config)?);
+        let parameters = config.build_parameters()?;
+        let settings = config.update_settings()?;
+        let (force, accels) = config.channel_roles()?;
+        if schedule.update_every_windows == 0 {
+            bail!("config: schedule.update_every_windows: must be at least 1");
+        }
+        if let Some(s) = &state {
+            for p in &s.parameters {
+                if !parameters.iter().any(|q| q.name == p.name) {
+                    bail!(
+                        "state: parameter {:?} is not an updating parameter of this config",
+                        p.name
+                    );
+                }
+            }
+        }
+        let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
+        let mut channels = vec![(names[force].clone(), ChannelQuantity::Force)];
+        channels.extend(
+            accels
+                .iter()
+                .map(|&i| (names[i].clone(), ChannelQuantity::Acceleration)),
+        );
+        let queues = channels
+            .iter()
+            .map(|_| ChannelQueue {
+                first: 0,
+                data: VecDeque::new(),
+                seen: false,
+            })
+            .collect();
+        Ok(Self {
+            config: config.clone(),
+            schedule,
+            setup,
+            parameters,
+            settings,
+            names,
+            force,
+            accels,
+            channels,
+            queues,
+            fs: None,
+            t0: None,
+            welch: None,
+            window_samples: 0,
+            fed: 0,
+            window_index: 0,
+            accepted_since_update: 0,
+            last: state,
+            health: Health::default(),
+        })
+    }
+
+    pub fn health(&self) -> &Health {
+        &self.health
+    }
+
+    pub fn health_mut(&mut self) -> &mut Health {
+        &mut self.health
+    }
+
+    /// The last accepted parameters, if any update succeeded (or a state was loaded).
+    pub fn accepted(&self) -> Option<&AcceptedParameters> {
+        self.last.as_ref()
+    }
+
+    pub fn parameters(&self) -> &[Parameter] {
+        &self.parameters
+    }
+
+    /// Counts a message the decoder rejected.
+    pub fn reject_message(&mut self, error: &WireError) {
+        self.health.reject(error.reason());
+    }
+
+    /// Takes one decoded block; returns the windows it closed and the update
+    /// jobs they triggered.
+    pub fn ingest(&mut self, block: ChannelBlock) -> (Vec<WindowReport>, Vec<UpdateJob>) {
+        let mut windows = Vec::new();
+        let mut jobs = Vec::new();
+        let Some(c) = self
+            .channels
+            .iter()
+            .position(|(n, q)| *n == block.name && *q == block.quantity)
+        else {
+            self.health.reject("unknown_channel");
+            return (windows, jobs);
+        };
+        let fs = *self.fs.get_or_insert(block.fs);
+        if (block.fs - fs).abs() > 1e-9 * fs {
+            self.health.reject("rate_mismatch");
+            return (windows, jobs);
+        }
+        if self.welch.is_none() {
+            match self.config.welch_settings(fs) {
+                Ok((settings, estimator)) => {
+                    self.window_samples = (self.config.frf.window_seconds * fs).round() as i64;
+                    self.welch = Some((
+                        WelchEstimator::new(settings, self.accels.len()).expect("validated"),
+                        estimator,
+                    ));
+                }
+                Err(_) => {
+                    self.health.reject("bad_fs_for_frf_settings");
+                    self.fs = None;
+                    return (windows, jobs);
+                }
+            }
+        }
+        let t0 = *self.t0.get_or_insert(block.start_ns);
+        let position = (block.start_ns - t0) as f64 * fs / 1e9;
+        let index = position.round();
+        if (position - index).abs() > 0.01 {
+            self.health.reject("misaligned");
+            return (windows, jobs);
+        }
+        let index = index as i64;
+        let queue = &mut self.queues[c];
+        let expected = if queue.seen { queue.end() } else { self.fed };
+        if index < expected {
+            // Backwards, duplicated or overlapping, or before what was already analysed.
+            self.health.reject("time_overlap");
+            return (windows, jobs);
+        }
+        let max_lag = (self.schedule.max_lag_seconds * fs) as i64;
+        if index - expected > self.window_samples.max(max_lag) * 4 {
+            self.health.reject("far_future");
+            return (windows, jobs);
+        }
+        if !queue.seen {
+            queue.first = self.fed;
+            queue.seen = true;
+        }
+        if index > expected {
+            self.health.gaps += 1;
+            self.health.gap_samples += (index - expected) as u64;
+            queue
+                .data
+                .extend(std::iter::repeat_n(f64::NAN, (index - expected) as usize));
+        }
+        queue.data.extend(block.data.iter().copied());
+        self.health.blocks += 1;
+        self.health.samples += block.data.len() as u64;
+        // Channels too far behind the leader: their missing stretch is a gap.
+        let leader = self.queues.iter().map(|q| q.end()).max().unwrap_or(0);
+        for q in &mut self.queues {
+            let behind = leader - q.end().max(self.fed);
+            if behind > max_lag {
+                let fill = behind - max_lag;
+                if !q.seen {
+                    q.first = self.fed;
+                    q.seen = true;
+                }
+                q.data.extend(std::iter::repeat_n(f64::NAN, fill as usize));
+                self.health.gaps += 1;
+                self.health.gap_samples += fill as u64;
+            }
+        }
+        self.feed(&mut windows, &mut jobs);
+        (windows, jobs)
+    }
+
+    /// Feeds every sample available on all channels, closing windows.
+    fn feed(&mut self, windows: &mut Vec<WindowReport>, jobs: &mut Vec<UpdateJob>) {
+        loop {
+            let frontier = self
+                .queues
+                .iter()
+                .map(|q| if q.seen { q.end() } else { self.fed })
+                .min()
+                .unwrap_or(self.fed);
+            let window_end = (self.window_index as i64 + 1) * self.window_samples;
+            let until = frontier.min(window_end);
+            if until > self.fed {
+                let n = (until - self.fed) as usize;
+                let mut take = |q: &mut ChannelQueue| -> Vec<f64> {
+                    let skip = (self.fed - q.first).max(0) as usize;
+                    q.data.drain(..skip.min(q.data.len()));
+                    q.first += skip as i64;
+                    let v: Vec<f64> = q.data.drain(..n.min(q.data.len())).collect();
+                    q.first += v.len() as i64;
+                    v
+                };
+                let cols: Vec<Vec<f64>> = self.queues.iter_mut().map(&mut take).collect();
+                let (welch, _) = self.welch.as_mut().expect("created with the first block");
+                let outputs: Vec<&[f64]> = cols[1..].iter().map(|v| v.as_slice()).collect();
+                welch.push(&cols[0], &outputs).expect("equal lengths by construction");
+                self.fed = until;
+            }
+            if self.fed == window_end {
+                let report = self.close_window();
+                if report.skipped.is_none() {
+                    self.accepted_since_update += 1;
+                    if self.accepted_since_update >= self.schedule.update_every_windows {
+                        self.accepted_since_update = 0;
+                        if let Some(frf) = &report.frf {
+                            jobs.push(self.job(report.index, report.end_ns, frf.clone()));
+                        }
+                    }
+                }
+                windows.push(report);
+                continue;
+            }
+            break;
+        }
+    }
+
+    fn close_window(&mut self) -> WindowReport {
+        let fs = self.fs.expect("set with the first block");
+        let t0 = self.t0.expect("set with the first block");
+        let index = self.window_index;
+        self.window_index += 1;
+        let start_ns = t0 + ((index as i64 * self.window_samples) as f64 * 1e9 / fs).round() as i128;
+        let end_ns = t0 + (((index + 1) as i64 * self.window_samples) as f64 * 1e9 / fs).round() as i128;
+        let (welch, estimator) = self.welch.as_mut().expect("created with the first block");
+        let counts = welch.counts();
+        self.health.segments_accepted += counts.accepted;
+        self.health.segments_rejected += counts.rejected();
+        let settings: &WelchSettings = welch.settings();
+        let possible = ((self.window_samples as usize).saturating_sub(settings.segment) / settings.step() + 1) as f64;
+        let mut report = WindowReport {
+            index,
+            start_ns,
+            end_ns,
+            segments_accepted: counts.accepted,
+            segments_rejected: counts.rejected(),
+            mean_coherence: Vec::new(),
+            skipped: None,
+            frf: None,
+        };
+        if (counts.accepted as f64) < self.schedule.min_segment_fraction * possible || counts.accepted == 0 {
+            report.skipped = Some("too_little_data".into());
+        } else {
+            let est = welch.spectra().frf(*estimator);
+            let [lo, hi] = self.config.frf.band;
+            let lines: Vec<usize> = (0..est.frequencies.len())
+                .filter(|&k| est.frequencies[k] > 0.0 && est.frequencies[k] >= lo && est.frequencies[k] <= hi)
+                .collect();
+            report.mean_coherence = est
+                .coherence
+                .iter()
+                .map(|c| lines.iter().map(|&k| c[k]).sum::<f64>() / lines.len().max(1) as f64)
+                .collect();
+            if report
+                .mean_coherence
+                .iter()
+                .any(|c| !(c.is_finite() && *c >= self.schedule.min_coherence))
+            {
+                report.skipped = Some("low_coherence".into());
+            } else {
+                let quantity = self.config.frf.quantity;
+                let convert = |a: c64, f: f64| {
+                    let w = 2.0 * PI * f;
+                    match quantity {
+                        Quantity::Accelerance => a,
+                        Quantity::Mobility => a / c64::new(0.0, w),
+                        Quantity::Receptance => a / c64::new(-w * w, 0.0),
+                    }
+                };
+                report.frf = Some(FrfFile {
+                    quantity,
+                    frequency_hz: lines.iter().map(|&k| est.frequencies[k]).collect(),
+                    frfs: self
+                        .accels
+                        .iter()
+                        .enumerate()
+                        .map(|(o, &i)| FrfEntry {
+                            input: self.names[self.force].clone(),
+                            output: self.names[i].clone(),
+                            re: lines
+                                .iter()
+                                .map(|&k| convert(est.h[o][k], est.frequencies[k]).re)
+                                .collect(),
+                            im: lines
+                                .iter()
+                                .map(|&k| convert(est.h[o][k], est.frequencies[k]).im)
+                                .collect(),
+                            coherence: Some(lines.iter().map(|&k| est.coherence[o][k].clamp(0.0, 1.0)).collect()),
+                            n_averages: Some(est.effective_averages),
+                        })
+                        .collect(),
+                });
+            }
+        }
+        match &report.skipped {
+            None => self.health.windows_accepted += 1,
+            Some(reason) => *self.health.windows_skipped.entry(reason.clone()).or_insert(0) += 1,
+        }
+        welch.reset();
+        report
+    }
+
+    fn job(&self, window: u64, time_ns: i128, measured: FrfFile) -> UpdateJob {
+        let base: Vec<f64> = self
+            .parameters
+            .iter()
+            .map(|p| match p.kind {
+                splinewatch_core::updating::ParameterKind::Spring { field, coefficient } => {
+                    self.setup.kappa[field][coefficient]
+                }
+                splinewatch_core::updating::ParameterKind::Damping { coefficient } => {
+                    self.setup.damping.coefficients()[coefficient]
+                }
+            })
+            .collect();
+        let start = match &self.last {
+            Some(last) => self
+                .parameters
+                .iter()
+                .zip(base)
+                .map(|(p, b)| last.parameters.iter().find(|s| s.name == p.name).map_or(b, |s| s.value))
+                .collect(),
+            None => base,
+        };
+        UpdateJob {
+            window,
+            time_ns,
+            measured,
+            setup: Arc::clone(&self.setup),
+            parameters: self.parameters.clone(),
+            settings: self.settings.clone(),
+            start,
+        }
+    }
+
+    /// Records an update's outcome: accepted parameters replace the last
+    /// good ones; a failure keeps them.
+    pub fn apply(&mut self, outcome: &UpdateOutcome) {
+        self.health.update_runs += 1;
+        match &outcome.result {
+            Ok(report) => {
+                self.last = Some(AcceptedParameters {
+                    window: outcome.window,
+                    time: crate::wire::format_timestamp(outcome.time_ns),
+                    parameters: report
+                        .result
+                        .parameters
+                        .iter()
+                        .map(|p| StateParameter {
+                            name: p.name.clone(),
+                            value: p.value,
+                            std: p.std,
+                        })
+                        .collect(),
+                });
+            }
+            Err(_) => self.health.update_failures += 1,
+        }
+    }
+}

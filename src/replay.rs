@@ -1,0 +1,139 @@
+//! Offline replay of a raw-input recording through the pipeline: the same
+//! code path as the live daemon, deterministic (updates run inline, in
+//! order, single-threaded).
+
+use crate::config::Config;
+use crate::pipeline::{AcceptedParameters, Pipeline, UpdateOutcome, WindowReport};
+use crate::results::{self, ResultsWriter};
+use crate::wire::{self, Encoding, Limits};
+use anyhow::{Context, Result};
+use std::io::{Seek, Write};
+use std::path::Path;
+
+/// Progress callback data.
+#[derive(Debug, Clone, Copy)]
+pub struct Progress {
+    pub messages: u64,
+    pub total: u64,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct ReplaySummary {
+    pub messages: u64,
+    pub windows: Vec<WindowReport>,
+    pub updates: Vec<UpdateOutcome>,
+    pub accepted: Option<AcceptedParameters>,
+}
+
+/// Replays `bytes` (an MCAP recording) into `out`; saves the state after
+/// every accepted update when `state_path` is given.
+pub fn replay<W: Write + Seek>(
+    config: &Config,
+    bytes: &[u8],
+    initial: Option<AcceptedParameters>,
+    out: &mut ResultsWriter<W>,
+    state_path: Option<&Path>,
+    progress: &mut dyn FnMut(Progress, Option<&str>),
+) -> Result<ReplaySummary> {
+    let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+    let limits = Limits {
+        max_samples: config.frf.max_block_samples,
+        ..Limits::default()
+    };
+    let total = mcap::Summary::read(bytes)
+        .ok()
+        .flatten()
+        .and_then(|s| s.stats.map(|st| st.message_count))
+        .unwrap_or(0);
+    let mut summary = ReplaySummary::default();
+    let mut last_time: i128 = 0;
+    for message in mcap::MessageStream::new(bytes).context("not a readable MCAP file")? {
+        let message = message.context("corrupt MCAP record")?;
+        summary.messages += 1;
+        let topic = &message.channel.topic;
+        if !(topic.contains("/accel/") || topic.contains("/force/")) {
+            continue;
+        }
+        let Some(encoding) = Encoding::from_name(&message.channel.message_encoding) else {
+            pipeline.health_mut().reject("unknown_encoding");
+            continue;
+        };
+        let blocks = match wire::decode(&message.data, encoding, &limits) {
+            Ok(b) => b,
+            Err(e) => {
+                pipeline.reject_message(&e);
+                continue;
+            }
+        };
+        for block in blocks {
+            let (windows, jobs) = pipeline.ingest(block);
+            for w in windows {
+                last_time = w.end_ns;
+                out.write("windows", w.end_ns, &results::window_message(&w))?;
+                let note = match &w.skipped {
+                    Some(reason) => format!("window {} skipped: {reason}", w.index),
+                    None => format!("window {} accepted ({} segments)", w.index, w.segments_accepted),
+                };
+                progress(
+                    Progress {
+                        messages: summary.messages,
+                        total,
+                    },
+                    Some(&note),
+                );
+                summary.windows.push(w);
+            }
+            for job in jobs {
+                let outcome = job.run();
+                pipeline.apply(&outcome);
+                for (suffix, msg) in results::update_messages(&outcome) {
+                    out.write(suffix, outcome.time_ns, &msg)?;
+                }
+                let note = match &outcome.result {
+                    Ok(r) => format!(
+                        "update after window {}: relative residual {:.4}, {} iterations",
+                        outcome.window,
+                        r.result.relative_residual,
+                        r.result.iterations.len() - 1
+                    ),
+                    Err(e) => format!(
+                        "update after window {} failed, keeping the last parameters: {e}",
+                        outcome.window
+                    ),
+                };
+                if let (Some(path), Some(state), Ok(_)) = (state_path, pipeline.accepted(), &outcome.result) {
+                    results::save_state(path, state)?;
+                }
+                out.write(
+                    "health",
+                    outcome.time_ns,
+                    &results::health_message(outcome.time_ns, pipeline.health()),
+                )?;
+                progress(
+                    Progress {
+                        messages: summary.messages,
+                        total,
+                    },
+                    Some(&note),
+                );
+                summary.updates.push(outcome);
+            }
+        }
+        if summary.messages % 256 == 0 {
+            progress(
+                Progress {
+                    messages: summary.messages,
+                    total,
+                },
+                None,
+            );
+        }
+    }
+    out.write(
+        "health",
+        last_time,
+        &results::health_message(last_time, pipeline.health()),
+    )?;
+    summary.accepted = pipeline.accepted().cloned();
+    Ok(summary)
+}

@@ -1,0 +1,235 @@
+//! Results outputs: an MCAP file of JSON messages with JSON Schemas (read by
+//! Foxglove and the Python `mcap` package), and the atomic state file.
+
+use crate::frf_json::FrfFile;
+use crate::pipeline::{AcceptedParameters, Health, UpdateOutcome, WindowReport};
+use crate::wire::format_timestamp;
+use anyhow::{Context, Result};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+
+/// The result topics under `<prefix>/`, with their JSON Schemas.
+pub const TOPICS: [(&str, &str); 8] = [
+    (
+        "updating/parameters",
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}}}}"#,
+    ),
+    (
+        "updating/residue",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array","items":{"type":"object","properties":{"input":{"type":"string"},"output":{"type":"string"},"relative_residue":{"type":"array","items":{"type":"number"}}}}}}}"#,
+    ),
+    (
+        "updating/failures",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"error":{"type":"string"}}}"#,
+    ),
+    (
+        "frf/measured",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"quantity":{"type":"string"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array"}}}"#,
+    ),
+    (
+        "frf/model",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"quantity":{"type":"string"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array"}}}"#,
+    ),
+    (
+        "modes",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"modes":{"type":"array","items":{"type":"object","properties":{"index":{"type":"integer"},"frequency_hz":{"type":"number"},"damping_ratio":{"type":"number"},"kind":{"type":"string"}}}}}}"#,
+    ),
+    (
+        "health",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"}}}"#,
+    ),
+    (
+        "windows",
+        r#"{"type":"object","properties":{"index":{"type":"integer"},"start":{"type":"string"},"end":{"type":"string"},"segments_accepted":{"type":"integer"},"segments_rejected":{"type":"integer"},"mean_coherence":{"type":"array","items":{"type":"number"}},"skipped":{"type":["string","null"]}}}"#,
+    ),
+];
+
+/// JSON messages for a closed window.
+pub fn window_message(w: &WindowReport) -> Value {
+    json!({
+        "index": w.index,
+        "start": format_timestamp(w.start_ns),
+        "end": format_timestamp(w.end_ns),
+        "segments_accepted": w.segments_accepted,
+        "segments_rejected": w.segments_rejected,
+        "mean_coherence": w.mean_coherence,
+        "skipped": w.skipped,
+    })
+}
+
+fn frf_message(time: &str, window: u64, frf: &FrfFile) -> Value {
+    let mut v = serde_json::to_value(frf).expect("plain data");
+    v["time"] = json!(time);
+    v["window"] = json!(window);
+    v
+}
+
+/// The messages of an update outcome, as `(topic suffix, message)`.
+pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
+    let time = format_timestamp(o.time_ns);
+    let mut out = vec![("frf/measured", frf_message(&time, o.window, &o.measured))];
+    match &o.result {
+        Ok(r) => {
+            out.push((
+                "updating/parameters",
+                json!({
+                    "time": time,
+                    "window": o.window,
+                    "converged": r.result.converged,
+                    "relative_residual": r.result.relative_residual,
+                    "iterations": r.result.iterations.len() - 1,
+                    "stop_reason": r.result.stop_reason,
+                    "condition_number": if r.result.condition_number.is_finite() { json!(r.result.condition_number) } else { Value::Null },
+                    "parameters": r.result.parameters,
+                }),
+            ));
+            out.push((
+                "updating/residue",
+                json!({
+                    "time": time,
+                    "window": o.window,
+                    "frequency_hz": r.model.frequency_hz,
+                    "frfs": r.model.frfs.iter().zip(&r.residue).map(|(f, res)| json!({
+                        "input": f.input, "output": f.output, "relative_residue": res
+                    })).collect::<Vec<_>>(),
+                }),
+            ));
+            out.push(("frf/model", frf_message(&time, o.window, &r.model)));
+            out.push((
+                "modes",
+                json!({
+                    "time": time,
+                    "window": o.window,
+                    "modes": r.modes.iter().enumerate().map(|(i, (f, z, k))| json!({
+                        "index": i + 1, "frequency_hz": f, "damping_ratio": z, "kind": k
+                    })).collect::<Vec<_>>(),
+                }),
+            ));
+        }
+        Err(e) => out.push((
+            "updating/failures",
+            json!({"time": time, "window": o.window, "error": e}),
+        )),
+    }
+    out
+}
+
+pub fn health_message(time_ns: i128, h: &Health) -> Value {
+    let mut v = serde_json::to_value(h).expect("plain data");
+    v["time"] = json!(format_timestamp(time_ns));
+    v
+}
+
+/// The results MCAP file.
+pub struct ResultsWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    prefix: String,
+    channels: BTreeMap<&'static str, u16>,
+    sequence: u32,
+}
+
+impl ResultsWriter<BufWriter<File>> {
+    pub fn create(path: &Path, prefix: &str) -> Result<Self> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+        Self::new(BufWriter::new(file), prefix)
+    }
+}
+
+impl<W: Write + Seek> ResultsWriter<W> {
+    pub fn new(w: W, prefix: &str) -> Result<Self> {
+        let mut writer = mcap::WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .profile("splinewatch")
+            .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
+            .create(w)
+            .context("cannot start the results MCAP file")?;
+        let mut channels = BTreeMap::new();
+        for (suffix, schema) in TOPICS {
+            let topic = format!("{prefix}/{suffix}");
+            let schema_id = writer.add_schema(&format!("splinewatch.{suffix}"), "jsonschema", schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+            channels.insert(suffix, id);
+        }
+        Ok(Self {
+            writer,
+            prefix: prefix.to_string(),
+            channels,
+            sequence: 0,
+        })
+    }
+
+    pub fn prefix(&self) -> &str {
+        &self.prefix
+    }
+
+    /// Writes `message` on `<prefix>/<suffix>` at `time_ns`.
+    pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) -> Result<()> {
+        let channel_id = *self
+            .channels
+            .get(suffix)
+            .with_context(|| format!("unknown result topic {suffix}"))?;
+        let log_time = u64::try_from(time_ns.max(0)).unwrap_or(u64::MAX);
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id,
+                sequence: self.sequence,
+                log_time,
+                publish_time: log_time,
+            },
+            &serde_json::to_vec(message)?,
+        )?;
+        Ok(())
+    }
+
+    pub fn finish(mut self) -> Result<W> {
+        self.writer.finish().context("cannot finish the results MCAP file")?;
+        Ok(self.writer.into_inner())
+    }
+}
+
+/// Writes the state atomically: temporary file in the same folder, fsync,
+/// rename over the old one, fsync of the folder. A crash leaves the old or
+/// the new complete file.
+pub fn save_state(path: &Path, state: &AcceptedParameters) -> Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp",
+        path.file_name().and_then(|n| n.to_str()).unwrap_or("state.json")
+    ));
+    {
+        let mut f = File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        serde_json::to_writer_pretty(&mut f, state)?;
+        f.write_all(b"\n")?;
+        f.sync_all()
+            .with_context(|| format!("cannot fsync {}", tmp.display()))?;
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("cannot replace {}", path.display()))?;
+    if let Ok(d) = File::open(dir) {
+        let _ = d.sync_all();
+    }
+    Ok(())
+}
+
+/// Loads a state file; `None` if it does not exist.
+pub fn load_state(path: &Path) -> Result<Option<AcceptedParameters>> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => {
+            Ok(Some(serde_json::from_str(&text).with_context(|| {
+                format!("state file {} is not valid", path.display())
+            })?))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(e).with_context(|| format!("cannot read state file {}", path.display())),
+    }
+}

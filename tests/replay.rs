@@ -1,0 +1,107 @@
+//! Offline replay of the bundled recording: outputs, determinism, state.
+
+use splinewatch::commands;
+use splinewatch::config::Config;
+use splinewatch::replay::replay;
+use splinewatch::results::{load_state, save_state, ResultsWriter};
+use std::io::Cursor;
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn config() -> Config {
+    commands::load_config(&root().join("config/sinello.toml")).unwrap()
+}
+
+fn run(cfg: &Config, state: Option<&Path>) -> (Vec<u8>, splinewatch::replay::ReplaySummary) {
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let initial = state.and_then(|p| load_state(p).unwrap());
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let summary = replay(cfg, &bytes, initial, &mut writer, state, &mut |_, _| {}).unwrap();
+    (writer.finish().unwrap().into_inner(), summary)
+}
+
+#[test]
+fn replay_of_the_demo_recording_tracks_the_bearing_damage_and_writes_every_topic() {
+    let cfg = config();
+    let (mcap_bytes, summary) = run(&cfg, None);
+    assert_eq!(summary.windows.len(), 6);
+    assert!(summary.windows.iter().all(|w| w.skipped.is_none()));
+    assert_eq!(summary.updates.len(), 6);
+    let k2 = |o: &splinewatch::pipeline::UpdateOutcome| {
+        o.result
+            .as_ref()
+            .unwrap()
+            .result
+            .parameters
+            .iter()
+            .find(|p| p.name == "east.k2")
+            .unwrap()
+            .value
+    };
+    // Before the damage (0:00–0:40) east.k2 ≈ 0.4e9; after it (1:20–2:00) ≈ 0.24e9.
+    let first = k2(&summary.updates[0]);
+    let last = k2(&summary.updates[5]);
+    assert!((first - 0.4e9).abs() < 0.1 * 0.4e9, "first {first}");
+    assert!((last - 0.24e9).abs() < 0.1 * 0.24e9, "last {last}");
+    // Every result topic is present in the MCAP file, with a JSON Schema.
+    let summary_rec = mcap::Summary::read(&mcap_bytes).unwrap().unwrap();
+    let stats = summary_rec.stats.unwrap();
+    for (suffix, _) in splinewatch::results::TOPICS {
+        let topic = format!("bridge/sinello-span2/{suffix}");
+        let channel = summary_rec
+            .channels
+            .values()
+            .find(|c| c.topic == topic)
+            .unwrap_or_else(|| panic!("{topic}"));
+        assert_eq!(channel.schema.as_ref().unwrap().encoding, "jsonschema");
+        let count = stats.channel_message_counts.get(&channel.id).copied().unwrap_or(0);
+        if suffix != "updating/failures" {
+            assert!(count > 0, "{topic} has no messages");
+        }
+    }
+    for m in mcap::MessageStream::new(&mcap_bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic.ends_with("updating/parameters") {
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            assert_eq!(v["parameters"].as_array().unwrap().len(), 15);
+            assert!(v["relative_residual"].as_f64().unwrap() < 0.2);
+        }
+    }
+}
+
+#[test]
+fn replay_is_deterministic() {
+    let cfg = config();
+    let (a, _) = run(&cfg, None);
+    let (b, _) = run(&cfg, None);
+    assert_eq!(a, b, "same input, byte-identical results");
+}
+
+#[test]
+fn the_state_file_warm_starts_a_restart() {
+    let cfg = config();
+    let dir = std::env::temp_dir().join(format!("splinewatch-state-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let state = dir.join("state.json");
+    let (_, first) = run(&cfg, Some(&state));
+    let saved = load_state(&state).unwrap().expect("written");
+    assert_eq!(saved, first.accepted.clone().unwrap());
+    // A restart from the saved state starts where the last run ended: the
+    // first update's iteration 0 is the saved parameters, not the config's.
+    let (_, second) = run(&cfg, Some(&state));
+    let start = &second.updates[0].result.as_ref().unwrap().result.iterations[0].parameters;
+    let saved_values: Vec<f64> = saved.parameters.iter().map(|p| p.value).collect();
+    assert_eq!(start, &saved_values);
+    let cold = &first.updates[0].result.as_ref().unwrap().result.iterations[0].parameters;
+    assert_ne!(cold, &saved_values);
+    // Atomic write: no temporary file left behind, and a rewrite replaces it whole.
+    save_state(&state, &saved).unwrap();
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert_eq!(names, vec!["state.json".to_string()]);
+}
