@@ -50,6 +50,8 @@ pub struct Config {
     pub schedule: crate::pipeline::ScheduleConfig,
     #[serde(default)]
     pub output: OutputConfig,
+    #[serde(default)]
+    pub zenoh: crate::daemon::ZenohConfig,
 }
 
 /// `[output]`: where results go.

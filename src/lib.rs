@@ -7,6 +7,8 @@
 
 pub mod commands;
 pub mod config;
+pub mod daemon;
+pub mod demo;
 pub mod estimate;
 pub mod frf_json;
 pub mod paper;

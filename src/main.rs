@@ -121,9 +121,15 @@ enum Command {
         /// Message encoding: cbor or json.
         #[arg(long, default_value = "cbor", value_parser = parse_encoding)]
         encoding: splinewatch::wire::Encoding,
-        /// Output recording (MCAP).
+        /// Output recording (MCAP); optional with --publish.
+        #[arg(long, required_unless_present = "publish")]
+        out: Option<PathBuf>,
+        /// Also publish the blocks live on zenoh (connecting to [zenoh] connect, or to its listen endpoints).
         #[arg(long)]
-        out: PathBuf,
+        publish: bool,
+        /// Publishing pace in multiples of real time (0: as fast as possible).
+        #[arg(long, default_value_t = 1.0)]
+        speed: f64,
     },
     /// Estimate FRFs (Welch, [frf] settings) from a raw-input MCAP recording.
     Frf {
@@ -157,6 +163,32 @@ enum Command {
         #[arg(long)]
         state: Option<PathBuf>,
     },
+    /// Run the monitoring daemon: zenoh ingest until SIGINT/SIGTERM.
+    Run {
+        #[arg(long)]
+        config: PathBuf,
+        /// State file (default: [output] state_file or <output.dir>/state.json).
+        #[arg(long)]
+        state: Option<PathBuf>,
+        /// Results MCAP (default: <output.dir>/results-<start time>.mcap).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// The whole live path in one process: the simulator publishes a bearing-damage
+    /// scenario over zenoh on loopback at high speed, the daemon updates the model.
+    Demo {
+        #[arg(long, default_value = "config/sinello.toml")]
+        config: PathBuf,
+        /// Output folder.
+        #[arg(long, default_value = "out/demo")]
+        out: PathBuf,
+        /// Simulated seconds.
+        #[arg(long, default_value_t = 600.0)]
+        duration: f64,
+        /// Publishing speed, multiples of real time.
+        #[arg(long, default_value_t = 40.0)]
+        speed: f64,
+    },
     /// Validate a configuration file without running anything.
     CheckConfig {
         /// Configuration file (TOML).
@@ -178,6 +210,17 @@ fn parse_encoding(s: &str) -> Result<splinewatch::wire::Encoding, String> {
 }
 
 fn main() -> ExitCode {
+    let json_logs = std::env::var("SPLINEWATCH_LOG_FORMAT").is_ok_and(|v| v == "json");
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,zenoh=warn"));
+    let builder = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr);
+    if json_logs {
+        builder.json().init();
+    } else {
+        builder.init();
+    }
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
@@ -293,6 +336,8 @@ fn run(cli: Cli) -> Result<()> {
             start,
             encoding,
             out,
+            publish,
+            speed,
         } => {
             let cfg = commands::load_config(&config)?;
             let scenario = scenario
@@ -318,16 +363,50 @@ fn run(cli: Cli) -> Result<()> {
                 scenario,
             };
             let prefix = cfg.topic_prefix();
-            let mut writer = splinewatch::recording::RecordingWriter::create(&out, encoding)?;
-            let summary =
-                splinewatch::simulation::simulate(&cfg, &options, &mut |block| writer.write_block(&prefix, &block))?;
-            writer.finish()?;
+            let mut writer = out
+                .as_ref()
+                .map(|p| splinewatch::recording::RecordingWriter::create(p, encoding))
+                .transpose()?;
+            let mut publisher = if publish {
+                let mut z = cfg.zenoh.clone();
+                if z.connect.is_empty() {
+                    z.connect = std::mem::take(&mut z.listen);
+                }
+                z.listen.clear();
+                z.mode = "client".into();
+                Some(splinewatch::daemon::Publisher::open(
+                    &z,
+                    prefix.clone(),
+                    encoding,
+                    speed,
+                )?)
+            } else {
+                None
+            };
+            let summary = splinewatch::simulation::simulate(&cfg, &options, &mut |block| {
+                if let Some(w) = writer.as_mut() {
+                    w.write_block(&prefix, &block)?;
+                }
+                if let Some(p) = publisher.as_mut() {
+                    p.publish(&block)?;
+                }
+                Ok(())
+            })?;
+            if let Some(w) = writer {
+                w.finish()?;
+            }
+            if let Some(p) = publisher {
+                p.close()?;
+            }
             eprintln!(
-                "wrote {} blocks ({} samples per channel, {} model updates) to {}",
+                "{} blocks ({} samples per channel, {} model updates){}{}",
                 summary.blocks,
                 summary.samples_per_channel,
                 summary.model_updates,
-                out.display()
+                out.as_ref()
+                    .map(|p| format!(", written to {}", p.display()))
+                    .unwrap_or_default(),
+                if publish { ", published on zenoh" } else { "" }
             );
         }
         Command::Frf {
@@ -442,6 +521,46 @@ fn run(cli: Cli) -> Result<()> {
                     );
                 }
             }
+        }
+        Command::Run { config, state, out } => {
+            let cfg = commands::load_config(&config)?;
+            let dir = cfg.output_dir();
+            let state = state
+                .or_else(|| cfg.output.state_file.clone())
+                .unwrap_or_else(|| dir.join("state.json"));
+            let stamp = splinewatch::wire::format_timestamp(
+                std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .map(|d| d.as_nanos() as i128)
+                    .unwrap_or(0),
+            )
+            .replace(':', "-");
+            let out = out.unwrap_or_else(|| dir.join(format!("results-{stamp}.mcap")));
+            tracing::info!(message = "effective configuration", config = ?cfg);
+            let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+            let summary = runtime.block_on(splinewatch::daemon::run(
+                cfg,
+                splinewatch::daemon::RunOptions {
+                    results: out.clone(),
+                    state: Some(state),
+                },
+                splinewatch::daemon::termination_signal(),
+            ))?;
+            eprintln!(
+                "stopped after {} messages, {} windows, {} updates; results in {}",
+                summary.messages,
+                summary.windows,
+                summary.updates.len(),
+                out.display()
+            );
+        }
+        Command::Demo {
+            config,
+            out,
+            duration,
+            speed,
+        } => {
+            splinewatch::demo::run_demo(&config, &out, duration, speed)?;
         }
         Command::CheckConfig { config } => {
             let cfg = commands::load_config(&config)?;

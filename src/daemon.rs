@@ -1,0 +1,397 @@
+//! The live daemon: zenoh ingest → pipeline → results MCAP + zenoh outputs.
+//!
+//! Tasks and queues (vector-style, each with its policy):
+//! - zenoh subscriber callbacks push raw samples into a bounded queue
+//!   (`INGEST_QUEUE` messages); when it is full the newest message is
+//!   dropped and counted in `health.queue_drops` (the logger keeps sending;
+//!   memory stays bounded).
+//! - the main task decodes, feeds the pipeline and writes results; an update
+//!   job runs on a blocking worker so ingest never stalls. At most one job
+//!   runs and one waits; a newer job replaces a waiting one (drop oldest,
+//!   counted).
+//! - shutdown (SIGINT/SIGTERM, or the caller's future) lets a running update
+//!   finish, writes the last health message, finalises the MCAP file and
+//!   saves the state.
+
+use crate::config::Config;
+use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome};
+use crate::results::{self, ResultsWriter};
+use crate::wire::{self, Encoding, Limits};
+use anyhow::{anyhow, Context, Result};
+use serde::Deserialize;
+use std::fs::File;
+use std::future::Future;
+use std::io::BufWriter;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use tokio::sync::mpsc;
+use zenoh::Wait;
+
+/// Capacity of the ingest queue, in messages.
+pub const INGEST_QUEUE: usize = 4096;
+
+/// `[zenoh]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ZenohConfig {
+    /// "peer" or "client".
+    pub mode: String,
+    /// Endpoints to listen on, e.g. "tcp/127.0.0.1:7447".
+    pub listen: Vec<String>,
+    /// Endpoints to connect to (a router in client mode, peers otherwise).
+    pub connect: Vec<String>,
+    pub multicast_scouting: bool,
+    /// A zenoh JSON5 configuration file, applied first.
+    pub config_file: Option<PathBuf>,
+}
+
+impl Default for ZenohConfig {
+    fn default() -> Self {
+        Self {
+            mode: "peer".into(),
+            listen: vec!["tcp/127.0.0.1:7447".into()],
+            connect: Vec::new(),
+            multicast_scouting: false,
+            config_file: None,
+        }
+    }
+}
+
+impl ZenohConfig {
+    /// The zenoh session configuration: the JSON5 file first, then our keys.
+    pub fn to_zenoh(&self) -> Result<zenoh::Config> {
+        let mut cfg = match &self.config_file {
+            Some(path) => zenoh::Config::from_file(path)
+                .map_err(|e| anyhow!("config: zenoh.config_file {}: {e}", path.display()))?,
+            None => zenoh::Config::default(),
+        };
+        if !matches!(self.mode.as_str(), "peer" | "client") {
+            return Err(anyhow!(
+                "config: zenoh.mode: {:?} is not \"peer\" or \"client\"",
+                self.mode
+            ));
+        }
+        let set = |cfg: &mut zenoh::Config, key: &str, value: String| {
+            cfg.insert_json5(key, &value)
+                .map_err(|e| anyhow!("config: zenoh: {key} = {value}: {e}"))
+        };
+        set(&mut cfg, "mode", format!("{:?}", self.mode))?;
+        if !self.listen.is_empty() {
+            set(&mut cfg, "listen/endpoints", serde_json::to_string(&self.listen)?)?;
+        }
+        if !self.connect.is_empty() {
+            set(&mut cfg, "connect/endpoints", serde_json::to_string(&self.connect)?)?;
+        }
+        set(
+            &mut cfg,
+            "scouting/multicast/enabled",
+            self.multicast_scouting.to_string(),
+        )?;
+        Ok(cfg)
+    }
+}
+
+/// Options of a live run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub results: PathBuf,
+    pub state: Option<PathBuf>,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Default)]
+pub struct RunSummary {
+    pub messages: u64,
+    pub windows: u64,
+    pub updates: Vec<UpdateOutcome>,
+    pub accepted: Option<AcceptedParameters>,
+}
+
+struct RawMessage {
+    encoding: Option<Encoding>,
+    payload: Vec<u8>,
+}
+
+/// Runs until `shutdown` resolves; returns what happened.
+pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Output = ()>) -> Result<RunSummary> {
+    let initial = match &options.state {
+        Some(p) => results::load_state(p)?,
+        None => None,
+    };
+    let mut pipeline = Pipeline::new(&config, config.schedule.clone(), initial)?;
+    let prefix = config.topic_prefix();
+    let limits = Limits {
+        max_samples: config.frf.max_block_samples,
+        ..Limits::default()
+    };
+    let mut writer: ResultsWriter<BufWriter<File>> = ResultsWriter::create(&options.results, &prefix)?;
+    let session = zenoh::open(config.zenoh.to_zenoh()?)
+        .await
+        .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
+    let (tx, mut rx) = mpsc::channel::<RawMessage>(INGEST_QUEUE);
+    let drops = Arc::new(AtomicU64::new(0));
+    let mut subscribers = Vec::new();
+    for segment in ["accel", "force"] {
+        let key = format!("{prefix}/{segment}/*");
+        let (tx, drops) = (tx.clone(), Arc::clone(&drops));
+        let sub = session
+            .declare_subscriber(&key)
+            .callback(move |sample| {
+                let e = sample.encoding();
+                let encoding = if *e == zenoh::bytes::Encoding::APPLICATION_CBOR {
+                    Some(Encoding::Cbor)
+                } else if *e == zenoh::bytes::Encoding::APPLICATION_JSON {
+                    Some(Encoding::Json)
+                } else {
+                    None
+                };
+                let msg = RawMessage {
+                    encoding,
+                    payload: sample.payload().to_bytes().into_owned(),
+                };
+                if tx.try_send(msg).is_err() {
+                    drops.fetch_add(1, Ordering::Relaxed);
+                }
+            })
+            .await
+            .map_err(|e| anyhow!("cannot subscribe to {key}: {e}"))?;
+        subscribers.push(sub);
+    }
+    drop(tx);
+    let latest: Arc<Mutex<Vec<u8>>> = Arc::new(Mutex::new(b"{}".to_vec()));
+    let latest_key = format!("{prefix}/updating/latest");
+    let queryable = {
+        let latest = Arc::clone(&latest);
+        let key = latest_key.clone();
+        session
+            .declare_queryable(&latest_key)
+            .callback(move |query| {
+                let body = latest.lock().map(|b| b.clone()).unwrap_or_default();
+                let _ = query
+                    .reply(&key, body)
+                    .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+                    .wait();
+            })
+            .await
+            .map_err(|e| anyhow!("cannot declare {latest_key}: {e}"))?
+    };
+    tracing::info!(message = "splinewatch running", prefix = %prefix, results = %options.results.display());
+    notify_systemd(&[sd_notify::NotifyState::Ready]);
+    let mut summary = RunSummary::default();
+    let mut running: Option<tokio::task::JoinHandle<UpdateOutcome>> = None;
+    let mut waiting: Option<UpdateJob> = None;
+    let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
+    let mut last_time: i128 = 0;
+    tokio::pin!(shutdown);
+    let publish = |session: &zenoh::Session, suffix: &str, v: &serde_json::Value| {
+        let key = format!("{prefix}/{suffix}");
+        if let Err(e) = session
+            .put(&key, serde_json::to_vec(v).unwrap_or_default())
+            .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+            .wait()
+        {
+            tracing::warn!(message = "cannot publish", key = %key, error = %e);
+        }
+    };
+    loop {
+        tokio::select! {
+            _ = &mut shutdown => break,
+            msg = rx.recv() => {
+                let Some(msg) = msg else { break };
+                summary.messages += 1;
+                let encoding = msg.encoding.unwrap_or(if msg.payload.first() == Some(&b'{') || msg.payload.first() == Some(&b'[') { Encoding::Json } else { Encoding::Cbor });
+                let blocks = match wire::decode(&msg.payload, encoding, &limits) {
+                    Ok(b) => b,
+                    Err(e) => {
+                        tracing::debug!(message = "rejected a message", reason = e.reason(), error = %e);
+                        pipeline.reject_message(&e);
+                        continue;
+                    }
+                };
+                for block in blocks {
+                    let (windows, jobs) = pipeline.ingest(block);
+                    for w in &windows {
+                        last_time = w.end_ns;
+                        let m = results::window_message(w);
+                        writer.write("windows", w.end_ns, &m)?;
+                        publish(&session, "windows", &m);
+                        summary.windows += 1;
+                        match &w.skipped {
+                            None => tracing::info!(message = "window accepted", window = w.index, segments = w.segments_accepted),
+                            Some(r) => tracing::warn!(message = "window skipped", window = w.index, reason = %r),
+                        }
+                    }
+                    for job in jobs {
+                        if running.is_none() {
+                            running = Some(tokio::task::spawn_blocking(move || job.run()));
+                        } else if waiting.replace(job).is_some() {
+                            pipeline.health_mut().queue_drops += 1;
+                        }
+                    }
+                }
+            }
+            outcome = async { running.as_mut().expect("guarded").await }, if running.is_some() => {
+                running = None;
+                let outcome = outcome.context("the update worker panicked")?;
+                handle_outcome(&mut pipeline, &mut writer, &session, &prefix, &options, &latest, &outcome, &publish)?;
+                summary.updates.push(outcome);
+                if let Some(job) = waiting.take() {
+                    running = Some(tokio::task::spawn_blocking(move || job.run()));
+                }
+            }
+            _ = health_timer.tick() => {
+                pipeline.health_mut().queue_drops = pipeline.health().queue_drops.max(drops.load(Ordering::Relaxed));
+                let h = results::health_message(last_time, pipeline.health());
+                publish(&session, "health", &h);
+                notify_systemd(&[sd_notify::NotifyState::Watchdog]);
+            }
+        }
+    }
+    // Let a running update finish so its result is not lost.
+    if let Some(handle) = running.take() {
+        let outcome = handle.await.context("the update worker panicked")?;
+        handle_outcome(
+            &mut pipeline,
+            &mut writer,
+            &session,
+            &prefix,
+            &options,
+            &latest,
+            &outcome,
+            &publish,
+        )?;
+        summary.updates.push(outcome);
+    }
+    pipeline.health_mut().queue_drops += drops.load(Ordering::Relaxed);
+    let h = results::health_message(last_time, pipeline.health());
+    writer.write("health", last_time, &h)?;
+    writer.finish()?;
+    notify_systemd(&[sd_notify::NotifyState::Stopping]);
+    drop(queryable);
+    drop(subscribers);
+    session
+        .close()
+        .await
+        .map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
+    summary.accepted = pipeline.accepted().cloned();
+    Ok(summary)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn handle_outcome(
+    pipeline: &mut Pipeline,
+    writer: &mut ResultsWriter<BufWriter<File>>,
+    session: &zenoh::Session,
+    _prefix: &str,
+    options: &RunOptions,
+    latest: &Arc<Mutex<Vec<u8>>>,
+    outcome: &UpdateOutcome,
+    publish: &dyn Fn(&zenoh::Session, &str, &serde_json::Value),
+) -> Result<()> {
+    pipeline.apply(outcome);
+    for (suffix, msg) in results::update_messages(outcome) {
+        writer.write(suffix, outcome.time_ns, &msg)?;
+        publish(session, suffix, &msg);
+        if suffix == "updating/parameters" {
+            if let Ok(mut l) = latest.lock() {
+                *l = serde_json::to_vec(&msg)?;
+            }
+        }
+    }
+    match &outcome.result {
+        Ok(r) => {
+            tracing::info!(
+                message = "update accepted",
+                window = outcome.window,
+                relative_residual = r.result.relative_residual
+            );
+            if let (Some(path), Some(state)) = (&options.state, pipeline.accepted()) {
+                // A failed state write is logged and retried at the next update; the run goes on.
+                if let Err(e) = results::save_state(path, state) {
+                    tracing::error!(message = "cannot save the state", error = %format!("{e:#}"));
+                }
+            }
+            notify_systemd(&[sd_notify::NotifyState::Status(&format!(
+                "window {}: relative residual {:.4}",
+                outcome.window, r.result.relative_residual
+            ))]);
+        }
+        Err(e) => {
+            tracing::warn!(message = "update failed, keeping the last parameters", window = outcome.window, error = %e)
+        }
+    }
+    Ok(())
+}
+
+fn notify_systemd(states: &[sd_notify::NotifyState]) {
+    let _ = sd_notify::notify(false, states);
+}
+
+/// Resolves on SIGINT or SIGTERM.
+pub async fn termination_signal() {
+    #[cfg(unix)]
+    {
+        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+        tokio::select! {
+            _ = tokio::signal::ctrl_c() => {}
+            _ = async { match term.as_mut() { Some(t) => { t.recv().await; } None => std::future::pending::<()>().await } } => {}
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+}
+
+/// Publishes blocks on zenoh (`simulate --publish`), pacing them at `speed`
+/// times real time (0 = as fast as possible).
+pub struct Publisher {
+    session: zenoh::Session,
+    prefix: String,
+    encoding: Encoding,
+    speed: f64,
+    origin: Option<(i128, std::time::Instant)>,
+}
+
+impl Publisher {
+    pub fn open(zenoh: &ZenohConfig, prefix: String, encoding: Encoding, speed: f64) -> Result<Self> {
+        let session = zenoh::open(zenoh.to_zenoh()?)
+            .wait()
+            .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
+        Ok(Self {
+            session,
+            prefix,
+            encoding,
+            speed,
+            origin: None,
+        })
+    }
+
+    pub fn publish(&mut self, block: &wire::ChannelBlock) -> Result<()> {
+        if self.speed > 0.0 {
+            let (t0, w0) = *self.origin.get_or_insert((block.start_ns, std::time::Instant::now()));
+            let due = std::time::Duration::from_secs_f64(((block.start_ns - t0) as f64 / 1e9 / self.speed).max(0.0));
+            if let Some(wait) = due.checked_sub(w0.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let key = block.topic(&self.prefix);
+        let zenc = match self.encoding {
+            Encoding::Cbor => zenoh::bytes::Encoding::APPLICATION_CBOR,
+            Encoding::Json => zenoh::bytes::Encoding::APPLICATION_JSON,
+        };
+        self.session
+            .put(&key, wire::encode(block, self.encoding))
+            .encoding(zenc)
+            .wait()
+            .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
+    }
+
+    pub fn close(self) -> Result<()> {
+        self.session
+            .close()
+            .wait()
+            .map_err(|e| anyhow!("closing the zenoh session: {e}"))
+    }
+}

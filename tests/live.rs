@@ -1,0 +1,114 @@
+//! The live path over real zenoh on loopback (multi-thread runtime): a
+//! simulated logger publishes, the daemon windows, updates and writes results.
+
+use splinewatch::commands;
+use splinewatch::demo::{run_live, run_recording_live};
+use splinewatch::replay::replay;
+use splinewatch::results::{load_state, ResultsWriter};
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("splinewatch-live-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn live_zenoh_run_tracks_a_bearing_damage() {
+    let out = temp("damage");
+    let duration = 300.0;
+    let summary = run_live(&root().join("config/sinello.toml"), &out, duration, 40.0, 11).unwrap();
+    let value = |u: &splinewatch::pipeline::UpdateOutcome, name: &str| {
+        u.result
+            .as_ref()
+            .unwrap()
+            .result
+            .parameters
+            .iter()
+            .find(|p| p.name == name)
+            .unwrap()
+            .value
+    };
+    let ok: Vec<_> = summary.updates.iter().filter(|u| u.result.is_ok()).collect();
+    assert!(ok.len() >= 10, "{} updates", ok.len());
+    // The damage ramps between 40 % and 60 % of the run.
+    let (first, last) = (ok[0], ok[ok.len() - 1]);
+    assert!(
+        (value(first, "east.k2") - 0.4e9).abs() < 0.1 * 0.4e9,
+        "before: {}",
+        value(first, "east.k2")
+    );
+    assert!(
+        (value(last, "east.k2") - 0.24e9).abs() < 0.1 * 0.24e9,
+        "after: {}",
+        value(last, "east.k2")
+    );
+    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let truth: Vec<(String, f64)> = cfg
+        .model
+        .springs
+        .iter()
+        .flat_map(|s| {
+            s.stiffness
+                .iter()
+                .enumerate()
+                .map(move |(j, &k)| (format!("{}.k{}", s.name, j + 1), k))
+        })
+        .collect();
+    for (name, t) in truth.iter().filter(|(n, _)| n != "east.k2") {
+        assert!(
+            (value(last, name) - t).abs() < 0.1 * t,
+            "{name}: {} vs {t}",
+            value(last, name)
+        );
+    }
+    // Every output channel is in the results file, which is finalised.
+    let bytes = std::fs::read(out.join("results.mcap")).unwrap();
+    let s = mcap::Summary::read(&bytes)
+        .unwrap()
+        .expect("summary written on shutdown");
+    let counts = s.stats.unwrap().channel_message_counts;
+    for (suffix, _) in splinewatch::results::TOPICS {
+        if suffix == "updating/failures" {
+            continue;
+        }
+        let ch = s.channels.values().find(|c| c.topic.ends_with(suffix)).unwrap();
+        assert!(counts.get(&ch.id).copied().unwrap_or(0) > 0, "{suffix}");
+    }
+    // The state file holds the last accepted parameters.
+    let state = load_state(&out.join("state.json")).unwrap().unwrap();
+    assert_eq!(
+        state.parameters.iter().find(|p| p.name == "east.k2").unwrap().value,
+        value(last, "east.k2")
+    );
+}
+
+#[test]
+fn live_and_replay_agree_on_the_bundled_recording() {
+    let out = temp("agree");
+    let recording = root().join("recordings/sinello-demo.mcap");
+    let live = run_recording_live(&root().join("config/sinello.toml"), &recording, &out, 10.0).unwrap();
+    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let bytes = std::fs::read(&recording).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let offline = replay(&cfg, &bytes, None, &mut writer, None, &mut |_, _| {}).unwrap();
+    assert_eq!(live.updates.len(), offline.updates.len());
+    let params = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
+        u.result
+            .as_ref()
+            .unwrap()
+            .result
+            .parameters
+            .iter()
+            .map(|p| p.value)
+            .collect()
+    };
+    for (a, b) in live.updates.iter().zip(&offline.updates) {
+        assert_eq!(params(a), params(b), "window {}", a.window);
+    }
+}
