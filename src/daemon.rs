@@ -119,6 +119,9 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         Some(p) => results::load_state(p)?,
         None => None,
     };
+    if let Some(s) = &initial {
+        tracing::info!(message = "warm start from the state file", window = s.window, time = %s.time);
+    }
     let mut pipeline = Pipeline::new(&config, config.schedule.clone(), initial)?;
     let prefix = config.topic_prefix();
     let limits = Limits {

@@ -112,3 +112,85 @@ fn live_and_replay_agree_on_the_bundled_recording() {
         assert_eq!(params(a), params(b), "window {}", a.window);
     }
 }
+
+#[cfg(unix)]
+#[test]
+fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
+    use std::process::{Command, Stdio};
+    let dir = temp("sigterm");
+    std::fs::create_dir_all(&dir).unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
+        + &format!("\n[zenoh]\nmode = \"peer\"\nlisten = [\"tcp/127.0.0.1:{port}\"]\nmulticast_scouting = false\n");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, text).unwrap();
+    let state = dir.join("state.json");
+    let start = |results: &str| {
+        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args([
+                "run",
+                "--config",
+                config.to_str().unwrap(),
+                "--state",
+                state.to_str().unwrap(),
+                "--out",
+            ])
+            .arg(dir.join(results))
+            .env("RUST_LOG", "info,zenoh=warn")
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let terminate = |child: std::process::Child| {
+        let status = Command::new("kill")
+            .args(["-TERM", &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let out = child.wait_with_output().unwrap();
+        (out.status, String::from_utf8_lossy(&out.stderr).to_string())
+    };
+    let daemon = start("first.mcap");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    // Publish the bundled recording until the first update has been saved.
+    let cfg = commands::load_config(&config).unwrap();
+    let mut z = cfg.zenoh.clone();
+    z.connect = std::mem::take(&mut z.listen);
+    z.mode = "client".into();
+    let mut publisher =
+        splinewatch::daemon::Publisher::open(&z, cfg.topic_prefix(), splinewatch::wire::Encoding::Cbor, 20.0).unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    for b in &blocks {
+        publisher.publish(&b.block).unwrap();
+    }
+    publisher.close().unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !state.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    assert!(state.exists(), "no update was saved");
+    let (status, log) = terminate(daemon);
+    assert!(status.success(), "exit status {status:?}\n{log}");
+    let results = std::fs::read(dir.join("first.mcap")).unwrap();
+    let summary = mcap::Summary::read(&results)
+        .unwrap()
+        .expect("MCAP finalised with a summary");
+    assert!(summary.stats.unwrap().message_count > 0);
+    let saved = load_state(&state).unwrap().expect("state file");
+    assert_eq!(saved.parameters.len(), 15);
+    // Restart: the daemon warm-starts from the state and again stops cleanly.
+    let again = start("second.mcap");
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let (status, log) = terminate(again);
+    assert!(status.success(), "{log}");
+    assert!(log.contains("warm start from the state file"), "{log}");
+    assert!(mcap::Summary::read(&std::fs::read(dir.join("second.mcap")).unwrap())
+        .unwrap()
+        .is_some());
+}
