@@ -1,0 +1,55 @@
+//! Replay throughput of the bundled recording (with its updates), and the
+//! ingest cost of the pipeline per 1000 samples (decode + align + Welch,
+//! no updates). Run: `cargo bench --bench pipeline`.
+
+use splinewatch::commands;
+use splinewatch::pipeline::{Pipeline, ScheduleConfig};
+use splinewatch::recording::read_recording;
+use splinewatch::replay::replay;
+use splinewatch::results::ResultsWriter;
+use splinewatch::wire::{self, Encoding, Limits};
+use std::io::Cursor;
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn replay_bundled_recording(bencher: divan::Bencher) {
+    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    bencher.bench(|| {
+        let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+        replay(&cfg, &bytes, None, &mut w, None, &mut |_, _| {}).unwrap()
+    });
+}
+
+/// Decoding and ingesting the 13 × 30 720 samples of the recording without
+/// updates; divide by 399.36 for the cost per 1000 samples.
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn ingest_without_updates(bencher: divan::Bencher) {
+    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let payloads: Vec<Vec<u8>> = mcap::MessageStream::new(&bytes).unwrap().map(|m| m.unwrap().data.into_owned()).collect();
+    let (blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
+    let samples: usize = blocks.iter().map(|b| b.block.data.len()).sum();
+    assert_eq!(samples, 13 * 30_720);
+    bencher.bench(|| {
+        let schedule = ScheduleConfig {
+            update_every_windows: u64::MAX,
+            ..ScheduleConfig::default()
+        };
+        let mut p = Pipeline::new(&cfg, schedule, None).unwrap();
+        for payload in &payloads {
+            for block in wire::decode(payload, Encoding::Cbor, &Limits::default()).unwrap() {
+                p.ingest(block);
+            }
+        }
+        p.health().windows_accepted
+    });
+}
+
+fn main() {
+    divan::main();
+}
