@@ -31,7 +31,10 @@ fn replay_bundled_recording(bencher: divan::Bencher) {
 fn ingest_without_updates(bencher: divan::Bencher) {
     let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let payloads: Vec<Vec<u8>> = mcap::MessageStream::new(&bytes).unwrap().map(|m| m.unwrap().data.into_owned()).collect();
+    let payloads: Vec<Vec<u8>> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap().data.into_owned())
+        .collect();
     let (blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
     let samples: usize = blocks.iter().map(|b| b.block.data.len()).sum();
     assert_eq!(samples, 13 * 30_720);

@@ -231,8 +231,22 @@ impl FrfModel {
     #[track_caller]
     pub fn evaluate(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> FrfEvaluation {
         let nf = request.frequencies_hz.len();
-        let nm = state.modes.len();
         let np = request.pairs.len();
+        // Modes that no involved sensor sees (the membrane modes of a flat
+        // deck under vertical sensors: their amplitudes are round-off, below
+        // 1e-10 of the largest) add nothing to H, g_s or the sensitivities
+        // beyond that round-off: leave them out (195 of 325 for Sinello).
+        let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
+        sensors.sort_unstable();
+        sensors.dedup();
+        let amax = sensors
+            .iter()
+            .flat_map(|&s| (0..state.modes.len()).map(move |i| state.amplitudes[(s, i)].abs()))
+            .fold(0.0, f64::max);
+        let active: Vec<usize> = (0..state.modes.len())
+            .filter(|&i| sensors.iter().any(|&s| state.amplitudes[(s, i)].abs() > 1e-10 * amax))
+            .collect();
+        let nm = active.len();
         for &(r, s) in request.pairs {
             assert!(
                 r < self.sensor_count() && s < self.sensor_count(),
@@ -245,9 +259,10 @@ impl FrfModel {
         let mut q_im = Mat::<f64>::zeros(nm, nf);
         for f in 0..nf {
             for i in 0..nm {
+                let m = active[i];
                 let d = c64::new(
-                    state.omega[i] * state.omega[i] - w[f] * w[f],
-                    2.0 * state.zeta[i] * state.omega[i] * w[f],
+                    state.omega[m] * state.omega[m] - w[f] * w[f],
+                    2.0 * state.zeta[m] * state.omega[m] * w[f],
                 );
                 let q = d.inv();
                 q_re[(i, f)] = q.re;
@@ -257,7 +272,7 @@ impl FrfModel {
         // H_p = Σ_i a_r a_s q_i for every pair p = (r, s).
         let coupling = Mat::from_fn(np, nm, |p, i| {
             let (r, s) = request.pairs[p];
-            state.amplitudes[(r, i)] * state.amplitudes[(s, i)]
+            state.amplitudes[(r, active[i])] * state.amplitudes[(s, active[i])]
         });
         let h_mat = complex_product(&coupling, &q_re, &q_im);
         let factor: Vec<c64> = w.iter().map(|&wf| request.quantity.factor(wf)).collect();
@@ -281,13 +296,13 @@ impl FrfModel {
         for f in 0..nf {
             for i in 0..nm {
                 let q = c64::new(q_re[(i, f)], q_im[(i, f)]);
-                let e = c64::new(0.0, -2.0 * state.omega[i] * w[f]) * q * q;
+                let e = c64::new(0.0, -2.0 * state.omega[active[i]] * w[f]) * q * q;
                 e_re[(i, f)] = e.re;
                 e_im[(i, f)] = e.im;
             }
         }
         let weighted = Mat::from_fn(np * nz, nm, |row, i| {
-            coupling[(row / nz, i)] * state.zeta_basis[(i, row % nz)]
+            coupling[(row / nz, i)] * state.zeta_basis[(active[i], row % nz)]
         });
         let dg = complex_product(&weighted, &e_re, &e_im);
         let dh_dgamma = (0..nz)
@@ -300,7 +315,7 @@ impl FrfModel {
         // One stacked GEMM: rows (sensor, u) of Φ_U diag(a_s), times Q.
         let nu = state.phi_springs.nrows();
         let stacked = Mat::from_fn(involved.len() * nu, nm, |row, i| {
-            state.phi_springs[(row % nu, i)] * state.amplitudes[(involved[row / nu], i)]
+            state.phi_springs[(row % nu, active[i])] * state.amplitudes[(involved[row / nu], active[i])]
         });
         let (all_re, all_im) = complex_product(&stacked, &q_re, &q_im);
         let g: Vec<(Mat<f64>, Mat<f64>)> = (0..involved.len())
