@@ -621,3 +621,112 @@ impl Pipeline {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::wire::parse_timestamp;
+
+    fn config() -> Config {
+        let text = include_str!("../config/sinello.toml").replace("window_seconds = 20.0", "window_seconds = 8.0");
+        Config::from_toml(&text).unwrap()
+    }
+
+    fn block(name: &str, quantity: ChannelQuantity, second: f64, n: usize, fs: f64) -> ChannelBlock {
+        ChannelBlock {
+            name: name.into(),
+            quantity,
+            unit: String::new(),
+            fs,
+            start_ns: parse_timestamp("2026-11-21T10:00:00Z").unwrap() + (second * 1e9) as i128,
+            data: (0..n).map(|k| ((k * 7 + name.len()) % 13) as f64 - 6.0).collect(),
+        }
+    }
+
+    fn all_channels(p: &mut Pipeline, second: f64) -> usize {
+        let mut closed = p
+            .ingest(block("P1", ChannelQuantity::Force, second, 256, 256.0))
+            .0
+            .len();
+        for i in 1..=12 {
+            closed += p
+                .ingest(block(
+                    &format!("P{i}"),
+                    ChannelQuantity::Acceleration,
+                    second,
+                    256,
+                    256.0,
+                ))
+                .0
+                .len();
+        }
+        closed
+    }
+
+    #[test]
+    fn bad_blocks_are_counted_by_reason_and_valid_ones_still_used() {
+        let mut p = Pipeline::new(&config(), ScheduleConfig::default(), None).unwrap();
+        all_channels(&mut p, 0.0);
+        p.ingest(block("P99", ChannelQuantity::Acceleration, 1.0, 256, 256.0));
+        p.ingest(block("P2", ChannelQuantity::Acceleration, 1.0, 256, 200.0));
+        p.ingest(block("P2", ChannelQuantity::Acceleration, 0.5, 256, 256.0));
+        p.ingest(block(
+            "P2",
+            ChannelQuantity::Acceleration,
+            1.0 + 0.5 / 256.0,
+            256,
+            256.0,
+        ));
+        p.ingest(block("P2", ChannelQuantity::Acceleration, 1e6, 256, 256.0));
+        let h = p.health().clone();
+        for reason in [
+            "unknown_channel",
+            "rate_mismatch",
+            "time_overlap",
+            "misaligned",
+            "far_future",
+        ] {
+            assert_eq!(h.rejected.get(reason), Some(&1), "{reason}: {:?}", h.rejected);
+        }
+        // The valid stream continues: 8 s windows close.
+        let mut closed = 0;
+        for s in 1..16 {
+            closed += all_channels(&mut p, s as f64);
+        }
+        assert_eq!(closed, 2);
+        assert_eq!(p.health().blocks, 16 * 13);
+    }
+
+    #[test]
+    fn a_gap_becomes_nan_samples_that_the_welch_gates_reject() {
+        let mut p = Pipeline::new(&config(), ScheduleConfig::default(), None).unwrap();
+        let mut windows = Vec::new();
+        for s in 0..16 {
+            let mut w = p.ingest(block("P1", ChannelQuantity::Force, s as f64, 256, 256.0)).0;
+            for i in 1..=12 {
+                // P5 misses seconds 3 and 4.
+                if i == 5 && (s == 3 || s == 4) {
+                    continue;
+                }
+                w.extend(
+                    p.ingest(block(
+                        &format!("P{i}"),
+                        ChannelQuantity::Acceleration,
+                        s as f64,
+                        256,
+                        256.0,
+                    ))
+                    .0,
+                );
+            }
+            windows.extend(w);
+        }
+        let h = p.health();
+        assert_eq!(h.gaps, 1);
+        assert_eq!(h.gap_samples, 512);
+        assert_eq!(windows.len(), 2);
+        // Window 0 (0–8 s): 4 s segments with 2 s hop; those touching 3–5 s are rejected.
+        assert!(windows[0].segments_rejected >= 2, "{:?}", windows[0].segments_rejected);
+        assert_eq!(windows[1].segments_rejected, 0);
+    }
+}
