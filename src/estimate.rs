@@ -8,7 +8,7 @@ use crate::wire::{format_timestamp, ChannelQuantity};
 use anyhow::{bail, Result};
 use splinewatch_core::c64;
 use splinewatch_core::frf::Quantity;
-use splinewatch_core::welch::{SegmentCounts, WelchEstimator};
+use splinewatch_core::welch::{FrfEstimate, SegmentCounts, WelchEstimator};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
@@ -170,12 +170,28 @@ pub fn estimate(
     }
     let spectra = welch.spectra();
     let est = spectra.frf(estimator);
+    let frf = frf_file(config, &est, force, &accels)
+        .ok_or_else(|| anyhow::anyhow!("no spectral line in frf.band {:?} Hz", config.frf.band))?;
+    Ok(EstimateReport {
+        frf,
+        segments: counts,
+        start_ns: start,
+        samples,
+        effective_averages: est.effective_averages,
+    })
+}
+
+/// The FRF file of an estimate (input: the force sensor, outputs: the
+/// acceleration sensors, by index into `[[sensors]]`): lines of `frf.band`
+/// above 0 Hz, converted from accelerance to `frf.quantity`, with coherence
+/// and effective averages. `None` if the band holds no line.
+pub fn frf_file(config: &Config, est: &FrfEstimate, force: usize, accels: &[usize]) -> Option<FrfFile> {
     let [lo, hi] = config.frf.band;
     let lines: Vec<usize> = (0..est.frequencies.len())
         .filter(|&k| est.frequencies[k] > 0.0 && est.frequencies[k] >= lo && est.frequencies[k] <= hi)
         .collect();
     if lines.is_empty() {
-        bail!("no spectral line in frf.band [{lo}, {hi}] Hz");
+        return None;
     }
     let quantity = config.frf.quantity;
     let convert = |a: c64, f_hz: f64| -> c64 {
@@ -186,33 +202,28 @@ pub fn estimate(
             Quantity::Receptance => a / c64::new(-w * w, 0.0),
         }
     };
+    let name = |i: usize| config.sensors[i].name.clone();
     let frfs = accels
         .iter()
         .enumerate()
-        .map(|(o, &i)| FrfEntry {
-            input: names[force].to_string(),
-            output: names[i].to_string(),
-            re: lines
+        .map(|(o, &i)| {
+            let h: Vec<c64> = lines
                 .iter()
-                .map(|&k| convert(est.h[o][k], est.frequencies[k]).re)
-                .collect(),
-            im: lines
-                .iter()
-                .map(|&k| convert(est.h[o][k], est.frequencies[k]).im)
-                .collect(),
-            coherence: Some(lines.iter().map(|&k| est.coherence[o][k].clamp(0.0, 1.0)).collect()),
-            n_averages: Some(est.effective_averages),
+                .map(|&k| convert(est.h[o][k], est.frequencies[k]))
+                .collect();
+            FrfEntry {
+                input: name(force),
+                output: name(i),
+                re: h.iter().map(|v| v.re).collect(),
+                im: h.iter().map(|v| v.im).collect(),
+                coherence: Some(lines.iter().map(|&k| est.coherence[o][k].clamp(0.0, 1.0)).collect()),
+                n_averages: Some(est.effective_averages),
+            }
         })
         .collect();
-    Ok(EstimateReport {
-        frf: FrfFile {
-            quantity,
-            frequency_hz: lines.iter().map(|&k| est.frequencies[k]).collect(),
-            frfs,
-        },
-        segments: counts,
-        start_ns: start,
-        samples,
-        effective_averages: est.effective_averages,
+    Some(FrfFile {
+        quantity,
+        frequency_hz: lines.iter().map(|&k| est.frequencies[k]).collect(),
+        frfs,
     })
 }

@@ -21,13 +21,10 @@ use crate::frf_json::{FrfEntry, FrfFile};
 use crate::wire::{ChannelBlock, ChannelQuantity, WireError};
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::c64;
-use splinewatch_core::frf::Quantity;
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::updating::{Parameter, UpdateProblem, UpdateResult, UpdateSettings};
 use splinewatch_core::welch::{Estimator, WelchEstimator, WelchSettings};
 use std::collections::{BTreeMap, VecDeque};
-use std::f64::consts::PI;
 use std::sync::Arc;
 
 /// Scheduling and quality settings (`[schedule]`).
@@ -249,7 +246,6 @@ pub struct Pipeline {
     setup: Arc<FrfSetup>,
     parameters: Vec<Parameter>,
     settings: UpdateSettings,
-    names: Vec<String>,
     force: usize,
     accels: Vec<usize>,
     /// Channel identities in queue order: force first.
@@ -307,7 +303,6 @@ impl Pipeline {
             setup,
             parameters,
             settings,
-            names,
             force,
             accels,
             channels,
@@ -521,38 +516,10 @@ impl Pipeline {
             {
                 report.skipped = Some("low_coherence".into());
             } else {
-                let quantity = self.config.frf.quantity;
-                let convert = |a: c64, f: f64| {
-                    let w = 2.0 * PI * f;
-                    match quantity {
-                        Quantity::Accelerance => a,
-                        Quantity::Mobility => a / c64::new(0.0, w),
-                        Quantity::Receptance => a / c64::new(-w * w, 0.0),
-                    }
-                };
-                report.frf = Some(FrfFile {
-                    quantity,
-                    frequency_hz: lines.iter().map(|&k| est.frequencies[k]).collect(),
-                    frfs: self
-                        .accels
-                        .iter()
-                        .enumerate()
-                        .map(|(o, &i)| FrfEntry {
-                            input: self.names[self.force].clone(),
-                            output: self.names[i].clone(),
-                            re: lines
-                                .iter()
-                                .map(|&k| convert(est.h[o][k], est.frequencies[k]).re)
-                                .collect(),
-                            im: lines
-                                .iter()
-                                .map(|&k| convert(est.h[o][k], est.frequencies[k]).im)
-                                .collect(),
-                            coherence: Some(lines.iter().map(|&k| est.coherence[o][k].clamp(0.0, 1.0)).collect()),
-                            n_averages: Some(est.effective_averages),
-                        })
-                        .collect(),
-                });
+                report.frf = crate::estimate::frf_file(&self.config, &est, self.force, &self.accels);
+                if report.frf.is_none() {
+                    report.skipped = Some("no_lines_in_band".into());
+                }
             }
         }
         match &report.skipped {
