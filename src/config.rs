@@ -28,6 +28,10 @@ pub struct ConfigError {
     pub message: String,
 }
 
+/// Largest control net accepted (5 dofs each; the dense eigen-solve of
+/// 10 000 dofs already takes minutes).
+pub const MAX_CONTROL_POINTS: usize = 2000;
+
 fn err(path: impl Into<String>, message: impl Display) -> ConfigError {
     ConfigError {
         path: path.into(),
@@ -431,6 +435,18 @@ impl Config {
     pub fn build_model(&self) -> Result<ShellModel, ConfigError> {
         let m = &self.model;
         let d = &m.discretization;
+        // The dense model path stores n_dof² matrices: refuse nets it cannot hold
+        // rather than exhausting memory.
+        let [cm, cn] = d.control_points;
+        let total = cm
+            .saturating_add(d.insert_knots_xi.len())
+            .saturating_mul(cn.saturating_add(d.insert_knots_eta.len()));
+        if total > MAX_CONTROL_POINTS {
+            return Err(err(
+                "model.discretization.control_points",
+                format!("{total} control points (after knot insertion) exceed the supported {MAX_CONTROL_POINTS}"),
+            ));
+        }
         let mut shell = match m.geometry {
             GeometryConfig::RectangularPlate {
                 length,
@@ -950,6 +966,11 @@ mod tests {
             e.contains("model.geometry / model.discretization") && e.contains("4 basis functions"),
             "{e}"
         );
+        let e = error_of(|t| t.replace("control_points = [13, 5]", "control_points = [13, 99999]"));
+        assert!(
+            e.contains("model.discretization.control_points") && e.contains("exceed"),
+            "{e}"
+        );
         let e = error_of(|t| t.replace("name = \"east\"", "name = \"west\""));
         assert!(e.contains("model.springs[1].name") && e.contains("used twice"), "{e}");
         let e = error_of(|t| t.replacen("bounds = [1.0e7, 5.0e9]", "bounds = [1.0e7, 1.0e9]", 1));
@@ -959,6 +980,23 @@ mod tests {
             e.contains("model.springs[1]") && e.contains("not inside the shell"),
             "{e}"
         );
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn mutated_configs_never_panic(flips in proptest::collection::vec((proptest::prelude::any::<proptest::sample::Index>(), proptest::prelude::any::<u8>()), 1..4)) {
+            let mut bytes = SINELLO.as_bytes().to_vec();
+            for (i, b) in &flips {
+                let k = i.index(bytes.len());
+                bytes[k] = *b;
+            }
+            if let Ok(text) = std::str::from_utf8(&bytes) {
+                if let Ok(c) = Config::from_toml(text) {
+                    let _ = c.validate();
+                }
+            }
+        }
     }
 
     #[test]

@@ -90,3 +90,43 @@ impl FrfFile {
         Ok(MeasuredSet::new(self.quantity, self.frequency_hz.clone(), frfs)?)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const GOOD: &str = r#"{"quantity":"accelerance","frequency_hz":[1.0,2.0],"frfs":[{"input":"P1","output":"P2","re":[0.1,0.2],"im":[0.0,0.1],"coherence":[0.9,1.0],"n_averages":4}]}"#;
+
+    #[test]
+    fn good_file_resolves_sensor_names() {
+        let names = vec!["P1".to_string(), "P2".to_string()];
+        let set = FrfFile::parse(GOOD).unwrap().to_measured(&names).unwrap();
+        assert_eq!(set.frfs()[0].output, 1);
+        assert_eq!(set.frfs()[0].input, 0);
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_text_never_panics(text in ".{0,300}") {
+            let names = vec!["P1".to_string(), "P2".to_string()];
+            if let Ok(f) = FrfFile::parse(&text) {
+                let _ = f.to_measured(&names);
+            }
+        }
+
+        #[test]
+        fn mutated_files_never_panic(flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..6)) {
+            let mut bytes = GOOD.as_bytes().to_vec();
+            for (i, b) in &flips {
+                let k = i.index(bytes.len());
+                bytes[k] = *b;
+            }
+            if let Ok(text) = std::str::from_utf8(&bytes) {
+                if let Ok(f) = FrfFile::parse(text) {
+                    let _ = f.to_measured(&["P1".to_string(), "P2".to_string()]);
+                }
+            }
+        }
+    }
+}
