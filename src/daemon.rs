@@ -111,6 +111,8 @@ pub struct RunSummary {
 struct RawMessage {
     encoding: Option<Encoding>,
     payload: Vec<u8>,
+    /// A pre-computed FRF (`<prefix>/frf/**`) rather than a channel block.
+    frf: bool,
 }
 
 /// Runs until `shutdown` resolves; returns what happened.
@@ -135,8 +137,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     let (tx, mut rx) = mpsc::channel::<RawMessage>(INGEST_QUEUE);
     let drops = Arc::new(AtomicU64::new(0));
     let mut subscribers = Vec::new();
-    for segment in ["accel", "force"] {
-        let key = format!("{prefix}/{segment}/*");
+    for (segment, frf) in [("accel/*", false), ("force/*", false), ("frf/**", true)] {
+        let key = format!("{prefix}/{segment}");
         let (tx, drops) = (tx.clone(), Arc::clone(&drops));
         let sub = session
             .declare_subscriber(&key)
@@ -152,6 +154,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 let msg = RawMessage {
                     encoding,
                     payload: sample.payload().to_bytes().into_owned(),
+                    frf,
                 };
                 if tx.try_send(msg).is_err() {
                     drops.fetch_add(1, Ordering::Relaxed);
@@ -203,6 +206,21 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             msg = rx.recv() => {
                 let Some(msg) = msg else { break };
                 summary.messages += 1;
+                if msg.frf {
+                    let now = std::time::SystemTime::now()
+                        .duration_since(std::time::UNIX_EPOCH)
+                        .map(|d| d.as_nanos() as i128)
+                        .unwrap_or(0);
+                    if let Some(job) = pipeline.ingest_frf(&msg.payload, now) {
+                        tracing::info!(message = "complete FRF set received", window = job.window);
+                        if running.is_none() {
+                            running = Some(tokio::task::spawn_blocking(move || job.run()));
+                        } else if waiting.replace(job).is_some() {
+                            pipeline.health_mut().queue_drops += 1;
+                        }
+                    }
+                    continue;
+                }
                 let encoding = msg.encoding.unwrap_or(if msg.payload.first() == Some(&b'{') || msg.payload.first() == Some(&b'[') { Encoding::Json } else { Encoding::Cbor });
                 let blocks = match wire::decode(&msg.payload, encoding, &limits) {
                     Ok(b) => b,
@@ -387,6 +405,16 @@ impl Publisher {
         self.session
             .put(&key, wire::encode(block, self.encoding))
             .encoding(zenc)
+            .wait()
+            .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
+    }
+
+    /// Publishes raw JSON bytes on `<prefix>/<suffix>` (e.g. a pre-computed FRF).
+    pub fn publish_json(&mut self, suffix: &str, bytes: Vec<u8>) -> Result<()> {
+        let key = format!("{}/{suffix}", self.prefix);
+        self.session
+            .put(&key, bytes)
+            .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
             .wait()
             .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
     }

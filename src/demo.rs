@@ -7,7 +7,7 @@ use crate::config::Config;
 use crate::daemon::{self, Publisher, RunOptions, RunSummary};
 use crate::recording::read_recording;
 use crate::simulation::{parse_scenario, simulate, Excitation, SimulationOptions};
-use crate::wire::{parse_timestamp, ChannelBlock, Encoding, Limits};
+use crate::wire::{parse_timestamp, Encoding, Limits};
 use anyhow::{Context, Result};
 use std::path::Path;
 
@@ -27,7 +27,7 @@ pub fn run_with_source(
     mut cfg: Config,
     out: &Path,
     speed: f64,
-    source: impl FnOnce(&Config, &mut dyn FnMut(&ChannelBlock) -> Result<()>) -> Result<u64> + Send + 'static,
+    source: impl FnOnce(&Config, &mut Publisher) -> Result<u64> + Send + 'static,
 ) -> Result<RunSummary> {
     let port = std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port();
     let endpoint = format!("tcp/127.0.0.1:{port}");
@@ -58,7 +58,7 @@ pub fn run_with_source(
             let mut publisher = Publisher::open(&publisher_cfg, prefix, Encoding::Cbor, speed)?;
             // Let the publisher's session connect before the first block.
             std::thread::sleep(std::time::Duration::from_millis(500));
-            let sent = source(&source_cfg, &mut |block| publisher.publish(block))?;
+            let sent = source(&source_cfg, &mut publisher)?;
             std::thread::sleep(std::time::Duration::from_millis(500));
             publisher.close()?;
             Ok(sent)
@@ -81,7 +81,7 @@ pub fn run_with_source(
 pub fn run_live(config_path: &Path, out: &Path, duration: f64, speed: f64, seed: u64) -> Result<RunSummary> {
     let cfg = commands::load_config(config_path)?;
     let scenario = parse_scenario(&demo_scenario(duration))?;
-    run_with_source(cfg, out, speed, move |cfg, publish| {
+    run_with_source(cfg, out, speed, move |cfg, publisher| {
         let options = SimulationOptions {
             duration_seconds: duration,
             fs: 256.0,
@@ -98,7 +98,7 @@ pub fn run_live(config_path: &Path, out: &Path, duration: f64, speed: f64, seed:
         let mut sent = 0;
         simulate(cfg, &options, &mut |block| {
             sent += 1;
-            publish(&block)
+            publisher.publish(&block)
         })?;
         Ok(sent)
     })
@@ -109,9 +109,9 @@ pub fn run_recording_live(config_path: &Path, recording: &Path, out: &Path, spee
     let cfg = commands::load_config(config_path)?;
     let bytes = std::fs::read(recording).with_context(|| format!("cannot read {}", recording.display()))?;
     let (blocks, _) = read_recording(&bytes, &Limits::default())?;
-    run_with_source(cfg, out, speed, move |_, publish| {
+    run_with_source(cfg, out, speed, move |_, publisher| {
         for b in &blocks {
-            publish(&b.block)?;
+            publisher.publish(&b.block)?;
         }
         Ok(blocks.len() as u64)
     })

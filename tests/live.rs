@@ -194,3 +194,45 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
         .unwrap()
         .is_some());
 }
+
+#[test]
+fn precomputed_frfs_on_the_frf_topic_drive_an_update() {
+    // A logger that computes FRFs itself publishes one FRF per message on
+    // <prefix>/frf/<input>/<output>; a complete set triggers an update.
+    let out = temp("frf-topic");
+    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let truth = commands::load_config(&root().join("config/sinello-truth.toml")).unwrap();
+    let outputs: Vec<String> = (1..=12).map(|i| format!("P{i}")).collect();
+    let file = commands::synth(
+        &truth,
+        &commands::SynthOptions {
+            inputs: vec!["P1".into()],
+            outputs,
+            quantity: splinewatch_core::frf::Quantity::Accelerance,
+            f_min: 0.5,
+            f_max: 80.0,
+            step: 0.25,
+            noise: 0.0,
+            seed: 0,
+        },
+    )
+    .unwrap();
+    let summary = splinewatch::demo::run_with_source(cfg, &out, 0.0, move |_, publisher| {
+        publisher.publish_json("frf/P1/P1", b"{not json".to_vec())?;
+        for e in &file.frfs {
+            let one = splinewatch::frf_json::FrfFile {
+                quantity: file.quantity,
+                frequency_hz: file.frequency_hz.clone(),
+                frfs: vec![e.clone()],
+            };
+            publisher.publish_json(&format!("frf/{}/{}", e.input, e.output), serde_json::to_vec(&one)?)?;
+        }
+        Ok(file.frfs.len() as u64 + 1)
+    })
+    .unwrap();
+    assert_eq!(summary.updates.len(), 1);
+    let result = &summary.updates[0].result.as_ref().unwrap().result;
+    assert!(result.converged);
+    let k2 = result.parameters.iter().find(|p| p.name == "east.k2").unwrap().value;
+    assert!((k2 - 0.4e9).abs() < 0.01 * 0.4e9, "{k2}");
+}
