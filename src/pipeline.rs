@@ -34,6 +34,10 @@ use std::sync::Arc;
 pub struct ScheduleConfig {
     /// Run the updating after this many accepted windows.
     pub update_every_windows: u64,
+    /// If set, run the updating instead at the first accepted window ending at
+    /// least this many minutes (of measurement time) after the previous update
+    /// (or the first sample); `update_every_windows` is then ignored.
+    pub update_every_minutes: Option<f64>,
     /// Skip a window whose FRFs have a mean coherence in the band below this.
     pub min_coherence: f64,
     /// Skip a window with fewer clean segments than this fraction of the possible ones.
@@ -46,6 +50,7 @@ impl Default for ScheduleConfig {
     fn default() -> Self {
         Self {
             update_every_windows: 1,
+            update_every_minutes: None,
             min_coherence: 0.6,
             min_segment_fraction: 0.5,
             max_lag_seconds: 30.0,
@@ -265,6 +270,8 @@ pub struct Pipeline {
     frf_inbox: BTreeMap<(String, String), FrfEntry>,
     frf_axis: Option<(Quantity, Vec<f64>)>,
     frf_sets: u64,
+    /// Measurement time of the last update (or the first sample).
+    last_update_ns: Option<i128>,
     last: Option<AcceptedParameters>,
     health: Health,
 }
@@ -277,6 +284,11 @@ impl Pipeline {
         let (force, accels) = config.channel_roles()?;
         if schedule.update_every_windows == 0 {
             bail!("config: schedule.update_every_windows: must be at least 1");
+        }
+        if let Some(m) = schedule.update_every_minutes {
+            if !(m.is_finite() && m > 0.0) {
+                bail!("config: schedule.update_every_minutes: must be positive, got {m}");
+            }
         }
         if let Some(s) = &state {
             for p in &s.parameters {
@@ -323,6 +335,7 @@ impl Pipeline {
             frf_inbox: BTreeMap::new(),
             frf_axis: None,
             frf_sets: 0,
+            last_update_ns: None,
             last: state,
             health: Health::default(),
         })
@@ -525,8 +538,16 @@ impl Pipeline {
                 let report = self.close_window();
                 if report.skipped.is_none() {
                     self.accepted_since_update += 1;
-                    if self.accepted_since_update >= self.schedule.update_every_windows {
+                    let since = *self
+                        .last_update_ns
+                        .get_or_insert(self.t0.expect("set with the first block"));
+                    let due = match self.schedule.update_every_minutes {
+                        Some(minutes) => (report.end_ns - since) as f64 >= minutes * 60e9,
+                        None => self.accepted_since_update >= self.schedule.update_every_windows,
+                    };
+                    if due {
                         self.accepted_since_update = 0;
+                        self.last_update_ns = Some(report.end_ns);
                         if let Some(frf) = &report.frf {
                             jobs.push(self.job(report.index, report.end_ns, frf.clone()));
                         }

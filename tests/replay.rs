@@ -105,3 +105,18 @@ fn the_state_file_warm_starts_a_restart() {
         .collect();
     assert_eq!(names, vec!["state.json".to_string()]);
 }
+
+#[test]
+fn time_based_scheduling_updates_every_t_minutes() {
+    let text = std::fs::read_to_string(root().join("config/sinello.toml"))
+        .unwrap()
+        .replace(
+            "update_every_windows = 1",
+            "update_every_windows = 1\nupdate_every_minutes = 0.9",
+        );
+    let cfg = Config::from_toml(&text).unwrap();
+    let (_, summary) = run(&cfg, None);
+    // 20 s windows end at 20, 40, … 120 s: updates at 60 s (≥ 54 s) and 120 s (≥ 60 + 54 s).
+    let windows: Vec<u64> = summary.updates.iter().map(|u| u.window).collect();
+    assert_eq!(windows, vec![2, 5]);
+}
