@@ -618,18 +618,7 @@ impl Pipeline {
     }
 
     fn job(&self, window: u64, time_ns: i128, measured: FrfFile) -> UpdateJob {
-        let base: Vec<f64> = self
-            .parameters
-            .iter()
-            .map(|p| match p.kind {
-                splinewatch_core::updating::ParameterKind::Spring { field, coefficient } => {
-                    self.setup.kappa[field][coefficient]
-                }
-                splinewatch_core::updating::ParameterKind::Damping { coefficient } => {
-                    self.setup.damping.coefficients()[coefficient]
-                }
-            })
-            .collect();
+        let base = splinewatch_core::updating::base_values(&self.parameters, &self.setup.kappa, &self.setup.damping);
         let start = match &self.last {
             Some(last) => self
                 .parameters

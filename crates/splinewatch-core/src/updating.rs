@@ -64,6 +64,19 @@ pub struct Parameter {
     pub upper: f64,
 }
 
+/// The values `parameters` take in the model given by spring coefficients
+/// `kappa` (one vector per field) and `damping`.
+#[track_caller]
+pub fn base_values(parameters: &[Parameter], kappa: &[Vec<f64>], damping: &DampingCurve) -> Vec<f64> {
+    parameters
+        .iter()
+        .map(|p| match p.kind {
+            ParameterKind::Spring { field, coefficient } => kappa[field][coefficient],
+            ParameterKind::Damping { coefficient } => damping.coefficients()[coefficient],
+        })
+        .collect()
+}
+
 /// Eq. (42): `p(y)`.
 pub fn bounded_value(y: f64, lower: f64, upper: f64) -> f64 {
     0.5 * (lower + upper) + 0.5 * (upper - lower) * y.sin()
@@ -436,13 +449,7 @@ impl<'a> UpdateProblem<'a> {
 
     /// The current value of each parameter in the base model.
     pub fn base_values(&self) -> Vec<f64> {
-        self.parameters
-            .iter()
-            .map(|p| match p.kind {
-                ParameterKind::Spring { field, coefficient } => self.kappa[field][coefficient],
-                ParameterKind::Damping { coefficient } => self.damping.coefficients()[coefficient],
-            })
-            .collect()
+        base_values(&self.parameters, &self.kappa, &self.damping)
     }
 
     /// Spring coefficients and damping curve for parameter values `p`.
