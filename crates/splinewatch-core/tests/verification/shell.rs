@@ -24,16 +24,33 @@ fn smallest_generalised_eigenvalue(k: [[f64; 3]; 3], m_diag: [f64; 3]) -> f64 {
     a.self_adjoint_eigenvalues(Side::Lower).unwrap()[0]
 }
 
+/// Plate bending rigidities `[D11, D22, D12, D66]` of a specially orthotropic plate.
+fn bending_rigidities(mat: &OrthotropicMaterial, h: f64) -> [f64; 4] {
+    let den = 1.0 - mat.nu12() * mat.nu21();
+    [
+        mat.e1() * h.powi(3) / (12.0 * den),
+        mat.e2() * h.powi(3) / (12.0 * den),
+        mat.nu12() * mat.e2() * h.powi(3) / (12.0 * den),
+        mat.g12() * h.powi(3) / 12.0,
+    ]
+}
+
+/// A rectangular plate, degree 4 on a 20 × 14 net, hard simply supported on all edges.
+fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial) -> ShellModel {
+    ShellModel {
+        shell: Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
+        material: material.clone(),
+        springs: vec![],
+        constraints: all_edges(SupportKind::SimplySupported),
+    }
+}
+
 /// Navier solution of a simply supported, specially orthotropic Mindlin
 /// plate (Reddy, *Theory and Analysis of Elastic Plates and Shells*, §10.2):
 /// for each (m, n) the lowest root of the 3×3 pencil in (w, φx, φy),
 /// with rotary inertia ρh³/12.
 fn mindlin_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: usize) -> Vec<f64> {
-    let den = 1.0 - mat.nu12() * mat.nu21();
-    let d11 = mat.e1() * h.powi(3) / (12.0 * den);
-    let d22 = mat.e2() * h.powi(3) / (12.0 * den);
-    let d12 = mat.nu12() * mat.e2() * h.powi(3) / (12.0 * den);
-    let d66 = mat.g12() * h.powi(3) / 12.0;
+    let [d11, d22, d12, d66] = bending_rigidities(mat, h);
     let a55 = mat.shear_correction() * mat.g13() * h;
     let a44 = mat.shear_correction() * mat.g23() * h;
     let rho = mat.density();
@@ -57,11 +74,7 @@ fn mindlin_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: u
 
 /// Kirchhoff solution: ω² = (D11 α⁴ + 2(D12 + 2D66) α²β² + D22 β⁴) / (ρh).
 fn kirchhoff_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: usize) -> Vec<f64> {
-    let den = 1.0 - mat.nu12() * mat.nu21();
-    let d11 = mat.e1() * h.powi(3) / (12.0 * den);
-    let d22 = mat.e2() * h.powi(3) / (12.0 * den);
-    let d12 = mat.nu12() * mat.e2() * h.powi(3) / (12.0 * den);
-    let d66 = mat.g12() * h.powi(3) / 12.0;
+    let [d11, d22, d12, d66] = bending_rigidities(mat, h);
     let mut out = Vec::new();
     for m in 1..=12 {
         for n in 1..=12 {
@@ -108,12 +121,7 @@ fn simply_supported_orthotropic_mindlin_plate_matches_navier() {
     // lowers the frequencies well below Kirchhoff, so Mindlin is what is tested.
     let (a, b, h) = (16.0, 9.0, 1.6);
     let mat = sinello_material();
-    let model = ShellModel {
-        shell: Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
-        material: mat.clone(),
-        springs: vec![],
-        constraints: all_edges(SupportKind::SimplySupported),
-    };
+    let model = simply_supported_plate(a, b, h, &mat);
     let exact = mindlin_navier_hz(&mat, a, b, h, 10);
     let fe = bending_frequencies(&model, 10);
     assert_close(&fe, &exact, 5e-3, "Mindlin Navier");
@@ -125,12 +133,7 @@ fn simply_supported_orthotropic_mindlin_plate_matches_navier() {
 fn thin_simply_supported_plate_matches_kirchhoff() {
     let (a, b, h) = (1.0, 0.7, 0.005);
     let mat = sinello_material();
-    let model = ShellModel {
-        shell: Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
-        material: mat.clone(),
-        springs: vec![],
-        constraints: all_edges(SupportKind::SimplySupported),
-    };
+    let model = simply_supported_plate(a, b, h, &mat);
     let exact = kirchhoff_navier_hz(&mat, a, b, h, 10);
     let fe = bending_frequencies(&model, 10);
     assert_close(&fe, &exact, 5e-3, "Kirchhoff Navier");
