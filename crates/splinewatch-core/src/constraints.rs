@@ -115,6 +115,11 @@ impl DofReduction {
         self.columns.len()
     }
 
+    /// The columns of `T`, sparse: `(full dof, weight)` pairs.
+    pub fn columns(&self) -> &[Vec<(usize, f64)>] {
+        &self.columns
+    }
+
     /// `Tᵀ A T`.
     #[track_caller]
     pub fn reduce(&self, a: &Mat<f64>) -> Mat<f64> {

@@ -22,6 +22,7 @@ use crate::damping::DampingCurve;
 use crate::linalg::{complex_solve, dense_rows};
 use crate::modal::{ModalError, ModeKind, Modes};
 use crate::model::{AssembledModel, ModelError};
+use crate::springs::LowRankBlock;
 use crate::vec3::{dot, normalize, Vec3};
 use faer::linalg::matmul::matmul;
 use faer::{c64, Accum, Mat, Par};
@@ -228,14 +229,26 @@ impl FrfModel {
     }
 
     /// FRFs (and, if asked, sensitivities) by modal superposition.
+    ///
+    /// The frequency axis is processed in blocks of [`FREQUENCY_BLOCK`]
+    /// lines so that every intermediate matrix stays in cache and is
+    /// allocated once per call; all products are real GEMMs on split
+    /// real/imaginary parts.
     #[track_caller]
     pub fn evaluate(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> FrfEvaluation {
         let nf = request.frequencies_hz.len();
         let np = request.pairs.len();
+        for &(r, s) in request.pairs {
+            assert!(
+                r < self.sensor_count() && s < self.sensor_count(),
+                "sensor index out of range"
+            );
+        }
         // Modes that no involved sensor sees (the membrane modes of a flat
-        // deck under vertical sensors: their amplitudes are round-off, below
-        // 1e-10 of the largest) add nothing to H, g_s or the sensitivities
-        // beyond that round-off: leave them out (195 of 325 for Sinello).
+        // deck under vertical sensors: their amplitudes are zero or
+        // round-off, below 1e-10 of the largest) add nothing to H, g_s or
+        // the sensitivities beyond that round-off: leave them out (195 of
+        // 325 for Sinello).
         let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
         sensors.sort_unstable();
         sensors.dedup();
@@ -247,116 +260,174 @@ impl FrfModel {
             .filter(|&i| sensors.iter().any(|&s| state.amplitudes[(s, i)].abs() > 1e-10 * amax))
             .collect();
         let nm = active.len();
-        for &(r, s) in request.pairs {
-            assert!(
-                r < self.sensor_count() && s < self.sensor_count(),
-                "sensor index out of range"
-            );
-        }
-        let w: Vec<f64> = request.frequencies_hz.iter().map(|f| 2.0 * PI * f).collect();
-        // q_{i,f} = 1 / D_i(ω_f), split into real and imaginary parts for real GEMMs.
-        let mut q_re = Mat::<f64>::zeros(nm, nf);
-        let mut q_im = Mat::<f64>::zeros(nm, nf);
-        for f in 0..nf {
-            for i in 0..nm {
-                let m = active[i];
-                let d = c64::new(
-                    state.omega[m] * state.omega[m] - w[f] * w[f],
-                    2.0 * state.zeta[m] * state.omega[m] * w[f],
-                );
-                let q = d.inv();
-                q_re[(i, f)] = q.re;
-                q_im[(i, f)] = q.im;
-            }
-        }
-        // H_p = Σ_i a_r a_s q_i for every pair p = (r, s).
+        let omega: Vec<f64> = active.iter().map(|&i| state.omega[i]).collect();
+        let zeta: Vec<f64> = active.iter().map(|&i| state.zeta[i]).collect();
+        let amplitude = |sensor: usize, i: usize| state.amplitudes[(sensor, active[i])];
+
+        // Frequency-independent factors. H_p = Σ_i a_r a_s q_i, p = (r, s).
         let coupling = Mat::from_fn(np, nm, |p, i| {
             let (r, s) = request.pairs[p];
-            state.amplitudes[(r, active[i])] * state.amplitudes[(s, active[i])]
+            amplitude(r, i) * amplitude(s, i)
         });
-        let h_mat = complex_product(&coupling, &q_re, &q_im);
-        let factor: Vec<c64> = w.iter().map(|&wf| request.quantity.factor(wf)).collect();
-        let scaled = |m: &(Mat<f64>, Mat<f64>), row: usize| -> Vec<c64> {
-            (0..nf)
-                .map(|f| c64::new(m.0[(row, f)], m.1[(row, f)]) * factor[f])
-                .collect()
-        };
-        let h: Vec<c64> = (0..np).flat_map(|p| scaled(&h_mat, p)).collect();
-        if !sensitivities {
-            return FrfEvaluation {
-                h,
-                dh_dkappa: Vec::new(),
-                dh_dgamma: Vec::new(),
-            };
-        }
+        let nz = if sensitivities { state.zeta_basis.ncols() } else { 0 };
         // Damping: ∂H_p/∂γ_z = Σ_i a_r a_s B_z(f_i) e_i, e_i = -2j ω_i ω q_i².
-        let nz = state.zeta_basis.ncols();
-        let mut e_re = Mat::<f64>::zeros(nm, nf);
-        let mut e_im = Mat::<f64>::zeros(nm, nf);
-        for f in 0..nf {
-            for i in 0..nm {
-                let q = c64::new(q_re[(i, f)], q_im[(i, f)]);
-                let e = c64::new(0.0, -2.0 * state.omega[active[i]] * w[f]) * q * q;
-                e_re[(i, f)] = e.re;
-                e_im[(i, f)] = e.im;
-            }
-        }
-        let weighted = Mat::from_fn(np * nz, nm, |row, i| {
-            coupling[(row / nz, i)] * state.zeta_basis[(active[i], row % nz)]
-        });
-        let dg = complex_product(&weighted, &e_re, &e_im);
-        let dh_dgamma = (0..nz)
-            .map(|z| (0..np).flat_map(|p| scaled(&dg, p * nz + z)).collect())
-            .collect();
-        // Springs: g_s on U for every sensor involved, then -g_rᵀ B_j g_s.
-        let mut involved: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
-        involved.sort_unstable();
-        involved.dedup();
-        // One stacked GEMM: rows (sensor, u) of Φ_U diag(a_s), times Q.
-        let nu = state.phi_springs.nrows();
-        let stacked = Mat::from_fn(involved.len() * nu, nm, |row, i| {
-            state.phi_springs[(row % nu, active[i])] * state.amplitudes[(involved[row / nu], active[i])]
-        });
-        let (all_re, all_im) = complex_product(&stacked, &q_re, &q_im);
-        let g: Vec<(Mat<f64>, Mat<f64>)> = (0..involved.len())
-            .map(|k| {
-                let rows = k * nu..(k + 1) * nu;
-                (
-                    all_re.subrows(rows.start, nu).to_owned(),
-                    all_im.subrows(rows.start, nu).to_owned(),
-                )
+        // B_z is non-zero on a contiguous range of modes (ascending
+        // frequencies): one GEMM per z over that range only.
+        let damping_terms: Vec<(usize, Mat<f64>)> = (0..nz)
+            .map(|z| {
+                let support: Vec<usize> = (0..nm).filter(|&i| state.zeta_basis[(active[i], z)] != 0.0).collect();
+                let (lo, hi) = match (support.first(), support.last()) {
+                    (Some(&lo), Some(&hi)) => (lo, hi + 1),
+                    _ => (0, 0),
+                };
+                let weights = Mat::from_fn(np, hi - lo, |p, i| {
+                    coupling[(p, lo + i)] * state.zeta_basis[(active[lo + i], z)]
+                });
+                (lo, weights)
             })
             .collect();
-        let g_of = |sensor: usize| &g[involved.binary_search(&sensor).expect("involved")];
-        let blocks: Vec<_> = self.assembled.spring_blocks.iter().flatten().collect();
+        // Springs (eq. 33, low rank): ∂H_rs/∂κ_j = -g_rᵀ B_j g_s on the
+        // block's dofs, g_s = Φ_U diag(a_s) q the response of the spring dofs
+        // U to input s. With g_r = Φ_U diag(a_r) q this is
+        // -Σ_i a_{r,i} q_i c_{j,i}, c_j = Φ_{B_j}ᵀ B_j g_s: g_s only for the
+        // inputs (not for every sensor), one small GEMM per block, then one
+        // GEMM over all blocks stacked side by side.
+        let blocks: Vec<&LowRankBlock> = if sensitivities {
+            self.assembled.spring_blocks.iter().flatten().collect()
+        } else {
+            Vec::new()
+        };
+        let nb = blocks.len();
         let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| s).collect();
         inputs.sort_unstable();
         inputs.dedup();
-        let mut dh_dkappa = Vec::with_capacity(blocks.len());
-        for (block, pos) in blocks.iter().zip(&self.block_positions) {
-            // B_j g_s on the block's dofs, once per input sensor s (two real GEMMs).
-            let b_g: Vec<(Mat<f64>, Mat<f64>)> = inputs
+        let nu = if sensitivities { state.phi_springs.nrows() } else { 0 };
+        let phi_u = Mat::from_fn(nu, nm, |u, i| state.phi_springs[(u, active[i])]);
+        let stacked = Mat::from_fn(inputs.len() * nu, nm, |row, i| {
+            phi_u[(row % nu, i)] * amplitude(inputs[row / nu], i)
+        });
+        let phi_blocks_t: Vec<Mat<f64>> = self
+            .block_positions
+            .iter()
+            .take(nb)
+            .map(|pos| Mat::from_fn(nm, pos.len(), |i, a| phi_u[(pos[a], i)]))
+            .collect();
+        let by_input: Vec<(Vec<usize>, Mat<f64>)> = inputs
+            .iter()
+            .map(|&s| {
+                let pairs: Vec<usize> = (0..np).filter(|&p| request.pairs[p].1 == s).collect();
+                let outputs = Mat::from_fn(pairs.len(), nm, |row, i| amplitude(request.pairs[pairs[row]].0, i));
+                (pairs, outputs)
+            })
+            .collect();
+
+        let zero = c64::new(0.0, 0.0);
+        let mut h = vec![zero; np * nf];
+        let mut dh_dgamma = vec![vec![zero; np * nf]; nz];
+        let mut dh_dkappa = vec![vec![zero; np * nf]; nb];
+        let width = FREQUENCY_BLOCK.min(nf.max(1));
+        let mut q = Split::zeros(nm, width);
+        let mut e = Split::zeros(nm, width);
+        let mut out = Split::zeros(np, width);
+        let mut g = Split::zeros(inputs.len() * nu, width);
+        let mut c = Split::zeros(nm, width);
+        let mut stacked_e = Split::zeros(nm, nb * width);
+        let mut r = Split::zeros(np, nb * width);
+        for start in (0..nf).step_by(width) {
+            let nc = width.min(nf - start);
+            let w: Vec<f64> = request.frequencies_hz[start..start + nc]
                 .iter()
-                .map(|&s| {
-                    let gs = g_of(s);
-                    let rows_re = Mat::from_fn(pos.len(), nf, |a, f| gs.0[(pos[a], f)]);
-                    let rows_im = Mat::from_fn(pos.len(), nf, |a, f| gs.1[(pos[a], f)]);
-                    complex_product(&block.values, &rows_re, &rows_im)
-                })
+                .map(|f| 2.0 * PI * f)
                 .collect();
-            let mut out = vec![c64::new(0.0, 0.0); np * nf];
-            for (p, &(r, s)) in request.pairs.iter().enumerate() {
-                let gr = g_of(r);
-                let bg = &b_g[inputs.binary_search(&s).expect("an input")];
-                for f in 0..nf {
-                    let mut acc = c64::new(0.0, 0.0);
-                    for (a, &row) in pos.iter().enumerate() {
-                        acc += c64::new(gr.0[(row, f)], gr.1[(row, f)]) * c64::new(bg.0[(a, f)], bg.1[(a, f)]);
-                    }
-                    out[p * nf + f] = -acc * factor[f];
+            let factor: Vec<c64> = w.iter().map(|&wf| request.quantity.factor(wf)).collect();
+            // q_{i,f} = 1 / D_i(ω_f).
+            for (f, &wf) in w.iter().enumerate() {
+                for i in 0..nm {
+                    let d = c64::new(omega[i] * omega[i] - wf * wf, 2.0 * zeta[i] * omega[i] * wf);
+                    let v = d.inv();
+                    q.re[(i, f)] = v.re;
+                    q.im[(i, f)] = v.im;
                 }
             }
-            dh_dkappa.push(out);
+            out.product(np, nc, &coupling, &q);
+            for p in 0..np {
+                for f in 0..nc {
+                    h[p * nf + start + f] = c64::new(out.re[(p, f)], out.im[(p, f)]) * factor[f];
+                }
+            }
+            if !sensitivities {
+                continue;
+            }
+            for (f, &wf) in w.iter().enumerate() {
+                for i in 0..nm {
+                    let v = c64::new(q.re[(i, f)], q.im[(i, f)]);
+                    let d = c64::new(0.0, -2.0 * omega[i] * wf) * v * v;
+                    e.re[(i, f)] = d.re;
+                    e.im[(i, f)] = d.im;
+                }
+            }
+            for ((lo, weights), dz) in damping_terms.iter().zip(dh_dgamma.iter_mut()) {
+                for (dst, src) in [(&mut out.re, &e.re), (&mut out.im, &e.im)] {
+                    matmul(
+                        dst.submatrix_mut(0, 0, np, nc),
+                        Accum::Replace,
+                        weights.as_ref(),
+                        src.submatrix(*lo, 0, weights.ncols(), nc),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
+                for p in 0..np {
+                    for f in 0..nc {
+                        dz[p * nf + start + f] = c64::new(out.re[(p, f)], out.im[(p, f)]) * factor[f];
+                    }
+                }
+            }
+            if nb == 0 {
+                continue;
+            }
+            g.product(inputs.len() * nu, nc, &stacked, &q);
+            for (k, (pairs, outputs)) in by_input.iter().enumerate() {
+                for (j, (block, pos)) in blocks.iter().zip(&self.block_positions).enumerate() {
+                    let gs_re = Mat::from_fn(pos.len(), nc, |a, f| g.re[(k * nu + pos[a], f)]);
+                    let gs_im = Mat::from_fn(pos.len(), nc, |a, f| g.im[(k * nu + pos[a], f)]);
+                    let x_re = &block.values * &gs_re;
+                    let x_im = &block.values * &gs_im;
+                    let phi_t = phi_blocks_t[j].as_ref();
+                    matmul(
+                        c.re.subcols_mut(0, nc),
+                        Accum::Replace,
+                        phi_t,
+                        x_re.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    matmul(
+                        c.im.subcols_mut(0, nc),
+                        Accum::Replace,
+                        phi_t,
+                        x_im.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for f in 0..nc {
+                        for i in 0..nm {
+                            let v = c64::new(q.re[(i, f)], q.im[(i, f)]) * c64::new(c.re[(i, f)], c.im[(i, f)]);
+                            stacked_e.re[(i, j * nc + f)] = v.re;
+                            stacked_e.im[(i, j * nc + f)] = v.im;
+                        }
+                    }
+                }
+                r.product(pairs.len(), nb * nc, outputs, &stacked_e);
+                for (row, &p) in pairs.iter().enumerate() {
+                    for (j, dj) in dh_dkappa.iter_mut().enumerate() {
+                        for f in 0..nc {
+                            let v = c64::new(r.re[(row, j * nc + f)], r.im[(row, j * nc + f)]);
+                            dj[p * nf + start + f] = -v * factor[f];
+                        }
+                    }
+                }
+            }
         }
         FrfEvaluation {
             h,
@@ -414,11 +485,36 @@ impl FrfModel {
     }
 }
 
-/// `A (B_re + j B_im)` for real `A`: two real GEMMs.
-fn complex_product(a: &Mat<f64>, b_re: &Mat<f64>, b_im: &Mat<f64>) -> (Mat<f64>, Mat<f64>) {
-    let mut re = Mat::<f64>::zeros(a.nrows(), b_re.ncols());
-    let mut im = Mat::<f64>::zeros(a.nrows(), b_re.ncols());
-    matmul(re.as_mut(), Accum::Replace, a.as_ref(), b_re.as_ref(), 1.0, Par::Seq);
-    matmul(im.as_mut(), Accum::Replace, a.as_ref(), b_im.as_ref(), 1.0, Par::Seq);
-    (re, im)
+/// Frequency lines per block in [`FrfModel::evaluate`]: 64 lines keep the
+/// largest intermediate (all spring blocks side by side, 8 × 64 columns of
+/// the active modes) near 1 MB.
+pub const FREQUENCY_BLOCK: usize = 64;
+
+/// A complex matrix stored as real and imaginary parts, for real GEMMs.
+struct Split {
+    re: Mat<f64>,
+    im: Mat<f64>,
+}
+
+impl Split {
+    fn zeros(rows: usize, cols: usize) -> Self {
+        Self {
+            re: Mat::zeros(rows, cols),
+            im: Mat::zeros(rows, cols),
+        }
+    }
+
+    /// `self[..rows, ..cols] = a · b[.., ..cols]` for real `a`.
+    fn product(&mut self, rows: usize, cols: usize, a: &Mat<f64>, b: &Split) {
+        for (dst, src) in [(&mut self.re, &b.re), (&mut self.im, &b.im)] {
+            matmul(
+                dst.submatrix_mut(0, 0, rows, cols),
+                Accum::Replace,
+                a.as_ref(),
+                src.subcols(0, cols),
+                1.0,
+                Par::Seq,
+            );
+        }
+    }
 }

@@ -9,6 +9,12 @@
 //! Lanczos on the banded `K - σM` (faer's sparse Cholesky), computing only the
 //! modes below the band's upper frequency; see ARCHITECTURE.md.
 //!
+//! Repeated solves ([`ModalSolver`], the updating loop): the transform above
+//! is done once per exactly decoupled block of the pencil, `K(κ)` enters as
+//! a low-rank update of the transformed matrix, and blocks no spring reaches
+//! keep their modes. For the Sinello deck this solves 195 of 325 dofs per
+//! evaluation instead of all 325, about a fifth of the dense cost.
+//!
 //! Classification: `rigid` when `ω < 1e-6 ω_max` (the round-off level of a
 //! zero eigenvalue after the Cholesky transform is `~1e-16 ω²_max`);
 //! otherwise `bending` when most of the translational kinetic energy is
@@ -17,11 +23,13 @@
 
 use crate::constraints::DofReduction;
 use crate::shell::{Shell, DOFS_PER_CONTROL_POINT};
+use crate::springs::LowRankBlock;
 use crate::vec3::{dot, Vec3};
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors, SelfAdjointEvdParams};
-use faer::{Auto, Mat, Par, Side, Spec};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Auto, Mat, Par, Side, Spec};
 use std::f64::consts::PI;
 use thiserror::Error;
 
@@ -73,7 +81,9 @@ impl Modes {
     }
 }
 
-/// Solves eq. (27) for all modes of the constrained model.
+/// Solves eq. (27) for all modes of the constrained model in one dense
+/// eigenproblem. Reference path: the updating loop uses [`ModalSolver`],
+/// which gives the same modes faster.
 pub fn solve(
     stiffness: &Mat<f64>,
     mass: &Mat<f64>,
@@ -84,47 +94,315 @@ pub fn solve(
     if n == 0 {
         return Err(ModalError::NoFreeDofs);
     }
-    // Jacobi scaling S = diag(M)^{-1/2}: rotational dofs carry t²/12 of the
-    // translational inertia, and without scaling the Cholesky transform loses
-    // cond(M)·eps of accuracy in the low modes.
-    let (mut kr, mut mr) = (reduction.reduce(stiffness), reduction.reduce(mass));
-    let mut s = vec![0.0; n];
-    for i in 0..n {
-        let d = mr[(i, i)];
-        if !(d > 0.0 && d.is_finite()) {
-            return Err(ModalError::MassNotPositiveDefinite { index: i });
-        }
-        s[i] = 1.0 / d.sqrt();
-    }
-    for j in 0..n {
-        for i in 0..n {
-            let f = s[i] * s[j];
-            kr[(i, j)] *= f;
-            mr[(i, j)] *= f;
-        }
-    }
-    let llt = mr.llt(Side::Lower).map_err(|e| match e {
-        faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
-            ModalError::MassNotPositiveDefinite { index }
-        }
-    })?;
-    let l = llt.L();
-    // A = L⁻¹ K L⁻ᵀ, formed as L⁻¹ (L⁻¹ K)ᵀ since K is symmetric.
-    let mut x = kr;
-    l.solve_lower_triangular_in_place(x.as_mut());
-    let mut a = x.transpose().to_owned();
-    l.solve_lower_triangular_in_place(a.as_mut());
-    let a = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
-    let (omega2, mut y) = symmetric_eigen(&a)?;
-    l.transpose().solve_upper_triangular_in_place(y.as_mut());
-    for i in 0..n {
-        for k in 0..n {
-            y[(i, k)] *= s[i];
-        }
-    }
-    let shapes = reduction.expand(&y);
+    let all: Vec<usize> = (0..n).collect();
+    let pencil = ScaledPencil::new(&reduction.reduce(stiffness), &reduction.reduce(mass), &all)?;
+    let (omega2, y) = symmetric_eigen(&pencil.a_free)?;
+    let shapes = reduction.expand(&pencil.back_transform(y));
     let kinds = classify(&omega2, &shapes, mass, shell);
     Ok(Modes { omega2, shapes, kinds })
+}
+
+/// One diagonal block `(K_c, M_c)` of the reduced pencil, transformed to a
+/// standard problem. Jacobi scaling `S = diag(M_c)^{-1/2}` first: rotational
+/// dofs carry t²/12 of the translational inertia, and without scaling the
+/// Cholesky transform loses cond(M)·eps of accuracy in the low modes. Then
+/// `S M_c S = L Lᵀ` and `A = L⁻¹ S K_c S L⁻ᵀ`.
+#[derive(Debug, Clone)]
+struct ScaledPencil {
+    scale: Vec<f64>,
+    l: Mat<f64>,
+    a_free: Mat<f64>,
+}
+
+impl ScaledPencil {
+    /// `kr`, `mr` are the full reduced matrices; `dofs` selects the block.
+    fn new(kr: &Mat<f64>, mr: &Mat<f64>, dofs: &[usize]) -> Result<Self, ModalError> {
+        let n = dofs.len();
+        let mut scale = vec![0.0; n];
+        for (i, &d) in dofs.iter().enumerate() {
+            let m = mr[(d, d)];
+            if !(m > 0.0 && m.is_finite()) {
+                return Err(ModalError::MassNotPositiveDefinite { index: d });
+            }
+            scale[i] = 1.0 / m.sqrt();
+        }
+        let m = Mat::from_fn(n, n, |i, j| mr[(dofs[i], dofs[j])] * scale[i] * scale[j]);
+        let llt = m.llt(Side::Lower).map_err(|e| match e {
+            faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index } => {
+                ModalError::MassNotPositiveDefinite { index: dofs[index] }
+            }
+        })?;
+        let l = llt.L().to_owned();
+        // A = L⁻¹ K L⁻ᵀ, formed as L⁻¹ (L⁻¹ K)ᵀ since K is symmetric.
+        let mut x = Mat::from_fn(n, n, |i, j| kr[(dofs[i], dofs[j])] * scale[i] * scale[j]);
+        l.solve_lower_triangular_in_place(x.as_mut());
+        let mut a = x.transpose().to_owned();
+        l.solve_lower_triangular_in_place(a.as_mut());
+        let a_free = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+        Ok(Self { scale, l, a_free })
+    }
+
+    /// `L⁻¹ S X` for rows `X` on the block's dofs.
+    fn forward(&self, mut x: Mat<f64>) -> Mat<f64> {
+        for j in 0..x.ncols() {
+            for i in 0..x.nrows() {
+                x[(i, j)] *= self.scale[i];
+            }
+        }
+        self.l.solve_lower_triangular_in_place(x.as_mut());
+        x
+    }
+
+    /// Eigenvectors `y` of `A` to mass-normalised block shapes `S L⁻ᵀ y`.
+    fn back_transform(&self, mut y: Mat<f64>) -> Mat<f64> {
+        self.l.transpose().solve_upper_triangular_in_place(y.as_mut());
+        for k in 0..y.ncols() {
+            for i in 0..y.nrows() {
+                y[(i, k)] *= self.scale[i];
+            }
+        }
+        y
+    }
+}
+
+/// Eq. (27) prepared for many spring coefficient vectors `κ`: only
+/// `ΔK(κ) = Σ_j κ_j ∂K/∂κ_j` changes between solves (eq. 22–23).
+///
+/// At construction the reduced dofs are split into the connected components
+/// of the union sparsity pattern of `K_f`, `M` and every `∂K/∂κ_j` (a flat
+/// deck on vertical springs splits exactly into its in-plane and its
+/// out-of-plane dofs), and each component gets its [`ScaledPencil`] once. A
+/// component that no spring reaches has κ-independent modes: solved once.
+/// Per `κ`, every other component forms `A = A_f + W Δ(κ) Wᵀ` with
+/// `W = L⁻¹ S Tᵀ E_U` (`U`: the spring dofs, `|U|` columns) and calls the
+/// symmetric eigensolver on its own size. The eigenpairs of a block-diagonal
+/// pencil are those of its blocks, so this is exact, not an approximation.
+#[derive(Debug, Clone)]
+pub struct ModalSolver {
+    free: usize,
+    /// Positions in `U` and values of every `∂K/∂κ_j`, flattened over fields.
+    blocks: Vec<(Vec<usize>, Mat<f64>)>,
+    spring_dof_count: usize,
+    components: Vec<Component>,
+}
+
+#[derive(Debug, Clone)]
+struct Component {
+    /// Reduced dof indices, ascending.
+    dofs: Vec<usize>,
+    pencil: ScaledPencil,
+    /// Positions in `U` of the spring dofs reaching this component.
+    springs: Vec<usize>,
+    /// `L⁻¹ S (Tᵀ E_U)[dofs, springs]`.
+    w: Mat<f64>,
+    /// Eigenvalues and block shapes when no spring reaches the component.
+    fixed: Option<(Vec<f64>, Mat<f64>)>,
+}
+
+impl ModalSolver {
+    pub fn new(
+        free_stiffness: &Mat<f64>,
+        mass: &Mat<f64>,
+        spring_blocks: &[&LowRankBlock],
+        reduction: &DofReduction,
+    ) -> Result<Self, ModalError> {
+        let n = reduction.free_count();
+        if n == 0 {
+            return Err(ModalError::NoFreeDofs);
+        }
+        let (kr, mr) = (reduction.reduce(free_stiffness), reduction.reduce(mass));
+        // Rows of T: the reduced dofs (and weights) each full dof enters.
+        let mut rows_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); reduction.full_count()];
+        for (c, col) in reduction.columns().iter().enumerate() {
+            for &(d, t) in col {
+                rows_of[d].push((c, t));
+            }
+        }
+        let mut spring_dofs: Vec<usize> = spring_blocks.iter().flat_map(|b| b.dofs.iter().copied()).collect();
+        spring_dofs.sort_unstable();
+        spring_dofs.dedup();
+        let blocks: Vec<(Vec<usize>, Mat<f64>)> = spring_blocks
+            .iter()
+            .map(|b| {
+                let pos = b
+                    .dofs
+                    .iter()
+                    .map(|d| spring_dofs.binary_search(d).expect("in the union"))
+                    .collect();
+                (pos, b.values.clone())
+            })
+            .collect();
+        // Connected components of the union pattern.
+        let mut sets = DisjointSets::new(n);
+        for j in 0..n {
+            for i in j + 1..n {
+                if kr[(i, j)] != 0.0 || kr[(j, i)] != 0.0 || mr[(i, j)] != 0.0 || mr[(j, i)] != 0.0 {
+                    sets.union(i, j);
+                }
+            }
+        }
+        for b in spring_blocks {
+            for (a, &da) in b.dofs.iter().enumerate() {
+                for (c, &dc) in b.dofs.iter().enumerate() {
+                    if b.values[(a, c)] == 0.0 {
+                        continue;
+                    }
+                    for &(ra, _) in &rows_of[da] {
+                        for &(rc, _) in &rows_of[dc] {
+                            sets.union(ra, rc);
+                        }
+                    }
+                }
+            }
+        }
+        let mut members: Vec<Vec<usize>> = Vec::new();
+        let mut slot = vec![usize::MAX; n];
+        for d in 0..n {
+            let root = sets.find(d);
+            if slot[root] == usize::MAX {
+                slot[root] = members.len();
+                members.push(Vec::new());
+            }
+            members[slot[root]].push(d);
+        }
+        let mut components = Vec::with_capacity(members.len());
+        for dofs in members {
+            let pencil = ScaledPencil::new(&kr, &mr, &dofs)?;
+            let springs: Vec<usize> = (0..spring_dofs.len())
+                .filter(|&u| {
+                    rows_of[spring_dofs[u]]
+                        .iter()
+                        .any(|(r, _)| dofs.binary_search(r).is_ok())
+                })
+                .collect();
+            let reach = Mat::from_fn(dofs.len(), springs.len(), |i, k| {
+                rows_of[spring_dofs[springs[k]]]
+                    .iter()
+                    .filter(|(r, _)| *r == dofs[i])
+                    .map(|(_, t)| t)
+                    .sum()
+            });
+            let w = pencil.forward(reach);
+            let fixed = if springs.is_empty() {
+                let (omega2, y) = symmetric_eigen(&pencil.a_free)?;
+                Some((omega2, pencil.back_transform(y)))
+            } else {
+                None
+            };
+            components.push(Component {
+                dofs,
+                pencil,
+                springs,
+                w,
+                fixed,
+            });
+        }
+        Ok(Self {
+            free: n,
+            blocks,
+            spring_dof_count: spring_dofs.len(),
+            components,
+        })
+    }
+
+    /// Number of independent diagonal blocks of the pencil.
+    pub fn component_sizes(&self) -> Vec<usize> {
+        self.components.iter().map(|c| c.dofs.len()).collect()
+    }
+
+    /// Eigenvalues (ascending) and reduced mass-normalised shapes for the
+    /// spring coefficients `kappa`, flattened in block order.
+    #[track_caller]
+    pub fn solve(&self, kappa: &[f64]) -> Result<(Vec<f64>, Mat<f64>), ModalError> {
+        assert_eq!(kappa.len(), self.blocks.len(), "one coefficient per spring block");
+        let nu = self.spring_dof_count;
+        let mut delta = Mat::<f64>::zeros(nu, nu);
+        for ((pos, values), &k) in self.blocks.iter().zip(kappa) {
+            for (a, &pa) in pos.iter().enumerate() {
+                for (b, &pb) in pos.iter().enumerate() {
+                    delta[(pa, pb)] += k * values[(a, b)];
+                }
+            }
+        }
+        let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(self.free);
+        let mut solved: Vec<Option<(Vec<f64>, Mat<f64>)>> = Vec::with_capacity(self.components.len());
+        for (ci, c) in self.components.iter().enumerate() {
+            let computed = match &c.fixed {
+                Some(_) => None,
+                None => {
+                    let d = Mat::from_fn(c.springs.len(), c.springs.len(), |a, b| {
+                        delta[(c.springs[a], c.springs[b])]
+                    });
+                    let wd = &c.w * &d;
+                    let mut a = c.pencil.a_free.clone();
+                    matmul(a.as_mut(), Accum::Add, wd.as_ref(), c.w.transpose(), 1.0, Par::Seq);
+                    let (omega2, y) = symmetric_eigen(&a)?;
+                    Some((omega2, c.pencil.back_transform(y)))
+                }
+            };
+            let omega2 = match (&computed, &c.fixed) {
+                (Some((o, _)), _) | (None, Some((o, _))) => o,
+                (None, None) => unreachable!("either fixed or computed"),
+            };
+            pairs.extend(omega2.iter().enumerate().map(|(k, &w2)| (w2, ci, k)));
+            solved.push(computed);
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut shapes = Mat::<f64>::zeros(self.free, self.free);
+        for (col, &(_, ci, k)) in pairs.iter().enumerate() {
+            let c = &self.components[ci];
+            let phi = match (&solved[ci], &c.fixed) {
+                (Some((_, p)), _) | (None, Some((_, p))) => p,
+                (None, None) => unreachable!("either fixed or computed"),
+            };
+            for (r, &d) in c.dofs.iter().enumerate() {
+                shapes[(d, col)] = phi[(r, k)];
+            }
+        }
+        Ok((pairs.iter().map(|p| p.0).collect(), shapes))
+    }
+
+    /// All modes for `kappa`: [`Self::solve`], expanded and classified.
+    pub fn modes(
+        &self,
+        kappa: &[f64],
+        reduction: &DofReduction,
+        mass: &Mat<f64>,
+        shell: &Shell,
+    ) -> Result<Modes, ModalError> {
+        let (omega2, y) = self.solve(kappa)?;
+        let shapes = reduction.expand(&y);
+        let kinds = classify(&omega2, &shapes, mass, shell);
+        Ok(Modes { omega2, shapes, kinds })
+    }
+}
+
+/// Union–find with path halving.
+struct DisjointSets {
+    parent: Vec<usize>,
+}
+
+impl DisjointSets {
+    fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n).collect(),
+        }
+    }
+
+    fn find(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+
+    fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            self.parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
 }
 
 /// Eigenvalues (ascending) and orthonormal eigenvectors of a symmetric matrix

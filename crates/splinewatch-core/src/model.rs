@@ -6,10 +6,11 @@
 
 use crate::constraints::{DofReduction, EdgeConstraint};
 use crate::material::OrthotropicMaterial;
-use crate::modal::{self, ModalError, Modes};
+use crate::modal::{ModalError, ModalSolver, Modes};
 use crate::shell::{self, Shell, ShellError};
 use crate::springs::{LowRankBlock, SpringError, SpringField};
 use faer::Mat;
+use std::sync::OnceLock;
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -50,6 +51,9 @@ pub struct AssembledModel {
     /// The spring coefficients the model was built with.
     pub spring_stiffness: Vec<Vec<f64>>,
     pub reduction: DofReduction,
+    /// Built on the first modal solve from the fields above (read-only after
+    /// assembly).
+    modal: OnceLock<Result<ModalSolver, ModalError>>,
 }
 
 impl ShellModel {
@@ -71,6 +75,7 @@ impl ShellModel {
             spring_blocks,
             spring_stiffness: self.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
             reduction: DofReduction::new(&self.shell, &self.constraints),
+            modal: OnceLock::new(),
         })
     }
 }
@@ -82,6 +87,17 @@ impl AssembledModel {
 
     /// `K_f + ΔK(κ)` for the given coefficients, one vector per spring field.
     pub fn stiffness_with(&self, kappa: &[Vec<f64>]) -> Result<Mat<f64>, ModelError> {
+        self.check_coefficient_counts(kappa)?;
+        let mut k = self.free_stiffness.clone();
+        for (blocks, coeffs) in self.spring_blocks.iter().zip(kappa) {
+            for (b, &c) in blocks.iter().zip(coeffs) {
+                b.add_scaled_to(&mut k, c);
+            }
+        }
+        Ok(k)
+    }
+
+    fn check_coefficient_counts(&self, kappa: &[Vec<f64>]) -> Result<(), ModelError> {
         if kappa.len() != self.spring_blocks.len() {
             return Err(ModelError::CoefficientCount {
                 field: kappa.len().min(self.spring_blocks.len()),
@@ -89,7 +105,6 @@ impl AssembledModel {
                 expected: self.spring_blocks.len(),
             });
         }
-        let mut k = self.free_stiffness.clone();
         for (field, (blocks, coeffs)) in self.spring_blocks.iter().zip(kappa).enumerate() {
             if coeffs.len() != blocks.len() {
                 return Err(ModelError::CoefficientCount {
@@ -98,11 +113,8 @@ impl AssembledModel {
                     expected: blocks.len(),
                 });
             }
-            for (b, &c) in blocks.iter().zip(coeffs) {
-                b.add_scaled_to(&mut k, c);
-            }
         }
-        Ok(k)
+        Ok(())
     }
 
     /// `K_f + ΔK` with the coefficients the model was built with.
@@ -113,8 +125,21 @@ impl AssembledModel {
 
     /// All modes for the given spring coefficients.
     pub fn modes_with(&self, kappa: &[Vec<f64>]) -> Result<Modes, ModelError> {
-        let k = self.stiffness_with(kappa)?;
-        Ok(modal::solve(&k, &self.mass, &self.reduction, &self.shell)?)
+        self.check_coefficient_counts(kappa)?;
+        let flat: Vec<f64> = kappa.iter().flatten().copied().collect();
+        let solver = self.modal_solver()?;
+        Ok(solver.modes(&flat, &self.reduction, &self.mass, &self.shell)?)
+    }
+
+    /// The prepared eigen-solver (see [`ModalSolver`]).
+    pub fn modal_solver(&self) -> Result<&ModalSolver, ModalError> {
+        self.modal
+            .get_or_init(|| {
+                let blocks: Vec<&LowRankBlock> = self.spring_blocks.iter().flatten().collect();
+                ModalSolver::new(&self.free_stiffness, &self.mass, &blocks, &self.reduction)
+            })
+            .as_ref()
+            .map_err(Clone::clone)
     }
 
     /// All modes with the model's own spring coefficients.

@@ -2,6 +2,7 @@
 
 mod common;
 mod frf;
+mod modal;
 mod shell;
 mod simulate;
 mod updating;
