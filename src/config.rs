@@ -66,6 +66,10 @@ pub struct OutputConfig {
     pub dir: Option<std::path::PathBuf>,
     /// State file (default `<dir>/state.json`).
     pub state_file: Option<std::path::PathBuf>,
+    /// Rerun `.rrd` file (relative to `dir`); none by default.
+    pub rerun_save: Option<std::path::PathBuf>,
+    /// A Rerun viewer to stream to, e.g. "rerun+http://127.0.0.1:9876/proxy".
+    pub rerun_connect: Option<String>,
 }
 
 /// `[frf]`: Welch FRF estimation from time series.

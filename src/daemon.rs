@@ -16,6 +16,7 @@
 use crate::config::Config;
 use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome};
 use crate::results::{self, ResultsWriter};
+use crate::viewer::{RerunOutput, RerunTargets};
 use crate::wire::{self, Encoding, Limits};
 use anyhow::{anyhow, Context, Result};
 use serde::Deserialize;
@@ -97,6 +98,8 @@ impl ZenohConfig {
 pub struct RunOptions {
     pub results: PathBuf,
     pub state: Option<PathBuf>,
+    /// Rerun outputs (none when empty).
+    pub rerun: RerunTargets,
 }
 
 /// What a run did.
@@ -131,6 +134,11 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         ..Limits::default()
     };
     let mut writer: ResultsWriter<BufWriter<File>> = ResultsWriter::create(&options.results, &prefix)?;
+    let mut viewer = if options.rerun.is_empty() {
+        None
+    } else {
+        Some(RerunOutput::open(&config, &options.rerun)?)
+    };
     let session = zenoh::open(config.zenoh.to_zenoh()?)
         .await
         .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
@@ -256,6 +264,9 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 running = None;
                 let outcome = outcome.context("the update worker panicked")?;
                 handle_outcome(&mut pipeline, &mut writer, &session, &prefix, &options, &latest, &outcome, &publish)?;
+                if let Some(v) = viewer.as_mut() {
+                    v.log_update(&outcome)?;
+                }
                 summary.updates.push(outcome);
                 if let Some(job) = waiting.take() {
                     running = Some(tokio::task::spawn_blocking(move || job.run()));
@@ -265,6 +276,9 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 pipeline.health_mut().queue_drops = pipeline.health().queue_drops.max(drops.load(Ordering::Relaxed));
                 let h = results::health_message(last_time, pipeline.health());
                 publish(&session, "health", &h);
+                if let Some(v) = viewer.as_mut() {
+                    v.log_health(last_time, pipeline.health())?;
+                }
                 notify_systemd(&[sd_notify::NotifyState::Watchdog]);
             }
         }
@@ -282,12 +296,19 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             &outcome,
             &publish,
         )?;
+        if let Some(v) = viewer.as_mut() {
+            v.log_update(&outcome)?;
+        }
         summary.updates.push(outcome);
     }
     pipeline.health_mut().queue_drops += drops.load(Ordering::Relaxed);
     let h = results::health_message(last_time, pipeline.health());
     writer.write("health", last_time, &h)?;
     writer.finish()?;
+    if let Some(mut v) = viewer.take() {
+        v.log_health(last_time, pipeline.health())?;
+        v.finish()?;
+    }
     notify_systemd(&[sd_notify::NotifyState::Stopping]);
     drop(queryable);
     drop(subscribers);

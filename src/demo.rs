@@ -7,6 +7,7 @@ use crate::config::Config;
 use crate::daemon::{self, Publisher, RunOptions, RunSummary};
 use crate::recording::read_recording;
 use crate::simulation::{parse_scenario, simulate, Excitation, SimulationOptions};
+use crate::viewer::RerunTargets;
 use crate::wire::{parse_timestamp, Encoding, Limits};
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -39,6 +40,10 @@ pub fn run_with_source(
     let options = RunOptions {
         results: out.join("results.mcap"),
         state: Some(out.join("state.json")),
+        rerun: RerunTargets {
+            save: Some(out.join("results.rrd")),
+            connect: cfg.output.rerun_connect.clone(),
+        },
     };
     let mut publisher_cfg = cfg.zenoh.clone();
     publisher_cfg.listen.clear();

@@ -17,4 +17,5 @@ pub mod recording;
 pub mod replay;
 pub mod results;
 pub mod simulation;
+pub mod viewer;
 pub mod wire;

@@ -162,6 +162,13 @@ enum Command {
         /// Warm-start from this state file if it exists, and keep it up to date.
         #[arg(long)]
         state: Option<PathBuf>,
+        /// Also write the Rerun recording here (.rrd; default: [output] rerun_save).
+        #[arg(long)]
+        rerun_save: Option<PathBuf>,
+        /// Also stream to this Rerun viewer (default: [output] rerun_connect),
+        /// e.g. rerun+http://127.0.0.1:9876/proxy.
+        #[arg(long)]
+        rerun_connect: Option<String>,
     },
     /// Run the monitoring daemon: zenoh ingest until SIGINT/SIGTERM.
     Run {
@@ -173,6 +180,13 @@ enum Command {
         /// Results MCAP (default: <output.dir>/results-<start time>.mcap).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Also write the Rerun recording here (.rrd; default: [output] rerun_save).
+        #[arg(long)]
+        rerun_save: Option<PathBuf>,
+        /// Also stream to this Rerun viewer (default: [output] rerun_connect),
+        /// e.g. rerun+http://127.0.0.1:9876/proxy.
+        #[arg(long)]
+        rerun_connect: Option<String>,
     },
     /// The whole live path in one process: the simulator publishes a bearing-damage
     /// scenario over zenoh on loopback at high speed, the daemon updates the model.
@@ -466,6 +480,8 @@ fn run(cli: Cli) -> Result<()> {
             input,
             out,
             state,
+            rerun_save,
+            rerun_connect,
         } => {
             let cfg = commands::load_config(&config)?;
             let out = out.unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
@@ -475,6 +491,12 @@ fn run(cli: Cli) -> Result<()> {
                 None => None,
             };
             let mut writer = splinewatch::results::ResultsWriter::create(&out, &cfg.topic_prefix())?;
+            let targets = splinewatch::viewer::targets(&cfg, rerun_save.as_deref(), rerun_connect.as_deref());
+            let mut viewer = if targets.is_empty() {
+                None
+            } else {
+                Some(splinewatch::viewer::RerunOutput::open(&cfg, &targets)?)
+            };
             let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
             let bar = indicatif::ProgressBar::new(0);
             if !terminal {
@@ -486,8 +508,14 @@ fn run(cli: Cli) -> Result<()> {
                     .progress_chars("=> "),
             );
             let t0 = std::time::Instant::now();
-            let summary =
-                splinewatch::replay::replay(&cfg, &bytes, initial, &mut writer, state.as_deref(), &mut |p, note| {
+            let summary = splinewatch::replay::replay(
+                &cfg,
+                &bytes,
+                initial,
+                &mut writer,
+                viewer.as_mut(),
+                state.as_deref(),
+                &mut |p, note| {
                     bar.set_length(p.total);
                     bar.set_position(p.messages);
                     if let Some(n) = note {
@@ -497,9 +525,13 @@ fn run(cli: Cli) -> Result<()> {
                             eprintln!("{n}");
                         }
                     }
-                })?;
+                },
+            )?;
             bar.finish_and_clear();
             writer.finish()?;
+            if let Some(v) = viewer {
+                v.finish()?;
+            }
             let seconds = t0.elapsed().as_secs_f64();
             let span = summary.windows.len() as f64 * cfg.frf.window_seconds;
             eprintln!(
@@ -522,7 +554,13 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
         }
-        Command::Run { config, state, out } => {
+        Command::Run {
+            config,
+            state,
+            out,
+            rerun_save,
+            rerun_connect,
+        } => {
             let cfg = commands::load_config(&config)?;
             let dir = cfg.output_dir();
             let state = state
@@ -536,6 +574,7 @@ fn run(cli: Cli) -> Result<()> {
             )
             .replace(':', "-");
             let out = out.unwrap_or_else(|| dir.join(format!("results-{stamp}.mcap")));
+            let rerun = splinewatch::viewer::targets(&cfg, rerun_save.as_deref(), rerun_connect.as_deref());
             tracing::info!(message = "effective configuration", config = ?cfg);
             let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
             let summary = runtime.block_on(splinewatch::daemon::run(
@@ -543,6 +582,7 @@ fn run(cli: Cli) -> Result<()> {
                 splinewatch::daemon::RunOptions {
                     results: out.clone(),
                     state: Some(state),
+                    rerun,
                 },
                 splinewatch::daemon::termination_signal(),
             ))?;

@@ -21,6 +21,7 @@ use crate::frf_json::{FrfEntry, FrfFile};
 use crate::wire::{ChannelBlock, ChannelQuantity, WireError};
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
+use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::Quantity;
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::updating::{Parameter, UpdateProblem, UpdateResult, UpdateSettings};
@@ -142,6 +143,9 @@ pub struct UpdateReport {
     pub modes: Vec<(f64, f64, ModeKind)>,
     /// `|h_x - h_a| / |h_x|` per FRF and line.
     pub residue: Vec<Vec<f64>>,
+    /// The identified spring coefficients (per field) and damping curve.
+    pub kappa: Vec<Vec<f64>>,
+    pub damping: DampingCurve,
 }
 
 impl UpdateJob {
@@ -215,6 +219,8 @@ impl UpdateJob {
             },
             modes,
             residue,
+            kappa,
+            damping,
         })
     }
 }

@@ -5,6 +5,7 @@
 use crate::config::Config;
 use crate::pipeline::{AcceptedParameters, Pipeline, UpdateOutcome, WindowReport};
 use crate::results::{self, ResultsWriter};
+use crate::viewer::RerunOutput;
 use crate::wire::{self, Encoding, Limits};
 use anyhow::{Context, Result};
 use std::io::{Seek, Write};
@@ -25,13 +26,14 @@ pub struct ReplaySummary {
     pub accepted: Option<AcceptedParameters>,
 }
 
-/// Replays `bytes` (an MCAP recording) into `out`; saves the state after
-/// every accepted update when `state_path` is given.
+/// Replays `bytes` (an MCAP recording) into `out` (and `viewer`, if any);
+/// saves the state after every accepted update when `state_path` is given.
 pub fn replay<W: Write + Seek>(
     config: &Config,
     bytes: &[u8],
     initial: Option<AcceptedParameters>,
     out: &mut ResultsWriter<W>,
+    mut viewer: Option<&mut RerunOutput>,
     state_path: Option<&Path>,
     progress: &mut dyn FnMut(Progress, Option<&str>),
 ) -> Result<ReplaySummary> {
@@ -109,6 +111,10 @@ pub fn replay<W: Write + Seek>(
                     outcome.time_ns,
                     &results::health_message(outcome.time_ns, pipeline.health()),
                 )?;
+                if let Some(v) = viewer.as_deref_mut() {
+                    v.log_update(&outcome)?;
+                    v.log_health(outcome.time_ns, pipeline.health())?;
+                }
                 progress(
                     Progress {
                         messages: summary.messages,
@@ -134,6 +140,9 @@ pub fn replay<W: Write + Seek>(
         last_time,
         &results::health_message(last_time, pipeline.health()),
     )?;
+    if let Some(v) = viewer {
+        v.log_health(last_time, pipeline.health())?;
+    }
     summary.accepted = pipeline.accepted().cloned();
     Ok(summary)
 }

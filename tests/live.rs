@@ -67,6 +67,9 @@ fn live_zenoh_run_tracks_a_bearing_damage() {
             value(last, name)
         );
     }
+    // The demo's Rerun recording is finalised and has the trends.
+    let rrd = splinewatch::viewer::inspect_rrd(&std::fs::read(out.join("results.rrd")).unwrap()).unwrap();
+    assert!(rrd.footer && rrd.entities.contains("/residual/relative"));
     // Every output channel is in the results file, which is finalised.
     let bytes = std::fs::read(out.join("results.mcap")).unwrap();
     let s = mcap::Summary::read(&bytes)
@@ -96,7 +99,7 @@ fn live_and_replay_agree_on_the_bundled_recording() {
     let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
     let bytes = std::fs::read(&recording).unwrap();
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let offline = replay(&cfg, &bytes, None, &mut writer, None, &mut |_, _| {}).unwrap();
+    let offline = replay(&cfg, &bytes, None, &mut writer, None, None, &mut |_, _| {}).unwrap();
     assert_eq!(live.updates.len(), offline.updates.len());
     let params = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
         u.result
@@ -140,6 +143,8 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
                 "--out",
             ])
             .arg(dir.join(results))
+            .arg("--rerun-save")
+            .arg(dir.join(results).with_extension("rrd"))
             .env("RUST_LOG", "info,zenoh=warn")
             .stderr(Stdio::piped())
             .spawn()
@@ -184,6 +189,14 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
     assert!(summary.stats.unwrap().message_count > 0);
     let saved = load_state(&state).unwrap().expect("state file");
     assert_eq!(saved.parameters.len(), 15);
+    // The .rrd is complete (footer) and holds the update.
+    let rrd = splinewatch::viewer::inspect_rrd(&std::fs::read(dir.join("first.rrd")).unwrap()).unwrap();
+    assert!(rrd.footer, "the .rrd was not finalised");
+    assert!(
+        rrd.entities.contains("/parameters/springs/east.k2"),
+        "{:?}",
+        rrd.entities
+    );
     // Restart: the daemon warm-starts from the state and again stops cleanly.
     let again = start("second.mcap");
     std::thread::sleep(std::time::Duration::from_millis(1500));

@@ -19,7 +19,7 @@ fn run(cfg: &Config, state: Option<&Path>) -> (Vec<u8>, splinewatch::replay::Rep
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let initial = state.and_then(|p| load_state(p).unwrap());
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let summary = replay(cfg, &bytes, initial, &mut writer, state, &mut |_, _| {}).unwrap();
+    let summary = replay(cfg, &bytes, initial, &mut writer, None, state, &mut |_, _| {}).unwrap();
     (writer.finish().unwrap().into_inner(), summary)
 }
 
@@ -119,4 +119,69 @@ fn time_based_scheduling_updates_every_t_minutes() {
     // 20 s windows end at 20, 40, … 120 s: updates at 60 s (≥ 54 s) and 120 s (≥ 60 + 54 s).
     let windows: Vec<u64> = summary.updates.iter().map(|u| u.window).collect();
     assert_eq!(windows, vec![2, 5]);
+}
+
+#[test]
+fn replay_writes_a_rerun_recording_with_every_view() {
+    let cfg = config();
+    let dir = std::env::temp_dir().join(format!("splinewatch-rrd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("replay.rrd");
+    let targets = splinewatch::viewer::RerunTargets {
+        save: Some(path.clone()),
+        connect: None,
+    };
+    let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let summary = replay(&cfg, &bytes, None, &mut writer, Some(&mut viewer), None, &mut |_, _| {}).unwrap();
+    viewer.finish().unwrap();
+    assert!(summary.updates.iter().any(|u| u.result.is_ok()));
+    // Read back with Rerun's own decoder: complete (footer) and holding the
+    // trends, the latest FRFs, ζ(f), the deck, the modes and the health.
+    let rrd = splinewatch::viewer::inspect_rrd(&std::fs::read(&path).unwrap()).unwrap();
+    assert!(rrd.footer, "the .rrd footer is missing");
+    let mut expected: Vec<String> = summary.updates[0]
+        .result
+        .as_ref()
+        .unwrap()
+        .result
+        .parameters
+        .iter()
+        .map(|p| {
+            let group = if p.name.starts_with("damping.") {
+                "damping"
+            } else {
+                "springs"
+            };
+            format!("/parameters/{group}/{}", p.name)
+        })
+        .collect();
+    for sensor in ["P2", "P12"] {
+        for what in ["magnitude", "phase"] {
+            for which in ["measured", "model"] {
+                expected.push(format!("/frf/{sensor}/{what}/{which}"));
+            }
+        }
+    }
+    expected.extend(
+        [
+            "/residual/relative",
+            "/damping/zeta",
+            "/deck/springs",
+            "/deck/sensors",
+            "/modes/1",
+            "/modes/4",
+            "/health/blocks",
+            "/health/queue_drops",
+        ]
+        .map(String::from),
+    );
+    for entity in &expected {
+        assert!(
+            rrd.entities.contains(entity),
+            "{entity} missing from {:?}",
+            rrd.entities
+        );
+    }
 }
