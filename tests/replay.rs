@@ -185,3 +185,59 @@ fn replay_writes_a_rerun_recording_with_every_view() {
         );
     }
 }
+
+/// `--rerun-connect`: the stream reaches a real Rerun server over gRPC (the
+/// `rerun` CLI of rerun-sdk 0.36.3, which saves what it receives).
+#[cfg(unix)]
+#[test]
+fn replay_streams_to_a_rerun_server_over_grpc() {
+    use std::process::{Command, Stdio};
+    let cfg = config();
+    let dir = std::env::temp_dir().join(format!("splinewatch-grpc-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let received = dir.join("received.rrd");
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let server = Command::new("rerun")
+        .args(["--port", &port.to_string(), "--save"])
+        .arg(&received)
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("the `rerun` CLI (pip install rerun-sdk==0.36.3, see README set-up)");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(std::time::Instant::now() < deadline, "the Rerun server did not start");
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let targets = splinewatch::viewer::RerunTargets {
+        save: None,
+        connect: Some(format!("rerun+http://127.0.0.1:{port}/proxy")),
+    };
+    let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    replay(&cfg, &bytes, None, &mut writer, Some(&mut viewer), None, &mut |_, _| {}).unwrap();
+    viewer.finish().unwrap();
+    let status = Command::new("kill")
+        .args(["-INT", &server.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    server.wait_with_output().unwrap();
+    let rrd = splinewatch::viewer::inspect_rrd(&std::fs::read(&received).unwrap()).unwrap();
+    for entity in [
+        "/parameters/springs/east.k2",
+        "/frf/P12/magnitude/model",
+        "/deck/springs",
+    ] {
+        assert!(
+            rrd.entities.contains(entity),
+            "{entity} not received: {:?}",
+            rrd.entities
+        );
+    }
+}
