@@ -21,7 +21,7 @@ fn replay_bundled_recording(bencher: divan::Bencher) {
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-        replay(&cfg, &bytes, None, &mut w, None, None, &mut |_, _| {}).unwrap()
+        replay(&cfg, &[&bytes], None, &mut w, None, None, &mut |_, _| {}).unwrap()
     });
 }
 

@@ -70,6 +70,8 @@ pub struct OutputConfig {
     pub rerun_save: Option<std::path::PathBuf>,
     /// A Rerun viewer to stream to, e.g. "rerun+http://127.0.0.1:9876/proxy".
     pub rerun_connect: Option<String>,
+    /// `[output.raw]`: optional raw-input recording.
+    pub raw: crate::recorder::RawRecordingConfig,
 }
 
 /// `[frf]`: Welch FRF estimation from time series.
@@ -676,6 +678,19 @@ impl Config {
         self.update_settings()?;
         // The sampling rate is only known from the data; check with a nominal one.
         self.welch_settings(256.0)?;
+        let raw = &self.output.raw;
+        if !(raw.rotate_minutes.is_finite() && raw.rotate_minutes > 0.0) {
+            return Err(err(
+                "output.raw.rotate_minutes",
+                format!("must be a positive number of minutes, got {}", raw.rotate_minutes),
+            ));
+        }
+        if !(raw.rotate_megabytes.is_finite() && raw.rotate_megabytes >= 0.01) {
+            return Err(err(
+                "output.raw.rotate_megabytes",
+                format!("must be at least 0.01, got {}", raw.rotate_megabytes),
+            ));
+        }
         Ok(())
     }
 

@@ -15,6 +15,7 @@
 
 use crate::config::Config;
 use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome};
+use crate::recorder::RawRecorder;
 use crate::results::{self, ResultsWriter};
 use crate::viewer::{RerunOutput, RerunTargets};
 use crate::wire::{self, Encoding, Limits};
@@ -139,6 +140,13 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     } else {
         Some(RerunOutput::open(&config, &options.rerun)?)
     };
+    let mut recorder = if config.output.raw.enabled {
+        let dir = config.output_dir().join(&config.output.raw.dir);
+        tracing::info!(message = "recording raw input", dir = %dir.display());
+        Some(RawRecorder::new(&dir, &prefix, &config.output.raw)?)
+    } else {
+        None
+    };
     let session = zenoh::open(config.zenoh.to_zenoh()?)
         .await
         .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
@@ -239,6 +247,16 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                     }
                 };
                 for block in blocks {
+                    if let Some(r) = recorder.as_mut() {
+                        if let Err(e) = r.record(&block) {
+                            let h = pipeline.health_mut();
+                            h.recording_errors += 1;
+                            // Rate-limited: the first error, then every 1000th.
+                            if h.recording_errors % 1000 == 1 {
+                                tracing::warn!(message = "raw-input recording failed; analysis continues", errors = h.recording_errors, error = %format!("{e:#}"));
+                            }
+                        }
+                    }
                     let (windows, jobs) = pipeline.ingest(block);
                     for w in &windows {
                         last_time = w.end_ns;
@@ -302,6 +320,12 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         summary.updates.push(outcome);
     }
     pipeline.health_mut().queue_drops += drops.load(Ordering::Relaxed);
+    if let Some(mut r) = recorder.take() {
+        if let Err(e) = r.close() {
+            pipeline.health_mut().recording_errors += 1;
+            tracing::warn!(message = "cannot finish the raw-input recording", error = %format!("{e:#}"));
+        }
+    }
     let h = results::health_message(last_time, pipeline.health());
     writer.write("health", last_time, &h)?;
     writer.finish()?;

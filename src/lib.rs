@@ -13,6 +13,7 @@ pub mod estimate;
 pub mod frf_json;
 pub mod paper;
 pub mod pipeline;
+pub mod recorder;
 pub mod recording;
 pub mod replay;
 pub mod results;

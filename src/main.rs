@@ -150,12 +150,13 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Run the monitoring pipeline over a raw-input recording as fast as the CPU allows.
+    /// Run the monitoring pipeline over raw-input recordings as fast as the CPU allows.
     Replay {
         #[arg(long)]
         config: PathBuf,
-        /// Recording (MCAP).
-        input: PathBuf,
+        /// Recordings (MCAP), replayed in the order given (e.g. a daemon's rotated raw files).
+        #[arg(required = true)]
+        inputs: Vec<PathBuf>,
         /// Results MCAP (default: <output.dir>/replay-results.mcap).
         #[arg(long)]
         out: Option<PathBuf>,
@@ -477,7 +478,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Replay {
             config,
-            input,
+            inputs,
             out,
             state,
             rerun_save,
@@ -485,7 +486,11 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let cfg = commands::load_config(&config)?;
             let out = out.unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
-            let bytes = std::fs::read(&input).with_context(|| format!("cannot read {}", input.display()))?;
+            let files = inputs
+                .iter()
+                .map(|p| std::fs::read(p).with_context(|| format!("cannot read {}", p.display())))
+                .collect::<Result<Vec<_>>>()?;
+            let recordings: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
             let initial = match &state {
                 Some(p) => splinewatch::results::load_state(p)?,
                 None => None,
@@ -510,7 +515,7 @@ fn run(cli: Cli) -> Result<()> {
             let t0 = std::time::Instant::now();
             let summary = splinewatch::replay::replay(
                 &cfg,
-                &bytes,
+                &recordings,
                 initial,
                 &mut writer,
                 viewer.as_mut(),

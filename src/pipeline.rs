@@ -75,6 +75,10 @@ pub struct Health {
     pub update_runs: u64,
     pub update_failures: u64,
     pub queue_drops: u64,
+    /// Raw-input recording errors (write failures, full disk); the block
+    /// is still analysed.
+    #[serde(default)]
+    pub recording_errors: u64,
 }
 
 impl Health {

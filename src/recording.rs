@@ -66,8 +66,9 @@ impl<W: Write + Seek> RecordingWriter<W> {
         })
     }
 
-    /// Appends one block on its topic under `prefix`.
-    pub fn write_block(&mut self, prefix: &str, block: &ChannelBlock) -> Result<()> {
+    /// Appends one block on its topic under `prefix`; returns the size of
+    /// the encoded message in bytes.
+    pub fn write_block(&mut self, prefix: &str, block: &ChannelBlock) -> Result<usize> {
         let topic = block.topic(prefix);
         let channel_id = match self.channels.get(&topic) {
             Some(&id) => id,
@@ -87,6 +88,7 @@ impl<W: Write + Seek> RecordingWriter<W> {
         };
         let log_time = u64::try_from(block.start_ns).context("block timestamps before 1970 cannot be recorded")?;
         self.sequence = self.sequence.wrapping_add(1);
+        let data = wire::encode(block, self.encoding);
         self.writer
             .write_to_known_channel(
                 &mcap::records::MessageHeader {
@@ -95,10 +97,10 @@ impl<W: Write + Seek> RecordingWriter<W> {
                     log_time,
                     publish_time: log_time,
                 },
-                &wire::encode(block, self.encoding),
+                &data,
             )
             .with_context(|| format!("cannot write to {topic}"))?;
-        Ok(())
+        Ok(data.len())
     }
 
     /// Writes the summary and index; the file is complete after this.

@@ -26,11 +26,12 @@ pub struct ReplaySummary {
     pub accepted: Option<AcceptedParameters>,
 }
 
-/// Replays `bytes` (an MCAP recording) into `out` (and `viewer`, if any);
-/// saves the state after every accepted update when `state_path` is given.
+/// Replays `recordings` (MCAP files, in order: e.g. the rotated raw-input
+/// files of a daemon) into `out` (and `viewer`, if any); saves the state
+/// after every accepted update when `state_path` is given.
 pub fn replay<W: Write + Seek>(
     config: &Config,
-    bytes: &[u8],
+    recordings: &[&[u8]],
     initial: Option<AcceptedParameters>,
     out: &mut ResultsWriter<W>,
     mut viewer: Option<&mut RerunOutput>,
@@ -42,14 +43,22 @@ pub fn replay<W: Write + Seek>(
         max_samples: config.frf.max_block_samples,
         ..Limits::default()
     };
-    let total = mcap::Summary::read(bytes)
-        .ok()
-        .flatten()
-        .and_then(|s| s.stats.map(|st| st.message_count))
-        .unwrap_or(0);
+    let total = recordings
+        .iter()
+        .map(|bytes| {
+            mcap::Summary::read(bytes)
+                .ok()
+                .flatten()
+                .and_then(|s| s.stats.map(|st| st.message_count))
+                .unwrap_or(0)
+        })
+        .sum();
     let mut summary = ReplaySummary::default();
     let mut last_time: i128 = 0;
-    for message in mcap::MessageStream::new(bytes).context("not a readable MCAP file")? {
+    let messages = recordings.iter().enumerate().map(|(k, bytes)| {
+        mcap::MessageStream::new(bytes).with_context(|| format!("recording {}: not a readable MCAP file", k + 1))
+    });
+    for message in messages.collect::<Result<Vec<_>>>()?.into_iter().flatten() {
         let message = message.context("corrupt MCAP record")?;
         summary.messages += 1;
         let topic = &message.channel.topic;

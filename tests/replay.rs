@@ -19,7 +19,7 @@ fn run(cfg: &Config, state: Option<&Path>) -> (Vec<u8>, splinewatch::replay::Rep
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let initial = state.and_then(|p| load_state(p).unwrap());
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let summary = replay(cfg, &bytes, initial, &mut writer, None, state, &mut |_, _| {}).unwrap();
+    let summary = replay(cfg, &[&bytes], initial, &mut writer, None, state, &mut |_, _| {}).unwrap();
     (writer.finish().unwrap().into_inner(), summary)
 }
 
@@ -134,7 +134,16 @@ fn replay_writes_a_rerun_recording_with_every_view() {
     let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let summary = replay(&cfg, &bytes, None, &mut writer, Some(&mut viewer), None, &mut |_, _| {}).unwrap();
+    let summary = replay(
+        &cfg,
+        &[&bytes],
+        None,
+        &mut writer,
+        Some(&mut viewer),
+        None,
+        &mut |_, _| {},
+    )
+    .unwrap();
     viewer.finish().unwrap();
     assert!(summary.updates.iter().any(|u| u.result.is_ok()));
     // Read back with Rerun's own decoder: complete (footer) and holding the
@@ -220,7 +229,16 @@ fn replay_streams_to_a_rerun_server_over_grpc() {
     let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    replay(&cfg, &bytes, None, &mut writer, Some(&mut viewer), None, &mut |_, _| {}).unwrap();
+    replay(
+        &cfg,
+        &[&bytes],
+        None,
+        &mut writer,
+        Some(&mut viewer),
+        None,
+        &mut |_, _| {},
+    )
+    .unwrap();
     viewer.finish().unwrap();
     let status = Command::new("kill")
         .args(["-INT", &server.id().to_string()])
