@@ -79,7 +79,10 @@ impl ZenohConfig {
                 .map_err(|e| anyhow!("config: zenoh: {key} = {value}: {e}"))
         };
         set(&mut cfg, "mode", format!("{:?}", self.mode))?;
-        if !self.listen.is_empty() {
+        // A client talks to its router and does not listen: the peer-mode
+        // default endpoint is not applied in client mode (explicit ones are).
+        let default_listen = self.mode == "client" && self.listen == Self::default().listen;
+        if !self.listen.is_empty() && !default_listen {
             set(&mut cfg, "listen/endpoints", serde_json::to_string(&self.listen)?)?;
         }
         if !self.connect.is_empty() {

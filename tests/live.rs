@@ -300,3 +300,96 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
         assert_eq!(values(a), values(b), "window {}", a.window);
     }
 }
+
+/// Client mode through a real zenoh router (in-process, router mode, on
+/// loopback): the daemon and the logger both connect to the router only.
+#[cfg(unix)]
+#[test]
+fn client_mode_through_a_zenoh_router() {
+    use std::process::{Command, Stdio};
+    use zenoh::Wait;
+    let dir = temp("router");
+    std::fs::create_dir_all(&dir).unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let mut router_cfg = zenoh::Config::default();
+    router_cfg.insert_json5("mode", "\"router\"").unwrap();
+    router_cfg
+        .insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]"))
+        .unwrap();
+    router_cfg.insert_json5("scouting/multicast/enabled", "false").unwrap();
+    let router = zenoh::open(router_cfg).wait().unwrap();
+    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
+        + &format!("\n[zenoh]\nmode = \"client\"\nconnect = [\"{endpoint}\"]\nmulticast_scouting = false\n");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, text).unwrap();
+    let state = dir.join("state.json");
+    let daemon = KillOnDrop(Some(
+        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args([
+                "run",
+                "--config",
+                config.to_str().unwrap(),
+                "--state",
+                state.to_str().unwrap(),
+                "--out",
+            ])
+            .arg(dir.join("results.mcap"))
+            .env("RUST_LOG", "info,zenoh=warn")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    ));
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let cfg = commands::load_config(&config).unwrap();
+    let mut publisher =
+        splinewatch::daemon::Publisher::open(&cfg.zenoh, cfg.topic_prefix(), splinewatch::wire::Encoding::Cbor, 20.0)
+            .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    for b in &blocks {
+        publisher.publish(&b.block).unwrap();
+    }
+    publisher.close().unwrap();
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !state.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    let daemon = daemon.take();
+    let status = Command::new("kill")
+        .args(["-TERM", &daemon.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = daemon.wait_with_output().unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{log}");
+    assert!(state.exists(), "no update arrived through the router\n{log}");
+    let saved = load_state(&state).unwrap().unwrap();
+    assert_eq!(saved.parameters.len(), 15);
+    router.close().wait().unwrap();
+}
+
+/// Kills a child process when a failing test unwinds past it.
+struct KillOnDrop(Option<std::process::Child>);
+
+impl KillOnDrop {
+    fn take(mut self) -> std::process::Child {
+        self.0.take().expect("taken once")
+    }
+}
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        if let Some(child) = self.0.as_mut() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
