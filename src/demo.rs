@@ -6,9 +6,9 @@ use crate::commands;
 use crate::config::Config;
 use crate::daemon::{self, Publisher, RunOptions, RunSummary};
 use crate::recording::read_recording;
-use crate::simulation::{parse_scenario, simulate, Excitation, SimulationOptions};
+use crate::simulation::{parse_scenario, simulate, SimulationOptions};
 use crate::viewer::RerunTargets;
-use crate::wire::{parse_timestamp, Encoding, Limits};
+use crate::wire::{Encoding, Limits};
 use anyhow::{Context, Result};
 use std::path::Path;
 
@@ -88,17 +88,8 @@ pub fn run_live(config_path: &Path, out: &Path, duration: f64, speed: f64, seed:
     let scenario = parse_scenario(&demo_scenario(duration))?;
     run_with_source(cfg, out, speed, move |cfg, publisher| {
         let options = SimulationOptions {
-            duration_seconds: duration,
-            fs: 256.0,
-            seed,
-            excitation: Excitation::Random,
-            force_rms: 1000.0,
-            noise: 0.02,
-            block_seconds: 1.0,
-            start_ns: parse_timestamp("2026-11-21T10:00:00Z").expect("valid"),
-            band: (cfg.frf.band[0].max(0.1), cfg.frf.band[1] * 1.1),
-            oversample: 16,
             scenario: Some(scenario),
+            ..SimulationOptions::random_excitation(cfg, duration, seed)
         };
         let mut sent = 0;
         simulate(cfg, &options, &mut |block| {

@@ -92,6 +92,27 @@ pub struct SimulationOptions {
     pub scenario: Option<Scenario>,
 }
 
+impl SimulationOptions {
+    /// The usual test and demo run: band-limited random force (1 kN RMS) over
+    /// the config's FRF band + 10 %, 2 % noise, 256 Hz, one-second blocks,
+    /// starting 2026-11-21T10:00:00Z, no scenario.
+    pub fn random_excitation(config: &Config, duration_seconds: f64, seed: u64) -> Self {
+        Self {
+            duration_seconds,
+            fs: 256.0,
+            seed,
+            excitation: Excitation::Random,
+            force_rms: 1000.0,
+            noise: 0.02,
+            block_seconds: 1.0,
+            start_ns: 1_795_255_200_000_000_000,
+            band: (config.frf.band[0].max(0.1), config.frf.band[1] * 1.1),
+            oversample: 16,
+            scenario: None,
+        }
+    }
+}
+
 /// What the simulation produced.
 #[derive(Debug, Clone, Default)]
 pub struct SimulationSummary {

@@ -5,7 +5,7 @@ use splinewatch::commands;
 use splinewatch::config::Config;
 use splinewatch::estimate::estimate;
 use splinewatch::recording::{read_recording, RecordedBlock, RecordingWriter};
-use splinewatch::simulation::{parse_scenario, simulate, Excitation, SimulationOptions};
+use splinewatch::simulation::{parse_scenario, simulate, SimulationOptions};
 use splinewatch::wire::{parse_timestamp, ChannelQuantity, Encoding, Limits};
 use std::io::Cursor;
 use std::path::Path;
@@ -15,19 +15,7 @@ fn config() -> Config {
 }
 
 fn options(seconds: f64, seed: u64) -> SimulationOptions {
-    SimulationOptions {
-        duration_seconds: seconds,
-        fs: 256.0,
-        seed,
-        excitation: Excitation::Random,
-        force_rms: 1000.0,
-        noise: 0.02,
-        block_seconds: 1.0,
-        start_ns: parse_timestamp("2026-11-21T10:00:00Z").unwrap(),
-        band: (0.5, 88.0),
-        oversample: 16,
-        scenario: None,
-    }
+    SimulationOptions::random_excitation(&config(), seconds, seed)
 }
 
 /// Simulates into an in-memory MCAP file.
