@@ -237,6 +237,16 @@ impl RerunOutput {
                     .with_widths([((f1 - f0) / (n - 1) as f64) as f32]),
             )
             .map_err(rerun_error)?;
+        let at = report.damping.coefficient_frequencies();
+        let gamma: Vec<f64> = report.damping.coefficients().iter().map(|g| 100.0 * g).collect();
+        self.rec
+            .log(
+                "damping/coefficients",
+                &rerun::BarChart::new(gamma.as_slice())
+                    .with_abscissa(at.as_slice())
+                    .with_widths([((f1 - f0) / (4 * gamma.len().max(1)) as f64) as f32]),
+            )
+            .map_err(rerun_error)?;
         // The identified spring field on the deck.
         let r33 = self.grid.spring_field(&self.model, &report.kappa);
         let top = r33.iter().copied().fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);

@@ -177,6 +177,7 @@ fn replay_writes_a_rerun_recording_with_every_view() {
         [
             "/residual/relative",
             "/damping/zeta",
+            "/damping/coefficients",
             "/deck/springs",
             "/deck/sensors",
             "/modes/1",

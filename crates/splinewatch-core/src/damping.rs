@@ -68,6 +68,13 @@ impl DampingCurve {
         self.knots.degree()
     }
 
+    /// Greville abscissa of each coefficient in Hz: where γ_z "sits" on the
+    /// curve (for plotting the control polygon).
+    pub fn coefficient_frequencies(&self) -> Vec<f64> {
+        let (f0, f1) = self.band();
+        self.knots.greville().iter().map(|u| f0 + (f1 - f0) * u).collect()
+    }
+
     pub fn band(&self) -> (f64, f64) {
         (self.f_start, self.f_end)
     }
