@@ -368,6 +368,7 @@ fn handle_outcome(
             }
         }
     }
+    writer.flush()?;
     match &outcome.result {
         Ok(r) => {
             tracing::info!(

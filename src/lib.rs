@@ -15,6 +15,7 @@ pub mod paper;
 pub mod pipeline;
 pub mod recorder;
 pub mod recording;
+pub mod recover;
 pub mod replay;
 pub mod results;
 pub mod simulation;

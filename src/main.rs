@@ -204,6 +204,16 @@ enum Command {
         #[arg(long, default_value_t = 40.0)]
         speed: f64,
     },
+    /// Salvage an MCAP file left unfinished by a killed process (results,
+    /// raw-input `.part` files): copies every message of every complete chunk
+    /// into a new, finalised file.
+    Recover {
+        /// The damaged file.
+        input: PathBuf,
+        /// Output (default: INPUT with `.recovered.mcap`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Validate a configuration file without running anything.
     CheckConfig {
         /// Configuration file (TOML).
@@ -475,6 +485,39 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 None => println!("{text}"),
             }
+        }
+        Command::Recover { input, out } => {
+            let bytes = std::fs::read(&input).with_context(|| format!("cannot read {}", input.display()))?;
+            let out = out.unwrap_or_else(|| {
+                let name = input
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                let stem = name.trim_end_matches(".part").trim_end_matches(".mcap");
+                input.with_file_name(format!("{stem}.recovered.mcap"))
+            });
+            let file = std::fs::File::create(&out).with_context(|| format!("cannot create {}", out.display()))?;
+            let (report, w) = splinewatch::recover::recover(&bytes, std::io::BufWriter::new(file))
+                .with_context(|| format!("recovering {}", input.display()))?;
+            w.into_inner()
+                .map_err(|e| anyhow::anyhow!("cannot write {}: {}", out.display(), e.error()))?
+                .sync_all()?;
+            eprintln!(
+                "{}: {} messages on {} channels recovered into {}{}{}",
+                input.display(),
+                report.messages,
+                report.channels,
+                out.display(),
+                if report.was_complete {
+                    " (the input was already complete)"
+                } else {
+                    ""
+                },
+                report
+                    .stopped_at
+                    .map(|e| format!("; stopped at a damaged record: {e}"))
+                    .unwrap_or_default()
+            );
         }
         Command::Replay {
             config,

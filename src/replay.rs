@@ -112,6 +112,7 @@ pub fn replay<W: Write + Seek>(
                         outcome.window
                     ),
                 };
+                out.flush()?;
                 if let (Some(path), Some(state), Ok(_)) = (state_path, pipeline.accepted(), &outcome.result) {
                     results::save_state(path, state)?;
                 }

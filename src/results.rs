@@ -188,6 +188,12 @@ impl<W: Write + Seek> ResultsWriter<W> {
         Ok(())
     }
 
+    /// Closes the current chunk and hands it to the OS: a process killed
+    /// after this loses nothing written before it (see `recover`).
+    pub fn flush(&mut self) -> Result<()> {
+        self.writer.flush().context("cannot flush the results MCAP file")
+    }
+
     pub fn finish(mut self) -> Result<W> {
         self.writer.finish().context("cannot finish the results MCAP file")?;
         Ok(self.writer.into_inner())
