@@ -16,7 +16,7 @@
 use crate::config::Config;
 use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome};
 use crate::recorder::RawRecorder;
-use crate::results::{self, ResultsWriter};
+use crate::results::{self, ResultsSink};
 use crate::viewer::{RerunOutput, RerunTargets};
 use crate::wire::{self, Encoding, Limits};
 use anyhow::{anyhow, Context, Result};
@@ -137,7 +137,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         max_samples: config.frf.max_block_samples,
         ..Limits::default()
     };
-    let mut writer: ResultsWriter<BufWriter<File>> = ResultsWriter::create(&options.results, &prefix)?;
+    let mut writer = ResultsSink::new(&prefix, results::results_files(&options.results))?;
     let mut viewer = if options.rerun.is_empty() {
         None
     } else {
@@ -264,7 +264,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                     for w in &windows {
                         last_time = w.end_ns;
                         let m = results::window_message(w);
-                        writer.write("windows", w.end_ns, &m)?;
+                        writer.write("windows", w.end_ns, &m);
                         publish(&session, "windows", &m);
                         summary.windows += 1;
                         match &w.skipped {
@@ -295,7 +295,9 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             }
             _ = health_timer.tick() => {
                 pipeline.health_mut().queue_drops = pipeline.health().queue_drops.max(drops.load(Ordering::Relaxed));
+                pipeline.health_mut().results_errors = writer.errors;
                 let h = results::health_message(last_time, pipeline.health());
+                writer.write("health", last_time, &h);
                 publish(&session, "health", &h);
                 if let Some(v) = viewer.as_mut() {
                     v.log_health(last_time, pipeline.health())?;
@@ -329,9 +331,10 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             tracing::warn!(message = "cannot finish the raw-input recording", error = %format!("{e:#}"));
         }
     }
+    pipeline.health_mut().results_errors = writer.errors;
     let h = results::health_message(last_time, pipeline.health());
-    writer.write("health", last_time, &h)?;
-    writer.finish()?;
+    writer.write("health", last_time, &h);
+    writer.finish();
     if let Some(mut v) = viewer.take() {
         v.log_health(last_time, pipeline.health())?;
         v.finish()?;
@@ -350,7 +353,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
 #[allow(clippy::too_many_arguments)]
 fn handle_outcome(
     pipeline: &mut Pipeline,
-    writer: &mut ResultsWriter<BufWriter<File>>,
+    writer: &mut ResultsSink<BufWriter<File>>,
     session: &zenoh::Session,
     _prefix: &str,
     options: &RunOptions,
@@ -360,7 +363,7 @@ fn handle_outcome(
 ) -> Result<()> {
     pipeline.apply(outcome);
     for (suffix, msg) in results::update_messages(outcome) {
-        writer.write(suffix, outcome.time_ns, &msg)?;
+        writer.write(suffix, outcome.time_ns, &msg);
         publish(session, suffix, &msg);
         if suffix == "updating/parameters" {
             if let Ok(mut l) = latest.lock() {
@@ -368,7 +371,7 @@ fn handle_outcome(
             }
         }
     }
-    writer.flush()?;
+    writer.flush();
     match &outcome.result {
         Ok(r) => {
             tracing::info!(

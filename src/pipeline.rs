@@ -79,6 +79,9 @@ pub struct Health {
     /// is still analysed.
     #[serde(default)]
     pub recording_errors: u64,
+    /// Results MCAP errors (write failures; a new file is opened).
+    #[serde(default)]
+    pub results_errors: u64,
 }
 
 impl Health {

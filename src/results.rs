@@ -39,7 +39,7 @@ pub const TOPICS: [(&str, &str); 8] = [
     ),
     (
         "health",
-        r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"},"recording_errors":{"type":"integer"}}}"#,
+        r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"},"recording_errors":{"type":"integer"},"results_errors":{"type":"integer"}}}"#,
     ),
     (
         "windows",
@@ -198,6 +198,111 @@ impl<W: Write + Seek> ResultsWriter<W> {
         self.writer.finish().context("cannot finish the results MCAP file")?;
         Ok(self.writer.into_inner())
     }
+}
+
+/// The daemon's results files, surviving write errors (full or read-only
+/// disk): a failing file is abandoned as it is (its completed chunks stay
+/// recoverable with `splinewatch recover`), the error is counted and logged,
+/// and the next message opens a new file (`open(1)`, `open(2)`, …). A
+/// message that cannot be written anywhere is counted, never fatal.
+pub struct ResultsSink<W: Write + Seek> {
+    open: Box<dyn FnMut(u32) -> Result<W> + Send>,
+    prefix: String,
+    writer: Option<ResultsWriter<W>>,
+    index: u32,
+    /// Write, flush or open errors so far.
+    pub errors: u64,
+}
+
+impl<W: Write + Seek> ResultsSink<W> {
+    /// Opens the first file (`open(0)`); failing here is an error, since a
+    /// daemon that cannot write its first results file is misconfigured.
+    pub fn new(prefix: &str, mut open: Box<dyn FnMut(u32) -> Result<W> + Send>) -> Result<Self> {
+        let writer = ResultsWriter::new(open(0)?, prefix)?;
+        Ok(Self {
+            open,
+            prefix: prefix.to_string(),
+            writer: Some(writer),
+            index: 0,
+            errors: 0,
+        })
+    }
+
+    fn fail(&mut self, what: &str, e: anyhow::Error) {
+        self.writer = None;
+        self.errors += 1;
+        if self.errors % 100 == 1 {
+            tracing::warn!(message = "results file error; continuing with a new file", what, errors = self.errors, error = %format!("{e:#}"));
+        }
+    }
+
+    fn writer(&mut self) -> Option<&mut ResultsWriter<W>> {
+        if self.writer.is_none() {
+            self.index += 1;
+            match (self.open)(self.index).and_then(|w| ResultsWriter::new(w, &self.prefix)) {
+                Ok(w) => self.writer = Some(w),
+                Err(e) => {
+                    self.fail("open", e);
+                    return None;
+                }
+            }
+        }
+        self.writer.as_mut()
+    }
+
+    pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) {
+        if let Some(w) = self.writer() {
+            if let Err(e) = w.write(suffix, time_ns, message) {
+                self.fail("write", e);
+            }
+        }
+    }
+
+    pub fn flush(&mut self) {
+        if let Some(w) = self.writer.as_mut() {
+            if let Err(e) = w.flush() {
+                self.fail("flush", e);
+            }
+        }
+    }
+
+    /// Finishes the open file; returns it (none if the last one failed).
+    pub fn finish(mut self) -> Option<W> {
+        let w = self.writer.take()?;
+        match w.finish() {
+            Ok(inner) => Some(inner),
+            Err(e) => {
+                self.fail("finish", e);
+                None
+            }
+        }
+    }
+}
+
+/// Opens results files for a [`ResultsSink`]: `path` first, then
+/// `<stem>-1.<ext>`, `<stem>-2.<ext>`, …
+pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File>> + Send> {
+    let path = path.to_path_buf();
+    Box::new(move |index| {
+        let target = if index == 0 {
+            path.clone()
+        } else {
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let ext = path
+                .extension()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "mcap".into());
+            path.with_file_name(format!("{stem}-{index}.{ext}"))
+        };
+        if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+        }
+        let file = File::create(&target).with_context(|| format!("cannot create {}", target.display()))?;
+        Ok(BufWriter::new(file))
+    })
 }
 
 /// Writes the state atomically: temporary file in the same folder, fsync,

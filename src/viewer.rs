@@ -365,6 +365,7 @@ impl RerunOutput {
             ("update_failures", health.update_failures),
             ("queue_drops", health.queue_drops),
             ("recording_errors", health.recording_errors),
+            ("results_errors", health.results_errors),
         ] {
             self.rec
                 .log(format!("health/{name}").as_str(), &rerun::Scalars::new([value as f64]))

@@ -90,3 +90,116 @@ fn sigkill_during_replay_loses_nothing_that_was_reported() {
         "the kills should not all land before the first update"
     );
 }
+
+/// A file on a disk that fills up after `limit` bytes.
+struct FillingDisk {
+    data: std::sync::Arc<std::sync::Mutex<Vec<u8>>>,
+    position: u64,
+    limit: usize,
+}
+
+impl std::io::Write for FillingDisk {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let mut data = self.data.lock().unwrap();
+        let at = self.position as usize;
+        if at + buf.len() > self.limit {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::StorageFull,
+                "no space left on device",
+            ));
+        }
+        if data.len() < at + buf.len() {
+            data.resize(at + buf.len(), 0);
+        }
+        data[at..at + buf.len()].copy_from_slice(buf);
+        self.position += buf.len() as u64;
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+impl std::io::Seek for FillingDisk {
+    fn seek(&mut self, pos: std::io::SeekFrom) -> std::io::Result<u64> {
+        let len = self.data.lock().unwrap().len() as i64;
+        self.position = match pos {
+            std::io::SeekFrom::Start(p) => p as i64,
+            std::io::SeekFrom::End(d) => len + d,
+            std::io::SeekFrom::Current(d) => self.position as i64 + d,
+        } as u64;
+        Ok(self.position)
+    }
+}
+
+#[test]
+fn results_survive_a_full_disk() {
+    use splinewatch::results::ResultsSink;
+    type Disk = std::sync::Arc<std::sync::Mutex<Vec<u8>>>;
+    let files: std::sync::Arc<std::sync::Mutex<Vec<Disk>>> = Default::default();
+    let opened = files.clone();
+    // File 0 fills the disk at 64 kB; opening file 1 fails (still full);
+    // file 2 gets space again.
+    let open = Box::new(move |index: u32| -> anyhow::Result<FillingDisk> {
+        if index == 1 {
+            anyhow::bail!("no space left on device");
+        }
+        let data: Disk = Default::default();
+        opened.lock().unwrap().push(data.clone());
+        Ok(FillingDisk {
+            data,
+            position: 0,
+            limit: if index == 0 { 64_000 } else { usize::MAX },
+        })
+    });
+    let mut sink = ResultsSink::new("bridge/test", open).unwrap();
+    // Incompressible-enough messages, flushed every 10 like the daemon's
+    // per-update flushes.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    let messages: Vec<serde_json::Value> = (0..400)
+        .map(|k| serde_json::json!({"k": k, "noise": (0..40).map(|_| rng.random::<f64>()).collect::<Vec<_>>()}))
+        .collect();
+    let mut flushed = 0;
+    for (k, m) in messages.iter().enumerate() {
+        sink.write("windows", k as i128, m);
+        if k % 10 == 9 {
+            sink.flush();
+            if sink.errors == 0 {
+                flushed = k + 1;
+            }
+        }
+    }
+    // One failed write on the full file, one failed open of the next.
+    assert_eq!(sink.errors, 2);
+    let last = sink.finish().expect("the last file finishes");
+    let disks = files.lock().unwrap();
+    assert_eq!(disks.len(), 2, "file 0 and file 2");
+    // File 0: everything flushed before the disk filled is recoverable.
+    let first = disks[0].lock().unwrap().clone();
+    let (report, _) = splinewatch::recover::recover(&first, std::io::Cursor::new(Vec::new())).unwrap();
+    assert!(flushed >= 10, "the disk filled too early for the test");
+    assert!(report.messages as usize >= flushed, "{report:?}, {flushed} flushed");
+    // File 2: finalised, holding the tail of the stream up to the last message.
+    drop(last);
+    let second = disks[1].lock().unwrap().clone();
+    let summary = mcap::Summary::read(&second).unwrap().expect("finalised");
+    let count = summary.stats.unwrap().message_count as usize;
+    let ks: Vec<u64> = mcap::MessageStream::new(&second)
+        .unwrap()
+        .map(|m| {
+            serde_json::from_slice::<serde_json::Value>(&m.unwrap().data).unwrap()["k"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(ks.len(), count);
+    assert_eq!(*ks.last().unwrap(), 399);
+    assert!(ks.windows(2).all(|w| w[1] == w[0] + 1), "no gaps once space is back");
+    eprintln!(
+        "full disk: {} messages recovered from the full file, {} in the new one, {} lost",
+        report.messages,
+        count,
+        400 - report.messages as usize - count
+    );
+}
