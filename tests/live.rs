@@ -393,3 +393,106 @@ impl Drop for KillOnDrop {
         }
     }
 }
+
+/// The router between logger and daemon goes away and comes back on the same
+/// endpoint: the daemon (a zenoh client) reconnects by itself and updates
+/// from the data sent after the return, without a restart.
+#[cfg(unix)]
+#[test]
+fn the_daemon_resumes_after_its_router_returns() {
+    use std::process::{Command, Stdio};
+    use zenoh::Wait;
+    let dir = temp("router-loss");
+    std::fs::create_dir_all(&dir).unwrap();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let endpoint = format!("tcp/127.0.0.1:{port}");
+    let open_router = || {
+        let mut c = zenoh::Config::default();
+        c.insert_json5("mode", "\"router\"").unwrap();
+        c.insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]"))
+            .unwrap();
+        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
+        zenoh::open(c).wait().unwrap()
+    };
+    let router = open_router();
+    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
+        + &format!("\n[zenoh]\nmode = \"client\"\nconnect = [\"{endpoint}\"]\nmulticast_scouting = false\n");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, text).unwrap();
+    let state = dir.join("state.json");
+    let daemon = KillOnDrop(Some(
+        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args([
+                "run",
+                "--config",
+                config.to_str().unwrap(),
+                "--state",
+                state.to_str().unwrap(),
+                "--out",
+            ])
+            .arg(dir.join("results.mcap"))
+            .env("RUST_LOG", "info,zenoh=warn")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    ));
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let cfg = commands::load_config(&config).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    let (first, second) = blocks.split_at(blocks.len() / 2);
+    let send = |part: &[splinewatch::recording::RecordedBlock]| {
+        let mut publisher = splinewatch::daemon::Publisher::open(
+            &cfg.zenoh,
+            cfg.topic_prefix(),
+            splinewatch::wire::Encoding::Cbor,
+            20.0,
+        )
+        .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(500));
+        for b in part {
+            publisher.publish(&b.block).unwrap();
+        }
+        publisher.close().unwrap();
+    };
+    let wait_for_window = |at_least: u64| {
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+        loop {
+            if let Ok(Some(s)) = load_state(&state) {
+                if s.window >= at_least {
+                    return s.window;
+                }
+            }
+            assert!(std::time::Instant::now() < deadline, "no update for window {at_least}");
+            std::thread::sleep(std::time::Duration::from_millis(100));
+        }
+    };
+    send(first);
+    let before = wait_for_window(0);
+    // The router goes away, and comes back on the same endpoint.
+    router.close().wait().unwrap();
+    drop(router);
+    std::thread::sleep(std::time::Duration::from_secs(2));
+    let router = open_router();
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    send(second);
+    // The second minute holds windows 3–5: an update for one of them proves
+    // the data after the return arrived.
+    let after = wait_for_window(3);
+    let daemon = daemon.take();
+    let status = Command::new("kill")
+        .args(["-TERM", &daemon.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let out = daemon.wait_with_output().unwrap();
+    let log = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{log}");
+    eprintln!("updated window {before} before the router loss and window {after} after its return");
+    router.close().wait().unwrap();
+}
