@@ -59,7 +59,7 @@ pub struct Config {
 }
 
 /// `[output]`: where results go.
-#[derive(Debug, Clone, Default, Deserialize)]
+#[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputConfig {
     /// Folder for results MCAP files and the state file (default `out/<structure.name>`).
@@ -72,6 +72,21 @@ pub struct OutputConfig {
     pub rerun_connect: Option<String>,
     /// `[output.raw]`: optional raw-input recording.
     pub raw: crate::recorder::RawRecordingConfig,
+    /// Start a new `.rrd` file after this much measurement time.
+    pub rerun_rotate_hours: f64,
+}
+
+impl Default for OutputConfig {
+    fn default() -> Self {
+        Self {
+            dir: None,
+            state_file: None,
+            rerun_save: None,
+            rerun_connect: None,
+            raw: Default::default(),
+            rerun_rotate_hours: 24.0,
+        }
+    }
 }
 
 /// `[frf]`: Welch FRF estimation from time series.
@@ -678,6 +693,13 @@ impl Config {
         self.update_settings()?;
         // The sampling rate is only known from the data; check with a nominal one.
         self.welch_settings(256.0)?;
+        let rotate = self.output.rerun_rotate_hours;
+        if !(rotate.is_finite() && rotate > 0.0) {
+            return Err(err(
+                "output.rerun_rotate_hours",
+                format!("must be a positive number of hours, got {rotate}"),
+            ));
+        }
         let raw = &self.output.raw;
         if !(raw.rotate_minutes.is_finite() && raw.rotate_minutes > 0.0) {
             return Err(err(

@@ -104,6 +104,9 @@ pub struct RunOptions {
     pub state: Option<PathBuf>,
     /// Rerun outputs (none when empty).
     pub rerun: RerunTargets,
+    /// How many of the latest update outcomes the returned summary keeps:
+    /// a long run must not hold every outcome in memory.
+    pub keep_updates: usize,
 }
 
 /// What a run did.
@@ -111,8 +114,31 @@ pub struct RunOptions {
 pub struct RunSummary {
     pub messages: u64,
     pub windows: u64,
-    pub updates: Vec<UpdateOutcome>,
+    /// The latest update outcomes (at most `RunOptions::keep_updates`).
+    pub updates: std::collections::VecDeque<UpdateOutcome>,
+    /// Every update run, including those no longer in `updates`.
+    pub update_count: u64,
     pub accepted: Option<AcceptedParameters>,
+}
+
+/// The zenoh key of a result message. FRF results go under
+/// `<prefix>/updating/frf/…`: `<prefix>/frf/**` is an input (pre-computed
+/// FRFs), and the daemon must not receive its own output there.
+pub fn zenoh_result_key(prefix: &str, suffix: &str) -> String {
+    match suffix.strip_prefix("frf/") {
+        Some(rest) => format!("{prefix}/updating/frf/{rest}"),
+        None => format!("{prefix}/{suffix}"),
+    }
+}
+
+impl RunSummary {
+    fn keep(&mut self, outcome: UpdateOutcome, keep: usize) {
+        self.update_count += 1;
+        self.updates.push_back(outcome);
+        while self.updates.len() > keep {
+            self.updates.pop_front();
+        }
+    }
 }
 
 struct RawMessage {
@@ -210,7 +236,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     let mut last_time: i128 = 0;
     tokio::pin!(shutdown);
     let publish = |session: &zenoh::Session, suffix: &str, v: &serde_json::Value| {
-        let key = format!("{prefix}/{suffix}");
+        let key = zenoh_result_key(&prefix, suffix);
         if let Err(e) = session
             .put(&key, serde_json::to_vec(v).unwrap_or_default())
             .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
@@ -288,7 +314,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 if let Some(v) = viewer.as_mut() {
                     v.log_update(&outcome)?;
                 }
-                summary.updates.push(outcome);
+                summary.keep(outcome, options.keep_updates);
                 if let Some(job) = waiting.take() {
                     running = Some(tokio::task::spawn_blocking(move || job.run()));
                 }
@@ -299,7 +325,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 let h = results::health_message(last_time, pipeline.health());
                 writer.write("health", last_time, &h);
                 publish(&session, "health", &h);
-                if let Some(v) = viewer.as_mut() {
+                // Health on the measurement timeline once data has arrived.
+                if let (Some(v), true) = (viewer.as_mut(), last_time > 0) {
                     v.log_health(last_time, pipeline.health())?;
                 }
                 notify_systemd(&[sd_notify::NotifyState::Watchdog]);
@@ -322,7 +349,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         if let Some(v) = viewer.as_mut() {
             v.log_update(&outcome)?;
         }
-        summary.updates.push(outcome);
+        summary.keep(outcome, options.keep_updates);
     }
     pipeline.health_mut().queue_drops += drops.load(Ordering::Relaxed);
     if let Some(mut r) = recorder.take() {

@@ -28,6 +28,7 @@ pub fn run_with_source(
     mut cfg: Config,
     out: &Path,
     speed: f64,
+    keep_updates: usize,
     source: impl FnOnce(&Config, &mut Publisher) -> Result<u64> + Send + 'static,
 ) -> Result<RunSummary> {
     let port = std::net::TcpListener::bind("127.0.0.1:0")?.local_addr()?.port();
@@ -44,6 +45,7 @@ pub fn run_with_source(
             save: Some(out.join("results.rrd")),
             connect: cfg.output.rerun_connect.clone(),
         },
+        keep_updates,
     };
     let mut publisher_cfg = cfg.zenoh.clone();
     publisher_cfg.listen.clear();
@@ -86,7 +88,7 @@ pub fn run_with_source(
 pub fn run_live(config_path: &Path, out: &Path, duration: f64, speed: f64, seed: u64) -> Result<RunSummary> {
     let cfg = commands::load_config(config_path)?;
     let scenario = parse_scenario(&demo_scenario(duration))?;
-    run_with_source(cfg, out, speed, move |cfg, publisher| {
+    run_with_source(cfg, out, speed, usize::MAX, move |cfg, publisher| {
         let options = SimulationOptions {
             scenario: Some(scenario),
             ..SimulationOptions::random_excitation(cfg, duration, seed)
@@ -105,7 +107,7 @@ pub fn run_recording_live(config_path: &Path, recording: &Path, out: &Path, spee
     let cfg = commands::load_config(config_path)?;
     let bytes = std::fs::read(recording).with_context(|| format!("cannot read {}", recording.display()))?;
     let (blocks, _) = read_recording(&bytes, &Limits::default())?;
-    run_with_source(cfg, out, speed, move |_, publisher| {
+    run_with_source(cfg, out, speed, usize::MAX, move |_, publisher| {
         for b in &blocks {
             publisher.publish(&b.block)?;
         }
@@ -186,7 +188,7 @@ pub fn soak(
     let started = std::time::Instant::now();
     let sent = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
     let counter = std::sync::Arc::clone(&sent);
-    let summary = run_with_source(cfg, out, speed, move |_, publisher| {
+    let summary = run_with_source(cfg, out, speed, 1, move |_, publisher| {
         let mut sent = 0;
         let mut next_hour = 1.0;
         for k in 0..loops {

@@ -526,12 +526,11 @@ fn run(cli: Cli) -> Result<()> {
                     s.rss_kib.map_or("?".into(), |k| format!("{:.1}", k as f64 / 1024.0))
                 );
             }
-            let h = summary.updates.iter().filter(|u| u.result.is_ok()).count();
+            let h = summary.update_count;
             println!(
-                "published {sent} blocks, the daemon received {} (the rest dropped by the bounded ingest queue, counted in health.queue_drops), {} windows, {} updates ({h} accepted); results in {}",
+                "published {sent} blocks, the daemon received {} (the rest dropped by the bounded ingest queue, counted in health.queue_drops), {} windows, {h} updates; results in {}",
                 summary.messages,
                 summary.windows,
-                summary.updates.len(),
                 out.display()
             );
         }
@@ -680,6 +679,7 @@ fn run(cli: Cli) -> Result<()> {
                     results: out.clone(),
                     state: Some(state),
                     rerun,
+                    keep_updates: 1,
                 },
                 splinewatch::daemon::termination_signal(),
             ))?;
@@ -687,7 +687,7 @@ fn run(cli: Cli) -> Result<()> {
                 "stopped after {} messages, {} windows, {} updates; results in {}",
                 summary.messages,
                 summary.windows,
-                summary.updates.len(),
+                summary.update_count,
                 out.display()
             );
         }

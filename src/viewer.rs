@@ -55,51 +55,101 @@ pub struct RerunOutput {
     updates: i64,
     /// Parameter series already given their static names and colours.
     named: std::collections::BTreeSet<String>,
+    targets: RerunTargets,
+    sensors: Vec<(String, SensorPoint)>,
+    rotate_ns: i128,
+    /// Measurement time of the open file's first message.
+    file_start_ns: Option<i128>,
 }
 
 impl RerunOutput {
     pub fn open(config: &Config, targets: &RerunTargets) -> Result<Self> {
-        let builder = rerun::RecordingStreamBuilder::new("splinewatch");
-        let rec = match (&targets.save, &targets.connect) {
-            (Some(path), None) => builder.save(path),
-            (None, Some(url)) => builder.connect_grpc_opts(url.clone()),
-            (Some(path), Some(url)) => {
-                let file = rerun::sink::FileSink::new(path).map_err(|e| anyhow!("{e}"))?;
-                let uri = url
-                    .parse::<rerun::external::re_uri::ProxyUri>()
-                    .map_err(|e| anyhow!("rerun_connect {url:?}: {e}"))?;
-                builder.set_sinks((file, rerun::sink::GrpcSink::new(uri)))
-            }
-            (None, None) => return Err(anyhow!("no Rerun target (rerun_save or rerun_connect)")),
-        }
-        .with_context(|| format!("opening the Rerun output {targets:?}"))?;
+        let rec = rerun::RecordingStreamBuilder::new("splinewatch")
+            .buffered()
+            .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
         let setup = commands::frf_setup(config)?;
         let model = config.build_model()?;
         let sensors = config.build_sensors(&model.shell)?;
         let grid = DeckGrid::new(&model);
-        let out = Self {
+        let mut out = Self {
             rec,
             setup,
             model,
             grid,
             updates: 0,
             named: Default::default(),
+            targets: targets.clone(),
+            sensors,
+            rotate_ns: (config.output.rerun_rotate_hours * 3600e9) as i128,
+            file_start_ns: None,
         };
-        out.send_blueprint()?;
-        out.log_sensors(&sensors)?;
-        // The mesh topology never changes: logged once, static; updates
-        // only carry vertex positions and colours.
+        out.attach_sinks(None)?;
+        Ok(out)
+    }
+
+    /// Points the stream at its targets; with `stamp`, the file is
+    /// `<stem>-<stamp>.rrd` (rotation). Each file gets the blueprint and the
+    /// static data, so it opens on its own.
+    fn attach_sinks(&mut self, stamp: Option<&str>) -> Result<()> {
+        let path = self.targets.save.as_ref().map(|p| match stamp {
+            None => p.clone(),
+            Some(stamp) => {
+                let stem = p
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                p.with_file_name(format!("{stem}-{stamp}.rrd"))
+            }
+        });
+        let file = |p: &PathBuf| rerun::sink::FileSink::new(p).map_err(|e| anyhow!("Rerun file {}: {e}", p.display()));
+        let grpc = |url: &String| -> Result<rerun::sink::GrpcSink> {
+            let uri = url
+                .parse::<rerun::external::re_uri::ProxyUri>()
+                .map_err(|e| anyhow!("rerun_connect {url:?}: {e}"))?;
+            Ok(rerun::sink::GrpcSink::new(uri))
+        };
+        match (&path, &self.targets.connect) {
+            (Some(p), None) => self.rec.set_sink(Box::new(file(p)?)),
+            (None, Some(url)) => self.rec.set_sink(Box::new(grpc(url)?)),
+            (Some(p), Some(url)) => self.rec.set_sinks((file(p)?, grpc(url)?)),
+            (None, None) => return Err(anyhow!("no Rerun target (rerun_save or rerun_connect)")),
+        }
+        self.send_blueprint()?;
+        self.log_sensors(&self.sensors)?;
+        // The mesh topology never changes: logged once per file, static;
+        // updates only carry vertex positions and colours.
         let mesh_paths =
             std::iter::once("deck/springs".to_string()).chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
         for path in mesh_paths {
-            out.rec
+            self.rec
                 .log_static(
                     path.as_str(),
-                    &rerun::Mesh3D::update_fields().with_triangle_indices(out.grid.triangles.clone()),
+                    &rerun::Mesh3D::update_fields().with_triangle_indices(self.grid.triangles.clone()),
                 )
                 .map_err(rerun_error)?;
         }
-        Ok(out)
+        self.named.clear();
+        Ok(())
+    }
+
+    /// Starts a new `.rrd` file once the current one spans `rerun_rotate_hours`
+    /// of measurement time: the SDK keeps an index of every chunk of an open
+    /// file in memory until its footer is written.
+    fn rotate_if_due(&mut self, time_ns: i128) -> Result<()> {
+        // No file to rotate, or no measurement time yet (health before data).
+        if self.targets.save.is_none() || time_ns <= 0 {
+            return Ok(());
+        }
+        match self.file_start_ns {
+            None => self.file_start_ns = Some(time_ns),
+            Some(start) if time_ns - start >= self.rotate_ns => {
+                self.file_start_ns = Some(time_ns);
+                let stamp = crate::wire::format_timestamp(time_ns).replace(':', "-");
+                self.attach_sinks(Some(&stamp))?;
+            }
+            Some(_) => {}
+        }
+        Ok(())
     }
 
     fn send_blueprint(&self) -> Result<()> {
@@ -176,6 +226,7 @@ impl RerunOutput {
 
     /// Logs one update: trends, FRFs, ζ(f), the spring field and modes.
     pub fn log_update(&mut self, outcome: &UpdateOutcome) -> Result<()> {
+        self.rotate_if_due(outcome.time_ns)?;
         self.updates += 1;
         self.set_time(outcome.time_ns);
         let report = match &outcome.result {
@@ -352,6 +403,7 @@ impl RerunOutput {
 
     /// Logs the health counters.
     pub fn log_health(&mut self, time_ns: i128, health: &Health) -> Result<()> {
+        self.rotate_if_due(time_ns)?;
         self.set_time(time_ns);
         let rejected: u64 = health.rejected.values().sum();
         let skipped: u64 = health.windows_skipped.values().sum();

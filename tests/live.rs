@@ -230,7 +230,7 @@ fn precomputed_frfs_on_the_frf_topic_drive_an_update() {
         },
     )
     .unwrap();
-    let summary = splinewatch::demo::run_with_source(cfg, &out, 0.0, move |_, publisher| {
+    let summary = splinewatch::demo::run_with_source(cfg, &out, 0.0, usize::MAX, move |_, publisher| {
         publisher.publish_json("frf/P1/P1", b"{not json".to_vec())?;
         for e in &file.frfs {
             let one = splinewatch::frf_json::FrfFile {
@@ -263,13 +263,16 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
     let sent = blocks.len() as u64;
-    let live = splinewatch::demo::run_with_source(cfg.clone(), &out, 10.0, move |_, publisher| {
+    let live = splinewatch::demo::run_with_source(cfg.clone(), &out, 10.0, usize::MAX, move |_, publisher| {
         for b in &blocks {
             publisher.publish(&b.block)?;
         }
         Ok(sent)
     })
     .unwrap();
+    // Every block arrived, and nothing else (the daemon's own results must
+    // not come back through its subscriptions).
+    assert_eq!(live.messages, 1560);
     // Two minutes rotated every 30 s of measurement time: four complete
     // files, none left unfinished.
     let mut files: Vec<PathBuf> = std::fs::read_dir(out.join("raw"))

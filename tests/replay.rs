@@ -260,3 +260,40 @@ fn replay_streams_to_a_rerun_server_over_grpc() {
         );
     }
 }
+
+#[test]
+fn rerun_files_rotate_by_measurement_time_and_each_stands_alone() {
+    let mut cfg = config();
+    cfg.output.rerun_rotate_hours = 0.01; // 36 s of data per file
+    let dir = std::env::temp_dir().join(format!("splinewatch-rrd-rotate-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let targets = splinewatch::viewer::RerunTargets {
+        save: Some(dir.join("trend.rrd")),
+        connect: None,
+    };
+    let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    replay(
+        &cfg,
+        &[&bytes],
+        None,
+        &mut writer,
+        Some(&mut viewer),
+        None,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    viewer.finish().unwrap();
+    let files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+    // Updates every 20 s over two minutes, a new file every 36 s.
+    assert!(files.len() >= 3, "{files:?}");
+    for f in &files {
+        let rrd = splinewatch::viewer::inspect_rrd(&std::fs::read(f).unwrap()).unwrap();
+        assert!(rrd.footer, "{f:?} not finalised");
+        for entity in ["/deck/sensors", "/deck/springs", "/parameters/springs/east.k2"] {
+            assert!(rrd.entities.contains(entity), "{f:?} lacks {entity}");
+        }
+    }
+}
