@@ -131,6 +131,17 @@ pub fn zenoh_result_key(prefix: &str, suffix: &str) -> String {
     }
 }
 
+/// A Rerun output error is counted and logged (rate-limited), never fatal:
+/// the viewer is a convenience, the model and its results go on.
+fn count_viewer_error(result: Result<()>, health: &mut crate::pipeline::Health) {
+    if let Err(e) = result {
+        health.rerun_errors += 1;
+        if health.rerun_errors % 100 == 1 {
+            tracing::warn!(message = "Rerun output failed; the daemon goes on", errors = health.rerun_errors, error = %format!("{e:#}"));
+        }
+    }
+}
+
 impl RunSummary {
     fn keep(&mut self, outcome: UpdateOutcome, keep: usize) {
         self.update_count += 1;
@@ -312,7 +323,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 let outcome = outcome.context("the update worker panicked")?;
                 handle_outcome(&mut pipeline, &mut writer, &session, &prefix, &options, &latest, &outcome, &publish)?;
                 if let Some(v) = viewer.as_mut() {
-                    v.log_update(&outcome)?;
+                    let r = v.log_update(&outcome);
+                    count_viewer_error(r, pipeline.health_mut());
                 }
                 summary.keep(outcome, options.keep_updates);
                 if let Some(job) = waiting.take() {
@@ -327,7 +339,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 publish(&session, "health", &h);
                 // Health on the measurement timeline once data has arrived.
                 if let (Some(v), true) = (viewer.as_mut(), last_time > 0) {
-                    v.log_health(last_time, pipeline.health())?;
+                    let r = v.log_health(last_time, pipeline.health());
+                    count_viewer_error(r, pipeline.health_mut());
                 }
                 notify_systemd(&[sd_notify::NotifyState::Watchdog]);
             }
@@ -347,7 +360,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             &publish,
         )?;
         if let Some(v) = viewer.as_mut() {
-            v.log_update(&outcome)?;
+            let r = v.log_update(&outcome);
+            count_viewer_error(r, pipeline.health_mut());
         }
         summary.keep(outcome, options.keep_updates);
     }
@@ -363,8 +377,9 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     writer.write("health", last_time, &h);
     writer.finish();
     if let Some(mut v) = viewer.take() {
-        v.log_health(last_time, pipeline.health())?;
-        v.finish()?;
+        let r = v.log_health(last_time, pipeline.health());
+        count_viewer_error(r, pipeline.health_mut());
+        count_viewer_error(v.finish(), pipeline.health_mut());
     }
     notify_systemd(&[sd_notify::NotifyState::Stopping]);
     drop(queryable);

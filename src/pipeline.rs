@@ -82,6 +82,9 @@ pub struct Health {
     /// Results MCAP errors (write failures; a new file is opened).
     #[serde(default)]
     pub results_errors: u64,
+    /// Rerun output errors (e.g. a rotated `.rrd` that cannot be created).
+    #[serde(default)]
+    pub rerun_errors: u64,
 }
 
 impl Health {

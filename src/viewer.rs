@@ -418,6 +418,7 @@ impl RerunOutput {
             ("queue_drops", health.queue_drops),
             ("recording_errors", health.recording_errors),
             ("results_errors", health.results_errors),
+            ("rerun_errors", health.rerun_errors),
         ] {
             self.rec
                 .log(format!("health/{name}").as_str(), &rerun::Scalars::new([value as f64]))
