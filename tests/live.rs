@@ -309,45 +309,13 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
 #[cfg(unix)]
 #[test]
 fn client_mode_through_a_zenoh_router() {
-    use std::process::{Command, Stdio};
+    use std::process::Command;
     use zenoh::Wait;
     let dir = temp("router");
     std::fs::create_dir_all(&dir).unwrap();
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let endpoint = format!("tcp/127.0.0.1:{port}");
-    let mut router_cfg = zenoh::Config::default();
-    router_cfg.insert_json5("mode", "\"router\"").unwrap();
-    router_cfg
-        .insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]"))
-        .unwrap();
-    router_cfg.insert_json5("scouting/multicast/enabled", "false").unwrap();
-    let router = zenoh::open(router_cfg).wait().unwrap();
-    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
-        + &format!("\n[zenoh]\nmode = \"client\"\nconnect = [\"{endpoint}\"]\nmulticast_scouting = false\n");
-    let config = dir.join("config.toml");
-    std::fs::write(&config, text).unwrap();
-    let state = dir.join("state.json");
-    let daemon = KillOnDrop(Some(
-        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-            .args([
-                "run",
-                "--config",
-                config.to_str().unwrap(),
-                "--state",
-                state.to_str().unwrap(),
-                "--out",
-            ])
-            .arg(dir.join("results.mcap"))
-            .env("RUST_LOG", "info,zenoh=warn")
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    ));
+    let endpoint = free_endpoint();
+    let router = open_router(&endpoint);
+    let (daemon, config, state) = spawn_client_daemon(&dir, &endpoint);
     std::thread::sleep(std::time::Duration::from_millis(1500));
     let cfg = commands::load_config(&config).unwrap();
     let mut publisher =
@@ -403,47 +371,13 @@ impl Drop for KillOnDrop {
 #[cfg(unix)]
 #[test]
 fn the_daemon_resumes_after_its_router_returns() {
-    use std::process::{Command, Stdio};
+    use std::process::Command;
     use zenoh::Wait;
     let dir = temp("router-loss");
     std::fs::create_dir_all(&dir).unwrap();
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    let endpoint = format!("tcp/127.0.0.1:{port}");
-    let open_router = || {
-        let mut c = zenoh::Config::default();
-        c.insert_json5("mode", "\"router\"").unwrap();
-        c.insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]"))
-            .unwrap();
-        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
-        zenoh::open(c).wait().unwrap()
-    };
-    let router = open_router();
-    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
-        + &format!("\n[zenoh]\nmode = \"client\"\nconnect = [\"{endpoint}\"]\nmulticast_scouting = false\n");
-    let config = dir.join("config.toml");
-    std::fs::write(&config, text).unwrap();
-    let state = dir.join("state.json");
-    let daemon = KillOnDrop(Some(
-        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-            .args([
-                "run",
-                "--config",
-                config.to_str().unwrap(),
-                "--state",
-                state.to_str().unwrap(),
-                "--out",
-            ])
-            .arg(dir.join("results.mcap"))
-            .env("RUST_LOG", "info,zenoh=warn")
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    ));
+    let endpoint = free_endpoint();
+    let router = open_router(&endpoint);
+    let (daemon, config, state) = spawn_client_daemon(&dir, &endpoint);
     std::thread::sleep(std::time::Duration::from_millis(1500));
     let cfg = commands::load_config(&config).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
@@ -481,7 +415,7 @@ fn the_daemon_resumes_after_its_router_returns() {
     router.close().wait().unwrap();
     drop(router);
     std::thread::sleep(std::time::Duration::from_secs(2));
-    let router = open_router();
+    let router = open_router(&endpoint);
     std::thread::sleep(std::time::Duration::from_secs(3));
     send(second);
     // The second minute holds windows 3–5: an update for one of them proves
@@ -498,4 +432,55 @@ fn the_daemon_resumes_after_its_router_returns() {
     assert!(out.status.success(), "{log}");
     eprintln!("updated window {before} before the router loss and window {after} after its return");
     router.close().wait().unwrap();
+}
+
+/// A free loopback TCP endpoint.
+fn free_endpoint() -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    format!("tcp/127.0.0.1:{port}")
+}
+
+/// An in-process zenoh router listening on `endpoint`.
+fn open_router(endpoint: &str) -> zenoh::Session {
+    use zenoh::Wait;
+    let mut c = zenoh::Config::default();
+    c.insert_json5("mode", "\"router\"").unwrap();
+    c.insert_json5("listen/endpoints", &format!("[\"{endpoint}\"]"))
+        .unwrap();
+    c.insert_json5("scouting/multicast/enabled", "false").unwrap();
+    zenoh::open(c).wait().unwrap()
+}
+
+/// `splinewatch run` as a zenoh client of `endpoint`, with its config,
+/// state and results in `dir`; returns the process, config and state paths.
+#[cfg(unix)]
+fn spawn_client_daemon(dir: &Path, endpoint: &str) -> (KillOnDrop, PathBuf, PathBuf) {
+    use std::process::{Command, Stdio};
+    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
+        + &format!("\n[zenoh]\nmode = \"client\"\nconnect = [\"{endpoint}\"]\nmulticast_scouting = false\n");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, text).unwrap();
+    let state = dir.join("state.json");
+    let daemon = KillOnDrop(Some(
+        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args([
+                "run",
+                "--config",
+                config.to_str().unwrap(),
+                "--state",
+                state.to_str().unwrap(),
+                "--out",
+            ])
+            .arg(dir.join("results.mcap"))
+            .env("RUST_LOG", "info,zenoh=warn")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap(),
+    ));
+    (daemon, config, state)
 }

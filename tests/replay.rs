@@ -131,20 +131,7 @@ fn replay_writes_a_rerun_recording_with_every_view() {
         save: Some(path.clone()),
         connect: None,
     };
-    let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let summary = replay(
-        &cfg,
-        &[&bytes],
-        None,
-        &mut writer,
-        Some(&mut viewer),
-        None,
-        &mut |_, _| {},
-    )
-    .unwrap();
-    viewer.finish().unwrap();
+    let summary = replay_into_rerun(&cfg, &targets);
     assert!(summary.updates.iter().any(|u| u.result.is_ok()));
     // Read back with Rerun's own decoder: complete (footer) and holding the
     // trends, the latest FRFs, ζ(f), the deck, the modes and the health.
@@ -227,20 +214,7 @@ fn replay_streams_to_a_rerun_server_over_grpc() {
         save: None,
         connect: Some(format!("rerun+http://127.0.0.1:{port}/proxy")),
     };
-    let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    replay(
-        &cfg,
-        &[&bytes],
-        None,
-        &mut writer,
-        Some(&mut viewer),
-        None,
-        &mut |_, _| {},
-    )
-    .unwrap();
-    viewer.finish().unwrap();
+    replay_into_rerun(&cfg, &targets);
     let status = Command::new("kill")
         .args(["-INT", &server.id().to_string()])
         .status()
@@ -272,20 +246,7 @@ fn rerun_files_rotate_by_measurement_time_and_each_stands_alone() {
         save: Some(dir.join("trend.rrd")),
         connect: None,
     };
-    let mut viewer = splinewatch::viewer::RerunOutput::open(&cfg, &targets).unwrap();
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    replay(
-        &cfg,
-        &[&bytes],
-        None,
-        &mut writer,
-        Some(&mut viewer),
-        None,
-        &mut |_, _| {},
-    )
-    .unwrap();
-    viewer.finish().unwrap();
+    replay_into_rerun(&cfg, &targets);
     let files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
     // Updates every 20 s over two minutes, a new file every 36 s.
     assert!(files.len() >= 3, "{files:?}");
@@ -296,4 +257,24 @@ fn rerun_files_rotate_by_measurement_time_and_each_stands_alone() {
             assert!(rrd.entities.contains(entity), "{f:?} lacks {entity}");
         }
     }
+}
+
+/// Replays the bundled recording with a Rerun output to `targets`, closed
+/// at the end.
+fn replay_into_rerun(cfg: &Config, targets: &splinewatch::viewer::RerunTargets) -> splinewatch::replay::ReplaySummary {
+    let mut viewer = splinewatch::viewer::RerunOutput::open(cfg, targets).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let summary = replay(
+        cfg,
+        &[&bytes],
+        None,
+        &mut writer,
+        Some(&mut viewer),
+        None,
+        &mut |_, _| {},
+    )
+    .unwrap();
+    viewer.finish().unwrap();
+    summary
 }
