@@ -131,14 +131,30 @@ pub fn zenoh_result_key(prefix: &str, suffix: &str) -> String {
     }
 }
 
-/// A Rerun output error is counted and logged (rate-limited), never fatal:
-/// the viewer is a convenience, the model and its results go on.
-fn count_viewer_error(result: Result<()>, health: &mut crate::pipeline::Health) {
+/// An output error (raw recording, Rerun) is counted in `counter` and
+/// logged for the first and then every `every`-th one, never fatal: the
+/// model and its results go on.
+fn count_output_error(result: Result<()>, counter: &mut u64, every: u64, what: &str) {
     if let Err(e) = result {
-        health.rerun_errors += 1;
-        if health.rerun_errors % 100 == 1 {
-            tracing::warn!(message = "Rerun output failed; the daemon goes on", errors = health.rerun_errors, error = %format!("{e:#}"));
+        *counter += 1;
+        if *counter % every == 1 {
+            tracing::warn!(message = "output failed; the daemon goes on", output = what, errors = *counter, error = %format!("{e:#}"));
         }
+    }
+}
+
+/// Starts `job` on the blocking worker, or makes it the waiting job when
+/// one runs; a waiting job it replaces is counted as a drop.
+fn submit(
+    job: UpdateJob,
+    running: &mut Option<tokio::task::JoinHandle<UpdateOutcome>>,
+    waiting: &mut Option<UpdateJob>,
+    drops: &mut u64,
+) {
+    if running.is_none() {
+        *running = Some(tokio::task::spawn_blocking(move || job.run()));
+    } else if waiting.replace(job).is_some() {
+        *drops += 1;
     }
 }
 
@@ -269,11 +285,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                         .unwrap_or(0);
                     if let Some(job) = pipeline.ingest_frf(&msg.payload, now) {
                         tracing::info!(message = "complete FRF set received", window = job.window);
-                        if running.is_none() {
-                            running = Some(tokio::task::spawn_blocking(move || job.run()));
-                        } else if waiting.replace(job).is_some() {
-                            pipeline.health_mut().queue_drops += 1;
-                        }
+                        submit(job, &mut running, &mut waiting, &mut pipeline.health_mut().queue_drops);
                     }
                     continue;
                 }
@@ -288,14 +300,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 };
                 for block in blocks {
                     if let Some(r) = recorder.as_mut() {
-                        if let Err(e) = r.record(&block) {
-                            let h = pipeline.health_mut();
-                            h.recording_errors += 1;
-                            // Rate-limited: the first error, then every 1000th.
-                            if h.recording_errors % 1000 == 1 {
-                                tracing::warn!(message = "raw-input recording failed; analysis continues", errors = h.recording_errors, error = %format!("{e:#}"));
-                            }
-                        }
+                        count_output_error(r.record(&block), &mut pipeline.health_mut().recording_errors, 1000, "raw-input recording");
                     }
                     let (windows, jobs) = pipeline.ingest(block);
                     for w in &windows {
@@ -310,22 +315,14 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                         }
                     }
                     for job in jobs {
-                        if running.is_none() {
-                            running = Some(tokio::task::spawn_blocking(move || job.run()));
-                        } else if waiting.replace(job).is_some() {
-                            pipeline.health_mut().queue_drops += 1;
-                        }
+                        submit(job, &mut running, &mut waiting, &mut pipeline.health_mut().queue_drops);
                     }
                 }
             }
             outcome = async { running.as_mut().expect("guarded").await }, if running.is_some() => {
                 running = None;
                 let outcome = outcome.context("the update worker panicked")?;
-                handle_outcome(&mut pipeline, &mut writer, &session, &prefix, &options, &latest, &outcome, &publish)?;
-                if let Some(v) = viewer.as_mut() {
-                    let r = v.log_update(&outcome);
-                    count_viewer_error(r, pipeline.health_mut());
-                }
+                handle_outcome(&mut pipeline, &mut writer, viewer.as_mut(), &session, &options, &latest, &outcome, &publish)?;
                 summary.keep(outcome, options.keep_updates);
                 if let Some(job) = waiting.take() {
                     running = Some(tokio::task::spawn_blocking(move || job.run()));
@@ -340,7 +337,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 // Health on the measurement timeline once data has arrived.
                 if let (Some(v), true) = (viewer.as_mut(), last_time > 0) {
                     let r = v.log_health(last_time, pipeline.health());
-                    count_viewer_error(r, pipeline.health_mut());
+                    count_output_error(r, &mut pipeline.health_mut().rerun_errors, 100, "Rerun");
                 }
                 notify_systemd(&[sd_notify::NotifyState::Watchdog]);
             }
@@ -352,25 +349,23 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         handle_outcome(
             &mut pipeline,
             &mut writer,
+            viewer.as_mut(),
             &session,
-            &prefix,
             &options,
             &latest,
             &outcome,
             &publish,
         )?;
-        if let Some(v) = viewer.as_mut() {
-            let r = v.log_update(&outcome);
-            count_viewer_error(r, pipeline.health_mut());
-        }
         summary.keep(outcome, options.keep_updates);
     }
     pipeline.health_mut().queue_drops += drops.load(Ordering::Relaxed);
     if let Some(mut r) = recorder.take() {
-        if let Err(e) = r.close() {
-            pipeline.health_mut().recording_errors += 1;
-            tracing::warn!(message = "cannot finish the raw-input recording", error = %format!("{e:#}"));
-        }
+        count_output_error(
+            r.close(),
+            &mut pipeline.health_mut().recording_errors,
+            1,
+            "raw-input recording",
+        );
     }
     pipeline.health_mut().results_errors = writer.errors;
     let h = results::health_message(last_time, pipeline.health());
@@ -378,8 +373,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     writer.finish();
     if let Some(mut v) = viewer.take() {
         let r = v.log_health(last_time, pipeline.health());
-        count_viewer_error(r, pipeline.health_mut());
-        count_viewer_error(v.finish(), pipeline.health_mut());
+        count_output_error(r, &mut pipeline.health_mut().rerun_errors, 100, "Rerun");
+        count_output_error(v.finish(), &mut pipeline.health_mut().rerun_errors, 100, "Rerun");
     }
     notify_systemd(&[sd_notify::NotifyState::Stopping]);
     drop(queryable);
@@ -396,8 +391,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
 fn handle_outcome(
     pipeline: &mut Pipeline,
     writer: &mut ResultsSink<BufWriter<File>>,
+    viewer: Option<&mut RerunOutput>,
     session: &zenoh::Session,
-    _prefix: &str,
     options: &RunOptions,
     latest: &Arc<Mutex<Vec<u8>>>,
     outcome: &UpdateOutcome,
@@ -435,6 +430,14 @@ fn handle_outcome(
         Err(e) => {
             tracing::warn!(message = "update failed, keeping the last parameters", window = outcome.window, error = %e)
         }
+    }
+    if let Some(v) = viewer {
+        count_output_error(
+            v.log_update(outcome),
+            &mut pipeline.health_mut().rerun_errors,
+            100,
+            "Rerun",
+        );
     }
     Ok(())
 }
