@@ -207,11 +207,15 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         .await
         .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
     let (tx, mut rx) = mpsc::channel::<RawMessage>(INGEST_QUEUE);
-    let drops = Arc::new(AtomicU64::new(0));
+    // Messages the full ingest queue refused (counted in the callbacks) and
+    // waiting update jobs replaced by newer ones; their sum is
+    // `health.queue_drops`.
+    let ingest_drops = Arc::new(AtomicU64::new(0));
+    let mut job_drops: u64 = 0;
     let mut subscribers = Vec::new();
     for (segment, frf) in [("accel/*", false), ("force/*", false), ("frf/**", true)] {
         let key = format!("{prefix}/{segment}");
-        let (tx, drops) = (tx.clone(), Arc::clone(&drops));
+        let (tx, drops) = (tx.clone(), Arc::clone(&ingest_drops));
         let sub = session
             .declare_subscriber(&key)
             .callback(move |sample| {
@@ -285,7 +289,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                         .unwrap_or(0);
                     if let Some(job) = pipeline.ingest_frf(&msg.payload, now) {
                         tracing::info!(message = "complete FRF set received", window = job.window);
-                        submit(job, &mut running, &mut waiting, &mut pipeline.health_mut().queue_drops);
+                        submit(job, &mut running, &mut waiting, &mut job_drops);
                     }
                     continue;
                 }
@@ -315,7 +319,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                         }
                     }
                     for job in jobs {
-                        submit(job, &mut running, &mut waiting, &mut pipeline.health_mut().queue_drops);
+                        submit(job, &mut running, &mut waiting, &mut job_drops);
                     }
                 }
             }
@@ -329,7 +333,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 }
             }
             _ = health_timer.tick() => {
-                pipeline.health_mut().queue_drops = pipeline.health().queue_drops.max(drops.load(Ordering::Relaxed));
+                pipeline.health_mut().queue_drops = job_drops + ingest_drops.load(Ordering::Relaxed);
                 pipeline.health_mut().results_errors = writer.errors;
                 let h = results::health_message(last_time, pipeline.health());
                 writer.write("health", last_time, &h);
@@ -358,7 +362,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         )?;
         summary.keep(outcome, options.keep_updates);
     }
-    pipeline.health_mut().queue_drops += drops.load(Ordering::Relaxed);
+    pipeline.health_mut().queue_drops = job_drops + ingest_drops.load(Ordering::Relaxed);
     if let Some(mut r) = recorder.take() {
         count_output_error(
             r.close(),
