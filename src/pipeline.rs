@@ -187,8 +187,10 @@ impl UpdateJob {
             bail!("the updating did not converge ({:?})", result.stop_reason);
         }
         let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
-        let h = problem.model_frfs(&values)?;
+        let state = problem.state_at(&values)?;
+        let h = problem.model_frfs(&values, &state)?;
         let lines = problem.line_frequencies().to_vec();
+        let sel = problem.line_indices();
         let nl = lines.len();
         let mut model_entries = Vec::new();
         let mut residue = Vec::new();
@@ -202,7 +204,6 @@ impl UpdateJob {
                 coherence: None,
                 n_averages: None,
             });
-            let sel = problem_lines(&self.measured.frequency_hz, &lines);
             residue.push(
                 sel.iter()
                     .zip(hs)
@@ -214,7 +215,6 @@ impl UpdateJob {
             );
         }
         let (kappa, damping) = problem.model_at(&values)?;
-        let state = self.setup.model.modal_state(&kappa, &damping)?;
         let top = lines.last().copied().unwrap_or(0.0);
         let modes = (0..state.modes.len())
             .filter(|&i| state.modes.frequency_hz(i) <= top)
@@ -233,19 +233,6 @@ impl UpdateJob {
             damping,
         })
     }
-}
-
-/// Indices of `lines` within `all` (both ascending, lines ⊂ all).
-fn problem_lines(all: &[f64], lines: &[f64]) -> Vec<usize> {
-    let mut out = Vec::with_capacity(lines.len());
-    let mut k = 0;
-    for &f in lines {
-        while k < all.len() && all[k] < f {
-            k += 1;
-        }
-        out.push(k.min(all.len().saturating_sub(1)));
-    }
-    out
 }
 
 struct ChannelQueue {

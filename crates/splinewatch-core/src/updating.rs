@@ -466,9 +466,10 @@ impl<'a> UpdateProblem<'a> {
     }
 
     /// Model FRFs (in the measured quantity) at `p` on the selected lines,
-    /// `[frf * n_lines + line]`.
-    pub fn model_frfs(&self, p: &[f64]) -> Result<Vec<c64>, UpdateError> {
-        Ok(self.evaluate(p, false)?.h)
+    /// `[frf * n_lines + line]`, from the modal state at `p`
+    /// ([`Self::state_at`]).
+    pub fn model_frfs(&self, p: &[f64], state: &ModalState) -> Result<Vec<c64>, UpdateError> {
+        Ok(self.evaluate_state(p, state, false)?.h)
     }
 
     /// Frequencies of the selected lines.
@@ -476,12 +477,17 @@ impl<'a> UpdateProblem<'a> {
         &self.frequencies
     }
 
+    /// Index of each selected line on the measured frequency axis.
+    pub fn line_indices(&self) -> &[usize] {
+        &self.lines
+    }
+
     fn measured_value(&self, frf: usize, line: usize) -> c64 {
         self.measured.frfs()[frf].values[self.lines[line]]
     }
 
     /// The modal model at parameter values `p`.
-    fn state_at(&self, p: &[f64]) -> Result<ModalState, UpdateError> {
+    pub fn state_at(&self, p: &[f64]) -> Result<ModalState, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
         Ok(self.model.modal_state(&kappa, &damping)?)
     }
