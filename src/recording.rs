@@ -27,6 +27,15 @@ pub const BLOCK_JSON_SCHEMA: &str = r#"{
   }
 }"#;
 
+/// The MCAP writer settings of every file splinewatch writes: zstd chunks,
+/// profile and library named.
+pub fn mcap_options() -> mcap::WriteOptions {
+    mcap::WriteOptions::new()
+        .compression(Some(mcap::Compression::Zstd))
+        .profile("splinewatch")
+        .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
+}
+
 /// Writes raw-input recordings.
 pub struct RecordingWriter<W: Write + Seek> {
     writer: mcap::Writer<W>,
@@ -45,12 +54,7 @@ impl RecordingWriter<BufWriter<File>> {
 
 impl<W: Write + Seek> RecordingWriter<W> {
     pub fn new(w: W, encoding: Encoding) -> Result<Self> {
-        let mut writer = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
-            .profile("splinewatch")
-            .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
-            .create(w)
-            .context("cannot start the MCAP file")?;
+        let mut writer = mcap_options().create(w).context("cannot start the MCAP file")?;
         let schema_id = match encoding {
             Encoding::Json => writer
                 .add_schema("splinewatch.ChannelBlock", "jsonschema", BLOCK_JSON_SCHEMA.as_bytes())

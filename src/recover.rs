@@ -23,9 +23,7 @@ pub fn recover<W: Write + Seek>(bytes: &[u8], out: W) -> Result<(RecoverReport, 
     let was_complete = matches!(mcap::Summary::read(bytes), Ok(Some(_)));
     let options = enumset::EnumSet::from(mcap::read::Options::IgnoreEndMagic) | mcap::read::Options::ValidateChunkCrcs;
     let stream = mcap::MessageStream::new_with_options(bytes, options).context("not an MCAP file (bad header)")?;
-    let mut writer = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
-        .profile("splinewatch")
+    let mut writer = crate::recording::mcap_options()
         .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION"), " (recovered)"))
         .create(out)
         .context("cannot start the recovered MCAP file")?;

@@ -133,20 +133,13 @@ pub struct ResultsWriter<W: Write + Seek> {
 
 impl ResultsWriter<BufWriter<File>> {
     pub fn create(path: &Path, prefix: &str) -> Result<Self> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        }
-        let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-        Self::new(BufWriter::new(file), prefix)
+        Self::new(create_buffered(path)?, prefix)
     }
 }
 
 impl<W: Write + Seek> ResultsWriter<W> {
     pub fn new(w: W, prefix: &str) -> Result<Self> {
-        let mut writer = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
-            .profile("splinewatch")
-            .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
+        let mut writer = crate::recording::mcap_options()
             .create(w)
             .context("cannot start the results MCAP file")?;
         let mut channels = BTreeMap::new();
@@ -297,12 +290,17 @@ pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File
                 .unwrap_or_else(|| "mcap".into());
             path.with_file_name(format!("{stem}-{index}.{ext}"))
         };
-        if let Some(dir) = target.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        }
-        let file = File::create(&target).with_context(|| format!("cannot create {}", target.display()))?;
-        Ok(BufWriter::new(file))
+        create_buffered(&target)
     })
+}
+
+/// Creates `path` (and its folder) for buffered writing.
+fn create_buffered(path: &Path) -> Result<BufWriter<File>> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+    Ok(BufWriter::new(file))
 }
 
 /// Writes the state atomically: temporary file in the same folder, fsync,
