@@ -30,6 +30,7 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors, SelfAdjointEvdParams};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Auto, Mat, Par, Side, Spec};
+use std::borrow::Cow;
 use std::f64::consts::PI;
 use thiserror::Error;
 
@@ -324,11 +325,11 @@ impl ModalSolver {
                 }
             }
         }
-        let mut pairs: Vec<(f64, usize, usize)> = Vec::with_capacity(self.free);
-        let mut solved: Vec<Option<(Vec<f64>, Mat<f64>)>> = Vec::with_capacity(self.components.len());
-        for (ci, c) in self.components.iter().enumerate() {
-            let computed = match &c.fixed {
-                Some(_) => None,
+        // Eigenpairs per component: kept ones borrowed, the others solved.
+        let mut eigen: Vec<Cow<(Vec<f64>, Mat<f64>)>> = Vec::with_capacity(self.components.len());
+        for c in &self.components {
+            eigen.push(match &c.fixed {
+                Some(fixed) => Cow::Borrowed(fixed),
                 None => {
                     let d = Mat::from_fn(c.springs.len(), c.springs.len(), |a, b| {
                         delta[(c.springs[a], c.springs[b])]
@@ -337,25 +338,20 @@ impl ModalSolver {
                     let mut a = c.pencil.a_free.clone();
                     matmul(a.as_mut(), Accum::Add, wd.as_ref(), c.w.transpose(), 1.0, Par::Seq);
                     let (omega2, y) = symmetric_eigen(&a)?;
-                    Some((omega2, c.pencil.back_transform(y)))
+                    Cow::Owned((omega2, c.pencil.back_transform(y)))
                 }
-            };
-            let omega2 = match (&computed, &c.fixed) {
-                (Some((o, _)), _) | (None, Some((o, _))) => o,
-                (None, None) => unreachable!("either fixed or computed"),
-            };
-            pairs.extend(omega2.iter().enumerate().map(|(k, &w2)| (w2, ci, k)));
-            solved.push(computed);
+            });
         }
+        let mut pairs: Vec<(f64, usize, usize)> = eigen
+            .iter()
+            .enumerate()
+            .flat_map(|(ci, e)| e.0.iter().enumerate().map(move |(k, &w2)| (w2, ci, k)))
+            .collect();
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut shapes = Mat::<f64>::zeros(self.free, self.free);
         for (col, &(_, ci, k)) in pairs.iter().enumerate() {
-            let c = &self.components[ci];
-            let phi = match (&solved[ci], &c.fixed) {
-                (Some((_, p)), _) | (None, Some((_, p))) => p,
-                (None, None) => unreachable!("either fixed or computed"),
-            };
-            for (r, &d) in c.dofs.iter().enumerate() {
+            let phi = &eigen[ci].1;
+            for (r, &d) in self.components[ci].dofs.iter().enumerate() {
                 shapes[(d, col)] = phi[(r, k)];
             }
         }
