@@ -1,5 +1,6 @@
 //! Shared fixtures: the paper's Sinello deck and its sensors.
 
+use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::frf::SensorPoint;
 use splinewatch_core::knots::KnotVector;
 use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
@@ -88,4 +89,18 @@ pub fn sinello_sensors() -> Vec<SensorPoint> {
             direction: [0.0, 0.0, 1.0],
         })
         .collect()
+}
+
+/// A clamped cylindrical panel on the Sinello springs: curved, so nothing
+/// decouples (2 × 3 m, R = 3 m, 0.6 rad, 5 cm, 7 × 6 cubic net).
+pub fn clamped_curved_panel() -> ShellModel {
+    ShellModel {
+        shell: Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
+        material: sinello_material(),
+        springs: sinello_springs(),
+        constraints: vec![EdgeConstraint {
+            edge: Edge::Eta0,
+            kind: SupportKind::Clamped,
+        }],
+    }
 }

@@ -5,11 +5,9 @@
 //! relative (observed ≤ 1.4e-12) and isolated mass-normalised shapes by
 //! round-off (observed ≤ 3e-15): the bounds are 1e-11 and 1e-12.
 
-use super::common::{sinello_material, sinello_model, sinello_springs, true_kappa};
-use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
+use super::common::{clamped_curved_panel, sinello_model, true_kappa};
 use splinewatch_core::modal::{self, Modes};
-use splinewatch_core::model::{AssembledModel, ShellModel};
-use splinewatch_core::shell::Shell;
+use splinewatch_core::model::AssembledModel;
 
 /// Worst relative eigenvalue difference and worst `1 - |φ_aᵀ M φ_b|` over
 /// the modes below `f_max_hz` whose eigenvalue is isolated (relative gap
@@ -62,15 +60,7 @@ fn sinello_splits_into_in_plane_and_out_of_plane_blocks() {
 
 #[test]
 fn curved_clamped_panel_is_one_block_and_matches() {
-    let model = ShellModel {
-        shell: Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
-        material: sinello_material(),
-        springs: sinello_springs(),
-        constraints: vec![EdgeConstraint {
-            edge: Edge::Eta0,
-            kind: SupportKind::Clamped,
-        }],
-    };
+    let model = clamped_curved_panel();
     let asm = model.assemble().unwrap();
     assert_eq!(asm.modal_solver().unwrap().component_sizes().len(), 1);
     let (eig, shape, compared) = compare(&asm, &true_kappa(), f64::INFINITY);

@@ -1,7 +1,7 @@
 //! The shell model: closed-form plate and shell frequencies, rigid-body
 //! counts and the paper's Sinello deck.
 
-use super::common::{sinello_material, sinello_springs};
+use super::common::{clamped_curved_panel, sinello_material, sinello_springs};
 use faer::{Mat, Side};
 use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
@@ -269,15 +269,7 @@ fn sinello_deck_has_thirty_modes_below_80_hz() {
 
 #[test]
 fn modes_are_mass_orthonormal() {
-    let model = ShellModel {
-        shell: Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
-        material: sinello_material(),
-        springs: sinello_springs(),
-        constraints: vec![EdgeConstraint {
-            edge: Edge::Eta0,
-            kind: SupportKind::Clamped,
-        }],
-    };
+    let model = clamped_curved_panel();
     let asm = model.assemble().unwrap();
     let modes = asm.modes().unwrap();
     let phi = &modes.shapes;
