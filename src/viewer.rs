@@ -153,10 +153,8 @@ impl RerunOutput {
     }
 
     fn send_blueprint(&self) -> Result<()> {
-        let names = &self.setup.sensor_names;
-        let outputs: Vec<&String> = names.iter().collect();
         let frf_tabs = |what: &str| -> ContainerLike {
-            Tabs::new(outputs.iter().map(|o| {
+            Tabs::new(self.setup.sensor_names.iter().map(|o| {
                 BarChartView::new(format!("{o} {what}"))
                     .with_origin(format!("/frf/{o}/{what}"))
                     .into()
