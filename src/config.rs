@@ -74,6 +74,9 @@ pub struct OutputConfig {
     pub raw: crate::recorder::RawRecordingConfig,
     /// Start a new `.rrd` file after this much measurement time.
     pub rerun_rotate_hours: f64,
+    /// Finalise the results MCAP file and start a new one after this much
+    /// measurement time.
+    pub results_rotate_hours: f64,
 }
 
 impl Default for OutputConfig {
@@ -85,6 +88,7 @@ impl Default for OutputConfig {
             rerun_connect: None,
             raw: Default::default(),
             rerun_rotate_hours: 24.0,
+            results_rotate_hours: 24.0,
         }
     }
 }
@@ -237,6 +241,9 @@ fn default_cost_tolerance() -> f64 {
 fn default_step_tolerance() -> f64 {
     1e-9
 }
+fn default_offset_tolerance() -> f64 {
+    1e-2
+}
 fn default_initial_damping() -> f64 {
     1e-3
 }
@@ -256,6 +263,10 @@ pub struct UpdatingConfig {
     /// Stop when the step in the transformed variables is this small.
     #[serde(default = "default_step_tolerance")]
     pub step_tolerance: f64,
+    /// Stop when the Gauss–Newton step is below this many standard errors,
+    /// root mean square over the parameters (Bates & Watts' relative offset).
+    #[serde(default = "default_offset_tolerance")]
+    pub offset_tolerance: f64,
     #[serde(default = "default_method")]
     pub method: Method,
     #[serde(default = "default_weighting")]
@@ -693,12 +704,13 @@ impl Config {
         self.update_settings()?;
         // The sampling rate is only known from the data; check with a nominal one.
         self.welch_settings(256.0)?;
-        let rotate = self.output.rerun_rotate_hours;
-        if !(rotate.is_finite() && rotate > 0.0) {
-            return Err(err(
-                "output.rerun_rotate_hours",
-                format!("must be a positive number of hours, got {rotate}"),
-            ));
+        for (key, hours) in [
+            ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
+            ("output.results_rotate_hours", self.output.results_rotate_hours),
+        ] {
+            if !(hours.is_finite() && hours >= 1.0 / 3600.0) {
+                return Err(err(key, format!("must be at least one second (1/3600 h), got {hours}")));
+            }
         }
         let raw = &self.output.raw;
         if !(raw.rotate_minutes.is_finite() && raw.rotate_minutes > 0.0) {
@@ -900,6 +912,7 @@ impl Config {
         };
         positive("cost_tolerance", u.cost_tolerance)?;
         positive("step_tolerance", u.step_tolerance)?;
+        positive("offset_tolerance", u.offset_tolerance)?;
         positive("initial_damping", u.initial_damping)?;
         if u.max_iterations == 0 {
             return Err(err("updating.max_iterations", "must be at least 1"));
@@ -926,6 +939,7 @@ impl Config {
             max_iterations: u.max_iterations,
             cost_tolerance: u.cost_tolerance,
             step_tolerance: u.step_tolerance,
+            offset_tolerance: u.offset_tolerance,
             weighting: u.weighting,
             lines: LineSelection {
                 band,

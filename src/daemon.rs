@@ -190,7 +190,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         max_samples: config.frf.max_block_samples,
         ..Limits::default()
     };
-    let mut writer = ResultsSink::new(&prefix, results::results_files(&options.results))?;
+    let mut writer = ResultsSink::new(&prefix, results::results_files(&options.results))?
+        .rotate_every((config.output.results_rotate_hours * 3600e9) as i128);
     let mut viewer = if options.rerun.is_empty() {
         None
     } else {

@@ -15,7 +15,7 @@ use std::path::Path;
 pub const TOPICS: [(&str, &str); 8] = [
     (
         "updating/parameters",
-        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}}}}"#,
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}}}}"#,
     ),
     (
         "updating/residue",
@@ -83,6 +83,7 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
                     "iterations": r.result.iterations.len() - 1,
                     "stop_reason": r.result.stop_reason,
                     "condition_number": if r.result.condition_number.is_finite() { json!(r.result.condition_number) } else { Value::Null },
+                    "relative_offset": r.result.relative_offset,
                     "parameters": r.result.parameters,
                 }),
             ));
@@ -198,13 +199,24 @@ impl<W: Write + Seek> ResultsWriter<W> {
 /// recoverable with `splinewatch recover`), the error is counted and logged,
 /// and the next message opens a new file (`open(1)`, `open(2)`, …). A
 /// message that cannot be written anywhere is counted, never fatal.
+///
+/// With [`Self::rotate_every`], a file is also finalised (summary and
+/// index written) once its messages span that much measurement time, and
+/// the next message opens a new file, so at most one file is ever
+/// unfinalised and a crash costs at most the unflushed tail of that one.
 pub struct ResultsSink<W: Write + Seek> {
     open: Box<dyn FnMut(u32) -> Result<W> + Send>,
     prefix: String,
     writer: Option<ResultsWriter<W>>,
     index: u32,
+    /// Measurement time one file may span, ns.
+    rotate_ns: Option<i128>,
+    /// Measurement time of the open file's first timed message.
+    file_start_ns: Option<i128>,
     /// Write, flush or open errors so far.
     pub errors: u64,
+    /// Files finalised by rotation so far.
+    pub rotations: u64,
 }
 
 impl<W: Write + Seek> ResultsSink<W> {
@@ -217,12 +229,47 @@ impl<W: Write + Seek> ResultsSink<W> {
             prefix: prefix.to_string(),
             writer: Some(writer),
             index: 0,
+            rotate_ns: None,
+            file_start_ns: None,
             errors: 0,
+            rotations: 0,
         })
+    }
+
+    /// Finalise a file once its messages span `span_ns` of measurement time.
+    pub fn rotate_every(mut self, span_ns: i128) -> Self {
+        self.rotate_ns = Some(span_ns.max(1));
+        self
+    }
+
+    /// Finalises the open file if the message at `time_ns` falls outside its
+    /// span; untimed messages (`time_ns <= 0`, health before any data) stay
+    /// in the current file.
+    fn rotate_if_due(&mut self, time_ns: i128) {
+        if time_ns <= 0 {
+            return;
+        }
+        let due = match (self.file_start_ns, self.rotate_ns) {
+            (Some(start), Some(span)) => time_ns - start >= span,
+            _ => false,
+        };
+        if due {
+            if let Some(w) = self.writer.take() {
+                match w.finish().and_then(|mut inner| Ok(inner.flush()?)) {
+                    Ok(()) => self.rotations += 1,
+                    Err(e) => self.fail("finish", e),
+                }
+            }
+            self.file_start_ns = None;
+        }
+        if self.file_start_ns.is_none() {
+            self.file_start_ns = Some(time_ns);
+        }
     }
 
     fn fail(&mut self, what: &str, e: anyhow::Error) {
         self.writer = None;
+        self.file_start_ns = None;
         self.errors += 1;
         if self.errors % 100 == 1 {
             tracing::warn!(message = "results file error; continuing with a new file", what, errors = self.errors, error = %format!("{e:#}"));
@@ -244,6 +291,7 @@ impl<W: Write + Seek> ResultsSink<W> {
     }
 
     pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) {
+        self.rotate_if_due(time_ns);
         if let Some(w) = self.writer() {
             if let Err(e) = w.write(suffix, time_ns, message) {
                 self.fail("write", e);
@@ -259,10 +307,14 @@ impl<W: Write + Seek> ResultsSink<W> {
         }
     }
 
-    /// Finishes the open file; returns it (none if the last one failed).
+    /// Finishes the open file and flushes it; returns it (none if the last
+    /// one failed).
     pub fn finish(mut self) -> Option<W> {
         let w = self.writer.take()?;
-        match w.finish() {
+        match w.finish().and_then(|mut inner| {
+            inner.flush()?;
+            Ok(inner)
+        }) {
             Ok(inner) => Some(inner),
             Err(e) => {
                 self.fail("finish", e);

@@ -203,3 +203,65 @@ fn results_survive_a_full_disk() {
         400 - report.messages as usize - count
     );
 }
+
+#[test]
+fn results_rotate_by_measurement_time_with_one_unfinalised_file_at_most() {
+    use splinewatch::results::{results_files, ResultsSink};
+    let dir = std::env::temp_dir().join(format!("splinewatch-rotate-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let hour: i128 = 3_600_000_000_000;
+    let start: i128 = 1_790_000_000 * 1_000_000_000;
+    let mut sink = ResultsSink::new("bridge/test", results_files(&dir.join("results.mcap")))
+        .unwrap()
+        .rotate_every(hour);
+    let finalised = |name: &str| {
+        let bytes = std::fs::read(dir.join(name)).unwrap_or_default();
+        mcap::Summary::read(&bytes).ok().flatten().is_some()
+    };
+    // A health message before any data (time 0) stays in the first file;
+    // then one message every 10 minutes of measurement time for 3.5 h.
+    sink.write("health", 0, &serde_json::json!({"k": -1}));
+    let times: Vec<i128> = (0..=21).map(|k| start + k * hour / 6).collect();
+    for (k, &t) in times.iter().enumerate() {
+        sink.write("windows", t, &serde_json::json!({"k": k}));
+        sink.flush();
+        // Every file but the one being written is finalised at all times.
+        let current = sink.rotations as usize;
+        for f in 0..current {
+            let name = if f == 0 {
+                "results.mcap".to_string()
+            } else {
+                format!("results-{f}.mcap")
+            };
+            assert!(finalised(&name), "{name} not finalised after message {k}");
+        }
+    }
+    assert_eq!(sink.errors, 0);
+    assert_eq!(sink.rotations, 3, "3.5 h in files of 1 h");
+    sink.finish().expect("last file finishes");
+    let mut seen = Vec::new();
+    for name in ["results.mcap", "results-1.mcap", "results-2.mcap", "results-3.mcap"] {
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        let summary = mcap::Summary::read(&bytes).unwrap().expect("finalised");
+        let stats = summary.stats.unwrap();
+        // Timed messages of one file span less than the rotation period.
+        let timed: Vec<u64> = mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .map(|m| m.unwrap().log_time)
+            .filter(|&t| t > 0)
+            .collect();
+        assert!(timed.last().unwrap() - timed.first().unwrap() < hour as u64, "{name}");
+        assert_eq!(
+            stats.message_count as usize,
+            mcap::MessageStream::new(&bytes).unwrap().count()
+        );
+        for m in mcap::MessageStream::new(&bytes).unwrap() {
+            let v: serde_json::Value = serde_json::from_slice(&m.unwrap().data).unwrap();
+            seen.push(v["k"].as_i64().unwrap());
+        }
+    }
+    assert!(!dir.join("results-4.mcap").exists());
+    // Every message, once, in order.
+    assert_eq!(seen, (-1..=21).collect::<Vec<i64>>());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

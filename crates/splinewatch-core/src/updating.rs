@@ -241,6 +241,10 @@ pub struct UpdateSettings {
     pub cost_tolerance: f64,
     /// Stop when `‖Δy‖ ≤ step_tolerance (‖y‖ + step_tolerance)`.
     pub step_tolerance: f64,
+    /// Stop when the relative offset of Bates & Watts (1981) is below this:
+    /// the full Gauss–Newton step is below this many standard errors, in root
+    /// mean square over the parameters (`UpdateResult::relative_offset`).
+    pub offset_tolerance: f64,
     pub weighting: Weighting,
     pub lines: LineSelection,
     /// Initial damping `λ0 = initial_damping · max diag(JᵀJ)`.
@@ -254,6 +258,7 @@ impl Default for UpdateSettings {
             max_iterations: 50,
             cost_tolerance: 1e-8,
             step_tolerance: 1e-9,
+            offset_tolerance: 1e-2,
             weighting: Weighting::Uniform,
             lines: LineSelection::default(),
             initial_damping: 1e-3,
@@ -290,6 +295,8 @@ pub struct IterationRecord {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
+    /// The remaining Gauss–Newton step is statistically negligible.
+    RelativeOffset,
     CostTolerance,
     StepTolerance,
     ZeroResidual,
@@ -315,6 +322,10 @@ pub struct UpdateResult {
     pub condition_number: f64,
     /// `σ̂²`, the weighted residual variance.
     pub residual_variance: f64,
+    /// Relative offset of Bates & Watts (1981) at the returned point: the
+    /// full Gauss–Newton step from there, in standard errors per parameter,
+    /// `√(gᵀA⁻¹g / n) / σ̂`. `None` when `JᵀJ` is singular or the residual is zero.
+    pub relative_offset: Option<f64>,
     pub evaluations: usize,
     pub lines_used: usize,
 }
@@ -621,9 +632,12 @@ impl<'a> UpdateProblem<'a> {
         }];
         observer(&iterations[0]);
         let chain = |jp: &Mat<f64>, y: &[f64]| -> Mat<f64> {
-            Mat::from_fn(jp.nrows(), n, |r, c| {
-                jp[(r, c)] * bounded_derivative(y[c], bounds[c].0, bounds[c].1)
-            })
+            let dp_dy: Vec<f64> = y
+                .iter()
+                .zip(&bounds)
+                .map(|(&y, &(a, b))| bounded_derivative(y, a, b))
+                .collect();
+            Mat::from_fn(jp.nrows(), n, |r, c| jp[(r, c)] * dp_dy[c])
         };
         let mut jy = chain(&current.jacobian, &y);
         let (mut a, mut g) = normal_equations(&jy, &current.residual);
@@ -638,9 +652,16 @@ impl<'a> UpdateProblem<'a> {
         let mut converged = false;
         let mut rejected = 0;
         let mut iteration = 0;
+        let m = current.residual.len();
+        let mut offset = relative_offset(&a, &g, cost, m);
         while iteration < self.settings.max_iterations {
             if cost == 0.0 {
                 stop = StopReason::ZeroResidual;
+                converged = true;
+                break;
+            }
+            if offset.is_some_and(|o| o < self.settings.offset_tolerance) {
+                stop = StopReason::RelativeOffset;
                 converged = true;
                 break;
             }
@@ -716,6 +737,7 @@ impl<'a> UpdateProblem<'a> {
             rejected = 0;
             jy = chain(&current.jacobian, &y);
             (a, g) = normal_equations(&jy, &current.residual);
+            offset = relative_offset(&a, &g, cost, m);
             if self.settings.method == Method::LevenbergMarquardt {
                 lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
                 nu = 2.0;
@@ -739,7 +761,6 @@ impl<'a> UpdateProblem<'a> {
         }
         let p = to_p(&y);
         let (relative_residual, frf_relative_residuals) = self.relative_residuals(&current.h);
-        let m = current.residual.len();
         let residual_variance = 2.0 * cost / (m - n) as f64;
         let (std, singular_values) = uncertainty(&current.jacobian, residual_variance);
         let condition_number = match (singular_values.first(), singular_values.last()) {
@@ -768,6 +789,7 @@ impl<'a> UpdateProblem<'a> {
             singular_values,
             condition_number,
             residual_variance,
+            relative_offset: offset,
             evaluations,
             lines_used: self.lines.len(),
         })
@@ -786,6 +808,28 @@ fn quadratic(a: &Mat<f64>, s: &[f64]) -> f64 {
     (0..s.len())
         .map(|i| s[i] * (0..s.len()).map(|j| a[(i, j)] * s[j]).sum::<f64>())
         .sum()
+}
+
+/// Relative offset of Bates & Watts (1981, Technometrics 23(2)):
+/// `√(‖P r‖² / n) / √(‖(I - P) r‖² / (m - n))` with `P` the projection on the
+/// columns of `J`, i.e. the length of the full Gauss–Newton step
+/// `δ = -A⁻¹g` measured in standard errors, `√(δᵀAδ / n) / σ̂`, since
+/// `‖P r‖² = gᵀA⁻¹g`. Below 0.01 the remaining step is a hundredth of a
+/// standard error in root mean square over the `n` directions (no single
+/// parameter moves by more than `√n / 100` of its standard deviation), far
+/// below the statistical uncertainty, so further iterations change nothing
+/// that matters. Invariant to the parametrisation (`y` or `p`). `None` when `A`
+/// is singular or the residual vanishes.
+fn relative_offset(a: &Mat<f64>, g: &[f64], cost: f64, m: usize) -> Option<f64> {
+    let n = g.len();
+    let step = solve_damped(a, g, &vec![0.0; n], 0.0)?;
+    let projected = -dot(g, &step);
+    let unexplained = 2.0 * cost - projected;
+    let usable = m > n && projected.is_finite() && projected >= 0.0 && unexplained > 0.0;
+    if !usable {
+        return None;
+    }
+    Some((projected / n as f64).sqrt() / (unexplained / (m - n) as f64).sqrt())
 }
 
 /// `A = JᵀJ`, `g = Jᵀr` (gradient of ½‖r‖²).
@@ -849,6 +893,35 @@ fn uncertainty(j: &Mat<f64>, variance: f64) -> (Vec<Option<f64>>, Vec<f64>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn relative_offset_is_the_gauss_newton_step_in_standard_errors() {
+        // Linear model r(p) = b - J p at p = 0: the least-squares point is
+        // p* = (JᵀJ)⁻¹Jᵀb, σ̂² = ‖b - J p*‖² / (m - n), and the relative offset
+        // must be √(p*ᵀ JᵀJ p* / n) / σ̂.
+        let (m, n) = (40, 3);
+        let j = Mat::from_fn(m, n, |r, c| {
+            ((r * (c + 2)) as f64 * 0.37).sin() + if r % n == c { 2.0 } else { 0.0 }
+        });
+        let b: Vec<f64> = (0..m).map(|r| 1.0 + 0.1 * (r as f64 * 1.3).cos()).collect();
+        // Residual r = b - Jp has Jacobian -J; at p = 0: A = JᵀJ, g = -Jᵀb.
+        let (a, g) = normal_equations(&(-&j), &b);
+        let cost = 0.5 * norm2(&b);
+        let p_star = solve_damped(&a, &g, &[0.0; 3], 0.0).unwrap();
+        let fitted: Vec<f64> = (0..m)
+            .map(|r| b[r] - (0..n).map(|c| j[(r, c)] * p_star[c]).sum::<f64>())
+            .collect();
+        let sigma2 = norm2(&fitted) / (m - n) as f64;
+        let expected = (quadratic(&a, &p_star) / n as f64).sqrt() / sigma2.sqrt();
+        let got = relative_offset(&a, &g, cost, m).unwrap();
+        assert!((got - expected).abs() < 1e-10 * expected, "{got} vs {expected}");
+        // At the least-squares point itself the offset vanishes.
+        let (a0, g0) = normal_equations(&(-&j), &fitted);
+        assert!(relative_offset(&a0, &g0, 0.5 * norm2(&fitted), m).unwrap() < 1e-12);
+        // Singular A and a zero residual have no offset.
+        assert_eq!(relative_offset(&Mat::zeros(3, 3), &[1.0, 0.0, 0.0], 1.0, m), None);
+        assert_eq!(relative_offset(&a, &[0.0; 3], 0.0, m), None);
+    }
 
     #[test]
     fn bounded_transform_round_trips_and_stays_inside() {
