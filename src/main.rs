@@ -253,10 +253,17 @@ fn parse_encoding(s: &str) -> Result<splinewatch::wire::Encoding, String> {
     splinewatch::wire::Encoding::from_name(s).ok_or_else(|| format!("{s:?} is not cbor or json"))
 }
 
+/// Caps the zenoh module that logs the session configuration (secrets
+/// included) at debug level.
+const NO_SECRETS_DIRECTIVE: &str = "zenoh::api::session=info";
+
 fn main() -> ExitCode {
     let json_logs = std::env::var("SPLINEWATCH_LOG_FORMAT").is_ok_and(|v| v == "json");
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
-        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,zenoh=warn"));
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,zenoh=warn"))
+        // zenoh logs its whole session configuration at debug level,
+        // user/password included: never below info, whatever RUST_LOG says.
+        .add_directive(NO_SECRETS_DIRECTIVE.parse().expect("a valid directive"));
     let builder = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr);

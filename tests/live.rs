@@ -8,6 +8,9 @@ use splinewatch::results::{load_state, ResultsWriter};
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
+mod common;
+use common::{free_endpoint, KillOnDrop};
+
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
@@ -347,24 +350,6 @@ fn client_mode_through_a_zenoh_router() {
     router.close().wait().unwrap();
 }
 
-/// Kills a child process when a failing test unwinds past it.
-struct KillOnDrop(Option<std::process::Child>);
-
-impl KillOnDrop {
-    fn take(mut self) -> std::process::Child {
-        self.0.take().expect("taken once")
-    }
-}
-
-impl Drop for KillOnDrop {
-    fn drop(&mut self) {
-        if let Some(child) = self.0.as_mut() {
-            let _ = child.kill();
-            let _ = child.wait();
-        }
-    }
-}
-
 /// The router between logger and daemon goes away and comes back on the same
 /// endpoint: the daemon (a zenoh client) reconnects by itself and updates
 /// from the data sent after the return, without a restart.
@@ -432,16 +417,6 @@ fn the_daemon_resumes_after_its_router_returns() {
     assert!(out.status.success(), "{log}");
     eprintln!("updated window {before} before the router loss and window {after} after its return");
     router.close().wait().unwrap();
-}
-
-/// A free loopback TCP endpoint.
-fn free_endpoint() -> String {
-    let port = std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port();
-    format!("tcp/127.0.0.1:{port}")
 }
 
 /// An in-process zenoh router listening on `endpoint`.
