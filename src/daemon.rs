@@ -363,6 +363,14 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         )?;
         summary.keep(outcome, options.keep_updates);
     }
+    // Blocks still held for the stream's reference (fewer than two per
+    // channel arrived) are decided on and counted; too little data for an
+    // update to be due.
+    let (windows, _) = pipeline.finish();
+    for w in &windows {
+        last_time = w.end_ns;
+        writer.write("windows", w.end_ns, &results::window_message(w));
+    }
     pipeline.health_mut().queue_drops = job_drops + ingest_drops.load(Ordering::Relaxed);
     if let Some(mut r) = recorder.take() {
         count_output_error(

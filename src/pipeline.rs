@@ -262,6 +262,9 @@ pub struct Pipeline {
     queues: Vec<ChannelQueue>,
     fs: Option<f64>,
     t0: Option<i128>,
+    /// Blocks held until the sampling rate and time origin are agreed on
+    /// ([`Self::establish_reference`]).
+    pending: Vec<ChannelBlock>,
     welch: Option<(WelchEstimator, Estimator)>,
     window_samples: i64,
     /// Grid index fed to the estimator so far.
@@ -330,6 +333,7 @@ impl Pipeline {
             queues,
             fs: None,
             t0: None,
+            pending: Vec::new(),
             welch: None,
             window_samples: 0,
             fed: 0,
@@ -428,54 +432,130 @@ impl Pipeline {
     pub fn ingest(&mut self, block: ChannelBlock) -> (Vec<WindowReport>, Vec<UpdateJob>) {
         let mut windows = Vec::new();
         let mut jobs = Vec::new();
-        let Some(c) = self
-            .channels
-            .iter()
-            .position(|(n, q)| *n == block.name && *q == block.quantity)
-        else {
+        if self.channel_of(&block).is_none() {
             self.health.reject("unknown_channel");
             return (windows, jobs);
-        };
-        let fs = *self.fs.get_or_insert(block.fs);
-        if (block.fs - fs).abs() > 1e-9 * fs {
-            self.health.reject("rate_mismatch");
+        }
+        if self.fs.is_none() {
+            self.pending.push(block);
+            if self.pending.len() >= 2 * self.channels.len() {
+                self.establish_reference(&mut windows, &mut jobs);
+            }
             return (windows, jobs);
         }
-        if self.welch.is_none() {
-            match self.config.welch_settings(fs) {
-                Ok((settings, estimator)) => {
-                    self.window_samples = (self.config.frf.window_seconds * fs).round() as i64;
-                    self.welch = Some((
-                        WelchEstimator::new(settings, self.accels.len()).expect("validated"),
-                        estimator,
-                    ));
-                }
-                Err(_) => {
-                    self.health.reject("bad_fs_for_frf_settings");
-                    self.fs = None;
-                    return (windows, jobs);
-                }
+        self.ingest_block(block, &mut windows, &mut jobs);
+        (windows, jobs)
+    }
+
+    /// Ends the stream: blocks still held for the reference
+    /// ([`Self::establish_reference`]) are decided on with what arrived.
+    pub fn finish(&mut self) -> (Vec<WindowReport>, Vec<UpdateJob>) {
+        let mut windows = Vec::new();
+        let mut jobs = Vec::new();
+        self.establish_reference(&mut windows, &mut jobs);
+        (windows, jobs)
+    }
+
+    fn channel_of(&self, block: &ChannelBlock) -> Option<usize> {
+        self.channels
+            .iter()
+            .position(|(n, q)| *n == block.name && *q == block.quantity)
+    }
+
+    /// Agrees on the sampling rate and the time origin from the first
+    /// `2 × channels` blocks instead of trusting the first one, which could
+    /// be bad (a wrong rate, a timestamp in 2099) and would then make every
+    /// valid block after it look wrong. The most common rate wins (ties: the
+    /// one seen first); among the blocks at that rate, those within the
+    /// far-future horizon of the median start are inliers and the earliest
+    /// inlier is the origin. The held blocks then go through the usual checks
+    /// in time order, so the outliers are counted by reason like any others.
+    fn establish_reference(&mut self, windows: &mut Vec<WindowReport>, jobs: &mut Vec<UpdateJob>) {
+        let mut pending = std::mem::take(&mut self.pending);
+        if pending.is_empty() {
+            return;
+        }
+        let same_rate = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a;
+        let mut rates: Vec<(f64, usize)> = Vec::new();
+        for b in &pending {
+            match rates.iter_mut().find(|(f, _)| same_rate(*f, b.fs)) {
+                Some(entry) => entry.1 += 1,
+                None => rates.push((b.fs, 1)),
             }
         }
-        let t0 = *self.t0.get_or_insert(block.start_ns);
+        let most = rates.iter().map(|r| r.1).max().unwrap_or(0);
+        let fs = rates.iter().find(|r| r.1 == most).expect("non-empty").0;
+        match self.config.welch_settings(fs) {
+            Ok((settings, estimator)) => {
+                self.window_samples = (self.config.frf.window_seconds * fs).round() as i64;
+                self.welch = Some((
+                    WelchEstimator::new(settings, self.accels.len()).expect("validated"),
+                    estimator,
+                ));
+            }
+            Err(_) => {
+                for _ in &pending {
+                    self.health.reject("bad_fs_for_frf_settings");
+                }
+                return;
+            }
+        }
+        let mut starts: Vec<i128> = pending
+            .iter()
+            .filter(|b| same_rate(b.fs, fs))
+            .map(|b| b.start_ns)
+            .collect();
+        starts.sort_unstable();
+        let median = starts[starts.len() / 2];
+        let horizon_ns = (self.far_future_samples(fs) as f64 / fs * 1e9) as i128;
+        let t0 = starts
+            .iter()
+            .copied()
+            .find(|&s| (s - median).abs() <= horizon_ns)
+            .unwrap_or(median);
+        self.fs = Some(fs);
+        self.t0 = Some(t0);
+        pending.sort_by_key(|b| b.start_ns);
+        for block in pending {
+            self.ingest_block(block, windows, jobs);
+        }
+    }
+
+    /// A block further ahead of its channel than this many samples is
+    /// rejected as `far_future`.
+    fn far_future_samples(&self, fs: f64) -> i64 {
+        let max_lag = (self.schedule.max_lag_seconds * fs) as i64;
+        self.window_samples.max(max_lag) * 4
+    }
+
+    /// [`Self::ingest`] once the reference is set.
+    fn ingest_block(&mut self, block: ChannelBlock, windows: &mut Vec<WindowReport>, jobs: &mut Vec<UpdateJob>) {
+        let c = self.channel_of(&block).expect("checked on arrival");
+        let fs = self.fs.expect("set by establish_reference");
+        if (block.fs - fs).abs() > 1e-9 * fs {
+            self.health.reject("rate_mismatch");
+            return;
+        }
+        let t0 = self.t0.expect("set by establish_reference");
         let position = (block.start_ns - t0) as f64 * fs / 1e9;
         let index = position.round();
         if (position - index).abs() > 0.01 {
             self.health.reject("misaligned");
-            return (windows, jobs);
+            return;
         }
         let index = index as i64;
+        let horizon = self.far_future_samples(fs);
         let queue = &mut self.queues[c];
         let expected = if queue.seen { queue.end() } else { self.fed };
         if index < expected {
             // Backwards, duplicated or overlapping, or before what was already analysed.
             self.health.reject("time_overlap");
-            return (windows, jobs);
+            return;
         }
         let max_lag = (self.schedule.max_lag_seconds * fs) as i64;
-        if index - expected > self.window_samples.max(max_lag) * 4 {
+        if index - expected > horizon {
             self.health.reject("far_future");
-            return (windows, jobs);
+            return;
         }
         if !queue.seen {
             queue.first = self.fed;
@@ -506,8 +586,7 @@ impl Pipeline {
                 self.health.gap_samples += fill as u64;
             }
         }
-        self.feed(&mut windows, &mut jobs);
-        (windows, jobs)
+        self.feed(windows, jobs);
     }
 
     /// Feeds every sample available on all channels, closing windows.
@@ -712,7 +791,9 @@ mod tests {
     #[test]
     fn bad_blocks_are_counted_by_reason_and_valid_ones_still_used() {
         let mut p = Pipeline::new(&config(), ScheduleConfig::default(), None).unwrap();
+        // Two blocks per channel set the grid's rate and origin.
         all_channels(&mut p, 0.0);
+        all_channels(&mut p, 1.0);
         p.ingest(block("P99", ChannelQuantity::Acceleration, 1.0, 256, 256.0));
         p.ingest(block("P2", ChannelQuantity::Acceleration, 1.0, 256, 200.0));
         p.ingest(block("P2", ChannelQuantity::Acceleration, 0.5, 256, 256.0));
@@ -736,7 +817,7 @@ mod tests {
         }
         // The valid stream continues: 8 s windows close.
         let mut closed = 0;
-        for s in 1..16 {
+        for s in 2..16 {
             closed += all_channels(&mut p, s as f64);
         }
         assert_eq!(closed, 2);

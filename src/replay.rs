@@ -3,7 +3,7 @@
 //! order, single-threaded).
 
 use crate::config::Config;
-use crate::pipeline::{AcceptedParameters, Pipeline, UpdateOutcome, WindowReport};
+use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome, WindowReport};
 use crate::results::{self, ResultsWriter};
 use crate::viewer::RerunOutput;
 use crate::wire::{self, Encoding, Limits};
@@ -34,7 +34,7 @@ pub fn replay<W: Write + Seek>(
     recordings: &[&[u8]],
     initial: Option<AcceptedParameters>,
     out: &mut ResultsWriter<W>,
-    mut viewer: Option<&mut RerunOutput>,
+    viewer: Option<&mut RerunOutput>,
     state_path: Option<&Path>,
     progress: &mut dyn FnMut(Progress, Option<&str>),
 ) -> Result<ReplaySummary> {
@@ -53,14 +53,21 @@ pub fn replay<W: Write + Seek>(
                 .unwrap_or(0)
         })
         .sum();
-    let mut summary = ReplaySummary::default();
-    let mut last_time: i128 = 0;
+    let mut sink = Outputs {
+        out,
+        viewer,
+        state_path,
+        progress,
+        total,
+        last_time: 0,
+        summary: ReplaySummary::default(),
+    };
     let messages = recordings.iter().enumerate().map(|(k, bytes)| {
         mcap::MessageStream::new(bytes).with_context(|| format!("recording {}: not a readable MCAP file", k + 1))
     });
     for message in messages.collect::<Result<Vec<_>>>()?.into_iter().flatten() {
         let message = message.context("corrupt MCAP record")?;
-        summary.messages += 1;
+        sink.summary.messages += 1;
         let topic = &message.channel.topic;
         if !(topic.contains("/accel/") || topic.contains("/force/")) {
             continue;
@@ -78,81 +85,97 @@ pub fn replay<W: Write + Seek>(
         };
         for block in blocks {
             let (windows, jobs) = pipeline.ingest(block);
-            for w in windows {
-                last_time = w.end_ns;
-                out.write("windows", w.end_ns, &results::window_message(&w))?;
-                let note = match &w.skipped {
-                    Some(reason) => format!("window {} skipped: {reason}", w.index),
-                    None => format!("window {} accepted ({} segments)", w.index, w.segments_accepted),
-                };
-                progress(
-                    Progress {
-                        messages: summary.messages,
-                        total,
-                    },
-                    Some(&note),
-                );
-                summary.windows.push(w);
-            }
-            for job in jobs {
-                let outcome = job.run();
-                pipeline.apply(&outcome);
-                for (suffix, msg) in results::update_messages(&outcome) {
-                    out.write(suffix, outcome.time_ns, &msg)?;
-                }
-                let note = match &outcome.result {
-                    Ok(r) => format!(
-                        "update after window {}: relative residual {:.4}, {} iterations",
-                        outcome.window,
-                        r.result.relative_residual,
-                        r.result.iterations.len() - 1
-                    ),
-                    Err(e) => format!(
-                        "update after window {} failed, keeping the last parameters: {e}",
-                        outcome.window
-                    ),
-                };
-                out.flush()?;
-                if let (Some(path), Some(state), Ok(_)) = (state_path, pipeline.accepted(), &outcome.result) {
-                    results::save_state(path, state)?;
-                }
-                out.write(
-                    "health",
-                    outcome.time_ns,
-                    &results::health_message(outcome.time_ns, pipeline.health()),
-                )?;
-                if let Some(v) = viewer.as_deref_mut() {
-                    v.log_update(&outcome)?;
-                    v.log_health(outcome.time_ns, pipeline.health())?;
-                }
-                progress(
-                    Progress {
-                        messages: summary.messages,
-                        total,
-                    },
-                    Some(&note),
-                );
-                summary.updates.push(outcome);
-            }
+            sink.handle(&mut pipeline, windows, jobs)?;
         }
-        if summary.messages % 256 == 0 {
-            progress(
-                Progress {
-                    messages: summary.messages,
-                    total,
-                },
-                None,
-            );
+        if sink.summary.messages % 256 == 0 {
+            sink.report(None);
         }
     }
-    out.write(
+    // Blocks still held for the stream's reference (a very short recording).
+    let (windows, jobs) = pipeline.finish();
+    sink.handle(&mut pipeline, windows, jobs)?;
+    let last_time = sink.last_time;
+    sink.out.write(
         "health",
         last_time,
         &results::health_message(last_time, pipeline.health()),
     )?;
-    if let Some(v) = viewer {
+    if let Some(v) = sink.viewer {
         v.log_health(last_time, pipeline.health())?;
     }
+    let mut summary = sink.summary;
     summary.accepted = pipeline.accepted().cloned();
     Ok(summary)
+}
+
+/// Where the replay's windows and updates go.
+struct Outputs<'a, W: Write + Seek> {
+    out: &'a mut ResultsWriter<W>,
+    viewer: Option<&'a mut RerunOutput>,
+    state_path: Option<&'a Path>,
+    progress: &'a mut dyn FnMut(Progress, Option<&str>),
+    total: u64,
+    last_time: i128,
+    summary: ReplaySummary,
+}
+
+impl<W: Write + Seek> Outputs<'_, W> {
+    fn report(&mut self, note: Option<&str>) {
+        (self.progress)(
+            Progress {
+                messages: self.summary.messages,
+                total: self.total,
+            },
+            note,
+        );
+    }
+
+    /// Writes the closed windows and runs the update jobs inline, in order.
+    fn handle(&mut self, pipeline: &mut Pipeline, windows: Vec<WindowReport>, jobs: Vec<UpdateJob>) -> Result<()> {
+        for w in windows {
+            self.last_time = w.end_ns;
+            self.out.write("windows", w.end_ns, &results::window_message(&w))?;
+            let note = match &w.skipped {
+                Some(reason) => format!("window {} skipped: {reason}", w.index),
+                None => format!("window {} accepted ({} segments)", w.index, w.segments_accepted),
+            };
+            self.report(Some(&note));
+            self.summary.windows.push(w);
+        }
+        for job in jobs {
+            let outcome = job.run();
+            pipeline.apply(&outcome);
+            for (suffix, msg) in results::update_messages(&outcome) {
+                self.out.write(suffix, outcome.time_ns, &msg)?;
+            }
+            let note = match &outcome.result {
+                Ok(r) => format!(
+                    "update after window {}: relative residual {:.4}, {} iterations",
+                    outcome.window,
+                    r.result.relative_residual,
+                    r.result.iterations.len() - 1
+                ),
+                Err(e) => format!(
+                    "update after window {} failed, keeping the last parameters: {e}",
+                    outcome.window
+                ),
+            };
+            self.out.flush()?;
+            if let (Some(path), Some(state), Ok(_)) = (self.state_path, pipeline.accepted(), &outcome.result) {
+                results::save_state(path, state)?;
+            }
+            self.out.write(
+                "health",
+                outcome.time_ns,
+                &results::health_message(outcome.time_ns, pipeline.health()),
+            )?;
+            if let Some(v) = self.viewer.as_deref_mut() {
+                v.log_update(&outcome)?;
+                v.log_health(outcome.time_ns, pipeline.health())?;
+            }
+            self.report(Some(&note));
+            self.summary.updates.push(outcome);
+        }
+        Ok(())
+    }
 }
