@@ -278,3 +278,57 @@ fn replay_into_rerun(cfg: &Config, targets: &splinewatch::viewer::RerunTargets) 
     viewer.finish().unwrap();
     summary
 }
+
+/// An update that fails (here: no convergence within one iteration) is
+/// rejected: the last good parameters stay, in memory and in the state
+/// file, and the failure is reported with its reason.
+#[test]
+fn failed_updates_keep_the_last_good_parameters_and_say_why() {
+    let dir = std::env::temp_dir().join(format!("splinewatch-failures-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let state = dir.join("state.json");
+    run(&config(), Some(&state));
+    let good = load_state(&state).unwrap().expect("six good updates saved a state");
+    let good_text = std::fs::read(&state).unwrap();
+
+    let mut cfg = config();
+    cfg.updating.max_iterations = 1;
+    cfg.updating.offset_tolerance = 1e-300;
+    cfg.updating.cost_tolerance = 1e-300;
+    cfg.updating.step_tolerance = 1e-300;
+    let (bytes, summary) = run(&cfg, Some(&state));
+    assert_eq!(summary.updates.len(), 6);
+    for o in &summary.updates {
+        let e = o.result.as_ref().expect_err("one iteration cannot converge");
+        assert!(e.contains("did not converge"), "{e}");
+    }
+    assert_eq!(
+        summary.accepted.as_ref(),
+        Some(&good),
+        "the last good parameters are kept"
+    );
+    assert_eq!(std::fs::read(&state).unwrap(), good_text, "the state file is untouched");
+    let mut failures = 0;
+    let mut parameters = 0;
+    let mut health = serde_json::Value::Null;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        match m.channel.topic.rsplit_once("sinello-span2/").unwrap().1 {
+            "updating/failures" => {
+                failures += 1;
+                assert!(v["error"].as_str().unwrap().contains("MaxIterations"), "{v}");
+            }
+            "updating/parameters" => parameters += 1,
+            "health" => health = v,
+            _ => {}
+        }
+    }
+    assert_eq!((failures, parameters), (6, 0));
+    assert_eq!(
+        (health["update_runs"].as_u64(), health["update_failures"].as_u64()),
+        (Some(6), Some(6))
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
