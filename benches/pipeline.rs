@@ -22,7 +22,7 @@ fn replay_bundled_recording(bencher: divan::Bencher) {
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-        replay(&cfg, &[&bytes], None, &mut w, None, None, &mut |_, _| {}).unwrap()
+        replay(&cfg, &[&bytes], &mut w, Default::default(), &mut |_, _| {}).unwrap()
     });
 }
 
@@ -40,7 +40,7 @@ fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
     let bytes = writer.finish().unwrap().into_inner();
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-        let summary = replay(&cfg, &[&bytes], None, &mut w, None, None, &mut |_, _| {}).unwrap();
+        let summary = replay(&cfg, &[&bytes], &mut w, Default::default(), &mut |_, _| {}).unwrap();
         assert_eq!(summary.updates.len(), 6);
         summary
     });

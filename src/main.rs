@@ -611,38 +611,36 @@ fn run(cli: Cli) -> Result<()> {
                     .progress_chars("=> "),
             );
             let t0 = std::time::Instant::now();
-            let summary = splinewatch::replay::replay(
-                &cfg,
-                &recordings,
+            let options = splinewatch::replay::ReplayOptions {
                 initial,
-                &mut writer,
-                viewer.as_mut(),
-                state.as_deref(),
-                &mut |p, note| {
-                    bar.set_length(p.total);
-                    bar.set_position(p.messages);
-                    if let Some(n) = note {
-                        if terminal {
-                            bar.set_message(n.to_string());
-                        } else {
-                            eprintln!("{n}");
-                        }
+                viewer: viewer.as_mut(),
+                state_path: state.as_deref(),
+                keep_latest: 1,
+            };
+            let summary = splinewatch::replay::replay(&cfg, &recordings, &mut writer, options, &mut |p, note| {
+                bar.set_length(p.total);
+                bar.set_position(p.messages);
+                if let Some(n) = note {
+                    if terminal {
+                        bar.set_message(n.to_string());
+                    } else {
+                        eprintln!("{n}");
                     }
-                },
-            )?;
+                }
+            })?;
             bar.finish_and_clear();
             writer.finish()?;
             if let Some(v) = viewer {
                 v.finish()?;
             }
             let seconds = t0.elapsed().as_secs_f64();
-            let span = summary.windows.len() as f64 * cfg.frf.window_seconds;
+            let span = summary.window_count as f64 * cfg.frf.window_seconds;
             eprintln!(
                 "replayed {} messages: {} windows ({} accepted), {} updates in {seconds:.2} s ({:.0}× real time); results in {}",
                 summary.messages,
-                summary.windows.len(),
-                summary.windows.iter().filter(|w| w.skipped.is_none()).count(),
-                summary.updates.len(),
+                summary.window_count,
+                summary.windows_accepted,
+                summary.update_count,
                 span / seconds.max(1e-9),
                 out.display()
             );

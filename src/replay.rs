@@ -8,6 +8,7 @@ use crate::results::{self, ResultsWriter};
 use crate::viewer::RerunOutput;
 use crate::wire::{self, Encoding, Limits};
 use anyhow::{Context, Result};
+use std::collections::VecDeque;
 use std::io::{Seek, Write};
 use std::path::Path;
 
@@ -18,12 +19,54 @@ pub struct Progress {
     pub total: u64,
 }
 
+/// What a replay starts from and writes besides the results file.
+pub struct ReplayOptions<'a> {
+    /// Warm start (e.g. a state file's parameters); the config's otherwise.
+    pub initial: Option<AcceptedParameters>,
+    /// Rerun output.
+    pub viewer: Option<&'a mut RerunOutput>,
+    /// State file, replaced after every accepted update.
+    pub state_path: Option<&'a Path>,
+    /// How many of the latest windows and update outcomes the summary keeps
+    /// (a month of 10-minute windows would otherwise hold about 1 GB).
+    pub keep_latest: usize,
+}
+
+impl Default for ReplayOptions<'_> {
+    fn default() -> Self {
+        Self {
+            initial: None,
+            viewer: None,
+            state_path: None,
+            keep_latest: 64,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Default)]
 pub struct ReplaySummary {
     pub messages: u64,
-    pub windows: Vec<WindowReport>,
-    pub updates: Vec<UpdateOutcome>,
+    /// Every window closed, and those accepted.
+    pub window_count: u64,
+    pub windows_accepted: u64,
+    /// The latest windows (at most `keep_latest`).
+    pub windows: VecDeque<WindowReport>,
+    /// Every update run.
+    pub update_count: u64,
+    /// The latest update outcomes (at most `keep_latest`).
+    pub updates: VecDeque<UpdateOutcome>,
     pub accepted: Option<AcceptedParameters>,
+}
+
+/// Appends `item`, dropping the oldest beyond `keep`.
+fn keep_latest<T>(list: &mut VecDeque<T>, item: T, keep: usize) {
+    if keep == 0 {
+        return;
+    }
+    if list.len() == keep {
+        list.pop_front();
+    }
+    list.push_back(item);
 }
 
 /// Replays `recordings` (MCAP files, in order: e.g. the rotated raw-input
@@ -32,12 +75,16 @@ pub struct ReplaySummary {
 pub fn replay<W: Write + Seek>(
     config: &Config,
     recordings: &[&[u8]],
-    initial: Option<AcceptedParameters>,
     out: &mut ResultsWriter<W>,
-    viewer: Option<&mut RerunOutput>,
-    state_path: Option<&Path>,
+    options: ReplayOptions<'_>,
     progress: &mut dyn FnMut(Progress, Option<&str>),
 ) -> Result<ReplaySummary> {
+    let ReplayOptions {
+        initial,
+        viewer,
+        state_path,
+        keep_latest,
+    } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
     let limits = Limits {
         max_samples: config.frf.max_block_samples,
@@ -59,6 +106,7 @@ pub fn replay<W: Write + Seek>(
         state_path,
         progress,
         total,
+        keep: keep_latest,
         last_time: 0,
         summary: ReplaySummary::default(),
     };
@@ -115,6 +163,7 @@ struct Outputs<'a, W: Write + Seek> {
     state_path: Option<&'a Path>,
     progress: &'a mut dyn FnMut(Progress, Option<&str>),
     total: u64,
+    keep: usize,
     last_time: i128,
     summary: ReplaySummary,
 }
@@ -140,7 +189,9 @@ impl<W: Write + Seek> Outputs<'_, W> {
                 None => format!("window {} accepted ({} segments)", w.index, w.segments_accepted),
             };
             self.report(Some(&note));
-            self.summary.windows.push(w);
+            self.summary.window_count += 1;
+            self.summary.windows_accepted += u64::from(w.skipped.is_none());
+            keep_latest(&mut self.summary.windows, w, self.keep);
         }
         for job in jobs {
             let outcome = job.run();
@@ -174,7 +225,8 @@ impl<W: Write + Seek> Outputs<'_, W> {
                 v.log_health(outcome.time_ns, pipeline.health())?;
             }
             self.report(Some(&note));
-            self.summary.updates.push(outcome);
+            self.summary.update_count += 1;
+            keep_latest(&mut self.summary.updates, outcome, self.keep);
         }
         Ok(())
     }

@@ -9,7 +9,7 @@
 use serde::Deserialize;
 use splinewatch::commands;
 use splinewatch::pipeline::{Pipeline, ScheduleConfig};
-use splinewatch::replay::{replay, ReplaySummary};
+use splinewatch::replay::{replay, ReplayOptions, ReplaySummary};
 use splinewatch::results::ResultsWriter;
 use splinewatch::wire::{self, Encoding, Limits};
 use std::collections::BTreeMap;
@@ -132,7 +132,7 @@ fn spliced_recording(clean: &[u8], prefix: &str) -> Vec<u8> {
 fn replay_bytes(bytes: &[u8]) -> ReplaySummary {
     let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
     let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    replay(&cfg, &[bytes], None, &mut w, None, None, &mut |_, _| {}).unwrap()
+    replay(&cfg, &[bytes], &mut w, ReplayOptions::default(), &mut |_, _| {}).unwrap()
 }
 
 fn bits(summary: &ReplaySummary) -> Vec<Vec<u64>> {

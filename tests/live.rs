@@ -102,7 +102,7 @@ fn live_and_replay_agree_on_the_bundled_recording() {
     let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
     let bytes = std::fs::read(&recording).unwrap();
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let offline = replay(&cfg, &[&bytes], None, &mut writer, None, None, &mut |_, _| {}).unwrap();
+    let offline = replay(&cfg, &[&bytes], &mut writer, Default::default(), &mut |_, _| {}).unwrap();
     assert_eq!(live.updates.len(), offline.updates.len());
     let params = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
         u.result
@@ -289,7 +289,7 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
     let recorded: Vec<Vec<u8>> = files.iter().map(|f| std::fs::read(f).unwrap()).collect();
     let recorded: Vec<&[u8]> = recorded.iter().map(Vec::as_slice).collect();
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let offline = replay(&cfg, &recorded, None, &mut writer, None, None, &mut |_, _| {}).unwrap();
+    let offline = replay(&cfg, &recorded, &mut writer, Default::default(), &mut |_, _| {}).unwrap();
     assert_eq!(live.updates.len(), offline.updates.len());
     assert!(!live.updates.is_empty());
     for (a, b) in live.updates.iter().zip(&offline.updates) {

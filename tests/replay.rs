@@ -2,7 +2,7 @@
 
 use splinewatch::commands;
 use splinewatch::config::Config;
-use splinewatch::replay::replay;
+use splinewatch::replay::{replay, ReplayOptions};
 use splinewatch::results::{load_state, save_state, ResultsWriter};
 use std::io::Cursor;
 use std::path::Path;
@@ -19,7 +19,12 @@ fn run(cfg: &Config, state: Option<&Path>) -> (Vec<u8>, splinewatch::replay::Rep
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let initial = state.and_then(|p| load_state(p).unwrap());
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let summary = replay(cfg, &[&bytes], initial, &mut writer, None, state, &mut |_, _| {}).unwrap();
+    let options = ReplayOptions {
+        initial,
+        state_path: state,
+        ..ReplayOptions::default()
+    };
+    let summary = replay(cfg, &[&bytes], &mut writer, options, &mut |_, _| {}).unwrap();
     (writer.finish().unwrap().into_inner(), summary)
 }
 
@@ -265,16 +270,11 @@ fn replay_into_rerun(cfg: &Config, targets: &splinewatch::viewer::RerunTargets) 
     let mut viewer = splinewatch::viewer::RerunOutput::open(cfg, targets).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
-    let summary = replay(
-        cfg,
-        &[&bytes],
-        None,
-        &mut writer,
-        Some(&mut viewer),
-        None,
-        &mut |_, _| {},
-    )
-    .unwrap();
+    let options = ReplayOptions {
+        viewer: Some(&mut viewer),
+        ..ReplayOptions::default()
+    };
+    let summary = replay(cfg, &[&bytes], &mut writer, options, &mut |_, _| {}).unwrap();
     viewer.finish().unwrap();
     summary
 }
@@ -331,4 +331,26 @@ fn failed_updates_keep_the_last_good_parameters_and_say_why() {
         (Some(6), Some(6))
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A long replay keeps only the latest windows and outcomes in its summary
+/// (months of data would otherwise fill memory); the counts cover them all.
+#[test]
+fn the_summary_keeps_only_the_latest_outcomes() {
+    let cfg = config();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let options = ReplayOptions {
+        keep_latest: 2,
+        ..ReplayOptions::default()
+    };
+    let summary = replay(&cfg, &[&bytes], &mut writer, options, &mut |_, _| {}).unwrap();
+    assert_eq!(
+        (summary.window_count, summary.windows_accepted, summary.update_count),
+        (6, 6, 6)
+    );
+    assert_eq!((summary.windows.len(), summary.updates.len()), (2, 2));
+    let (_, all) = run(&cfg, None);
+    assert_eq!(summary.updates[1].window, all.updates[5].window);
+    assert_eq!(summary.accepted, all.accepted);
 }
