@@ -1,7 +1,9 @@
-//! Fault injection: SIGKILL at seeded random moments of a replay with a
-//! state file. After every kill the state file is the old or the new
-//! complete version, the results MCAP is recoverable, and the recovered
-//! results hold every update the state file says was accepted.
+//! Fault injection: SIGKILL at seeded random moments of a replay, and of
+//! the live daemon fed over zenoh, with a state file. After every kill the
+//! state file is the old or the new complete version, the results MCAP is
+//! recoverable, and the recovered results hold every update the state file
+//! says was accepted; the live daemon restarts warm from that state.
+//! Also: results files on a full disk, and their rotation.
 
 #![cfg(unix)]
 
@@ -10,6 +12,9 @@ use splinewatch::results::load_state;
 use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Instant;
+
+mod common;
+use common::{free_endpoint, KillOnDrop};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -263,5 +268,118 @@ fn results_rotate_by_measurement_time_with_one_unfinalised_file_at_most() {
     assert!(!dir.join("results-4.mcap").exists());
     // Every message, once, in order.
     assert_eq!(seen, (-1..=21).collect::<Vec<i64>>());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Parameter messages `(window, time)` in recovered results.
+fn recovered_updates(recovered: &[u8]) -> Vec<(u64, String)> {
+    mcap::MessageStream::new(recovered)
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.channel.topic.ends_with("updating/parameters"))
+        .map(|m| {
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            (v["window"].as_u64().unwrap(), v["time"].as_str().unwrap().to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn sigkill_of_the_live_daemon_loses_nothing_that_was_reported() {
+    let dir = std::env::temp_dir().join(format!("splinewatch-livekill-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let endpoint = free_endpoint();
+    let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
+        + &format!("\n[zenoh]\nmode = \"peer\"\nlisten = [\"{endpoint}\"]\nmulticast_scouting = false\n");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, text).unwrap();
+    let cfg = splinewatch::commands::load_config(&config).unwrap();
+    let logger = splinewatch::daemon::ZenohConfig {
+        mode: "client".into(),
+        listen: Vec::new(),
+        connect: vec![endpoint.clone()],
+        ..cfg.zenoh.clone()
+    };
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    let blocks: Vec<_> = blocks.into_iter().map(|b| b.block).collect();
+    let state = dir.join("state.json");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2027);
+    let mut before = None;
+    let (mut kills, mut saved_updates, mut warm_starts) = (0, 0, 0);
+    for round in 0..6 {
+        let results = dir.join(format!("results-{round}.mcap"));
+        let log = dir.join(format!("daemon-{round}.log"));
+        let daemon = KillOnDrop(Some(
+            Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+                .args([
+                    "run",
+                    "--config",
+                    config.to_str().unwrap(),
+                    "--state",
+                    state.to_str().unwrap(),
+                    "--out",
+                ])
+                .arg(&results)
+                .env("RUST_LOG", "info,zenoh=warn")
+                .stdout(Stdio::null())
+                .stderr(std::fs::File::create(&log).unwrap())
+                .spawn()
+                .unwrap(),
+        ));
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        // The logger streams the recording at 20x (6 s) while the daemon is
+        // killed at a random moment of it.
+        let (logger, prefix, blocks) = (logger.clone(), cfg.topic_prefix(), blocks.clone());
+        let publisher = std::thread::spawn(move || {
+            let mut p =
+                splinewatch::daemon::Publisher::open(&logger, prefix, splinewatch::wire::Encoding::Cbor, 20.0).unwrap();
+            for b in &blocks {
+                p.publish(b).unwrap();
+            }
+            p.close().unwrap();
+        });
+        std::thread::sleep(std::time::Duration::from_secs_f64(rng.random_range(0.3..6.5)));
+        let mut child = daemon.take();
+        assert!(Command::new("kill")
+            .args(["-KILL", &child.id().to_string()])
+            .status()
+            .unwrap()
+            .success());
+        let _ = child.wait();
+        kills += 1;
+        publisher.join().unwrap();
+        let text = std::fs::read_to_string(&log).unwrap();
+        if before.is_some() {
+            assert!(
+                text.contains("warm start from the state file"),
+                "round {round}: no warm start\n{text}"
+            );
+            warm_starts += 1;
+        }
+        // (a) the state is a complete version.
+        let saved = load_state(&state).unwrap_or_else(|e| panic!("round {round}: state file damaged: {e:#}"));
+        // (b) the results are recoverable.
+        let (_, recovered) =
+            splinewatch::recover::recover(&std::fs::read(&results).unwrap(), std::io::Cursor::new(Vec::new()))
+                .unwrap_or_else(|e| panic!("round {round}: results not recoverable: {e:#}"));
+        let recovered = recovered.into_inner();
+        // (c) an update this run saved in the state is in its results.
+        if saved != before {
+            let s = saved.clone().expect("a state once written stays");
+            let updates = recovered_updates(&recovered);
+            assert!(
+                updates.contains(&(s.window, s.time.clone())),
+                "round {round}: the state says window {} at {} was accepted; the results have {updates:?}",
+                s.window,
+                s.time
+            );
+            saved_updates += 1;
+        }
+        before = saved;
+    }
+    eprintln!("live daemon: {kills} SIGKILLs, {saved_updates} of them after a newly saved update, {warm_starts} warm restarts");
+    assert!(saved_updates >= 2, "the kills should not all land before an update");
     std::fs::remove_dir_all(&dir).unwrap();
 }
