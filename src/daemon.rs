@@ -121,6 +121,26 @@ pub struct RunSummary {
     pub accepted: Option<AcceptedParameters>,
 }
 
+/// Logs the input rejected since the last call, by reason, as one warning:
+/// called on the health tick, so a flood of bad input costs one log line per
+/// tick, and nothing is logged while the input is clean.
+fn log_new_rejections(
+    rejected: &std::collections::BTreeMap<String, u64>,
+    logged: &mut std::collections::BTreeMap<String, u64>,
+) {
+    let new: std::collections::BTreeMap<&str, u64> = rejected
+        .iter()
+        .filter_map(|(reason, &count)| {
+            let before = logged.get(reason).copied().unwrap_or(0);
+            (count > before).then_some((reason.as_str(), count - before))
+        })
+        .collect();
+    if !new.is_empty() {
+        tracing::warn!(message = "input rejected since the last report", by_reason = ?new, total = ?rejected);
+        logged.clone_from(rejected);
+    }
+}
+
 /// The zenoh key of a result message. FRF results go under
 /// `<prefix>/updating/frf/…`: `<prefix>/frf/**` is an input (pre-computed
 /// FRFs), and the daemon must not receive its own output there.
@@ -266,6 +286,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     let mut waiting: Option<UpdateJob> = None;
     let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
     let mut last_time: i128 = 0;
+    // Rejections already logged: one warning per health tick covers the rest.
+    let mut logged_rejections = std::collections::BTreeMap::new();
     tokio::pin!(shutdown);
     let publish = |session: &zenoh::Session, suffix: &str, v: &serde_json::Value| {
         let key = zenoh_result_key(&prefix, suffix);
@@ -344,6 +366,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                     let r = v.log_health(last_time, pipeline.health());
                     count_output_error(r, &mut pipeline.health_mut().rerun_errors, 100, "Rerun");
                 }
+                log_new_rejections(&pipeline.health().rejected, &mut logged_rejections);
                 notify_systemd(&[sd_notify::NotifyState::Watchdog]);
             }
         }
@@ -371,6 +394,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         last_time = w.end_ns;
         writer.write("windows", w.end_ns, &results::window_message(w));
     }
+    log_new_rejections(&pipeline.health().rejected, &mut logged_rejections);
     pipeline.health_mut().queue_drops = job_drops + ingest_drops.load(Ordering::Relaxed);
     if let Some(mut r) = recorder.take() {
         count_output_error(

@@ -10,6 +10,7 @@ pub mod config;
 pub mod daemon;
 pub mod demo;
 pub mod estimate;
+pub mod files;
 pub mod frf_json;
 pub mod paper;
 pub mod pipeline;

@@ -551,7 +551,7 @@ fn run(cli: Cli) -> Result<()> {
                 let stem = name.trim_end_matches(".part").trim_end_matches(".mcap");
                 input.with_file_name(format!("{stem}.recovered.mcap"))
             });
-            let file = std::fs::File::create(&out).with_context(|| format!("cannot create {}", out.display()))?;
+            let file = splinewatch::files::create_output_file(&out)?;
             let (report, w) = splinewatch::recover::recover(&bytes, std::io::BufWriter::new(file))
                 .with_context(|| format!("recovering {}", input.display()))?;
             w.into_inner()

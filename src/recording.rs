@@ -47,8 +47,7 @@ pub struct RecordingWriter<W: Write + Seek> {
 
 impl RecordingWriter<BufWriter<File>> {
     pub fn create(path: &Path, encoding: Encoding) -> Result<Self> {
-        let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-        Self::new(BufWriter::new(file), encoding)
+        Self::new(BufWriter::new(crate::files::create_output_file(path)?), encoding)
     }
 }
 

@@ -348,11 +348,7 @@ pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File
 
 /// Creates `path` (and its folder) for buffered writing.
 fn create_buffered(path: &Path) -> Result<BufWriter<File>> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    }
-    let file = File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    Ok(BufWriter::new(file))
+    Ok(BufWriter::new(crate::files::create_output_file(path)?))
 }
 
 /// Writes the state atomically: temporary file in the same folder, fsync,
@@ -369,7 +365,7 @@ pub fn save_state(path: &Path, state: &AcceptedParameters) -> Result<()> {
         path.file_name().and_then(|n| n.to_str()).unwrap_or("state.json")
     ));
     {
-        let mut f = File::create(&tmp).with_context(|| format!("cannot create {}", tmp.display()))?;
+        let mut f = crate::files::create_output_file(&tmp)?;
         serde_json::to_writer_pretty(&mut f, state)?;
         f.write_all(b"\n")?;
         f.sync_all()

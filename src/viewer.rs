@@ -101,7 +101,11 @@ impl RerunOutput {
                 p.with_file_name(format!("{stem}-{stamp}.rrd"))
             }
         });
-        let file = |p: &PathBuf| rerun::sink::FileSink::new(p).map_err(|e| anyhow!("Rerun file {}: {e}", p.display()));
+        // Created first with our permissions; the sink truncates and keeps them.
+        let file = |p: &PathBuf| {
+            crate::files::create_output_file(p)?;
+            rerun::sink::FileSink::new(p).map_err(|e| anyhow!("Rerun file {}: {e}", p.display()))
+        };
         let grpc = |url: &String| -> Result<rerun::sink::GrpcSink> {
             let uri = url
                 .parse::<rerun::external::re_uri::ProxyUri>()

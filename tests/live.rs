@@ -192,6 +192,14 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
     assert!(summary.stats.unwrap().message_count > 0);
     let saved = load_state(&state).unwrap().expect("state file");
     assert_eq!(saved.parameters.len(), 15);
+    // Outputs carry explicit permissions (rw-r-----), whatever the umask.
+    {
+        use std::os::unix::fs::PermissionsExt;
+        for f in [dir.join("first.mcap"), state.clone(), dir.join("first.rrd")] {
+            let mode = std::fs::metadata(&f).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, splinewatch::files::OUTPUT_FILE_MODE, "{}: {mode:o}", f.display());
+        }
+    }
     // The .rrd is complete (footer) and holds the update.
     let rrd = splinewatch::viewer::inspect_rrd(&std::fs::read(dir.join("first.rrd")).unwrap()).unwrap();
     assert!(rrd.footer, "the .rrd was not finalised");
@@ -284,6 +292,14 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
         .collect();
     files.sort();
     assert!(files.iter().all(|f| f.extension().unwrap() == "mcap"), "{files:?}");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        for f in &files {
+            let mode = std::fs::metadata(f).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode, splinewatch::files::OUTPUT_FILE_MODE, "{}: {mode:o}", f.display());
+        }
+    }
     assert_eq!(files.len(), 4, "{files:?}");
     // Replaying the rotated files reproduces the live parameters exactly.
     let recorded: Vec<Vec<u8>> = files.iter().map(|f| std::fs::read(f).unwrap()).collect();

@@ -181,6 +181,9 @@ fn authenticated_clients_and_access_control_keep_forged_data_out() {
     logger
         .publish_json("updating/parameters", br#"{"forged": true}"#.to_vec())
         .unwrap();
+    // A garbled measurement from the logger gets through the router and is
+    // rejected (and logged) by the daemon.
+    logger.publish_json("accel/P3", b"{garbled".to_vec()).unwrap();
     for b in &blocks {
         logger.publish(&b.block).unwrap();
     }
@@ -220,6 +223,11 @@ fn authenticated_clients_and_access_control_keep_forged_data_out() {
         .expect("a health message");
     let health: serde_json::Value = serde_json::from_slice(&last_health.data).unwrap();
     assert_eq!(health["blocks"].as_u64().unwrap(), blocks.len() as u64, "{health}");
+    assert_eq!(health["rejected"], serde_json::json!({"malformed": 1}), "{health}");
+    assert!(
+        log.contains("input rejected since the last report"),
+        "the rejection was not logged"
+    );
 
     // The dashboard got the daemon's parameters and none of the forged ones.
     let received: Vec<serde_json::Value> = parameters
