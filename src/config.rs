@@ -725,6 +725,20 @@ impl Config {
                 format!("must be at least 0.01, got {}", raw.rotate_megabytes),
             ));
         }
+        for (key, endpoints) in [
+            ("zenoh.listen", &self.zenoh.listen),
+            ("zenoh.connect", &self.zenoh.connect),
+        ] {
+            if let Some((i, e)) = endpoints.iter().enumerate().find(|(_, e)| !e.starts_with("tcp/")) {
+                return Err(err(
+                    format!("{key}[{i}]"),
+                    format!(
+                        "{e:?}: this build speaks zenoh over TCP only (\"tcp/<host>:<port>\"); \
+                         for encryption see README, \"Transport security\""
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 

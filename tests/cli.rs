@@ -70,6 +70,11 @@ fn bad_config_is_a_clear_error_not_a_panic() {
             "model.springs[0].knots_eta: not non-decreasing at index 4",
         ),
         ("not-toml.toml", "this is = = not toml".to_string(), "line 1"),
+        (
+            "tls-endpoint.toml",
+            good.clone() + "\n[zenoh]\nlisten = [\"tls/127.0.0.1:7447\"]\n",
+            "zenoh.listen[0]: \"tls/127.0.0.1:7447\": this build speaks zenoh over TCP only",
+        ),
     ];
     for (name, text, expected) in cases {
         let path = temp_config(name, &text);
