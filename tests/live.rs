@@ -9,7 +9,7 @@ use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{free_endpoint, KillOnDrop};
+use common::{free_endpoint, spawn_daemon, KillOnDrop};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -450,28 +450,18 @@ fn open_router(endpoint: &str) -> zenoh::Session {
 /// state and results in `dir`; returns the process, config and state paths.
 #[cfg(unix)]
 fn spawn_client_daemon(dir: &Path, endpoint: &str) -> (KillOnDrop, PathBuf, PathBuf) {
-    use std::process::{Command, Stdio};
     let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
         + &format!("\n[zenoh]\nmode = \"client\"\nconnect = [\"{endpoint}\"]\nmulticast_scouting = false\n");
     let config = dir.join("config.toml");
     std::fs::write(&config, text).unwrap();
     let state = dir.join("state.json");
-    let daemon = KillOnDrop(Some(
-        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-            .args([
-                "run",
-                "--config",
-                config.to_str().unwrap(),
-                "--state",
-                state.to_str().unwrap(),
-                "--out",
-            ])
-            .arg(dir.join("results.mcap"))
-            .env("RUST_LOG", "info,zenoh=warn")
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap(),
-    ));
+    let results = dir.join("results.mcap");
+    let daemon = spawn_daemon(
+        &config,
+        &state,
+        &results,
+        "info,zenoh=warn",
+        std::process::Stdio::piped(),
+    );
     (daemon, config, state)
 }

@@ -14,7 +14,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 mod common;
-use common::{free_endpoint, KillOnDrop};
+use common::{free_endpoint, spawn_daemon};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -311,23 +311,8 @@ fn sigkill_of_the_live_daemon_loses_nothing_that_was_reported() {
     for round in 0..6 {
         let results = dir.join(format!("results-{round}.mcap"));
         let log = dir.join(format!("daemon-{round}.log"));
-        let daemon = KillOnDrop(Some(
-            Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-                .args([
-                    "run",
-                    "--config",
-                    config.to_str().unwrap(),
-                    "--state",
-                    state.to_str().unwrap(),
-                    "--out",
-                ])
-                .arg(&results)
-                .env("RUST_LOG", "info,zenoh=warn")
-                .stdout(Stdio::null())
-                .stderr(std::fs::File::create(&log).unwrap())
-                .spawn()
-                .unwrap(),
-        ));
+        let log_file = std::fs::File::create(&log).unwrap();
+        let daemon = spawn_daemon(&config, &state, &results, "info,zenoh=warn", log_file.into());
         std::thread::sleep(std::time::Duration::from_millis(1500));
         // The logger streams the recording at 20x (6 s) while the daemon is
         // killed at a random moment of it.

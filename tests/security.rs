@@ -10,12 +10,12 @@ use splinewatch::daemon::{Publisher, ZenohConfig};
 use splinewatch::results::load_state;
 use splinewatch::wire::Encoding;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 use zenoh::Wait;
 
 mod common;
-use common::{free_endpoint, KillOnDrop};
+use common::{free_endpoint, spawn_daemon};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -100,24 +100,9 @@ fn authenticated_clients_and_access_control_keep_forged_data_out() {
     std::fs::write(&config, text).unwrap();
     let state = dir.join("state.json");
     let results = dir.join("results.mcap");
-    let daemon = KillOnDrop(Some(
-        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-            .args([
-                "run",
-                "--config",
-                config.to_str().unwrap(),
-                "--state",
-                state.to_str().unwrap(),
-                "--out",
-            ])
-            .arg(&results)
-            // Everything at debug level, to a file (a pipe could fill and stall it).
-            .env("RUST_LOG", "debug")
-            .stdout(Stdio::null())
-            .stderr(std::fs::File::create(dir.join("daemon.log")).unwrap())
-            .spawn()
-            .unwrap(),
-    ));
+    // Everything at debug level, to a file (a pipe could fill and stall it).
+    let log_file = std::fs::File::create(dir.join("daemon.log")).unwrap();
+    let daemon = spawn_daemon(&config, &state, &results, "debug", log_file.into());
 
     // The dashboard reads the results.
     let dashboard = zenoh::open(client_config(

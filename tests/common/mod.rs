@@ -30,3 +30,29 @@ impl Drop for KillOnDrop {
         }
     }
 }
+
+/// `splinewatch run --config … --state … --out …` with `RUST_LOG` set and
+/// its log going to `log` (a file, or a pipe the test reads at the end).
+pub fn spawn_daemon(
+    config: &std::path::Path,
+    state: &std::path::Path,
+    results: &std::path::Path,
+    rust_log: &str,
+    log: std::process::Stdio,
+) -> KillOnDrop {
+    KillOnDrop(Some(
+        std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .arg("run")
+            .arg("--config")
+            .arg(config)
+            .arg("--state")
+            .arg(state)
+            .arg("--out")
+            .arg(results)
+            .env("RUST_LOG", rust_log)
+            .stdout(std::process::Stdio::null())
+            .stderr(log)
+            .spawn()
+            .unwrap(),
+    ))
+}
