@@ -120,6 +120,10 @@ pub struct FrfConfig {
     pub band: [f64; 2],
     /// Analysis window of the daemon, seconds.
     pub window_seconds: f64,
+    /// Time between the starts of consecutive windows, seconds (at most
+    /// `window_seconds`; less gives overlapping windows). Default: the window
+    /// length, back to back.
+    pub window_hop_seconds: Option<f64>,
     /// Reject segments reaching this magnitude (overload), optional.
     pub full_scale: Option<f64>,
     /// Impact tests: reject segments with a second hit above this fraction of the peak.
@@ -144,6 +148,7 @@ impl Default for FrfConfig {
             exponential_weight: 0.05,
             band: [0.5, 80.0],
             window_seconds: 600.0,
+            window_hop_seconds: None,
             full_scale: None,
             double_impact_fraction: None,
             quantity: Quantity::Accelerance,
@@ -869,6 +874,17 @@ impl Config {
         }
         if !(f.window_seconds.is_finite() && f.window_seconds >= f.segment_seconds) {
             return Err(err("frf.window_seconds", "must be at least one segment long"));
+        }
+        if let Some(hop) = f.window_hop_seconds {
+            if !(hop.is_finite() && hop * fs >= 1.0 && hop <= f.window_seconds) {
+                return Err(err(
+                    "frf.window_hop_seconds",
+                    format!(
+                        "must be between one sample and frf.window_seconds ({} s), got {hop}",
+                        f.window_seconds
+                    ),
+                ));
+            }
         }
         let settings = WelchSettings {
             fs,

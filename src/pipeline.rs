@@ -265,10 +265,16 @@ pub struct Pipeline {
     /// Blocks held until the sampling rate and time origin are agreed on
     /// ([`Self::establish_reference`]).
     pending: Vec<ChannelBlock>,
-    welch: Option<(WelchEstimator, Estimator)>,
+    /// Welch settings and FRF estimator, once the rate is known.
+    welch: Option<(WelchSettings, Estimator)>,
+    /// Windows being estimated (several when they overlap), oldest first:
+    /// window `k` spans grid samples `[k·hop, k·hop + window_samples)`.
+    open: VecDeque<(u64, WelchEstimator)>,
     window_samples: i64,
-    /// Grid index fed to the estimator so far.
+    hop_samples: i64,
+    /// Grid index fed to the estimators so far.
     fed: i64,
+    /// The next window to open.
     window_index: u64,
     accepted_since_update: u64,
     /// Pre-computed FRFs received on `<prefix>/frf/<input>/<output>`, by pair,
@@ -335,7 +341,9 @@ impl Pipeline {
             t0: None,
             pending: Vec::new(),
             welch: None,
+            open: VecDeque::new(),
             window_samples: 0,
+            hop_samples: 0,
             fed: 0,
             window_index: 0,
             accepted_since_update: 0,
@@ -488,10 +496,12 @@ impl Pipeline {
         match self.config.welch_settings(fs) {
             Ok((settings, estimator)) => {
                 self.window_samples = (self.config.frf.window_seconds * fs).round() as i64;
-                self.welch = Some((
-                    WelchEstimator::new(settings, self.accels.len()).expect("validated"),
-                    estimator,
-                ));
+                self.hop_samples = self
+                    .config
+                    .frf
+                    .window_hop_seconds
+                    .map_or(self.window_samples, |hop| ((hop * fs).round() as i64).max(1));
+                self.welch = Some((settings, estimator));
             }
             Err(_) => {
                 for _ in &pending {
@@ -589,17 +599,29 @@ impl Pipeline {
         self.feed(windows, jobs);
     }
 
-    /// Feeds every sample available on all channels, closing windows.
+    /// Feeds every sample available on all channels to the open windows,
+    /// opening and closing windows on the way.
     fn feed(&mut self, windows: &mut Vec<WindowReport>, jobs: &mut Vec<UpdateJob>) {
         loop {
+            let next_start = self.window_index as i64 * self.hop_samples;
+            if next_start == self.fed {
+                let (settings, _) = self.welch.as_ref().expect("set with the reference");
+                let estimator = WelchEstimator::new(settings.clone(), self.accels.len()).expect("validated");
+                self.open.push_back((self.window_index, estimator));
+                self.window_index += 1;
+                continue;
+            }
             let frontier = self
                 .queues
                 .iter()
                 .map(|q| if q.seen { q.end() } else { self.fed })
                 .min()
                 .unwrap_or(self.fed);
-            let window_end = (self.window_index as i64 + 1) * self.window_samples;
-            let until = frontier.min(window_end);
+            let oldest_end = self
+                .open
+                .front()
+                .map_or(i64::MAX, |(k, _)| *k as i64 * self.hop_samples + self.window_samples);
+            let until = frontier.min(next_start).min(oldest_end);
             if until > self.fed {
                 let n = (until - self.fed) as usize;
                 let mut take = |q: &mut ChannelQueue| -> Vec<f64> {
@@ -611,13 +633,15 @@ impl Pipeline {
                     v
                 };
                 let cols: Vec<Vec<f64>> = self.queues.iter_mut().map(&mut take).collect();
-                let (welch, _) = self.welch.as_mut().expect("created with the first block");
                 let outputs: Vec<&[f64]> = cols[1..].iter().map(|v| v.as_slice()).collect();
-                welch.push(&cols[0], &outputs).expect("equal lengths by construction");
+                for (_, welch) in &mut self.open {
+                    welch.push(&cols[0], &outputs).expect("equal lengths by construction");
+                }
                 self.fed = until;
             }
-            if self.fed == window_end {
-                let report = self.close_window();
+            if self.fed == oldest_end {
+                let (index, welch) = self.open.pop_front().expect("an open window ends here");
+                let report = self.close_window(index, welch);
                 if report.skipped.is_none() {
                     self.accepted_since_update += 1;
                     let since = *self
@@ -642,14 +666,13 @@ impl Pipeline {
         }
     }
 
-    fn close_window(&mut self) -> WindowReport {
+    fn close_window(&mut self, index: u64, welch: WelchEstimator) -> WindowReport {
         let fs = self.fs.expect("set with the first block");
         let t0 = self.t0.expect("set with the first block");
-        let index = self.window_index;
-        self.window_index += 1;
-        let start_ns = t0 + ((index as i64 * self.window_samples) as f64 * 1e9 / fs).round() as i128;
-        let end_ns = t0 + (((index + 1) as i64 * self.window_samples) as f64 * 1e9 / fs).round() as i128;
-        let (welch, estimator) = self.welch.as_mut().expect("created with the first block");
+        let start = index as i64 * self.hop_samples;
+        let start_ns = t0 + (start as f64 * 1e9 / fs).round() as i128;
+        let end_ns = t0 + ((start + self.window_samples) as f64 * 1e9 / fs).round() as i128;
+        let (_, estimator) = self.welch.as_ref().expect("set with the reference");
         let counts = welch.counts();
         self.health.segments_accepted += counts.accepted;
         self.health.segments_rejected += counts.rejected();
@@ -695,7 +718,6 @@ impl Pipeline {
             None => self.health.windows_accepted += 1,
             Some(reason) => *self.health.windows_skipped.entry(reason.clone()).or_insert(0) += 1,
         }
-        welch.reset();
         report
     }
 

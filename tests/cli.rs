@@ -71,6 +71,14 @@ fn bad_config_is_a_clear_error_not_a_panic() {
         ),
         ("not-toml.toml", "this is = = not toml".to_string(), "line 1"),
         (
+            "hop-longer-than-window.toml",
+            good.replace(
+                "window_seconds = 20.0",
+                "window_seconds = 20.0\nwindow_hop_seconds = 30.0",
+            ),
+            "frf.window_hop_seconds: must be between one sample and frf.window_seconds (20 s), got 30",
+        ),
+        (
             "tls-endpoint.toml",
             good.clone() + "\n[zenoh]\nlisten = [\"tls/127.0.0.1:7447\"]\n",
             "zenoh.listen[0]: \"tls/127.0.0.1:7447\": this build speaks zenoh over TCP only",

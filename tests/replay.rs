@@ -354,3 +354,40 @@ fn the_summary_keeps_only_the_latest_outcomes() {
     assert_eq!(summary.updates[1].window, all.updates[5].window);
     assert_eq!(summary.accepted, all.accepted);
 }
+
+/// Overlapping windows (`frf.window_hop_seconds` < `window_seconds`): 20 s
+/// windows every 10 s over the two minutes give 11 windows; every other one
+/// is exactly a window of the back-to-back replay (each window has its own
+/// estimator fed the same samples), the ones in between are new.
+#[test]
+fn overlapping_windows_every_hop() {
+    let plain = config();
+    let mut overlapping = config();
+    overlapping.frf.window_hop_seconds = Some(10.0);
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let windows = |cfg: &Config| {
+        let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+        let options = ReplayOptions {
+            keep_latest: usize::MAX,
+            ..ReplayOptions::default()
+        };
+        replay(cfg, &[&bytes], &mut w, options, &mut |_, _| {}).unwrap()
+    };
+    let (a, b) = (windows(&plain), windows(&overlapping));
+    assert_eq!((a.window_count, b.window_count), (6, 11));
+    assert_eq!(b.update_count, 11);
+    let t0 = a.windows[0].start_ns;
+    for (k, w) in b.windows.iter().enumerate() {
+        assert_eq!(w.index, k as u64);
+        assert_eq!(w.start_ns - t0, k as i128 * 10_000_000_000);
+        assert_eq!(w.end_ns - w.start_ns, 20_000_000_000);
+        assert!(w.skipped.is_none(), "window {k}: {:?}", w.skipped);
+        if k % 2 == 0 {
+            let same = &a.windows[k / 2];
+            assert_eq!((same.start_ns, same.end_ns), (w.start_ns, w.end_ns));
+            assert_eq!(same.frf, w.frf, "window {k}");
+        } else {
+            assert_ne!(a.windows[k / 2].frf, w.frf);
+        }
+    }
+}
