@@ -272,6 +272,9 @@ pub struct UpdatingConfig {
     /// root mean square over the parameters (Bates & Watts' relative offset).
     #[serde(default = "default_offset_tolerance")]
     pub offset_tolerance: f64,
+    /// Threads for the FRF evaluation (results do not depend on it); default:
+    /// the available cores, at most 4.
+    pub threads: Option<usize>,
     #[serde(default = "default_method")]
     pub method: Method,
     #[serde(default = "default_weighting")]
@@ -947,6 +950,11 @@ impl Config {
         if u.max_iterations == 0 {
             return Err(err("updating.max_iterations", "must be at least 1"));
         }
+        let threads = match u.threads {
+            Some(n @ 1..=64) => n,
+            Some(n) => return Err(err("updating.threads", format!("must be between 1 and 64, got {n}"))),
+            None => std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
+        };
         if u.decimation == 0 {
             return Err(err("updating.decimation", "must be at least 1"));
         }
@@ -977,6 +985,7 @@ impl Config {
                 exclude,
             },
             initial_damping: u.initial_damping,
+            threads,
         })
     }
 }

@@ -236,6 +236,75 @@ impl FrfModel {
     /// real/imaginary parts.
     #[track_caller]
     pub fn evaluate(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> FrfEvaluation {
+        self.evaluate_on_threads(state, request, sensitivities, 1)
+    }
+
+    /// [`Self::evaluate`] on up to `threads` threads, each taking a
+    /// contiguous run of whole frequency blocks. Every block is computed
+    /// exactly as in the sequential call, so the result is the same bit for
+    /// bit whatever the thread count.
+    #[track_caller]
+    pub fn evaluate_on_threads(
+        &self,
+        state: &ModalState,
+        request: FrfRequest<'_>,
+        sensitivities: bool,
+        threads: usize,
+    ) -> FrfEvaluation {
+        let nf = request.frequencies_hz.len();
+        let blocks = nf.div_ceil(FREQUENCY_BLOCK);
+        let threads = threads.clamp(1, blocks.max(1));
+        if threads == 1 {
+            return self.evaluate_lines(state, request, sensitivities);
+        }
+        let per_thread = blocks.div_ceil(threads) * FREQUENCY_BLOCK;
+        let ranges: Vec<(usize, usize)> = (0..nf)
+            .step_by(per_thread)
+            .map(|a| (a, (a + per_thread).min(nf)))
+            .collect();
+        let parts: Vec<FrfEvaluation> = std::thread::scope(|scope| {
+            let handles: Vec<_> = ranges
+                .iter()
+                .map(|&(a, b)| {
+                    let part = FrfRequest {
+                        frequencies_hz: &request.frequencies_hz[a..b],
+                        ..request
+                    };
+                    scope.spawn(move || self.evaluate_lines(state, part, sensitivities))
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+                .collect()
+        });
+        // Reassemble the pair-major layouts `[pair * n_f + line]`.
+        let np = request.pairs.len();
+        let merge = |column: &dyn Fn(&FrfEvaluation) -> &Vec<c64>| -> Vec<c64> {
+            let mut all = vec![c64::new(0.0, 0.0); np * nf];
+            for ((a, b), part) in ranges.iter().zip(&parts) {
+                let n = b - a;
+                for p in 0..np {
+                    all[p * nf + a..p * nf + b].copy_from_slice(&column(part)[p * n..(p + 1) * n]);
+                }
+            }
+            all
+        };
+        let first = &parts[0];
+        FrfEvaluation {
+            h: merge(&|e| &e.h),
+            dh_dkappa: (0..first.dh_dkappa.len())
+                .map(|j| merge(&|e| &e.dh_dkappa[j]))
+                .collect(),
+            dh_dgamma: (0..first.dh_dgamma.len())
+                .map(|z| merge(&|e| &e.dh_dgamma[z]))
+                .collect(),
+        }
+    }
+
+    /// The sequential evaluation.
+    #[track_caller]
+    fn evaluate_lines(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> FrfEvaluation {
         let nf = request.frequencies_hz.len();
         let np = request.pairs.len();
         for &(r, s) in request.pairs {

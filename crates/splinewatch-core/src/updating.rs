@@ -249,6 +249,8 @@ pub struct UpdateSettings {
     pub lines: LineSelection,
     /// Initial damping `λ0 = initial_damping · max diag(JᵀJ)`.
     pub initial_damping: f64,
+    /// Threads for the FRF evaluation; the result does not depend on it.
+    pub threads: usize,
 }
 
 impl Default for UpdateSettings {
@@ -262,6 +264,7 @@ impl Default for UpdateSettings {
             weighting: Weighting::Uniform,
             lines: LineSelection::default(),
             initial_damping: 1e-3,
+            threads: 1,
         }
     }
 }
@@ -519,7 +522,9 @@ impl<'a> UpdateProblem<'a> {
 
     /// Weighted residual and, if asked, `∂r/∂p` for a computed modal state.
     fn evaluate_state(&self, p: &[f64], state: &ModalState, jacobian: bool) -> Result<Evaluation, UpdateError> {
-        let eval = self.model.evaluate(state, self.request(), jacobian);
+        let eval = self
+            .model
+            .evaluate_on_threads(state, self.request(), jacobian, self.settings.threads);
         let nl = self.lines.len();
         let nb = self.pairs.len();
         let mut residual = Vec::with_capacity(2 * nl * nb);
