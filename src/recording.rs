@@ -129,13 +129,37 @@ pub struct RejectedMessage {
     pub error: WireError,
 }
 
+/// The largest record (message or chunk) a recording may hold: far above
+/// what splinewatch or the usual MCAP writers produce, small enough that a
+/// damaged length field cannot make the reader ask for gigabytes.
+pub const MAX_RECORD_BYTES: usize = 256 << 20;
+
+/// The messages of an in-memory MCAP file in file order, chunk CRCs checked
+/// and record lengths bounded by [`MAX_RECORD_BYTES`]. (`mcap::MessageStream`
+/// trusts a damaged length field inside a chunk and the process aborts
+/// trying to allocate it.) `salvage` reads a file that has no end (a killed
+/// writer) up to its last complete record.
+pub fn mcap_messages(
+    bytes: &[u8],
+    salvage: bool,
+) -> Result<impl Iterator<Item = mcap::McapResult<mcap::Message<'static>>> + '_> {
+    if !bytes.starts_with(mcap::MAGIC) {
+        anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
+    }
+    let options = mcap::sans_io::LinearReaderOptions::default()
+        .with_record_length_limit(MAX_RECORD_BYTES)
+        .with_validate_chunk_crcs(true)
+        .with_skip_end_magic(salvage);
+    Ok(mcap::io::MessageReader::new_with_options(bytes, options))
+}
+
 /// Reads every raw-input block of a recording, in file order. Messages on
 /// topics that are not `…/accel/…` or `…/force/…`, or with another encoding,
 /// are skipped; undecodable ones are returned in the second list.
 pub fn read_recording(bytes: &[u8], limits: &Limits) -> Result<(Vec<RecordedBlock>, Vec<RejectedMessage>)> {
     let mut blocks = Vec::new();
     let mut rejected = Vec::new();
-    for message in mcap::MessageStream::new(bytes).context("not a readable MCAP file")? {
+    for message in mcap_messages(bytes, false)? {
         let message = message.context("corrupt MCAP record")?;
         let topic = &message.channel.topic;
         if !(topic.contains("/accel/") || topic.contains("/force/")) {

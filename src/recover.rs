@@ -21,8 +21,7 @@ pub struct RecoverReport {
 
 pub fn recover<W: Write + Seek>(bytes: &[u8], out: W) -> Result<(RecoverReport, W)> {
     let was_complete = matches!(mcap::Summary::read(bytes), Ok(Some(_)));
-    let options = enumset::EnumSet::from(mcap::read::Options::IgnoreEndMagic) | mcap::read::Options::ValidateChunkCrcs;
-    let stream = mcap::MessageStream::new_with_options(bytes, options).context("not an MCAP file (bad header)")?;
+    let stream = crate::recording::mcap_messages(bytes, true)?;
     let mut writer = crate::recording::mcap_options()
         .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION"), " (recovered)"))
         .create(out)

@@ -111,7 +111,7 @@ pub fn replay<W: Write + Seek>(
         summary: ReplaySummary::default(),
     };
     let messages = recordings.iter().enumerate().map(|(k, bytes)| {
-        mcap::MessageStream::new(bytes).with_context(|| format!("recording {}: not a readable MCAP file", k + 1))
+        crate::recording::mcap_messages(bytes, false).with_context(|| format!("recording {}", k + 1))
     });
     for message in messages.collect::<Result<Vec<_>>>()?.into_iter().flatten() {
         let message = message.context("corrupt MCAP record")?;
