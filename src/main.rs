@@ -706,6 +706,8 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::CheckConfig { config } => {
             let cfg = commands::load_config(&config)?;
+            // The zenoh session settings too: the JSON5 file and our keys on top.
+            cfg.zenoh.to_zenoh()?;
             println!("{}: configuration is valid", cfg.structure.name);
         }
     }

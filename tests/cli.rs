@@ -100,6 +100,33 @@ fn bad_config_is_a_clear_error_not_a_panic() {
 }
 
 #[test]
+fn check_config_validates_the_zenoh_settings_too() {
+    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
+    let missing = temp_config(
+        "zenoh-file-missing.toml",
+        &(good.clone() + "\n[zenoh]\nconfig_file = \"/nonexistent/zenoh.json5\"\n"),
+    );
+    let out = splinewatch(&["check-config", missing.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("zenoh.config_file /nonexistent/zenoh.json5"),
+        "{stderr}"
+    );
+    // The example site configuration passes.
+    let example = concat!(env!("CARGO_MANIFEST_DIR"), "/config/zenoh/splinewatch-client.json5");
+    let ok = temp_config(
+        "zenoh-example.toml",
+        &(good
+            + &format!(
+                "\n[zenoh]\nmode = \"client\"\nconnect = [\"tcp/192.0.2.10:7447\"]\nconfig_file = {example:?}\n"
+            )),
+    );
+    let out = splinewatch(&["check-config", ok.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
+#[test]
 fn synth_then_update_round_trip_json() {
     let dir = std::env::temp_dir().join(format!("splinewatch-cli-rt-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
