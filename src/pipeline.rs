@@ -144,6 +144,17 @@ pub struct UpdateOutcome {
     pub result: Result<UpdateReport, String>,
 }
 
+/// How many bending mode shapes an update report carries (for the views).
+pub const BENDING_MODES_KEPT: usize = 4;
+
+/// A mode of the updated model with its shape on every (full) dof.
+#[derive(Debug, Clone)]
+pub struct ModeShape {
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    pub shape: Vec<f64>,
+}
+
 #[derive(Debug, Clone)]
 pub struct UpdateReport {
     pub result: UpdateResult,
@@ -151,6 +162,8 @@ pub struct UpdateReport {
     pub model: FrfFile,
     /// `(frequency Hz, damping ratio, kind)` of the updated model below the band's top.
     pub modes: Vec<(f64, f64, ModeKind)>,
+    /// The first [`BENDING_MODES_KEPT`] bending modes, with their shapes.
+    pub bending_modes: Vec<ModeShape>,
     /// `|h_x - h_a| / |h_x|` per FRF and line.
     pub residue: Vec<Vec<f64>>,
     /// The identified spring coefficients (per field) and damping curve.
@@ -220,6 +233,17 @@ impl UpdateJob {
             .filter(|&i| state.modes.frequency_hz(i) <= top)
             .map(|i| (state.modes.frequency_hz(i), state.zeta[i], state.modes.kinds[i]))
             .collect();
+        let bending_modes = (0..state.modes.len())
+            .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
+            .take(BENDING_MODES_KEPT)
+            .map(|i| ModeShape {
+                frequency_hz: state.modes.frequency_hz(i),
+                damping_ratio: state.zeta[i],
+                shape: (0..state.modes.shapes.nrows())
+                    .map(|d| state.modes.shapes[(d, i)])
+                    .collect(),
+            })
+            .collect();
         Ok(UpdateReport {
             result,
             model: FrfFile {
@@ -228,6 +252,7 @@ impl UpdateJob {
                 frfs: model_entries,
             },
             modes,
+            bending_modes,
             residue,
             kappa,
             damping,

@@ -22,7 +22,6 @@ use rerun::blueprint::{
     Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial3DView, Tabs, TimeSeriesView, Vertical,
 };
 use splinewatch_core::frf::SensorPoint;
-use splinewatch_core::modal::ModeKind;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::vec3::Vec3;
 use std::path::{Path, PathBuf};
@@ -43,7 +42,7 @@ impl RerunTargets {
 }
 
 /// Mode shapes shown per update.
-const MODES_SHOWN: usize = 4;
+const MODES_SHOWN: usize = crate::pipeline::BENDING_MODES_KEPT;
 /// Grid of the deck mesh along ξ and η (spring knots are added to it).
 const GRID: (usize, usize) = (49, 25);
 
@@ -352,19 +351,8 @@ impl RerunOutput {
     }
 
     fn log_modes(&self, report: &crate::pipeline::UpdateReport) -> Result<()> {
-        let state = self
-            .setup
-            .model
-            .modal_state(&report.kappa, &report.damping)
-            .map_err(|e| anyhow!("modes for the Rerun view: {e}"))?;
-        let bending: Vec<usize> = (0..state.modes.len())
-            .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
-            .take(MODES_SHOWN)
-            .collect();
-        for (k, &i) in bending.iter().enumerate() {
-            let w = self
-                .grid
-                .normal_displacement(&self.model, |dof| state.modes.shapes[(dof, i)]);
+        for (k, mode) in report.bending_modes.iter().enumerate() {
+            let w = self.grid.normal_displacement(&self.model, |dof| mode.shape[dof]);
             let peak = w.iter().map(|v| v.abs()).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
             let scale = 0.1 * self.grid.span / peak;
             let positions: Vec<[f32; 3]> = self
@@ -382,11 +370,7 @@ impl RerunOutput {
                 })
                 .collect();
             let colors: Vec<rerun::Color> = w.iter().map(|v| colormap(0.5 + 0.5 * v / peak)).collect();
-            let label = format!(
-                "{:.2} Hz, ζ = {:.2} %",
-                state.modes.frequency_hz(i),
-                100.0 * state.zeta[i]
-            );
+            let label = format!("{:.2} Hz, ζ = {:.2} %", mode.frequency_hz, 100.0 * mode.damping_ratio);
             let path = format!("modes/{}", k + 1);
             self.rec
                 .log(
