@@ -325,25 +325,38 @@ impl<W: Write + Seek> ResultsSink<W> {
 }
 
 /// Opens results files for a [`ResultsSink`]: `path` first, then
-/// `<stem>-1.<ext>`, `<stem>-2.<ext>`, …
+/// `<stem>-1.<ext>`, `<stem>-2.<ext>`, … An existing file is never
+/// overwritten (a daemon restarted with the same `--out` keeps the earlier
+/// results): its number is skipped.
 pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File>> + Send> {
     let path = path.to_path_buf();
+    let mut next = 0;
     Box::new(move |index| {
-        let target = if index == 0 {
-            path.clone()
-        } else {
-            let stem = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let ext = path
-                .extension()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "mcap".into());
-            path.with_file_name(format!("{stem}-{index}.{ext}"))
-        };
-        create_buffered(&target)
+        next = u32::max(next, index);
+        loop {
+            let target = numbered(&path, next);
+            next += 1;
+            if !target.exists() {
+                return create_buffered(&target);
+            }
+        }
     })
+}
+
+/// `path` for 0, `<stem>-<index>.<ext>` otherwise.
+fn numbered(path: &Path, index: u32) -> std::path::PathBuf {
+    if index == 0 {
+        return path.to_path_buf();
+    }
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "mcap".into());
+    path.with_file_name(format!("{stem}-{index}.{ext}"))
 }
 
 /// Creates `path` (and its folder) for buffered writing.

@@ -368,3 +368,25 @@ fn sigkill_of_the_live_daemon_loses_nothing_that_was_reported() {
     assert!(saved_updates >= 2, "the kills should not all land before an update");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_daemons_results_never_overwrite_an_existing_file() {
+    use splinewatch::results::{results_files, ResultsSink};
+    let dir = std::env::temp_dir().join(format!("splinewatch-no-overwrite-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // Results of an earlier run under the same name, and its first rotation.
+    std::fs::write(dir.join("results.mcap"), b"earlier run").unwrap();
+    std::fs::write(dir.join("results-1.mcap"), b"earlier run, rotated").unwrap();
+    let mut sink = ResultsSink::new("bridge/test", results_files(&dir.join("results.mcap"))).unwrap();
+    sink.write("windows", 1, &serde_json::json!({"k": 1}));
+    sink.finish().expect("finished");
+    assert_eq!(std::fs::read(dir.join("results.mcap")).unwrap(), b"earlier run");
+    assert_eq!(
+        std::fs::read(dir.join("results-1.mcap")).unwrap(),
+        b"earlier run, rotated"
+    );
+    let new = std::fs::read(dir.join("results-2.mcap")).unwrap();
+    assert!(mcap::Summary::read(&new).unwrap().is_some());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
