@@ -215,7 +215,10 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     let mut viewer = if options.rerun.is_empty() {
         None
     } else {
-        Some(RerunOutput::open(&config, &options.rerun)?)
+        // A restart never overwrites an earlier run's .rrd.
+        let mut targets = options.rerun.clone();
+        targets.save = targets.save.map(|p| crate::files::first_free(&p));
+        Some(RerunOutput::open(&config, &targets)?)
     };
     let mut recorder = if config.output.raw.enabled {
         let dir = config.output_dir().join(&config.output.raw.dir);

@@ -334,29 +334,13 @@ pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File
     Box::new(move |index| {
         next = u32::max(next, index);
         loop {
-            let target = numbered(&path, next);
+            let target = crate::files::numbered(&path, next);
             next += 1;
             if !target.exists() {
                 return create_buffered(&target);
             }
         }
     })
-}
-
-/// `path` for 0, `<stem>-<index>.<ext>` otherwise.
-fn numbered(path: &Path, index: u32) -> std::path::PathBuf {
-    if index == 0 {
-        return path.to_path_buf();
-    }
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let ext = path
-        .extension()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "mcap".into());
-    path.with_file_name(format!("{stem}-{index}.{ext}"))
 }
 
 /// Creates `path` (and its folder) for buffered writing.

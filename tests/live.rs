@@ -208,15 +208,25 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
         "{:?}",
         rrd.entities
     );
-    // Restart: the daemon warm-starts from the state and again stops cleanly.
-    let again = start("second.mcap");
+    // Restart with the same --out and --rerun-save: the daemon warm-starts
+    // from the state, stops cleanly again, and leaves the first run's files
+    // as they were (its own go to the next free numbers).
+    let first_rrd = std::fs::read(dir.join("first.rrd")).unwrap();
+    let again = start("first.mcap");
     std::thread::sleep(std::time::Duration::from_millis(1500));
     let (status, log) = terminate(again);
     assert!(status.success(), "{log}");
     assert!(log.contains("warm start from the state file"), "{log}");
-    assert!(mcap::Summary::read(&std::fs::read(dir.join("second.mcap")).unwrap())
+    assert_eq!(std::fs::read(dir.join("first.mcap")).unwrap(), results);
+    assert_eq!(std::fs::read(dir.join("first.rrd")).unwrap(), first_rrd);
+    assert!(mcap::Summary::read(&std::fs::read(dir.join("first-1.mcap")).unwrap())
         .unwrap()
         .is_some());
+    assert!(
+        splinewatch::viewer::inspect_rrd(&std::fs::read(dir.join("first-1.rrd")).unwrap())
+            .unwrap()
+            .footer
+    );
 }
 
 #[test]
