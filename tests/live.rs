@@ -9,7 +9,7 @@ use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{free_endpoint, spawn_daemon, KillOnDrop};
+use common::{bundled_blocks, free_endpoint, spawn_daemon, terminate, wait_for_file, KillOnDrop};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -153,15 +153,6 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
             .spawn()
             .unwrap()
     };
-    let terminate = |child: std::process::Child| {
-        let status = Command::new("kill")
-            .args(["-TERM", &child.id().to_string()])
-            .status()
-            .unwrap();
-        assert!(status.success());
-        let out = child.wait_with_output().unwrap();
-        (out.status, String::from_utf8_lossy(&out.stderr).to_string())
-    };
     let daemon = start("first.mcap");
     std::thread::sleep(std::time::Duration::from_millis(1500));
     // Publish the bundled recording until the first update has been saved.
@@ -172,17 +163,11 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
     let mut publisher =
         splinewatch::daemon::Publisher::open(&z, cfg.topic_prefix(), splinewatch::wire::Encoding::Cbor, 20.0).unwrap();
     std::thread::sleep(std::time::Duration::from_millis(500));
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
-    for b in &blocks {
+    for b in &bundled_blocks() {
         publisher.publish(&b.block).unwrap();
     }
     publisher.close().unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
-    while !state.exists() && std::time::Instant::now() < deadline {
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    }
-    assert!(state.exists(), "no update was saved");
+    assert!(wait_for_file(&state), "no update was saved");
     let (status, log) = terminate(daemon);
     assert!(status.success(), "exit status {status:?}\n{log}");
     let results = std::fs::read(dir.join("first.mcap")).unwrap();
@@ -338,7 +323,6 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
 #[cfg(unix)]
 #[test]
 fn client_mode_through_a_zenoh_router() {
-    use std::process::Command;
     use zenoh::Wait;
     let dir = temp("router");
     std::fs::create_dir_all(&dir).unwrap();
@@ -351,25 +335,13 @@ fn client_mode_through_a_zenoh_router() {
         splinewatch::daemon::Publisher::open(&cfg.zenoh, cfg.topic_prefix(), splinewatch::wire::Encoding::Cbor, 20.0)
             .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(500));
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
-    for b in &blocks {
+    for b in &bundled_blocks() {
         publisher.publish(&b.block).unwrap();
     }
     publisher.close().unwrap();
-    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
-    while !state.exists() && std::time::Instant::now() < deadline {
-        std::thread::sleep(std::time::Duration::from_millis(100));
-    }
-    let daemon = daemon.take();
-    let status = Command::new("kill")
-        .args(["-TERM", &daemon.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let out = daemon.wait_with_output().unwrap();
-    let log = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{log}");
+    wait_for_file(&state);
+    let (status, log) = terminate(daemon.take());
+    assert!(status.success(), "{log}");
     assert!(state.exists(), "no update arrived through the router\n{log}");
     let saved = load_state(&state).unwrap().unwrap();
     assert_eq!(saved.parameters.len(), 15);
@@ -382,7 +354,6 @@ fn client_mode_through_a_zenoh_router() {
 #[cfg(unix)]
 #[test]
 fn the_daemon_resumes_after_its_router_returns() {
-    use std::process::Command;
     use zenoh::Wait;
     let dir = temp("router-loss");
     std::fs::create_dir_all(&dir).unwrap();
@@ -391,8 +362,7 @@ fn the_daemon_resumes_after_its_router_returns() {
     let (daemon, config, state) = spawn_client_daemon(&dir, &endpoint);
     std::thread::sleep(std::time::Duration::from_millis(1500));
     let cfg = commands::load_config(&config).unwrap();
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    let blocks = bundled_blocks();
     let (first, second) = blocks.split_at(blocks.len() / 2);
     let send = |part: &[splinewatch::recording::RecordedBlock]| {
         let mut publisher = splinewatch::daemon::Publisher::open(
@@ -432,15 +402,8 @@ fn the_daemon_resumes_after_its_router_returns() {
     // The second minute holds windows 3–5: an update for one of them proves
     // the data after the return arrived.
     let after = wait_for_window(3);
-    let daemon = daemon.take();
-    let status = Command::new("kill")
-        .args(["-TERM", &daemon.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
-    let out = daemon.wait_with_output().unwrap();
-    let log = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{log}");
+    let (status, log) = terminate(daemon.take());
+    assert!(status.success(), "{log}");
     eprintln!("updated window {before} before the router loss and window {after} after its return");
     router.close().wait().unwrap();
 }

@@ -14,7 +14,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 mod common;
-use common::{free_endpoint, spawn_daemon};
+use common::{bundled_blocks, free_endpoint, spawn_daemon};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -301,9 +301,7 @@ fn sigkill_of_the_live_daemon_loses_nothing_that_was_reported() {
         connect: vec![endpoint.clone()],
         ..cfg.zenoh.clone()
     };
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
-    let blocks: Vec<_> = blocks.into_iter().map(|b| b.block).collect();
+    let blocks: Vec<_> = bundled_blocks().into_iter().map(|b| b.block).collect();
     let state = dir.join("state.json");
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2027);
     let mut before = None;

@@ -10,12 +10,11 @@ use splinewatch::daemon::{Publisher, ZenohConfig};
 use splinewatch::results::load_state;
 use splinewatch::wire::Encoding;
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use zenoh::Wait;
 
 mod common;
-use common::{free_endpoint, spawn_daemon};
+use common::{bundled_blocks, free_endpoint, spawn_daemon, terminate, wait_for_file};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -120,8 +119,7 @@ fn authenticated_clients_and_access_control_keep_forged_data_out() {
     std::thread::sleep(Duration::from_millis(1500));
 
     let cfg = commands::load_config(&config).unwrap();
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    let blocks = bundled_blocks();
     let zenoh_as = |user: &str, password: &str| ZenohConfig {
         mode: "client".into(),
         connect: vec![endpoint.clone()],
@@ -174,10 +172,7 @@ fn authenticated_clients_and_access_control_keep_forged_data_out() {
     }
     logger.close().unwrap();
 
-    let deadline = Instant::now() + Duration::from_secs(60);
-    while !state.exists() && Instant::now() < deadline {
-        std::thread::sleep(Duration::from_millis(100));
-    }
+    wait_for_file(&state);
     // The dashboard may query the latest result.
     let replies: Vec<_> = dashboard
         .get(format!("{PREFIX}/updating/latest"))
@@ -186,13 +181,7 @@ fn authenticated_clients_and_access_control_keep_forged_data_out() {
         .into_iter()
         .collect();
 
-    let daemon = daemon.take();
-    assert!(Command::new("kill")
-        .args(["-TERM", &daemon.id().to_string()])
-        .status()
-        .unwrap()
-        .success());
-    let status = daemon.wait_with_output().unwrap().status;
+    let (status, _) = terminate(daemon.take());
     let log = std::fs::read_to_string(dir.join("daemon.log")).unwrap();
     assert!(status.success(), "{log}");
     assert!(state.exists(), "no update through the secured router\n{log}");

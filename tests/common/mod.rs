@@ -56,3 +56,33 @@ pub fn spawn_daemon(
             .unwrap(),
     ))
 }
+
+/// The blocks of the bundled recording, in file order.
+pub fn bundled_blocks() -> Vec<splinewatch::recording::RecordedBlock> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/sinello-demo.mcap");
+    let bytes = std::fs::read(path).unwrap();
+    splinewatch::recording::read_recording(&bytes, &Default::default())
+        .unwrap()
+        .0
+}
+
+/// Sends SIGTERM to `child` and waits for it: its exit status and what it
+/// wrote to its stderr, if that was piped.
+pub fn terminate(child: std::process::Child) -> (std::process::ExitStatus, String) {
+    let signalled = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(signalled.success());
+    let out = child.wait_with_output().unwrap();
+    (out.status, String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Waits up to a minute for `path` to appear; whether it did.
+pub fn wait_for_file(path: &std::path::Path) -> bool {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !path.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    path.exists()
+}
