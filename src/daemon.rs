@@ -181,10 +181,7 @@ fn submit(
 impl RunSummary {
     fn keep(&mut self, outcome: UpdateOutcome, keep: usize) {
         self.update_count += 1;
-        self.updates.push_back(outcome);
-        while self.updates.len() > keep {
-            self.updates.pop_front();
-        }
+        crate::replay::keep_latest(&mut self.updates, outcome, keep);
     }
 }
 

@@ -189,14 +189,12 @@ pub fn soak(
     let sent = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
     let counter = std::sync::Arc::clone(&sent);
     let summary = run_with_source(cfg, out, speed, 1, move |_, publisher| {
-        let mut sent = 0;
         let mut next_hour = 1.0;
         for k in 0..loops {
             for b in &blocks {
                 let mut block = b.block.clone();
                 block.start_ns += k * span_ns;
                 publisher.publish(&block)?;
-                sent += 1;
                 counter.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
             }
             let data_hours = ((k + 1) * span_ns) as f64 / 3600e9;
@@ -211,7 +209,7 @@ pub fn soak(
                 }
             }
         }
-        Ok(sent)
+        Ok(counter.load(std::sync::atomic::Ordering::Relaxed))
     })?;
     let mut samples = samples.lock().map(|s| s.clone()).unwrap_or_default();
     samples.push(SoakSample {

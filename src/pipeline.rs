@@ -260,6 +260,11 @@ impl UpdateJob {
     }
 }
 
+/// Two sampling rates are the same to 1e-9 relative.
+fn same_rate(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a
+}
+
 struct ChannelQueue {
     /// Grid index of the first buffered sample.
     first: i64,
@@ -508,7 +513,6 @@ impl Pipeline {
         if pending.is_empty() {
             return;
         }
-        let same_rate = |a: f64, b: f64| (a - b).abs() <= 1e-9 * a;
         let mut rates: Vec<(f64, usize)> = Vec::new();
         for b in &pending {
             match rates.iter_mut().find(|(f, _)| same_rate(*f, b.fs)) {
@@ -567,7 +571,7 @@ impl Pipeline {
     fn ingest_block(&mut self, block: ChannelBlock, windows: &mut Vec<WindowReport>, jobs: &mut Vec<UpdateJob>) {
         let c = self.channel_of(&block).expect("checked on arrival");
         let fs = self.fs.expect("set by establish_reference");
-        if (block.fs - fs).abs() > 1e-9 * fs {
+        if !same_rate(fs, block.fs) {
             self.health.reject("rate_mismatch");
             return;
         }

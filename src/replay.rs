@@ -59,7 +59,7 @@ pub struct ReplaySummary {
 }
 
 /// Appends `item`, dropping the oldest beyond `keep`.
-fn keep_latest<T>(list: &mut VecDeque<T>, item: T, keep: usize) {
+pub(crate) fn keep_latest<T>(list: &mut VecDeque<T>, item: T, keep: usize) {
     if keep == 0 {
         return;
     }

@@ -188,9 +188,12 @@ impl<W: Write + Seek> ResultsWriter<W> {
         self.writer.flush().context("cannot flush the results MCAP file")
     }
 
+    /// Writes the summary and index and flushes the underlying writer.
     pub fn finish(mut self) -> Result<W> {
         self.writer.finish().context("cannot finish the results MCAP file")?;
-        Ok(self.writer.into_inner())
+        let mut inner = self.writer.into_inner();
+        inner.flush().context("cannot flush the results MCAP file")?;
+        Ok(inner)
     }
 }
 
@@ -255,8 +258,8 @@ impl<W: Write + Seek> ResultsSink<W> {
         };
         if due {
             if let Some(w) = self.writer.take() {
-                match w.finish().and_then(|mut inner| Ok(inner.flush()?)) {
-                    Ok(()) => self.rotations += 1,
+                match w.finish() {
+                    Ok(_) => self.rotations += 1,
                     Err(e) => self.fail("finish", e),
                 }
             }
@@ -307,14 +310,10 @@ impl<W: Write + Seek> ResultsSink<W> {
         }
     }
 
-    /// Finishes the open file and flushes it; returns it (none if the last
-    /// one failed).
+    /// Finishes the open file; returns it (none if the last one failed).
     pub fn finish(mut self) -> Option<W> {
         let w = self.writer.take()?;
-        match w.finish().and_then(|mut inner| {
-            inner.flush()?;
-            Ok(inner)
-        }) {
+        match w.finish() {
             Ok(inner) => Some(inner),
             Err(e) => {
                 self.fail("finish", e);

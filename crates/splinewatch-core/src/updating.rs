@@ -326,8 +326,8 @@ pub struct UpdateResult {
     /// `σ̂²`, the weighted residual variance.
     pub residual_variance: f64,
     /// Relative offset of Bates & Watts (1981) at the returned point: the
-    /// full Gauss–Newton step from there, in standard errors per parameter,
-    /// `√(gᵀA⁻¹g / n) / σ̂`. `None` when `JᵀJ` is singular or the residual is zero.
+    /// full Gauss–Newton step from there in standard errors, root mean square
+    /// over the parameters, `√(gᵀA⁻¹g / n) / σ̂`. `None` when `JᵀJ` is singular or the residual is zero.
     pub relative_offset: Option<f64>,
     pub evaluations: usize,
     pub lines_used: usize,

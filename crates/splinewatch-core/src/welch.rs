@@ -336,23 +336,6 @@ impl WelchEstimator {
         self.pending[0].len()
     }
 
-    /// Starts a new analysis window: spectra, counts and pending samples cleared.
-    pub fn reset(&mut self) {
-        for p in &mut self.pending {
-            p.clear();
-        }
-        self.s_ff.fill(0.0);
-        for v in &mut self.s_fx {
-            v.fill(c64::new(0.0, 0.0));
-        }
-        for v in &mut self.s_xx {
-            v.fill(0.0);
-        }
-        self.weight_sum = 0.0;
-        self.weight_square_sum = 0.0;
-        self.counts = SegmentCounts::default();
-    }
-
     /// Appends time-aligned samples (same length on every channel) and
     /// processes every segment that became complete.
     pub fn push(&mut self, input: &[f64], outputs: &[&[f64]]) -> Result<(), WelchError> {
