@@ -348,8 +348,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             }
             outcome = async { running.as_mut().expect("guarded").await }, if running.is_some() => {
                 running = None;
-                let outcome = outcome.context("the update worker panicked")?;
-                handle_outcome(&mut pipeline, &mut writer, viewer.as_mut(), &session, &options, &latest, &outcome, &publish)?;
+                let mut outcome = outcome.context("the update worker panicked")?;
+                handle_outcome(&mut pipeline, &mut writer, viewer.as_mut(), &session, &options, &latest, &mut outcome, &publish)?;
                 summary.keep(outcome, options.keep_updates);
                 if let Some(job) = waiting.take() {
                     running = Some(tokio::task::spawn_blocking(move || job.run()));
@@ -373,7 +373,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     }
     // Let a running update finish so its result is not lost.
     if let Some(handle) = running.take() {
-        let outcome = handle.await.context("the update worker panicked")?;
+        let mut outcome = handle.await.context("the update worker panicked")?;
         handle_outcome(
             &mut pipeline,
             &mut writer,
@@ -381,7 +381,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             &session,
             &options,
             &latest,
-            &outcome,
+            &mut outcome,
             &publish,
         )?;
         summary.keep(outcome, options.keep_updates);
@@ -432,10 +432,11 @@ fn handle_outcome(
     session: &zenoh::Session,
     options: &RunOptions,
     latest: &Arc<Mutex<Vec<u8>>>,
-    outcome: &UpdateOutcome,
+    outcome: &mut UpdateOutcome,
     publish: &dyn Fn(&zenoh::Session, &str, &serde_json::Value),
 ) -> Result<()> {
     pipeline.apply(outcome);
+    let outcome = &*outcome;
     for (suffix, msg) in results::update_messages(outcome) {
         writer.write(suffix, outcome.time_ns, &msg);
         publish(session, suffix, &msg);

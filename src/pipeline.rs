@@ -24,7 +24,7 @@ use serde::{Deserialize, Serialize};
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::Quantity;
 use splinewatch_core::modal::ModeKind;
-use splinewatch_core::updating::{Parameter, UpdateProblem, UpdateResult, UpdateSettings};
+use splinewatch_core::updating::{ModelPoint, Parameter, UpdateProblem, UpdateResult, UpdateSettings};
 use splinewatch_core::welch::{Estimator, WelchEstimator, WelchSettings};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
@@ -133,6 +133,9 @@ pub struct UpdateJob {
     parameters: Vec<Parameter>,
     settings: UpdateSettings,
     start: Vec<f64>,
+    /// The model at the last accepted parameters, if known: the solve starts
+    /// from it instead of re-evaluating the model there.
+    previous: Option<Arc<ModelPoint>>,
 }
 
 /// What an update produced.
@@ -142,6 +145,9 @@ pub struct UpdateOutcome {
     pub time_ns: i128,
     pub measured: FrfFile,
     pub result: Result<UpdateReport, String>,
+    /// The model at the identified parameters, taken by [`Pipeline::apply`]
+    /// for the next warm start (kept outcomes do not hold it: ~2 MB).
+    point: Option<Arc<ModelPoint>>,
 }
 
 /// How many bending mode shapes an update report carries (for the views).
@@ -173,16 +179,20 @@ pub struct UpdateReport {
 
 impl UpdateJob {
     pub fn run(self) -> UpdateOutcome {
-        let result = self.compute().map_err(|e| format!("{e:#}"));
+        let (result, point) = match self.compute() {
+            Ok((report, point)) => (Ok(report), Some(Arc::new(point))),
+            Err(e) => (Err(format!("{e:#}")), None),
+        };
         UpdateOutcome {
             window: self.window,
             time_ns: self.time_ns,
             measured: self.measured,
             result,
+            point,
         }
     }
 
-    fn compute(&self) -> Result<UpdateReport> {
+    fn compute(&self) -> Result<(UpdateReport, ModelPoint)> {
         let measured = self.measured.to_measured(&self.setup.sensor_names)?;
         let problem = UpdateProblem::new(
             &self.setup.model,
@@ -192,7 +202,8 @@ impl UpdateJob {
             &measured,
             self.settings.clone(),
         )?;
-        let result = problem.solve(&self.start)?;
+        let solution = problem.solve_from(&self.start, self.previous.as_deref(), &mut |_| {})?;
+        let (result, point) = (solution.result, solution.point);
         if result.parameters.iter().any(|p| !p.value.is_finite()) {
             bail!("non-finite parameters");
         }
@@ -200,8 +211,7 @@ impl UpdateJob {
             bail!("the updating did not converge ({:?})", result.stop_reason);
         }
         let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
-        let state = problem.state_at(&values)?;
-        let h = problem.model_frfs(&values, &state)?;
+        let (state, h) = (point.state(), point.frfs());
         let lines = problem.line_frequencies().to_vec();
         let sel = problem.line_indices();
         let nl = lines.len();
@@ -244,7 +254,7 @@ impl UpdateJob {
                     .collect(),
             })
             .collect();
-        Ok(UpdateReport {
+        let report = UpdateReport {
             result,
             model: FrfFile {
                 quantity: self.measured.quantity,
@@ -256,7 +266,8 @@ impl UpdateJob {
             residue,
             kappa,
             damping,
-        })
+        };
+        Ok((report, point))
     }
 }
 
@@ -315,6 +326,8 @@ pub struct Pipeline {
     /// Measurement time of the last update (or the first sample).
     last_update_ns: Option<i128>,
     last: Option<AcceptedParameters>,
+    /// The model at `last`, when the update that produced it ran here.
+    last_point: Option<Arc<ModelPoint>>,
     health: Health,
 }
 
@@ -382,6 +395,7 @@ impl Pipeline {
             frf_sets: 0,
             last_update_ns: None,
             last: state,
+            last_point: None,
             health: Health::default(),
         })
     }
@@ -769,15 +783,17 @@ impl Pipeline {
             parameters: self.parameters.clone(),
             settings: self.settings.clone(),
             start,
+            previous: self.last_point.clone(),
         }
     }
 
     /// Records an update's outcome: accepted parameters replace the last
     /// good ones; a failure keeps them.
-    pub fn apply(&mut self, outcome: &UpdateOutcome) {
+    pub fn apply(&mut self, outcome: &mut UpdateOutcome) {
         self.health.update_runs += 1;
         match &outcome.result {
             Ok(report) => {
+                self.last_point = outcome.point.take();
                 self.last = Some(AcceptedParameters {
                     window: outcome.window,
                     time: crate::wire::format_timestamp(outcome.time_ns),

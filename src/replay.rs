@@ -194,8 +194,8 @@ impl<W: Write + Seek> Outputs<'_, W> {
             keep_latest(&mut self.summary.windows, w, self.keep);
         }
         for job in jobs {
-            let outcome = job.run();
-            pipeline.apply(&outcome);
+            let mut outcome = job.run();
+            pipeline.apply(&mut outcome);
             for (suffix, msg) in results::update_messages(&outcome) {
                 self.out.write(suffix, outcome.time_ns, &msg)?;
             }

@@ -21,7 +21,7 @@
 //! value flags a parameter combination the data cannot identify.
 
 use crate::damping::{DampingCurve, DampingError};
-use crate::frf::{FrfError, FrfModel, FrfRequest, ModalState, Quantity};
+use crate::frf::{FrfError, FrfEvaluation, FrfModel, FrfRequest, ModalState, Quantity};
 use faer::{c64, Mat, Side};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -329,8 +329,59 @@ pub struct UpdateResult {
     /// full Gauss–Newton step from there in standard errors, root mean square
     /// over the parameters, `√(gᵀA⁻¹g / n) / σ̂`. `None` when `JᵀJ` is singular or the residual is zero.
     pub relative_offset: Option<f64>,
+    /// Model evaluations (modes + FRFs) this solve did; a start point reused
+    /// from the previous solve is not one.
     pub evaluations: usize,
     pub lines_used: usize,
+}
+
+/// The model at one parameter point, with its FRFs and sensitivities on an
+/// [`UpdateProblem`]'s lines: where a solve ends. Handed to the next
+/// warm-started solve ([`UpdateProblem::solve_from`]), whose first point it
+/// is when that solve starts from these parameters on the same lines, it
+/// saves the first modal solve and sensitivity evaluation; the result is the
+/// same bit for bit as without it.
+#[derive(Debug, Clone)]
+pub struct ModelPoint {
+    kappa: Vec<Vec<f64>>,
+    gamma: Vec<f64>,
+    frequencies: Vec<f64>,
+    pairs: Vec<(usize, usize)>,
+    quantity: Quantity,
+    state: ModalState,
+    /// With sensitivities.
+    frfs: FrfEvaluation,
+}
+
+impl ModelPoint {
+    /// The modes and modal damping at this point.
+    pub fn state(&self) -> &ModalState {
+        &self.state
+    }
+
+    /// Model FRFs in the measured quantity on the problem's lines,
+    /// `[frf * n_lines + line]`.
+    pub fn frfs(&self) -> &[c64] {
+        &self.frfs.h
+    }
+
+    /// Spring coefficients per field at this point.
+    pub fn kappa(&self) -> &[Vec<f64>] {
+        &self.kappa
+    }
+
+    /// Damping coefficients γ_z at this point.
+    pub fn gamma(&self) -> &[f64] {
+        &self.gamma
+    }
+}
+
+/// What [`UpdateProblem::solve_from`] returns: the result and the model at
+/// the returned parameters.
+#[derive(Debug, Clone)]
+pub struct Solution {
+    pub result: UpdateResult,
+    pub point: ModelPoint,
 }
 
 /// Everything needed to update a model against one measured set.
@@ -352,7 +403,7 @@ pub struct UpdateProblem<'a> {
 struct Evaluation {
     residual: Vec<f64>,
     jacobian: Mat<f64>,
-    h: Vec<c64>,
+    frfs: FrfEvaluation,
 }
 
 impl<'a> UpdateProblem<'a> {
@@ -483,7 +534,7 @@ impl<'a> UpdateProblem<'a> {
     /// `[frf * n_lines + line]`, from the modal state at `p`
     /// ([`Self::state_at`]).
     pub fn model_frfs(&self, p: &[f64], state: &ModalState) -> Result<Vec<c64>, UpdateError> {
-        Ok(self.evaluate_state(p, state, false)?.h)
+        Ok(self.evaluate_state(p, state, false)?.frfs.h)
     }
 
     /// Frequencies of the selected lines.
@@ -514,24 +565,30 @@ impl<'a> UpdateProblem<'a> {
         }
     }
 
-    /// Weighted residual `r = √w (h_x - h_a)` at `p`; no Jacobian.
-    fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluation, UpdateError> {
+    /// Weighted residual `r = √w (h_x - h_a)` at `p` and, if asked, `∂r/∂p`.
+    fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<(ModalState, Evaluation), UpdateError> {
         let state = self.state_at(p)?;
-        self.evaluate_state(p, &state, jacobian)
+        let evaluation = self.evaluate_state(p, &state, jacobian)?;
+        Ok((state, evaluation))
     }
 
-    /// Weighted residual and, if asked, `∂r/∂p` for a computed modal state.
+    /// [`Self::evaluate`] for a computed modal state.
     fn evaluate_state(&self, p: &[f64], state: &ModalState, jacobian: bool) -> Result<Evaluation, UpdateError> {
-        let eval = self
+        let frfs = self
             .model
             .evaluate_on_threads(state, self.request(), jacobian, self.settings.threads);
+        self.weighted(p, frfs, jacobian)
+    }
+
+    /// Residual and, if asked, Jacobian from model FRFs (and sensitivities) at `p`.
+    fn weighted(&self, p: &[f64], frfs: FrfEvaluation, jacobian: bool) -> Result<Evaluation, UpdateError> {
         let nl = self.lines.len();
         let nb = self.pairs.len();
         let mut residual = Vec::with_capacity(2 * nl * nb);
         for b in 0..nb {
             for l in 0..nl {
                 let k = b * nl + l;
-                let d = (self.measured_value(b, l) - eval.h[k]) * self.sqrt_weights[k];
+                let d = (self.measured_value(b, l) - frfs.h[k]) * self.sqrt_weights[k];
                 residual.push(d.re);
                 residual.push(d.im);
             }
@@ -554,8 +611,8 @@ impl<'a> UpdateProblem<'a> {
             jac = Mat::zeros(residual.len(), self.parameters.len());
             for (c, par) in self.parameters.iter().enumerate() {
                 let column = match par.kind {
-                    ParameterKind::Spring { field, coefficient } => &eval.dh_dkappa[offsets[field] + coefficient],
-                    ParameterKind::Damping { coefficient } => &eval.dh_dgamma[coefficient],
+                    ParameterKind::Spring { field, coefficient } => &frfs.dh_dkappa[offsets[field] + coefficient],
+                    ParameterKind::Damping { coefficient } => &frfs.dh_dgamma[coefficient],
                 };
                 for k in 0..nl * nb {
                     let d = -column[k] * self.sqrt_weights[k];
@@ -567,7 +624,38 @@ impl<'a> UpdateProblem<'a> {
         Ok(Evaluation {
             residual,
             jacobian: jac,
-            h: eval.h,
+            frfs,
+        })
+    }
+
+    /// `previous` if it is the model at `p` on this problem's lines.
+    fn reusable<'p>(&self, previous: Option<&'p ModelPoint>, p: &[f64]) -> Result<Option<&'p ModelPoint>, UpdateError> {
+        let Some(point) = previous else {
+            return Ok(None);
+        };
+        let (kappa, damping) = self.model_at(p)?;
+        let same =
+            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let matches = point.kappa.len() == kappa.len()
+            && point.kappa.iter().zip(&kappa).all(|(a, b)| same(a, b))
+            && same(&point.gamma, damping.coefficients())
+            && same(&point.frequencies, &self.frequencies)
+            && point.pairs == self.pairs
+            && point.quantity == self.measured.quantity()
+            && point.frfs.dh_dkappa.len() == self.model.spring_coefficient_count();
+        Ok(matches.then_some(point))
+    }
+
+    fn point(&self, p: &[f64], state: ModalState, frfs: FrfEvaluation) -> Result<ModelPoint, UpdateError> {
+        let (kappa, damping) = self.model_at(p)?;
+        Ok(ModelPoint {
+            kappa,
+            gamma: damping.coefficients().to_vec(),
+            frequencies: self.frequencies.clone(),
+            pairs: self.pairs.clone(),
+            quantity: self.measured.quantity(),
+            state,
+            frfs,
         })
     }
 
@@ -595,7 +683,7 @@ impl<'a> UpdateProblem<'a> {
     /// derivative.
     #[track_caller]
     pub fn solve(&self, start: &[f64]) -> Result<UpdateResult, UpdateError> {
-        self.solve_observed(start, &mut |_| {})
+        Ok(self.solve_from(start, None, &mut |_| {})?.result)
     }
 
     /// [`solve`](Self::solve), calling `observer` with the start and every
@@ -606,6 +694,20 @@ impl<'a> UpdateProblem<'a> {
         start: &[f64],
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<UpdateResult, UpdateError> {
+        Ok(self.solve_from(start, None, observer)?.result)
+    }
+
+    /// [`solve_observed`](Self::solve_observed), also returning the model at
+    /// the result. `previous` (the point the last solve ended on) is used
+    /// instead of evaluating the model at `start` when it is that model on
+    /// these lines — the usual warm start; otherwise it is ignored.
+    #[track_caller]
+    pub fn solve_from(
+        &self,
+        start: &[f64],
+        previous: Option<&ModelPoint>,
+        observer: &mut dyn FnMut(&IterationRecord),
+    ) -> Result<Solution, UpdateError> {
         assert_eq!(start.len(), self.parameters.len(), "one start value per parameter");
         let bounds: Vec<(f64, f64)> = self.parameters.iter().map(|p| (p.lower, p.upper)).collect();
         let to_p = |y: &[f64]| -> Vec<f64> {
@@ -614,23 +716,39 @@ impl<'a> UpdateProblem<'a> {
                 .map(|(&y, &(a, b))| bounded_value(y, a, b))
                 .collect()
         };
-        let mut y: Vec<f64> = start
+        // The model is evaluated at the start values themselves (not at
+        // p(y(start)), which differs in the last bits), so that a warm start
+        // lands exactly on the point the previous solve ended on.
+        let mut p: Vec<f64> = start
             .iter()
             .zip(&bounds)
             .map(|(&p, &(a, b))| {
                 let margin = 1e-6 * (b - a);
-                unbounded_value(p.clamp(a + margin, b - margin), a, b)
+                p.clamp(a + margin, b - margin)
             })
             .collect();
+        let mut y: Vec<f64> = p
+            .iter()
+            .zip(&bounds)
+            .map(|(&p, &(a, b))| unbounded_value(p, a, b))
+            .collect();
         let n = y.len();
-        let mut evaluations = 1;
-        let mut current = self.evaluate(&to_p(&y), true)?;
+        let (mut evaluations, mut state, mut current) = match self.reusable(previous, &p)? {
+            Some(point) => {
+                let current = self.weighted(&p, point.frfs.clone(), true)?;
+                (0, point.state.clone(), current)
+            }
+            None => {
+                let (state, current) = self.evaluate(&p, true)?;
+                (1, state, current)
+            }
+        };
         let mut cost = 0.5 * norm2(&current.residual);
         let mut iterations = vec![IterationRecord {
             iteration: 0,
-            relative_residual: self.relative_residuals(&current.h).0,
+            relative_residual: self.relative_residuals(&current.frfs.h).0,
             cost,
-            parameters: to_p(&y),
+            parameters: p.clone(),
             step_norm: 0.0,
             damping: 0.0,
             rejected_steps: 0,
@@ -720,20 +838,22 @@ impl<'a> UpdateProblem<'a> {
                 }
                 continue;
             }
-            let (state, _) = trial.expect("accepted steps evaluated");
-            let trial = self.evaluate_state(&p_new, &state, true)?;
+            let (trial_state, _) = trial.expect("accepted steps evaluated");
+            let trial = self.evaluate_state(&p_new, &trial_state, true)?;
             iteration += 1;
             let step_norm = norm2(&step).sqrt();
             let relative_decrease = (cost - new_cost) / cost;
             let diverged = new_cost > cost;
             y = y_new;
+            p = p_new;
+            state = trial_state;
             current = trial;
             cost = new_cost;
             iterations.push(IterationRecord {
                 iteration,
-                relative_residual: self.relative_residuals(&current.h).0,
+                relative_residual: self.relative_residuals(&current.frfs.h).0,
                 cost,
-                parameters: to_p(&y),
+                parameters: p.clone(),
                 step_norm,
                 damping: lambda,
                 rejected_steps: rejected,
@@ -764,8 +884,7 @@ impl<'a> UpdateProblem<'a> {
                 break;
             }
         }
-        let p = to_p(&y);
-        let (relative_residual, frf_relative_residuals) = self.relative_residuals(&current.h);
+        let (relative_residual, frf_relative_residuals) = self.relative_residuals(&current.frfs.h);
         let residual_variance = 2.0 * cost / (m - n) as f64;
         let (std, singular_values) = uncertainty(&current.jacobian, residual_variance);
         let condition_number = match (singular_values.first(), singular_values.last()) {
@@ -784,7 +903,7 @@ impl<'a> UpdateProblem<'a> {
                 upper: par.upper,
             })
             .collect();
-        Ok(UpdateResult {
+        let result = UpdateResult {
             parameters,
             iterations,
             converged,
@@ -797,7 +916,9 @@ impl<'a> UpdateProblem<'a> {
             relative_offset: offset,
             evaluations,
             lines_used: self.lines.len(),
-        })
+        };
+        let point = self.point(&p, state, current.frfs)?;
+        Ok(Solution { result, point })
     }
 }
 

@@ -166,3 +166,87 @@ fn h1_weighting_without_coherence_is_an_error() {
     .unwrap_err();
     assert_eq!(err, UpdateError::NoParameters);
 }
+
+/// Two measured sets in sequence, as the daemon's windows: the second solve
+/// warm-starts from the first's result. Handing it the first solve's end
+/// point skips the model evaluation at the start and changes nothing else,
+/// bit for bit; a point at other parameters or on other lines is ignored.
+#[test]
+fn warm_start_from_the_previous_point_is_exact_and_saves_an_evaluation() {
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
+    let first = corrupted_measurements(&model, &damping);
+    // The second "window": the same deck measured with a 2 % gain error.
+    let second = MeasuredSet::new(
+        Quantity::Accelerance,
+        first.frequencies_hz().to_vec(),
+        first
+            .frfs()
+            .iter()
+            .map(|f| MeasuredFrf {
+                values: f.values.iter().map(|v| v * c64::new(1.02, 0.0)).collect(),
+                ..f.clone()
+            })
+            .collect(),
+    )
+    .unwrap();
+    let problem = |measured| {
+        UpdateProblem::new(
+            &model,
+            true_kappa(),
+            damping.clone(),
+            spring_parameters(),
+            measured,
+            UpdateSettings::default(),
+        )
+        .unwrap()
+    };
+    let earlier = problem(&first).solve_from(&[1e9; 8], None, &mut |_| {}).unwrap();
+    let start: Vec<f64> = earlier.result.parameters.iter().map(|p| p.value).collect();
+    assert_eq!(
+        earlier.point.kappa().concat(),
+        start,
+        "the point is the model at the result"
+    );
+
+    let cold = problem(&second).solve_from(&start, None, &mut |_| {}).unwrap();
+    let warm = problem(&second)
+        .solve_from(&start, Some(&earlier.point), &mut |_| {})
+        .unwrap();
+    assert!(cold.result.iterations.len() > 1, "the second set moves the parameters");
+    assert_eq!(warm.result.evaluations + 1, cold.result.evaluations);
+    let without_count = |r: &splinewatch_core::updating::UpdateResult| {
+        let mut r = r.clone();
+        r.evaluations = 0;
+        r
+    };
+    assert_eq!(without_count(&warm.result), without_count(&cold.result));
+    assert_eq!(warm.point.frfs(), cold.point.frfs());
+
+    // Elsewhere: the point of the cold start is not the model at 1e9.
+    let elsewhere = problem(&second)
+        .solve_from(&[1e9; 8], Some(&earlier.point), &mut |_| {})
+        .unwrap();
+    let fresh = problem(&second).solve_from(&[1e9; 8], None, &mut |_| {}).unwrap();
+    assert_eq!(elsewhere.result, fresh.result);
+    // Other lines: a decimated problem cannot use it either.
+    let decimated = UpdateSettings {
+        lines: LineSelection {
+            decimation: 2,
+            ..LineSelection::default()
+        },
+        ..UpdateSettings::default()
+    };
+    let other = UpdateProblem::new(
+        &model,
+        true_kappa(),
+        damping.clone(),
+        spring_parameters(),
+        &second,
+        decimated.clone(),
+    )
+    .unwrap();
+    let with_point = other.solve_from(&start, Some(&earlier.point), &mut |_| {}).unwrap();
+    let without = other.solve_from(&start, None, &mut |_| {}).unwrap();
+    assert_eq!(with_point.result, without.result);
+}
