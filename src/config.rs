@@ -287,7 +287,7 @@ pub struct UpdatingConfig {
     /// Bands [a, b] in Hz left out.
     #[serde(default)]
     pub exclude: Vec<[f64; 2]>,
-    /// Initial Levenberg–Marquardt damping, relative to max diag(JᵀJ).
+    /// Initial Levenberg–Marquardt damping λ0, dimensionless (see `UpdateSettings::initial_damping`).
     #[serde(default = "default_initial_damping")]
     pub initial_damping: f64,
 }

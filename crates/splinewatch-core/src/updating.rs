@@ -247,7 +247,10 @@ pub struct UpdateSettings {
     pub offset_tolerance: f64,
     pub weighting: Weighting,
     pub lines: LineSelection,
-    /// Initial damping `λ0 = initial_damping · max diag(JᵀJ)`.
+    /// Initial Levenberg–Marquardt damping λ0, relative: steps solve
+    /// `(JᵀJ + λ D) s = -Jᵀr` with `D` the largest `diag(JᵀJ)` seen so far
+    /// (Moré's scaling), so λ is dimensionless and the iterates do not depend
+    /// on the units of the FRFs.
     pub initial_damping: f64,
     /// Threads for the FRF evaluation; the result does not depend on it.
     pub threads: usize,
@@ -764,9 +767,8 @@ impl<'a> UpdateProblem<'a> {
         };
         let mut jy = chain(&current.jacobian, &y);
         let (mut a, mut g) = normal_equations(&jy, &current.residual);
-        let max_diag = (0..n).map(|i| a[(i, i)]).fold(0.0, f64::max);
         let mut lambda = match self.settings.method {
-            Method::LevenbergMarquardt => self.settings.initial_damping * max_diag.max(f64::MIN_POSITIVE),
+            Method::LevenbergMarquardt => self.settings.initial_damping,
             Method::GaussNewton => 0.0,
         };
         let mut nu = 2.0;
@@ -792,7 +794,7 @@ impl<'a> UpdateProblem<'a> {
                 scale[i] = scale[i].max(a[(i, i)]);
             }
             let Some(step) = solve_damped(&a, &g, &scale, lambda) else {
-                lambda = (lambda * nu).max(1e-12 * max_diag);
+                lambda = (lambda * nu).max(1e-12);
                 nu *= 2.0;
                 continue;
             };
@@ -832,7 +834,7 @@ impl<'a> UpdateProblem<'a> {
                 }
                 lambda *= nu;
                 nu *= 2.0;
-                if lambda > 1e16 * max_diag.max(1.0) {
+                if lambda > 1e16 {
                     stop = StopReason::Stalled;
                     break;
                 }

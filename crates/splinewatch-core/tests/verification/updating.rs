@@ -250,3 +250,53 @@ fn warm_start_from_the_previous_point_is_exact_and_saves_an_evaluation() {
     let without = other.solve_from(&start, None, &mut |_| {}).unwrap();
     assert_eq!(with_point.result, without.result);
 }
+
+/// The iterates do not depend on the units of the residual: scaling every
+/// weight by 10⁶ (here through the number of averages of the H1-variance
+/// weighting) scales JᵀJ, Jᵀr and the cost alike, and the damped steps, the
+/// acceptance ratios and the stopping tests are ratios of those.
+#[test]
+fn iterates_do_not_depend_on_the_scale_of_the_residual() {
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
+    let measured = corrupted_measurements(&model, &damping);
+    let scaled = MeasuredSet::new(
+        Quantity::Accelerance,
+        measured.frequencies_hz().to_vec(),
+        measured
+            .frfs()
+            .iter()
+            .map(|f| MeasuredFrf {
+                n_averages: f.n_averages.map(|n| n * 1e6),
+                ..f.clone()
+            })
+            .collect(),
+    )
+    .unwrap();
+    let solve = |measured| {
+        let settings = UpdateSettings {
+            weighting: Weighting::H1Variance,
+            ..UpdateSettings::default()
+        };
+        UpdateProblem::new(
+            &model,
+            true_kappa(),
+            damping.clone(),
+            spring_parameters(),
+            measured,
+            settings,
+        )
+        .unwrap()
+        .solve(&[1e9; 8])
+        .unwrap()
+    };
+    let (base, large) = (solve(&measured), solve(&scaled));
+    assert_eq!(base.iterations.len(), large.iterations.len());
+    assert_eq!(base.evaluations, large.evaluations);
+    for (a, b) in base.iterations.iter().zip(&large.iterations) {
+        assert_eq!(a.rejected_steps, b.rejected_steps);
+        for (x, y) in a.parameters.iter().zip(&b.parameters) {
+            assert!((x - y).abs() <= 1e-9 * x.abs(), "iteration {}: {x} vs {y}", a.iteration);
+        }
+    }
+}
