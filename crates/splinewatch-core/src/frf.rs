@@ -330,7 +330,8 @@ impl FrfModel {
             .collect();
         let nm = active.len();
         let omega: Vec<f64> = active.iter().map(|&i| state.omega[i]).collect();
-        let zeta: Vec<f64> = active.iter().map(|&i| state.zeta[i]).collect();
+        let omega2: Vec<f64> = omega.iter().map(|w| w * w).collect();
+        let two_zeta_omega: Vec<f64> = active.iter().map(|&i| 2.0 * state.zeta[i] * state.omega[i]).collect();
         let amplitude = |sensor: usize, i: usize| state.amplitudes[(sensor, active[i])];
 
         // Frequency-independent factors. H_p = Σ_i a_r a_s q_i, p = (r, s).
@@ -375,12 +376,13 @@ impl FrfModel {
         let stacked = Mat::from_fn(inputs.len() * nu, nm, |row, i| {
             phi_u[(row % nu, i)] * amplitude(inputs[row / nu], i)
         });
-        let phi_blocks_t: Vec<Mat<f64>> = self
-            .block_positions
+        // Φ_{B_j}ᵀ B_j, frequency-independent: c_j = (Φ_{B_j}ᵀ B_j) g_s[B_j].
+        let phi_b_blocks: Vec<Mat<f64>> = blocks
             .iter()
-            .take(nb)
-            .map(|pos| Mat::from_fn(nm, pos.len(), |i, a| phi_u[(pos[a], i)]))
+            .zip(&self.block_positions)
+            .map(|(block, pos)| Mat::from_fn(nm, pos.len(), |i, a| phi_u[(pos[a], i)]) * &block.values)
             .collect();
+        let widest = self.block_positions.iter().take(nb).map(Vec::len).max().unwrap_or(0);
         let by_input: Vec<(Vec<usize>, Mat<f64>)> = inputs
             .iter()
             .map(|&s| {
@@ -400,8 +402,8 @@ impl FrfModel {
         let mut out = Split::zeros(np, width);
         let mut g = Split::zeros(inputs.len() * nu, width);
         let mut c = Split::zeros(nm, width);
-        let mut stacked_e = Split::zeros(nm, nb * width);
-        let mut r = Split::zeros(np, nb * width);
+        let mut gathered = Split::zeros(widest, width);
+        let mut r = Split::zeros(np, width);
         for start in (0..nf).step_by(width) {
             let nc = width.min(nf - start);
             let w: Vec<f64> = request.frequencies_hz[start..start + nc]
@@ -409,13 +411,15 @@ impl FrfModel {
                 .map(|f| 2.0 * PI * f)
                 .collect();
             let factor: Vec<c64> = w.iter().map(|&wf| request.quantity.factor(wf)).collect();
-            // q_{i,f} = 1 / D_i(ω_f).
+            // q_{i,f} = 1 / D_i(ω_f) = conj(D) / |D|², over contiguous columns.
             for (f, &wf) in w.iter().enumerate() {
-                for i in 0..nm {
-                    let d = c64::new(omega[i] * omega[i] - wf * wf, 2.0 * zeta[i] * omega[i] * wf);
-                    let v = d.inv();
-                    q.re[(i, f)] = v.re;
-                    q.im[(i, f)] = v.im;
+                let (re, im) = q.col_mut(f);
+                for (((re, im), &w2), &tzw) in re.iter_mut().zip(im.iter_mut()).zip(&omega2).zip(&two_zeta_omega) {
+                    let d_re = w2 - wf * wf;
+                    let d_im = tzw * wf;
+                    let norm = d_re * d_re + d_im * d_im;
+                    *re = d_re / norm;
+                    *im = -d_im / norm;
                 }
             }
             out.product(np, nc, &coupling, &q);
@@ -427,12 +431,15 @@ impl FrfModel {
             if !sensitivities {
                 continue;
             }
+            // e_{i,f} = -2j ω_i ω_f q_{i,f}².
             for (f, &wf) in w.iter().enumerate() {
-                for i in 0..nm {
-                    let v = c64::new(q.re[(i, f)], q.im[(i, f)]);
-                    let d = c64::new(0.0, -2.0 * omega[i] * wf) * v * v;
-                    e.re[(i, f)] = d.re;
-                    e.im[(i, f)] = d.im;
+                let (q_re, q_im) = (q.re.col_as_slice(f), q.im.col_as_slice(f));
+                let (re, im) = e.col_mut(f);
+                for ((((re, im), &a), &b), &w) in re.iter_mut().zip(im.iter_mut()).zip(q_re).zip(q_im).zip(&omega) {
+                    // j s (a + j b)² = j s (a² - b²) - 2 s a b, s = -2 ω_i ω
+                    let s = -2.0 * w * wf;
+                    *re = -2.0 * s * a * b;
+                    *im = s * (a * a - b * b);
                 }
             }
             for ((lo, weights), dz) in damping_terms.iter().zip(dh_dgamma.iter_mut()) {
@@ -457,41 +464,38 @@ impl FrfModel {
             }
             g.product(inputs.len() * nu, nc, &stacked, &q);
             for (k, (pairs, outputs)) in by_input.iter().enumerate() {
-                for (j, (block, pos)) in blocks.iter().zip(&self.block_positions).enumerate() {
-                    let gs_re = Mat::from_fn(pos.len(), nc, |a, f| g.re[(k * nu + pos[a], f)]);
-                    let gs_im = Mat::from_fn(pos.len(), nc, |a, f| g.im[(k * nu + pos[a], f)]);
-                    let x_re = &block.values * &gs_re;
-                    let x_im = &block.values * &gs_im;
-                    let phi_t = phi_blocks_t[j].as_ref();
-                    matmul(
-                        c.re.subcols_mut(0, nc),
-                        Accum::Replace,
-                        phi_t,
-                        x_re.as_ref(),
-                        1.0,
-                        Par::Seq,
-                    );
-                    matmul(
-                        c.im.subcols_mut(0, nc),
-                        Accum::Replace,
-                        phi_t,
-                        x_im.as_ref(),
-                        1.0,
-                        Par::Seq,
-                    );
+                for (j, (phi_b, pos)) in phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
                     for f in 0..nc {
-                        for i in 0..nm {
-                            let v = c64::new(q.re[(i, f)], q.im[(i, f)]) * c64::new(c.re[(i, f)], c.im[(i, f)]);
-                            stacked_e.re[(i, j * nc + f)] = v.re;
-                            stacked_e.im[(i, j * nc + f)] = v.im;
+                        for (a, &u) in pos.iter().enumerate() {
+                            gathered.re[(a, f)] = g.re[(k * nu + u, f)];
+                            gathered.im[(a, f)] = g.im[(k * nu + u, f)];
                         }
                     }
-                }
-                r.product(pairs.len(), nb * nc, outputs, &stacked_e);
-                for (row, &p) in pairs.iter().enumerate() {
-                    for (j, dj) in dh_dkappa.iter_mut().enumerate() {
+                    for (dst, src) in [(&mut c.re, &gathered.re), (&mut c.im, &gathered.im)] {
+                        matmul(
+                            dst.subcols_mut(0, nc),
+                            Accum::Replace,
+                            phi_b.as_ref(),
+                            src.submatrix(0, 0, pos.len(), nc),
+                            1.0,
+                            Par::Seq,
+                        );
+                    }
+                    // c ← q ∘ c in place, then ∂H_p/∂κ_j = -Σ_i a_{r,i} c_i.
+                    for f in 0..nc {
+                        let (q_re, q_im) = (q.re.col_as_slice(f), q.im.col_as_slice(f));
+                        let (c_re, c_im) = c.col_mut(f);
+                        for (((cr, ci), &qr), &qi) in c_re.iter_mut().zip(c_im.iter_mut()).zip(q_re).zip(q_im) {
+                            let (a, b) = (*cr, *ci);
+                            *cr = qr * a - qi * b;
+                            *ci = qr * b + qi * a;
+                        }
+                    }
+                    r.product(pairs.len(), nc, outputs, &c);
+                    let dj = &mut dh_dkappa[j];
+                    for (row, &p) in pairs.iter().enumerate() {
                         for f in 0..nc {
-                            let v = c64::new(r.re[(row, j * nc + f)], r.im[(row, j * nc + f)]);
+                            let v = c64::new(r.re[(row, f)], r.im[(row, f)]);
                             dj[p * nf + start + f] = -v * factor[f];
                         }
                     }
@@ -571,6 +575,11 @@ impl Split {
             re: Mat::zeros(rows, cols),
             im: Mat::zeros(rows, cols),
         }
+    }
+
+    /// Column `j` as contiguous real and imaginary slices.
+    fn col_mut(&mut self, j: usize) -> (&mut [f64], &mut [f64]) {
+        (self.re.col_as_slice_mut(j), self.im.col_as_slice_mut(j))
     }
 
     /// `self[..rows, ..cols] = a · b[.., ..cols]` for real `a`.
