@@ -8,7 +8,8 @@
 //! - the main task decodes, feeds the pipeline and writes results; an update
 //!   job runs on a blocking worker so ingest never stalls. At most one job
 //!   runs and one waits; a newer job replaces a waiting one (drop oldest,
-//!   counted).
+//!   counted). A waiting job is rebased when it starts, so it warm-starts
+//!   from the result that finished meanwhile, as in a replay.
 //! - shutdown (SIGINT/SIGTERM, or the caller's future) lets a running update
 //!   finish, writes the last health message, finalises the MCAP file and
 //!   saves the state.
@@ -351,7 +352,9 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 let mut outcome = outcome.context("the update worker panicked")?;
                 handle_outcome(&mut pipeline, &mut writer, viewer.as_mut(), &session, &options, &latest, &mut outcome, &publish)?;
                 summary.keep(outcome, options.keep_updates);
-                if let Some(job) = waiting.take() {
+                if let Some(mut job) = waiting.take() {
+                    // It waited: start it from the result just applied.
+                    pipeline.rebase(&mut job);
                     running = Some(tokio::task::spawn_blocking(move || job.run()));
                 }
             }

@@ -765,16 +765,6 @@ impl Pipeline {
     }
 
     fn job(&self, window: u64, time_ns: i128, measured: FrfFile) -> UpdateJob {
-        let base = splinewatch_core::updating::base_values(&self.parameters, &self.setup.kappa, &self.setup.damping);
-        let start = match &self.last {
-            Some(last) => self
-                .parameters
-                .iter()
-                .zip(base)
-                .map(|(p, b)| last.parameters.iter().find(|s| s.name == p.name).map_or(b, |s| s.value))
-                .collect(),
-            None => base,
-        };
         UpdateJob {
             window,
             time_ns,
@@ -782,9 +772,33 @@ impl Pipeline {
             setup: Arc::clone(&self.setup),
             parameters: self.parameters.clone(),
             settings: self.settings.clone(),
-            start,
+            start: self.start_values(),
             previous: self.last_point.clone(),
         }
+    }
+
+    /// The last accepted parameters (the config's values for those never
+    /// updated).
+    fn start_values(&self) -> Vec<f64> {
+        let base = splinewatch_core::updating::base_values(&self.parameters, &self.setup.kappa, &self.setup.damping);
+        match &self.last {
+            Some(last) => self
+                .parameters
+                .iter()
+                .zip(base)
+                .map(|(p, b)| last.parameters.iter().find(|s| s.name == p.name).map_or(b, |s| s.value))
+                .collect(),
+            None => base,
+        }
+    }
+
+    /// Moves a job made earlier (one that waited while another update ran)
+    /// to start from the parameters accepted since: every update starts
+    /// from the latest result, however the updates were scheduled, so the
+    /// live daemon gives the replay's parameters even when its updates queue.
+    pub fn rebase(&self, job: &mut UpdateJob) {
+        job.start = self.start_values();
+        job.previous = self.last_point.clone();
     }
 
     /// Records an update's outcome: accepted parameters replace the last

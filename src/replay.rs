@@ -193,7 +193,9 @@ impl<W: Write + Seek> Outputs<'_, W> {
             self.summary.windows_accepted += u64::from(w.skipped.is_none());
             keep_latest(&mut self.summary.windows, w, self.keep);
         }
-        for job in jobs {
+        for mut job in jobs {
+            // Several jobs from one block: each starts from the one before.
+            pipeline.rebase(&mut job);
             let mut outcome = job.run();
             pipeline.apply(&mut outcome);
             for (suffix, msg) in results::update_messages(&outcome) {

@@ -391,3 +391,46 @@ fn overlapping_windows_every_hop() {
         }
     }
 }
+
+/// Live, an update that arrives while another runs waits; its job was made
+/// before that update's result existed. Rebased when it starts, it warm-starts
+/// from that result and gives the replay's parameters bit for bit.
+#[test]
+fn a_job_that_waited_starts_from_the_latest_result() {
+    use splinewatch::pipeline::Pipeline;
+    let cfg = config();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
+    // Every job made before any update ran, as when updates queue up live.
+    let mut pipeline = Pipeline::new(&cfg, cfg.schedule.clone(), None).unwrap();
+    let mut jobs = Vec::new();
+    for recorded in blocks {
+        jobs.extend(pipeline.ingest(recorded.block).1);
+    }
+    jobs.extend(pipeline.finish().1);
+    assert_eq!(jobs.len(), 6);
+    let (_, inline) = run(&cfg, None);
+    let values = |o: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
+        let report = o.result.as_ref().expect("update succeeded");
+        report.result.parameters.iter().map(|p| p.value).collect()
+    };
+    let mut jobs = jobs.into_iter();
+    let mut first = jobs.next().unwrap().run();
+    pipeline.apply(&mut first);
+    assert_eq!(values(&first), values(&inline.updates[0]));
+    let mut second = jobs.next().unwrap();
+    pipeline.rebase(&mut second);
+    let second = second.run();
+    assert_eq!(values(&second), values(&inline.updates[1]));
+    // Not rebased, the third job starts from the config's values instead of
+    // the second result: a different warm start, different last digits.
+    let stale = jobs.next().unwrap().run();
+    let (stale, fresh) = (values(&stale), values(&inline.updates[2]));
+    assert_ne!(stale, fresh);
+    // Both end within a tenth of a standard deviation of the same optimum.
+    let report = inline.updates[2].result.as_ref().unwrap();
+    for ((a, b), p) in stale.iter().zip(&fresh).zip(&report.result.parameters) {
+        let std = p.std.expect("identifiable");
+        assert!((a - b).abs() < 0.1 * std, "{}: {a} vs {b}, σ {std}", p.name);
+    }
+}
