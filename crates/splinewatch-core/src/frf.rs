@@ -254,8 +254,9 @@ impl FrfModel {
         let nf = request.frequencies_hz.len();
         let blocks = nf.div_ceil(FREQUENCY_BLOCK);
         let threads = threads.clamp(1, blocks.max(1));
+        let prepared = self.prepare(state, request, sensitivities);
         if threads == 1 {
-            return self.evaluate_lines(state, request, sensitivities);
+            return self.evaluate_lines(&prepared, request);
         }
         let per_thread = blocks.div_ceil(threads) * FREQUENCY_BLOCK;
         let ranges: Vec<(usize, usize)> = (0..nf)
@@ -270,7 +271,8 @@ impl FrfModel {
                         frequencies_hz: &request.frequencies_hz[a..b],
                         ..request
                     };
-                    scope.spawn(move || self.evaluate_lines(state, part, sensitivities))
+                    let prepared = &prepared;
+                    scope.spawn(move || self.evaluate_lines(prepared, part))
                 })
                 .collect();
             handles
@@ -302,10 +304,10 @@ impl FrfModel {
         }
     }
 
-    /// The sequential evaluation.
+    /// The frequency-independent factors of an evaluation, computed once and
+    /// shared by the threads.
     #[track_caller]
-    fn evaluate_lines(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> FrfEvaluation {
-        let nf = request.frequencies_hz.len();
+    fn prepare(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> Prepared {
         let np = request.pairs.len();
         for &(r, s) in request.pairs {
             assert!(
@@ -392,6 +394,45 @@ impl FrfModel {
             })
             .collect();
 
+        Prepared {
+            sensitivities,
+            nm,
+            omega,
+            omega2,
+            two_zeta_omega,
+            coupling,
+            damping_terms,
+            nb,
+            input_count: inputs.len(),
+            nu,
+            stacked,
+            phi_b_blocks,
+            widest,
+            by_input,
+        }
+    }
+
+    /// The evaluation on the lines of `request` (all or a thread's share).
+    fn evaluate_lines(&self, prepared: &Prepared, request: FrfRequest<'_>) -> FrfEvaluation {
+        let nf = request.frequencies_hz.len();
+        let np = request.pairs.len();
+        let Prepared {
+            sensitivities,
+            nm,
+            ref omega,
+            ref omega2,
+            ref two_zeta_omega,
+            ref coupling,
+            ref damping_terms,
+            nb,
+            input_count,
+            nu,
+            ref stacked,
+            ref phi_b_blocks,
+            widest,
+            ref by_input,
+        } = *prepared;
+        let nz = damping_terms.len();
         let zero = c64::new(0.0, 0.0);
         let mut h = vec![zero; np * nf];
         let mut dh_dgamma = vec![vec![zero; np * nf]; nz];
@@ -400,7 +441,7 @@ impl FrfModel {
         let mut q = Split::zeros(nm, width);
         let mut e = Split::zeros(nm, width);
         let mut out = Split::zeros(np, width);
-        let mut g = Split::zeros(inputs.len() * nu, width);
+        let mut g = Split::zeros(input_count * nu, width);
         let mut c = Split::zeros(nm, width);
         let mut gathered = Split::zeros(widest, width);
         let mut r = Split::zeros(np, width);
@@ -414,7 +455,7 @@ impl FrfModel {
             // q_{i,f} = 1 / D_i(ω_f) = conj(D) / |D|², over contiguous columns.
             for (f, &wf) in w.iter().enumerate() {
                 let (re, im) = q.col_mut(f);
-                for (((re, im), &w2), &tzw) in re.iter_mut().zip(im.iter_mut()).zip(&omega2).zip(&two_zeta_omega) {
+                for (((re, im), &w2), &tzw) in re.iter_mut().zip(im.iter_mut()).zip(omega2).zip(two_zeta_omega) {
                     let d_re = w2 - wf * wf;
                     let d_im = tzw * wf;
                     let norm = d_re * d_re + d_im * d_im;
@@ -422,7 +463,7 @@ impl FrfModel {
                     *im = -d_im / norm;
                 }
             }
-            out.product(np, nc, &coupling, &q);
+            out.product(np, nc, coupling, &q);
             for p in 0..np {
                 for f in 0..nc {
                     h[p * nf + start + f] = c64::new(out.re[(p, f)], out.im[(p, f)]) * factor[f];
@@ -435,7 +476,7 @@ impl FrfModel {
             for (f, &wf) in w.iter().enumerate() {
                 let (q_re, q_im) = (q.re.col_as_slice(f), q.im.col_as_slice(f));
                 let (re, im) = e.col_mut(f);
-                for ((((re, im), &a), &b), &w) in re.iter_mut().zip(im.iter_mut()).zip(q_re).zip(q_im).zip(&omega) {
+                for ((((re, im), &a), &b), &w) in re.iter_mut().zip(im.iter_mut()).zip(q_re).zip(q_im).zip(omega) {
                     // j s (a + j b)² = j s (a² - b²) - 2 s a b, s = -2 ω_i ω
                     let s = -2.0 * w * wf;
                     *re = -2.0 * s * a * b;
@@ -462,7 +503,7 @@ impl FrfModel {
             if nb == 0 {
                 continue;
             }
-            g.product(inputs.len() * nu, nc, &stacked, &q);
+            g.product(input_count * nu, nc, stacked, &q);
             for (k, (pairs, outputs)) in by_input.iter().enumerate() {
                 for (j, (phi_b, pos)) in phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
                     for f in 0..nc {
@@ -558,10 +599,35 @@ impl FrfModel {
     }
 }
 
-/// Frequency lines per block in [`FrfModel::evaluate`]: 64 lines keep the
-/// largest intermediate (all spring blocks side by side, 8 × 64 columns of
-/// the active modes) near 1 MB.
-pub const FREQUENCY_BLOCK: usize = 64;
+/// Frequency lines per block in [`FrfModel::evaluate`]: every intermediate
+/// (at most the active modes × 32 lines, re and im: 67 kB for Sinello) stays
+/// in L2, and a typical 300-line band splits evenly over two threads.
+pub const FREQUENCY_BLOCK: usize = 32;
+
+/// See [`FrfModel::prepare`]: the active modes' data and the products
+/// that do not depend on frequency.
+struct Prepared {
+    sensitivities: bool,
+    nm: usize,
+    omega: Vec<f64>,
+    omega2: Vec<f64>,
+    two_zeta_omega: Vec<f64>,
+    /// `a_{r,i} a_{s,i}` per pair.
+    coupling: Mat<f64>,
+    /// Per damping coefficient: first mode of its support, weights.
+    damping_terms: Vec<(usize, Mat<f64>)>,
+    /// Spring coefficients with sensitivities (0 without).
+    nb: usize,
+    input_count: usize,
+    nu: usize,
+    /// `Φ_U diag(a_s)` per input, stacked.
+    stacked: Mat<f64>,
+    /// `Φ_{B_j}ᵀ B_j` per spring coefficient.
+    phi_b_blocks: Vec<Mat<f64>>,
+    widest: usize,
+    /// Per input: its pairs and their output amplitudes.
+    by_input: Vec<(Vec<usize>, Mat<f64>)>,
+}
 
 /// A complex matrix stored as real and imaginary parts, for real GEMMs.
 struct Split {
