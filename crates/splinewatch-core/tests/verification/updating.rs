@@ -65,6 +65,12 @@ fn corrupted_measurements(model: &FrfModel, damping: &DampingCurve) -> MeasuredS
     MeasuredSet::new(Quantity::Accelerance, freqs, frfs).unwrap()
 }
 
+/// `measured` with every FRF replaced by `change` of it.
+fn with_each_frf(measured: &MeasuredSet, change: impl Fn(&MeasuredFrf) -> MeasuredFrf) -> MeasuredSet {
+    let frfs = measured.frfs().iter().map(change).collect();
+    MeasuredSet::new(measured.quantity(), measured.frequencies_hz().to_vec(), frfs).unwrap()
+}
+
 fn worst_kappa_error(values: &[f64]) -> f64 {
     let truth: Vec<f64> = true_kappa().into_iter().flatten().collect();
     values
@@ -177,19 +183,10 @@ fn warm_start_from_the_previous_point_is_exact_and_saves_an_evaluation() {
     let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
     let first = corrupted_measurements(&model, &damping);
     // The second "window": the same deck measured with a 2 % gain error.
-    let second = MeasuredSet::new(
-        Quantity::Accelerance,
-        first.frequencies_hz().to_vec(),
-        first
-            .frfs()
-            .iter()
-            .map(|f| MeasuredFrf {
-                values: f.values.iter().map(|v| v * c64::new(1.02, 0.0)).collect(),
-                ..f.clone()
-            })
-            .collect(),
-    )
-    .unwrap();
+    let second = with_each_frf(&first, |f| MeasuredFrf {
+        values: f.values.iter().map(|v| v * c64::new(1.02, 0.0)).collect(),
+        ..f.clone()
+    });
     let problem = |measured| {
         UpdateProblem::new(
             &model,
@@ -260,19 +257,10 @@ fn iterates_do_not_depend_on_the_scale_of_the_residual() {
     let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
     let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
     let measured = corrupted_measurements(&model, &damping);
-    let scaled = MeasuredSet::new(
-        Quantity::Accelerance,
-        measured.frequencies_hz().to_vec(),
-        measured
-            .frfs()
-            .iter()
-            .map(|f| MeasuredFrf {
-                n_averages: f.n_averages.map(|n| n * 1e6),
-                ..f.clone()
-            })
-            .collect(),
-    )
-    .unwrap();
+    let scaled = with_each_frf(&measured, |f| MeasuredFrf {
+        n_averages: f.n_averages.map(|n| n * 1e6),
+        ..f.clone()
+    });
     let solve = |measured| {
         let settings = UpdateSettings {
             weighting: Weighting::H1Variance,
