@@ -304,7 +304,7 @@ pub struct Pipeline {
     fs: Option<f64>,
     t0: Option<i128>,
     /// Blocks held until the sampling rate and time origin are agreed on
-    /// ([`Self::establish_reference`]).
+    /// (`establish_reference`).
     pending: Vec<ChannelBlock>,
     /// Welch settings and FRF estimator, once the rate is known.
     welch: Option<(WelchSettings, Estimator)>,
@@ -500,7 +500,7 @@ impl Pipeline {
     }
 
     /// Ends the stream: blocks still held for the reference
-    /// ([`Self::establish_reference`]) are decided on with what arrived.
+    /// (`establish_reference`) are decided on with what arrived.
     pub fn finish(&mut self) -> (Vec<WindowReport>, Vec<UpdateJob>) {
         let mut windows = Vec::new();
         let mut jobs = Vec::new();

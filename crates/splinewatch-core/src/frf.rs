@@ -27,6 +27,7 @@ use crate::vec3::{dot, normalize, Vec3};
 use faer::linalg::matmul::matmul;
 use faer::{c64, Accum, Mat, Par};
 use std::f64::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -124,7 +125,12 @@ pub struct FrfModel {
     spring_dofs: Vec<usize>,
     /// Positions in `U` of each block's dofs, blocks flattened over fields.
     block_positions: Vec<Vec<usize>>,
+    /// Distinct for every model built (clones share it): results computed
+    /// on one model are not mistaken for another's.
+    id: u64,
 }
+
+static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(0);
 
 impl FrfModel {
     pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
@@ -173,7 +179,13 @@ impl FrfModel {
             sensor_rows,
             spring_dofs,
             block_positions,
+            id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
         })
+    }
+
+    /// This model's identity (see the field).
+    pub fn id(&self) -> u64 {
+        self.id
     }
 
     pub fn assembled(&self) -> &AssembledModel {

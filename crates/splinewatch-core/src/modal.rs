@@ -172,7 +172,7 @@ impl ScaledPencil {
 /// At construction the reduced dofs are split into the connected components
 /// of the union sparsity pattern of `K_f`, `M` and every `∂K/∂κ_j` (a flat
 /// deck on vertical springs splits exactly into its in-plane and its
-/// out-of-plane dofs), and each component gets its [`ScaledPencil`] once. A
+/// out-of-plane dofs), and each component gets its `ScaledPencil` once. A
 /// component that no spring reaches has κ-independent modes: solved once.
 /// Per `κ`, every other component forms `A = A_f + W Δ(κ) Wᵀ` with
 /// `W = L⁻¹ S Tᵀ E_U` (`U`: the spring dofs, `|U|` columns) and calls the

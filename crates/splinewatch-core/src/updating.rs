@@ -341,11 +341,13 @@ pub struct UpdateResult {
 /// The model at one parameter point, with its FRFs and sensitivities on an
 /// [`UpdateProblem`]'s lines: where a solve ends. Handed to the next
 /// warm-started solve ([`UpdateProblem::solve_from`]), whose first point it
-/// is when that solve starts from these parameters on the same lines, it
+/// is when that solve starts from these parameters on the same lines of the
+/// same model ([`FrfModel::id`]), it
 /// saves the first modal solve and sensitivity evaluation; the result is the
 /// same bit for bit as without it.
 #[derive(Debug, Clone)]
 pub struct ModelPoint {
+    model_id: u64,
     kappa: Vec<Vec<f64>>,
     gamma: Vec<f64>,
     frequencies: Vec<f64>,
@@ -631,7 +633,7 @@ impl<'a> UpdateProblem<'a> {
         })
     }
 
-    /// `previous` if it is the model at `p` on this problem's lines.
+    /// `previous` if it is this model at `p` on this problem's lines.
     fn reusable<'p>(&self, previous: Option<&'p ModelPoint>, p: &[f64]) -> Result<Option<&'p ModelPoint>, UpdateError> {
         let Some(point) = previous else {
             return Ok(None);
@@ -639,19 +641,20 @@ impl<'a> UpdateProblem<'a> {
         let (kappa, damping) = self.model_at(p)?;
         let same =
             |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
-        let matches = point.kappa.len() == kappa.len()
+        let matches = point.model_id == self.model.id()
+            && point.kappa.len() == kappa.len()
             && point.kappa.iter().zip(&kappa).all(|(a, b)| same(a, b))
             && same(&point.gamma, damping.coefficients())
             && same(&point.frequencies, &self.frequencies)
             && point.pairs == self.pairs
-            && point.quantity == self.measured.quantity()
-            && point.frfs.dh_dkappa.len() == self.model.spring_coefficient_count();
+            && point.quantity == self.measured.quantity();
         Ok(matches.then_some(point))
     }
 
     fn point(&self, p: &[f64], state: ModalState, frfs: FrfEvaluation) -> Result<ModelPoint, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
         Ok(ModelPoint {
+            model_id: self.model.id(),
             kappa,
             gamma: damping.coefficients().to_vec(),
             frequencies: self.frequencies.clone(),

@@ -246,6 +246,25 @@ fn warm_start_from_the_previous_point_is_exact_and_saves_an_evaluation() {
     let with_point = other.solve_from(&start, Some(&earlier.point), &mut |_| {}).unwrap();
     let without = other.solve_from(&start, None, &mut |_| {}).unwrap();
     assert_eq!(with_point.result, without.result);
+    // Another model, even one built alike, cannot use it either; a clone can.
+    let twin = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let on = |model| {
+        let problem = UpdateProblem::new(
+            model,
+            true_kappa(),
+            damping.clone(),
+            spring_parameters(),
+            &second,
+            UpdateSettings::default(),
+        )
+        .unwrap();
+        problem
+            .solve_from(&start, Some(&earlier.point), &mut |_| {})
+            .unwrap()
+            .result
+    };
+    assert_eq!(on(&twin).evaluations, cold.result.evaluations);
+    assert_eq!(on(&model.clone()).evaluations, warm.result.evaluations);
 }
 
 /// The iterates do not depend on the units of the residual: scaling every
