@@ -210,7 +210,6 @@ impl UpdateJob {
         if !result.converged {
             bail!("the updating did not converge ({:?})", result.stop_reason);
         }
-        let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
         let (state, h) = (point.state(), point.frfs());
         let lines = problem.line_frequencies().to_vec();
         let sel = problem.line_indices();
@@ -237,7 +236,7 @@ impl UpdateJob {
                     .collect(),
             );
         }
-        let (kappa, damping) = problem.model_at(&values)?;
+        let (kappa, damping) = (point.kappa().to_vec(), point.damping().clone());
         let top = lines.last().copied().unwrap_or(0.0);
         let modes = (0..state.modes.len())
             .filter(|&i| state.modes.frequency_hz(i) <= top)

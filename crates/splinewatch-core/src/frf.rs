@@ -374,14 +374,13 @@ impl FrfModel {
         // block's dofs, g_s = Φ_U diag(a_s) q the response of the spring dofs
         // U to input s. With g_r = Φ_U diag(a_r) q this is
         // -Σ_i a_{r,i} q_i c_{j,i}, c_j = Φ_{B_j}ᵀ B_j g_s: g_s only for the
-        // inputs (not for every sensor), one small GEMM per block, then one
-        // GEMM over all blocks stacked side by side.
+        // inputs (not for every sensor), then per block one small GEMM for
+        // c_j and one against the output amplitudes.
         let blocks: Vec<&LowRankBlock> = if sensitivities {
             self.assembled.spring_blocks.iter().flatten().collect()
         } else {
             Vec::new()
         };
-        let nb = blocks.len();
         let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| s).collect();
         inputs.sort_unstable();
         inputs.dedup();
@@ -396,7 +395,6 @@ impl FrfModel {
             .zip(&self.block_positions)
             .map(|(block, pos)| Mat::from_fn(nm, pos.len(), |i, a| phi_u[(pos[a], i)]) * &block.values)
             .collect();
-        let widest = self.block_positions.iter().take(nb).map(Vec::len).max().unwrap_or(0);
         let by_input: Vec<(Vec<usize>, Mat<f64>)> = inputs
             .iter()
             .map(|&s| {
@@ -408,18 +406,14 @@ impl FrfModel {
 
         Prepared {
             sensitivities,
-            nm,
             omega,
             omega2,
             two_zeta_omega,
             coupling,
             damping_terms,
-            nb,
-            input_count: inputs.len(),
             nu,
             stacked,
             phi_b_blocks,
-            widest,
             by_input,
         }
     }
@@ -430,21 +424,18 @@ impl FrfModel {
         let np = request.pairs.len();
         let Prepared {
             sensitivities,
-            nm,
             ref omega,
             ref omega2,
             ref two_zeta_omega,
             ref coupling,
             ref damping_terms,
-            nb,
-            input_count,
             nu,
             ref stacked,
             ref phi_b_blocks,
-            widest,
             ref by_input,
         } = *prepared;
-        let nz = damping_terms.len();
+        let (nm, nz, nb) = (omega.len(), damping_terms.len(), phi_b_blocks.len());
+        let widest = phi_b_blocks.iter().map(Mat::ncols).max().unwrap_or(0);
         let zero = c64::new(0.0, 0.0);
         let mut h = vec![zero; np * nf];
         let mut dh_dgamma = vec![vec![zero; np * nf]; nz];
@@ -453,7 +444,7 @@ impl FrfModel {
         let mut q = Split::zeros(nm, width);
         let mut e = Split::zeros(nm, width);
         let mut out = Split::zeros(np, width);
-        let mut g = Split::zeros(input_count * nu, width);
+        let mut g = Split::zeros(by_input.len() * nu, width);
         let mut c = Split::zeros(nm, width);
         let mut gathered = Split::zeros(widest, width);
         let mut r = Split::zeros(np, width);
@@ -515,7 +506,7 @@ impl FrfModel {
             if nb == 0 {
                 continue;
             }
-            g.product(input_count * nu, nc, stacked, &q);
+            g.product(by_input.len() * nu, nc, stacked, &q);
             for (k, (pairs, outputs)) in by_input.iter().enumerate() {
                 for (j, (phi_b, pos)) in phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
                     for f in 0..nc {
@@ -620,7 +611,7 @@ pub const FREQUENCY_BLOCK: usize = 32;
 /// that do not depend on frequency.
 struct Prepared {
     sensitivities: bool,
-    nm: usize,
+    /// ω of the active modes.
     omega: Vec<f64>,
     omega2: Vec<f64>,
     two_zeta_omega: Vec<f64>,
@@ -628,15 +619,11 @@ struct Prepared {
     coupling: Mat<f64>,
     /// Per damping coefficient: first mode of its support, weights.
     damping_terms: Vec<(usize, Mat<f64>)>,
-    /// Spring coefficients with sensitivities (0 without).
-    nb: usize,
-    input_count: usize,
     nu: usize,
     /// `Φ_U diag(a_s)` per input, stacked.
     stacked: Mat<f64>,
-    /// `Φ_{B_j}ᵀ B_j` per spring coefficient.
+    /// `Φ_{B_j}ᵀ B_j` per spring coefficient (none without sensitivities).
     phi_b_blocks: Vec<Mat<f64>>,
-    widest: usize,
     /// Per input: its pairs and their output amplitudes.
     by_input: Vec<(Vec<usize>, Mat<f64>)>,
 }

@@ -349,7 +349,7 @@ pub struct UpdateResult {
 pub struct ModelPoint {
     model_id: u64,
     kappa: Vec<Vec<f64>>,
-    gamma: Vec<f64>,
+    damping: DampingCurve,
     frequencies: Vec<f64>,
     pairs: Vec<(usize, usize)>,
     quantity: Quantity,
@@ -375,9 +375,9 @@ impl ModelPoint {
         &self.kappa
     }
 
-    /// Damping coefficients γ_z at this point.
-    pub fn gamma(&self) -> &[f64] {
-        &self.gamma
+    /// The damping curve ζ(f) at this point.
+    pub fn damping(&self) -> &DampingCurve {
+        &self.damping
     }
 }
 
@@ -535,13 +535,6 @@ impl<'a> UpdateProblem<'a> {
         Ok((kappa, self.damping.with_coefficients(gamma)?))
     }
 
-    /// Model FRFs (in the measured quantity) at `p` on the selected lines,
-    /// `[frf * n_lines + line]`, from the modal state at `p`
-    /// ([`Self::state_at`]).
-    pub fn model_frfs(&self, p: &[f64], state: &ModalState) -> Result<Vec<c64>, UpdateError> {
-        Ok(self.evaluate_state(p, state, false)?.frfs.h)
-    }
-
     /// Frequencies of the selected lines.
     pub fn line_frequencies(&self) -> &[f64] {
         &self.frequencies
@@ -644,7 +637,7 @@ impl<'a> UpdateProblem<'a> {
         let matches = point.model_id == self.model.id()
             && point.kappa.len() == kappa.len()
             && point.kappa.iter().zip(&kappa).all(|(a, b)| same(a, b))
-            && same(&point.gamma, damping.coefficients())
+            && same(point.damping.coefficients(), damping.coefficients())
             && same(&point.frequencies, &self.frequencies)
             && point.pairs == self.pairs
             && point.quantity == self.measured.quantity();
@@ -656,7 +649,7 @@ impl<'a> UpdateProblem<'a> {
         Ok(ModelPoint {
             model_id: self.model.id(),
             kappa,
-            gamma: damping.coefficients().to_vec(),
+            damping,
             frequencies: self.frequencies.clone(),
             pairs: self.pairs.clone(),
             quantity: self.measured.quantity(),
