@@ -573,11 +573,16 @@ impl Pipeline {
         }
     }
 
+    /// How far (samples) a channel may lag the others before its missing
+    /// stretch counts as a gap.
+    fn max_lag_samples(&self, fs: f64) -> i64 {
+        (self.schedule.max_lag_seconds * fs) as i64
+    }
+
     /// A block further ahead of its channel than this many samples is
     /// rejected as `far_future`.
     fn far_future_samples(&self, fs: f64) -> i64 {
-        let max_lag = (self.schedule.max_lag_seconds * fs) as i64;
-        self.window_samples.max(max_lag) * 4
+        self.window_samples.max(self.max_lag_samples(fs)) * 4
     }
 
     /// [`Self::ingest`] once the reference is set.
@@ -597,6 +602,7 @@ impl Pipeline {
         }
         let index = index as i64;
         let horizon = self.far_future_samples(fs);
+        let max_lag = self.max_lag_samples(fs);
         let queue = &mut self.queues[c];
         let expected = if queue.seen { queue.end() } else { self.fed };
         if index < expected {
@@ -604,7 +610,6 @@ impl Pipeline {
             self.health.reject("time_overlap");
             return;
         }
-        let max_lag = (self.schedule.max_lag_seconds * fs) as i64;
         if index - expected > horizon {
             self.health.reject("far_future");
             return;
@@ -688,7 +693,7 @@ impl Pipeline {
                     self.accepted_since_update += 1;
                     let since = *self
                         .last_update_ns
-                        .get_or_insert(self.t0.expect("set with the first block"));
+                        .get_or_insert(self.t0.expect("set with the reference"));
                     let due = match self.schedule.update_every_minutes {
                         Some(minutes) => (report.end_ns - since) as f64 >= minutes * 60e9,
                         None => self.accepted_since_update >= self.schedule.update_every_windows,
@@ -709,8 +714,8 @@ impl Pipeline {
     }
 
     fn close_window(&mut self, index: u64, welch: WelchEstimator) -> WindowReport {
-        let fs = self.fs.expect("set with the first block");
-        let t0 = self.t0.expect("set with the first block");
+        let fs = self.fs.expect("set with the reference");
+        let t0 = self.t0.expect("set with the reference");
         let start = index as i64 * self.hop_samples;
         let start_ns = t0 + (start as f64 * 1e9 / fs).round() as i128;
         let end_ns = t0 + ((start + self.window_samples) as f64 * 1e9 / fs).round() as i128;
