@@ -15,7 +15,7 @@
 //!   saves the state.
 
 use crate::config::Config;
-use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome};
+use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome, WindowReport};
 use crate::recorder::RawRecorder;
 use crate::results::{self, ResultsSink};
 use crate::viewer::{RerunOutput, RerunTargets};
@@ -332,15 +332,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                     }
                     let (windows, jobs) = pipeline.ingest(block);
                     for w in &windows {
+                        report_window(w, &mut writer, &session, &publish, &mut summary);
                         last_time = w.end_ns;
-                        let m = results::window_message(w);
-                        writer.write("windows", w.end_ns, &m);
-                        publish(&session, "windows", &m);
-                        summary.windows += 1;
-                        match &w.skipped {
-                            None => tracing::info!(message = "window accepted", window = w.index, segments = w.segments_accepted),
-                            Some(r) => tracing::warn!(message = "window skipped", window = w.index, reason = %r),
-                        }
                     }
                     for job in jobs {
                         submit(job, &mut running, &mut waiting, &mut job_drops);
@@ -394,8 +387,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     // update to be due.
     let (windows, _) = pipeline.finish();
     for w in &windows {
+        report_window(w, &mut writer, &session, &publish, &mut summary);
         last_time = w.end_ns;
-        writer.write("windows", w.end_ns, &results::window_message(w));
     }
     log_new_rejections(&pipeline.health().rejected, &mut logged_rejections);
     pipeline.health_mut().queue_drops = job_drops + ingest_drops.load(Ordering::Relaxed);
@@ -425,6 +418,28 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
         .map_err(|e| anyhow!("closing the zenoh session: {e}"))?;
     summary.accepted = pipeline.accepted().cloned();
     Ok(summary)
+}
+
+/// Writes, publishes, counts and logs a closed window.
+fn report_window(
+    w: &WindowReport,
+    writer: &mut ResultsSink<BufWriter<File>>,
+    session: &zenoh::Session,
+    publish: &dyn Fn(&zenoh::Session, &str, &serde_json::Value),
+    summary: &mut RunSummary,
+) {
+    let m = results::window_message(w);
+    writer.write("windows", w.end_ns, &m);
+    publish(session, "windows", &m);
+    summary.windows += 1;
+    match &w.skipped {
+        None => tracing::info!(
+            message = "window accepted",
+            window = w.index,
+            segments = w.segments_accepted
+        ),
+        Some(r) => tracing::warn!(message = "window skipped", window = w.index, reason = %r),
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
