@@ -43,9 +43,15 @@ pub fn numbered(path: &Path, index: u32) -> PathBuf {
 /// The first of `path`, `<stem>-1.<ext>`, `<stem>-2.<ext>`, … that does not
 /// exist: how a restarted daemon avoids overwriting an earlier run's output.
 pub fn first_free(path: &Path) -> PathBuf {
-    (0..)
-        .map(|k| numbered(path, k))
-        .find(|p| !p.exists())
+    first_free_from(path, 0).1
+}
+
+/// The first number from `from` on whose [`numbered`] file does not exist,
+/// and that file.
+pub fn first_free_from(path: &Path, from: u32) -> (u32, PathBuf) {
+    (from..)
+        .map(|k| (k, numbered(path, k)))
+        .find(|(_, p)| !p.exists())
         .expect("some number is free")
 }
 

@@ -331,14 +331,9 @@ pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File
     let path = path.to_path_buf();
     let mut next = 0;
     Box::new(move |index| {
-        next = u32::max(next, index);
-        loop {
-            let target = crate::files::numbered(&path, next);
-            next += 1;
-            if !target.exists() {
-                return create_buffered(&target);
-            }
-        }
+        let (number, target) = crate::files::first_free_from(&path, u32::max(next, index));
+        next = number + 1;
+        create_buffered(&target)
     })
 }
 
