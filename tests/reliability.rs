@@ -14,7 +14,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 mod common;
-use common::{bundled_blocks, free_endpoint, spawn_daemon};
+use common::{bundled_blocks, free_endpoint, fresh_dir, spawn_daemon};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -22,9 +22,7 @@ fn root() -> &'static Path {
 
 #[test]
 fn sigkill_during_replay_loses_nothing_that_was_reported() {
-    let dir = std::env::temp_dir().join(format!("splinewatch-kill-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("kill");
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2026);
     // How long an uninterrupted replay takes here, to spread the kills over it.
     let t0 = Instant::now();
@@ -286,9 +284,7 @@ fn recovered_updates(recovered: &[u8]) -> Vec<(u64, String)> {
 
 #[test]
 fn sigkill_of_the_live_daemon_loses_nothing_that_was_reported() {
-    let dir = std::env::temp_dir().join(format!("splinewatch-livekill-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("livekill");
     let endpoint = free_endpoint();
     let text = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
         + &format!("\n[zenoh]\nmode = \"peer\"\nlisten = [\"{endpoint}\"]\nmulticast_scouting = false\n");
@@ -370,9 +366,7 @@ fn sigkill_of_the_live_daemon_loses_nothing_that_was_reported() {
 #[test]
 fn the_daemons_results_never_overwrite_an_existing_file() {
     use splinewatch::results::{results_files, ResultsSink};
-    let dir = std::env::temp_dir().join(format!("splinewatch-no-overwrite-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("no-overwrite");
     // Results of an earlier run under the same name, and its first rotation.
     std::fs::write(dir.join("results.mcap"), b"earlier run").unwrap();
     std::fs::write(dir.join("results-1.mcap"), b"earlier run, rotated").unwrap();

@@ -1,5 +1,7 @@
 //! Offline replay of the bundled recording: outputs, determinism, state.
 
+mod common;
+use common::{bundled_blocks, fresh_dir};
 use splinewatch::commands;
 use splinewatch::config::Config;
 use splinewatch::replay::{replay, ReplayOptions};
@@ -244,9 +246,7 @@ fn replay_streams_to_a_rerun_server_over_grpc() {
 fn rerun_files_rotate_by_measurement_time_and_each_stands_alone() {
     let mut cfg = config();
     cfg.output.rerun_rotate_hours = 0.01; // 36 s of data per file
-    let dir = std::env::temp_dir().join(format!("splinewatch-rrd-rotate-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("rrd-rotate");
     let targets = splinewatch::viewer::RerunTargets {
         save: Some(dir.join("trend.rrd")),
         connect: None,
@@ -284,9 +284,7 @@ fn replay_into_rerun(cfg: &Config, targets: &splinewatch::viewer::RerunTargets) 
 /// file, and the failure is reported with its reason.
 #[test]
 fn failed_updates_keep_the_last_good_parameters_and_say_why() {
-    let dir = std::env::temp_dir().join(format!("splinewatch-failures-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("failures");
     let state = dir.join("state.json");
     run(&config(), Some(&state));
     let good = load_state(&state).unwrap().expect("six good updates saved a state");
@@ -399,12 +397,10 @@ fn overlapping_windows_every_hop() {
 fn a_job_that_waited_starts_from_the_latest_result() {
     use splinewatch::pipeline::Pipeline;
     let cfg = config();
-    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
-    let (blocks, _) = splinewatch::recording::read_recording(&bytes, &Default::default()).unwrap();
     // Every job made before any update ran, as when updates queue up live.
     let mut pipeline = Pipeline::new(&cfg, cfg.schedule.clone(), None).unwrap();
     let mut jobs = Vec::new();
-    for recorded in blocks {
+    for recorded in bundled_blocks() {
         jobs.extend(pipeline.ingest(recorded.block).1);
     }
     jobs.extend(pipeline.finish().1);

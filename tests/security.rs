@@ -14,7 +14,7 @@ use std::time::Duration;
 use zenoh::Wait;
 
 mod common;
-use common::{bundled_blocks, free_endpoint, spawn_daemon, terminate, wait_for_file};
+use common::{bundled_blocks, free_endpoint, fresh_dir, spawn_daemon, terminate, wait_for_file};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -53,9 +53,7 @@ fn client_file(dir: &Path, name: &str, file: &str, user: &str, password: &str) -
 
 #[test]
 fn authenticated_clients_and_access_control_keep_forged_data_out() {
-    let dir = std::env::temp_dir().join(format!("splinewatch-security-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("security");
     let endpoint = free_endpoint();
 
     // The router exactly as in config/zenoh/router-acl.json5, with a test

@@ -86,3 +86,12 @@ pub fn wait_for_file(path: &std::path::Path) -> bool {
     }
     path.exists()
 }
+
+/// An empty folder `splinewatch-<name>-<pid>` under the system temp folder
+/// (whatever an earlier run left there is removed).
+pub fn fresh_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("splinewatch-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
