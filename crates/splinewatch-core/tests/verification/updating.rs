@@ -65,6 +65,25 @@ fn corrupted_measurements(model: &FrfModel, damping: &DampingCurve) -> MeasuredS
     MeasuredSet::new(Quantity::Accelerance, freqs, frfs).unwrap()
 }
 
+/// The eight spring coefficients updated against `measured`, the truth as
+/// the base model.
+fn spring_problem<'a>(
+    model: &'a FrfModel,
+    damping: &DampingCurve,
+    measured: &'a MeasuredSet,
+    settings: UpdateSettings,
+) -> UpdateProblem<'a> {
+    UpdateProblem::new(
+        model,
+        true_kappa(),
+        damping.clone(),
+        spring_parameters(),
+        measured,
+        settings,
+    )
+    .unwrap()
+}
+
 /// `measured` with every FRF replaced by `change` of it.
 fn with_each_frf(measured: &MeasuredSet, change: impl Fn(&MeasuredFrf) -> MeasuredFrf) -> MeasuredSet {
     let frfs = measured.frfs().iter().map(change).collect();
@@ -90,15 +109,7 @@ fn h1_variance_weighting_discounts_low_coherence_lines() {
             weighting,
             ..UpdateSettings::default()
         };
-        let problem = UpdateProblem::new(
-            &model,
-            true_kappa(),
-            damping.clone(),
-            spring_parameters(),
-            &measured,
-            settings,
-        )
-        .unwrap();
+        let problem = spring_problem(&model, &damping, &measured, settings);
         let result = problem.solve(&[1e9; 8]).unwrap();
         assert!(result.converged, "{:?}", result.stop_reason);
         worst_kappa_error(&result.parameters.iter().map(|p| p.value).collect::<Vec<_>>())
@@ -123,7 +134,7 @@ fn excluding_the_corrupted_band_recovers_the_truth() {
         },
         ..UpdateSettings::default()
     };
-    let problem = UpdateProblem::new(&model, true_kappa(), damping, spring_parameters(), &measured, settings).unwrap();
+    let problem = spring_problem(&model, &damping, &measured, settings);
     let result = problem.solve(&[1e9; 8]).unwrap();
     let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
     assert!(worst_kappa_error(&values) < 1e-6, "{values:?}");
@@ -187,17 +198,7 @@ fn warm_start_from_the_previous_point_is_exact_and_saves_an_evaluation() {
         values: f.values.iter().map(|v| v * c64::new(1.02, 0.0)).collect(),
         ..f.clone()
     });
-    let problem = |measured| {
-        UpdateProblem::new(
-            &model,
-            true_kappa(),
-            damping.clone(),
-            spring_parameters(),
-            measured,
-            UpdateSettings::default(),
-        )
-        .unwrap()
-    };
+    let problem = |measured| spring_problem(&model, &damping, measured, UpdateSettings::default());
     let earlier = problem(&first).solve_from(&[1e9; 8], None, &mut |_| {}).unwrap();
     let start: Vec<f64> = earlier.result.parameters.iter().map(|p| p.value).collect();
     assert_eq!(
@@ -234,30 +235,14 @@ fn warm_start_from_the_previous_point_is_exact_and_saves_an_evaluation() {
         },
         ..UpdateSettings::default()
     };
-    let other = UpdateProblem::new(
-        &model,
-        true_kappa(),
-        damping.clone(),
-        spring_parameters(),
-        &second,
-        decimated.clone(),
-    )
-    .unwrap();
+    let other = spring_problem(&model, &damping, &second, decimated.clone());
     let with_point = other.solve_from(&start, Some(&earlier.point), &mut |_| {}).unwrap();
     let without = other.solve_from(&start, None, &mut |_| {}).unwrap();
     assert_eq!(with_point.result, without.result);
     // Another model, even one built alike, cannot use it either; a clone can.
     let twin = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
-    let on = |model| {
-        let problem = UpdateProblem::new(
-            model,
-            true_kappa(),
-            damping.clone(),
-            spring_parameters(),
-            &second,
-            UpdateSettings::default(),
-        )
-        .unwrap();
+    let on = |model: &FrfModel| {
+        let problem = spring_problem(model, &damping, &second, UpdateSettings::default());
         problem
             .solve_from(&start, Some(&earlier.point), &mut |_| {})
             .unwrap()
@@ -285,17 +270,9 @@ fn iterates_do_not_depend_on_the_scale_of_the_residual() {
             weighting: Weighting::H1Variance,
             ..UpdateSettings::default()
         };
-        UpdateProblem::new(
-            &model,
-            true_kappa(),
-            damping.clone(),
-            spring_parameters(),
-            measured,
-            settings,
-        )
-        .unwrap()
-        .solve(&[1e9; 8])
-        .unwrap()
+        spring_problem(&model, &damping, measured, settings)
+            .solve(&[1e9; 8])
+            .unwrap()
     };
     let (base, large) = (solve(&measured), solve(&scaled));
     assert_eq!(base.iterations.len(), large.iterations.len());
