@@ -2,13 +2,14 @@
 //! ingest cost of the pipeline per 1000 samples (decode + align + Welch,
 //! no updates). Run: `cargo bench --bench pipeline`.
 
-use splinewatch::commands;
-use splinewatch::pipeline::{Pipeline, ScheduleConfig};
-use splinewatch::recording::{read_recording, RecordingWriter};
-use splinewatch::replay::replay;
-use splinewatch::results::ResultsWriter;
-use splinewatch::simulation::{simulate, SimulationOptions};
-use splinewatch::wire::{self, Encoding, Limits};
+use splinewatch::config::load_config;
+use splinewatch::config::ScheduleConfig;
+use splinewatch::io::recording::{read_recording, RecordingWriter};
+use splinewatch::io::wire::{self, Encoding, Limits};
+use splinewatch::outputs::results::ResultsWriter;
+use splinewatch::pipeline::Pipeline;
+use splinewatch::service::replay::replay;
+use splinewatch::studies::simulation::{simulate, SimulationOptions};
 use std::io::Cursor;
 use std::path::Path;
 
@@ -18,7 +19,7 @@ fn root() -> &'static Path {
 
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn replay_bundled_recording(bencher: divan::Bencher) {
-    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
@@ -31,7 +32,7 @@ fn replay_bundled_recording(bencher: divan::Bencher) {
 /// updates. Throughput = 3600 s / the time shown.
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
-    let mut cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let mut cfg = load_config(&root().join("config/sinello.toml")).unwrap();
     cfg.frf.window_seconds = 600.0;
     let options = SimulationOptions::random_excitation(&cfg, 3600.0, 7);
     let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), Encoding::Cbor).unwrap();
@@ -50,7 +51,7 @@ fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
 /// updates; divide by 399.36 for the cost per 1000 samples.
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn ingest_without_updates(bencher: divan::Bencher) {
-    let cfg = commands::load_config(&root().join("config/sinello.toml")).unwrap();
+    let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
     let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
     let payloads: Vec<Vec<u8>> = mcap::MessageStream::new(&bytes)
         .unwrap()

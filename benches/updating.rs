@@ -2,8 +2,7 @@
 //! (modes + 12 FRFs × 796 lines + 15 sensitivities) and a whole updating.
 //! Run: `cargo bench --bench updating`.
 
-use splinewatch::commands;
-use splinewatch::paper::{bundled_configs, run, EXPERIMENTS};
+use splinewatch::studies::paper::{bundled_configs, run, EXPERIMENTS};
 use splinewatch_core::frf::{FrfEvaluation, FrfRequest, ModalState, Quantity};
 use std::path::Path;
 
@@ -14,13 +13,13 @@ fn root() -> &'static Path {
 #[divan::bench(sample_count = 20)]
 fn eigen_solve(bencher: divan::Bencher) {
     let (_, model) = bundled_configs(root()).unwrap();
-    let setup = commands::frf_setup(&model).unwrap();
+    let setup = splinewatch::config::frf_setup(&model).unwrap();
     bencher.bench(|| setup.model.modal_state(&setup.kappa, &setup.damping).unwrap());
 }
 
 /// The paper's 12-sensor case: accelerances P1 → P1…P12 on 0.5–80 Hz every
 /// 0.1 Hz (796 lines), with all sensitivities.
-fn paper_case(setup: &commands::FrfSetup, state: &ModalState) -> FrfEvaluation {
+fn paper_case(setup: &splinewatch::config::FrfSetup, state: &ModalState) -> FrfEvaluation {
     let freqs: Vec<f64> = (0..796).map(|k| 0.5 + 0.1 * k as f64).collect();
     let pairs: Vec<(usize, usize)> = (0..12).map(|r| (r, 0)).collect();
     setup.model.evaluate(
@@ -37,7 +36,7 @@ fn paper_case(setup: &commands::FrfSetup, state: &ModalState) -> FrfEvaluation {
 #[divan::bench(sample_count = 20)]
 fn frfs_and_sensitivities(bencher: divan::Bencher) {
     let (_, model) = bundled_configs(root()).unwrap();
-    let setup = commands::frf_setup(&model).unwrap();
+    let setup = splinewatch::config::frf_setup(&model).unwrap();
     let state = setup.model.modal_state(&setup.kappa, &setup.damping).unwrap();
     bencher.bench(|| paper_case(&setup, &state));
 }
@@ -47,7 +46,7 @@ fn frfs_and_sensitivities(bencher: divan::Bencher) {
 #[divan::bench(sample_count = 20)]
 fn one_evaluation(bencher: divan::Bencher) {
     let (_, model) = bundled_configs(root()).unwrap();
-    let setup = commands::frf_setup(&model).unwrap();
+    let setup = splinewatch::config::frf_setup(&model).unwrap();
     bencher.bench(|| {
         let state = setup.model.modal_state(&setup.kappa, &setup.damping).unwrap();
         paper_case(&setup, &state)

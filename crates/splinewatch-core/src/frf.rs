@@ -318,6 +318,10 @@ impl FrfModel {
 
     /// The frequency-independent factors of an evaluation, computed once and
     /// shared by the threads.
+    #[allow(
+        clippy::too_many_lines,
+        reason = "one pass forms every frequency-independent factor of eq. (31)-(33); each is a few lines and used by the next"
+    )]
     #[track_caller]
     fn prepare(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> Prepared {
         let np = request.pairs.len();
@@ -419,6 +423,10 @@ impl FrfModel {
     }
 
     /// The evaluation on the lines of `request` (all or a thread's share).
+    #[allow(
+        clippy::too_many_lines,
+        reason = "the hot loop over 32-line blocks: H, g_s and the sensitivities share the block's buffers, kept in one scope so they stay in cache"
+    )]
     fn evaluate_lines(&self, prepared: &Prepared, request: FrfRequest<'_>) -> FrfEvaluation {
         let nf = request.frequencies_hz.len();
         let np = request.pairs.len();

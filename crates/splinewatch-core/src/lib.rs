@@ -7,6 +7,8 @@
 #![forbid(unsafe_code)]
 // Index loops mirror the summations of the paper; iterator chains would hide them.
 #![allow(clippy::needless_range_loop)]
+// No function longer than clippy.toml's too-many-lines-threshold without a written reason.
+#![warn(clippy::too_many_lines)]
 
 pub mod constraints;
 pub mod damping;

@@ -358,6 +358,10 @@ fn lamina_frame(jac: &[Vec3; 3], angle: f64) -> Option<[Vec3; 3]> {
 }
 
 /// Assembles eq. (16) and eq. (17) over every knot span.
+#[allow(
+    clippy::too_many_lines,
+    reason = "the quadrature loop of eq. (16)-(17): span, Gauss point, local frame, strain rows and the two products read as one nest"
+)]
 pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMatrices, ShellError> {
     let ndof = shell.dof_count();
     let mut stiffness = Mat::<f64>::zeros(ndof, ndof);

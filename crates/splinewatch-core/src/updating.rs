@@ -414,6 +414,10 @@ struct Evaluation {
 impl<'a> UpdateProblem<'a> {
     /// `kappa` and `damping` give the values of parameters that are not
     /// updated; `parameters` lists the updated ones.
+    #[allow(
+        clippy::too_many_lines,
+        reason = "checks every argument against the model (named errors), then selects lines and weights; one constructor so an UpdateProblem that exists is valid"
+    )]
     pub fn new(
         model: &'a FrfModel,
         kappa: Vec<Vec<f64>>,
@@ -700,6 +704,10 @@ impl<'a> UpdateProblem<'a> {
     /// the result. `previous` (the point the last solve ended on) is used
     /// instead of evaluating the model at `start` when it is that model on
     /// these lines — the usual warm start; otherwise it is ignored.
+    #[allow(
+        clippy::too_many_lines,
+        reason = "the Levenberg-Marquardt loop of eq. (40)-(43) with its trial steps, stopping rules and the final covariance; split, its state would travel through many arguments"
+    )]
     #[track_caller]
     pub fn solve_from(
         &self,

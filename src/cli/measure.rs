@@ -1,0 +1,197 @@
+//! `simulate` and `frf`: making and analysing measurement recordings.
+
+use super::parse_encoding;
+use crate::config::{load_config, Config};
+use crate::io::recording::{read_recording, RecordingWriter};
+use crate::io::wire::{self, Encoding, Limits};
+use crate::outputs::publisher::Publisher;
+use crate::pipeline::estimate;
+use crate::studies::simulation::{self, Excitation, SimulationOptions};
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct SimulateArgs {
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Length of the recording, seconds.
+    #[arg(long)]
+    pub duration: f64,
+    /// Sampling frequency of the recorded channels, Hz.
+    #[arg(long, default_value_t = 256.0)]
+    pub fs: f64,
+    /// Time-varying scenario (TOML), e.g. a bearing losing stiffness.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Seed of the force and noise generators (ChaCha8): same seed, same bytes.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    #[arg(long, value_enum, default_value = "random")]
+    pub excitation: Excitation,
+    /// RMS of the force, N.
+    #[arg(long, default_value_t = 1000.0)]
+    pub force_rms: f64,
+    /// Measurement noise, fraction of each channel's RMS.
+    #[arg(long, default_value_t = 0.02)]
+    pub noise: f64,
+    /// Samples per message, seconds.
+    #[arg(long, default_value_t = 1.0)]
+    pub block_seconds: f64,
+    /// Timestamp of the first sample (RFC 3339).
+    #[arg(long, default_value = "2026-11-21T10:00:00Z")]
+    pub start: String,
+    /// Message encoding: cbor or json.
+    #[arg(long, default_value = "cbor", value_parser = parse_encoding)]
+    pub encoding: Encoding,
+    /// Output recording (MCAP); optional with --publish.
+    #[arg(long, required_unless_present = "publish")]
+    pub out: Option<PathBuf>,
+    /// Also publish the blocks live on zenoh (connecting to [zenoh] connect, or to its listen endpoints).
+    #[arg(long)]
+    pub publish: bool,
+    /// Publishing pace in multiples of real time (0: as fast as possible).
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+}
+
+#[derive(Args)]
+pub struct FrfArgs {
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Recording (MCAP).
+    pub input: PathBuf,
+    /// Start of the analysed span: seconds from the recording's start, or RFC 3339.
+    #[arg(long)]
+    pub from: Option<String>,
+    /// End of the analysed span: seconds from the recording's start, or RFC 3339.
+    #[arg(long)]
+    pub to: Option<String>,
+    /// Write the FRF JSON here instead of stdout.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print the FRF JSON on stdout (the default without --out).
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn simulate(a: SimulateArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let scenario = a
+        .scenario
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).with_context(|| format!("cannot read scenario {}", p.display()))?;
+            simulation::parse_scenario(&text).with_context(|| format!("scenario {}", p.display()))
+        })
+        .transpose()?;
+    let start_ns = wire::parse_timestamp(&a.start)
+        .with_context(|| format!("--start {:?} is not an RFC 3339 timestamp", a.start))?;
+    let options = SimulationOptions {
+        duration_seconds: a.duration,
+        fs: a.fs,
+        seed: a.seed,
+        excitation: a.excitation,
+        force_rms: a.force_rms,
+        noise: a.noise,
+        block_seconds: a.block_seconds,
+        start_ns,
+        band: (cfg.frf.band[0].max(0.1), cfg.frf.band[1] * 1.1),
+        oversample: 16,
+        scenario,
+    };
+    let prefix = cfg.topic_prefix();
+    let mut writer = a
+        .out
+        .as_ref()
+        .map(|p| RecordingWriter::create(p, a.encoding))
+        .transpose()?;
+    let mut publisher = if a.publish {
+        Some(simulator_publisher(&cfg, a.encoding, a.speed)?)
+    } else {
+        None
+    };
+    let summary = simulation::simulate(&cfg, &options, &mut |block| {
+        if let Some(w) = writer.as_mut() {
+            w.write_block(&prefix, &block)?;
+        }
+        if let Some(p) = publisher.as_mut() {
+            p.publish(&block)?;
+        }
+        Ok(())
+    })?;
+    if let Some(w) = writer {
+        w.finish()?;
+    }
+    if let Some(p) = publisher {
+        p.close()?;
+    }
+    eprintln!(
+        "{} blocks ({} samples per channel, {} model updates){}{}",
+        summary.blocks,
+        summary.samples_per_channel,
+        summary.model_updates,
+        a.out
+            .as_ref()
+            .map(|p| format!(", written to {}", p.display()))
+            .unwrap_or_default(),
+        if a.publish { ", published on zenoh" } else { "" }
+    );
+    Ok(())
+}
+
+/// The simulator's publisher: a zenoh client of the config's `connect`
+/// endpoints, or of its `listen` ones (where the daemon listens).
+fn simulator_publisher(cfg: &Config, encoding: Encoding, speed: f64) -> Result<Publisher> {
+    let mut z = cfg.zenoh.clone();
+    if z.connect.is_empty() {
+        z.connect = std::mem::take(&mut z.listen);
+    }
+    z.listen.clear();
+    z.mode = "client".into();
+    Publisher::open(&z, cfg.topic_prefix(), encoding, speed)
+}
+
+pub fn frf(a: FrfArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let input = &a.input;
+    let bytes = std::fs::read(input).with_context(|| format!("cannot read {}", input.display()))?;
+    let limits = Limits {
+        max_samples: cfg.frf.max_block_samples,
+        ..Default::default()
+    };
+    let (blocks, rejected) = read_recording(&bytes, &limits).with_context(|| format!("reading {}", input.display()))?;
+    for r in &rejected {
+        eprintln!("skipped a message on {} at {} ns: {}", r.topic, r.log_time, r.error);
+    }
+    let origin = blocks
+        .iter()
+        .map(|b| b.block.start_ns)
+        .min()
+        .context("the recording holds no channel blocks")?;
+    let when = |s: &Option<String>| -> Result<Option<i128>> {
+        s.as_ref()
+            .map(|t| match t.parse::<f64>() {
+                Ok(sec) => Ok(origin + (sec * 1e9).round() as i128),
+                Err(_) => wire::parse_timestamp(t)
+                    .with_context(|| format!("{t:?} is neither seconds nor an RFC 3339 timestamp")),
+            })
+            .transpose()
+    };
+    let report = estimate::estimate(&cfg, &blocks, when(&a.from)?, when(&a.to)?)?;
+    eprintln!(
+        "{} samples from {}: {} segments used, {} rejected, {:.1} effective averages, {} FRFs × {} lines",
+        report.samples,
+        wire::format_timestamp(report.start_ns),
+        report.segments.accepted,
+        report.segments.rejected(),
+        report.effective_averages,
+        report.frf.frfs.len(),
+        report.frf.frequency_hz.len()
+    );
+    let text = serde_json::to_string(&report.frf)?;
+    match a.out {
+        Some(path) => std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?,
+        None => println!("{text}"),
+    }
+    Ok(())
+}

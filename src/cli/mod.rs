@@ -1,0 +1,116 @@
+//! The command line: argument parsing (clap) and one small function per
+//! command, grouped by family; output to the console happens here.
+//! Room: the top. May import: `service`, `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
+
+mod measure;
+mod model;
+mod monitor;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+use splinewatch_core::frf::Quantity;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "splinewatch",
+    version,
+    about = "Vibration-based structural health monitoring: B-spline shell FE model updating from FRFs"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Natural frequencies and mode kinds of the configured model.
+    Modes(model::ModesArgs),
+    /// Model FRFs at sensors, optionally with the paper's noise model, as FRF JSON.
+    Synth(model::SynthArgs),
+    /// FRF-based model updating of the configured model against measured FRFs.
+    Update(model::UpdateArgs),
+    /// Reproduce the paper's §4 experiments on the bundled Sinello model and
+    /// write a Markdown report and ζ(f) plots to a folder.
+    Paper(model::PaperArgs),
+    /// Simulate the configured bridge under excitation and write a raw-input MCAP recording.
+    Simulate(measure::SimulateArgs),
+    /// Estimate FRFs (Welch, [frf] settings) from a raw-input MCAP recording.
+    Frf(measure::FrfArgs),
+    /// Run the monitoring pipeline over raw-input recordings as fast as the CPU allows.
+    Replay(monitor::ReplayArgs),
+    /// Run the monitoring daemon: zenoh ingest until SIGINT/SIGTERM.
+    Run(monitor::RunArgs),
+    /// The whole live path in one process: the simulator publishes a bearing-damage
+    /// scenario over zenoh on loopback at high speed, the daemon updates the model.
+    Demo(monitor::DemoArgs),
+    /// Soak test: the daemon in one process with a publisher replaying a
+    /// recording in a loop, unpaced, for many hours of data; reports RSS.
+    Soak(monitor::SoakArgs),
+    /// Salvage an MCAP file left unfinished by a killed process (results,
+    /// raw-input `.part` files): copies every message of every complete chunk
+    /// into a new, finalised file.
+    Recover(monitor::RecoverArgs),
+    /// Validate a configuration file without running anything.
+    CheckConfig(model::CheckConfigArgs),
+}
+
+/// The command table: each command is one small function of its arguments.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Modes(args) => model::modes(args),
+        Command::Synth(args) => model::synth(args),
+        Command::Update(args) => model::update(args),
+        Command::Paper(args) => model::paper(args),
+        Command::Simulate(args) => measure::simulate(args),
+        Command::Frf(args) => measure::frf(args),
+        Command::Replay(args) => monitor::replay(args),
+        Command::Run(args) => monitor::run(args),
+        Command::Demo(args) => monitor::demo(args),
+        Command::Soak(args) => monitor::soak(args),
+        Command::Recover(args) => monitor::recover(args),
+        Command::CheckConfig(args) => model::check_config(args),
+    }
+}
+
+fn parse_quantity(s: &str) -> Result<Quantity, String> {
+    match s {
+        "receptance" => Ok(Quantity::Receptance),
+        "mobility" => Ok(Quantity::Mobility),
+        "accelerance" => Ok(Quantity::Accelerance),
+        other => Err(format!("{other:?} is not receptance, mobility or accelerance")),
+    }
+}
+
+fn parse_encoding(s: &str) -> Result<crate::io::wire::Encoding, String> {
+    crate::io::wire::Encoding::from_name(s).ok_or_else(|| format!("{s:?} is not cbor or json"))
+}
+
+/// Caps the zenoh module that logs the session configuration (secrets
+/// included) at debug level.
+const NO_SECRETS_DIRECTIVE: &str = "zenoh::api::session=info";
+
+/// The process: logging set up, the command run, its error printed once.
+pub fn main() -> ExitCode {
+    let json_logs = std::env::var("SPLINEWATCH_LOG_FORMAT").is_ok_and(|v| v == "json");
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,zenoh=warn"))
+        // zenoh logs its whole session configuration at debug level,
+        // user/password included: never below info, whatever RUST_LOG says.
+        .add_directive(NO_SECRETS_DIRECTIVE.parse().expect("a valid directive"));
+    let builder = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr);
+    if json_logs {
+        builder.json().init();
+    } else {
+        builder.init();
+    }
+    match run(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

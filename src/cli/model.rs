@@ -1,0 +1,179 @@
+//! `modes`, `synth`, `update`, `paper`, `check-config`: the model's own
+//! commands (no measurement stream).
+
+use super::parse_quantity;
+use crate::config::load_config;
+use crate::studies::{self, paper, SynthOptions};
+use anyhow::{Context, Result};
+use clap::Args;
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::updating::IterationRecord;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct ModesArgs {
+    /// Configuration file (TOML).
+    #[arg(long)]
+    pub config: PathBuf,
+    /// How many modes to list, lowest first.
+    #[arg(long, default_value_t = 30)]
+    pub count: usize,
+    /// Print `{"modes":[{"index","frequency_hz","kind"}…]}` instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct SynthArgs {
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Input (force) sensors, comma-separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub inputs: Vec<String>,
+    /// Output (response) sensors, comma-separated.
+    #[arg(long, value_delimiter = ',', required = true)]
+    pub outputs: Vec<String>,
+    /// receptance, mobility or accelerance.
+    #[arg(long, default_value = "accelerance", value_parser = parse_quantity)]
+    pub quantity: Quantity,
+    /// Lowest frequency line, Hz.
+    #[arg(long, default_value_t = 0.5)]
+    pub from: f64,
+    /// Highest frequency line, Hz.
+    #[arg(long, default_value_t = 80.0)]
+    pub to: f64,
+    /// Line spacing, Hz.
+    #[arg(long, default_value_t = 0.1)]
+    pub step: f64,
+    /// Complex Gaussian noise, standard deviation as a fraction of each FRF's RMS.
+    #[arg(long, default_value_t = 0.0)]
+    pub noise: f64,
+    /// Seed of the noise generator (ChaCha8).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output file (FRF JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Args)]
+pub struct UpdateArgs {
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Measured FRFs (FRF JSON).
+    #[arg(long)]
+    pub frf: PathBuf,
+    /// Start from a previous result (`update --json` output) instead of the config's values.
+    #[arg(long)]
+    pub start: Option<PathBuf>,
+    /// Print the result as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Args)]
+pub struct PaperArgs {
+    /// Output folder.
+    #[arg(long, default_value = "docs/paper")]
+    pub out: PathBuf,
+}
+
+#[derive(Args)]
+pub struct CheckConfigArgs {
+    /// Configuration file (TOML).
+    pub config: PathBuf,
+}
+
+pub fn modes(a: ModesArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let (report, info) = studies::compute_modes(&cfg, a.count)?;
+    eprintln!(
+        "{}: {} dofs ({} free), assembly {:.3} s, eigen-solve {:.3} s",
+        cfg.structure.name, info.dofs, info.free_dofs, info.assembly_seconds, info.solve_seconds
+    );
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    studies::write_modes(&report, a.json, &mut out)?;
+    out.flush()?;
+    Ok(())
+}
+
+pub fn synth(a: SynthArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let options = SynthOptions {
+        inputs: a.inputs,
+        outputs: a.outputs,
+        quantity: a.quantity,
+        f_min: a.from,
+        f_max: a.to,
+        step: a.step,
+        noise: a.noise,
+        seed: a.seed,
+    };
+    let file = studies::synth(&cfg, &options)?;
+    let text = serde_json::to_string(&file)?;
+    std::fs::write(&a.out, text).with_context(|| format!("cannot write {}", a.out.display()))?;
+    eprintln!(
+        "wrote {} FRFs × {} lines to {}",
+        file.frfs.len(),
+        file.frequency_hz.len(),
+        a.out.display()
+    );
+    Ok(())
+}
+
+pub fn update(a: UpdateArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let frf_text =
+        std::fs::read_to_string(&a.frf).with_context(|| format!("cannot read FRF file {}", a.frf.display()))?;
+    let start_text = a
+        .start
+        .as_ref()
+        .map(|p| std::fs::read_to_string(p).with_context(|| format!("cannot read start file {}", p.display())))
+        .transpose()?;
+    let mut progress = |it: &IterationRecord| {
+        eprintln!(
+            "iteration {:3}  relative residual {:.4e}  step {:.3e}  damping {:.3e}  rejected {}",
+            it.iteration, it.relative_residual, it.step_norm, it.damping, it.rejected_steps
+        );
+    };
+    let result = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
+        .with_context(|| format!("updating against {}", a.frf.display()))?;
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if a.json {
+        serde_json::to_writer(&mut out, &result)?;
+        writeln!(out)?;
+    } else {
+        studies::write_update_table(&result, &mut out)?;
+    }
+    out.flush()?;
+    Ok(())
+}
+
+pub fn paper(a: PaperArgs) -> Result<()> {
+    let out = a.out;
+    let (truth, model) = paper::bundled_configs(Path::new("."))?;
+    std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+    let mut outcomes = Vec::new();
+    for (k, e) in paper::EXPERIMENTS.iter().enumerate() {
+        eprintln!("running {} (paper §{})", e.name, e.section);
+        let o = paper::run(&truth, &model, e)?;
+        let svg = out.join(format!("damping-{}.svg", k + 1));
+        paper::plot_damping(&o, &svg)?;
+        outcomes.push(o);
+    }
+    let report = paper::report_markdown(&outcomes);
+    std::fs::write(out.join("report.md"), &report)?;
+    print!("{report}");
+    Ok(())
+}
+
+pub fn check_config(a: CheckConfigArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    // The zenoh session settings too: the JSON5 file and our keys on top.
+    cfg.zenoh.to_zenoh()?;
+    println!("{}: configuration is valid", cfg.structure.name);
+    Ok(())
+}

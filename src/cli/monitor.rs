@@ -1,0 +1,320 @@
+//! `replay`, `run`, `demo`, `soak`, `recover`: the monitoring runs and
+//! their files.
+
+use crate::config::load_config;
+use crate::io::files;
+use crate::io::wire;
+use crate::outputs::rerun::{self, RerunOutput};
+use crate::outputs::results::ResultsWriter;
+use crate::outputs::state;
+use crate::service::{daemon, demo, replay, soak};
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args)]
+pub struct ReplayArgs {
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Recordings (MCAP), replayed in the order given (e.g. a daemon's rotated raw files).
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Results MCAP (default: <output.dir>/replay-results.mcap).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Warm-start from this state file if it exists, and keep it up to date.
+    #[arg(long)]
+    pub state: Option<PathBuf>,
+    /// Also write the Rerun recording here (.rrd; default: [output] rerun_save).
+    #[arg(long)]
+    pub rerun_save: Option<PathBuf>,
+    /// Also stream to this Rerun viewer (default: [output] rerun_connect),
+    /// e.g. rerun+http://127.0.0.1:9876/proxy.
+    #[arg(long)]
+    pub rerun_connect: Option<String>,
+}
+
+#[derive(Args)]
+pub struct RunArgs {
+    #[arg(long)]
+    pub config: PathBuf,
+    /// State file (default: [output] state_file or <output.dir>/state.json).
+    #[arg(long)]
+    pub state: Option<PathBuf>,
+    /// Results MCAP (default: <output.dir>/results-<start time>.mcap).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Also write the Rerun recording here (.rrd; default: [output] rerun_save).
+    #[arg(long)]
+    pub rerun_save: Option<PathBuf>,
+    /// Also stream to this Rerun viewer (default: [output] rerun_connect),
+    /// e.g. rerun+http://127.0.0.1:9876/proxy.
+    #[arg(long)]
+    pub rerun_connect: Option<String>,
+}
+
+#[derive(Args)]
+pub struct DemoArgs {
+    #[arg(long, default_value = "config/sinello.toml")]
+    pub config: PathBuf,
+    /// Output folder.
+    #[arg(long, default_value = "out/demo")]
+    pub out: PathBuf,
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 600.0)]
+    pub duration: f64,
+    /// Publishing speed, multiples of real time.
+    #[arg(long, default_value_t = 40.0)]
+    pub speed: f64,
+}
+
+#[derive(Args)]
+pub struct SoakArgs {
+    #[arg(long, default_value = "config/sinello.toml")]
+    pub config: PathBuf,
+    #[arg(long, default_value = "recordings/sinello-demo.mcap")]
+    pub recording: PathBuf,
+    /// Hours of data to push through.
+    #[arg(long, default_value_t = 24.0)]
+    pub hours: f64,
+    /// Analysis window (the bridge setting is 10 minutes).
+    #[arg(long, default_value_t = 10.0)]
+    pub window_minutes: f64,
+    /// Publishing speed in multiples of real time; 0 = unpaced (a flood).
+    #[arg(long, default_value_t = 1000.0)]
+    pub speed: f64,
+    #[arg(long, default_value = "out/soak")]
+    pub out: PathBuf,
+}
+
+#[derive(Args)]
+pub struct RecoverArgs {
+    /// The damaged file.
+    pub input: PathBuf,
+    /// Output (default: INPUT with `.recovered.mcap`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+pub fn replay(a: ReplayArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let out = a.out.unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
+    let files = a
+        .inputs
+        .iter()
+        .map(|p| std::fs::read(p).with_context(|| format!("cannot read {}", p.display())))
+        .collect::<Result<Vec<_>>>()?;
+    let recordings: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
+    let initial = match &a.state {
+        Some(p) => state::load_state(p)?,
+        None => None,
+    };
+    let mut writer = ResultsWriter::create(&out, &cfg.topic_prefix())?;
+    let targets = rerun::targets(&cfg, a.rerun_save.as_deref(), a.rerun_connect.as_deref());
+    let mut viewer = if targets.is_empty() {
+        None
+    } else {
+        Some(RerunOutput::open(&cfg, &targets)?)
+    };
+    let progress = ReplayProgress::new();
+    let t0 = std::time::Instant::now();
+    let options = replay::ReplayOptions {
+        initial,
+        viewer: viewer.as_mut(),
+        state_path: a.state.as_deref(),
+        keep_latest: 1,
+    };
+    let summary = replay::replay(&cfg, &recordings, &mut writer, options, &mut |p, note| {
+        progress.show(p, note)
+    })?;
+    progress.bar.finish_and_clear();
+    writer.finish()?;
+    if let Some(v) = viewer {
+        v.finish()?;
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    let span = summary.window_count as f64 * cfg.frf.window_seconds;
+    eprintln!(
+        "replayed {} messages: {} windows ({} accepted), {} updates in {seconds:.2} s ({:.0}× real time); results in {}",
+        summary.messages,
+        summary.window_count,
+        summary.windows_accepted,
+        summary.update_count,
+        span / seconds.max(1e-9),
+        out.display()
+    );
+    if let Some(acc) = &summary.accepted {
+        for p in &acc.parameters {
+            println!(
+                "{:<14} {:>14.6e} {:>12}",
+                p.name,
+                p.value,
+                p.std.map_or("-".into(), |s| format!("{s:.3e}"))
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Replay progress: a bar on a terminal, plain log lines otherwise.
+struct ReplayProgress {
+    bar: indicatif::ProgressBar,
+    terminal: bool,
+}
+
+impl ReplayProgress {
+    fn new() -> Self {
+        let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+        let bar = indicatif::ProgressBar::new(0);
+        if !terminal {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+        }
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:40}] {pos}/{len} messages {msg}")
+                .expect("valid template")
+                .progress_chars("=> "),
+        );
+        Self { bar, terminal }
+    }
+
+    fn show(&self, p: replay::Progress, note: Option<&str>) {
+        self.bar.set_length(p.total);
+        self.bar.set_position(p.messages);
+        if let Some(n) = note {
+            if self.terminal {
+                self.bar.set_message(n.to_string());
+            } else {
+                eprintln!("{n}");
+            }
+        }
+    }
+}
+
+pub fn run(a: RunArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let dir = cfg.output_dir();
+    let state = a
+        .state
+        .or_else(|| cfg.output.state_file.clone())
+        .unwrap_or_else(|| dir.join("state.json"));
+    let stamp = wire::format_timestamp(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos() as i128)
+            .unwrap_or(0),
+    )
+    .replace(':', "-");
+    let out = a.out.unwrap_or_else(|| dir.join(format!("results-{stamp}.mcap")));
+    let rerun = rerun::targets(&cfg, a.rerun_save.as_deref(), a.rerun_connect.as_deref());
+    tracing::info!(message = "effective configuration", config = ?cfg);
+    let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
+    let summary = runtime.block_on(daemon::run(
+        cfg,
+        daemon::RunOptions {
+            results: out.clone(),
+            state: Some(state),
+            rerun,
+            keep_updates: 1,
+        },
+        daemon::termination_signal(),
+    ))?;
+    eprintln!(
+        "stopped after {} messages, {} windows, {} updates; results in {}",
+        summary.messages,
+        summary.windows,
+        summary.update_count,
+        out.display()
+    );
+    Ok(())
+}
+
+pub fn demo(a: DemoArgs) -> Result<()> {
+    run_demo(&a.config, &a.out, a.duration, a.speed)
+}
+
+/// The `demo` command: runs and prints a summary.
+fn run_demo(config_path: &std::path::Path, out: &std::path::Path, duration: f64, speed: f64) -> Result<()> {
+    let summary = demo::run_live(config_path, out, duration, speed, 2026)?;
+    eprintln!(
+        "demo: {} messages received, {} windows, {} updates ({} failed); results in {}, state in {}",
+        summary.messages,
+        summary.windows,
+        summary.updates.len(),
+        summary.updates.iter().filter(|u| u.result.is_err()).count(),
+        out.join("results.mcap").display(),
+        out.join("state.json").display()
+    );
+    println!("{:>8} {:>14} {:>12}", "window", "east.k2", "rel. resid.");
+    for u in &summary.updates {
+        if let Ok(r) = &u.result {
+            let k2 = r
+                .result
+                .parameters
+                .iter()
+                .find(|p| p.name == "east.k2")
+                .map_or(f64::NAN, |p| p.value);
+            println!("{:>8} {:>14.4e} {:>12.4}", u.window, k2, r.result.relative_residual);
+        }
+    }
+    Ok(())
+}
+
+pub fn soak(a: SoakArgs) -> Result<()> {
+    let mut cfg = load_config(&a.config)?;
+    cfg.frf.window_seconds = 60.0 * a.window_minutes;
+    let (summary, samples, sent) = soak::soak(cfg, &a.recording, &a.out, a.hours, a.speed)?;
+    println!("| data (h) | wall (s) | RSS (MiB) |");
+    println!("| --- | --- | --- |");
+    for s in &samples {
+        println!(
+            "| {:.1} | {:.1} | {} |",
+            s.data_hours,
+            s.wall_seconds,
+            s.rss_kib.map_or("?".into(), |k| format!("{:.1}", k as f64 / 1024.0))
+        );
+    }
+    let h = summary.update_count;
+    println!(
+        "published {sent} blocks, the daemon received {} (the rest dropped by the bounded ingest queue, counted in health.queue_drops), {} windows, {h} updates; results in {}",
+        summary.messages,
+        summary.windows,
+        a.out.display()
+    );
+    Ok(())
+}
+
+pub fn recover(a: RecoverArgs) -> Result<()> {
+    let input = &a.input;
+    let bytes = std::fs::read(input).with_context(|| format!("cannot read {}", input.display()))?;
+    let out = a.out.unwrap_or_else(|| {
+        let name = input
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let stem = name.trim_end_matches(".part").trim_end_matches(".mcap");
+        input.with_file_name(format!("{stem}.recovered.mcap"))
+    });
+    let file = files::create_output_file(&out)?;
+    let (report, w) = crate::io::recover::recover(&bytes, std::io::BufWriter::new(file))
+        .with_context(|| format!("recovering {}", input.display()))?;
+    w.into_inner()
+        .map_err(|e| anyhow::anyhow!("cannot write {}: {}", out.display(), e.error()))?
+        .sync_all()?;
+    eprintln!(
+        "{}: {} messages on {} channels recovered into {}{}{}",
+        input.display(),
+        report.messages,
+        report.channels,
+        out.display(),
+        if report.was_complete {
+            " (the input was already complete)"
+        } else {
+            ""
+        },
+        report
+            .stopped_at
+            .map(|e| format!("; stopped at a damaged record: {e}"))
+            .unwrap_or_default()
+    );
+    Ok(())
+}

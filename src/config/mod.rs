@@ -1,0 +1,320 @@
+//! The TOML configuration: parsed with serde (unknown keys rejected), then
+//! validated into the core crate's types. Every error names the key path.
+//! Room: the schema and its validation. May import: the core crate only.
+//!
+//! Physics (`[model.geometry]`, `[model.material]`, `[[model.springs]]`,
+//! `[[model.constraints]]`) is kept apart from discretisation
+//! (`[model.discretization]`); see README.md for every key.
+
+mod frf;
+mod model;
+mod output;
+mod schedule;
+mod setup;
+mod updating;
+mod zenoh;
+
+pub use frf::FrfConfig;
+pub use model::{
+    ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
+    MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, SupportConfig, MAX_CONTROL_POINTS,
+};
+pub use output::{OutputConfig, RawRecordingConfig};
+pub use schedule::ScheduleConfig;
+pub use setup::{frf_setup, FrfSetup};
+pub use updating::UpdatingConfig;
+pub use zenoh::ZenohConfig;
+
+use anyhow::Context;
+use serde::Deserialize;
+use std::fmt::Display;
+use std::path::Path;
+use thiserror::Error;
+
+/// A configuration error: the key path and what is wrong with it.
+#[derive(Debug, Error)]
+#[error("config: {path}: {message}")]
+pub struct ConfigError {
+    pub path: String,
+    pub message: String,
+}
+
+pub(crate) fn err(path: impl Into<String>, message: impl Display) -> ConfigError {
+    ConfigError {
+        path: path.into(),
+        message: message.to_string(),
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Config {
+    pub structure: StructureConfig,
+    pub model: ModelConfig,
+    #[serde(default)]
+    pub sensors: Vec<SensorConfig>,
+    #[serde(default)]
+    pub updating: UpdatingConfig,
+    #[serde(default)]
+    pub frf: FrfConfig,
+    #[serde(default)]
+    pub schedule: ScheduleConfig,
+    #[serde(default)]
+    pub output: OutputConfig,
+    #[serde(default)]
+    pub zenoh: ZenohConfig,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureConfig {
+    /// Identifier of the monitored structure; also the default zenoh/MCAP prefix
+    /// `bridge/<name>`.
+    pub name: String,
+}
+
+/// Reads and validates a configuration file.
+pub fn load_config(path: &Path) -> anyhow::Result<Config> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
+    let config = Config::from_toml(&text).with_context(|| format!("invalid config file {}", path.display()))?;
+    config
+        .validate()
+        .with_context(|| format!("invalid config file {}", path.display()))?;
+    Ok(config)
+}
+
+impl Config {
+    /// Parses TOML text; `origin` names the source in errors.
+    pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
+        let config: Config = toml::from_str(text).map_err(|e| {
+            let path = e
+                .span()
+                .map(|s| line_of(text, s.start))
+                .unwrap_or_else(|| "(document)".into());
+            err(path, e.message())
+        })?;
+        config.validate_names()?;
+        Ok(config)
+    }
+
+    fn validate_names(&self) -> Result<(), ConfigError> {
+        if self.structure.name.trim().is_empty() {
+            return Err(err("structure.name", "must not be empty"));
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, s) in self.sensors.iter().enumerate() {
+            if s.name.trim().is_empty() || s.name.contains('/') || s.name.contains(char::is_whitespace) {
+                return Err(err(
+                    format!("sensors[{i}].name"),
+                    format!("{:?} must be non-empty without '/' or spaces", s.name),
+                ));
+            }
+            if !seen.insert(s.name.as_str()) {
+                return Err(err(format!("sensors[{i}].name"), format!("{:?} is used twice", s.name)));
+            }
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, s) in self.model.springs.iter().enumerate() {
+            let valid = !s.name.is_empty()
+                && s.name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+            if !valid {
+                return Err(err(
+                    format!("model.springs[{i}].name"),
+                    format!("{:?} must be non-empty ASCII letters, digits, '_' or '-'", s.name),
+                ));
+            }
+            if !seen.insert(s.name.as_str()) {
+                return Err(err(
+                    format!("model.springs[{i}].name"),
+                    format!("{:?} is used twice", s.name),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Results folder: `[output] dir`, default `out/<structure.name>`.
+    pub fn output_dir(&self) -> std::path::PathBuf {
+        self.output
+            .dir
+            .clone()
+            .unwrap_or_else(|| std::path::Path::new("out").join(&self.structure.name))
+    }
+
+    /// Topic / key-expression prefix: `bridge/<structure.name>`.
+    pub fn topic_prefix(&self) -> String {
+        format!("bridge/{}", self.structure.name)
+    }
+
+    /// Builds every section, so all errors surface at load time.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let model = self.build_model()?;
+        self.build_sensors(&model.shell)?;
+        if self.model.damping.is_some() {
+            self.build_damping()?;
+        }
+        self.build_parameters()?;
+        self.update_settings()?;
+        // The sampling rate is only known from the data; check with a nominal one.
+        self.welch_settings(256.0)?;
+        for (key, hours) in [
+            ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
+            ("output.results_rotate_hours", self.output.results_rotate_hours),
+        ] {
+            if !(hours.is_finite() && hours >= 1.0 / 3600.0) {
+                return Err(err(key, format!("must be at least one second (1/3600 h), got {hours}")));
+            }
+        }
+        let raw = &self.output.raw;
+        if !(raw.rotate_minutes.is_finite() && raw.rotate_minutes > 0.0) {
+            return Err(err(
+                "output.raw.rotate_minutes",
+                format!("must be a positive number of minutes, got {}", raw.rotate_minutes),
+            ));
+        }
+        if !(raw.rotate_megabytes.is_finite() && raw.rotate_megabytes >= 0.01) {
+            return Err(err(
+                "output.raw.rotate_megabytes",
+                format!("must be at least 0.01, got {}", raw.rotate_megabytes),
+            ));
+        }
+        for (key, endpoints) in [
+            ("zenoh.listen", &self.zenoh.listen),
+            ("zenoh.connect", &self.zenoh.connect),
+        ] {
+            if let Some((i, e)) = endpoints.iter().enumerate().find(|(_, e)| !e.starts_with("tcp/")) {
+                return Err(err(
+                    format!("{key}[{i}]"),
+                    format!(
+                        "{e:?}: this build speaks zenoh over TCP only (\"tcp/<host>:<port>\"); \
+                         for encryption see README, \"Transport security\""
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// "line L, column C" of a byte offset, for parse errors.
+fn line_of(text: &str, offset: usize) -> String {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    format!("line {line}, column {column}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SINELLO: &str = include_str!("../../config/sinello.toml");
+
+    fn error_of(edit: impl Fn(&str) -> String) -> String {
+        let text = edit(SINELLO);
+        match Config::from_toml(&text).and_then(|c| c.build_model().map(|_| c)) {
+            Ok(_) => panic!("expected an error"),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn bundled_config_builds() {
+        let model = Config::from_toml(SINELLO).unwrap().build_model().unwrap();
+        assert_eq!(model.shell.control_point_count(), 65);
+        assert_eq!(model.springs.len(), 2);
+    }
+
+    #[test]
+    fn errors_name_the_key() {
+        let e = error_of(|t| t.replace("thickness = 1.6", "thickness = -1.6"));
+        assert!(
+            e.contains("model.geometry") && e.contains("thickness") && e.contains("-1.6"),
+            "{e}"
+        );
+        let e = error_of(|t| {
+            t.replacen(
+                "knots_eta = [0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0]",
+                "knots_eta = [0.0, 0.0, 0.0, 0.7, 0.5, 1.0, 1.0, 1.0]",
+                1,
+            )
+        });
+        assert!(
+            e.contains("model.springs[0].knots_eta") && e.contains("not non-decreasing at index 4"),
+            "{e}"
+        );
+        let e = error_of(|t| {
+            t.replacen(
+                "stiffness = [0.4e9, 1.5e9, 1.8e9, 0.6e9]",
+                "stiffness = [0.4e9, 1.5e9, 1.8e9]",
+                1,
+            )
+        });
+        assert!(
+            e.contains("model.springs[0].stiffness") && e.contains("3 stiffness coefficients given"),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("[structure]", "[structure]\ncolour = \"red\""));
+        // toml reports the span of the table holding the unknown key.
+        assert!(e.contains("unknown field `colour`") && e.contains("line 9"), "{e}");
+        let e = error_of(|t| t.replace("nu12 = 0.3", "nu12 = 3.0"));
+        assert!(e.contains("model.material") && e.contains("nu12"), "{e}");
+        let e = error_of(|t| t.replacen("direction = \"z\"", "direction = \"up\"", 1));
+        assert!(e.contains("model.springs[0].direction"), "{e}");
+        let e = error_of(|t| t.replace("control_points = [13, 5]", "control_points = [13, 4]"));
+        assert!(
+            e.contains("model.geometry / model.discretization") && e.contains("4 basis functions"),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("control_points = [13, 5]", "control_points = [13, 99999]"));
+        assert!(
+            e.contains("model.discretization.control_points") && e.contains("exceed"),
+            "{e}"
+        );
+        let e = error_of(|t| t.replace("name = \"east\"", "name = \"west\""));
+        assert!(e.contains("model.springs[1].name") && e.contains("used twice"), "{e}");
+        let e = error_of(|t| t.replacen("bounds = [1.0e7, 5.0e9]", "bounds = [1.0e7, 1.0e9]", 1));
+        assert!(e.contains("outside bounds"), "{e}");
+        let e = error_of(|t| t.replace("knots_xi = [0.97, 1.0]", "knots_xi = [0.97, 1.2]"));
+        assert!(
+            e.contains("model.springs[1]") && e.contains("not inside the shell"),
+            "{e}"
+        );
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+        #[test]
+        fn mutated_configs_never_panic(flips in proptest::collection::vec((proptest::prelude::any::<proptest::sample::Index>(), proptest::prelude::any::<u8>()), 1..4)) {
+            let mut bytes = SINELLO.as_bytes().to_vec();
+            for (i, b) in &flips {
+                let k = i.index(bytes.len());
+                bytes[k] = *b;
+            }
+            if let Ok(text) = std::str::from_utf8(&bytes) {
+                if let Ok(c) = Config::from_toml(text) {
+                    let _ = c.validate();
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn knot_insertion_refines_the_net() {
+        let text = SINELLO.replace(
+            "control_points = [13, 5]",
+            "control_points = [13, 5]\ninsert_knots_eta = [0.25, 0.75]",
+        );
+        let model = Config::from_toml(&text).unwrap().build_model().unwrap();
+        assert_eq!(model.shell.surface().net_size(), (13, 7));
+        let e = error_of(|t| {
+            t.replace(
+                "control_points = [13, 5]",
+                "control_points = [13, 5]\ninsert_knots_xi = [1.5]",
+            )
+        });
+        assert!(e.contains("model.discretization.insert_knots_xi[0]"), "{e}");
+    }
+}

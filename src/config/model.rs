@@ -1,0 +1,458 @@
+//! `[model]` and `[[sensors]]`: the shell, its material, springs,
+//! constraints, damping curve and measurement points, built into core types.
+
+use super::{err, Config, ConfigError};
+use serde::Deserialize;
+use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::SensorPoint;
+use splinewatch_core::knots::KnotVector;
+use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::model::ShellModel;
+use splinewatch_core::shell::Shell;
+use splinewatch_core::springs::{Face, SpringDirection, SpringField};
+use splinewatch_core::surface::Direction;
+
+/// Largest control net accepted (5 dofs each; the dense eigen-solve of
+/// 10 000 dofs already takes minutes).
+pub const MAX_CONTROL_POINTS: usize = 2000;
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelConfig {
+    pub geometry: GeometryConfig,
+    pub discretization: DiscretizationConfig,
+    pub material: MaterialConfig,
+    #[serde(default)]
+    pub springs: Vec<SpringConfig>,
+    #[serde(default)]
+    pub constraints: Vec<ConstraintConfig>,
+    pub damping: Option<DampingConfig>,
+}
+
+/// `[model.damping]`: the B-spline ζ(f) of eq. (29).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingConfig {
+    pub degree: usize,
+    /// Start values γ_z; their count is n_z.
+    pub coefficients: Vec<f64>,
+    /// Band [f_start, f_end] in Hz over which the curve is defined.
+    pub f_start: f64,
+    pub f_end: f64,
+    /// `[lower, upper]` for every γ_z when updating.
+    pub bounds: Option<[f64; 2]>,
+    #[serde(default = "default_true")]
+    pub update: bool,
+}
+
+/// A measurement point: parametric `xi`/`eta` or physical `x`/`y`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorConfig {
+    pub name: String,
+    pub xi: Option<f64>,
+    pub eta: Option<f64>,
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+    pub direction: DirectionConfig,
+    /// What is measured there: one of, or a list of, "acceleration",
+    /// "force", "displacement", "velocity".
+    #[serde(default = "default_quantity")]
+    pub quantity: QuantityList,
+    /// Face the sensor sits on (default: the mid-surface).
+    #[serde(default = "default_face")]
+    pub surface: FaceConfig,
+}
+
+fn default_quantity() -> QuantityList {
+    QuantityList::One("acceleration".into())
+}
+
+fn default_face() -> FaceConfig {
+    FaceConfig::Middle
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum QuantityList {
+    One(String),
+    Many(Vec<String>),
+}
+
+impl QuantityList {
+    pub fn as_slice(&self) -> &[String] {
+        match self {
+            QuantityList::One(q) => std::slice::from_ref(q),
+            QuantityList::Many(v) => v,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum GeometryConfig {
+    /// `[0, length] × [0, width]` in the xy plane, x along ξ.
+    RectangularPlate { length: f64, width: f64, thickness: f64 },
+    /// Circular-cylindrical panel, axis along x (ξ), arc along η.
+    CylindricalPanel {
+        length: f64,
+        radius: f64,
+        angle_deg: f64,
+        thickness: f64,
+    },
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiscretizationConfig {
+    /// B-spline degrees `[p, q]` along ξ and η.
+    pub degree: [usize; 2],
+    /// Control points `[m, n]` along ξ and η (uniform clamped knots).
+    pub control_points: [usize; 2],
+    /// Knots inserted into the net afterwards (h-refinement), along ξ.
+    #[serde(default)]
+    pub insert_knots_xi: Vec<f64>,
+    /// Knots inserted along η.
+    #[serde(default)]
+    pub insert_knots_eta: Vec<f64>,
+}
+
+fn default_shear_correction() -> f64 {
+    5.0 / 6.0
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialConfig {
+    pub e1: f64,
+    pub e2: f64,
+    pub g12: f64,
+    pub g13: f64,
+    pub g23: f64,
+    pub nu12: f64,
+    pub density: f64,
+    #[serde(default)]
+    pub angle_deg: f64,
+    #[serde(default = "default_shear_correction")]
+    pub shear_correction: f64,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+pub enum DirectionConfig {
+    /// `"x"`, `"y"`, `"z"` or `"normal"`.
+    Named(String),
+    /// A vector in the global frame (normalised on load).
+    Vector([f64; 3]),
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FaceConfig {
+    Bottom,
+    #[serde(alias = "mid")]
+    Middle,
+    Top,
+}
+
+pub(crate) fn default_true() -> bool {
+    true
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringConfig {
+    pub name: String,
+    pub direction: DirectionConfig,
+    pub surface: FaceConfig,
+    pub knots_xi: Vec<f64>,
+    pub degree_xi: usize,
+    pub knots_eta: Vec<f64>,
+    pub degree_eta: usize,
+    /// Coefficients κ in N/m³, η fastest.
+    pub stiffness: Vec<f64>,
+    /// `[lower, upper]` for every coefficient when updating.
+    pub bounds: Option<[f64; 2]>,
+    /// Whether the updating identifies these coefficients.
+    #[serde(default = "default_true")]
+    pub update: bool,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeConfig {
+    Xi0,
+    Xi1,
+    Eta0,
+    Eta1,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SupportConfig {
+    SimplySupported,
+    ShearDiaphragm,
+    Clamped,
+}
+
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConstraintConfig {
+    pub edge: EdgeConfig,
+    pub kind: SupportConfig,
+}
+
+impl Config {
+    /// Validates the model section into a [`ShellModel`].
+    pub fn build_model(&self) -> Result<ShellModel, ConfigError> {
+        let shell = self.build_shell()?;
+        let material = self.build_material()?;
+        let m = &self.model;
+        let springs = m
+            .springs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| build_spring(i, s))
+            .collect::<Result<Vec<_>, _>>()?;
+        let constraints = m
+            .constraints
+            .iter()
+            .map(|c| EdgeConstraint {
+                edge: match c.edge {
+                    EdgeConfig::Xi0 => Edge::Xi0,
+                    EdgeConfig::Xi1 => Edge::Xi1,
+                    EdgeConfig::Eta0 => Edge::Eta0,
+                    EdgeConfig::Eta1 => Edge::Eta1,
+                },
+                kind: match c.kind {
+                    SupportConfig::SimplySupported => SupportKind::SimplySupported,
+                    SupportConfig::ShearDiaphragm => SupportKind::ShearDiaphragm,
+                    SupportConfig::Clamped => SupportKind::Clamped,
+                },
+            })
+            .collect();
+        let model = ShellModel {
+            shell,
+            material,
+            springs,
+            constraints,
+        };
+        // Surface the spring/shell compatibility errors here, with their key.
+        for (i, s) in model.springs.iter().enumerate() {
+            s.coefficient_matrices(&model.shell)
+                .map_err(|e| err(format!("model.springs[{i}]"), e))?;
+        }
+        Ok(model)
+    }
+
+    /// `[model.geometry]` on the `[model.discretization]` net, refined.
+    fn build_shell(&self) -> Result<Shell, ConfigError> {
+        let m = &self.model;
+        let d = &m.discretization;
+        // The dense model path stores n_dof² matrices: refuse nets it cannot hold
+        // rather than exhausting memory.
+        let [cm, cn] = d.control_points;
+        let total = cm
+            .saturating_add(d.insert_knots_xi.len())
+            .saturating_mul(cn.saturating_add(d.insert_knots_eta.len()));
+        if total > MAX_CONTROL_POINTS {
+            return Err(err(
+                "model.discretization.control_points",
+                format!("{total} control points (after knot insertion) exceed the supported {MAX_CONTROL_POINTS}"),
+            ));
+        }
+        let mut shell = match m.geometry {
+            GeometryConfig::RectangularPlate {
+                length,
+                width,
+                thickness,
+            } => Shell::rectangular_plate(length, width, thickness, d.degree, d.control_points),
+            GeometryConfig::CylindricalPanel {
+                length,
+                radius,
+                angle_deg,
+                thickness,
+            } => Shell::cylindrical_panel(
+                length,
+                radius,
+                angle_deg.to_radians(),
+                thickness,
+                d.degree,
+                d.control_points,
+            ),
+        }
+        .map_err(|e| err("model.geometry / model.discretization", e))?;
+        for (key, direction, knots) in [
+            ("insert_knots_xi", Direction::Xi, &d.insert_knots_xi),
+            ("insert_knots_eta", Direction::Eta, &d.insert_knots_eta),
+        ] {
+            for (i, &u) in knots.iter().enumerate() {
+                shell = shell.insert_knot(direction, u).map_err(|e| {
+                    err(
+                        format!("model.discretization.{key}[{i}]"),
+                        format!("cannot insert {u}: {e} (knots must lie strictly inside (0, 1))"),
+                    )
+                })?;
+            }
+        }
+        Ok(shell)
+    }
+
+    fn build_material(&self) -> Result<OrthotropicMaterial, ConfigError> {
+        let mat = &self.model.material;
+        OrthotropicMaterial::new(OrthotropicParameters {
+            e1: mat.e1,
+            e2: mat.e2,
+            g12: mat.g12,
+            g13: mat.g13,
+            g23: mat.g23,
+            nu12: mat.nu12,
+            density: mat.density,
+            angle_deg: mat.angle_deg,
+            shear_correction: mat.shear_correction,
+        })
+        .map_err(|e| err("model.material", e))
+    }
+
+    /// `[model.damping]` as a curve; an error if it is missing.
+    pub fn build_damping(&self) -> Result<DampingCurve, ConfigError> {
+        let d = self
+            .model
+            .damping
+            .as_ref()
+            .ok_or_else(|| err("model.damping", "is required for FRFs and updating"))?;
+        if let Some([lo, hi]) = d.bounds {
+            if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+                return Err(err(
+                    "model.damping.bounds",
+                    format!("[{lo}, {hi}] must satisfy 0 <= lower < upper"),
+                ));
+            }
+            if let Some((j, g)) = d.coefficients.iter().enumerate().find(|(_, &g)| !(g >= lo && g <= hi)) {
+                return Err(err(
+                    "model.damping.coefficients",
+                    format!("coefficient {} = {g} lies outside bounds [{lo}, {hi}]", j + 1),
+                ));
+            }
+        }
+        DampingCurve::new(d.degree, d.coefficients.clone(), d.f_start, d.f_end).map_err(|e| err("model.damping", e))
+    }
+}
+
+fn build_spring(i: usize, s: &SpringConfig) -> Result<SpringField, ConfigError> {
+    let key = |k: &str| format!("model.springs[{i}].{k}");
+    let xi = KnotVector::new(s.knots_xi.clone(), s.degree_xi).map_err(|e| err(key("knots_xi"), e))?;
+    let eta = KnotVector::new(s.knots_eta.clone(), s.degree_eta).map_err(|e| err(key("knots_eta"), e))?;
+    let direction = match &s.direction {
+        DirectionConfig::Named(n) => match n.as_str() {
+            "x" => SpringDirection::Fixed([1.0, 0.0, 0.0]),
+            "y" => SpringDirection::Fixed([0.0, 1.0, 0.0]),
+            "z" => SpringDirection::Fixed([0.0, 0.0, 1.0]),
+            "normal" => SpringDirection::Normal,
+            other => {
+                return Err(err(
+                    key("direction"),
+                    format!("{other:?} is not one of \"x\", \"y\", \"z\", \"normal\" or a 3-vector"),
+                ))
+            }
+        },
+        DirectionConfig::Vector(v) => SpringDirection::fixed(*v).map_err(|e| err(key("direction"), e))?,
+    };
+    let face = match s.surface {
+        FaceConfig::Bottom => Face::Bottom,
+        FaceConfig::Middle => Face::Middle,
+        FaceConfig::Top => Face::Top,
+    };
+    if let Some([lo, hi]) = s.bounds {
+        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+            return Err(err(
+                key("bounds"),
+                format!("[{lo}, {hi}] must satisfy 0 <= lower < upper"),
+            ));
+        }
+        if let Some((j, k)) = s.stiffness.iter().enumerate().find(|(_, &k)| !(k >= lo && k <= hi)) {
+            return Err(err(
+                key("stiffness"),
+                format!("coefficient {} = {k} lies outside bounds [{lo}, {hi}]", j + 1),
+            ));
+        }
+    }
+    SpringField::new(xi, eta, s.stiffness.clone(), direction, face).map_err(|e| err(key("stiffness"), e))
+}
+
+impl Config {
+    /// The sensors as model points, in config order, with their names.
+    pub fn build_sensors(&self, shell: &Shell) -> Result<Vec<(String, SensorPoint)>, ConfigError> {
+        let mut out = Vec::with_capacity(self.sensors.len());
+        for (i, s) in self.sensors.iter().enumerate() {
+            let key = |k: &str| format!("sensors[{i}].{k}");
+            for q in s.quantity.as_slice() {
+                if !matches!(q.as_str(), "acceleration" | "force" | "displacement" | "velocity") {
+                    return Err(err(
+                        key("quantity"),
+                        format!("{q:?} is not one of acceleration, force, displacement, velocity"),
+                    ));
+                }
+            }
+            let (xi, eta) = match (s.xi, s.eta, s.x, s.y) {
+                (Some(xi), Some(eta), None, None) => (xi, eta),
+                (None, None, Some(x), Some(y)) => shell.surface().locate_xy(x, y).ok_or_else(|| {
+                    err(
+                        key("x"),
+                        format!("point ({x}, {y}) m is not on the deck (outside the model's plan)"),
+                    )
+                })?,
+                _ => {
+                    return Err(err(
+                        format!("sensors[{i}]"),
+                        "give either both xi and eta (parametric) or both x and y (metres)",
+                    ))
+                }
+            };
+            let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+            if !kx.contains(xi) || !ke.contains(eta) {
+                return Err(err(
+                    key("xi"),
+                    format!("({xi}, {eta}) lies outside the parameter domain"),
+                ));
+            }
+            let direction = match &s.direction {
+                DirectionConfig::Named(n) => match n.as_str() {
+                    "x" => [1.0, 0.0, 0.0],
+                    "y" => [0.0, 1.0, 0.0],
+                    "z" => [0.0, 0.0, 1.0],
+                    "normal" => {
+                        let e = shell.surface().evaluate(xi, eta);
+                        splinewatch_core::vec3::cross(e.r_xi, e.r_eta)
+                    }
+                    other => {
+                        return Err(err(
+                            key("direction"),
+                            format!("{other:?} is not one of \"x\", \"y\", \"z\", \"normal\" or a 3-vector"),
+                        ))
+                    }
+                },
+                DirectionConfig::Vector(v) => *v,
+            };
+            if splinewatch_core::vec3::normalize(direction).is_none() {
+                return Err(err(key("direction"), "must be a finite non-zero vector"));
+            }
+            let tau = match s.surface {
+                FaceConfig::Bottom => 0.0,
+                FaceConfig::Middle => 0.5,
+                FaceConfig::Top => 1.0,
+            };
+            out.push((
+                s.name.clone(),
+                SensorPoint {
+                    xi,
+                    eta,
+                    tau,
+                    direction,
+                },
+            ));
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,170 @@
+//! `[updating]`: the solver's settings and the updating parameters.
+
+use super::{err, Config, ConfigError};
+use serde::Deserialize;
+use splinewatch_core::updating::{LineSelection, Method, Parameter, ParameterKind, UpdateSettings, Weighting};
+
+fn default_max_iterations() -> usize {
+    50
+}
+fn default_cost_tolerance() -> f64 {
+    1e-8
+}
+fn default_step_tolerance() -> f64 {
+    1e-9
+}
+fn default_offset_tolerance() -> f64 {
+    1e-2
+}
+fn default_initial_damping() -> f64 {
+    1e-3
+}
+fn default_decimation() -> usize {
+    1
+}
+
+/// `[updating]`: solver and data selection.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UpdatingConfig {
+    #[serde(default = "default_max_iterations")]
+    pub max_iterations: usize,
+    /// Stop when an accepted step lowers the cost by less than this fraction.
+    #[serde(default = "default_cost_tolerance")]
+    pub cost_tolerance: f64,
+    /// Stop when the step in the transformed variables is this small.
+    #[serde(default = "default_step_tolerance")]
+    pub step_tolerance: f64,
+    /// Stop when the Gauss–Newton step is below this many standard errors,
+    /// root mean square over the parameters (Bates & Watts' relative offset).
+    #[serde(default = "default_offset_tolerance")]
+    pub offset_tolerance: f64,
+    /// Threads for the FRF evaluation (results do not depend on it); default:
+    /// the available cores, at most 4.
+    pub threads: Option<usize>,
+    #[serde(default = "default_method")]
+    pub method: Method,
+    #[serde(default = "default_weighting")]
+    pub weighting: Weighting,
+    /// Frequency band [f_min, f_max] in Hz used for the residues.
+    pub band: Option<[f64; 2]>,
+    /// Keep every n-th line of the band.
+    #[serde(default = "default_decimation")]
+    pub decimation: usize,
+    /// Bands [a, b] in Hz left out.
+    #[serde(default)]
+    pub exclude: Vec<[f64; 2]>,
+    /// Initial Levenberg–Marquardt damping λ0, dimensionless (see `UpdateSettings::initial_damping`).
+    #[serde(default = "default_initial_damping")]
+    pub initial_damping: f64,
+}
+
+fn default_method() -> Method {
+    Method::LevenbergMarquardt
+}
+fn default_weighting() -> Weighting {
+    Weighting::Uniform
+}
+
+impl Default for UpdatingConfig {
+    fn default() -> Self {
+        toml::from_str("").expect("every key has a default")
+    }
+}
+
+impl Config {
+    /// The updating parameters: `<spring>.k<j>` for spring fields with
+    /// `update = true` (j from 1, η fastest) and `damping.g<z>`.
+    pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
+        let mut out = Vec::new();
+        for (field, s) in self.model.springs.iter().enumerate() {
+            if !s.update {
+                continue;
+            }
+            let [lower, upper] = s
+                .bounds
+                .ok_or_else(|| err(format!("model.springs[{field}].bounds"), "required when update = true"))?;
+            for coefficient in 0..s.stiffness.len() {
+                out.push(Parameter {
+                    name: format!("{}.k{}", s.name, coefficient + 1),
+                    kind: ParameterKind::Spring { field, coefficient },
+                    lower,
+                    upper,
+                });
+            }
+        }
+        if let Some(d) = self.model.damping.as_ref().filter(|d| d.update) {
+            let [lower, upper] = d
+                .bounds
+                .ok_or_else(|| err("model.damping.bounds", "required when update = true"))?;
+            for coefficient in 0..d.coefficients.len() {
+                out.push(Parameter {
+                    name: format!("damping.g{}", coefficient + 1),
+                    kind: ParameterKind::Damping { coefficient },
+                    lower,
+                    upper,
+                });
+            }
+        }
+        Ok(out)
+    }
+
+    /// `[updating]` as solver settings.
+    pub fn update_settings(&self) -> Result<UpdateSettings, ConfigError> {
+        let u = &self.updating;
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(err(
+                    format!("updating.{key}"),
+                    format!("must be finite and positive, got {v}"),
+                ))
+            }
+        };
+        positive("cost_tolerance", u.cost_tolerance)?;
+        positive("step_tolerance", u.step_tolerance)?;
+        positive("offset_tolerance", u.offset_tolerance)?;
+        positive("initial_damping", u.initial_damping)?;
+        if u.max_iterations == 0 {
+            return Err(err("updating.max_iterations", "must be at least 1"));
+        }
+        let threads = match u.threads {
+            Some(n @ 1..=64) => n,
+            Some(n) => return Err(err("updating.threads", format!("must be between 1 and 64, got {n}"))),
+            None => std::thread::available_parallelism().map_or(1, |n| n.get().min(4)),
+        };
+        if u.decimation == 0 {
+            return Err(err("updating.decimation", "must be at least 1"));
+        }
+        let interval = |key: String, [a, b]: [f64; 2]| {
+            if a.is_finite() && b.is_finite() && a >= 0.0 && a <= b {
+                Ok((a, b))
+            } else {
+                Err(err(key, format!("[{a}, {b}] must satisfy 0 <= a <= b")))
+            }
+        };
+        let band = u.band.map(|b| interval("updating.band".into(), b)).transpose()?;
+        let exclude = u
+            .exclude
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| interval(format!("updating.exclude[{i}]"), b))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(UpdateSettings {
+            method: u.method,
+            max_iterations: u.max_iterations,
+            cost_tolerance: u.cost_tolerance,
+            step_tolerance: u.step_tolerance,
+            offset_tolerance: u.offset_tolerance,
+            weighting: u.weighting,
+            lines: LineSelection {
+                band,
+                decimation: u.decimation,
+                exclude,
+            },
+            initial_damping: u.initial_damping,
+            threads,
+        })
+    }
+}

@@ -1,0 +1,70 @@
+//! `[zenoh]`: the session's mode and endpoints, layered over an optional
+//! zenoh JSON5 file.
+
+use anyhow::{anyhow, Result};
+use serde::Deserialize;
+use std::path::PathBuf;
+
+/// `[zenoh]`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct ZenohConfig {
+    /// "peer" or "client".
+    pub mode: String,
+    /// Endpoints to listen on, e.g. "tcp/127.0.0.1:7447".
+    pub listen: Vec<String>,
+    /// Endpoints to connect to (a router in client mode, peers otherwise).
+    pub connect: Vec<String>,
+    pub multicast_scouting: bool,
+    /// A zenoh JSON5 configuration file, applied first.
+    pub config_file: Option<PathBuf>,
+}
+
+impl Default for ZenohConfig {
+    fn default() -> Self {
+        Self {
+            mode: "peer".into(),
+            listen: vec!["tcp/127.0.0.1:7447".into()],
+            connect: Vec::new(),
+            multicast_scouting: false,
+            config_file: None,
+        }
+    }
+}
+
+impl ZenohConfig {
+    /// The zenoh session configuration: the JSON5 file first, then our keys.
+    pub fn to_zenoh(&self) -> Result<zenoh::Config> {
+        let mut cfg = match &self.config_file {
+            Some(path) => zenoh::Config::from_file(path)
+                .map_err(|e| anyhow!("config: zenoh.config_file {}: {e}", path.display()))?,
+            None => zenoh::Config::default(),
+        };
+        if !matches!(self.mode.as_str(), "peer" | "client") {
+            return Err(anyhow!(
+                "config: zenoh.mode: {:?} is not \"peer\" or \"client\"",
+                self.mode
+            ));
+        }
+        let set = |cfg: &mut zenoh::Config, key: &str, value: String| {
+            cfg.insert_json5(key, &value)
+                .map_err(|e| anyhow!("config: zenoh: {key} = {value}: {e}"))
+        };
+        set(&mut cfg, "mode", format!("{:?}", self.mode))?;
+        // A client talks to its router and does not listen: the peer-mode
+        // default endpoint is not applied in client mode (explicit ones are).
+        let default_listen = self.mode == "client" && self.listen == Self::default().listen;
+        if !self.listen.is_empty() && !default_listen {
+            set(&mut cfg, "listen/endpoints", serde_json::to_string(&self.listen)?)?;
+        }
+        if !self.connect.is_empty() {
+            set(&mut cfg, "connect/endpoints", serde_json::to_string(&self.connect)?)?;
+        }
+        set(
+            &mut cfg,
+            "scouting/multicast/enabled",
+            self.multicast_scouting.to_string(),
+        )?;
+        Ok(cfg)
+    }
+}

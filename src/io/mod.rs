@@ -1,0 +1,9 @@
+//! Bytes in and out: the wire format of channel blocks, MCAP recordings, FRF
+//! files, output-file creation and numbering, and salvaging unfinished MCAP.
+//! Room: the bottom of the application. May import: the core crate only.
+
+pub mod files;
+pub mod frf_json;
+pub mod recording;
+pub mod recover;
+pub mod wire;

@@ -1,0 +1,185 @@
+//! MCAP recordings of raw input: one channel per topic
+//! (`<prefix>/accel/<name>`, `<prefix>/force/<name>`), message encoding
+//! `cbor` or `json` (the wire format), `log_time` = block start in ns since
+//! the epoch, zstd-compressed chunks. JSON channels carry a JSON Schema so
+//! Foxglove can plot them.
+
+use crate::io::wire::{self, ChannelBlock, Encoding, Limits, WireError};
+use anyhow::{Context, Result};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+
+/// JSON Schema of a channel block (for `json` channels).
+pub const BLOCK_JSON_SCHEMA: &str = r#"{
+  "$schema": "https://json-schema.org/draft/2020-12/schema",
+  "title": "splinewatch channel block (SEP005 style)",
+  "type": "object",
+  "required": ["name", "quantity", "fs", "start_timestamp", "data"],
+  "properties": {
+    "name": {"type": "string"},
+    "quantity": {"enum": ["acceleration", "force"]},
+    "unit_str": {"type": "string"},
+    "fs": {"type": "number", "exclusiveMinimum": 0},
+    "start_timestamp": {"type": "string", "format": "date-time"},
+    "data": {"type": "array", "items": {"type": "number"}}
+  }
+}"#;
+
+/// The MCAP writer settings of every file splinewatch writes: zstd chunks,
+/// profile and library named.
+pub fn mcap_options() -> mcap::WriteOptions {
+    mcap::WriteOptions::new()
+        .compression(Some(mcap::Compression::Zstd))
+        .profile("splinewatch")
+        .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
+}
+
+/// Writes raw-input recordings.
+pub struct RecordingWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    encoding: Encoding,
+    schema_id: u16,
+    channels: BTreeMap<String, u16>,
+    sequence: u32,
+}
+
+impl RecordingWriter<BufWriter<File>> {
+    pub fn create(path: &Path, encoding: Encoding) -> Result<Self> {
+        Self::new(BufWriter::new(crate::io::files::create_output_file(path)?), encoding)
+    }
+}
+
+impl<W: Write + Seek> RecordingWriter<W> {
+    pub fn new(w: W, encoding: Encoding) -> Result<Self> {
+        let mut writer = mcap_options().create(w).context("cannot start the MCAP file")?;
+        let schema_id = match encoding {
+            Encoding::Json => writer
+                .add_schema("splinewatch.ChannelBlock", "jsonschema", BLOCK_JSON_SCHEMA.as_bytes())
+                .context("cannot add the MCAP schema")?,
+            Encoding::Cbor => 0,
+        };
+        Ok(Self {
+            writer,
+            encoding,
+            schema_id,
+            channels: BTreeMap::new(),
+            sequence: 0,
+        })
+    }
+
+    /// Appends one block on its topic under `prefix`; returns the size of
+    /// the encoded message in bytes.
+    pub fn write_block(&mut self, prefix: &str, block: &ChannelBlock) -> Result<usize> {
+        let topic = block.topic(prefix);
+        let channel_id = match self.channels.get(&topic) {
+            Some(&id) => id,
+            None => {
+                let metadata = BTreeMap::from([
+                    ("quantity".to_string(), format!("{:?}", block.quantity).to_lowercase()),
+                    ("unit".to_string(), block.unit.clone()),
+                    ("fs".to_string(), block.fs.to_string()),
+                ]);
+                let id = self
+                    .writer
+                    .add_channel(self.schema_id, &topic, self.encoding.mcap_name(), &metadata)
+                    .with_context(|| format!("cannot add MCAP channel {topic}"))?;
+                self.channels.insert(topic.clone(), id);
+                id
+            }
+        };
+        let log_time = u64::try_from(block.start_ns).context("block timestamps before 1970 cannot be recorded")?;
+        self.sequence = self.sequence.wrapping_add(1);
+        let data = wire::encode(block, self.encoding);
+        self.writer
+            .write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id,
+                    sequence: self.sequence,
+                    log_time,
+                    publish_time: log_time,
+                },
+                &data,
+            )
+            .with_context(|| format!("cannot write to {topic}"))?;
+        Ok(data.len())
+    }
+
+    /// Writes the summary and index; the file is complete after this.
+    pub fn finish(mut self) -> Result<W> {
+        self.writer.finish().context("cannot finish the MCAP file")?;
+        Ok(self.writer.into_inner())
+    }
+}
+
+/// A block read back from a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordedBlock {
+    pub topic: String,
+    pub log_time: u64,
+    pub block: ChannelBlock,
+}
+
+/// A message that could not be used, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RejectedMessage {
+    pub topic: String,
+    pub log_time: u64,
+    pub error: WireError,
+}
+
+/// The largest record (message or chunk) a recording may hold: far above
+/// what splinewatch or the usual MCAP writers produce, small enough that a
+/// damaged length field cannot make the reader ask for gigabytes.
+pub const MAX_RECORD_BYTES: usize = 256 << 20;
+
+/// The messages of an in-memory MCAP file in file order, chunk CRCs checked
+/// and record lengths bounded by [`MAX_RECORD_BYTES`]. (`mcap::MessageStream`
+/// trusts a damaged length field inside a chunk and the process aborts
+/// trying to allocate it.) `salvage` reads a file that has no end (a killed
+/// writer) up to its last complete record.
+pub fn mcap_messages(
+    bytes: &[u8],
+    salvage: bool,
+) -> Result<impl Iterator<Item = mcap::McapResult<mcap::Message<'static>>> + '_> {
+    if !bytes.starts_with(mcap::MAGIC) {
+        anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
+    }
+    let options = mcap::sans_io::LinearReaderOptions::default()
+        .with_record_length_limit(MAX_RECORD_BYTES)
+        .with_validate_chunk_crcs(true)
+        .with_skip_end_magic(salvage);
+    Ok(mcap::io::MessageReader::new_with_options(bytes, options))
+}
+
+/// Reads every raw-input block of a recording, in file order. Messages on
+/// topics that are not `…/accel/…` or `…/force/…`, or with another encoding,
+/// are skipped; undecodable ones are returned in the second list.
+pub fn read_recording(bytes: &[u8], limits: &Limits) -> Result<(Vec<RecordedBlock>, Vec<RejectedMessage>)> {
+    let mut blocks = Vec::new();
+    let mut rejected = Vec::new();
+    for message in mcap_messages(bytes, false)? {
+        let message = message.context("corrupt MCAP record")?;
+        let topic = &message.channel.topic;
+        if !(topic.contains("/accel/") || topic.contains("/force/")) {
+            continue;
+        }
+        let Some(encoding) = Encoding::from_name(&message.channel.message_encoding) else {
+            continue;
+        };
+        match wire::decode(&message.data, encoding, limits) {
+            Ok(decoded) => blocks.extend(decoded.into_iter().map(|block| RecordedBlock {
+                topic: topic.clone(),
+                log_time: message.log_time,
+                block,
+            })),
+            Err(error) => rejected.push(RejectedMessage {
+                topic: topic.clone(),
+                log_time: message.log_time,
+                error,
+            }),
+        }
+    }
+    Ok((blocks, rejected))
+}

@@ -1,0 +1,606 @@
+//! The measurement wire format (docs/wire-format.md): one message is one
+//! block of consecutive samples of one channel, a SEP005-style object
+//! `{"name","quantity","unit_str","fs","start_timestamp","data"}`, or a list
+//! of such objects. JSON and CBOR carry the same keys; CBOR `data` may be a
+//! plain array or an RFC 8746 typed float array (tags 81, 82, 85, 86).
+//! Zenoh payloads and MCAP messages use the same bytes.
+
+use ciborium::value::Value;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+use time::format_description::well_known::Rfc3339;
+use time::OffsetDateTime;
+
+/// Message encodings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Encoding {
+    Json,
+    Cbor,
+}
+
+impl Encoding {
+    /// MCAP `message_encoding` and zenoh encoding names.
+    pub fn mcap_name(self) -> &'static str {
+        match self {
+            Encoding::Json => "json",
+            Encoding::Cbor => "cbor",
+        }
+    }
+
+    pub fn mime(self) -> &'static str {
+        match self {
+            Encoding::Json => "application/json",
+            Encoding::Cbor => "application/cbor",
+        }
+    }
+
+    /// From an MCAP `message_encoding` or a MIME type.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "json" | "application/json" => Some(Encoding::Json),
+            "cbor" | "application/cbor" => Some(Encoding::Cbor),
+            _ => None,
+        }
+    }
+}
+
+/// What a channel measures.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ChannelQuantity {
+    Acceleration,
+    Force,
+}
+
+impl ChannelQuantity {
+    /// The topic segment: `<prefix>/accel/<name>` or `<prefix>/force/<name>`.
+    pub fn topic_segment(self) -> &'static str {
+        match self {
+            ChannelQuantity::Acceleration => "accel",
+            ChannelQuantity::Force => "force",
+        }
+    }
+
+    /// The wire format's `quantity` value.
+    pub fn from_wire(value: &str) -> Option<Self> {
+        match value {
+            "acceleration" => Some(ChannelQuantity::Acceleration),
+            "force" => Some(ChannelQuantity::Force),
+            _ => None,
+        }
+    }
+
+    pub fn unit(self) -> &'static str {
+        match self {
+            ChannelQuantity::Acceleration => "m/s^2",
+            ChannelQuantity::Force => "N",
+        }
+    }
+}
+
+/// A decoded, validated block.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChannelBlock {
+    pub name: String,
+    pub quantity: ChannelQuantity,
+    pub unit: String,
+    pub fs: f64,
+    /// First sample time, nanoseconds since the Unix epoch.
+    pub start_ns: i128,
+    pub data: Vec<f64>,
+}
+
+impl ChannelBlock {
+    pub fn topic(&self, prefix: &str) -> String {
+        format!("{prefix}/{}/{}", self.quantity.topic_segment(), self.name)
+    }
+
+    /// Time of sample `k` (ns since the epoch).
+    pub fn sample_time_ns(&self, k: usize) -> i128 {
+        self.start_ns + (k as f64 * 1e9 / self.fs).round() as i128
+    }
+}
+
+/// Limits applied while decoding untrusted input.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// Most samples in one block.
+    pub max_samples: usize,
+    /// Most bytes in one message.
+    pub max_bytes: usize,
+    /// Most blocks in one multi-channel message.
+    pub max_blocks: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_samples: 1 << 20,
+            max_bytes: 64 << 20,
+            max_blocks: 256,
+        }
+    }
+}
+
+/// Why a message was rejected; `reason()` names the health counter.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum WireError {
+    #[error("message of {size} bytes exceeds the limit of {limit}")]
+    TooLarge { size: usize, limit: usize },
+    #[error("malformed {encoding}: {message}")]
+    Malformed { encoding: &'static str, message: String },
+    #[error("block {index}: missing field {field:?}")]
+    Missing { index: usize, field: &'static str },
+    #[error("block {index}: field {field:?} has the wrong type ({expected} expected)")]
+    WrongType {
+        index: usize,
+        field: &'static str,
+        expected: &'static str,
+    },
+    #[error("block {index}: unknown quantity {value:?} (acceleration or force)")]
+    Quantity { index: usize, value: String },
+    #[error("block {index}: fs = {fs} must be finite and positive")]
+    SampleRate { index: usize, fs: f64 },
+    #[error("block {index}: start_timestamp {value:?} is not RFC 3339")]
+    Timestamp { index: usize, value: String },
+    #[error("block {index}: {samples} samples exceed the limit of {limit}")]
+    TooManySamples { index: usize, samples: usize, limit: usize },
+    #[error("block {index}: no samples")]
+    Empty { index: usize },
+    #[error("block {index}: sample {sample} is not finite")]
+    NonFinite { index: usize, sample: usize },
+    #[error("block {index}: channel name {name:?} must be non-empty without '/' or whitespace")]
+    Name { index: usize, name: String },
+    #[error("{count} blocks in one message exceed the limit of {limit}")]
+    TooManyBlocks { count: usize, limit: usize },
+}
+
+impl WireError {
+    /// Short stable name for health counters.
+    pub fn reason(&self) -> &'static str {
+        match self {
+            WireError::TooLarge { .. } => "too_large",
+            WireError::Malformed { .. } => "malformed",
+            WireError::Missing { .. } | WireError::WrongType { .. } => "bad_field",
+            WireError::Quantity { .. } => "bad_quantity",
+            WireError::SampleRate { .. } => "bad_fs",
+            WireError::Timestamp { .. } => "bad_timestamp",
+            WireError::TooManySamples { .. } | WireError::TooManyBlocks { .. } => "too_many_samples",
+            WireError::Empty { .. } => "empty",
+            WireError::NonFinite { .. } => "non_finite",
+            WireError::Name { .. } => "bad_name",
+        }
+    }
+}
+
+/// Formats ns since the epoch as RFC 3339 with nanoseconds, UTC.
+pub fn format_timestamp(ns: i128) -> String {
+    OffsetDateTime::from_unix_timestamp_nanos(ns)
+        .ok()
+        .and_then(|t| t.format(&Rfc3339).ok())
+        .unwrap_or_else(|| format!("{ns}ns"))
+}
+
+/// Parses RFC 3339 into ns since the epoch.
+pub fn parse_timestamp(s: &str) -> Option<i128> {
+    OffsetDateTime::parse(s, &Rfc3339)
+        .ok()
+        .map(|t| t.unix_timestamp_nanos())
+}
+
+#[derive(Serialize)]
+struct JsonBlock<'a> {
+    name: &'a str,
+    quantity: ChannelQuantity,
+    unit_str: &'a str,
+    fs: f64,
+    start_timestamp: String,
+    data: &'a [f64],
+}
+
+/// Encodes one block. CBOR uses an RFC 8746 little-endian float64 typed
+/// array (tag 86) for `data`: 8 bytes per sample, no per-item headers.
+pub fn encode(block: &ChannelBlock, encoding: Encoding) -> Vec<u8> {
+    match encoding {
+        Encoding::Json => serde_json::to_vec(&JsonBlock {
+            name: &block.name,
+            quantity: block.quantity,
+            unit_str: &block.unit,
+            fs: block.fs,
+            start_timestamp: format_timestamp(block.start_ns),
+            data: &block.data,
+        })
+        .expect("plain data serialises"),
+        Encoding::Cbor => {
+            let bytes: Vec<u8> = block.data.iter().flat_map(|v| v.to_le_bytes()).collect();
+            let map = Value::Map(vec![
+                (Value::Text("name".into()), Value::Text(block.name.clone())),
+                (
+                    Value::Text("quantity".into()),
+                    Value::Text(format!("{:?}", block.quantity).to_lowercase()),
+                ),
+                (Value::Text("unit_str".into()), Value::Text(block.unit.clone())),
+                (Value::Text("fs".into()), Value::Float(block.fs)),
+                (
+                    Value::Text("start_timestamp".into()),
+                    Value::Text(format_timestamp(block.start_ns)),
+                ),
+                (
+                    Value::Text("data".into()),
+                    Value::Tag(86, Box::new(Value::Bytes(bytes))),
+                ),
+            ]);
+            let mut out = Vec::with_capacity(block.data.len() * 8 + 128);
+            ciborium::into_writer(&map, &mut out).expect("writing to a Vec cannot fail");
+            out
+        }
+    }
+}
+
+/// Decodes a message: one block object or a list of them.
+pub fn decode(bytes: &[u8], encoding: Encoding, limits: &Limits) -> Result<Vec<ChannelBlock>, WireError> {
+    if bytes.len() > limits.max_bytes {
+        return Err(WireError::TooLarge {
+            size: bytes.len(),
+            limit: limits.max_bytes,
+        });
+    }
+    let value: Value = match encoding {
+        Encoding::Json => {
+            let v: serde_json::Value = serde_json::from_slice(bytes).map_err(|e| WireError::Malformed {
+                encoding: "JSON",
+                message: e.to_string(),
+            })?;
+            json_to_cbor(v)
+        }
+        Encoding::Cbor => {
+            ciborium::de::from_reader_with_recursion_limit(bytes, 16).map_err(|e| WireError::Malformed {
+                encoding: "CBOR",
+                message: e.to_string(),
+            })?
+        }
+    };
+    let items = match value {
+        Value::Array(items) => items,
+        single => vec![single],
+    };
+    if items.len() > limits.max_blocks {
+        return Err(WireError::TooManyBlocks {
+            count: items.len(),
+            limit: limits.max_blocks,
+        });
+    }
+    items
+        .into_iter()
+        .enumerate()
+        .map(|(index, item)| block_from_value(index, item, limits))
+        .collect()
+}
+
+fn json_to_cbor(v: serde_json::Value) -> Value {
+    match v {
+        serde_json::Value::Null => Value::Null,
+        serde_json::Value::Bool(b) => Value::Bool(b),
+        serde_json::Value::Number(n) => n.as_f64().map(Value::Float).unwrap_or(Value::Null),
+        serde_json::Value::String(s) => Value::Text(s),
+        serde_json::Value::Array(a) => Value::Array(a.into_iter().map(json_to_cbor).collect()),
+        serde_json::Value::Object(o) => {
+            Value::Map(o.into_iter().map(|(k, v)| (Value::Text(k), json_to_cbor(v))).collect())
+        }
+    }
+}
+
+fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Float(f) => Some(*f),
+        Value::Integer(i) => Some(i128::from(*i) as f64),
+        _ => None,
+    }
+}
+
+fn block_from_value(index: usize, item: Value, limits: &Limits) -> Result<ChannelBlock, WireError> {
+    let Value::Map(entries) = item else {
+        return Err(WireError::WrongType {
+            index,
+            field: "(block)",
+            expected: "map/object",
+        });
+    };
+    let get = |field: &'static str| {
+        entries
+            .iter()
+            .find(|(k, _)| matches!(k, Value::Text(t) if t == field))
+            .map(|(_, v)| v)
+    };
+    let text = |field: &'static str| -> Result<String, WireError> {
+        match get(field) {
+            None => Err(WireError::Missing { index, field }),
+            Some(Value::Text(t)) => Ok(t.clone()),
+            Some(_) => Err(WireError::WrongType {
+                index,
+                field,
+                expected: "string",
+            }),
+        }
+    };
+    let name = text("name")?;
+    if name.is_empty() || name.contains('/') || name.contains(char::is_whitespace) {
+        return Err(WireError::Name { index, name });
+    }
+    let value = text("quantity")?;
+    let quantity = ChannelQuantity::from_wire(&value).ok_or(WireError::Quantity { index, value })?;
+    let unit = match get("unit_str") {
+        Some(Value::Text(t)) => t.clone(),
+        None => quantity.unit().to_string(),
+        Some(_) => {
+            return Err(WireError::WrongType {
+                index,
+                field: "unit_str",
+                expected: "string",
+            })
+        }
+    };
+    let fs = get("fs")
+        .map(|v| {
+            number(v).ok_or(WireError::WrongType {
+                index,
+                field: "fs",
+                expected: "number",
+            })
+        })
+        .ok_or(WireError::Missing { index, field: "fs" })??;
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(WireError::SampleRate { index, fs });
+    }
+    let ts = text("start_timestamp")?;
+    let start_ns = parse_timestamp(&ts).ok_or(WireError::Timestamp { index, value: ts })?;
+    let data = samples(
+        index,
+        get("data").ok_or(WireError::Missing { index, field: "data" })?,
+        limits,
+    )?;
+    if data.is_empty() {
+        return Err(WireError::Empty { index });
+    }
+    if let Some(sample) = data.iter().position(|v| !v.is_finite()) {
+        return Err(WireError::NonFinite { index, sample });
+    }
+    Ok(ChannelBlock {
+        name,
+        quantity,
+        unit,
+        fs,
+        start_ns,
+        data,
+    })
+}
+
+/// The `data` field: an array of numbers, or an RFC 8746 typed float array.
+fn samples(index: usize, value: &Value, limits: &Limits) -> Result<Vec<f64>, WireError> {
+    match value {
+        Value::Array(items) => {
+            if items.len() > limits.max_samples {
+                return Err(WireError::TooManySamples {
+                    index,
+                    samples: items.len(),
+                    limit: limits.max_samples,
+                });
+            }
+            items
+                .iter()
+                .map(|v| {
+                    number(v).ok_or(WireError::WrongType {
+                        index,
+                        field: "data",
+                        expected: "array of numbers",
+                    })
+                })
+                .collect()
+        }
+        Value::Tag(tag, inner) => typed_array(index, *tag, inner, limits),
+        _ => Err(WireError::WrongType {
+            index,
+            field: "data",
+            expected: "array of numbers or typed array",
+        }),
+    }
+}
+
+/// An RFC 8746 typed float array (tags 81, 82, 85, 86) over a byte string.
+fn typed_array(index: usize, tag: u64, inner: &Value, limits: &Limits) -> Result<Vec<f64>, WireError> {
+    let Value::Bytes(bytes) = inner else {
+        return Err(WireError::WrongType {
+            index,
+            field: "data",
+            expected: "typed array over a byte string",
+        });
+    };
+    let width = match tag {
+        81 | 85 => 4,
+        82 | 86 => 8,
+        _ => {
+            return Err(WireError::WrongType {
+                index,
+                field: "data",
+                expected: "RFC 8746 float array (tags 81, 82, 85, 86)",
+            })
+        }
+    };
+    if bytes.len() % width != 0 {
+        return Err(WireError::WrongType {
+            index,
+            field: "data",
+            expected: "a whole number of floats",
+        });
+    }
+    let samples = bytes.len() / width;
+    if samples > limits.max_samples {
+        return Err(WireError::TooManySamples {
+            index,
+            samples,
+            limit: limits.max_samples,
+        });
+    }
+    Ok(bytes
+        .chunks_exact(width)
+        .map(|c| match tag {
+            81 => f32::from_be_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            85 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
+            82 => f64::from_be_bytes(c.try_into().expect("8 bytes")),
+            _ => f64::from_le_bytes(c.try_into().expect("8 bytes")),
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn block() -> ChannelBlock {
+        ChannelBlock {
+            name: "P3".into(),
+            quantity: ChannelQuantity::Acceleration,
+            unit: "m/s^2".into(),
+            fs: 256.0,
+            start_ns: parse_timestamp("2026-11-21T10:00:00.000000001Z").unwrap(),
+            data: vec![0.5, -1.25, 3.0e-7, 42.0],
+        }
+    }
+
+    #[test]
+    fn round_trips_in_both_encodings() {
+        for enc in [Encoding::Json, Encoding::Cbor] {
+            let b = block();
+            let decoded = decode(&encode(&b, enc), enc, &Limits::default()).unwrap();
+            assert_eq!(decoded, vec![b]);
+        }
+    }
+
+    #[test]
+    fn accepts_lists_plain_cbor_arrays_and_other_typed_arrays() {
+        let text = r#"[{"name":"F1","quantity":"force","fs":100,"start_timestamp":"2026-11-21T10:00:00+01:00","data":[1,2.5],"extra":{"ok":true}},
+                       {"name":"P2","quantity":"acceleration","unit_str":"g","fs":100.0,"start_timestamp":"2026-11-21T09:00:00Z","data":[0.0]}]"#;
+        let blocks = decode(text.as_bytes(), Encoding::Json, &Limits::default()).unwrap();
+        assert_eq!(blocks.len(), 2);
+        assert_eq!(blocks[0].start_ns, blocks[1].start_ns);
+        assert_eq!(blocks[0].unit, "N");
+        let be32: Vec<u8> = [1.5f32, -2.0].iter().flat_map(|v| v.to_be_bytes()).collect();
+        let map = Value::Map(vec![
+            (Value::Text("name".into()), Value::Text("P1".into())),
+            (Value::Text("quantity".into()), Value::Text("acceleration".into())),
+            (Value::Text("fs".into()), Value::Integer(200.into())),
+            (
+                Value::Text("start_timestamp".into()),
+                Value::Text("2026-11-21T10:00:00Z".into()),
+            ),
+            (Value::Text("data".into()), Value::Tag(81, Box::new(Value::Bytes(be32)))),
+        ]);
+        let mut bytes = Vec::new();
+        ciborium::into_writer(&map, &mut bytes).unwrap();
+        assert_eq!(
+            decode(&bytes, Encoding::Cbor, &Limits::default()).unwrap()[0].data,
+            vec![1.5, -2.0]
+        );
+    }
+
+    #[test]
+    fn rejects_bad_blocks_with_reasons() {
+        let lim = Limits {
+            max_samples: 3,
+            ..Limits::default()
+        };
+        let cases = [
+            (
+                r#"{"quantity":"force","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[1]}"#,
+                "bad_field",
+            ),
+            (
+                r#"{"name":"a","quantity":"strain","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[1]}"#,
+                "bad_quantity",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":0,"start_timestamp":"2026-11-21T10:00:00Z","data":[1]}"#,
+                "bad_fs",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":-5,"start_timestamp":"2026-11-21T10:00:00Z","data":[1]}"#,
+                "bad_fs",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":"fast","start_timestamp":"2026-11-21T10:00:00Z","data":[1]}"#,
+                "bad_field",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":1,"start_timestamp":"yesterday","data":[1]}"#,
+                "bad_timestamp",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[1,2,3,4]}"#,
+                "too_many_samples",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[]}"#,
+                "empty",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[1,"x"]}"#,
+                "bad_field",
+            ),
+            (
+                r#"{"name":"a/b","quantity":"force","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[1]}"#,
+                "bad_name",
+            ),
+            (
+                r#"{"name":"a","quantity":"force","fs":1,"start_timestamp":"2026-11-21T10:00:00Z","data":[1]"#,
+                "malformed",
+            ),
+            ("[1, 2]", "bad_field"),
+        ];
+        for (text, reason) in cases {
+            let e = decode(text.as_bytes(), Encoding::Json, &lim).unwrap_err();
+            assert_eq!(e.reason(), reason, "{text}: {e}");
+        }
+        let nan = ChannelBlock {
+            data: vec![1.0, f64::NAN],
+            ..block()
+        };
+        let e = decode(&encode(&nan, Encoding::Cbor), Encoding::Cbor, &Limits::default()).unwrap_err();
+        assert_eq!(e, WireError::NonFinite { index: 0, sample: 1 });
+        let huge = Limits {
+            max_bytes: 10,
+            ..Limits::default()
+        };
+        assert_eq!(
+            decode(&[0u8; 11], Encoding::Cbor, &huge).unwrap_err().reason(),
+            "too_large"
+        );
+        // A CBOR array header claiming 2^32 items with no bytes behind it.
+        let claim = [0x9b, 0, 0, 0, 1, 0, 0, 0, 0];
+        assert_eq!(
+            decode(&claim, Encoding::Cbor, &Limits::default()).unwrap_err().reason(),
+            "malformed"
+        );
+    }
+
+    proptest! {
+        #[test]
+        fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
+            let _ = decode(&bytes, Encoding::Cbor, &Limits::default());
+            let _ = decode(&bytes, Encoding::Json, &Limits::default());
+        }
+
+        #[test]
+        fn mutated_valid_messages_never_panic(flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8)) {
+            for enc in [Encoding::Json, Encoding::Cbor] {
+                let mut bytes = encode(&block(), enc);
+                for (i, b) in &flips {
+                    let k = i.index(bytes.len());
+                    bytes[k] = *b;
+                }
+                let _ = decode(&bytes, enc, &Limits::default());
+            }
+        }
+    }
+}

@@ -1,0 +1,9 @@
+//! Where results go: the results MCAP, the state file, Rerun (`.rrd` files
+//! and a live viewer), the raw-input recorder and zenoh publishing.
+//! Room: below the services. May import: `pipeline`, `config`, `io`, the core crate.
+
+pub mod publisher;
+pub mod raw_recorder;
+pub mod rerun;
+pub mod results;
+pub mod state;

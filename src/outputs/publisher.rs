@@ -1,0 +1,79 @@
+//! Zenoh publishing: channel blocks (the simulator, the demo, the soak) paced
+//! at a multiple of real time, and the keys result messages go out on.
+
+use crate::config::ZenohConfig;
+use crate::io::wire::{self, Encoding};
+use anyhow::{anyhow, Result};
+use zenoh::Wait;
+
+/// The zenoh key of a result message. FRF results go under
+/// `<prefix>/updating/frf/…`: `<prefix>/frf/**` is an input (pre-computed
+/// FRFs), and the daemon must not receive its own output there.
+pub fn zenoh_result_key(prefix: &str, suffix: &str) -> String {
+    match suffix.strip_prefix("frf/") {
+        Some(rest) => format!("{prefix}/updating/frf/{rest}"),
+        None => format!("{prefix}/{suffix}"),
+    }
+}
+
+/// Publishes blocks on zenoh (`simulate --publish`), pacing them at `speed`
+/// times real time (0 = as fast as possible).
+pub struct Publisher {
+    session: zenoh::Session,
+    prefix: String,
+    encoding: Encoding,
+    speed: f64,
+    origin: Option<(i128, std::time::Instant)>,
+}
+
+impl Publisher {
+    pub fn open(zenoh: &ZenohConfig, prefix: String, encoding: Encoding, speed: f64) -> Result<Self> {
+        let session = zenoh::open(zenoh.to_zenoh()?)
+            .wait()
+            .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
+        Ok(Self {
+            session,
+            prefix,
+            encoding,
+            speed,
+            origin: None,
+        })
+    }
+
+    pub fn publish(&mut self, block: &wire::ChannelBlock) -> Result<()> {
+        if self.speed > 0.0 {
+            let (t0, w0) = *self.origin.get_or_insert((block.start_ns, std::time::Instant::now()));
+            let due = std::time::Duration::from_secs_f64(((block.start_ns - t0) as f64 / 1e9 / self.speed).max(0.0));
+            if let Some(wait) = due.checked_sub(w0.elapsed()) {
+                std::thread::sleep(wait);
+            }
+        }
+        let key = block.topic(&self.prefix);
+        let zenc = match self.encoding {
+            Encoding::Cbor => zenoh::bytes::Encoding::APPLICATION_CBOR,
+            Encoding::Json => zenoh::bytes::Encoding::APPLICATION_JSON,
+        };
+        self.session
+            .put(&key, wire::encode(block, self.encoding))
+            .encoding(zenc)
+            .wait()
+            .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
+    }
+
+    /// Publishes raw JSON bytes on `<prefix>/<suffix>` (e.g. a pre-computed FRF).
+    pub fn publish_json(&mut self, suffix: &str, bytes: Vec<u8>) -> Result<()> {
+        let key = format!("{}/{suffix}", self.prefix);
+        self.session
+            .put(&key, bytes)
+            .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+            .wait()
+            .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
+    }
+
+    pub fn close(self) -> Result<()> {
+        self.session
+            .close()
+            .wait()
+            .map_err(|e| anyhow!("closing the zenoh session: {e}"))
+    }
+}

@@ -1,0 +1,77 @@
+//! What every `.rrd` file starts with: the blueprint (the viewer's layout)
+//! and the static sensor positions.
+
+use super::deck::f32x3;
+use super::{rerun_error, RerunOutput, MODES_SHOWN};
+use anyhow::{anyhow, Result};
+use rerun::blueprint::BarChartView;
+use rerun::blueprint::{
+    Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial3DView, Tabs, TimeSeriesView, Vertical,
+};
+use splinewatch_core::frf::SensorPoint;
+
+impl RerunOutput {
+    pub(super) fn send_blueprint(&self) -> Result<()> {
+        let frf_tabs = |what: &str| -> ContainerLike {
+            Tabs::new(self.setup.sensor_names.iter().map(|o| {
+                BarChartView::new(format!("{o} {what}"))
+                    .with_origin(format!("/frf/{o}/{what}"))
+                    .into()
+            }))
+            .into()
+        };
+        let mode_tabs = Tabs::new((1..=MODES_SHOWN).map(|k| {
+            Spatial3DView::new(format!("mode {k}"))
+                .with_origin(format!("/modes/{k}"))
+                .into()
+        }));
+        let blueprint = Blueprint::new(Horizontal::new([
+            Vertical::new([
+                TimeSeriesView::new("Spring coefficients (N/m³, ±1σ)")
+                    .with_origin("/parameters/springs")
+                    .into(),
+                TimeSeriesView::new("Damping coefficients (±1σ)")
+                    .with_origin("/parameters/damping")
+                    .into(),
+                TimeSeriesView::new("Relative residual").with_origin("/residual").into(),
+                TimeSeriesView::new("Health").with_origin("/health").into(),
+            ])
+            .into(),
+            Vertical::new([
+                Spatial3DView::new("Deck: spring field r33").with_origin("/deck").into(),
+                mode_tabs.into(),
+            ])
+            .into(),
+            Vertical::new([
+                frf_tabs("magnitude"),
+                frf_tabs("phase"),
+                BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
+            ])
+            .into(),
+        ]));
+        blueprint
+            .send(
+                &self.rec,
+                BlueprintActivation {
+                    make_active: true,
+                    make_default: true,
+                },
+            )
+            .map_err(|e| anyhow!("sending the Rerun blueprint: {e}"))
+    }
+
+    pub(super) fn log_sensors(&self, sensors: &[(String, SensorPoint)]) -> Result<()> {
+        let shell = &self.model.shell;
+        let positions: Vec<[f32; 3]> = sensors
+            .iter()
+            .map(|(_, s)| f32x3(shell.position(s.xi, s.eta, 1.0)))
+            .collect();
+        let labels: Vec<String> = sensors.iter().map(|(name, _)| name.clone()).collect();
+        self.rec
+            .log_static(
+                "deck/sensors",
+                &rerun::Points3D::new(positions).with_labels(labels).with_radii([0.15]),
+            )
+            .map_err(rerun_error)
+    }
+}

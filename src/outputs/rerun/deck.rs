@@ -1,0 +1,123 @@
+//! The deck mesh shown in the viewer: the mid-surface on a (ξ, η) grid, the
+//! spring field and mode shapes evaluated on it, and the colour ramp.
+
+use super::GRID;
+use splinewatch_core::model::ShellModel;
+use splinewatch_core::vec3::Vec3;
+
+pub(super) fn f32x3(v: Vec3) -> [f32; 3] {
+    [v[0] as f32, v[1] as f32, v[2] as f32]
+}
+
+/// A blue → green → yellow ramp for `t ∈ [0, 1]`.
+pub(super) fn colormap(t: f64) -> rerun::Color {
+    let t = t.clamp(0.0, 1.0);
+    let (r, g, b) = if t < 0.5 {
+        let u = 2.0 * t;
+        (0.15 * (1.0 - u), 0.2 + 0.55 * u, 0.7 * (1.0 - u) + 0.35 * u)
+    } else {
+        let u = 2.0 * t - 1.0;
+        (0.95 * u, 0.75 + 0.2 * u, 0.35 * (1.0 - u))
+    };
+    rerun::Color::from_rgb((255.0 * r) as u8, (255.0 * g) as u8, (255.0 * b) as u8)
+}
+
+/// The deck's mid-surface sampled on a (ξ, η) grid that includes every
+/// spring field's knots, so narrow spring strips are visible.
+pub(super) struct DeckGrid {
+    pub(super) params: Vec<(f64, f64)>,
+    pub(super) positions: Vec<[f32; 3]>,
+    pub(super) normals: Vec<[f32; 3]>,
+    pub(super) triangles: Vec<[u32; 3]>,
+    /// Largest extent of the deck, for scaling mode shapes.
+    pub(super) span: f64,
+}
+
+impl DeckGrid {
+    pub(super) fn new(model: &ShellModel) -> Self {
+        let axis = |n: usize, knots: &mut dyn Iterator<Item = f64>| -> Vec<f64> {
+            let mut v: Vec<f64> = (0..n).map(|k| k as f64 / (n - 1) as f64).collect();
+            v.extend(knots.filter(|u| (0.0..=1.0).contains(u)));
+            v.sort_by(f64::total_cmp);
+            v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+            v
+        };
+        let xs = axis(GRID.0, &mut model.springs.iter().flat_map(|s| s.xi().knots().to_vec()));
+        let ys = axis(GRID.1, &mut model.springs.iter().flat_map(|s| s.eta().knots().to_vec()));
+        let shell = &model.shell;
+        let mut params = Vec::with_capacity(xs.len() * ys.len());
+        let mut positions = Vec::with_capacity(params.capacity());
+        let mut normals = Vec::with_capacity(params.capacity());
+        for &x in &xs {
+            for &y in &ys {
+                params.push((x, y));
+                let p = shell.position(x, y, 0.5);
+                let q = shell.position(x, y, 1.0);
+                let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+                let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(f64::MIN_POSITIVE);
+                positions.push(f32x3(p));
+                normals.push([(d[0] / norm) as f32, (d[1] / norm) as f32, (d[2] / norm) as f32]);
+            }
+        }
+        let ny = ys.len();
+        let mut triangles = Vec::new();
+        for i in 0..xs.len() - 1 {
+            for j in 0..ny - 1 {
+                let a = (i * ny + j) as u32;
+                let b = ((i + 1) * ny + j) as u32;
+                triangles.push([a, b, b + 1]);
+                triangles.push([a, b + 1, a + 1]);
+            }
+        }
+        let extent = |k: usize| {
+            let (lo, hi) = positions
+                .iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p[k]), hi.max(p[k]))
+                });
+            f64::from(hi - lo)
+        };
+        let span = extent(0).max(extent(1)).max(extent(2));
+        Self {
+            params,
+            positions,
+            normals,
+            triangles,
+            span,
+        }
+    }
+
+    /// Σ over spring fields of the stiffness per unit area at each vertex.
+    pub(super) fn spring_field(&self, model: &ShellModel, kappa: &[Vec<f64>]) -> Vec<f64> {
+        self.params
+            .iter()
+            .map(|&(x, y)| {
+                model
+                    .springs
+                    .iter()
+                    .zip(kappa)
+                    .map(|(s, k)| s.value_with(k, x, y))
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// Displacement along the surface normal at each vertex of the shape
+    /// with generalised dof values `shape(dof)`.
+    pub(super) fn normal_displacement(&self, model: &ShellModel, shape: impl Fn(usize) -> f64) -> Vec<f64> {
+        self.params
+            .iter()
+            .zip(&self.normals)
+            .map(|(&(x, y), n)| {
+                model
+                    .shell
+                    .shape_functions(x, y, 0.5)
+                    .into_iter()
+                    .map(|(dof, col)| {
+                        shape(dof) * (col[0] * f64::from(n[0]) + col[1] * f64::from(n[1]) + col[2] * f64::from(n[2]))
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+}

@@ -1,0 +1,241 @@
+//! Rerun output (0.36): trends and the latest update, to a `.rrd` file
+//! and/or a live viewer, with a blueprint sent from here.
+//!
+//! Timelines: `measurement_time` (the data's own clock) and `update` (the
+//! update index). Entities:
+//! - `parameters/springs/<name>`, `parameters/damping/<name>`: the value and
+//!   ±1σ as three series; `residual/relative`; `health/<counter>`;
+//! - `frf/<output>/magnitude/{measured,model}` (dB) and
+//!   `frf/<output>/phase/{measured,model}` (degrees), bar charts over the
+//!   frequency lines; `damping/zeta` (ζ(f) in %) and
+//!   `damping/coefficients` (γ_z at their Greville abscissae);
+//! - `deck/springs`: the deck mesh coloured by the identified spring field
+//!   r33 (N/m³); `deck/sensors`; `modes/<k>`: the first bending modes.
+
+mod blueprint;
+mod deck;
+mod rrd;
+mod update;
+
+pub use rrd::{inspect_rrd, RrdSummary};
+
+use crate::config::{frf_setup, Config, FrfSetup};
+use crate::pipeline::{Health, UpdateOutcome};
+use anyhow::{anyhow, Result};
+use deck::DeckGrid;
+use splinewatch_core::frf::SensorPoint;
+use splinewatch_core::model::ShellModel;
+use std::path::{Path, PathBuf};
+
+/// Where the Rerun stream goes.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RerunTargets {
+    /// A `.rrd` file.
+    pub save: Option<PathBuf>,
+    /// A viewer's gRPC proxy, e.g. `rerun+http://127.0.0.1:9876/proxy`.
+    pub connect: Option<String>,
+}
+
+impl RerunTargets {
+    pub fn is_empty(&self) -> bool {
+        self.save.is_none() && self.connect.is_none()
+    }
+}
+
+/// Mode shapes shown per update.
+const MODES_SHOWN: usize = crate::pipeline::BENDING_MODES_KEPT;
+/// Grid of the deck mesh along ξ and η (spring knots are added to it).
+const GRID: (usize, usize) = (49, 25);
+
+pub struct RerunOutput {
+    rec: rerun::RecordingStream,
+    setup: FrfSetup,
+    model: ShellModel,
+    grid: DeckGrid,
+    updates: i64,
+    /// Parameter series already given their static names and colours.
+    named: std::collections::BTreeSet<String>,
+    targets: RerunTargets,
+    sensors: Vec<(String, SensorPoint)>,
+    rotate_ns: i128,
+    /// Measurement time of the open file's first message.
+    file_start_ns: Option<i128>,
+}
+
+impl RerunOutput {
+    pub fn open(config: &Config, targets: &RerunTargets) -> Result<Self> {
+        let rec = rerun::RecordingStreamBuilder::new("splinewatch")
+            .buffered()
+            .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
+        let setup = frf_setup(config)?;
+        let model = config.build_model()?;
+        let sensors = config.build_sensors(&model.shell)?;
+        let grid = DeckGrid::new(&model);
+        let mut out = Self {
+            rec,
+            setup,
+            model,
+            grid,
+            updates: 0,
+            named: Default::default(),
+            targets: targets.clone(),
+            sensors,
+            rotate_ns: (config.output.rerun_rotate_hours * 3600e9) as i128,
+            file_start_ns: None,
+        };
+        out.attach_sinks(None)?;
+        Ok(out)
+    }
+
+    /// Points the stream at its targets; with `stamp`, the file is
+    /// `<stem>-<stamp>.rrd` (rotation). Each file gets the blueprint and the
+    /// static data, so it opens on its own.
+    fn attach_sinks(&mut self, stamp: Option<&str>) -> Result<()> {
+        let path = self.targets.save.as_ref().map(|p| match stamp {
+            None => p.clone(),
+            Some(stamp) => {
+                let stem = p
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                p.with_file_name(format!("{stem}-{stamp}.rrd"))
+            }
+        });
+        // Created first with our permissions; the sink truncates and keeps them.
+        let file = |p: &PathBuf| {
+            crate::io::files::create_output_file(p)?;
+            rerun::sink::FileSink::new(p).map_err(|e| anyhow!("Rerun file {}: {e}", p.display()))
+        };
+        let grpc = |url: &String| -> Result<rerun::sink::GrpcSink> {
+            let uri = url
+                .parse::<rerun::external::re_uri::ProxyUri>()
+                .map_err(|e| anyhow!("rerun_connect {url:?}: {e}"))?;
+            Ok(rerun::sink::GrpcSink::new(uri))
+        };
+        match (&path, &self.targets.connect) {
+            (Some(p), None) => self.rec.set_sink(Box::new(file(p)?)),
+            (None, Some(url)) => self.rec.set_sink(Box::new(grpc(url)?)),
+            (Some(p), Some(url)) => self.rec.set_sinks((file(p)?, grpc(url)?)),
+            (None, None) => return Err(anyhow!("no Rerun target (rerun_save or rerun_connect)")),
+        }
+        self.send_blueprint()?;
+        self.log_sensors(&self.sensors)?;
+        // The mesh topology never changes: logged once per file, static;
+        // updates only carry vertex positions and colours.
+        let mesh_paths =
+            std::iter::once("deck/springs".to_string()).chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
+        for path in mesh_paths {
+            self.rec
+                .log_static(
+                    path.as_str(),
+                    &rerun::Mesh3D::update_fields().with_triangle_indices(self.grid.triangles.clone()),
+                )
+                .map_err(rerun_error)?;
+        }
+        self.named.clear();
+        Ok(())
+    }
+
+    /// Starts a new `.rrd` file once the current one spans `rerun_rotate_hours`
+    /// of measurement time: the SDK keeps an index of every chunk of an open
+    /// file in memory until its footer is written.
+    fn rotate_if_due(&mut self, time_ns: i128) -> Result<()> {
+        // No file to rotate, or no measurement time yet (health before data).
+        if self.targets.save.is_none() || time_ns <= 0 {
+            return Ok(());
+        }
+        match self.file_start_ns {
+            None => self.file_start_ns = Some(time_ns),
+            Some(start) if time_ns - start >= self.rotate_ns => {
+                self.file_start_ns = Some(time_ns);
+                let stamp = crate::io::wire::format_timestamp(time_ns).replace(':', "-");
+                self.attach_sinks(Some(&stamp))?;
+            }
+            Some(_) => {}
+        }
+        Ok(())
+    }
+
+    fn set_time(&self, time_ns: i128) {
+        self.rec
+            .set_timestamp_nanos_since_epoch("measurement_time", time_ns.clamp(0, i64::MAX as i128) as i64);
+        self.rec.set_time_sequence("update", self.updates);
+    }
+
+    /// Logs one update: trends, FRFs, ζ(f), the spring field and modes.
+    pub fn log_update(&mut self, outcome: &UpdateOutcome) -> Result<()> {
+        self.rotate_if_due(outcome.time_ns)?;
+        self.updates += 1;
+        self.set_time(outcome.time_ns);
+        let report = match &outcome.result {
+            Ok(r) => r,
+            Err(_) => {
+                self.rec
+                    .log("residual/failed_updates", &rerun::Scalars::new([1.0]))
+                    .map_err(rerun_error)?;
+                return Ok(());
+            }
+        };
+        self.log_parameters(report)?;
+        self.log_frfs(&outcome.measured, "measured")?;
+        self.log_frfs(&report.model, "model")?;
+        self.log_damping(&report.damping)?;
+        self.log_spring_field(&report.kappa)?;
+        self.log_modes(report)?;
+        Ok(())
+    }
+
+    /// Logs the health counters.
+    pub fn log_health(&mut self, time_ns: i128, health: &Health) -> Result<()> {
+        self.rotate_if_due(time_ns)?;
+        self.set_time(time_ns);
+        let rejected: u64 = health.rejected.values().sum();
+        let skipped: u64 = health.windows_skipped.values().sum();
+        for (name, value) in [
+            ("blocks", health.blocks),
+            ("rejected", rejected),
+            ("gaps", health.gaps),
+            ("windows_accepted", health.windows_accepted),
+            ("windows_skipped", skipped),
+            ("update_runs", health.update_runs),
+            ("update_failures", health.update_failures),
+            ("queue_drops", health.queue_drops),
+            ("recording_errors", health.recording_errors),
+            ("results_errors", health.results_errors),
+            ("rerun_errors", health.rerun_errors),
+        ] {
+            self.rec
+                .log(format!("health/{name}").as_str(), &rerun::Scalars::new([value as f64]))
+                .map_err(rerun_error)?;
+        }
+        Ok(())
+    }
+
+    /// Flushes every sink and closes the stream (the `.rrd` gets its footer).
+    pub fn finish(self) -> Result<()> {
+        self.rec
+            .flush_blocking()
+            .map_err(|e| anyhow!("flushing the Rerun output: {e}"))?;
+        drop(self.rec);
+        Ok(())
+    }
+}
+
+fn rerun_error(e: rerun::RecordingStreamError) -> anyhow::Error {
+    anyhow!("Rerun output: {e}")
+}
+
+/// The Rerun targets for a run: command-line flags first, then `[output]`;
+/// relative paths resolve against the output folder.
+pub fn targets(config: &Config, save: Option<&Path>, connect: Option<&str>) -> RerunTargets {
+    let dir = config.output_dir();
+    let resolve = |p: &Path| if p.is_absolute() { p.to_path_buf() } else { dir.join(p) };
+    RerunTargets {
+        save: save
+            .map(Path::to_path_buf)
+            .or_else(|| config.output.rerun_save.as_deref().map(resolve)),
+        connect: connect
+            .map(str::to_string)
+            .or_else(|| config.output.rerun_connect.clone()),
+    }
+}

@@ -1,0 +1,166 @@
+//! One update in the Rerun stream: parameter trends, FRFs, ζ(f), the
+//! identified spring field on the deck and the bending modes.
+
+use super::deck::colormap;
+use super::{rerun_error, RerunOutput};
+use crate::io::frf_json::FrfFile;
+use crate::pipeline::UpdateReport;
+use anyhow::Result;
+use splinewatch_core::damping::DampingCurve;
+
+impl RerunOutput {
+    /// Value and ±1σ of every parameter, and the relative residual.
+    pub(super) fn log_parameters(&mut self, report: &UpdateReport) -> Result<()> {
+        for p in &report.result.parameters {
+            let group = if p.name.starts_with("damping.") {
+                "damping"
+            } else {
+                "springs"
+            };
+            let path = format!("parameters/{group}/{}", p.name);
+            let sigma = p.std.unwrap_or(0.0);
+            if self.named.insert(path.clone()) {
+                self.rec
+                    .log_static(
+                        path.as_str(),
+                        &rerun::SeriesLines::new()
+                            .with_names(["value", "+1σ", "−1σ"])
+                            .with_colors([
+                                rerun::Color::from_rgb(30, 110, 200),
+                                rerun::Color::from_rgb(150, 180, 220),
+                                rerun::Color::from_rgb(150, 180, 220),
+                            ]),
+                    )
+                    .map_err(rerun_error)?;
+            }
+            self.rec
+                .log(
+                    path.as_str(),
+                    &rerun::Scalars::new([p.value, p.value + sigma, p.value - sigma]),
+                )
+                .map_err(rerun_error)?;
+        }
+        self.rec
+            .log(
+                "residual/relative",
+                &rerun::Scalars::new([report.result.relative_residual]),
+            )
+            .map_err(rerun_error)?;
+        Ok(())
+    }
+
+    /// ζ(f) over its band, in %, and the control coefficients.
+    pub(super) fn log_damping(&self, damping: &DampingCurve) -> Result<()> {
+        let (f0, f1) = damping.band();
+        let n = 161;
+        let fs: Vec<f64> = (0..n).map(|k| f0 + (f1 - f0) * k as f64 / (n - 1) as f64).collect();
+        let zeta: Vec<f64> = fs.iter().map(|&f| 100.0 * damping.zeta(f)).collect();
+        self.rec
+            .log(
+                "damping/zeta",
+                &rerun::BarChart::new(zeta.as_slice())
+                    .with_abscissa(fs.as_slice())
+                    .with_widths([((f1 - f0) / (n - 1) as f64) as f32]),
+            )
+            .map_err(rerun_error)?;
+        let at = damping.coefficient_frequencies();
+        let gamma: Vec<f64> = damping.coefficients().iter().map(|g| 100.0 * g).collect();
+        self.rec
+            .log(
+                "damping/coefficients",
+                &rerun::BarChart::new(gamma.as_slice())
+                    .with_abscissa(at.as_slice())
+                    .with_widths([((f1 - f0) / (4 * gamma.len().max(1)) as f64) as f32]),
+            )
+            .map_err(rerun_error)?;
+        Ok(())
+    }
+
+    /// The identified spring field on the deck.
+    pub(super) fn log_spring_field(&self, kappa: &[Vec<f64>]) -> Result<()> {
+        let r33 = self.grid.spring_field(&self.model, kappa);
+        let top = r33.iter().copied().fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+        let colors: Vec<rerun::Color> = r33.iter().map(|&v| colormap(v / top)).collect();
+        self.rec
+            .log(
+                "deck/springs",
+                &rerun::Mesh3D::update_fields()
+                    .with_vertex_positions(self.grid.positions.clone())
+                    .with_vertex_colors(colors),
+            )
+            .map_err(rerun_error)?;
+        Ok(())
+    }
+
+    pub(super) fn log_frfs(&self, frfs: &FrfFile, which: &str) -> Result<()> {
+        let frequencies: Vec<f32> = frfs.frequency_hz.iter().map(|&f| f as f32).collect();
+        let width = frfs
+            .frequency_hz
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .fold(f64::INFINITY, f64::min);
+        let width = if width.is_finite() { width as f32 } else { 1.0 };
+        for entry in &frfs.frfs {
+            let magnitude: Vec<f64> = entry
+                .re
+                .iter()
+                .zip(&entry.im)
+                .map(|(re, im)| 20.0 * re.hypot(*im).max(1e-300).log10())
+                .collect();
+            let phase: Vec<f64> = entry
+                .re
+                .iter()
+                .zip(&entry.im)
+                .map(|(re, im)| im.atan2(*re).to_degrees())
+                .collect();
+            for (what, values) in [("magnitude", magnitude), ("phase", phase)] {
+                self.rec
+                    .log(
+                        format!("frf/{}/{what}/{which}", entry.output).as_str(),
+                        &rerun::BarChart::new(values.as_slice())
+                            .with_abscissa(frequencies.as_slice())
+                            .with_widths([width]),
+                    )
+                    .map_err(rerun_error)?;
+            }
+        }
+        Ok(())
+    }
+
+    pub(super) fn log_modes(&self, report: &UpdateReport) -> Result<()> {
+        for (k, mode) in report.bending_modes.iter().enumerate() {
+            let w = self.grid.normal_displacement(&self.model, |dof| mode.shape[dof]);
+            let peak = w.iter().map(|v| v.abs()).fold(0.0f64, f64::max).max(f64::MIN_POSITIVE);
+            let scale = 0.1 * self.grid.span / peak;
+            let positions: Vec<[f32; 3]> = self
+                .grid
+                .positions
+                .iter()
+                .zip(&self.grid.normals)
+                .zip(&w)
+                .map(|((p, n), w)| {
+                    [
+                        p[0] + (scale * w) as f32 * n[0],
+                        p[1] + (scale * w) as f32 * n[1],
+                        p[2] + (scale * w) as f32 * n[2],
+                    ]
+                })
+                .collect();
+            let colors: Vec<rerun::Color> = w.iter().map(|v| colormap(0.5 + 0.5 * v / peak)).collect();
+            let label = format!("{:.2} Hz, ζ = {:.2} %", mode.frequency_hz, 100.0 * mode.damping_ratio);
+            let path = format!("modes/{}", k + 1);
+            self.rec
+                .log(
+                    path.as_str(),
+                    &rerun::Mesh3D::update_fields()
+                        .with_vertex_positions(positions)
+                        .with_vertex_colors(colors),
+                )
+                .map_err(rerun_error)?;
+            self.rec
+                .log(format!("{path}/label").as_str(), &rerun::TextDocument::new(label))
+                .map_err(rerun_error)?;
+        }
+        Ok(())
+    }
+}

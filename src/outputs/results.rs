@@ -1,0 +1,343 @@
+//! Results outputs: an MCAP file of JSON messages with JSON Schemas (read by
+//! Foxglove and the Python `mcap` package), rotated by measurement time.
+
+use crate::io::frf_json::FrfFile;
+use crate::io::wire::format_timestamp;
+use crate::pipeline::{Health, UpdateOutcome, WindowReport};
+use anyhow::{Context, Result};
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Seek, Write};
+use std::path::Path;
+
+/// The result topics under `<prefix>/`, with their JSON Schemas.
+pub const TOPICS: [(&str, &str); 8] = [
+    (
+        "updating/parameters",
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}}}}"#,
+    ),
+    (
+        "updating/residue",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array","items":{"type":"object","properties":{"input":{"type":"string"},"output":{"type":"string"},"relative_residue":{"type":"array","items":{"type":"number"}}}}}}}"#,
+    ),
+    (
+        "updating/failures",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"error":{"type":"string"}}}"#,
+    ),
+    (
+        "frf/measured",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"quantity":{"type":"string"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array"}}}"#,
+    ),
+    (
+        "frf/model",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"quantity":{"type":"string"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array"}}}"#,
+    ),
+    (
+        "modes",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"modes":{"type":"array","items":{"type":"object","properties":{"index":{"type":"integer"},"frequency_hz":{"type":"number"},"damping_ratio":{"type":"number"},"kind":{"type":"string"}}}}}}"#,
+    ),
+    (
+        "health",
+        r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"},"recording_errors":{"type":"integer"},"results_errors":{"type":"integer"},"rerun_errors":{"type":"integer"}}}"#,
+    ),
+    (
+        "windows",
+        r#"{"type":"object","properties":{"index":{"type":"integer"},"start":{"type":"string"},"end":{"type":"string"},"segments_accepted":{"type":"integer"},"segments_rejected":{"type":"integer"},"mean_coherence":{"type":"array","items":{"type":"number"}},"skipped":{"type":["string","null"]}}}"#,
+    ),
+];
+
+/// JSON messages for a closed window.
+pub fn window_message(w: &WindowReport) -> Value {
+    json!({
+        "index": w.index,
+        "start": format_timestamp(w.start_ns),
+        "end": format_timestamp(w.end_ns),
+        "segments_accepted": w.segments_accepted,
+        "segments_rejected": w.segments_rejected,
+        "mean_coherence": w.mean_coherence,
+        "skipped": w.skipped,
+    })
+}
+
+fn frf_message(time: &str, window: u64, frf: &FrfFile) -> Value {
+    let mut v = serde_json::to_value(frf).expect("plain data");
+    v["time"] = json!(time);
+    v["window"] = json!(window);
+    v
+}
+
+/// The messages of an update outcome, as `(topic suffix, message)`.
+pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
+    let time = format_timestamp(o.time_ns);
+    let mut out = vec![("frf/measured", frf_message(&time, o.window, &o.measured))];
+    match &o.result {
+        Ok(r) => {
+            out.push((
+                "updating/parameters",
+                json!({
+                    "time": time,
+                    "window": o.window,
+                    "converged": r.result.converged,
+                    "relative_residual": r.result.relative_residual,
+                    "iterations": r.result.iterations.len() - 1,
+                    "stop_reason": r.result.stop_reason,
+                    "condition_number": if r.result.condition_number.is_finite() { json!(r.result.condition_number) } else { Value::Null },
+                    "relative_offset": r.result.relative_offset,
+                    "parameters": r.result.parameters,
+                }),
+            ));
+            out.push((
+                "updating/residue",
+                json!({
+                    "time": time,
+                    "window": o.window,
+                    "frequency_hz": r.model.frequency_hz,
+                    "frfs": r.model.frfs.iter().zip(&r.residue).map(|(f, res)| json!({
+                        "input": f.input, "output": f.output, "relative_residue": res
+                    })).collect::<Vec<_>>(),
+                }),
+            ));
+            out.push(("frf/model", frf_message(&time, o.window, &r.model)));
+            out.push((
+                "modes",
+                json!({
+                    "time": time,
+                    "window": o.window,
+                    "modes": r.modes.iter().enumerate().map(|(i, (f, z, k))| json!({
+                        "index": i + 1, "frequency_hz": f, "damping_ratio": z, "kind": k
+                    })).collect::<Vec<_>>(),
+                }),
+            ));
+        }
+        Err(e) => out.push((
+            "updating/failures",
+            json!({"time": time, "window": o.window, "error": e}),
+        )),
+    }
+    out
+}
+
+pub fn health_message(time_ns: i128, h: &Health) -> Value {
+    let mut v = serde_json::to_value(h).expect("plain data");
+    v["time"] = json!(format_timestamp(time_ns));
+    v
+}
+
+/// The results MCAP file.
+pub struct ResultsWriter<W: Write + Seek> {
+    writer: mcap::Writer<W>,
+    prefix: String,
+    channels: BTreeMap<&'static str, u16>,
+    sequence: u32,
+}
+
+impl ResultsWriter<BufWriter<File>> {
+    pub fn create(path: &Path, prefix: &str) -> Result<Self> {
+        Self::new(create_buffered(path)?, prefix)
+    }
+}
+
+impl<W: Write + Seek> ResultsWriter<W> {
+    pub fn new(w: W, prefix: &str) -> Result<Self> {
+        let mut writer = crate::io::recording::mcap_options()
+            .create(w)
+            .context("cannot start the results MCAP file")?;
+        let mut channels = BTreeMap::new();
+        for (suffix, schema) in TOPICS {
+            let topic = format!("{prefix}/{suffix}");
+            let schema_id = writer.add_schema(&format!("splinewatch.{suffix}"), "jsonschema", schema.as_bytes())?;
+            let id = writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+            channels.insert(suffix, id);
+        }
+        Ok(Self {
+            writer,
+            prefix: prefix.to_string(),
+            channels,
+            sequence: 0,
+        })
+    }
+
+    pub fn prefix(&self) -> &str {
+        &self.prefix
+    }
+
+    /// Writes `message` on `<prefix>/<suffix>` at `time_ns`.
+    pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) -> Result<()> {
+        let channel_id = *self
+            .channels
+            .get(suffix)
+            .with_context(|| format!("unknown result topic {suffix}"))?;
+        let log_time = u64::try_from(time_ns.max(0)).unwrap_or(u64::MAX);
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id,
+                sequence: self.sequence,
+                log_time,
+                publish_time: log_time,
+            },
+            &serde_json::to_vec(message)?,
+        )?;
+        Ok(())
+    }
+
+    /// Closes the current chunk and hands it to the OS: a process killed
+    /// after this loses nothing written before it (see `recover`).
+    pub fn flush(&mut self) -> Result<()> {
+        self.writer.flush().context("cannot flush the results MCAP file")
+    }
+
+    /// Writes the summary and index and flushes the underlying writer.
+    pub fn finish(mut self) -> Result<W> {
+        self.writer.finish().context("cannot finish the results MCAP file")?;
+        let mut inner = self.writer.into_inner();
+        inner.flush().context("cannot flush the results MCAP file")?;
+        Ok(inner)
+    }
+}
+
+/// The daemon's results files, surviving write errors (full or read-only
+/// disk): a failing file is abandoned as it is (its completed chunks stay
+/// recoverable with `splinewatch recover`), the error is counted and logged,
+/// and the next message opens a new file (`open(1)`, `open(2)`, …). A
+/// message that cannot be written anywhere is counted, never fatal.
+///
+/// With [`Self::rotate_every`], a file is also finalised (summary and
+/// index written) once its messages span that much measurement time, and
+/// the next message opens a new file, so at most one file is ever
+/// unfinalised and a crash costs at most the unflushed tail of that one.
+pub struct ResultsSink<W: Write + Seek> {
+    open: Box<dyn FnMut(u32) -> Result<W> + Send>,
+    prefix: String,
+    writer: Option<ResultsWriter<W>>,
+    index: u32,
+    /// Measurement time one file may span, ns.
+    rotate_ns: Option<i128>,
+    /// Measurement time of the open file's first timed message.
+    file_start_ns: Option<i128>,
+    /// Write, flush or open errors so far.
+    pub errors: u64,
+    /// Files finalised by rotation so far.
+    pub rotations: u64,
+}
+
+impl<W: Write + Seek> ResultsSink<W> {
+    /// Opens the first file (`open(0)`); failing here is an error, since a
+    /// daemon that cannot write its first results file is misconfigured.
+    pub fn new(prefix: &str, mut open: Box<dyn FnMut(u32) -> Result<W> + Send>) -> Result<Self> {
+        let writer = ResultsWriter::new(open(0)?, prefix)?;
+        Ok(Self {
+            open,
+            prefix: prefix.to_string(),
+            writer: Some(writer),
+            index: 0,
+            rotate_ns: None,
+            file_start_ns: None,
+            errors: 0,
+            rotations: 0,
+        })
+    }
+
+    /// Finalise a file once its messages span `span_ns` of measurement time.
+    pub fn rotate_every(mut self, span_ns: i128) -> Self {
+        self.rotate_ns = Some(span_ns.max(1));
+        self
+    }
+
+    /// Finalises the open file if the message at `time_ns` falls outside its
+    /// span; untimed messages (`time_ns <= 0`, health before any data) stay
+    /// in the current file.
+    fn rotate_if_due(&mut self, time_ns: i128) {
+        if time_ns <= 0 {
+            return;
+        }
+        let due = match (self.file_start_ns, self.rotate_ns) {
+            (Some(start), Some(span)) => time_ns - start >= span,
+            _ => false,
+        };
+        if due {
+            if let Some(w) = self.writer.take() {
+                match w.finish() {
+                    Ok(_) => self.rotations += 1,
+                    Err(e) => self.fail("finish", e),
+                }
+            }
+            self.file_start_ns = None;
+        }
+        if self.file_start_ns.is_none() {
+            self.file_start_ns = Some(time_ns);
+        }
+    }
+
+    fn fail(&mut self, what: &str, e: anyhow::Error) {
+        self.writer = None;
+        self.file_start_ns = None;
+        self.errors += 1;
+        if self.errors % 100 == 1 {
+            tracing::warn!(message = "results file error; continuing with a new file", what, errors = self.errors, error = %format!("{e:#}"));
+        }
+    }
+
+    fn writer(&mut self) -> Option<&mut ResultsWriter<W>> {
+        if self.writer.is_none() {
+            self.index += 1;
+            match (self.open)(self.index).and_then(|w| ResultsWriter::new(w, &self.prefix)) {
+                Ok(w) => self.writer = Some(w),
+                Err(e) => {
+                    self.fail("open", e);
+                    return None;
+                }
+            }
+        }
+        self.writer.as_mut()
+    }
+
+    pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) {
+        self.rotate_if_due(time_ns);
+        if let Some(w) = self.writer() {
+            if let Err(e) = w.write(suffix, time_ns, message) {
+                self.fail("write", e);
+            }
+        }
+    }
+
+    pub fn flush(&mut self) {
+        if let Some(w) = self.writer.as_mut() {
+            if let Err(e) = w.flush() {
+                self.fail("flush", e);
+            }
+        }
+    }
+
+    /// Finishes the open file; returns it (none if the last one failed).
+    pub fn finish(mut self) -> Option<W> {
+        let w = self.writer.take()?;
+        match w.finish() {
+            Ok(inner) => Some(inner),
+            Err(e) => {
+                self.fail("finish", e);
+                None
+            }
+        }
+    }
+}
+
+/// Opens results files for a [`ResultsSink`]: `path` first, then
+/// `<stem>-1.<ext>`, `<stem>-2.<ext>`, … An existing file is never
+/// overwritten (a daemon restarted with the same `--out` keeps the earlier
+/// results): its number is skipped.
+pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File>> + Send> {
+    let path = path.to_path_buf();
+    let mut next = 0;
+    Box::new(move |index| {
+        let (number, target) = crate::io::files::first_free_from(&path, u32::max(next, index));
+        next = number + 1;
+        create_buffered(&target)
+    })
+}
+
+/// Creates `path` (and its folder) for buffered writing.
+fn create_buffered(path: &Path) -> Result<BufWriter<File>> {
+    Ok(BufWriter::new(crate::io::files::create_output_file(path)?))
+}

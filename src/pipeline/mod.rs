@@ -1,0 +1,381 @@
+//! The monitoring pipeline shared by the live daemon and offline replay:
+//! decoded channel blocks in, windowed FRFs and warm-started updates out.
+//! Room: below the outputs and services. May import: `config`, `io`, the core crate.
+//!
+//! - **Alignment.** The sample grid is anchored at the first accepted block;
+//!   every channel must sit on it (within 1 % of a sample). A missing stretch
+//!   (gap, late or silent channel) is filled with NaN so that the Welch gates
+//!   reject exactly the segments it touches; a block that goes back in time
+//!   is rejected. Nothing is buffered beyond `max_lag_seconds` per channel.
+//! - **Windows.** Aligned samples stream into a Welch estimator; at each
+//!   window end the FRFs are estimated and the window is accepted, or
+//!   skipped with a reason (too few clean segments, low coherence).
+//! - **Updating.** Every `update_every_windows` accepted windows an update
+//!   job is produced (warm-started from the last accepted parameters, the
+//!   config's values at first). The caller runs it (inline for replay, on a
+//!   blocking worker live) and hands the outcome back; a failed or
+//!   non-converged run keeps the last good parameters.
+
+mod align;
+pub mod estimate;
+mod frf_inbox;
+mod job;
+mod reports;
+mod windows;
+
+pub use job::{ModeShape, UpdateJob, UpdateOutcome, UpdateReport, BENDING_MODES_KEPT};
+pub use reports::{AcceptedParameters, Health, StateParameter, WindowReport};
+
+use crate::config::{Config, FrfSetup, ScheduleConfig};
+use crate::io::frf_json::{FrfEntry, FrfFile};
+use crate::io::wire::{ChannelBlock, ChannelQuantity, WireError};
+use align::ChannelQueue;
+use anyhow::{bail, Result};
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::updating::{ModelPoint, Parameter, UpdateSettings};
+use splinewatch_core::welch::{Estimator, WelchEstimator, WelchSettings};
+use std::collections::{BTreeMap, VecDeque};
+use std::sync::Arc;
+
+/// The pipeline state machine.
+pub struct Pipeline {
+    config: Config,
+    schedule: ScheduleConfig,
+    setup: Arc<FrfSetup>,
+    parameters: Vec<Parameter>,
+    settings: UpdateSettings,
+    force: usize,
+    accels: Vec<usize>,
+    /// Channel identities in queue order: force first.
+    channels: Vec<(String, ChannelQuantity)>,
+    queues: Vec<ChannelQueue>,
+    fs: Option<f64>,
+    t0: Option<i128>,
+    /// Blocks held until the sampling rate and time origin are agreed on
+    /// (`establish_reference`).
+    pending: Vec<ChannelBlock>,
+    /// Welch settings and FRF estimator, once the rate is known.
+    welch: Option<(WelchSettings, Estimator)>,
+    /// Windows being estimated (several when they overlap), oldest first:
+    /// window `k` spans grid samples `[k·hop, k·hop + window_samples)`.
+    open: VecDeque<(u64, WelchEstimator)>,
+    window_samples: i64,
+    hop_samples: i64,
+    /// Grid index fed to the estimators so far.
+    fed: i64,
+    /// The next window to open.
+    window_index: u64,
+    accepted_since_update: u64,
+    /// Pre-computed FRFs received on `<prefix>/frf/<input>/<output>`, by pair,
+    /// all on one frequency axis; a complete set becomes an update job.
+    frf_inbox: BTreeMap<(String, String), FrfEntry>,
+    frf_axis: Option<(Quantity, Vec<f64>)>,
+    frf_sets: u64,
+    /// Measurement time of the last update (or the first sample).
+    last_update_ns: Option<i128>,
+    last: Option<AcceptedParameters>,
+    /// The model at `last`, when the update that produced it ran here.
+    last_point: Option<Arc<ModelPoint>>,
+    health: Health,
+}
+
+impl Pipeline {
+    pub fn new(config: &Config, schedule: ScheduleConfig, state: Option<AcceptedParameters>) -> Result<Self> {
+        let setup = Arc::new(crate::config::frf_setup(config)?);
+        let parameters = config.build_parameters()?;
+        let settings = config.update_settings()?;
+        let (force, accels) = config.channel_roles()?;
+        if schedule.update_every_windows == 0 {
+            bail!("config: schedule.update_every_windows: must be at least 1");
+        }
+        if let Some(m) = schedule.update_every_minutes {
+            if !(m.is_finite() && m > 0.0) {
+                bail!("config: schedule.update_every_minutes: must be positive, got {m}");
+            }
+        }
+        if let Some(s) = &state {
+            for p in &s.parameters {
+                if !parameters.iter().any(|q| q.name == p.name) {
+                    bail!(
+                        "state: parameter {:?} is not an updating parameter of this config",
+                        p.name
+                    );
+                }
+            }
+        }
+        let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
+        let mut channels = vec![(names[force].clone(), ChannelQuantity::Force)];
+        channels.extend(
+            accels
+                .iter()
+                .map(|&i| (names[i].clone(), ChannelQuantity::Acceleration)),
+        );
+        let queues = channels
+            .iter()
+            .map(|_| ChannelQueue {
+                first: 0,
+                data: VecDeque::new(),
+                seen: false,
+            })
+            .collect();
+        Ok(Self {
+            config: config.clone(),
+            schedule,
+            setup,
+            parameters,
+            settings,
+            force,
+            accels,
+            channels,
+            queues,
+            fs: None,
+            t0: None,
+            pending: Vec::new(),
+            welch: None,
+            open: VecDeque::new(),
+            window_samples: 0,
+            hop_samples: 0,
+            fed: 0,
+            window_index: 0,
+            accepted_since_update: 0,
+            frf_inbox: BTreeMap::new(),
+            frf_axis: None,
+            frf_sets: 0,
+            last_update_ns: None,
+            last: state,
+            last_point: None,
+            health: Health::default(),
+        })
+    }
+
+    pub fn health(&self) -> &Health {
+        &self.health
+    }
+
+    pub fn health_mut(&mut self) -> &mut Health {
+        &mut self.health
+    }
+
+    /// The last accepted parameters, if any update succeeded (or a state was loaded).
+    pub fn accepted(&self) -> Option<&AcceptedParameters> {
+        self.last.as_ref()
+    }
+
+    pub fn parameters(&self) -> &[Parameter] {
+        &self.parameters
+    }
+
+    /// Counts a message the decoder rejected.
+    pub fn reject_message(&mut self, error: &WireError) {
+        self.health.reject(error.reason());
+    }
+
+    /// Takes one decoded block; returns the windows it closed and the update
+    /// jobs they triggered.
+    pub fn ingest(&mut self, block: ChannelBlock) -> (Vec<WindowReport>, Vec<UpdateJob>) {
+        let mut windows = Vec::new();
+        let mut jobs = Vec::new();
+        if self.channel_of(&block).is_none() {
+            self.health.reject("unknown_channel");
+            return (windows, jobs);
+        }
+        if self.fs.is_none() {
+            self.pending.push(block);
+            if self.pending.len() >= 2 * self.channels.len() {
+                self.establish_reference(&mut windows, &mut jobs);
+            }
+            return (windows, jobs);
+        }
+        self.ingest_block(block, &mut windows, &mut jobs);
+        (windows, jobs)
+    }
+
+    /// Ends the stream: blocks still held for the reference
+    /// (`establish_reference`) are decided on with what arrived.
+    pub fn finish(&mut self) -> (Vec<WindowReport>, Vec<UpdateJob>) {
+        let mut windows = Vec::new();
+        let mut jobs = Vec::new();
+        self.establish_reference(&mut windows, &mut jobs);
+        (windows, jobs)
+    }
+
+    fn channel_of(&self, block: &ChannelBlock) -> Option<usize> {
+        self.channels
+            .iter()
+            .position(|(n, q)| *n == block.name && *q == block.quantity)
+    }
+
+    fn job(&self, window: u64, time_ns: i128, measured: FrfFile) -> UpdateJob {
+        UpdateJob {
+            window,
+            time_ns,
+            measured,
+            setup: Arc::clone(&self.setup),
+            parameters: self.parameters.clone(),
+            settings: self.settings.clone(),
+            start: self.start_values(),
+            previous: self.last_point.clone(),
+        }
+    }
+
+    /// The last accepted parameters (the config's values for those never
+    /// updated).
+    fn start_values(&self) -> Vec<f64> {
+        let base = splinewatch_core::updating::base_values(&self.parameters, &self.setup.kappa, &self.setup.damping);
+        match &self.last {
+            Some(last) => self
+                .parameters
+                .iter()
+                .zip(base)
+                .map(|(p, b)| last.parameters.iter().find(|s| s.name == p.name).map_or(b, |s| s.value))
+                .collect(),
+            None => base,
+        }
+    }
+
+    /// Moves a job made earlier (one that waited while another update ran)
+    /// to start from the parameters accepted since: every update starts
+    /// from the latest result, however the updates were scheduled, so the
+    /// live daemon gives the replay's parameters even when its updates queue.
+    pub fn rebase(&self, job: &mut UpdateJob) {
+        job.start = self.start_values();
+        job.previous = self.last_point.clone();
+    }
+
+    /// Records an update's outcome: accepted parameters replace the last
+    /// good ones; a failure keeps them.
+    pub fn apply(&mut self, outcome: &mut UpdateOutcome) {
+        self.health.update_runs += 1;
+        match &outcome.result {
+            Ok(report) => {
+                self.last_point = outcome.point.take();
+                self.last = Some(AcceptedParameters {
+                    window: outcome.window,
+                    time: crate::io::wire::format_timestamp(outcome.time_ns),
+                    parameters: report
+                        .result
+                        .parameters
+                        .iter()
+                        .map(|p| StateParameter {
+                            name: p.name.clone(),
+                            value: p.value,
+                            std: p.std,
+                        })
+                        .collect(),
+                });
+            }
+            Err(_) => self.health.update_failures += 1,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::wire::parse_timestamp;
+
+    fn config() -> Config {
+        let text = include_str!("../../config/sinello.toml").replace("window_seconds = 20.0", "window_seconds = 8.0");
+        Config::from_toml(&text).unwrap()
+    }
+
+    fn block(name: &str, quantity: ChannelQuantity, second: f64, n: usize, fs: f64) -> ChannelBlock {
+        ChannelBlock {
+            name: name.into(),
+            quantity,
+            unit: String::new(),
+            fs,
+            start_ns: parse_timestamp("2026-11-21T10:00:00Z").unwrap() + (second * 1e9) as i128,
+            data: (0..n).map(|k| ((k * 7 + name.len()) % 13) as f64 - 6.0).collect(),
+        }
+    }
+
+    fn all_channels(p: &mut Pipeline, second: f64) -> usize {
+        let mut closed = p
+            .ingest(block("P1", ChannelQuantity::Force, second, 256, 256.0))
+            .0
+            .len();
+        for i in 1..=12 {
+            closed += p
+                .ingest(block(
+                    &format!("P{i}"),
+                    ChannelQuantity::Acceleration,
+                    second,
+                    256,
+                    256.0,
+                ))
+                .0
+                .len();
+        }
+        closed
+    }
+
+    #[test]
+    fn bad_blocks_are_counted_by_reason_and_valid_ones_still_used() {
+        let mut p = Pipeline::new(&config(), ScheduleConfig::default(), None).unwrap();
+        // Two blocks per channel set the grid's rate and origin.
+        all_channels(&mut p, 0.0);
+        all_channels(&mut p, 1.0);
+        p.ingest(block("P99", ChannelQuantity::Acceleration, 1.0, 256, 256.0));
+        p.ingest(block("P2", ChannelQuantity::Acceleration, 1.0, 256, 200.0));
+        p.ingest(block("P2", ChannelQuantity::Acceleration, 0.5, 256, 256.0));
+        p.ingest(block(
+            "P2",
+            ChannelQuantity::Acceleration,
+            1.0 + 0.5 / 256.0,
+            256,
+            256.0,
+        ));
+        p.ingest(block("P2", ChannelQuantity::Acceleration, 1e6, 256, 256.0));
+        let h = p.health().clone();
+        for reason in [
+            "unknown_channel",
+            "rate_mismatch",
+            "time_overlap",
+            "misaligned",
+            "far_future",
+        ] {
+            assert_eq!(h.rejected.get(reason), Some(&1), "{reason}: {:?}", h.rejected);
+        }
+        // The valid stream continues: 8 s windows close.
+        let mut closed = 0;
+        for s in 2..16 {
+            closed += all_channels(&mut p, s as f64);
+        }
+        assert_eq!(closed, 2);
+        assert_eq!(p.health().blocks, 16 * 13);
+    }
+
+    #[test]
+    fn a_gap_becomes_nan_samples_that_the_welch_gates_reject() {
+        let mut p = Pipeline::new(&config(), ScheduleConfig::default(), None).unwrap();
+        let mut windows = Vec::new();
+        for s in 0..16 {
+            let mut w = p.ingest(block("P1", ChannelQuantity::Force, s as f64, 256, 256.0)).0;
+            for i in 1..=12 {
+                // P5 misses seconds 3 and 4.
+                if i == 5 && (s == 3 || s == 4) {
+                    continue;
+                }
+                w.extend(
+                    p.ingest(block(
+                        &format!("P{i}"),
+                        ChannelQuantity::Acceleration,
+                        s as f64,
+                        256,
+                        256.0,
+                    ))
+                    .0,
+                );
+            }
+            windows.extend(w);
+        }
+        let h = p.health();
+        assert_eq!(h.gaps, 1);
+        assert_eq!(h.gap_samples, 512);
+        assert_eq!(windows.len(), 2);
+        // Window 0 (0–8 s): 4 s segments with 2 s hop; those touching 3–5 s are rejected.
+        assert!(windows[0].segments_rejected >= 2, "{:?}", windows[0].segments_rejected);
+        assert_eq!(windows[1].segments_rejected, 0);
+    }
+}

@@ -1,0 +1,70 @@
+//! What the pipeline reports: health counters, closed windows and the
+//! accepted parameters that the state file keeps.
+
+use crate::io::frf_json::FrfFile;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// Counters published on `<prefix>/health`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Health {
+    pub blocks: u64,
+    pub samples: u64,
+    /// Rejected messages and blocks by reason.
+    pub rejected: BTreeMap<String, u64>,
+    pub gaps: u64,
+    pub gap_samples: u64,
+    pub segments_accepted: u64,
+    pub segments_rejected: u64,
+    pub windows_accepted: u64,
+    pub windows_skipped: BTreeMap<String, u64>,
+    pub update_runs: u64,
+    pub update_failures: u64,
+    pub queue_drops: u64,
+    /// Raw-input recording errors (write failures, full disk); the block
+    /// is still analysed.
+    #[serde(default)]
+    pub recording_errors: u64,
+    /// Results MCAP errors (write failures; a new file is opened).
+    #[serde(default)]
+    pub results_errors: u64,
+    /// Rerun output errors (e.g. a rotated `.rrd` that cannot be created).
+    #[serde(default)]
+    pub rerun_errors: u64,
+}
+
+impl Health {
+    pub fn reject(&mut self, reason: &str) {
+        *self.rejected.entry(reason.to_string()).or_insert(0) += 1;
+    }
+}
+
+/// The last accepted parameters (persisted in the state file).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AcceptedParameters {
+    pub window: u64,
+    pub time: String,
+    pub parameters: Vec<StateParameter>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StateParameter {
+    pub name: String,
+    pub value: f64,
+    pub std: Option<f64>,
+}
+
+/// A closed analysis window.
+#[derive(Debug, Clone)]
+pub struct WindowReport {
+    pub index: u64,
+    pub start_ns: i128,
+    pub end_ns: i128,
+    pub segments_accepted: u64,
+    pub segments_rejected: u64,
+    /// Mean coherence in the band per FRF.
+    pub mean_coherence: Vec<f64>,
+    /// `None` when accepted.
+    pub skipped: Option<String>,
+    pub frf: Option<FrfFile>,
+}

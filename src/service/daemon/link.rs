@@ -1,0 +1,140 @@
+//! The daemon's zenoh session: subscribers that push raw messages into the
+//! bounded ingest queue, the `<prefix>/updating/latest` queryable, and the
+//! publishing of result messages.
+
+use crate::config::Config;
+use crate::io::wire::Encoding;
+use crate::outputs::publisher::zenoh_result_key;
+use anyhow::{anyhow, Result};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use tokio::sync::mpsc;
+use zenoh::Wait;
+
+/// Capacity of the ingest queue, in messages.
+pub const INGEST_QUEUE: usize = 4096;
+
+/// A message as it arrived, not yet decoded.
+pub(super) struct RawMessage {
+    pub(super) encoding: Option<Encoding>,
+    pub(super) payload: Vec<u8>,
+    /// A pre-computed FRF (`<prefix>/frf/**`) rather than a channel block.
+    pub(super) frf: bool,
+}
+
+/// The open session and what the daemon declared on it.
+pub(super) struct ZenohLink {
+    session: zenoh::Session,
+    subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
+    queryable: zenoh::query::Queryable<()>,
+    /// The body of the reply to `<prefix>/updating/latest`.
+    latest: Arc<Mutex<Vec<u8>>>,
+    prefix: String,
+    /// Messages the full ingest queue refused (counted in the callbacks).
+    ingest_drops: Arc<AtomicU64>,
+}
+
+impl ZenohLink {
+    /// Opens the session, subscribes to `<prefix>/accel/*`, `force/*` and
+    /// `frf/**`, and declares the queryable; returns the ingest queue.
+    pub(super) async fn open(config: &Config) -> Result<(Self, mpsc::Receiver<RawMessage>)> {
+        let prefix = config.topic_prefix();
+        let session = zenoh::open(config.zenoh.to_zenoh()?)
+            .await
+            .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
+        let (tx, rx) = mpsc::channel::<RawMessage>(INGEST_QUEUE);
+        let ingest_drops = Arc::new(AtomicU64::new(0));
+        let mut subscribers = Vec::new();
+        for (segment, frf) in [("accel/*", false), ("force/*", false), ("frf/**", true)] {
+            let key = format!("{prefix}/{segment}");
+            let (tx, drops) = (tx.clone(), Arc::clone(&ingest_drops));
+            let sub = session
+                .declare_subscriber(&key)
+                .callback(move |sample| {
+                    let msg = RawMessage {
+                        encoding: wire_encoding(sample.encoding()),
+                        payload: sample.payload().to_bytes().into_owned(),
+                        frf,
+                    };
+                    if tx.try_send(msg).is_err() {
+                        drops.fetch_add(1, Ordering::Relaxed);
+                    }
+                })
+                .await
+                .map_err(|e| anyhow!("cannot subscribe to {key}: {e}"))?;
+            subscribers.push(sub);
+        }
+        drop(tx);
+        let latest: Arc<Mutex<Vec<u8>>> = Arc::new(Mutex::new(b"{}".to_vec()));
+        let latest_key = format!("{prefix}/updating/latest");
+        let queryable = {
+            let latest = Arc::clone(&latest);
+            let key = latest_key.clone();
+            session
+                .declare_queryable(&latest_key)
+                .callback(move |query| {
+                    let body = latest.lock().map(|b| b.clone()).unwrap_or_default();
+                    let _ = query
+                        .reply(&key, body)
+                        .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+                        .wait();
+                })
+                .await
+                .map_err(|e| anyhow!("cannot declare {latest_key}: {e}"))?
+        };
+        let link = Self {
+            session,
+            subscribers,
+            queryable,
+            latest,
+            prefix,
+            ingest_drops,
+        };
+        Ok((link, rx))
+    }
+
+    /// Publishes a result message (JSON) under its key; a failure is logged.
+    pub(super) fn publish(&self, suffix: &str, v: &serde_json::Value) {
+        let key = zenoh_result_key(&self.prefix, suffix);
+        if let Err(e) = self
+            .session
+            .put(&key, serde_json::to_vec(v).unwrap_or_default())
+            .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+            .wait()
+        {
+            tracing::warn!(message = "cannot publish", key = %key, error = %e);
+        }
+    }
+
+    /// Replaces the reply to `<prefix>/updating/latest`.
+    pub(super) fn set_latest(&self, body: Vec<u8>) {
+        if let Ok(mut l) = self.latest.lock() {
+            *l = body;
+        }
+    }
+
+    /// Messages dropped by the full ingest queue so far.
+    pub(super) fn ingest_drops(&self) -> u64 {
+        self.ingest_drops.load(Ordering::Relaxed)
+    }
+
+    pub(super) async fn close(self) -> Result<()> {
+        drop(self.queryable);
+        drop(self.subscribers);
+        self.session
+            .close()
+            .await
+            .map_err(|e| anyhow!("closing the zenoh session: {e}"))
+    }
+}
+
+/// The wire encoding a zenoh sample declares, if it is one of ours.
+fn wire_encoding(e: &zenoh::bytes::Encoding) -> Option<Encoding> {
+    if *e == zenoh::bytes::Encoding::APPLICATION_CBOR {
+        Some(Encoding::Cbor)
+    } else if *e == zenoh::bytes::Encoding::APPLICATION_JSON {
+        Some(Encoding::Json)
+    } else {
+        None
+    }
+}

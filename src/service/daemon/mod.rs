@@ -1,0 +1,109 @@
+//! The live daemon: zenoh ingest → pipeline → results MCAP + zenoh outputs.
+//! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
+//!
+//! Tasks and queues (vector-style, each with its policy):
+//! - zenoh subscriber callbacks push raw samples into a bounded queue
+//!   (`INGEST_QUEUE` messages); when it is full the newest message is
+//!   dropped and counted in `health.queue_drops` (the logger keeps sending;
+//!   memory stays bounded) (`link.rs`).
+//! - the main task decodes, feeds the pipeline and writes results; an update
+//!   job runs on a blocking worker so ingest never stalls. At most one job
+//!   runs and one waits; a newer job replaces a waiting one (drop oldest,
+//!   counted). A waiting job is rebased when it starts, so it warm-starts
+//!   from the result that finished meanwhile, as in a replay (`worker.rs`).
+//! - shutdown (SIGINT/SIGTERM, or the caller's future) lets a running update
+//!   finish, writes the last health message, finalises the MCAP file and
+//!   saves the state.
+//!
+//! The run loop is a `select!` over four events, each handled by a named
+//! stage of `Daemon` (`stages.rs`): a message (`on_message`), a finished update
+//! (`on_outcome`), the health tick (`on_health_tick`) and
+//! shutdown (`shut_down`).
+
+mod link;
+mod stages;
+mod worker;
+
+pub use link::INGEST_QUEUE;
+
+use crate::config::Config;
+use crate::outputs::rerun::RerunTargets;
+use crate::pipeline::{AcceptedParameters, UpdateOutcome};
+use anyhow::Result;
+use link::ZenohLink;
+use stages::Daemon;
+use std::future::Future;
+use std::path::PathBuf;
+
+/// Options of a live run.
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    pub results: PathBuf,
+    pub state: Option<PathBuf>,
+    /// Rerun outputs (none when empty).
+    pub rerun: RerunTargets,
+    /// How many of the latest update outcomes the returned summary keeps:
+    /// a long run must not hold every outcome in memory.
+    pub keep_updates: usize,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, Default)]
+pub struct RunSummary {
+    pub messages: u64,
+    pub windows: u64,
+    /// The latest update outcomes (at most `RunOptions::keep_updates`).
+    pub updates: std::collections::VecDeque<UpdateOutcome>,
+    /// Every update run, including those no longer in `updates`.
+    pub update_count: u64,
+    pub accepted: Option<AcceptedParameters>,
+}
+
+impl RunSummary {
+    fn keep(&mut self, outcome: UpdateOutcome, keep: usize) {
+        self.update_count += 1;
+        super::keep_latest(&mut self.updates, outcome, keep);
+    }
+}
+
+/// Runs until `shutdown` resolves; returns what happened.
+pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Output = ()>) -> Result<RunSummary> {
+    let mut daemon = Daemon::start(&config, &options)?;
+    let (link, mut messages) = ZenohLink::open(&config).await?;
+    tracing::info!(message = "splinewatch running", prefix = %config.topic_prefix(), results = %options.results.display());
+    notify_systemd(&[sd_notify::NotifyState::Ready]);
+    let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
+    tokio::pin!(shutdown);
+    loop {
+        tokio::select! {
+            _ = &mut shutdown => break,
+            message = messages.recv() => {
+                let Some(message) = message else { break };
+                daemon.on_message(message, &link);
+            }
+            outcome = daemon.worker.finished(), if daemon.worker.is_busy() => daemon.on_outcome(outcome, &link)?,
+            _ = health_timer.tick() => daemon.on_health_tick(&link),
+        }
+    }
+    daemon.shut_down(link).await
+}
+
+pub(crate) fn notify_systemd(states: &[sd_notify::NotifyState]) {
+    let _ = sd_notify::notify(false, states);
+}
+
+/// Resolves on SIGINT or SIGTERM.
+pub async fn termination_signal() {
+    #[cfg(unix)]
+    {
+        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
+        tokio::select! {
+            _ = tokio::signal::ctrl_c() => {}
+            _ = async { match term.as_mut() { Some(t) => { t.recv().await; } None => std::future::pending::<()>().await } } => {}
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = tokio::signal::ctrl_c().await;
+    }
+}

@@ -1,0 +1,305 @@
+//! The daemon's stages: what happens on a message, a finished update, the
+//! health tick and shutdown. Everything here runs on the main task.
+
+use super::link::{RawMessage, ZenohLink};
+use super::worker::UpdateWorker;
+use super::{notify_systemd, RunOptions, RunSummary};
+use crate::config::Config;
+use crate::io::files;
+use crate::io::wire::{self, ChannelBlock, Encoding, Limits};
+use crate::outputs::raw_recorder::RawRecorder;
+use crate::outputs::rerun::RerunOutput;
+use crate::outputs::results::{self, ResultsSink};
+use crate::outputs::state;
+use crate::pipeline::{Pipeline, UpdateOutcome, WindowReport};
+use anyhow::{Context, Result};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::BufWriter;
+use std::path::PathBuf;
+use tokio::task::JoinError;
+
+/// The daemon between events.
+pub(super) struct Daemon {
+    pipeline: Pipeline,
+    pub(super) worker: UpdateWorker,
+    results: ResultsSink<BufWriter<File>>,
+    viewer: Option<RerunOutput>,
+    recorder: Option<RawRecorder>,
+    state: Option<PathBuf>,
+    keep_updates: usize,
+    limits: Limits,
+    summary: RunSummary,
+    /// Measurement time of the latest closed window.
+    last_time: i128,
+    /// Rejections already logged: one warning per health tick covers the rest.
+    logged_rejections: BTreeMap<String, u64>,
+}
+
+impl Daemon {
+    /// Loads the state, builds the pipeline and opens every output.
+    pub(super) fn start(config: &Config, options: &RunOptions) -> Result<Self> {
+        let initial = match &options.state {
+            Some(p) => state::load_state(p)?,
+            None => None,
+        };
+        if let Some(s) = &initial {
+            tracing::info!(message = "warm start from the state file", window = s.window, time = %s.time);
+        }
+        let pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+        let prefix = config.topic_prefix();
+        let results = ResultsSink::new(&prefix, results::results_files(&options.results))?
+            .rotate_every((config.output.results_rotate_hours * 3600e9) as i128);
+        let viewer = if options.rerun.is_empty() {
+            None
+        } else {
+            // A restart never overwrites an earlier run's .rrd.
+            let mut targets = options.rerun.clone();
+            targets.save = targets.save.map(|p| files::first_free(&p));
+            Some(RerunOutput::open(config, &targets)?)
+        };
+        let recorder = if config.output.raw.enabled {
+            let dir = config.output_dir().join(&config.output.raw.dir);
+            tracing::info!(message = "recording raw input", dir = %dir.display());
+            Some(RawRecorder::new(&dir, &prefix, &config.output.raw)?)
+        } else {
+            None
+        };
+        Ok(Self {
+            pipeline,
+            worker: UpdateWorker::default(),
+            results,
+            viewer,
+            recorder,
+            state: options.state.clone(),
+            keep_updates: options.keep_updates,
+            limits: Limits {
+                max_samples: config.frf.max_block_samples,
+                ..Limits::default()
+            },
+            summary: RunSummary::default(),
+            last_time: 0,
+            logged_rejections: BTreeMap::new(),
+        })
+    }
+
+    /// A message from the ingest queue: a pre-computed FRF, or channel
+    /// blocks to decode, record and feed to the pipeline.
+    pub(super) fn on_message(&mut self, msg: RawMessage, link: &ZenohLink) {
+        self.summary.messages += 1;
+        if msg.frf {
+            let now = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map(|d| d.as_nanos() as i128)
+                .unwrap_or(0);
+            if let Some(job) = self.pipeline.ingest_frf(&msg.payload, now) {
+                tracing::info!(message = "complete FRF set received", window = job.window);
+                self.worker.submit(job);
+            }
+            return;
+        }
+        let sniffed = if matches!(msg.payload.first(), Some(b'{' | b'[')) {
+            Encoding::Json
+        } else {
+            Encoding::Cbor
+        };
+        let blocks = match wire::decode(&msg.payload, msg.encoding.unwrap_or(sniffed), &self.limits) {
+            Ok(b) => b,
+            Err(e) => {
+                tracing::debug!(message = "rejected a message", reason = e.reason(), error = %e);
+                self.pipeline.reject_message(&e);
+                return;
+            }
+        };
+        for block in blocks {
+            self.ingest(block, link);
+        }
+    }
+
+    fn ingest(&mut self, block: ChannelBlock, link: &ZenohLink) {
+        if let Some(r) = self.recorder.as_mut() {
+            count_output_error(
+                r.record(&block),
+                &mut self.pipeline.health_mut().recording_errors,
+                1000,
+                "raw-input recording",
+            );
+        }
+        let (windows, jobs) = self.pipeline.ingest(block);
+        for w in &windows {
+            self.report_window(w, link);
+        }
+        for job in jobs {
+            self.worker.submit(job);
+        }
+    }
+
+    /// The update worker finished: apply and report the outcome, then start
+    /// the waiting job from the result just applied.
+    pub(super) fn on_outcome(&mut self, outcome: Result<UpdateOutcome, JoinError>, link: &ZenohLink) -> Result<()> {
+        let waiting = self.worker.next();
+        let mut outcome = outcome.context("the update worker panicked")?;
+        self.handle_outcome(&mut outcome, link)?;
+        self.summary.keep(outcome, self.keep_updates);
+        if let Some(mut job) = waiting {
+            // It waited: start it from the result just applied.
+            self.pipeline.rebase(&mut job);
+            self.worker.start(job);
+        }
+        Ok(())
+    }
+
+    /// Every 10 s: the health message (results, zenoh, Rerun), new
+    /// rejections in the log, the systemd watchdog.
+    pub(super) fn on_health_tick(&mut self, link: &ZenohLink) {
+        self.sync_counters(link);
+        let h = results::health_message(self.last_time, self.pipeline.health());
+        self.results.write("health", self.last_time, &h);
+        link.publish("health", &h);
+        // Health on the measurement timeline once data has arrived.
+        if let (Some(v), true) = (self.viewer.as_mut(), self.last_time > 0) {
+            let r = v.log_health(self.last_time, self.pipeline.health());
+            count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
+        }
+        log_new_rejections(&self.pipeline.health().rejected, &mut self.logged_rejections);
+        notify_systemd(&[sd_notify::NotifyState::Watchdog]);
+    }
+
+    /// Lets a running update finish, decides on the blocks still held for
+    /// the reference, writes the last health message, finalises every file
+    /// and closes the session.
+    pub(super) async fn shut_down(mut self, link: ZenohLink) -> Result<RunSummary> {
+        if let Some(outcome) = self.worker.drain().await {
+            let mut outcome = outcome.context("the update worker panicked")?;
+            self.handle_outcome(&mut outcome, &link)?;
+            self.summary.keep(outcome, self.keep_updates);
+        }
+        // Blocks still held for the stream's reference (fewer than two per
+        // channel arrived) are decided on and counted; too little data for an
+        // update to be due.
+        let (windows, _) = self.pipeline.finish();
+        for w in &windows {
+            self.report_window(w, &link);
+        }
+        log_new_rejections(&self.pipeline.health().rejected, &mut self.logged_rejections);
+        self.pipeline.health_mut().queue_drops = self.worker.drops + link.ingest_drops();
+        if let Some(mut r) = self.recorder.take() {
+            count_output_error(
+                r.close(),
+                &mut self.pipeline.health_mut().recording_errors,
+                1,
+                "raw-input recording",
+            );
+        }
+        self.pipeline.health_mut().results_errors = self.results.errors;
+        let h = results::health_message(self.last_time, self.pipeline.health());
+        self.results.write("health", self.last_time, &h);
+        self.results.finish();
+        if let Some(mut v) = self.viewer.take() {
+            let r = v.log_health(self.last_time, self.pipeline.health());
+            count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
+            count_output_error(v.finish(), &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
+        }
+        notify_systemd(&[sd_notify::NotifyState::Stopping]);
+        link.close().await?;
+        self.summary.accepted = self.pipeline.accepted().cloned();
+        Ok(self.summary)
+    }
+
+    fn sync_counters(&mut self, link: &ZenohLink) {
+        self.pipeline.health_mut().queue_drops = self.worker.drops + link.ingest_drops();
+        self.pipeline.health_mut().results_errors = self.results.errors;
+    }
+
+    /// Writes, publishes, counts and logs a closed window.
+    fn report_window(&mut self, w: &WindowReport, link: &ZenohLink) {
+        let m = results::window_message(w);
+        self.results.write("windows", w.end_ns, &m);
+        link.publish("windows", &m);
+        self.summary.windows += 1;
+        self.last_time = w.end_ns;
+        match &w.skipped {
+            None => tracing::info!(
+                message = "window accepted",
+                window = w.index,
+                segments = w.segments_accepted
+            ),
+            Some(r) => tracing::warn!(message = "window skipped", window = w.index, reason = %r),
+        }
+    }
+
+    /// Applies an outcome to the pipeline and sends it everywhere: results,
+    /// zenoh (and the `latest` reply), the state file, Rerun.
+    fn handle_outcome(&mut self, outcome: &mut UpdateOutcome, link: &ZenohLink) -> Result<()> {
+        self.pipeline.apply(outcome);
+        let outcome = &*outcome;
+        for (suffix, msg) in results::update_messages(outcome) {
+            self.results.write(suffix, outcome.time_ns, &msg);
+            link.publish(suffix, &msg);
+            if suffix == "updating/parameters" {
+                link.set_latest(serde_json::to_vec(&msg)?);
+            }
+        }
+        self.results.flush();
+        match &outcome.result {
+            Ok(r) => {
+                tracing::info!(
+                    message = "update accepted",
+                    window = outcome.window,
+                    relative_residual = r.result.relative_residual
+                );
+                if let (Some(path), Some(accepted)) = (&self.state, self.pipeline.accepted()) {
+                    // A failed state write is logged and retried at the next update; the run goes on.
+                    if let Err(e) = state::save_state(path, accepted) {
+                        tracing::error!(message = "cannot save the state", error = %format!("{e:#}"));
+                    }
+                }
+                notify_systemd(&[sd_notify::NotifyState::Status(&format!(
+                    "window {}: relative residual {:.4}",
+                    outcome.window, r.result.relative_residual
+                ))]);
+            }
+            Err(e) => {
+                tracing::warn!(message = "update failed, keeping the last parameters", window = outcome.window, error = %e)
+            }
+        }
+        if let Some(v) = self.viewer.as_mut() {
+            count_output_error(
+                v.log_update(outcome),
+                &mut self.pipeline.health_mut().rerun_errors,
+                100,
+                "Rerun",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Logs the input rejected since the last call, by reason, as one warning:
+/// called on the health tick, so a flood of bad input costs one log line per
+/// tick, and nothing is logged while the input is clean.
+fn log_new_rejections(rejected: &BTreeMap<String, u64>, logged: &mut BTreeMap<String, u64>) {
+    let new: BTreeMap<&str, u64> = rejected
+        .iter()
+        .filter_map(|(reason, &count)| {
+            let before = logged.get(reason).copied().unwrap_or(0);
+            (count > before).then_some((reason.as_str(), count - before))
+        })
+        .collect();
+    if !new.is_empty() {
+        tracing::warn!(message = "input rejected since the last report", by_reason = ?new, total = ?rejected);
+        logged.clone_from(rejected);
+    }
+}
+
+/// An output error (raw recording, Rerun) is counted in `counter` and
+/// logged for the first and then every `every`-th one, never fatal: the
+/// model and its results go on.
+fn count_output_error(result: Result<()>, counter: &mut u64, every: u64, what: &str) {
+    if let Err(e) = result {
+        *counter += 1;
+        if *counter % every == 1 {
+            tracing::warn!(message = "output failed; the daemon goes on", output = what, errors = *counter, error = %format!("{e:#}"));
+        }
+    }
+}

@@ -1,0 +1,15 @@
+//! Offline studies of the configured model, each returning its output as a
+//! value or writing to a given writer, so tests run them without a process:
+//! modes, synthetic FRFs, updating against an FRF file, the paper's §4
+//! experiments and the time-domain simulation of the deck.
+//! Room: below the services, beside the pipeline. May import: `config`, `io`, the core crate.
+
+pub mod modes;
+pub mod paper;
+pub mod simulation;
+pub mod synth;
+pub mod update;
+
+pub use modes::{compute_modes, write_modes, ModalRunInfo, ModeRow, ModesReport};
+pub use synth::{synth, SynthOptions};
+pub use update::{start_values, update, write_update_table};

@@ -1,0 +1,99 @@
+//! `splinewatch update`: FRF-based updating against an FRF file, optionally
+//! warm-started from an earlier result.
+
+use crate::config::{frf_setup, Config};
+use crate::io::frf_json::FrfFile;
+use anyhow::{Context, Result};
+use serde::Deserialize;
+use splinewatch_core::updating::{IterationRecord, Parameter, UpdateProblem, UpdateResult};
+use std::io::Write;
+
+#[derive(Debug, Deserialize)]
+struct StartFile {
+    parameters: Vec<StartParameter>,
+}
+
+#[derive(Debug, Deserialize)]
+struct StartParameter {
+    name: String,
+    value: f64,
+}
+
+/// Parses a previous result (`update --json` output or the daemon state) into
+/// start values for `parameters`; parameters it does not name keep `base`.
+pub fn start_values(text: &str, parameters: &[Parameter], base: &[f64]) -> Result<Vec<f64>> {
+    let start: StartFile = serde_json::from_str(text).context("not a result JSON with a \"parameters\" list")?;
+    let mut values = base.to_vec();
+    for sp in start.parameters {
+        let k = parameters.iter().position(|p| p.name == sp.name).with_context(|| {
+            format!(
+                "start parameter {:?} is not an updating parameter of this config",
+                sp.name
+            )
+        })?;
+        if !sp.value.is_finite() {
+            anyhow::bail!("start parameter {:?} is not finite", sp.name);
+        }
+        values[k] = sp.value;
+    }
+    Ok(values)
+}
+
+/// `splinewatch update`: runs the updating and returns its result.
+pub fn update(
+    config: &Config,
+    frf_text: &str,
+    start: Option<&str>,
+    progress: &mut dyn FnMut(&IterationRecord),
+) -> Result<UpdateResult> {
+    let setup = frf_setup(config)?;
+    let frf = FrfFile::parse(frf_text)?;
+    let measured = frf.to_measured(&setup.sensor_names)?;
+    let parameters = config.build_parameters()?;
+    let settings = config.update_settings()?;
+    let problem = UpdateProblem::new(
+        &setup.model,
+        setup.kappa.clone(),
+        setup.damping.clone(),
+        parameters,
+        &measured,
+        settings,
+    )?;
+    let base = problem.base_values();
+    let start = match start {
+        Some(text) => start_values(text, problem.parameters(), &base)?,
+        None => base,
+    };
+    Ok(problem.solve_observed(&start, progress)?)
+}
+
+/// The final table of `splinewatch update`.
+pub fn write_update_table(result: &UpdateResult, out: &mut impl Write) -> Result<()> {
+    writeln!(
+        out,
+        "{:<14} {:>14} {:>12} {:>7} {:>12} {:>12}",
+        "parameter", "value", "std", "std %", "lower", "upper"
+    )?;
+    for p in &result.parameters {
+        let (std, pct) = match p.std {
+            Some(s) => (format!("{s:.4e}"), format!("{:.2}", 100.0 * s / p.value.abs())),
+            None => ("unidentif.".to_string(), "-".to_string()),
+        };
+        writeln!(
+            out,
+            "{:<14} {:>14.6e} {:>12} {:>7} {:>12.4e} {:>12.4e}",
+            p.name, p.value, std, pct, p.lower, p.upper
+        )?;
+    }
+    writeln!(
+        out,
+        "converged: {} ({:?}) after {} iterations, {} model evaluations; relative residual {:.4e}; Jacobian condition {:.3e}",
+        result.converged,
+        result.stop_reason,
+        result.iterations.len() - 1,
+        result.evaluations,
+        result.relative_residual,
+        result.condition_number
+    )?;
+    Ok(())
+}

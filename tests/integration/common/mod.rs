@@ -1,0 +1,97 @@
+//! Helpers shared by the integration tests that run real zenoh sessions
+//! and `splinewatch` processes.
+
+#![allow(dead_code)] // each test crate uses its own subset
+
+/// A free loopback TCP endpoint.
+pub fn free_endpoint() -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    format!("tcp/127.0.0.1:{port}")
+}
+
+/// Kills a child process when a failing test unwinds past it.
+pub struct KillOnDrop(pub Option<std::process::Child>);
+
+impl KillOnDrop {
+    pub fn take(mut self) -> std::process::Child {
+        self.0.take().expect("taken once")
+    }
+}
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        if let Some(child) = self.0.as_mut() {
+            let _ = child.kill();
+            let _ = child.wait();
+        }
+    }
+}
+
+/// `splinewatch run --config … --state … --out …` with `RUST_LOG` set and
+/// its log going to `log` (a file, or a pipe the test reads at the end).
+pub fn spawn_daemon(
+    config: &std::path::Path,
+    state: &std::path::Path,
+    results: &std::path::Path,
+    rust_log: &str,
+    log: std::process::Stdio,
+) -> KillOnDrop {
+    KillOnDrop(Some(
+        std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .arg("run")
+            .arg("--config")
+            .arg(config)
+            .arg("--state")
+            .arg(state)
+            .arg("--out")
+            .arg(results)
+            .env("RUST_LOG", rust_log)
+            .stdout(std::process::Stdio::null())
+            .stderr(log)
+            .spawn()
+            .unwrap(),
+    ))
+}
+
+/// The blocks of the bundled recording, in file order.
+pub fn bundled_blocks() -> Vec<splinewatch::io::recording::RecordedBlock> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/sinello-demo.mcap");
+    let bytes = std::fs::read(path).unwrap();
+    splinewatch::io::recording::read_recording(&bytes, &Default::default())
+        .unwrap()
+        .0
+}
+
+/// Sends SIGTERM to `child` and waits for it: its exit status and what it
+/// wrote to its stderr, if that was piped.
+pub fn terminate(child: std::process::Child) -> (std::process::ExitStatus, String) {
+    let signalled = std::process::Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(signalled.success());
+    let out = child.wait_with_output().unwrap();
+    (out.status, String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Waits up to a minute for `path` to appear; whether it did.
+pub fn wait_for_file(path: &std::path::Path) -> bool {
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !path.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    }
+    path.exists()
+}
+
+/// An empty folder `splinewatch-<name>-<pid>` under the system temp folder
+/// (whatever an earlier run left there is removed).
+pub fn fresh_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("splinewatch-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

@@ -1,0 +1,16 @@
+//! The integration tests, one binary (one link of zenoh, Rerun and faer
+//! instead of one per file): real zenoh sessions on loopback, real MCAP and
+//! `.rrd` files and the real binary. `common` holds the shared helpers.
+
+mod architecture;
+mod cli;
+mod common;
+mod corpus;
+mod live;
+mod measurements;
+mod paper;
+#[cfg(unix)]
+mod reliability;
+mod replay;
+#[cfg(unix)]
+mod security;

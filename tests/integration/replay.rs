@@ -1,0 +1,442 @@
+//! Offline replay of the bundled recording: outputs, determinism, state.
+
+use crate::common::{bundled_blocks, fresh_dir};
+use splinewatch::config::load_config;
+use splinewatch::config::Config;
+use splinewatch::outputs::results::ResultsWriter;
+use splinewatch::outputs::state::{load_state, save_state};
+use splinewatch::service::replay::{replay, ReplayOptions};
+use std::io::Cursor;
+use std::path::Path;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn config() -> Config {
+    load_config(&root().join("config/sinello.toml")).unwrap()
+}
+
+fn run(cfg: &Config, state: Option<&Path>) -> (Vec<u8>, splinewatch::service::replay::ReplaySummary) {
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let initial = state.and_then(|p| load_state(p).unwrap());
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let options = ReplayOptions {
+        initial,
+        state_path: state,
+        ..ReplayOptions::default()
+    };
+    let summary = replay(cfg, &[&bytes], &mut writer, options, &mut |_, _| {}).unwrap();
+    (writer.finish().unwrap().into_inner(), summary)
+}
+
+#[test]
+fn replay_of_the_demo_recording_tracks_the_bearing_damage_and_writes_every_topic() {
+    let cfg = config();
+    let (mcap_bytes, summary) = run(&cfg, None);
+    assert_eq!(summary.windows.len(), 6);
+    assert!(summary.windows.iter().all(|w| w.skipped.is_none()));
+    assert_eq!(summary.updates.len(), 6);
+    let k2 = |o: &splinewatch::pipeline::UpdateOutcome| {
+        o.result
+            .as_ref()
+            .unwrap()
+            .result
+            .parameters
+            .iter()
+            .find(|p| p.name == "east.k2")
+            .unwrap()
+            .value
+    };
+    // Before the damage (0:00–0:40) east.k2 ≈ 0.4e9; after it (1:20–2:00) ≈ 0.24e9.
+    let first = k2(&summary.updates[0]);
+    let last = k2(&summary.updates[5]);
+    assert!((first - 0.4e9).abs() < 0.1 * 0.4e9, "first {first}");
+    assert!((last - 0.24e9).abs() < 0.1 * 0.24e9, "last {last}");
+    // Every result topic is present in the MCAP file, with a JSON Schema.
+    let summary_rec = mcap::Summary::read(&mcap_bytes).unwrap().unwrap();
+    let stats = summary_rec.stats.unwrap();
+    for (suffix, _) in splinewatch::outputs::results::TOPICS {
+        let topic = format!("bridge/sinello-span2/{suffix}");
+        let channel = summary_rec
+            .channels
+            .values()
+            .find(|c| c.topic == topic)
+            .unwrap_or_else(|| panic!("{topic}"));
+        assert_eq!(channel.schema.as_ref().unwrap().encoding, "jsonschema");
+        let count = stats.channel_message_counts.get(&channel.id).copied().unwrap_or(0);
+        if suffix != "updating/failures" {
+            assert!(count > 0, "{topic} has no messages");
+        }
+    }
+    for m in mcap::MessageStream::new(&mcap_bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic.ends_with("updating/parameters") {
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            assert_eq!(v["parameters"].as_array().unwrap().len(), 15);
+            assert!(v["relative_residual"].as_f64().unwrap() < 0.2);
+        }
+    }
+}
+
+#[test]
+fn replay_is_deterministic() {
+    let cfg = config();
+    let (a, _) = run(&cfg, None);
+    let (b, _) = run(&cfg, None);
+    assert_eq!(a, b, "same input, byte-identical results");
+}
+
+#[test]
+fn the_state_file_warm_starts_a_restart() {
+    let cfg = config();
+    let dir = std::env::temp_dir().join(format!("splinewatch-state-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let state = dir.join("state.json");
+    let (_, first) = run(&cfg, Some(&state));
+    let saved = load_state(&state).unwrap().expect("written");
+    assert_eq!(saved, first.accepted.clone().unwrap());
+    // A restart from the saved state starts where the last run ended: the
+    // first update's iteration 0 is the saved parameters, not the config's.
+    let (_, second) = run(&cfg, Some(&state));
+    let start = &second.updates[0].result.as_ref().unwrap().result.iterations[0].parameters;
+    let saved_values: Vec<f64> = saved.parameters.iter().map(|p| p.value).collect();
+    assert_eq!(start, &saved_values);
+    let cold = &first.updates[0].result.as_ref().unwrap().result.iterations[0].parameters;
+    assert_ne!(cold, &saved_values);
+    // Atomic write: no temporary file left behind, and a rewrite replaces it whole.
+    save_state(&state, &saved).unwrap();
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    assert_eq!(names, vec!["state.json".to_string()]);
+}
+
+#[test]
+fn time_based_scheduling_updates_every_t_minutes() {
+    let text = std::fs::read_to_string(root().join("config/sinello.toml"))
+        .unwrap()
+        .replace(
+            "update_every_windows = 1",
+            "update_every_windows = 1\nupdate_every_minutes = 0.9",
+        );
+    let cfg = Config::from_toml(&text).unwrap();
+    let (_, summary) = run(&cfg, None);
+    // 20 s windows end at 20, 40, … 120 s: updates at 60 s (≥ 54 s) and 120 s (≥ 60 + 54 s).
+    let windows: Vec<u64> = summary.updates.iter().map(|u| u.window).collect();
+    assert_eq!(windows, vec![2, 5]);
+}
+
+#[test]
+fn replay_writes_a_rerun_recording_with_every_view() {
+    let cfg = config();
+    let dir = std::env::temp_dir().join(format!("splinewatch-rrd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("replay.rrd");
+    let targets = splinewatch::outputs::rerun::RerunTargets {
+        save: Some(path.clone()),
+        connect: None,
+    };
+    let summary = replay_into_rerun(&cfg, &targets);
+    assert!(summary.updates.iter().any(|u| u.result.is_ok()));
+    // Read back with Rerun's own decoder: complete (footer) and holding the
+    // trends, the latest FRFs, ζ(f), the deck, the modes and the health.
+    let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&path).unwrap()).unwrap();
+    assert!(rrd.footer, "the .rrd footer is missing");
+    let mut expected: Vec<String> = summary.updates[0]
+        .result
+        .as_ref()
+        .unwrap()
+        .result
+        .parameters
+        .iter()
+        .map(|p| {
+            let group = if p.name.starts_with("damping.") {
+                "damping"
+            } else {
+                "springs"
+            };
+            format!("/parameters/{group}/{}", p.name)
+        })
+        .collect();
+    for sensor in ["P2", "P12"] {
+        for what in ["magnitude", "phase"] {
+            for which in ["measured", "model"] {
+                expected.push(format!("/frf/{sensor}/{what}/{which}"));
+            }
+        }
+    }
+    expected.extend(
+        [
+            "/residual/relative",
+            "/damping/zeta",
+            "/damping/coefficients",
+            "/deck/springs",
+            "/deck/sensors",
+            "/modes/1",
+            "/modes/4",
+            "/health/blocks",
+            "/health/queue_drops",
+        ]
+        .map(String::from),
+    );
+    for entity in &expected {
+        assert!(
+            rrd.entities.contains(entity),
+            "{entity} missing from {:?}",
+            rrd.entities
+        );
+    }
+}
+
+/// `--rerun-connect`: the replay streams to a Rerun gRPC server. The server
+/// is Rerun's own (`re_grpc_server`, the code the `rerun` CLI runs), started
+/// in-process on a loopback port, so the test needs no Python.
+#[test]
+fn replay_streams_to_a_rerun_server_over_grpc() {
+    let cfg = config();
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()
+        .unwrap();
+    let (stop, shutdown) = re_grpc_server::shutdown::shutdown();
+    let addr: std::net::SocketAddr = ([127, 0, 0, 1], port).into();
+    let (received, _proxy) = {
+        let _inside = runtime.enter();
+        re_grpc_server::spawn_with_recv(addr, re_grpc_server::ServerOptions::default(), shutdown)
+    };
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+    while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
+        assert!(std::time::Instant::now() < deadline, "the Rerun server did not start");
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let targets = splinewatch::outputs::rerun::RerunTargets {
+        save: None,
+        connect: Some(format!("rerun+http://127.0.0.1:{port}/proxy")),
+    };
+    // `finish` flushes the stream: everything was sent when this returns.
+    replay_into_rerun(&cfg, &targets);
+    let mut rrd = splinewatch::outputs::rerun::RrdSummary::default();
+    let wanted = [
+        "/parameters/springs/east.k2",
+        "/frf/P12/magnitude/model",
+        "/deck/springs",
+    ];
+    while !wanted.iter().all(|e| rrd.entities.contains(*e)) {
+        let left = deadline.saturating_duration_since(std::time::Instant::now());
+        let Ok(message) = received.recv_timeout(left) else {
+            break;
+        };
+        if let re_log_channel::SmartMessagePayload::Msg(re_log_channel::DataSourceMessage::LogMsg(msg)) =
+            message.payload
+        {
+            rrd.add(&msg).unwrap();
+        }
+    }
+    stop.stop();
+    for entity in wanted {
+        assert!(
+            rrd.entities.contains(entity),
+            "{entity} not received: {:?}",
+            rrd.entities
+        );
+    }
+}
+
+#[test]
+fn rerun_files_rotate_by_measurement_time_and_each_stands_alone() {
+    let mut cfg = config();
+    cfg.output.rerun_rotate_hours = 0.01; // 36 s of data per file
+    let dir = fresh_dir("rrd-rotate");
+    let targets = splinewatch::outputs::rerun::RerunTargets {
+        save: Some(dir.join("trend.rrd")),
+        connect: None,
+    };
+    replay_into_rerun(&cfg, &targets);
+    let files: Vec<_> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().path()).collect();
+    // Updates every 20 s over two minutes, a new file every 36 s.
+    assert!(files.len() >= 3, "{files:?}");
+    for f in &files {
+        let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(f).unwrap()).unwrap();
+        assert!(rrd.footer, "{f:?} not finalised");
+        for entity in ["/deck/sensors", "/deck/springs", "/parameters/springs/east.k2"] {
+            assert!(rrd.entities.contains(entity), "{f:?} lacks {entity}");
+        }
+    }
+}
+
+/// Replays the bundled recording with a Rerun output to `targets`, closed
+/// at the end.
+fn replay_into_rerun(
+    cfg: &Config,
+    targets: &splinewatch::outputs::rerun::RerunTargets,
+) -> splinewatch::service::replay::ReplaySummary {
+    let mut viewer = splinewatch::outputs::rerun::RerunOutput::open(cfg, targets).unwrap();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let options = ReplayOptions {
+        viewer: Some(&mut viewer),
+        ..ReplayOptions::default()
+    };
+    let summary = replay(cfg, &[&bytes], &mut writer, options, &mut |_, _| {}).unwrap();
+    viewer.finish().unwrap();
+    summary
+}
+
+/// An update that fails (here: no convergence within one iteration) is
+/// rejected: the last good parameters stay, in memory and in the state
+/// file, and the failure is reported with its reason.
+#[test]
+fn failed_updates_keep_the_last_good_parameters_and_say_why() {
+    let dir = fresh_dir("failures");
+    let state = dir.join("state.json");
+    run(&config(), Some(&state));
+    let good = load_state(&state).unwrap().expect("six good updates saved a state");
+    let good_text = std::fs::read(&state).unwrap();
+
+    let mut cfg = config();
+    cfg.updating.max_iterations = 1;
+    cfg.updating.offset_tolerance = 1e-300;
+    cfg.updating.cost_tolerance = 1e-300;
+    cfg.updating.step_tolerance = 1e-300;
+    let (bytes, summary) = run(&cfg, Some(&state));
+    assert_eq!(summary.updates.len(), 6);
+    for o in &summary.updates {
+        let e = o.result.as_ref().expect_err("one iteration cannot converge");
+        assert!(e.contains("did not converge"), "{e}");
+    }
+    assert_eq!(
+        summary.accepted.as_ref(),
+        Some(&good),
+        "the last good parameters are kept"
+    );
+    assert_eq!(std::fs::read(&state).unwrap(), good_text, "the state file is untouched");
+    let mut failures = 0;
+    let mut parameters = 0;
+    let mut health = serde_json::Value::Null;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        match m.channel.topic.rsplit_once("sinello-span2/").unwrap().1 {
+            "updating/failures" => {
+                failures += 1;
+                assert!(v["error"].as_str().unwrap().contains("MaxIterations"), "{v}");
+            }
+            "updating/parameters" => parameters += 1,
+            "health" => health = v,
+            _ => {}
+        }
+    }
+    assert_eq!((failures, parameters), (6, 0));
+    assert_eq!(
+        (health["update_runs"].as_u64(), health["update_failures"].as_u64()),
+        (Some(6), Some(6))
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A long replay keeps only the latest windows and outcomes in its summary
+/// (months of data would otherwise fill memory); the counts cover them all.
+#[test]
+fn the_summary_keeps_only_the_latest_outcomes() {
+    let cfg = config();
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let options = ReplayOptions {
+        keep_latest: 2,
+        ..ReplayOptions::default()
+    };
+    let summary = replay(&cfg, &[&bytes], &mut writer, options, &mut |_, _| {}).unwrap();
+    assert_eq!(
+        (summary.window_count, summary.windows_accepted, summary.update_count),
+        (6, 6, 6)
+    );
+    assert_eq!((summary.windows.len(), summary.updates.len()), (2, 2));
+    let (_, all) = run(&cfg, None);
+    assert_eq!(summary.updates[1].window, all.updates[5].window);
+    assert_eq!(summary.accepted, all.accepted);
+}
+
+/// Overlapping windows (`frf.window_hop_seconds` < `window_seconds`): 20 s
+/// windows every 10 s over the two minutes give 11 windows; every other one
+/// is exactly a window of the back-to-back replay (each window has its own
+/// estimator fed the same samples), the ones in between are new.
+#[test]
+fn overlapping_windows_every_hop() {
+    let plain = config();
+    let mut overlapping = config();
+    overlapping.frf.window_hop_seconds = Some(10.0);
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let windows = |cfg: &Config| {
+        let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+        let options = ReplayOptions {
+            keep_latest: usize::MAX,
+            ..ReplayOptions::default()
+        };
+        replay(cfg, &[&bytes], &mut w, options, &mut |_, _| {}).unwrap()
+    };
+    let (a, b) = (windows(&plain), windows(&overlapping));
+    assert_eq!((a.window_count, b.window_count), (6, 11));
+    assert_eq!(b.update_count, 11);
+    let t0 = a.windows[0].start_ns;
+    for (k, w) in b.windows.iter().enumerate() {
+        assert_eq!(w.index, k as u64);
+        assert_eq!(w.start_ns - t0, k as i128 * 10_000_000_000);
+        assert_eq!(w.end_ns - w.start_ns, 20_000_000_000);
+        assert!(w.skipped.is_none(), "window {k}: {:?}", w.skipped);
+        if k % 2 == 0 {
+            let same = &a.windows[k / 2];
+            assert_eq!((same.start_ns, same.end_ns), (w.start_ns, w.end_ns));
+            assert_eq!(same.frf, w.frf, "window {k}");
+        } else {
+            assert_ne!(a.windows[k / 2].frf, w.frf);
+        }
+    }
+}
+
+/// Live, an update that arrives while another runs waits; its job was made
+/// before that update's result existed. Rebased when it starts, it warm-starts
+/// from that result and gives the replay's parameters bit for bit.
+#[test]
+fn a_job_that_waited_starts_from_the_latest_result() {
+    use splinewatch::pipeline::Pipeline;
+    let cfg = config();
+    // Every job made before any update ran, as when updates queue up live.
+    let mut pipeline = Pipeline::new(&cfg, cfg.schedule.clone(), None).unwrap();
+    let mut jobs = Vec::new();
+    for recorded in bundled_blocks() {
+        jobs.extend(pipeline.ingest(recorded.block).1);
+    }
+    jobs.extend(pipeline.finish().1);
+    assert_eq!(jobs.len(), 6);
+    let (_, inline) = run(&cfg, None);
+    let values = |o: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
+        let report = o.result.as_ref().expect("update succeeded");
+        report.result.parameters.iter().map(|p| p.value).collect()
+    };
+    let mut jobs = jobs.into_iter();
+    let mut first = jobs.next().unwrap().run();
+    pipeline.apply(&mut first);
+    assert_eq!(values(&first), values(&inline.updates[0]));
+    let mut second = jobs.next().unwrap();
+    pipeline.rebase(&mut second);
+    let second = second.run();
+    assert_eq!(values(&second), values(&inline.updates[1]));
+    // Not rebased, the third job starts from the config's values instead of
+    // the second result: a different warm start, different last digits.
+    let stale = jobs.next().unwrap().run();
+    let (stale, fresh) = (values(&stale), values(&inline.updates[2]));
+    assert_ne!(stale, fresh);
+    // Both end within a tenth of a standard deviation of the same optimum.
+    let report = inline.updates[2].result.as_ref().unwrap();
+    for ((a, b), p) in stale.iter().zip(&fresh).zip(&report.result.parameters) {
+        let std = p.std.expect("identifiable");
+        assert!((a - b).abs() < 0.1 * std, "{}: {a} vs {b}, σ {std}", p.name);
+    }
+}
