@@ -2,6 +2,7 @@
 
 use super::parse_encoding;
 use crate::config::{load_config, Config};
+use crate::io::console::{errln, outln};
 use crate::io::recording::{read_recording, RecordingWriter};
 use crate::io::wire::{self, Encoding, Limits};
 use crate::outputs::publisher::Publisher;
@@ -125,7 +126,7 @@ pub fn simulate(a: SimulateArgs) -> Result<()> {
     if let Some(p) = publisher {
         p.close()?;
     }
-    eprintln!(
+    errln!(
         "{} blocks ({} samples per channel, {} model updates){}{}",
         summary.blocks,
         summary.samples_per_channel,
@@ -161,7 +162,7 @@ pub fn frf(a: FrfArgs) -> Result<()> {
     };
     let (blocks, rejected) = read_recording(&bytes, &limits).with_context(|| format!("reading {}", input.display()))?;
     for r in &rejected {
-        eprintln!("skipped a message on {} at {} ns: {}", r.topic, r.log_time, r.error);
+        errln!("skipped a message on {} at {} ns: {}", r.topic, r.log_time, r.error);
     }
     let origin = blocks
         .iter()
@@ -178,7 +179,7 @@ pub fn frf(a: FrfArgs) -> Result<()> {
             .transpose()
     };
     let report = estimate::estimate(&cfg, &blocks, when(&a.from)?, when(&a.to)?)?;
-    eprintln!(
+    errln!(
         "{} samples from {}: {} segments used, {} rejected, {:.1} effective averages, {} FRFs × {} lines",
         report.samples,
         wire::format_timestamp(report.start_ns),
@@ -191,7 +192,7 @@ pub fn frf(a: FrfArgs) -> Result<()> {
     let text = serde_json::to_string(&report.frf)?;
     match a.out {
         Some(path) => std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?,
-        None => println!("{text}"),
+        None => outln!("{text}"),
     }
     Ok(())
 }

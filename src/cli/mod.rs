@@ -6,6 +6,7 @@ mod measure;
 mod model;
 mod monitor;
 
+use crate::io::console::errln;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 use splinewatch_core::frf::Quantity;
@@ -98,9 +99,13 @@ pub fn main() -> ExitCode {
         // zenoh logs its whole session configuration at debug level,
         // user/password included: never below info, whatever RUST_LOG says.
         .add_directive(NO_SECRETS_DIRECTIVE.parse().expect("a valid directive"));
+    // A closed stderr drops (and counts) log lines instead of panicking in
+    // tracing's own error report; colours only on a terminal.
     let builder = tracing_subscriber::fmt()
         .with_env_filter(filter)
-        .with_writer(std::io::stderr);
+        .with_writer(crate::io::console::LogWriter)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .log_internal_errors(false);
     if json_logs {
         builder.json().init();
     } else {
@@ -109,7 +114,7 @@ pub fn main() -> ExitCode {
     match run(Cli::parse()) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            errln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }

@@ -3,6 +3,7 @@
 
 use super::parse_quantity;
 use crate::config::load_config;
+use crate::io::console::{errln, outln};
 use crate::studies::{self, paper, SynthOptions};
 use anyhow::{Context, Result};
 use clap::Args;
@@ -74,8 +75,9 @@ pub struct UpdateArgs {
 
 #[derive(Args)]
 pub struct PaperArgs {
-    /// Output folder.
-    #[arg(long, default_value = "docs/paper")]
+    /// Output folder (outside the source tree by default; `--out docs/paper`
+    /// refreshes the committed report).
+    #[arg(long, default_value = "out/paper")]
     pub out: PathBuf,
 }
 
@@ -88,12 +90,15 @@ pub struct CheckConfigArgs {
 pub fn modes(a: ModesArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let (report, info) = studies::compute_modes(&cfg, a.count)?;
-    eprintln!(
+    errln!(
         "{}: {} dofs ({} free), assembly {:.3} s, eigen-solve {:.3} s",
-        cfg.structure.name, info.dofs, info.free_dofs, info.assembly_seconds, info.solve_seconds
+        cfg.structure.name,
+        info.dofs,
+        info.free_dofs,
+        info.assembly_seconds,
+        info.solve_seconds
     );
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = crate::io::console::Stdout;
     studies::write_modes(&report, a.json, &mut out)?;
     out.flush()?;
     Ok(())
@@ -114,7 +119,7 @@ pub fn synth(a: SynthArgs) -> Result<()> {
     let file = studies::synth(&cfg, &options)?;
     let text = serde_json::to_string(&file)?;
     std::fs::write(&a.out, text).with_context(|| format!("cannot write {}", a.out.display()))?;
-    eprintln!(
+    errln!(
         "wrote {} FRFs × {} lines to {}",
         file.frfs.len(),
         file.frequency_hz.len(),
@@ -133,15 +138,18 @@ pub fn update(a: UpdateArgs) -> Result<()> {
         .map(|p| std::fs::read_to_string(p).with_context(|| format!("cannot read start file {}", p.display())))
         .transpose()?;
     let mut progress = |it: &IterationRecord| {
-        eprintln!(
+        errln!(
             "iteration {:3}  relative residual {:.4e}  step {:.3e}  damping {:.3e}  rejected {}",
-            it.iteration, it.relative_residual, it.step_norm, it.damping, it.rejected_steps
+            it.iteration,
+            it.relative_residual,
+            it.step_norm,
+            it.damping,
+            it.rejected_steps
         );
     };
     let result = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
         .with_context(|| format!("updating against {}", a.frf.display()))?;
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = crate::io::console::Stdout;
     if a.json {
         serde_json::to_writer(&mut out, &result)?;
         writeln!(out)?;
@@ -158,7 +166,7 @@ pub fn paper(a: PaperArgs) -> Result<()> {
     std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
     let mut outcomes = Vec::new();
     for (k, e) in paper::EXPERIMENTS.iter().enumerate() {
-        eprintln!("running {} (paper §{})", e.name, e.section);
+        errln!("running {} (paper §{})", e.name, e.section);
         let o = paper::run(&truth, &model, e)?;
         let svg = out.join(format!("damping-{}.svg", k + 1));
         paper::plot_damping(&o, &svg)?;
@@ -166,7 +174,7 @@ pub fn paper(a: PaperArgs) -> Result<()> {
     }
     let report = paper::report_markdown(&outcomes);
     std::fs::write(out.join("report.md"), &report)?;
-    print!("{report}");
+    crate::io::console::out(format_args!("{report}"));
     Ok(())
 }
 
@@ -174,6 +182,6 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     // The zenoh session settings too: the JSON5 file and our keys on top.
     cfg.zenoh.to_zenoh()?;
-    println!("{}: configuration is valid", cfg.structure.name);
+    outln!("{}: configuration is valid", cfg.structure.name);
     Ok(())
 }

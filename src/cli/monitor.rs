@@ -2,6 +2,7 @@
 //! their files.
 
 use crate::config::load_config;
+use crate::io::console::{errln, outln};
 use crate::io::files;
 use crate::io::wire;
 use crate::outputs::rerun::{self, RerunOutput};
@@ -134,7 +135,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     }
     let seconds = t0.elapsed().as_secs_f64();
     let span = summary.window_count as f64 * cfg.frf.window_seconds;
-    eprintln!(
+    errln!(
         "replayed {} messages: {} windows ({} accepted), {} updates in {seconds:.2} s ({:.0}× real time); results in {}",
         summary.messages,
         summary.window_count,
@@ -145,7 +146,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     );
     if let Some(acc) = &summary.accepted {
         for p in &acc.parameters {
-            println!(
+            outln!(
                 "{:<14} {:>14.6e} {:>12}",
                 p.name,
                 p.value,
@@ -184,7 +185,7 @@ impl ReplayProgress {
             if self.terminal {
                 self.bar.set_message(n.to_string());
             } else {
-                eprintln!("{n}");
+                errln!("{n}");
             }
         }
     }
@@ -218,7 +219,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         },
         daemon::termination_signal(),
     ))?;
-    eprintln!(
+    errln!(
         "stopped after {} messages, {} windows, {} updates; results in {}",
         summary.messages,
         summary.windows,
@@ -234,17 +235,28 @@ pub fn demo(a: DemoArgs) -> Result<()> {
 
 /// The `demo` command: runs and prints a summary.
 fn run_demo(config_path: &std::path::Path, out: &std::path::Path, duration: f64, speed: f64) -> Result<()> {
+    let removed = demo::clear_previous(out)?;
+    if !removed.is_empty() {
+        errln!(
+            "demo: starting fresh in {} (removed the previous demo's {})",
+            out.display(),
+            removed.join(", ")
+        );
+    }
     let summary = demo::run_live(config_path, out, duration, speed, 2026)?;
-    eprintln!(
-        "demo: {} messages received, {} windows, {} updates ({} failed); results in {}, state in {}",
+    errln!(
+        "demo: {} messages received, {} windows, {} updates ({} failed); wrote {}",
         summary.messages,
         summary.windows,
         summary.updates.len(),
         summary.updates.iter().filter(|u| u.result.is_err()).count(),
-        out.join("results.mcap").display(),
-        out.join("state.json").display()
+        demo::written(out)
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     );
-    println!("{:>8} {:>14} {:>12}", "window", "east.k2", "rel. resid.");
+    outln!("{:>8} {:>14} {:>12}", "window", "east.k2 (N/m³)", "rel. resid.");
     for u in &summary.updates {
         if let Ok(r) = &u.result {
             let k2 = r
@@ -253,7 +265,7 @@ fn run_demo(config_path: &std::path::Path, out: &std::path::Path, duration: f64,
                 .iter()
                 .find(|p| p.name == "east.k2")
                 .map_or(f64::NAN, |p| p.value);
-            println!("{:>8} {:>14.4e} {:>12.4}", u.window, k2, r.result.relative_residual);
+            outln!("{:>8} {:>14.4e} {:>12.4}", u.window, k2, r.result.relative_residual);
         }
     }
     Ok(())
@@ -263,10 +275,10 @@ pub fn soak(a: SoakArgs) -> Result<()> {
     let mut cfg = load_config(&a.config)?;
     cfg.frf.window_seconds = 60.0 * a.window_minutes;
     let (summary, samples, sent) = soak::soak(cfg, &a.recording, &a.out, a.hours, a.speed)?;
-    println!("| data (h) | wall (s) | RSS (MiB) |");
-    println!("| --- | --- | --- |");
+    outln!("| data (h) | wall (s) | RSS (MiB) |");
+    outln!("| --- | --- | --- |");
     for s in &samples {
-        println!(
+        outln!(
             "| {:.1} | {:.1} | {} |",
             s.data_hours,
             s.wall_seconds,
@@ -274,7 +286,7 @@ pub fn soak(a: SoakArgs) -> Result<()> {
         );
     }
     let h = summary.update_count;
-    println!(
+    outln!(
         "published {sent} blocks, the daemon received {} (the rest dropped by the bounded ingest queue, counted in health.queue_drops), {} windows, {h} updates; results in {}",
         summary.messages,
         summary.windows,
@@ -300,7 +312,7 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
     w.into_inner()
         .map_err(|e| anyhow::anyhow!("cannot write {}: {}", out.display(), e.error()))?
         .sync_all()?;
-    eprintln!(
+    errln!(
         "{}: {} messages on {} channels recovered into {}{}{}",
         input.display(),
         report.messages,

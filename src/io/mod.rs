@@ -1,7 +1,8 @@
-//! Bytes in and out: the wire format of channel blocks, MCAP recordings, FRF
+//! Bytes in and out: the console (never fatal), the wire format of channel blocks, MCAP recordings, FRF
 //! files, output-file creation and numbering, and salvaging unfinished MCAP.
 //! Room: the bottom of the application. May import: the core crate only.
 
+pub mod console;
 pub mod files;
 pub mod frf_json;
 pub mod recording;

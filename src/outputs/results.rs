@@ -39,7 +39,7 @@ pub const TOPICS: [(&str, &str); 8] = [
     ),
     (
         "health",
-        r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"},"recording_errors":{"type":"integer"},"results_errors":{"type":"integer"},"rerun_errors":{"type":"integer"}}}"#,
+        r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"},"recording_errors":{"type":"integer"},"results_errors":{"type":"integer"},"rerun_errors":{"type":"integer"},"log_writes_dropped":{"type":"integer"}}}"#,
     ),
     (
         "windows",

@@ -161,6 +161,13 @@ impl Pipeline {
         self.last.as_ref()
     }
 
+    /// Measurement time up to which every channel's samples have been
+    /// analysed; `None` before the stream's rate and origin are agreed on.
+    pub fn measured_until(&self) -> Option<i128> {
+        let (fs, t0) = (self.fs?, self.t0?);
+        Some(t0 + (self.fed as f64 * 1e9 / fs).round() as i128)
+    }
+
     pub fn parameters(&self) -> &[Parameter] {
         &self.parameters
     }

@@ -31,6 +31,10 @@ pub struct Health {
     /// Rerun output errors (e.g. a rotated `.rrd` that cannot be created).
     #[serde(default)]
     pub rerun_errors: u64,
+    /// Log lines dropped because the log stream (stderr) was closed or
+    /// failing; the analysis goes on.
+    #[serde(default)]
+    pub log_writes_dropped: u64,
 }
 
 impl Health {

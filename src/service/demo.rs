@@ -115,3 +115,75 @@ pub fn run_recording_live(config_path: &Path, recording: &Path, out: &Path, spee
         Ok(blocks.len() as u64)
     })
 }
+
+/// Whether `name` is one of the files a demo writes in its folder:
+/// `state.json`, `results.mcap`, `results.rrd` or a numbered
+/// `results-<n>.mcap`/`.rrd` (what a daemon restarted on them writes).
+fn is_demo_file(name: &str) -> bool {
+    let numbered = |ext: &str| {
+        name.strip_prefix("results-")
+            .and_then(|rest| rest.strip_suffix(ext))
+            .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
+    };
+    matches!(name, "state.json" | "results.mcap" | "results.rrd") || numbered(".mcap") || numbered(".rrd")
+}
+
+/// Removes a previous demo's files from `out` (only those, never anything
+/// else), so a demo starts fresh instead of warm-starting from the last
+/// one; returns their names.
+pub fn clear_previous(out: &Path) -> Result<Vec<String>> {
+    let mut removed = Vec::new();
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return Ok(removed);
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if is_demo_file(&name) && entry.path().is_file() {
+            std::fs::remove_file(entry.path()).with_context(|| format!("cannot remove {}", entry.path().display()))?;
+            removed.push(name);
+        }
+    }
+    removed.sort();
+    Ok(removed)
+}
+
+/// The demo files in `out`, sorted: after [`clear_previous`], what the run wrote.
+pub fn written(out: &Path) -> Vec<std::path::PathBuf> {
+    let mut files: Vec<_> = std::fs::read_dir(out)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| is_demo_file(&e.file_name().to_string_lossy()))
+        .map(|e| e.path())
+        .collect();
+    files.sort();
+    files
+}
+
+#[cfg(test)]
+mod tests {
+    use super::is_demo_file;
+
+    #[test]
+    fn only_the_demos_own_files_are_cleared() {
+        for name in [
+            "state.json",
+            "results.mcap",
+            "results.rrd",
+            "results-1.mcap",
+            "results-12.rrd",
+        ] {
+            assert!(is_demo_file(name), "{name}");
+        }
+        for name in [
+            "notes.txt",
+            "results-.mcap",
+            "results-a.mcap",
+            "results.json",
+            "raw",
+            "state.json.bak",
+        ] {
+            assert!(!is_demo_file(name), "{name}");
+        }
+    }
+}

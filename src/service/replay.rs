@@ -125,14 +125,21 @@ pub fn replay<W: Write + Seek>(
     // Blocks still held for the stream's reference (a very short recording).
     let (windows, jobs) = pipeline.finish();
     sink.handle(&mut pipeline, windows, jobs)?;
-    let last_time = sink.last_time;
-    sink.out.write(
-        "health",
-        last_time,
-        &results::health_message(last_time, pipeline.health()),
-    )?;
-    if let Some(v) = sink.viewer {
-        v.log_health(last_time, pipeline.health())?;
+    // The final health, at the last window's end (or, with none closed, the
+    // data analysed so far); without any data there is no measurement time
+    // to stamp it with, and no message.
+    let last_time = Some(sink.last_time)
+        .filter(|&t| t > 0)
+        .or_else(|| pipeline.measured_until().filter(|&t| t > 0));
+    if let Some(last_time) = last_time {
+        sink.out.write(
+            "health",
+            last_time,
+            &results::health_message(last_time, pipeline.health()),
+        )?;
+        if let Some(v) = sink.viewer {
+            v.log_health(last_time, pipeline.health())?;
+        }
     }
     let mut summary = sink.summary;
     summary.accepted = pipeline.accepted().cloned();

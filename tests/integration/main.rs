@@ -9,6 +9,7 @@ mod corpus;
 mod live;
 mod measurements;
 mod paper;
+mod pipes;
 #[cfg(unix)]
 mod reliability;
 mod replay;

@@ -203,6 +203,7 @@ impl RerunOutput {
             ("recording_errors", health.recording_errors),
             ("results_errors", health.results_errors),
             ("rerun_errors", health.rerun_errors),
+            ("log_writes_dropped", health.log_writes_dropped),
         ] {
             self.rec
                 .log(format!("health/{name}").as_str(), &rerun::Scalars::new([value as f64]))

@@ -14,6 +14,10 @@ use zenoh::Wait;
 /// Capacity of the ingest queue, in messages.
 pub const INGEST_QUEUE: usize = 4096;
 
+/// The input key expressions under `<prefix>/`, and whether they carry
+/// pre-computed FRFs (else channel blocks).
+const INPUTS: [(&str, bool); 3] = [("accel/*", false), ("force/*", false), ("frf/**", true)];
+
 /// A message as it arrived, not yet decoded.
 pub(super) struct RawMessage {
     pub(super) encoding: Option<Encoding>,
@@ -45,7 +49,7 @@ impl ZenohLink {
         let (tx, rx) = mpsc::channel::<RawMessage>(INGEST_QUEUE);
         let ingest_drops = Arc::new(AtomicU64::new(0));
         let mut subscribers = Vec::new();
-        for (segment, frf) in [("accel/*", false), ("force/*", false), ("frf/**", true)] {
+        for (segment, frf) in INPUTS {
             let key = format!("{prefix}/{segment}");
             let (tx, drops) = (tx.clone(), Arc::clone(&ingest_drops));
             let sub = session
@@ -104,6 +108,13 @@ impl ZenohLink {
         {
             tracing::warn!(message = "cannot publish", key = %key, error = %e);
         }
+    }
+
+    /// The key expressions the daemon subscribes to, for the log.
+    pub(super) fn inputs(&self) -> String {
+        INPUTS
+            .map(|(segment, _)| format!("{}/{segment}", self.prefix))
+            .join(", ")
     }
 
     /// Replaces the reply to `<prefix>/updating/latest`.

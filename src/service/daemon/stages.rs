@@ -5,8 +5,8 @@ use super::link::{RawMessage, ZenohLink};
 use super::worker::UpdateWorker;
 use super::{notify_systemd, RunOptions, RunSummary};
 use crate::config::Config;
-use crate::io::files;
 use crate::io::wire::{self, ChannelBlock, Encoding, Limits};
+use crate::io::{console, files};
 use crate::outputs::raw_recorder::RawRecorder;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsSink};
@@ -34,6 +34,8 @@ pub(super) struct Daemon {
     last_time: i128,
     /// Rejections already logged: one warning per health tick covers the rest.
     logged_rejections: BTreeMap<String, u64>,
+    /// Whether the log said what an idle daemon waits for.
+    said_waiting: bool,
 }
 
 impl Daemon {
@@ -80,6 +82,7 @@ impl Daemon {
             summary: RunSummary::default(),
             last_time: 0,
             logged_rejections: BTreeMap::new(),
+            said_waiting: false,
         })
     }
 
@@ -149,20 +152,45 @@ impl Daemon {
         Ok(())
     }
 
-    /// Every 10 s: the health message (results, zenoh, Rerun), new
-    /// rejections in the log, the systemd watchdog.
+    /// Every 10 s: the health message (results, zenoh, Rerun) stamped with
+    /// the measurement time analysed so far, new rejections in the log, the
+    /// systemd watchdog. Before any data there is no measurement time: no
+    /// message (never one stamped at the Unix epoch), one log line saying
+    /// what the daemon waits for.
     pub(super) fn on_health_tick(&mut self, link: &ZenohLink) {
         self.sync_counters(link);
-        let h = results::health_message(self.last_time, self.pipeline.health());
-        self.results.write("health", self.last_time, &h);
+        notify_systemd(&[sd_notify::NotifyState::Watchdog]);
+        log_new_rejections(&self.pipeline.health().rejected, &mut self.logged_rejections);
+        let Some(time) = self.health_time() else {
+            if !std::mem::replace(&mut self.said_waiting, true) {
+                tracing::info!(message = "waiting for data", on = %link.inputs());
+            }
+            return;
+        };
+        let h = results::health_message(time, self.pipeline.health());
+        self.results.write("health", time, &h);
         link.publish("health", &h);
-        // Health on the measurement timeline once data has arrived.
-        if let (Some(v), true) = (self.viewer.as_mut(), self.last_time > 0) {
-            let r = v.log_health(self.last_time, self.pipeline.health());
+        if let Some(v) = self.viewer.as_mut() {
+            let r = v.log_health(time, self.pipeline.health());
             count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
         }
-        log_new_rejections(&self.pipeline.health().rejected, &mut self.logged_rejections);
-        notify_systemd(&[sd_notify::NotifyState::Watchdog]);
+        let health = self.pipeline.health();
+        tracing::info!(
+            message = "health",
+            blocks = health.blocks,
+            windows_accepted = health.windows_accepted,
+            updates = health.update_runs,
+            update_failures = health.update_failures,
+            rejected = health.rejected.values().sum::<u64>(),
+            queue_drops = health.queue_drops,
+        );
+    }
+
+    /// The measurement time health is stamped with: the data analysed so far
+    /// (at least the last closed window's end); `None` before any data.
+    fn health_time(&self) -> Option<i128> {
+        let time = self.pipeline.measured_until().unwrap_or(0).max(self.last_time);
+        (time > 0).then_some(time)
     }
 
     /// Lets a running update finish, decides on the blocks still held for
@@ -192,12 +220,18 @@ impl Daemon {
             );
         }
         self.pipeline.health_mut().results_errors = self.results.errors;
-        let h = results::health_message(self.last_time, self.pipeline.health());
-        self.results.write("health", self.last_time, &h);
+        self.pipeline.health_mut().log_writes_dropped = console::log_writes_dropped();
+        let time = self.health_time();
+        if let Some(time) = time {
+            let h = results::health_message(time, self.pipeline.health());
+            self.results.write("health", time, &h);
+        }
         self.results.finish();
         if let Some(mut v) = self.viewer.take() {
-            let r = v.log_health(self.last_time, self.pipeline.health());
-            count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
+            if let Some(time) = time {
+                let r = v.log_health(time, self.pipeline.health());
+                count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
+            }
             count_output_error(v.finish(), &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
         }
         notify_systemd(&[sd_notify::NotifyState::Stopping]);
@@ -207,8 +241,10 @@ impl Daemon {
     }
 
     fn sync_counters(&mut self, link: &ZenohLink) {
-        self.pipeline.health_mut().queue_drops = self.worker.drops + link.ingest_drops();
-        self.pipeline.health_mut().results_errors = self.results.errors;
+        let health = self.pipeline.health_mut();
+        health.queue_drops = self.worker.drops + link.ingest_drops();
+        health.results_errors = self.results.errors;
+        health.log_writes_dropped = console::log_writes_dropped();
     }
 
     /// Writes, publishes, counts and logs a closed window.
