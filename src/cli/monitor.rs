@@ -103,7 +103,16 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     let files = a
         .inputs
         .iter()
-        .map(|p| std::fs::read(p).with_context(|| format!("cannot read {}", p.display())))
+        .map(|p| {
+            let bytes = std::fs::read(p).with_context(|| format!("cannot read {}", p.display()))?;
+            if !bytes.starts_with(mcap::MAGIC) {
+                anyhow::bail!(
+                    "{} is not an MCAP file (it does not start with the MCAP magic)",
+                    p.display()
+                );
+            }
+            Ok(bytes)
+        })
         .collect::<Result<Vec<_>>>()?;
     let recordings: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
     let initial = match &a.state {

@@ -76,22 +76,28 @@ pub struct StructureConfig {
 /// Reads and validates a configuration file.
 pub fn load_config(path: &Path) -> anyhow::Result<Config> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
-    let config = Config::from_toml(&text).with_context(|| format!("invalid config file {}", path.display()))?;
-    config
-        .validate()
-        .with_context(|| format!("invalid config file {}", path.display()))?;
+    let config = Config::from_toml(&text).with_context(|| path.display().to_string())?;
+    config.validate().with_context(|| path.display().to_string())?;
     Ok(config)
 }
 
 impl Config {
-    /// Parses TOML text; `origin` names the source in errors.
+    /// Parses TOML text. A syntax error names its line and column; a value
+    /// of the wrong type or an unknown key names its key path
+    /// (`model.material.density`, or the table holding an unknown key) and
+    /// its line.
     pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
-        let config: Config = toml::from_str(text).map_err(|e| {
-            let path = e
-                .span()
-                .map(|s| line_of(text, s.start))
-                .unwrap_or_else(|| "(document)".into());
-            err(path, e.message())
+        let at = |e: &toml::de::Error| e.span().map(|s| line_of(text, s.start));
+        let document = toml::Deserializer::parse(text)
+            .map_err(|e| err(at(&e).unwrap_or_else(|| "(document)".into()), e.message()))?;
+        let config: Config = serde_path_to_error::deserialize(document).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            let message = match at(&inner) {
+                Some(line) => format!("{} ({line})", inner.message()),
+                None => inner.message().to_string(),
+            };
+            err(if path == "." { "(document)".into() } else { path }, message)
         })?;
         config.validate_names()?;
         Ok(config)
@@ -231,7 +237,7 @@ mod tests {
     fn errors_name_the_key() {
         let e = error_of(|t| t.replace("thickness = 1.6", "thickness = -1.6"));
         assert!(
-            e.contains("model.geometry") && e.contains("thickness") && e.contains("-1.6"),
+            e.contains("config: model.geometry.thickness: ") && e.contains("-1.6"),
             "{e}"
         );
         let e = error_of(|t| {
@@ -265,7 +271,7 @@ mod tests {
         assert!(e.contains("model.springs[0].direction"), "{e}");
         let e = error_of(|t| t.replace("control_points = [13, 5]", "control_points = [13, 4]"));
         assert!(
-            e.contains("model.geometry / model.discretization") && e.contains("4 basis functions"),
+            e.contains("model.discretization.control_points") && e.contains("4 basis functions"),
             "{e}"
         );
         let e = error_of(|t| t.replace("control_points = [13, 5]", "control_points = [13, 99999]"));

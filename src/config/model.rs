@@ -9,7 +9,7 @@ use splinewatch_core::frf::SensorPoint;
 use splinewatch_core::knots::KnotVector;
 use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::shell::Shell;
+use splinewatch_core::shell::{Shell, ShellError};
 use splinewatch_core::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::surface::Direction;
 
@@ -282,7 +282,7 @@ impl Config {
                 d.control_points,
             ),
         }
-        .map_err(|e| err("model.geometry / model.discretization", e))?;
+        .map_err(|e| err(shell_error_key(&e), e))?;
         for (key, direction, knots) in [
             ("insert_knots_xi", Direction::Xi, &d.insert_knots_xi),
             ("insert_knots_eta", Direction::Eta, &d.insert_knots_eta),
@@ -337,6 +337,17 @@ impl Config {
             }
         }
         DampingCurve::new(d.degree, d.coefficients.clone(), d.f_start, d.f_end).map_err(|e| err("model.damping", e))
+    }
+}
+
+/// The key a shell construction error is about.
+fn shell_error_key(e: &ShellError) -> String {
+    match e {
+        ShellError::Thickness { .. } | ShellError::ThicknessCount { .. } => "model.geometry.thickness".into(),
+        ShellError::Dimension { name: "angle", .. } => "model.geometry.angle_deg".into(),
+        ShellError::Dimension { name, .. } => format!("model.geometry.{name}"),
+        ShellError::Surface(_) | ShellError::Knot(_) => "model.discretization.control_points".into(),
+        _ => "model.geometry".into(),
     }
 }
 

@@ -99,6 +99,59 @@ fn bad_config_is_a_clear_error_not_a_panic() {
     }
 }
 
+/// Each kind of error a newcomer met names the key (or the file), once:
+/// a value of the wrong type, an unknown key (with its section), a geometry
+/// error, no doubled `invalid config file …: config:` prefix, and `replay`
+/// on a file that is not MCAP.
+#[test]
+fn config_errors_name_the_key_path() {
+    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
+    let cases = [
+        (
+            "wrong-type.toml",
+            good.replace("density = ", "density = \"975\" # was "),
+            "config: model.material.density: invalid type: string \"975\", expected f64 (line ",
+        ),
+        (
+            "unknown-key-section.toml",
+            good.replace("[model.material]", "[model.material]\nyoung = 1.0"),
+            "config: model.material.young: unknown field `young`, expected one of `e1`",
+        ),
+        (
+            "thickness.toml",
+            good.replace("thickness = 1.6", "thickness = -1.6"),
+            "config: model.geometry.thickness: thickness must be finite and positive, got -1.6",
+        ),
+        (
+            "spring-type.toml",
+            good.replacen("degree_xi = 0", "degree_xi = \"zero\"", 1),
+            "config: model.springs[0].degree_xi: invalid type: string \"zero\"",
+        ),
+    ];
+    for (name, text, expected) in cases {
+        assert_ne!(text, good, "{name}: the edit did not apply");
+        let path = temp_config(name, &text);
+        let out = splinewatch(&["check-config", path.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
+        assert!(
+            stderr.starts_with(&format!("error: {}: config: ", path.display())),
+            "{name}: {stderr}"
+        );
+        assert!(stderr.contains(expected), "{name}: {stderr}");
+        assert_eq!(stderr.matches("config:").count(), 1, "{name}: doubled prefix: {stderr}");
+        assert!(!stderr.contains("invalid config file"), "{name}: {stderr}");
+    }
+    let not_mcap = temp_config("not-a-recording.mcap", "hello");
+    let out = splinewatch(&["replay", "--config", "config/sinello.toml", not_mcap.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(&format!("{} is not an MCAP file", not_mcap.display())),
+        "{stderr}"
+    );
+}
+
 #[test]
 fn check_config_validates_the_zenoh_settings_too() {
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
