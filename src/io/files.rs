@@ -61,8 +61,8 @@ mod tests {
 
     #[test]
     fn numbering_skips_existing_files_and_new_files_get_the_output_mode() {
-        let dir = std::env::temp_dir().join(format!("splinewatch-files-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("files");
         let path = dir.join("results.rrd");
         assert_eq!(first_free(&path), path);
         create_output_file(&path).unwrap();

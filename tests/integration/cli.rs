@@ -1,6 +1,7 @@
 //! End-to-end tests of the `splinewatch` binary on the bundled configuration.
 
-use std::path::PathBuf;
+use crate::common::fresh_dir;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn splinewatch(args: &[&str]) -> Output {
@@ -11,9 +12,8 @@ fn splinewatch(args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
-fn temp_config(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("splinewatch-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// Writes a test input into the test's folder.
+fn temp_config(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, text).unwrap();
     path
@@ -48,6 +48,7 @@ fn modes_table_is_human_readable() {
 
 #[test]
 fn bad_config_is_a_clear_error_not_a_panic() {
+    let dir = fresh_dir("cli");
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
     let cases = [
         (
@@ -85,7 +86,7 @@ fn bad_config_is_a_clear_error_not_a_panic() {
         ),
     ];
     for (name, text, expected) in cases {
-        let path = temp_config(name, &text);
+        let path = temp_config(&dir, name, &text);
         for args in [
             vec!["modes", "--config", path.to_str().unwrap()],
             vec!["check-config", path.to_str().unwrap()],
@@ -105,6 +106,7 @@ fn bad_config_is_a_clear_error_not_a_panic() {
 /// on a file that is not MCAP.
 #[test]
 fn config_errors_name_the_key_path() {
+    let dir = fresh_dir("cli");
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
     let cases = [
         (
@@ -130,7 +132,7 @@ fn config_errors_name_the_key_path() {
     ];
     for (name, text, expected) in cases {
         assert_ne!(text, good, "{name}: the edit did not apply");
-        let path = temp_config(name, &text);
+        let path = temp_config(&dir, name, &text);
         let out = splinewatch(&["check-config", path.to_str().unwrap()]);
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{name}: {stderr}");
@@ -142,7 +144,7 @@ fn config_errors_name_the_key_path() {
         assert_eq!(stderr.matches("config:").count(), 1, "{name}: doubled prefix: {stderr}");
         assert!(!stderr.contains("invalid config file"), "{name}: {stderr}");
     }
-    let not_mcap = temp_config("not-a-recording.mcap", "hello");
+    let not_mcap = temp_config(&dir, "not-a-recording.mcap", "hello");
     let out = splinewatch(&["replay", "--config", "config/sinello.toml", not_mcap.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
@@ -154,8 +156,10 @@ fn config_errors_name_the_key_path() {
 
 #[test]
 fn check_config_validates_the_zenoh_settings_too() {
+    let dir = fresh_dir("cli");
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
     let missing = temp_config(
+        &dir,
         "zenoh-file-missing.toml",
         &(good.clone() + "\n[zenoh]\nconfig_file = \"/nonexistent/zenoh.json5\"\n"),
     );
@@ -169,6 +173,7 @@ fn check_config_validates_the_zenoh_settings_too() {
     // The example site configuration passes.
     let example = concat!(env!("CARGO_MANIFEST_DIR"), "/config/zenoh/splinewatch-client.json5");
     let ok = temp_config(
+        &dir,
         "zenoh-example.toml",
         &(good
             + &format!(
@@ -181,8 +186,7 @@ fn check_config_validates_the_zenoh_settings_too() {
 
 #[test]
 fn synth_then_update_round_trip_json() {
-    let dir = std::env::temp_dir().join(format!("splinewatch-cli-rt-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("cli-rt");
     let frf = dir.join("frf.json");
     let out = splinewatch(&[
         "synth",
@@ -244,8 +248,7 @@ fn synth_then_update_round_trip_json() {
 
 #[test]
 fn bad_frf_files_are_clear_errors_not_panics() {
-    let dir = std::env::temp_dir().join(format!("splinewatch-cli-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("cli-bad");
     let good = serde_json::json!({
         "quantity": "accelerance",
         "frequency_hz": [1.0, 2.0, 3.0],

@@ -10,16 +10,16 @@ use splinewatch::studies;
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
-use crate::common::{bundled_blocks, free_endpoint, spawn_daemon, terminate, wait_for_file, KillOnDrop};
+use crate::common::{
+    bundled_blocks, free_endpoint, fresh_dir, spawn_daemon, terminate, wait_for_file, KillOnDrop, TestDir,
+};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("splinewatch-live-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn temp(name: &str) -> TestDir {
+    fresh_dir(&format!("live-{name}"))
 }
 
 #[test]

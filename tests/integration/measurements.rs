@@ -164,8 +164,8 @@ fn gaps_and_missing_channels_are_clear_errors() {
 #[test]
 fn raw_recorder_rotates_by_size_and_survives_an_unusable_folder() {
     use splinewatch::{config::RawRecordingConfig, outputs::raw_recorder::RawRecorder};
-    let dir = std::env::temp_dir().join(format!("splinewatch-recorder-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = crate::common::fresh_dir("recorder");
+    let dir = tmp.join("raw");
     let bytes = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/sinello-demo.mcap")).unwrap();
     let (blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
     let settings = RawRecordingConfig {

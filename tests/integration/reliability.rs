@@ -207,8 +207,8 @@ fn results_survive_a_full_disk() {
 #[test]
 fn results_rotate_by_measurement_time_with_one_unfinalised_file_at_most() {
     use splinewatch::outputs::results::{results_files, ResultsSink};
-    let dir = std::env::temp_dir().join(format!("splinewatch-rotate-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = fresh_dir("rotate");
+    let dir = tmp.join("results");
     let hour: i128 = 3_600_000_000_000;
     let start: i128 = 1_790_000_000 * 1_000_000_000;
     let mut sink = ResultsSink::new("bridge/test", results_files(&dir.join("results.mcap")))

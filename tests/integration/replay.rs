@@ -90,8 +90,8 @@ fn replay_is_deterministic() {
 #[test]
 fn the_state_file_warm_starts_a_restart() {
     let cfg = config();
-    let dir = std::env::temp_dir().join(format!("splinewatch-state-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let tmp = fresh_dir("state");
+    let dir = tmp.join("state");
     let state = dir.join("state.json");
     let (_, first) = run(&cfg, Some(&state));
     let saved = load_state(&state).unwrap().expect("written");
@@ -131,8 +131,7 @@ fn time_based_scheduling_updates_every_t_minutes() {
 #[test]
 fn replay_writes_a_rerun_recording_with_every_view() {
     let cfg = config();
-    let dir = std::env::temp_dir().join(format!("splinewatch-rrd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = fresh_dir("rrd");
     let path = dir.join("replay.rrd");
     let targets = splinewatch::outputs::rerun::RerunTargets {
         save: Some(path.clone()),

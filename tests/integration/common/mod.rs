@@ -87,11 +87,31 @@ pub fn wait_for_file(path: &std::path::Path) -> bool {
     path.exists()
 }
 
-/// An empty folder `splinewatch-<name>-<pid>` under the system temp folder
-/// (whatever an earlier run left there is removed).
-pub fn fresh_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("splinewatch-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// An empty folder `splinewatch-<name>-…` under the system temp folder,
+/// removed with everything in it when dropped (tempfile): the tests leave
+/// nothing behind. It derefs to its path.
+pub fn fresh_dir(name: &str) -> TestDir {
+    TestDir(
+        tempfile::Builder::new()
+            .prefix(&format!("splinewatch-{name}-"))
+            .tempdir()
+            .unwrap(),
+    )
+}
+
+/// A test's temporary folder (see [`fresh_dir`]).
+pub struct TestDir(tempfile::TempDir);
+
+impl std::ops::Deref for TestDir {
+    type Target = std::path::Path;
+
+    fn deref(&self) -> &std::path::Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<std::path::Path> for TestDir {
+    fn as_ref(&self) -> &std::path::Path {
+        self.0.path()
+    }
 }
