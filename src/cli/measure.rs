@@ -14,6 +14,7 @@ use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct SimulateArgs {
+    /// Configuration file (TOML).
     #[arg(long)]
     pub config: PathBuf,
     /// Length of the recording, seconds.
@@ -58,6 +59,7 @@ pub struct SimulateArgs {
 
 #[derive(Args)]
 pub struct FrfArgs {
+    /// Configuration file (TOML).
     #[arg(long)]
     pub config: PathBuf,
     /// Recording (MCAP).

@@ -46,7 +46,7 @@ enum Command {
     /// scenario over zenoh on loopback at high speed, the daemon updates the model.
     Demo(monitor::DemoArgs),
     /// Soak test: the daemon in one process with a publisher replaying a
-    /// recording in a loop, unpaced, for many hours of data; reports RSS.
+    /// recording in a loop at --speed × real time, for many hours of data; reports RSS.
     Soak(monitor::SoakArgs),
     /// Salvage an MCAP file left unfinished by a killed process (results,
     /// raw-input `.part` files): copies every message of every complete chunk

@@ -27,6 +27,7 @@ pub struct ModesArgs {
 
 #[derive(Args)]
 pub struct SynthArgs {
+    /// Configuration file (TOML).
     #[arg(long)]
     pub config: PathBuf,
     /// Input (force) sensors, comma-separated.
@@ -60,6 +61,7 @@ pub struct SynthArgs {
 
 #[derive(Args)]
 pub struct UpdateArgs {
+    /// Configuration file (TOML).
     #[arg(long)]
     pub config: PathBuf,
     /// Measured FRFs (FRF JSON).

@@ -9,12 +9,15 @@ use crate::outputs::rerun::{self, RerunOutput};
 use crate::outputs::results::ResultsWriter;
 use crate::outputs::state;
 use crate::service::{daemon, demo, replay, soak};
+use crate::studies;
 use anyhow::{Context, Result};
 use clap::Args;
+use std::io::Write;
 use std::path::PathBuf;
 
 #[derive(Args)]
 pub struct ReplayArgs {
+    /// Configuration file (TOML).
     #[arg(long)]
     pub config: PathBuf,
     /// Recordings (MCAP), replayed in the order given (e.g. a daemon's rotated raw files).
@@ -37,6 +40,7 @@ pub struct ReplayArgs {
 
 #[derive(Args)]
 pub struct RunArgs {
+    /// Configuration file (TOML).
     #[arg(long)]
     pub config: PathBuf,
     /// State file (default: [output] state_file or <output.dir>/state.json).
@@ -56,6 +60,7 @@ pub struct RunArgs {
 
 #[derive(Args)]
 pub struct DemoArgs {
+    /// Configuration file (TOML).
     #[arg(long, default_value = "config/sinello.toml")]
     pub config: PathBuf,
     /// Output folder.
@@ -71,6 +76,7 @@ pub struct DemoArgs {
 
 #[derive(Args)]
 pub struct SoakArgs {
+    /// Configuration file (TOML).
     #[arg(long, default_value = "config/sinello.toml")]
     pub config: PathBuf,
     #[arg(long, default_value = "recordings/sinello-demo.mcap")]
@@ -81,7 +87,7 @@ pub struct SoakArgs {
     /// Analysis window (the bridge setting is 10 minutes).
     #[arg(long, default_value_t = 10.0)]
     pub window_minutes: f64,
-    /// Publishing speed in multiples of real time; 0 = unpaced (a flood).
+    /// Publishing speed in multiples of real time (default 1000); 0 = unpaced (a flood).
     #[arg(long, default_value_t = 1000.0)]
     pub speed: f64,
     #[arg(long, default_value = "out/soak")]
@@ -154,13 +160,11 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         out.display()
     );
     if let Some(acc) = &summary.accepted {
+        let mut out = crate::io::console::Stdout;
+        studies::write_parameter_header(&mut out, false)?;
         for p in &acc.parameters {
-            outln!(
-                "{:<14} {:>14.6e} {:>12}",
-                p.name,
-                p.value,
-                p.std.map_or("-".into(), |s| format!("{s:.3e}"))
-            );
+            studies::write_parameter_row(&mut out, &p.name, p.value, p.std)?;
+            writeln!(out)?;
         }
     }
     Ok(())

@@ -67,23 +67,55 @@ pub fn update(
     Ok(problem.solve_observed(&start, progress)?)
 }
 
+/// The unit of a parameter: spring coefficients κ in N/m³ (eq. 19), the
+/// damping curve's coefficients γ are ratios.
+pub fn parameter_unit(name: &str) -> &'static str {
+    if name.starts_with("damping.") {
+        "-"
+    } else {
+        "N/m³"
+    }
+}
+
+/// One row of the parameter tables of `update` and `replay`: name, unit,
+/// value, standard deviation and its percentage of the value.
+pub fn write_parameter_row(out: &mut impl Write, name: &str, value: f64, std: Option<f64>) -> Result<()> {
+    let (std, pct) = match std {
+        Some(s) => (format!("{s:.4e}"), format!("{:.2}", 100.0 * s / value.abs())),
+        None => ("unidentif.".to_string(), "-".to_string()),
+    };
+    write!(
+        out,
+        "{:<14} {:<5} {:>14.6e} {:>12} {:>7}",
+        name,
+        parameter_unit(name),
+        value,
+        std,
+        pct
+    )?;
+    Ok(())
+}
+
+/// The header of the parameter tables (`bounds`: with lower and upper).
+pub fn write_parameter_header(out: &mut impl Write, bounds: bool) -> Result<()> {
+    write!(
+        out,
+        "{:<14} {:<5} {:>14} {:>12} {:>7}",
+        "parameter", "unit", "value", "std", "std %"
+    )?;
+    if bounds {
+        write!(out, " {:>12} {:>12}", "lower", "upper")?;
+    }
+    writeln!(out)?;
+    Ok(())
+}
+
 /// The final table of `splinewatch update`.
 pub fn write_update_table(result: &UpdateResult, out: &mut impl Write) -> Result<()> {
-    writeln!(
-        out,
-        "{:<14} {:>14} {:>12} {:>7} {:>12} {:>12}",
-        "parameter", "value", "std", "std %", "lower", "upper"
-    )?;
+    write_parameter_header(out, true)?;
     for p in &result.parameters {
-        let (std, pct) = match p.std {
-            Some(s) => (format!("{s:.4e}"), format!("{:.2}", 100.0 * s / p.value.abs())),
-            None => ("unidentif.".to_string(), "-".to_string()),
-        };
-        writeln!(
-            out,
-            "{:<14} {:>14.6e} {:>12} {:>7} {:>12.4e} {:>12.4e}",
-            p.name, p.value, std, pct, p.lower, p.upper
-        )?;
+        write_parameter_row(out, &p.name, p.value, p.std)?;
+        writeln!(out, " {:>12.4e} {:>12.4e}", p.lower, p.upper)?;
     }
     writeln!(
         out,
