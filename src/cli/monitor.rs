@@ -220,7 +220,10 @@ pub fn run(a: RunArgs) -> Result<()> {
     .replace(':', "-");
     let out = a.out.unwrap_or_else(|| dir.join(format!("results-{stamp}.mcap")));
     let rerun = rerun::targets(&cfg, a.rerun_save.as_deref(), a.rerun_connect.as_deref());
-    tracing::info!(message = "effective configuration", config = ?cfg);
+    // Compact JSON (defaults filled in), one line; secrets live in the zenoh
+    // JSON5 file, which is only named here.
+    let effective = serde_json::to_string(&cfg).unwrap_or_else(|e| format!("(not serialisable: {e})"));
+    tracing::info!(message = "effective configuration", config = %effective);
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     let summary = runtime.block_on(daemon::run(
         cfg,

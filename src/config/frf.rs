@@ -1,12 +1,12 @@
 //! `[frf]`: Welch FRF estimation from time series, and the channel roles.
 
 use super::{err, Config, ConfigError};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use splinewatch_core::frf::Quantity;
 use splinewatch_core::welch::{Averaging, Detrend, Estimator, Gates, WelchSettings, Window};
 
 /// `[frf]`: Welch FRF estimation from time series.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FrfConfig {
     /// Welch segment length, seconds.

@@ -26,7 +26,7 @@ pub use updating::UpdatingConfig;
 pub use zenoh::ZenohConfig;
 
 use anyhow::Context;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::fmt::Display;
 use std::path::Path;
 use thiserror::Error;
@@ -46,7 +46,7 @@ pub(crate) fn err(path: impl Into<String>, message: impl Display) -> ConfigError
     }
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct Config {
     pub structure: StructureConfig,
@@ -65,7 +65,7 @@ pub struct Config {
     pub zenoh: ZenohConfig,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct StructureConfig {
     /// Identifier of the monitored structure; also the default zenoh/MCAP prefix

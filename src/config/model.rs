@@ -2,7 +2,7 @@
 //! constraints, damping curve and measurement points, built into core types.
 
 use super::{err, Config, ConfigError};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::SensorPoint;
@@ -17,7 +17,7 @@ use splinewatch_core::surface::Direction;
 /// 10 000 dofs already takes minutes).
 pub const MAX_CONTROL_POINTS: usize = 2000;
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelConfig {
     pub geometry: GeometryConfig,
@@ -31,7 +31,7 @@ pub struct ModelConfig {
 }
 
 /// `[model.damping]`: the B-spline ζ(f) of eq. (29).
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DampingConfig {
     pub degree: usize,
@@ -47,7 +47,7 @@ pub struct DampingConfig {
 }
 
 /// A measurement point: parametric `xi`/`eta` or physical `x`/`y`.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorConfig {
     pub name: String,
@@ -73,7 +73,7 @@ fn default_face() -> FaceConfig {
     FaceConfig::Middle
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum QuantityList {
     One(String),
@@ -89,7 +89,7 @@ impl QuantityList {
     }
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum GeometryConfig {
     /// `[0, length] × [0, width]` in the xy plane, x along ξ.
@@ -103,7 +103,7 @@ pub enum GeometryConfig {
     },
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct DiscretizationConfig {
     /// B-spline degrees `[p, q]` along ξ and η.
@@ -122,7 +122,7 @@ fn default_shear_correction() -> f64 {
     5.0 / 6.0
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialConfig {
     pub e1: f64,
@@ -138,7 +138,7 @@ pub struct MaterialConfig {
     pub shear_correction: f64,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(untagged)]
 pub enum DirectionConfig {
     /// `"x"`, `"y"`, `"z"` or `"normal"`.
@@ -147,7 +147,7 @@ pub enum DirectionConfig {
     Vector([f64; 3]),
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum FaceConfig {
     Bottom,
@@ -160,7 +160,7 @@ pub(crate) fn default_true() -> bool {
     true
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpringConfig {
     pub name: String,
@@ -179,7 +179,7 @@ pub struct SpringConfig {
     pub update: bool,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum EdgeConfig {
     Xi0,
@@ -188,7 +188,7 @@ pub enum EdgeConfig {
     Eta1,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum SupportConfig {
     SimplySupported,
@@ -196,7 +196,7 @@ pub enum SupportConfig {
     Clamped,
 }
 
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintConfig {
     pub edge: EdgeConfig,

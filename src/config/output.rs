@@ -1,11 +1,11 @@
 //! `[output]` and `[output.raw]`: where results, state, Rerun and raw-input
 //! recordings go, and when their files rotate.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// `[output]`: where results go.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct OutputConfig {
     /// Folder for results MCAP files and the state file (default `out/<structure.name>`).
@@ -40,7 +40,7 @@ impl Default for OutputConfig {
 }
 
 /// `[output.raw]`: optional raw-input recording.
-#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct RawRecordingConfig {
     pub enabled: bool,

@@ -1,9 +1,9 @@
 //! `[schedule]`: when the updating runs and which windows it accepts.
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 /// Scheduling and quality settings (`[schedule]`).
-#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScheduleConfig {
     /// Run the updating after this many accepted windows.

@@ -1,7 +1,7 @@
 //! `[updating]`: the solver's settings and the updating parameters.
 
 use super::{err, Config, ConfigError};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use splinewatch_core::updating::{LineSelection, Method, Parameter, ParameterKind, UpdateSettings, Weighting};
 
 fn default_max_iterations() -> usize {
@@ -24,7 +24,7 @@ fn default_decimation() -> usize {
 }
 
 /// `[updating]`: solver and data selection.
-#[derive(Debug, Clone, Deserialize)]
+#[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct UpdatingConfig {
     #[serde(default = "default_max_iterations")]

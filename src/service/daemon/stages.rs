@@ -282,7 +282,8 @@ impl Daemon {
                 tracing::info!(
                     message = "update accepted",
                     window = outcome.window,
-                    relative_residual = r.result.relative_residual
+                    relative_residual = %format_args!("{:.4}", r.result.relative_residual),
+                    iterations = r.result.iterations.len().saturating_sub(1)
                 );
                 if let (Some(path), Some(accepted)) = (&self.state, self.pipeline.accepted()) {
                     // A failed state write is logged and retried at the next update; the run goes on.
