@@ -3,11 +3,13 @@
 use super::parse_encoding;
 use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
+use crate::io::import::{self, CsvOptions};
 use crate::io::recording::{read_recording, RecordingWriter};
 use crate::io::wire::{self, Encoding, Limits};
 use crate::outputs::publisher::Publisher;
 use crate::pipeline::estimate;
 use crate::studies::simulation::{self, Excitation, SimulationOptions};
+use crate::studies::{self, import::ImportOptions};
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -76,6 +78,98 @@ pub struct FrfArgs {
     /// Print the FRF JSON on stdout (the default without --out).
     #[arg(long)]
     pub json: bool,
+}
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum ImportFormat {
+    /// Comma-, semicolon- or tab-separated values with a header row.
+    Csv,
+    /// Universal file format, dataset 58 time responses (ASCII).
+    Uff,
+}
+
+#[derive(Args)]
+pub struct ImportArgs {
+    /// Configuration file (TOML): its [[sensors]] name the channels.
+    #[arg(long)]
+    pub config: PathBuf,
+    /// File format.
+    #[arg(long, value_enum)]
+    pub format: ImportFormat,
+    /// The logger's file.
+    pub input: PathBuf,
+    /// Output recording (MCAP).
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Sampling rate, Hz (when the file has no time column; overrides the file's).
+    #[arg(long)]
+    pub fs: Option<f64>,
+    /// Time of the first sample, RFC 3339 (when the file's time is relative or absent).
+    #[arg(long)]
+    pub start: Option<String>,
+    /// CSV: field delimiter (default: detected among `,`, `;`, tab).
+    #[arg(long)]
+    pub delimiter: Option<char>,
+    /// CSV: numbers use a decimal comma (default: detected).
+    #[arg(long)]
+    pub decimal_comma: bool,
+    /// CSV: the time column (default: one named time, t, time_s, timestamp or seconds).
+    #[arg(long)]
+    pub time_column: Option<String>,
+    /// Samples per message, seconds.
+    #[arg(long, default_value_t = 1.0)]
+    pub block_seconds: f64,
+    /// Message encoding: cbor or json.
+    #[arg(long, default_value = "cbor", value_parser = parse_encoding)]
+    pub encoding: Encoding,
+}
+
+pub fn import(a: ImportArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let text = std::fs::read_to_string(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
+    let series = match a.format {
+        ImportFormat::Csv => {
+            let delimiter = a
+                .delimiter
+                .map(|d| u8::try_from(d).map_err(|_| anyhow::anyhow!("--delimiter {d:?} is not one ASCII character")))
+                .transpose()?;
+            let options = CsvOptions {
+                delimiter,
+                decimal_comma: a.decimal_comma.then_some(true),
+                time_column: a.time_column.clone(),
+            };
+            import::read_csv(&text, &options)
+        }
+        ImportFormat::Uff => import::read_uff58(&text),
+    }
+    .with_context(|| a.input.display().to_string())?;
+    let start_ns = a
+        .start
+        .as_deref()
+        .map(|s| wire::parse_timestamp(s).with_context(|| format!("--start {s:?} is not an RFC 3339 timestamp")))
+        .transpose()?;
+    if !(a.block_seconds.is_finite() && a.block_seconds > 0.0) {
+        anyhow::bail!("--block-seconds must be positive, got {}", a.block_seconds);
+    }
+    let options = ImportOptions {
+        fs: a.fs,
+        start_ns,
+        block_seconds: a.block_seconds,
+    };
+    let blocks = studies::import::to_blocks(&cfg, series, &options).with_context(|| a.input.display().to_string())?;
+    let prefix = cfg.topic_prefix();
+    let mut writer = RecordingWriter::create(&a.out, a.encoding)?;
+    for b in &blocks {
+        writer.write_block(&prefix, b)?;
+    }
+    writer.finish()?;
+    errln!(
+        "{} blocks from {} written to {}",
+        blocks.len(),
+        a.input.display(),
+        a.out.display()
+    );
+    Ok(())
 }
 
 pub fn simulate(a: SimulateArgs) -> Result<()> {

@@ -36,6 +36,9 @@ enum Command {
     Paper(model::PaperArgs),
     /// Simulate the configured bridge under excitation and write a raw-input MCAP recording.
     Simulate(measure::SimulateArgs),
+    /// Convert a logger's time series (CSV/TSV or UFF 58) into a raw-input
+    /// MCAP recording, one channel per column, named after the config's sensors.
+    Import(measure::ImportArgs),
     /// Estimate FRFs (Welch, [frf] settings) from a raw-input MCAP recording.
     Frf(measure::FrfArgs),
     /// Run the monitoring pipeline over raw-input recordings as fast as the CPU allows.
@@ -65,6 +68,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Paper(args) => model::paper(args),
         Command::Simulate(args) => measure::simulate(args),
         Command::Frf(args) => measure::frf(args),
+        Command::Import(args) => measure::import(args),
         Command::Replay(args) => monitor::replay(args),
         Command::Run(args) => monitor::run(args),
         Command::Demo(args) => monitor::demo(args),

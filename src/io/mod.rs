@@ -1,10 +1,12 @@
 //! Bytes in and out: the console (never fatal), the wire format of channel blocks, MCAP recordings, FRF
-//! files, output-file creation and numbering, and salvaging unfinished MCAP.
+//! files, loggers' CSV and UFF 58 files, output-file creation and numbering,
+//! and salvaging unfinished MCAP.
 //! Room: the bottom of the application. May import: the core crate only.
 
 pub mod console;
 pub mod files;
 pub mod frf_json;
+pub mod import;
 pub mod recording;
 pub mod recover;
 pub mod wire;

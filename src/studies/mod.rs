@@ -1,9 +1,11 @@
 //! Offline studies of the configured model, each returning its output as a
 //! value or writing to a given writer, so tests run them without a process:
 //! modes, synthetic FRFs, updating against an FRF file, the paper's §4
-//! experiments and the time-domain simulation of the deck.
+//! experiments, the time-domain simulation of the deck and the import of
+//! loggers' files.
 //! Room: below the services, beside the pipeline. May import: `config`, `io`, the core crate.
 
+pub mod import;
 pub mod modes;
 pub mod paper;
 pub mod simulation;

@@ -6,6 +6,7 @@ mod architecture;
 mod cli;
 mod common;
 mod corpus;
+mod import;
 mod live;
 mod measurements;
 mod paper;

@@ -1,0 +1,183 @@
+//! `splinewatch import`: columns read from a logger's file (CSV/TSV, UFF 58)
+//! mapped to the config's sensors and cut into wire-format channel blocks,
+//! ready for a raw-input recording that `replay` and `frf` read.
+//!
+//! A column belongs to the sensor it names (exactly, else ignoring case);
+//! `P1:force` / `P1:acceleration` say which quantity of a sensor that
+//! measures both, as do a unit (`N`, `kN` → force; `m/s^2`, `m/s²`, `g` →
+//! acceleration, converted to SI) and a UFF ordinate type.
+
+use crate::config::Config;
+use crate::io::import::{ImportedChannel, ImportedSeries};
+use crate::io::wire::{format_timestamp, ChannelBlock, ChannelQuantity};
+use anyhow::{bail, Context, Result};
+
+/// What the file may not say.
+#[derive(Debug, Clone)]
+pub struct ImportOptions {
+    /// Sampling rate, Hz (overrides the file's, which must agree within 1e-4).
+    pub fs: Option<f64>,
+    /// Time of the first sample (overrides an absolute time column).
+    pub start_ns: Option<i128>,
+    /// Samples per block, seconds.
+    pub block_seconds: f64,
+}
+
+/// One mapped column: sensor name, quantity, samples in SI units.
+struct Mapped {
+    sensor: usize,
+    quantity: ChannelQuantity,
+    data: Vec<f64>,
+}
+
+/// The series as channel blocks in time order (per block interval: force
+/// first, then the sensors in config order).
+pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOptions) -> Result<Vec<ChannelBlock>> {
+    let fs = sampling_rate(series.fs, options.fs)?;
+    let start_ns = match (options.start_ns, series.start_ns) {
+        (Some(t), _) => t + (series.offset_seconds * 1e9).round() as i128,
+        (None, Some(t)) => t,
+        (None, None) => bail!("the file gives no absolute start time: pass --start (RFC 3339)"),
+    };
+    let mut mapped = series
+        .channels
+        .into_iter()
+        .map(|c| map_channel(config, c))
+        .collect::<Result<Vec<_>>>()?;
+    for (i, m) in mapped.iter().enumerate() {
+        if mapped[..i]
+            .iter()
+            .any(|o| o.sensor == m.sensor && o.quantity == m.quantity)
+        {
+            bail!(
+                "two columns give the {:?} of sensor {:?}",
+                m.quantity,
+                config.sensors[m.sensor].name
+            );
+        }
+    }
+    let samples = mapped.first().map_or(0, |m| m.data.len());
+    if samples == 0 {
+        bail!("the file holds no samples");
+    }
+    if let Some(m) = mapped.iter().find(|m| m.data.len() != samples) {
+        bail!(
+            "channel {:?} has {} samples, the first one {samples}: every channel must cover the same span",
+            config.sensors[m.sensor].name,
+            m.data.len()
+        );
+    }
+    mapped.sort_by_key(|m| (m.quantity != ChannelQuantity::Force, m.sensor));
+    let block_len = ((options.block_seconds * fs).round() as usize).max(1);
+    let mut blocks = Vec::with_capacity(mapped.len() * samples.div_ceil(block_len));
+    for first in (0..samples).step_by(block_len) {
+        let last = (first + block_len).min(samples);
+        for m in &mapped {
+            blocks.push(ChannelBlock {
+                name: config.sensors[m.sensor].name.clone(),
+                quantity: m.quantity,
+                unit: m.quantity.unit().into(),
+                fs,
+                start_ns: start_ns + (first as f64 * 1e9 / fs).round() as i128,
+                data: m.data[first..last].to_vec(),
+            });
+        }
+    }
+    tracing::info!(
+        message = "imported",
+        channels = mapped.len(),
+        samples,
+        fs,
+        start = %format_timestamp(start_ns)
+    );
+    Ok(blocks)
+}
+
+fn sampling_rate(file: Option<f64>, flag: Option<f64>) -> Result<f64> {
+    match (file, flag) {
+        (_, Some(f)) if !(f.is_finite() && f > 0.0) => bail!("--fs {f} is not a positive rate"),
+        (Some(file), Some(flag)) if (file - flag).abs() > 1e-4 * flag => {
+            bail!("--fs {flag} Hz disagrees with the file's {file} Hz")
+        }
+        (_, Some(f)) | (Some(f), None) => Ok(f),
+        (None, None) => bail!("the file gives no sampling rate (no time column): pass --fs"),
+    }
+}
+
+/// The quantity a unit implies and the factor to SI.
+fn unit_quantity(unit: &str) -> Option<(ChannelQuantity, f64)> {
+    match unit.trim() {
+        "N" => Some((ChannelQuantity::Force, 1.0)),
+        "kN" => Some((ChannelQuantity::Force, 1e3)),
+        "m/s^2" | "m/s²" | "m/s2" | "m s^-2" => Some((ChannelQuantity::Acceleration, 1.0)),
+        "g" => Some((ChannelQuantity::Acceleration, 9.806_65)),
+        _ => None,
+    }
+}
+
+fn map_channel(config: &Config, c: ImportedChannel) -> Result<Mapped> {
+    let (base, suffix) = match c.name.rsplit_once(':') {
+        Some((b, q)) => (b, Some(q)),
+        None => (c.name.as_str(), None),
+    };
+    let names: Vec<&str> = config.sensors.iter().map(|s| s.name.as_str()).collect();
+    let sensor = names
+        .iter()
+        .position(|n| *n == base)
+        .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(base)))
+        .with_context(|| {
+            format!(
+                "column {:?} matches no [[sensors]] name (sensors: {})",
+                c.name,
+                names.join(", ")
+            )
+        })?;
+    let measured: Vec<ChannelQuantity> = config.sensors[sensor]
+        .quantity
+        .as_slice()
+        .iter()
+        .filter_map(|q| ChannelQuantity::from_wire(q))
+        .collect();
+    let (from_unit, scale) = match c.unit.as_deref() {
+        Some(u) => {
+            let (q, s) = unit_quantity(u)
+                .with_context(|| format!("column {:?}: unit {u:?} is not N, kN, m/s^2 or g", c.name))?;
+            (Some(q), s)
+        }
+        None => (None, 1.0),
+    };
+    let from_suffix = match suffix {
+        Some(q) => Some(
+            ChannelQuantity::from_wire(q)
+                .with_context(|| format!("column {:?}: {q:?} is not force or acceleration", c.name))?,
+        ),
+        None => None,
+    };
+    let stated: Vec<ChannelQuantity> = [from_suffix, from_unit, c.quantity].into_iter().flatten().collect();
+    if stated.windows(2).any(|w| w[0] != w[1]) {
+        bail!("column {:?}: its name, unit and file disagree on the quantity", c.name);
+    }
+    let candidates: Vec<ChannelQuantity> = measured
+        .into_iter()
+        .filter(|q| stated.first().is_none_or(|s| s == q))
+        .collect();
+    let quantity = match candidates.as_slice() {
+        [one] => *one,
+        [] => bail!(
+            "column {:?}: sensor {:?} measures no {}",
+            c.name,
+            names[sensor],
+            stated.first().map_or("force or acceleration", |q| match q {
+                ChannelQuantity::Force => "force",
+                ChannelQuantity::Acceleration => "acceleration",
+            })
+        ),
+        _ => bail!(
+            "column {:?}: sensor {:?} measures force and acceleration; name the column {0}:force or {0}:acceleration, or give its unit",
+            c.name,
+            names[sensor]
+        ),
+    };
+    let data = c.data.into_iter().map(|v| v * scale).collect();
+    Ok(Mapped { sensor, quantity, data })
+}

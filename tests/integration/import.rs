@@ -1,0 +1,274 @@
+//! `splinewatch import`: loggers' CSV/TSV and UFF 58 files into recordings.
+//! The committed fixtures (tests/fixtures/make_import_fixtures.py) were
+//! written by pyuff and in a logger's CSV style; the round trips write the
+//! bundled recording out as CSV and UFF 58 and check that the imported
+//! recording replays to the same parameters.
+
+use crate::common::{bundled_blocks, fresh_dir};
+use splinewatch::config::load_config;
+use splinewatch::io::recording::{read_recording, RecordedBlock};
+use splinewatch::io::wire::{parse_timestamp, ChannelQuantity};
+use splinewatch::outputs::results::ResultsWriter;
+use splinewatch::service::replay::{replay, ReplayOptions};
+use std::path::Path;
+use std::process::Command;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn import(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .arg("import")
+        .args(["--config", "config/sinello.toml"])
+        .args(args)
+        .current_dir(root())
+        .output()
+        .unwrap()
+}
+
+/// The blocks of an imported recording, per channel, concatenated.
+/// An imported channel: name, quantity, rate, start, samples.
+type Channel = (String, ChannelQuantity, f64, i128, Vec<f64>);
+
+fn channels(path: &Path) -> Vec<Channel> {
+    let (blocks, rejected) = read_recording(&std::fs::read(path).unwrap(), &Default::default()).unwrap();
+    assert!(rejected.is_empty());
+    let mut out: Vec<Channel> = Vec::new();
+    for b in blocks.iter().map(|b| &b.block) {
+        match out.iter_mut().find(|c| c.0 == b.name && c.1 == b.quantity) {
+            Some(c) => c.4.extend_from_slice(&b.data),
+            None => out.push((b.name.clone(), b.quantity, b.fs, b.start_ns, b.data.clone())),
+        }
+    }
+    out
+}
+
+/// The fixtures' formulas: P1 force 100 sin(2π·3t) N, P2 0.5 cos(2π·5t) m/s².
+fn check_fixture_channels(path: &Path, tolerance: f64) {
+    let start = parse_timestamp("2026-11-21T10:00:00Z").unwrap();
+    let got = channels(path);
+    assert_eq!(got.len(), 2, "{:?}", got.iter().map(|c| &c.0).collect::<Vec<_>>());
+    let t = |k: usize| k as f64 / 256.0;
+    for (name, quantity, fs, start_ns, data) in &got {
+        assert_eq!((*fs, *start_ns, data.len()), (256.0, start, 512), "{name}");
+        let expected = |k: usize| match quantity {
+            ChannelQuantity::Force => 100.0 * (2.0 * std::f64::consts::PI * 3.0 * t(k)).sin(),
+            ChannelQuantity::Acceleration => 0.5 * (2.0 * std::f64::consts::PI * 5.0 * t(k)).cos(),
+        };
+        let expected_name = match quantity {
+            ChannelQuantity::Force => "P1",
+            ChannelQuantity::Acceleration => "P2",
+        };
+        assert_eq!(name, expected_name);
+        let worst = (0..512).map(|k| (data[k] - expected(k)).abs()).fold(0.0, f64::max);
+        assert!(worst <= tolerance, "{name}: worst error {worst:e}");
+    }
+}
+
+#[test]
+fn a_uff58_file_written_by_pyuff_imports() {
+    let dir = fresh_dir("import-uff");
+    let out = dir.join("uff.mcap");
+    let o = import(&[
+        "--format",
+        "uff",
+        "tests/fixtures/pyuff_time58.uff",
+        "--start",
+        "2026-11-21T10:00:00Z",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // pyuff writes 12 significant digits (E20.12): 1e-10 of the amplitudes.
+    check_fixture_channels(&out, 1e-9);
+}
+
+#[test]
+fn a_logger_csv_with_semicolons_decimal_commas_and_units_imports() {
+    let dir = fresh_dir("import-csv");
+    let out = dir.join("csv.mcap");
+    let o = import(&[
+        "--format",
+        "csv",
+        "tests/fixtures/logger_semicolon.csv",
+        "--start",
+        "2026-11-21T10:00:00Z",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // kN and g converted to N and m/s² (printed at full precision: rounding only).
+    check_fixture_channels(&out, 1e-12);
+}
+
+#[test]
+fn import_errors_name_the_column_or_what_is_missing() {
+    let dir = fresh_dir("import-errors");
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let out = dir.join("x.mcap");
+    let out = out.to_str().unwrap();
+    let cases = [
+        (
+            write("unknown.csv", "time,P1:force,P99\n0,1,2\n0.5,1,2\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "column \"P99\" matches no [[sensors]] name",
+        ),
+        (
+            write("ambiguous.csv", "time,P1\n0,1\n0.5,1\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "sensor \"P1\" measures force and acceleration; name the column P1:force or P1:acceleration",
+        ),
+        (
+            write("no-rate.csv", "P2,P3\n1,2\n1,2\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "no sampling rate (no time column): pass --fs",
+        ),
+        (
+            write("no-start.csv", "time,P2\n0,1\n0.5,1\n"),
+            vec![],
+            "no absolute start time: pass --start",
+        ),
+        (
+            write("text.csv", "time,P2\n0,1\n0.5,abc\n1.0,2\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "line 3, column \"P2\": \"abc\" is not a number",
+        ),
+        (
+            write("uneven.csv", "time,P2\n0,1\n0.5,1\n1.2,1\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "time column \"time\": not evenly sampled",
+        ),
+        (
+            write("unit.csv", "time,P2\ns,furlong\n0,1\n0.5,1\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "column \"P2\": unit \"furlong\" is not N, kN, m/s^2 or g",
+        ),
+    ];
+    for (file, extra, expected) in cases {
+        let mut args = vec!["--format", "csv", file.as_str(), "--out", out];
+        args.extend(extra);
+        let o = import(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{file}: {stderr}");
+        assert!(stderr.contains(expected), "{file}: {stderr}");
+        assert!(stderr.contains(&file), "{file}: the error names the file: {stderr}");
+    }
+}
+
+/// A column of a written-out file: name, unit, samples.
+type Column = (String, &'static str, Vec<f64>);
+
+/// The bundled recording's channels, concatenated, with CSV/UFF names.
+fn bundled_columns() -> (i128, Vec<Column>) {
+    let blocks: Vec<RecordedBlock> = bundled_blocks();
+    let start = blocks.iter().map(|b| b.block.start_ns).min().unwrap();
+    let mut columns: Vec<Column> = Vec::new();
+    for b in blocks.iter().map(|b| &b.block) {
+        let (name, unit) = match b.quantity {
+            ChannelQuantity::Force => (format!("{}:force", b.name), "N"),
+            ChannelQuantity::Acceleration if b.name == "P1" => (format!("{}:acceleration", b.name), "m/s^2"),
+            ChannelQuantity::Acceleration => (b.name.clone(), "m/s^2"),
+        };
+        match columns.iter_mut().find(|c| c.0 == name) {
+            Some(c) => c.2.extend_from_slice(&b.data),
+            None => columns.push((name, unit, b.data.clone())),
+        }
+    }
+    (start, columns)
+}
+
+fn replay_parameters(path: &Path) -> Vec<(String, f64)> {
+    let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
+    let bytes = std::fs::read(path).unwrap();
+    let mut out = ResultsWriter::new(std::io::Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let summary = replay(&cfg, &[&bytes], &mut out, ReplayOptions::default(), &mut |_, _| {}).unwrap();
+    assert_eq!(summary.update_count, 6);
+    let accepted = summary.accepted.expect("updates accepted");
+    accepted.parameters.into_iter().map(|p| (p.name, p.value)).collect()
+}
+
+#[test]
+fn csv_and_uff_round_trips_replay_to_the_bundled_parameters() {
+    let dir = fresh_dir("import-round-trip");
+    let (start, columns) = bundled_columns();
+    let start_text = splinewatch::io::wire::format_timestamp(start);
+    let n = columns[0].2.len();
+    // CSV: a time column, a units row, every value at full precision.
+    let mut csv = String::from("time");
+    for c in &columns {
+        csv += &format!(",{}", c.0);
+    }
+    csv += "\ns";
+    for c in &columns {
+        csv += &format!(",{}", c.1);
+    }
+    csv += "\n";
+    for k in 0..n {
+        csv += &format!("{}", k as f64 / 256.0);
+        for c in &columns {
+            csv += &format!(",{}", c.2[k]);
+        }
+        csv += "\n";
+    }
+    // UFF 58: one dataset per channel, double precision, as pyuff writes them.
+    let mut uff = String::new();
+    for (i, c) in columns.iter().enumerate() {
+        let (name, kind) = match c.0.split_once(':') {
+            Some((s, "force")) => (s.to_string(), 13),
+            Some((s, _)) => (format!("{s}:acceleration"), 12),
+            None => (c.0.clone(), 12),
+        };
+        uff += &format!("    -1\n    58\n{name} time response\nNONE\nNONE\nNONE\nNONE\n");
+        uff += &format!(
+            "    1         0    0         0         {name:<10}{:>10}   3 P1                 1   3\n",
+            i + 1
+        );
+        uff += &format!(
+            "{:>10}{:>10}{:>10}{:>13.5e}{:>13.5e}{:>13.5e}\n",
+            4,
+            n,
+            1,
+            0.0,
+            1.0 / 256.0,
+            0.0
+        );
+        uff += "        17    0    0    0 NONE                 s                   \n";
+        uff += &format!("{kind:>10}    0    0    0 NONE                 {:<20}\n", c.1);
+        uff += "         0    0    0    0 NONE                 NONE                \n";
+        uff += "         0    0    0    0 NONE                 NONE                \n";
+        for chunk in c.2.chunks(4) {
+            uff += &chunk.iter().map(|v| format!("{v:20.12e}")).collect::<String>();
+            uff += "\n";
+        }
+        uff += "    -1\n";
+    }
+    let bundled = replay_parameters(&root().join("recordings/sinello-demo.mcap"));
+    for (format, text, tolerance) in [("csv", csv, 0.0), ("uff", uff, 1e-6)] {
+        let input = dir.join(format!("bundled.{format}"));
+        std::fs::write(&input, text).unwrap();
+        let out = dir.join(format!("{format}.mcap"));
+        let o = import(&[
+            "--format",
+            format,
+            input.to_str().unwrap(),
+            "--start",
+            &start_text,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{format}: {}", String::from_utf8_lossy(&o.stderr));
+        let imported = replay_parameters(&out);
+        assert_eq!(imported.len(), bundled.len());
+        for ((name, a), (_, b)) in imported.iter().zip(&bundled) {
+            assert!(
+                (a - b).abs() <= tolerance * b.abs(),
+                "{format}: {name} = {a} after import, {b} from the bundled recording"
+            );
+        }
+    }
+}
