@@ -66,20 +66,26 @@ fn check_fixture_channels(path: &Path, tolerance: f64) {
     }
 }
 
-#[test]
-fn a_uff58_file_written_by_pyuff_imports() {
-    let dir = fresh_dir("import-uff");
-    let out = dir.join("uff.mcap");
+/// Imports a committed fixture starting at 2026-11-21T10:00:00Z; the recording.
+fn import_fixture(dir: &Path, format: &str, fixture: &str) -> std::path::PathBuf {
+    let out = dir.join(format!("{format}.mcap"));
     let o = import(&[
         "--format",
-        "uff",
-        "tests/fixtures/pyuff_time58.uff",
+        format,
+        fixture,
         "--start",
         "2026-11-21T10:00:00Z",
         "--out",
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
+#[test]
+fn a_uff58_file_written_by_pyuff_imports() {
+    let dir = fresh_dir("import-uff");
+    let out = import_fixture(&dir, "uff", "tests/fixtures/pyuff_time58.uff");
     // pyuff writes 12 significant digits (E20.12): 1e-10 of the amplitudes.
     check_fixture_channels(&out, 1e-9);
 }
@@ -87,17 +93,7 @@ fn a_uff58_file_written_by_pyuff_imports() {
 #[test]
 fn a_logger_csv_with_semicolons_decimal_commas_and_units_imports() {
     let dir = fresh_dir("import-csv");
-    let out = dir.join("csv.mcap");
-    let o = import(&[
-        "--format",
-        "csv",
-        "tests/fixtures/logger_semicolon.csv",
-        "--start",
-        "2026-11-21T10:00:00Z",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = import_fixture(&dir, "csv", "tests/fixtures/logger_semicolon.csv");
     // kN and g converted to N and m/s² (printed at full precision: rounding only).
     check_fixture_channels(&out, 1e-12);
 }

@@ -11,7 +11,8 @@ use std::io::Cursor;
 use std::path::{Path, PathBuf};
 
 use crate::common::{
-    bundled_blocks, free_endpoint, fresh_dir, spawn_daemon, terminate, wait_for_file, KillOnDrop, TestDir,
+    bundled_blocks, free_endpoint, fresh_dir, publish_bundled, publish_bundled_to, spawn_daemon, terminate,
+    wait_for_file, KillOnDrop, TestDir,
 };
 
 fn root() -> &'static Path {
@@ -157,22 +158,7 @@ fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
     let daemon = start("first.mcap");
     std::thread::sleep(std::time::Duration::from_millis(1500));
     // Publish the bundled recording until the first update has been saved.
-    let cfg = load_config(&config).unwrap();
-    let mut z = cfg.zenoh.clone();
-    z.connect = std::mem::take(&mut z.listen);
-    z.mode = "client".into();
-    let mut publisher = splinewatch::outputs::publisher::Publisher::open(
-        &z,
-        cfg.topic_prefix(),
-        splinewatch::io::wire::Encoding::Cbor,
-        20.0,
-    )
-    .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    for b in &bundled_blocks() {
-        publisher.publish(&b.block).unwrap();
-    }
-    publisher.close().unwrap();
+    publish_bundled_to(&config);
     assert!(wait_for_file(&state), "no update was saved");
     let (status, log) = terminate(daemon);
     assert!(status.success(), "exit status {status:?}\n{log}");
@@ -347,18 +333,7 @@ fn client_mode_through_a_zenoh_router() {
     let (daemon, config, state) = spawn_client_daemon(&dir, &endpoint);
     std::thread::sleep(std::time::Duration::from_millis(1500));
     let cfg = load_config(&config).unwrap();
-    let mut publisher = splinewatch::outputs::publisher::Publisher::open(
-        &cfg.zenoh,
-        cfg.topic_prefix(),
-        splinewatch::io::wire::Encoding::Cbor,
-        20.0,
-    )
-    .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    for b in &bundled_blocks() {
-        publisher.publish(&b.block).unwrap();
-    }
-    publisher.close().unwrap();
+    publish_bundled(&cfg.zenoh, cfg.topic_prefix());
     wait_for_file(&state);
     let (status, log) = terminate(daemon.take());
     assert!(status.success(), "{log}");

@@ -4,8 +4,7 @@
 //! to those of a run with open pipes. (Before, `demo 2>&1 | head -3` aborted
 //! and left an unreadable results file, `replay | head -2` exited 101.)
 
-use crate::common::{bundled_blocks, free_endpoint, wait_for_file};
-use splinewatch::config::load_config;
+use crate::common::{free_endpoint, publish_bundled_to, wait_for_file};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 
@@ -122,22 +121,7 @@ fn a_daemon_with_closed_pipes_keeps_working_and_stops_cleanly() {
             .arg(&results),
     );
     std::thread::sleep(std::time::Duration::from_millis(1500));
-    let cfg = load_config(&config).unwrap();
-    let mut z = cfg.zenoh.clone();
-    z.connect = std::mem::take(&mut z.listen);
-    z.mode = "client".into();
-    let mut publisher = splinewatch::outputs::publisher::Publisher::open(
-        &z,
-        cfg.topic_prefix(),
-        splinewatch::io::wire::Encoding::Cbor,
-        20.0,
-    )
-    .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(500));
-    for b in &bundled_blocks() {
-        publisher.publish(&b.block).unwrap();
-    }
-    publisher.close().unwrap();
+    publish_bundled_to(&config);
     assert!(wait_for_file(&state), "no update was saved");
     let signalled = Command::new("kill")
         .args(["-TERM", &daemon.id().to_string()])

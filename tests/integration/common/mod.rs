@@ -66,6 +66,30 @@ pub fn bundled_blocks() -> Vec<splinewatch::io::recording::RecordedBlock> {
         .0
 }
 
+/// Publishes the bundled recording, at 20× real time, to the daemon that
+/// listens where the config at `config` says (a zenoh client of its
+/// `listen` endpoints).
+pub fn publish_bundled_to(config: &std::path::Path) {
+    let cfg = splinewatch::config::load_config(config).unwrap();
+    let mut z = cfg.zenoh.clone();
+    z.connect = std::mem::take(&mut z.listen);
+    z.mode = "client".into();
+    publish_bundled(&z, cfg.topic_prefix());
+}
+
+/// Publishes the bundled recording, at 20× real time, on a session of `zenoh`.
+pub fn publish_bundled(zenoh: &splinewatch::config::ZenohConfig, prefix: String) {
+    let mut publisher =
+        splinewatch::outputs::publisher::Publisher::open(zenoh, prefix, splinewatch::io::wire::Encoding::Cbor, 20.0)
+            .unwrap();
+    // Let the session connect before the first block.
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    for b in &bundled_blocks() {
+        publisher.publish(&b.block).unwrap();
+    }
+    publisher.close().unwrap();
+}
+
 /// Sends SIGTERM to `child` and waits for it: its exit status and what it
 /// wrote to its stderr, if that was piped.
 pub fn terminate(child: std::process::Child) -> (std::process::ExitStatus, String) {
