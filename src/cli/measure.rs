@@ -148,9 +148,6 @@ pub fn import(a: ImportArgs) -> Result<()> {
         .as_deref()
         .map(|s| wire::parse_timestamp(s).with_context(|| format!("--start {s:?} is not an RFC 3339 timestamp")))
         .transpose()?;
-    if !(a.block_seconds.is_finite() && a.block_seconds > 0.0) {
-        anyhow::bail!("--block-seconds must be positive, got {}", a.block_seconds);
-    }
     let options = ImportOptions {
         fs: a.fs,
         start_ns,

@@ -211,13 +211,7 @@ pub fn run(a: RunArgs) -> Result<()> {
         .state
         .or_else(|| cfg.output.state_file.clone())
         .unwrap_or_else(|| dir.join("state.json"));
-    let stamp = wire::format_timestamp(
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map(|d| d.as_nanos() as i128)
-            .unwrap_or(0),
-    )
-    .replace(':', "-");
+    let stamp = wire::format_timestamp(wire::now_ns()).replace(':', "-");
     let out = a.out.unwrap_or_else(|| dir.join(format!("results-{stamp}.mcap")));
     let rerun = rerun::targets(&cfg, a.rerun_save.as_deref(), a.rerun_connect.as_deref());
     // Compact JSON (defaults filled in), one line; secrets live in the zenoh
@@ -245,12 +239,9 @@ pub fn run(a: RunArgs) -> Result<()> {
     Ok(())
 }
 
+/// The `demo` command: a fresh run, then a summary and the `east.k2` trace.
 pub fn demo(a: DemoArgs) -> Result<()> {
-    run_demo(&a.config, &a.out, a.duration, a.speed)
-}
-
-/// The `demo` command: runs and prints a summary.
-fn run_demo(config_path: &std::path::Path, out: &std::path::Path, duration: f64, speed: f64) -> Result<()> {
+    let out = &a.out;
     let removed = demo::clear_previous(out)?;
     if !removed.is_empty() {
         errln!(
@@ -259,14 +250,14 @@ fn run_demo(config_path: &std::path::Path, out: &std::path::Path, duration: f64,
             removed.join(", ")
         );
     }
-    let summary = demo::run_live(config_path, out, duration, speed, 2026)?;
+    let summary = demo::run_live(&a.config, out, a.duration, a.speed, 2026)?;
     errln!(
         "demo: {} messages received, {} windows, {} updates ({} failed); wrote {}",
         summary.messages,
         summary.windows,
         summary.updates.len(),
         summary.updates.iter().filter(|u| u.result.is_err()).count(),
-        demo::written(out)
+        demo::demo_files(out)
             .iter()
             .map(|p| p.display().to_string())
             .collect::<Vec<_>>()

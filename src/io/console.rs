@@ -17,23 +17,27 @@ pub fn log_writes_dropped() -> u64 {
     LOG_WRITES_DROPPED.load(Ordering::Relaxed)
 }
 
-fn write_or_close(mut w: impl Write, closed: &AtomicBool, args: fmt::Arguments<'_>) {
-    if closed.load(Ordering::Relaxed) {
-        return;
-    }
-    if w.write_fmt(args).and_then(|()| w.flush()).is_err() {
+/// Runs `write` unless the stream is marked closed; a failure marks it.
+fn unless_closed(closed: &AtomicBool, write: impl FnOnce() -> io::Result<()>) {
+    if !closed.load(Ordering::Relaxed) && write().is_err() {
         closed.store(true, Ordering::Relaxed);
     }
 }
 
 /// Writes to standard output; once a write failed, nothing more is tried.
 pub fn out(args: fmt::Arguments<'_>) {
-    write_or_close(io::stdout().lock(), &STDOUT_CLOSED, args);
+    unless_closed(&STDOUT_CLOSED, || {
+        let mut w = io::stdout().lock();
+        w.write_fmt(args).and_then(|()| w.flush())
+    });
 }
 
 /// Writes to standard error; once a write failed, nothing more is tried.
 pub fn err(args: fmt::Arguments<'_>) {
-    write_or_close(io::stderr().lock(), &STDERR_CLOSED, args);
+    unless_closed(&STDERR_CLOSED, || {
+        let mut w = io::stderr().lock();
+        w.write_fmt(args).and_then(|()| w.flush())
+    });
 }
 
 /// `println!` that never panics: a closed stdout ends the printing.
@@ -54,16 +58,12 @@ pub struct Stdout;
 
 impl Write for Stdout {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
-        if !STDOUT_CLOSED.load(Ordering::Relaxed) && io::stdout().lock().write_all(buf).is_err() {
-            STDOUT_CLOSED.store(true, Ordering::Relaxed);
-        }
+        unless_closed(&STDOUT_CLOSED, || io::stdout().lock().write_all(buf));
         Ok(buf.len())
     }
 
     fn flush(&mut self) -> io::Result<()> {
-        if !STDOUT_CLOSED.load(Ordering::Relaxed) && io::stdout().lock().flush().is_err() {
-            STDOUT_CLOSED.store(true, Ordering::Relaxed);
-        }
+        unless_closed(&STDOUT_CLOSED, || io::stdout().lock().flush());
         Ok(())
     }
 }

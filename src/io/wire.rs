@@ -62,13 +62,19 @@ impl ChannelQuantity {
         }
     }
 
-    /// The wire format's `quantity` value.
-    pub fn from_wire(value: &str) -> Option<Self> {
-        match value {
-            "acceleration" => Some(ChannelQuantity::Acceleration),
-            "force" => Some(ChannelQuantity::Force),
-            _ => None,
+    /// The wire format's `quantity` value (serde's name too).
+    pub fn wire_name(self) -> &'static str {
+        match self {
+            ChannelQuantity::Acceleration => "acceleration",
+            ChannelQuantity::Force => "force",
         }
+    }
+
+    /// The quantity of a wire format `quantity` value.
+    pub fn from_wire(value: &str) -> Option<Self> {
+        [ChannelQuantity::Acceleration, ChannelQuantity::Force]
+            .into_iter()
+            .find(|q| q.wire_name() == value)
     }
 
     pub fn unit(self) -> &'static str {
@@ -182,6 +188,14 @@ pub fn format_timestamp(ns: i128) -> String {
         .unwrap_or_else(|| format!("{ns}ns"))
 }
 
+/// The system clock as nanoseconds since the Unix epoch (0 if it reads
+/// before the epoch).
+pub fn now_ns() -> i128 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_nanos() as i128)
+}
+
 /// Parses RFC 3339 into ns since the epoch.
 pub fn parse_timestamp(s: &str) -> Option<i128> {
     OffsetDateTime::parse(s, &Rfc3339)
@@ -218,7 +232,7 @@ pub fn encode(block: &ChannelBlock, encoding: Encoding) -> Vec<u8> {
                 (Value::Text("name".into()), Value::Text(block.name.clone())),
                 (
                     Value::Text("quantity".into()),
-                    Value::Text(format!("{:?}", block.quantity).to_lowercase()),
+                    Value::Text(block.quantity.wire_name().into()),
                 ),
                 (Value::Text("unit_str".into()), Value::Text(block.unit.clone())),
                 (Value::Text("fs".into()), Value::Float(block.fs)),

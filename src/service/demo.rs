@@ -128,36 +128,34 @@ fn is_demo_file(name: &str) -> bool {
     matches!(name, "state.json" | "results.mcap" | "results.rrd") || numbered(".mcap") || numbered(".rrd")
 }
 
-/// Removes a previous demo's files from `out` (only those, never anything
-/// else), so a demo starts fresh instead of warm-starting from the last
-/// one; returns their names.
-pub fn clear_previous(out: &Path) -> Result<Vec<String>> {
-    let mut removed = Vec::new();
-    let Ok(entries) = std::fs::read_dir(out) else {
-        return Ok(removed);
-    };
-    for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if is_demo_file(&name) && entry.path().is_file() {
-            std::fs::remove_file(entry.path()).with_context(|| format!("cannot remove {}", entry.path().display()))?;
-            removed.push(name);
-        }
-    }
-    removed.sort();
-    Ok(removed)
-}
-
-/// The demo files in `out`, sorted: after [`clear_previous`], what the run wrote.
-pub fn written(out: &Path) -> Vec<std::path::PathBuf> {
+/// The demo's files in `out` (regular files only), sorted.
+pub fn demo_files(out: &Path) -> Vec<std::path::PathBuf> {
     let mut files: Vec<_> = std::fs::read_dir(out)
         .into_iter()
         .flatten()
         .flatten()
         .filter(|e| is_demo_file(&e.file_name().to_string_lossy()))
         .map(|e| e.path())
+        .filter(|p| p.is_file())
         .collect();
     files.sort();
     files
+}
+
+/// Removes a previous demo's files from `out` (only those, never anything
+/// else), so a demo starts fresh instead of warm-starting from the last
+/// one; returns their names.
+pub fn clear_previous(out: &Path) -> Result<Vec<String>> {
+    demo_files(out)
+        .into_iter()
+        .map(|path| {
+            std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
+            Ok(path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default())
+        })
+        .collect()
 }
 
 #[cfg(test)]

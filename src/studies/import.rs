@@ -33,6 +33,9 @@ struct Mapped {
 /// The series as channel blocks in time order (per block interval: force
 /// first, then the sensors in config order).
 pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOptions) -> Result<Vec<ChannelBlock>> {
+    if !(options.block_seconds.is_finite() && options.block_seconds > 0.0) {
+        bail!("--block-seconds must be positive, got {}", options.block_seconds);
+    }
     let fs = sampling_rate(series.fs, options.fs)?;
     let start_ns = match (options.start_ns, series.start_ns) {
         (Some(t), _) => t + (series.offset_seconds * 1e9).round() as i128,
@@ -167,10 +170,7 @@ fn map_channel(config: &Config, c: ImportedChannel) -> Result<Mapped> {
             "column {:?}: sensor {:?} measures no {}",
             c.name,
             names[sensor],
-            stated.first().map_or("force or acceleration", |q| match q {
-                ChannelQuantity::Force => "force",
-                ChannelQuantity::Acceleration => "acceleration",
-            })
+            stated.first().map_or("force or acceleration", |q| q.wire_name())
         ),
         _ => bail!(
             "column {:?}: sensor {:?} measures force and acceleration; name the column {0}:force or {0}:acceleration, or give its unit",

@@ -126,7 +126,6 @@ fn live_and_replay_agree_on_the_bundled_recording() {
 fn sigterm_finalises_the_results_and_a_restart_warm_starts() {
     use std::process::{Command, Stdio};
     let dir = temp("sigterm");
-    std::fs::create_dir_all(&dir).unwrap();
     let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
@@ -327,7 +326,6 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
 fn client_mode_through_a_zenoh_router() {
     use zenoh::Wait;
     let dir = temp("router");
-    std::fs::create_dir_all(&dir).unwrap();
     let endpoint = free_endpoint();
     let router = open_router(&endpoint);
     let (daemon, config, state) = spawn_client_daemon(&dir, &endpoint);
@@ -351,7 +349,6 @@ fn client_mode_through_a_zenoh_router() {
 fn the_daemon_resumes_after_its_router_returns() {
     use zenoh::Wait;
     let dir = temp("router-loss");
-    std::fs::create_dir_all(&dir).unwrap();
     let endpoint = free_endpoint();
     let router = open_router(&endpoint);
     let (daemon, config, state) = spawn_client_daemon(&dir, &endpoint);

@@ -91,11 +91,7 @@ impl Daemon {
     pub(super) fn on_message(&mut self, msg: RawMessage, link: &ZenohLink) {
         self.summary.messages += 1;
         if msg.frf {
-            let now = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map(|d| d.as_nanos() as i128)
-                .unwrap_or(0);
-            if let Some(job) = self.pipeline.ingest_frf(&msg.payload, now) {
+            if let Some(job) = self.pipeline.ingest_frf(&msg.payload, wire::now_ns()) {
                 tracing::info!(message = "complete FRF set received", window = job.window);
                 self.worker.submit(job);
             }
@@ -167,13 +163,8 @@ impl Daemon {
             }
             return;
         };
-        let h = results::health_message(time, self.pipeline.health());
-        self.results.write("health", time, &h);
+        let h = self.record_health(time);
         link.publish("health", &h);
-        if let Some(v) = self.viewer.as_mut() {
-            let r = v.log_health(time, self.pipeline.health());
-            count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
-        }
         let health = self.pipeline.health();
         tracing::info!(
             message = "health",
@@ -210,7 +201,6 @@ impl Daemon {
             self.report_window(w, &link);
         }
         log_new_rejections(&self.pipeline.health().rejected, &mut self.logged_rejections);
-        self.pipeline.health_mut().queue_drops = self.worker.drops + link.ingest_drops();
         if let Some(mut r) = self.recorder.take() {
             count_output_error(
                 r.close(),
@@ -219,19 +209,12 @@ impl Daemon {
                 "raw-input recording",
             );
         }
-        self.pipeline.health_mut().results_errors = self.results.errors;
-        self.pipeline.health_mut().log_writes_dropped = console::log_writes_dropped();
-        let time = self.health_time();
-        if let Some(time) = time {
-            let h = results::health_message(time, self.pipeline.health());
-            self.results.write("health", time, &h);
+        self.sync_counters(&link);
+        if let Some(time) = self.health_time() {
+            self.record_health(time);
         }
         self.results.finish();
-        if let Some(mut v) = self.viewer.take() {
-            if let Some(time) = time {
-                let r = v.log_health(time, self.pipeline.health());
-                count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
-            }
+        if let Some(v) = self.viewer.take() {
             count_output_error(v.finish(), &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
         }
         notify_systemd(&[sd_notify::NotifyState::Stopping]);
@@ -240,6 +223,19 @@ impl Daemon {
         Ok(self.summary)
     }
 
+    /// The health message at `time` into the results file and Rerun;
+    /// returned for publishing.
+    fn record_health(&mut self, time: i128) -> serde_json::Value {
+        let h = results::health_message(time, self.pipeline.health());
+        self.results.write("health", time, &h);
+        if let Some(v) = self.viewer.as_mut() {
+            let r = v.log_health(time, self.pipeline.health());
+            count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
+        }
+        h
+    }
+
+    /// Counters kept outside the pipeline, copied into its health.
     fn sync_counters(&mut self, link: &ZenohLink) {
         let health = self.pipeline.health_mut();
         health.queue_drops = self.worker.drops + link.ingest_drops();
