@@ -5,7 +5,7 @@ use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
 use crate::io::import::{self, CsvOptions};
 use crate::io::recording::{read_recording, RecordingWriter};
-use crate::io::wire::{self, Encoding, Limits};
+use crate::io::wire::{self, Encoding};
 use crate::outputs::publisher::Publisher;
 use crate::pipeline::estimate;
 use crate::studies::simulation::{self, Excitation, SimulationOptions};
@@ -249,10 +249,7 @@ pub fn frf(a: FrfArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let input = &a.input;
     let bytes = std::fs::read(input).with_context(|| format!("cannot read {}", input.display()))?;
-    let limits = Limits {
-        max_samples: cfg.frf.max_block_samples,
-        ..Default::default()
-    };
+    let limits = crate::pipeline::block_limits(&cfg);
     let (blocks, rejected) = read_recording(&bytes, &limits).with_context(|| format!("reading {}", input.display()))?;
     for r in &rejected {
         errln!("skipped a message on {} at {} ns: {}", r.topic, r.log_time, r.error);

@@ -28,7 +28,7 @@ pub use reports::{AcceptedParameters, Health, StateParameter, WindowReport};
 
 use crate::config::{Config, FrfSetup, ScheduleConfig};
 use crate::io::frf_json::{FrfEntry, FrfFile};
-use crate::io::wire::{ChannelBlock, ChannelQuantity, WireError};
+use crate::io::wire::{ChannelBlock, ChannelQuantity, Limits, WireError};
 use align::ChannelQueue;
 use anyhow::{bail, Result};
 use splinewatch_core::frf::Quantity;
@@ -36,6 +36,15 @@ use splinewatch_core::updating::{ModelPoint, Parameter, UpdateSettings};
 use splinewatch_core::welch::{Estimator, WelchEstimator, WelchSettings};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
+
+/// The decoder limits for blocks this config's pipeline takes: at most
+/// `frf.max_block_samples` samples per block, the other limits as default.
+pub fn block_limits(config: &Config) -> Limits {
+    Limits {
+        max_samples: config.frf.max_block_samples,
+        ..Limits::default()
+    }
+}
 
 /// The pipeline state machine.
 pub struct Pipeline {

@@ -5,7 +5,7 @@
 
 use super::keep_latest;
 use crate::config::Config;
-use crate::io::wire::{self, Encoding, Limits};
+use crate::io::wire::{self, Encoding};
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsWriter};
 use crate::outputs::state;
@@ -78,10 +78,7 @@ pub fn replay<W: Write + Seek>(
         keep_latest,
     } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
-    let limits = Limits {
-        max_samples: config.frf.max_block_samples,
-        ..Limits::default()
-    };
+    let limits = crate::pipeline::block_limits(config);
     let total = recordings.iter().map(|bytes| message_count(bytes)).sum();
     let mut sink = Outputs {
         out,

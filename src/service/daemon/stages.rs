@@ -75,10 +75,7 @@ impl Daemon {
             recorder,
             state: options.state.clone(),
             keep_updates: options.keep_updates,
-            limits: Limits {
-                max_samples: config.frf.max_block_samples,
-                ..Limits::default()
-            },
+            limits: crate::pipeline::block_limits(config),
             summary: RunSummary::default(),
             last_time: 0,
             logged_rejections: BTreeMap::new(),
