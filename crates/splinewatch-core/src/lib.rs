@@ -18,6 +18,7 @@ pub mod linalg;
 pub mod material;
 pub mod modal;
 pub mod model;
+pub mod oma;
 pub mod quadrature;
 pub mod shell;
 pub mod springs;

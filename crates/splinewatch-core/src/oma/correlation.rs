@@ -1,0 +1,289 @@
+//! Output correlations `R_k = E[y_{t+k} y_ref,tᵀ]` (`l × r`, lags
+//! `k = 0..=max_lag`), the data of covariance-driven SSI (Peeters & De Roeck
+//! 1999, eq. 8).
+//!
+//! The window is cut into `B` contiguous batches; each batch keeps the sums
+//! `S_k^b = Σ_t y_{t+k} y_ref,tᵀ` over the pairs inside it and their count
+//! `c_k^b = n_b − k`. The estimate is `R_k = Σ_b S_k^b / Σ_b c_k^b` (the
+//! unbiased estimate, as KOMA's `xcorr_lag`, up to the pairs that straddle a
+//! batch boundary), and the leave-one-batch-out estimates
+//! `(Σ S − S^b) / (Σ c − c^b)` feed the jackknife of [`super::uncertainty`].
+//! Sums are computed per batch by FFT (zero padded past `n_b + max_lag`, so
+//! no circular wrap), `O(l n log n + l r n)` per batch.
+
+use super::OmaError;
+use faer::c64;
+use realfft::RealFftPlanner;
+
+/// Batched sums of lagged output products; see the module documentation.
+#[derive(Debug, Clone)]
+pub struct OutputCorrelations {
+    channels: usize,
+    references: Vec<usize>,
+    max_lag: usize,
+    /// Per batch, `(max_lag + 1) × l × r` sums, lag-major then row-major.
+    sums: Vec<Vec<f64>>,
+    /// Per batch, pairs per lag (`n_b − k`).
+    counts: Vec<Vec<f64>>,
+}
+
+impl OutputCorrelations {
+    /// Correlations of `channels` (equal lengths, mean removed here) against
+    /// the reference channels `references` (indices into `channels`; empty
+    /// means all), for lags `0..=max_lag`, in `batches` batches.
+    pub fn from_samples(
+        channels: &[&[f64]],
+        references: &[usize],
+        max_lag: usize,
+        batches: usize,
+    ) -> Result<Self, OmaError> {
+        let l = channels.len();
+        if l == 0 {
+            return Err(OmaError::NoChannels);
+        }
+        let n = channels[0].len();
+        if let Some(bad) = channels.iter().position(|c| c.len() != n) {
+            return Err(OmaError::UnequalLengths {
+                channel: bad,
+                len: channels[bad].len(),
+                expected: n,
+            });
+        }
+        if let Some(bad) = channels.iter().position(|c| c.iter().any(|v| !v.is_finite())) {
+            return Err(OmaError::NonFinite { channel: bad });
+        }
+        let references: Vec<usize> = if references.is_empty() {
+            (0..l).collect()
+        } else {
+            references.to_vec()
+        };
+        if let Some(&bad) = references.iter().find(|&&r| r >= l) {
+            return Err(OmaError::BadReference {
+                index: bad,
+                channels: l,
+            });
+        }
+        let batches = batches.max(1);
+        let batch_len = n / batches;
+        if batch_len < 4 * (max_lag + 1) {
+            return Err(OmaError::TooShort {
+                samples: n,
+                needed: 4 * (max_lag + 1) * batches,
+            });
+        }
+        let centred: Vec<Vec<f64>> = channels
+            .iter()
+            .map(|c| {
+                let mean = c.iter().sum::<f64>() / n as f64;
+                c.iter().map(|v| v - mean).collect()
+            })
+            .collect();
+        let mut out = Self {
+            channels: l,
+            references,
+            max_lag,
+            sums: Vec::with_capacity(batches),
+            counts: Vec::with_capacity(batches),
+        };
+        let mut planner = RealFftPlanner::<f64>::new();
+        for b in 0..batches {
+            // The last batch takes the remainder.
+            let start = b * batch_len;
+            let end = if b + 1 == batches { n } else { start + batch_len };
+            let slices: Vec<&[f64]> = centred.iter().map(|c| &c[start..end]).collect();
+            out.sums.push(out.batch_sums(&slices, &mut planner));
+            out.counts
+                .push((0..=max_lag).map(|k| (end - start - k) as f64).collect());
+        }
+        Ok(out)
+    }
+
+    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` of one batch, by FFT.
+    fn batch_sums(&self, batch: &[&[f64]], planner: &mut RealFftPlanner<f64>) -> Vec<f64> {
+        let (l, r, n) = (self.channels, self.references.len(), batch[0].len());
+        let m = (n + self.max_lag + 1).next_power_of_two();
+        let forward = planner.plan_fft_forward(m);
+        let inverse = planner.plan_fft_inverse(m);
+        let spectra: Vec<Vec<c64>> = batch
+            .iter()
+            .map(|y| {
+                let mut padded = vec![0.0; m];
+                padded[..n].copy_from_slice(y);
+                let mut spectrum = forward.make_output_vec();
+                forward.process(&mut padded, &mut spectrum).expect("sized by the plan");
+                spectrum
+            })
+            .collect();
+        let mut sums = vec![0.0; (self.max_lag + 1) * l * r];
+        let mut product = inverse.make_input_vec();
+        let mut lagged = inverse.make_output_vec();
+        for a in 0..l {
+            for (j, &reference) in self.references.iter().enumerate() {
+                // Σ_t y_a[t+k] y_ref[t] = IFFT(Y_a · conj(Y_ref))[k].
+                for ((p, ya), yr) in product.iter_mut().zip(&spectra[a]).zip(&spectra[reference]) {
+                    *p = ya * yr.conj();
+                }
+                product[0].im = 0.0;
+                product[m / 2].im = 0.0;
+                inverse.process(&mut product, &mut lagged).expect("sized by the plan");
+                for k in 0..=self.max_lag {
+                    sums[(k * l + a) * r + j] = lagged[k] / m as f64;
+                }
+            }
+        }
+        sums
+    }
+
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+
+    pub fn references(&self) -> &[usize] {
+        &self.references
+    }
+
+    pub fn max_lag(&self) -> usize {
+        self.max_lag
+    }
+
+    pub fn batches(&self) -> usize {
+        self.sums.len()
+    }
+
+    /// `R_k` of the whole window: `(max_lag + 1) × l × r`, lag-major.
+    pub fn estimate(&self) -> Vec<f64> {
+        self.estimate_without(None)
+    }
+
+    /// `R_k` with batch `left_out` removed (the jackknife's replicate).
+    pub fn estimate_without(&self, left_out: Option<usize>) -> Vec<f64> {
+        let block = self.channels * self.references.len();
+        let mut sum = vec![0.0; self.sums[0].len()];
+        let mut count = vec![0.0; self.max_lag + 1];
+        for (b, (s, c)) in self.sums.iter().zip(&self.counts).enumerate() {
+            if Some(b) == left_out {
+                continue;
+            }
+            sum.iter_mut().zip(s).for_each(|(t, v)| *t += v);
+            count.iter_mut().zip(c).for_each(|(t, v)| *t += v);
+        }
+        for (i, v) in sum.iter_mut().enumerate() {
+            *v /= count[i / block];
+        }
+        sum
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Direct `O(n · lags)` sums, the definition.
+    fn direct(y: &[Vec<f64>], max_lag: usize, batches: usize, skip: Option<usize>) -> Vec<f64> {
+        let l = y.len();
+        let n = y[0].len();
+        let centred: Vec<Vec<f64>> = y
+            .iter()
+            .map(|c| {
+                let m = c.iter().sum::<f64>() / n as f64;
+                c.iter().map(|v| v - m).collect()
+            })
+            .collect();
+        let len = n / batches;
+        let mut out = vec![0.0; (max_lag + 1) * l * l];
+        for k in 0..=max_lag {
+            for a in 0..l {
+                for r in 0..l {
+                    let (mut s, mut c) = (0.0, 0.0);
+                    for b in (0..batches).filter(|&b| Some(b) != skip) {
+                        let end = if b + 1 == batches { n } else { (b + 1) * len };
+                        for t in b * len..end - k {
+                            s += centred[a][t + k] * centred[r][t];
+                            c += 1.0;
+                        }
+                    }
+                    out[(k * l + a) * l + r] = s / c;
+                }
+            }
+        }
+        out
+    }
+
+    fn signals() -> Vec<Vec<f64>> {
+        // Deterministic, non-periodic, correlated channels.
+        let base: Vec<f64> = (0..997).map(|t| ((t * t) as f64 * 0.37).sin() + 0.3).collect();
+        vec![
+            base.clone(),
+            base.iter()
+                .enumerate()
+                .map(|(t, v)| 0.5 * v + (t as f64 * 0.11).cos())
+                .collect(),
+            (0..997).map(|t| ((t as f64).sqrt() * 1.7).sin()).collect(),
+        ]
+    }
+
+    #[test]
+    fn fft_sums_equal_the_definition() {
+        let y = signals();
+        let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+        for batches in [1, 3] {
+            let c = OutputCorrelations::from_samples(&views, &[], 20, batches).unwrap();
+            let want = direct(&y, 20, batches, None);
+            for (g, w) in c.estimate().iter().zip(&want) {
+                assert!((g - w).abs() < 1e-12, "{g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn references_pick_columns() {
+        let y = signals();
+        let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+        let all = OutputCorrelations::from_samples(&views, &[], 5, 2).unwrap().estimate();
+        let one = OutputCorrelations::from_samples(&views, &[2], 5, 2).unwrap().estimate();
+        for k in 0..=5 {
+            for a in 0..3 {
+                assert!((one[k * 3 + a] - all[(k * 3 + a) * 3 + 2]).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn leave_one_out_is_the_estimate_of_the_other_batches() {
+        let y = signals();
+        let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+        let c = OutputCorrelations::from_samples(&views, &[], 4, 4).unwrap();
+        for b in 0..4 {
+            let want = direct(&y, 4, 4, Some(b));
+            for (g, w) in c.estimate_without(Some(b)).iter().zip(&want) {
+                assert!((g - w).abs() < 1e-12, "{g} vs {w}");
+            }
+        }
+    }
+
+    #[test]
+    fn bad_input_is_named() {
+        let y = signals();
+        let short: Vec<&[f64]> = vec![&y[0][..10], &y[1][..10]];
+        assert!(matches!(
+            OutputCorrelations::from_samples(&short, &[], 5, 1),
+            Err(OmaError::TooShort { .. })
+        ));
+        let uneven: Vec<&[f64]> = vec![&y[0], &y[1][..50]];
+        assert!(matches!(
+            OutputCorrelations::from_samples(&uneven, &[], 5, 1),
+            Err(OmaError::UnequalLengths { channel: 1, .. })
+        ));
+        let nan = vec![f64::NAN; 997];
+        let with_nan: Vec<&[f64]> = vec![&y[0], &nan];
+        assert!(matches!(
+            OutputCorrelations::from_samples(&with_nan, &[], 5, 1),
+            Err(OmaError::NonFinite { channel: 1 })
+        ));
+        let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+        assert!(matches!(
+            OutputCorrelations::from_samples(&views, &[7], 5, 1),
+            Err(OmaError::BadReference { index: 7, .. })
+        ));
+    }
+}

@@ -1,0 +1,255 @@
+//! Operational (output-only) modal analysis: covariance-driven SSI with
+//! automatic pole selection and jackknife uncertainty.
+//!
+//! Data flow: samples → [`OutputCorrelations`] (batched, FFT) → block Hankel
+//! and its SVD ([`SubspaceModel`]) → poles at every order of
+//! [`OmaSettings::orders`] → stable and physical poles
+//! ([`stabilisation::stable_flags`]) → modes by clustering
+//! ([`stabilisation::cluster`]) → standard deviations
+//! ([`uncertainty::jackknife`]). The identified frequency, damping and shape
+//! of a mode are those of its cluster's medoid pole (the member at the
+//! median frequency), so the jackknife, done at that pole's order, measures
+//! the spread of exactly what is reported.
+
+pub mod correlation;
+pub mod shape;
+pub mod ssi;
+pub mod stabilisation;
+pub mod uncertainty;
+
+pub use correlation::OutputCorrelations;
+pub use ssi::{Pole, SubspaceModel};
+pub use stabilisation::{ClusterCriteria, StabilityCriteria};
+
+use faer::c64;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum OmaError {
+    #[error("no channels to analyse")]
+    NoChannels,
+    #[error("channel {channel} has {len} samples, the first has {expected}")]
+    UnequalLengths {
+        channel: usize,
+        len: usize,
+        expected: usize,
+    },
+    #[error("channel {channel} holds a NaN or an infinity")]
+    NonFinite { channel: usize },
+    #[error("reference channel {index} does not exist ({channels} channels)")]
+    BadReference { index: usize, channels: usize },
+    #[error("the window is too short: {samples} samples, at least {needed} needed for these block rows and batches")]
+    TooShort { samples: usize, needed: usize },
+    #[error("{block_rows} block rows need correlations up to lag {}", 2 * block_rows)]
+    TooFewLags { block_rows: usize },
+    #[error("the SVD of the block Hankel matrix did not converge")]
+    SvdFailed,
+    #[error("the block Hankel matrix is singular at order {order} (no signal, or fewer modes than the order)")]
+    SingularHankel { order: usize },
+    #[error("model order {order} is above the largest this Hankel matrix supports ({max})")]
+    OrderTooHigh { order: usize, max: usize },
+    #[error("the eigenvalues of the state matrix at order {order} did not converge")]
+    EigenFailed { order: usize },
+    #[error("no physical mode: {stable} stable poles, none in a cluster of at least {min_poles}")]
+    NoModes { stable: usize, min_poles: usize },
+    #[error("invalid OMA settings: {0}")]
+    InvalidSettings(String),
+}
+
+/// Settings of one identification (the `[oma]` config section).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OmaSettings {
+    /// `p`: the Hankel matrix has `p + 1` block rows and `p` block columns.
+    pub block_rows: usize,
+    /// Model orders `min_order, min_order + order_step, …, ≤ max_order`.
+    pub min_order: usize,
+    pub max_order: usize,
+    pub order_step: usize,
+    /// Frequency band of the reported modes (Hz).
+    pub band: [f64; 2],
+    pub stability: StabilityCriteria,
+    pub clustering: ClusterCriteria,
+    /// Correlation batches for the jackknife (≥ 2; more batches, a better
+    /// variance estimate, one SVD each).
+    pub batches: usize,
+}
+
+impl Default for OmaSettings {
+    fn default() -> Self {
+        Self {
+            block_rows: 40,
+            min_order: 2,
+            max_order: 120,
+            order_step: 2,
+            band: [0.5, 80.0],
+            stability: StabilityCriteria::default(),
+            clustering: ClusterCriteria::default(),
+            batches: 16,
+        }
+    }
+}
+
+impl OmaSettings {
+    /// Rejects settings no data can satisfy.
+    pub fn check(&self) -> Result<(), OmaError> {
+        let bad = |what: &str| Err(OmaError::InvalidSettings(what.into()));
+        if self.block_rows == 0 || self.order_step == 0 || self.min_order == 0 {
+            return bad("block_rows, min_order and order_step must be positive");
+        }
+        if self.min_order > self.max_order {
+            return bad("min_order must not exceed max_order");
+        }
+        if !(self.band[0] >= 0.0 && self.band[1] > self.band[0] && self.band[1].is_finite()) {
+            return bad("band must be [low, high] with 0 <= low < high");
+        }
+        if self.batches < 2 {
+            return bad("batches must be at least 2 (the jackknife needs them)");
+        }
+        let s = &self.stability;
+        let c = &self.clustering;
+        if [s.frequency, s.damping, s.mac, s.max_damping, c.distance]
+            .iter()
+            .any(|v| !(v.is_finite() && *v > 0.0))
+            || !(0.0..=1.0).contains(&s.min_mpc)
+            || !(0.0..=1.0).contains(&c.min_fraction)
+        {
+            return bad("stability and clustering tolerances must be positive (min_mpc, min_fraction in [0, 1])");
+        }
+        Ok(())
+    }
+
+    /// Correlation lags the Hankel matrix needs: `2p`.
+    pub fn max_lag(&self) -> usize {
+        2 * self.block_rows
+    }
+
+    /// The orders to compute, capped at what the model supports.
+    pub fn orders(&self, supported: usize) -> Vec<usize> {
+        (self.min_order..=self.max_order.min(supported))
+            .step_by(self.order_step)
+            .collect()
+    }
+}
+
+/// One identified mode.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifiedMode {
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    /// Jackknife standard deviations; `None` when fewer than two replicates
+    /// found the mode.
+    pub frequency_std_hz: Option<f64>,
+    pub damping_std: Option<f64>,
+    /// At every channel, largest component `1 + 0i`.
+    pub shape: Vec<c64>,
+    pub shape_std: Option<Vec<f64>>,
+    pub mpc: f64,
+    /// Order of the reported pole and number of orders the mode was stable at.
+    pub order: usize,
+    pub stable_orders: usize,
+}
+
+/// A pole of the stabilisation diagram.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiagramPole {
+    pub order: usize,
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    pub stable: bool,
+    /// Index into [`OmaResult::modes`] when the pole belongs to a mode.
+    pub mode: Option<usize>,
+}
+
+/// What one identification produced.
+#[derive(Debug, Clone)]
+pub struct OmaResult {
+    pub modes: Vec<IdentifiedMode>,
+    pub diagram: Vec<DiagramPole>,
+    /// Singular values of the block Hankel matrix.
+    pub singular_values: Vec<f64>,
+}
+
+/// Identifies the modes of `correlations` (sampled at `fs`); see the module
+/// documentation for the steps.
+pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettings) -> Result<OmaResult, OmaError> {
+    settings.check()?;
+    let model = SubspaceModel::new(
+        &correlations.estimate(),
+        correlations.channels(),
+        correlations.references().len(),
+        settings.block_rows,
+        fs,
+    )?;
+    let mut by_order = Vec::new();
+    for order in settings.orders(model.max_order()) {
+        match model.poles(order) {
+            Ok(poles) => by_order.push(poles),
+            // Fewer modes in the data than the order: stop at the last one.
+            Err(OmaError::SingularHankel { .. }) if !by_order.is_empty() => break,
+            Err(e) => return Err(e),
+        }
+    }
+    let flags = stabilisation::stable_flags(&by_order, &settings.stability, settings.band);
+    let stable: Vec<(usize, usize)> = flags
+        .iter()
+        .enumerate()
+        .flat_map(|(o, f)| f.iter().enumerate().filter(|(_, s)| **s).map(move |(j, _)| (o, j)))
+        .collect();
+    let stable_poles: Vec<&Pole> = stable.iter().map(|&(o, j)| &by_order[o][j]).collect();
+    let clusters = stabilisation::cluster(&stable_poles, &settings.clustering, by_order.len());
+    if clusters.is_empty() {
+        return Err(OmaError::NoModes {
+            stable: stable.len(),
+            min_poles: ((settings.clustering.min_fraction * by_order.len() as f64).ceil() as usize).max(2),
+        });
+    }
+    let medoids: Vec<&Pole> = clusters.iter().map(|c| stable_poles[c[c.len() / 2]]).collect();
+    let spreads = uncertainty::jackknife(
+        correlations,
+        settings.block_rows,
+        fs,
+        &medoids,
+        settings.clustering.distance,
+    );
+    let modes = medoids
+        .iter()
+        .zip(spreads)
+        .zip(&clusters)
+        .map(|((pole, spread), members)| IdentifiedMode {
+            frequency_hz: pole.frequency_hz,
+            damping_ratio: pole.damping_ratio,
+            frequency_std_hz: spread.as_ref().map(|s| s.frequency_std_hz),
+            damping_std: spread.as_ref().map(|s| s.damping_std),
+            shape: pole.shape.clone(),
+            shape_std: spread.map(|s| s.shape_std),
+            mpc: pole.mpc,
+            order: pole.order,
+            stable_orders: members.len(),
+        })
+        .collect();
+    let mut mode_of = std::collections::HashMap::new();
+    for (m, members) in clusters.iter().enumerate() {
+        for &i in members {
+            mode_of.insert(stable[i], m);
+        }
+    }
+    let diagram = by_order
+        .iter()
+        .enumerate()
+        .flat_map(|(o, poles)| poles.iter().enumerate().map(move |(j, p)| (o, j, p)))
+        .map(|(o, j, p)| DiagramPole {
+            order: p.order,
+            frequency_hz: p.frequency_hz,
+            damping_ratio: p.damping_ratio,
+            stable: flags[o][j],
+            mode: mode_of.get(&(o, j)).copied(),
+        })
+        .collect();
+    Ok(OmaResult {
+        modes,
+        diagram,
+        singular_values: model.singular_values().to_vec(),
+    })
+}

@@ -1,0 +1,179 @@
+//! Covariance-driven stochastic subspace identification (SSI-cov; Peeters &
+//! De Roeck 1999, Döhler & Mevel 2013 for the notation).
+//!
+//! With `p` block rows and the correlations `R_k` (`l × r`), the block
+//! Hankel matrix `H = [R_{i+j+1}]`, `i = 0..=p`, `j = 0..p−1`
+//! (`l(p+1) × rp`), factorises as `H = O C_ref`. Its SVD `H = U Σ Vᵀ`
+//! gives, at model order `n`, the observability matrix `O = U_n Σ_n^{1/2}`,
+//! the output matrix `C` (its first `l` rows) and the state matrix by shift
+//! invariance, `A = O↑⁺ O↓` (least squares; `O↑`/`O↓` drop the last/first
+//! block row). Each eigenpair `(μ, ψ)` of `A` is a pole
+//! `λ = ln(μ) f_s`, frequency `|λ|/2π`, damping ratio `−Re λ/|λ|`, shape
+//! `φ = C ψ` at the sensors. One SVD serves every order.
+
+use super::shape::{mpc, normalise};
+use super::OmaError;
+use faer::linalg::solvers::SolveLstsq;
+use faer::{c64, Mat};
+use std::f64::consts::PI;
+
+/// One pole of the identified state-space model at one order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pole {
+    pub order: usize,
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    /// At the sensors (all channels), largest component `1 + 0i`.
+    pub shape: Vec<c64>,
+    /// Modal phase collinearity of the shape.
+    pub mpc: f64,
+}
+
+/// The SVD of the block Hankel matrix: poles at any order.
+#[derive(Debug, Clone)]
+pub struct SubspaceModel {
+    u: Mat<f64>,
+    singular_values: Vec<f64>,
+    channels: usize,
+    block_rows: usize,
+    fs: f64,
+}
+
+impl SubspaceModel {
+    /// `correlations` as [`super::OutputCorrelations::estimate`] lays them
+    /// out (`(max_lag + 1) × l × r`, lag-major), `max_lag ≥ 2p`.
+    pub fn new(
+        correlations: &[f64],
+        channels: usize,
+        references: usize,
+        block_rows: usize,
+        fs: f64,
+    ) -> Result<Self, OmaError> {
+        let (l, r, p) = (channels, references, block_rows);
+        if p == 0 || correlations.len() < (2 * p + 1) * l * r {
+            return Err(OmaError::TooFewLags { block_rows: p });
+        }
+        let lag = |k: usize, a: usize, b: usize| correlations[(k * l + a) * r + b];
+        let hankel = Mat::from_fn(l * (p + 1), r * p, |row, col| {
+            lag(row / l + col / r + 1, row % l, col % r)
+        });
+        let svd = hankel.thin_svd().map_err(|_| OmaError::SvdFailed)?;
+        let singular_values: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+        if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
+            return Err(OmaError::SingularHankel { order: 1 });
+        }
+        Ok(Self {
+            u: svd.U().to_owned(),
+            singular_values,
+            channels: l,
+            block_rows: p,
+            fs,
+        })
+    }
+
+    /// Singular values of `H`, non-increasing.
+    pub fn singular_values(&self) -> &[f64] {
+        &self.singular_values
+    }
+
+    /// Largest usable order: `O↑` (`lp` rows) must have full column rank.
+    pub fn max_order(&self) -> usize {
+        (self.channels * self.block_rows).min(self.singular_values.len())
+    }
+
+    /// The oscillating poles (one of each conjugate pair) at order `n`.
+    pub fn poles(&self, order: usize) -> Result<Vec<Pole>, OmaError> {
+        let l = self.channels;
+        if order == 0 || order > self.max_order() {
+            return Err(OmaError::OrderTooHigh {
+                order,
+                max: self.max_order(),
+            });
+        }
+        if self.singular_values[order - 1] <= 1e-13 * self.singular_values[0] {
+            return Err(OmaError::SingularHankel { order });
+        }
+        let rows = self.u.nrows();
+        let observability = Mat::from_fn(rows, order, |i, j| self.u[(i, j)] * self.singular_values[j].sqrt());
+        let upper = observability.subrows(0, rows - l).to_owned();
+        let lower = observability.subrows(l, rows - l).to_owned();
+        let state = upper.col_piv_qr().solve_lstsq(&lower);
+        let eigen = state.eigen().map_err(|_| OmaError::EigenFailed { order })?;
+        let (values, vectors) = (eigen.S().column_vector(), eigen.U());
+        let mut poles = Vec::new();
+        for j in 0..order {
+            let mu = values[j];
+            if mu.im <= 0.0 || mu.norm() == 0.0 {
+                continue; // the conjugate, a real pole or a pure delay
+            }
+            let lambda = c64::new(mu.norm().ln(), mu.im.atan2(mu.re)) * self.fs;
+            let mut shape: Vec<c64> = (0..l)
+                .map(|a| (0..order).map(|k| vectors[(k, j)] * observability[(a, k)]).sum())
+                .collect();
+            normalise(&mut shape);
+            poles.push(Pole {
+                order,
+                frequency_hz: lambda.norm() / (2.0 * PI),
+                damping_ratio: -lambda.re / lambda.norm(),
+                mpc: mpc(&shape),
+                shape,
+            });
+        }
+        poles.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+        Ok(poles)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Exact correlations of a two-mode system: `R_k = C Aᵏ G` with known
+    /// poles, so SSI must return them to round-off.
+    #[test]
+    fn exact_correlations_give_the_exact_poles() {
+        let fs = 100.0;
+        let modes = [(3.0, 0.02), (11.0, 0.05)];
+        let shapes = [[1.0, 0.5, -0.3], [0.2, -1.0, 0.7]];
+        let (l, max_lag) = (3, 21);
+        let mut r = vec![0.0; (max_lag + 1) * l * l];
+        for ((f, zeta), shape) in modes.iter().zip(&shapes) {
+            let omega = 2.0 * PI * f;
+            let lambda = c64::new(-zeta * omega, omega * (1.0f64 - zeta * zeta).sqrt());
+            for k in 0..=max_lag {
+                // R_k = Re(φ e^{λ k Δt} gᵀ), g = φ (a symmetric, real-mode model).
+                let decay = (lambda * (k as f64 / fs)).exp();
+                for a in 0..l {
+                    for b in 0..l {
+                        r[(k * l + a) * l + b] += (decay * c64::new(shape[a] * shape[b], 0.0)).re;
+                    }
+                }
+            }
+        }
+        let model = SubspaceModel::new(&r, l, l, 10, fs).unwrap();
+        let poles = model.poles(4).unwrap();
+        assert_eq!(poles.len(), 2);
+        for (pole, ((f, zeta), shape)) in poles.iter().zip(modes.iter().zip(&shapes)) {
+            assert!((pole.frequency_hz - f).abs() < 1e-9 * f, "{pole:?}");
+            assert!((pole.damping_ratio - zeta).abs() < 1e-9, "{pole:?}");
+            let real: Vec<f64> = shape.to_vec();
+            assert!((super::super::shape::mac_real(&pole.shape, &real) - 1.0).abs() < 1e-9);
+            assert!((pole.mpc - 1.0).abs() < 1e-9);
+        }
+        assert!(model.singular_values()[4] < 1e-10 * model.singular_values()[0]);
+        assert!(matches!(model.poles(6), Err(OmaError::SingularHankel { order: 6 })));
+        assert!(matches!(model.poles(31), Err(OmaError::OrderTooHigh { .. })));
+    }
+
+    #[test]
+    fn too_few_lags_and_zero_data_are_errors() {
+        assert!(matches!(
+            SubspaceModel::new(&[0.0; 9], 1, 1, 5, 10.0),
+            Err(OmaError::TooFewLags { block_rows: 5 })
+        ));
+        assert!(matches!(
+            SubspaceModel::new(&[0.0; 11], 1, 1, 5, 10.0),
+            Err(OmaError::SingularHankel { order: 1 })
+        ));
+    }
+}
