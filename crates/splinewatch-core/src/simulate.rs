@@ -1,8 +1,9 @@
 //! Time-domain response by modal superposition with exact per-mode
 //! recursions.
 //!
-//! Each mode obeys `q̈ + 2ζω q̇ + ω² q = a_in f(t)` (mass-normalised, input
-//! at one sensor). With the force linear between samples (first-order
+//! Each mode obeys `q̈ + 2ζω q̇ + ω² q = Σ_j a_{in_j} f_j(t)` (mass-normalised,
+//! forces at one or more points of the model's sensor list; several
+//! uncorrelated forces are the ambient excitation of output-only tests). With the force linear between samples (first-order
 //! hold), the exact discrete update is
 //! `z_{k+1} = Φ z_k + Γ0 f_k + Γ1 (f_{k+1} - f_k)`, `z = (q, q̇)`, with
 //! `Φ = e^{AΔt}`, `Γ0 = ∫₀^Δt e^{Aτ} B dτ` and
@@ -27,13 +28,16 @@ struct ModeRecursion {
     g1: [f64; 2],
     omega2: f64,
     two_zeta_omega: f64,
-    input_gain: f64,
+    /// `a_{in_j,i}` of every input `j`.
+    input_gains: Vec<f64>,
+    /// Modal force `Σ_j a_{in_j,i} f_j` at the last step.
+    last_modal_force: f64,
     /// Column `i` of the sensor amplitudes.
     output_gains: Vec<f64>,
     state: [f64; 2],
 }
 
-/// Simulates accelerations at every sensor for a force at one sensor.
+/// Simulates accelerations at every sensor for forces at some of them.
 #[derive(Debug, Clone)]
 pub struct ModalSimulator {
     modes: Vec<ModeRecursion>,
@@ -41,23 +45,32 @@ pub struct ModalSimulator {
     kept: Vec<usize>,
     dt: f64,
     sensors: usize,
-    last_force: f64,
+    last_forces: Vec<f64>,
 }
 
 impl ModalSimulator {
     /// `input` is the sensor index where the force acts; `dt` the step.
-    /// Modes the input does not excite (|a_in| below 1e-12 of the largest)
-    /// are skipped.
     #[track_caller]
     pub fn new(state: &ModalState, sensors: usize, input: usize, dt: f64) -> Self {
+        Self::with_inputs(state, sensors, &[input], dt)
+    }
+
+    /// Forces at the sensor indices `inputs` (one force each, see
+    /// [`Self::step_forces`]). Modes no input excites (every `|a_in|` below
+    /// 1e-12 of the largest) are skipped.
+    #[track_caller]
+    pub fn with_inputs(state: &ModalState, sensors: usize, inputs: &[usize], dt: f64) -> Self {
         assert!(dt > 0.0 && dt.is_finite(), "time step must be positive");
+        assert!(!inputs.is_empty(), "at least one input");
         let nm = state.modes.len();
-        let largest = (0..nm).map(|i| state.amplitude(input, i).abs()).fold(0.0, f64::max);
+        let largest = (0..nm)
+            .flat_map(|i| inputs.iter().map(move |&j| state.amplitude(j, i).abs()))
+            .fold(0.0, f64::max);
         let mut modes = Vec::new();
         let mut kept = Vec::new();
         for i in 0..nm {
-            let a_in = state.amplitude(input, i);
-            if a_in.abs() <= 1e-12 * largest {
+            let input_gains: Vec<f64> = inputs.iter().map(|&j| state.amplitude(j, i)).collect();
+            if input_gains.iter().all(|a| a.abs() <= 1e-12 * largest) {
                 continue;
             }
             let omega2 = state.modes.omega2[i].max(0.0);
@@ -70,7 +83,8 @@ impl ModalSimulator {
                 g1,
                 omega2,
                 two_zeta_omega,
-                input_gain: a_in,
+                input_gains,
+                last_modal_force: 0.0,
                 output_gains: (0..sensors).map(|s| state.amplitude(s, i)).collect(),
                 state: [0.0, 0.0],
             });
@@ -81,7 +95,7 @@ impl ModalSimulator {
             kept,
             dt,
             sensors,
-            last_force: 0.0,
+            last_forces: vec![0.0; inputs.len()],
         }
     }
 
@@ -89,27 +103,34 @@ impl ModalSimulator {
         self.dt
     }
 
-    /// Advances one step to force `f_next` and writes the accelerations at
-    /// the new time into `out` (one per sensor).
+    /// Advances one step to force `f_next` (a single-input simulator) and
+    /// writes the accelerations at the new time into `out` (one per sensor).
     #[track_caller]
     pub fn step(&mut self, f_next: f64, out: &mut [f64]) {
+        self.step_forces(&[f_next], out);
+    }
+
+    /// Advances one step to the forces `f_next` (one per input).
+    #[track_caller]
+    pub fn step_forces(&mut self, f_next: &[f64], out: &mut [f64]) {
         assert_eq!(out.len(), self.sensors);
+        assert_eq!(f_next.len(), self.last_forces.len());
         out.fill(0.0);
-        let f0 = self.last_force;
-        let df = f_next - f0;
         for m in &mut self.modes {
+            let u1: f64 = m.input_gains.iter().zip(f_next).map(|(g, f)| g * f).sum();
+            let u0 = m.last_modal_force;
+            let du = u1 - u0;
             let [q, v] = m.state;
-            let u0 = m.input_gain * f0;
-            let du = m.input_gain * df;
             let q1 = m.phi[0][0] * q + m.phi[0][1] * v + m.g0[0] * u0 + m.g1[0] * du;
             let v1 = m.phi[1][0] * q + m.phi[1][1] * v + m.g0[1] * u0 + m.g1[1] * du;
             m.state = [q1, v1];
-            let acc = m.input_gain * f_next - m.two_zeta_omega * v1 - m.omega2 * q1;
+            m.last_modal_force = u1;
+            let acc = u1 - m.two_zeta_omega * v1 - m.omega2 * q1;
             for (o, g) in out.iter_mut().zip(&m.output_gains) {
                 *o += g * acc;
             }
         }
-        self.last_force = f_next;
+        self.last_forces.copy_from_slice(f_next);
     }
 
     /// Physical displacement and velocity `Φ q`, `Φ q̇` of the full model.
@@ -141,13 +162,28 @@ impl ModalSimulator {
         }
     }
 
-    /// Carries the last force sample over (used with `set_physical_state`).
+    /// Carries the last force sample over (a single-input simulator; used
+    /// with `set_physical_state`).
     pub fn last_force(&self) -> f64 {
-        self.last_force
+        self.last_forces[0]
     }
 
     pub fn set_last_force(&mut self, f: f64) {
-        self.last_force = f;
+        self.set_last_forces(&[f]);
+    }
+
+    /// The last force of every input.
+    pub fn last_forces(&self) -> &[f64] {
+        &self.last_forces
+    }
+
+    /// Carries the last forces over to a re-based simulator.
+    #[track_caller]
+    pub fn set_last_forces(&mut self, forces: &[f64]) {
+        self.last_forces.copy_from_slice(forces);
+        for m in &mut self.modes {
+            m.last_modal_force = m.input_gains.iter().zip(forces).map(|(g, f)| g * f).sum();
+        }
     }
 }
 

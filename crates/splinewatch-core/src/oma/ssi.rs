@@ -10,11 +10,19 @@
 //! block row). Each eigenpair `(μ, ψ)` of `A` is a pole
 //! `λ = ln(μ) f_s`, frequency `|λ|/2π`, damping ratio `−Re λ/|λ|`, shape
 //! `φ = C ψ` at the sensors. One SVD serves every order.
+//!
+//! Every order from one pair of Gram matrices: `A = Σ^{-1/2} B Σ^{1/2}` with
+//! `B = U↑⁺ U↓ = (U↑ᵀU↑)⁻¹ U↑ᵀU↓` on the first `n` columns, so the
+//! eigenvalues are those of `B`, `ψ = Σ^{-1/2} ψ_B` and `φ = C ψ = U_top ψ_B`
+//! (`U_top`: the first `l` rows of `U`). `G↑ = U↑ᵀU↑ = I − U_lastᵀU_last` is
+//! well conditioned (`U` is orthonormal), so its leading `n × n` block is
+//! factorised by Cholesky at each order: a small solve and an eigenvalue
+//! problem per order instead of a least-squares solve on the tall `O↑`.
 
 use super::shape::{mpc, normalise};
 use super::OmaError;
-use faer::linalg::solvers::SolveLstsq;
-use faer::{c64, Mat};
+use faer::linalg::solvers::Solve;
+use faer::{c64, Mat, Side};
 use std::f64::consts::PI;
 
 /// One pole of the identified state-space model at one order.
@@ -32,10 +40,13 @@ pub struct Pole {
 /// The SVD of the block Hankel matrix: poles at any order.
 #[derive(Debug, Clone)]
 pub struct SubspaceModel {
-    u: Mat<f64>,
+    /// First `l` rows of `U`.
+    u_top: Mat<f64>,
+    /// `U↑ᵀU↑` and `U↑ᵀU↓`, both `max_order × max_order`.
+    gram_up: Mat<f64>,
+    gram_shift: Mat<f64>,
     singular_values: Vec<f64>,
     channels: usize,
-    block_rows: usize,
     fs: f64,
 }
 
@@ -62,11 +73,16 @@ impl SubspaceModel {
         if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
             return Err(OmaError::SingularHankel { order: 1 });
         }
+        let order_cap = (l * p).min(singular_values.len());
+        let u = svd.U().subcols(0, order_cap);
+        let rows = u.nrows();
+        let (up, down) = (u.subrows(0, rows - l), u.subrows(l, rows - l));
         Ok(Self {
-            u: svd.U().to_owned(),
+            u_top: u.subrows(0, l).to_owned(),
+            gram_up: up.transpose() * up,
+            gram_shift: up.transpose() * down,
             singular_values,
             channels: l,
-            block_rows: p,
             fs,
         })
     }
@@ -78,7 +94,7 @@ impl SubspaceModel {
 
     /// Largest usable order: `O↑` (`lp` rows) must have full column rank.
     pub fn max_order(&self) -> usize {
-        (self.channels * self.block_rows).min(self.singular_values.len())
+        self.gram_up.ncols()
     }
 
     /// The oscillating poles (one of each conjugate pair) at order `n`.
@@ -93,12 +109,14 @@ impl SubspaceModel {
         if self.singular_values[order - 1] <= 1e-13 * self.singular_values[0] {
             return Err(OmaError::SingularHankel { order });
         }
-        let rows = self.u.nrows();
-        let observability = Mat::from_fn(rows, order, |i, j| self.u[(i, j)] * self.singular_values[j].sqrt());
-        let upper = observability.subrows(0, rows - l).to_owned();
-        let lower = observability.subrows(l, rows - l).to_owned();
-        let state = upper.col_piv_qr().solve_lstsq(&lower);
-        let eigen = state.eigen().map_err(|_| OmaError::EigenFailed { order })?;
+        let n = order;
+        let shift = self
+            .gram_up
+            .submatrix(0, 0, n, n)
+            .llt(Side::Lower)
+            .map_err(|_| OmaError::SingularHankel { order })?
+            .solve(self.gram_shift.submatrix(0, 0, n, n));
+        let eigen = shift.eigen().map_err(|_| OmaError::EigenFailed { order })?;
         let (values, vectors) = (eigen.S().column_vector(), eigen.U());
         let mut poles = Vec::new();
         for j in 0..order {
@@ -108,7 +126,7 @@ impl SubspaceModel {
             }
             let lambda = c64::new(mu.norm().ln(), mu.im.atan2(mu.re)) * self.fs;
             let mut shape: Vec<c64> = (0..l)
-                .map(|a| (0..order).map(|k| vectors[(k, j)] * observability[(a, k)]).sum())
+                .map(|a| (0..n).map(|k| vectors[(k, j)] * self.u_top[(a, k)]).sum())
                 .collect();
             normalise(&mut shape);
             poles.push(Pole {

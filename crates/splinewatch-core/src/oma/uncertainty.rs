@@ -15,7 +15,7 @@
 
 use super::correlation::OutputCorrelations;
 use super::ssi::{Pole, SubspaceModel};
-use super::stabilisation::pole_distance;
+use super::stabilisation::{median, pole_distance};
 use faer::c64;
 use std::collections::BTreeMap;
 
@@ -30,14 +30,34 @@ pub struct Spread {
     pub replicates: usize,
 }
 
-/// Spreads of `modes` (representative poles of the full window), pairing
-/// each with the nearest pole of every replicate at its order (within
-/// `max_distance`, see [`pole_distance`]).
+/// A mode as the estimator reports it: the medians of frequency and damping
+/// over its poles (one per order) and the shape of its medoid.
+#[derive(Debug, Clone)]
+pub struct ModePoles<'a> {
+    /// The cluster's poles, one per order.
+    pub members: Vec<&'a Pole>,
+    /// The member at the median frequency.
+    pub medoid: &'a Pole,
+}
+
+impl ModePoles<'_> {
+    /// `(median frequency, median damping)` of the members.
+    pub fn medians(&self) -> (f64, f64) {
+        (
+            median(self.members.iter().map(|p| p.frequency_hz).collect()),
+            median(self.members.iter().map(|p| p.damping_ratio).collect()),
+        )
+    }
+}
+
+/// Spreads of `modes`: every replicate recomputes each member's pole (the
+/// nearest at its order within `max_distance`, see [`pole_distance`]) and
+/// the same medians, so the spread is that of exactly what is reported.
 pub fn jackknife(
     correlations: &OutputCorrelations,
     block_rows: usize,
     fs: f64,
-    modes: &[&Pole],
+    modes: &[ModePoles<'_>],
     max_distance: f64,
 ) -> Vec<Option<Spread>> {
     let batches = correlations.batches();
@@ -58,18 +78,27 @@ pub fn jackknife(
         };
         let mut by_order: BTreeMap<usize, Vec<Pole>> = BTreeMap::new();
         for (m, mode) in modes.iter().enumerate() {
-            let poles = by_order
-                .entry(mode.order)
-                .or_insert_with(|| model.poles(mode.order).unwrap_or_default());
-            let nearest = poles
-                .iter()
-                .map(|p| (pole_distance(p, mode), p))
-                .min_by(|a, b| a.0.total_cmp(&b.0));
-            if let Some((d, p)) = nearest {
-                if d <= max_distance {
-                    found[m].push((p.frequency_hz, p.damping_ratio, aligned(&p.shape, &mode.shape)));
-                }
-            }
+            let mut nearest = |reference: &Pole| -> Option<Pole> {
+                let poles = by_order
+                    .entry(reference.order)
+                    .or_insert_with(|| model.poles(reference.order).unwrap_or_default());
+                poles
+                    .iter()
+                    .map(|p| (pole_distance(p, reference), p))
+                    .min_by(|a, b| a.0.total_cmp(&b.0))
+                    .filter(|(d, _)| *d <= max_distance)
+                    .map(|(_, p)| p.clone())
+            };
+            let Some(medoid) = nearest(mode.medoid) else {
+                continue;
+            };
+            let matched: Vec<Pole> = mode.members.iter().filter_map(|p| nearest(p)).collect();
+            let replicate = ModePoles {
+                members: matched.iter().collect(),
+                medoid: &medoid,
+            };
+            let (f, zeta) = replicate.medians();
+            found[m].push((f, zeta, aligned(&medoid.shape, &mode.medoid.shape)));
         }
     }
     found

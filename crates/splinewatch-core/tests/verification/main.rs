@@ -3,6 +3,7 @@
 mod common;
 mod frf;
 mod modal;
+mod oma;
 mod shell;
 mod simulate;
 mod updating;

@@ -1,0 +1,197 @@
+//! Output-only identification (SSI-cov) on simulated ambient vibration of
+//! the Sinello deck: four uncorrelated band-limited random forces at points
+//! that carry no sensor, twelve vertical accelerometers, 2 % noise.
+
+use super::common::{sinello_model, sinello_sensors, true_kappa};
+use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::{FrfModel, ModalState, SensorPoint};
+use splinewatch_core::modal::ModeKind;
+use splinewatch_core::oma::shape::mac_real;
+use splinewatch_core::oma::{identify, IdentifiedMode, OmaResult, OmaSettings, OutputCorrelations};
+use splinewatch_core::simulate::{band_limit, ModalSimulator};
+
+const FS: f64 = 256.0;
+const OVERSAMPLE: usize = 4;
+/// Unmeasured force points (x, y) in metres, away from the sensors.
+const FORCE_XY: [(f64, f64); 4] = [(2.0, 1.0), (7.5, 6.5), (13.0, 3.5), (10.0, 8.2)];
+
+/// Gaussian samples (64-bit LCG and Box–Muller): deterministic per seed.
+fn gaussian(n: usize, seed: u64) -> Vec<f64> {
+    let mut state = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 + 0.5) / ((1u64 << 53) as f64)
+    };
+    (0..n)
+        .map(|_| {
+            let (u1, u2) = (uniform(), uniform());
+            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+        })
+        .collect()
+}
+
+/// The model with the force points appended to the sensors, and its state.
+fn ambient_model() -> (FrfModel, ModalState) {
+    let mut points = sinello_sensors();
+    points.extend(FORCE_XY.iter().map(|&(x, y)| SensorPoint {
+        xi: x / 16.0,
+        eta: y / 9.0,
+        tau: 0.5,
+        direction: [0.0, 0.0, 1.0],
+    }));
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &points).unwrap();
+    let damping = DampingCurve::new(2, vec![0.01; 7], 0.0, 80.0).unwrap();
+    let state = model.modal_state(&true_kappa(), &damping).unwrap();
+    (model, state)
+}
+
+/// `seconds` of accelerations at the twelve sensors.
+fn ambient_record(model: &FrfModel, state: &ModalState, seconds: f64, seed: u64) -> Vec<Vec<f64>> {
+    let n = (seconds * FS) as usize;
+    let fine = n * OVERSAMPLE;
+    let forces: Vec<Vec<f64>> = (0..FORCE_XY.len())
+        .map(|j| {
+            let mut f = gaussian(fine, seed * 101 + j as u64);
+            band_limit(&mut f, FS * OVERSAMPLE as f64, 0.5, 88.0);
+            f
+        })
+        .collect();
+    let inputs: Vec<usize> = (12..12 + FORCE_XY.len()).collect();
+    let mut sim = ModalSimulator::with_inputs(state, model.sensor_count(), &inputs, 1.0 / (FS * OVERSAMPLE as f64));
+    let mut acc = vec![0.0; model.sensor_count()];
+    let mut f_now = vec![0.0; FORCE_XY.len()];
+    let mut out: Vec<Vec<f64>> = (0..12).map(|_| Vec::with_capacity(n)).collect();
+    for k in 0..fine {
+        for (f, src) in f_now.iter_mut().zip(&forces) {
+            *f = src[k];
+        }
+        sim.step_forces(&f_now, &mut acc);
+        if (k + 1) % OVERSAMPLE == 0 {
+            for (o, a) in out.iter_mut().zip(&acc) {
+                o.push(*a);
+            }
+        }
+    }
+    for (c, channel) in out.iter_mut().enumerate() {
+        let rms = (channel.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+        let noise = gaussian(n, seed * 977 + 500 + c as u64);
+        channel.iter_mut().zip(noise).for_each(|(v, e)| *v += 0.02 * rms * e);
+    }
+    out
+}
+
+fn run(record: &[Vec<f64>], settings: &OmaSettings) -> OmaResult {
+    let views: Vec<&[f64]> = record.iter().map(Vec::as_slice).collect();
+    let correlations = OutputCorrelations::from_samples(&views, &[], settings.max_lag(), settings.batches).unwrap();
+    identify(&correlations, FS, settings).unwrap()
+}
+
+/// The model's bending modes below 80 Hz: (frequency, shape at the sensors).
+fn exact_modes(state: &ModalState) -> Vec<(f64, Vec<f64>)> {
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending && state.modes.frequency_hz(i) < 80.0)
+        .map(|i| {
+            (
+                state.modes.frequency_hz(i),
+                (0..12).map(|s| state.amplitude(s, i)).collect(),
+            )
+        })
+        .collect()
+}
+
+/// The identified mode paired with each exact one (largest MAC).
+fn paired<'a>(result: &'a OmaResult, exact: &[(f64, Vec<f64>)]) -> Vec<&'a IdentifiedMode> {
+    exact
+        .iter()
+        .map(|(_, shape)| {
+            result
+                .modes
+                .iter()
+                .max_by(|a, b| mac_real(&a.shape, shape).total_cmp(&mac_real(&b.shape, shape)))
+                .expect("at least one mode")
+        })
+        .collect()
+}
+
+/// Acceptance of the output-only issue: all 18 bending modes below 80 Hz,
+/// frequency within 0.5 %, MAC > 0.9, damping within 30 %. Reached (seed 1):
+/// frequencies within 0.03 %, MAC ≥ 0.996 (the closest pair, 73.49 and
+/// 73.99 Hz, included), damping within 10 % of the true 1 %.
+#[test]
+fn twenty_minutes_of_ambient_data_give_the_bending_modes() {
+    let (model, state) = ambient_model();
+    let record = ambient_record(&model, &state, 1200.0, 1);
+    let result = run(&record, &OmaSettings::default());
+    let exact = exact_modes(&state);
+    assert_eq!(exact.len(), 18);
+    assert_eq!(result.modes.len(), 18, "no spurious mode in the band");
+    for ((f, shape), mode) in exact.iter().zip(paired(&result, &exact)) {
+        let mac = mac_real(&mode.shape, shape);
+        assert!((mode.frequency_hz / f - 1.0).abs() < 0.005, "{f} Hz: {mode:?}");
+        assert!(mac > 0.9, "{f} Hz: MAC {mac}");
+        assert!((mode.damping_ratio / 0.01 - 1.0).abs() < 0.3, "{f} Hz: {mode:?}");
+        let std = mode.frequency_std_hz.expect("every replicate finds a mode this clear");
+        assert!(
+            (mode.frequency_hz - f).abs() < 4.0 * std,
+            "{f} Hz: error beyond 4 std: {mode:?}"
+        );
+    }
+    // Each identified mode is a different exact mode.
+    let distinct: std::collections::BTreeSet<u64> = paired(&result, &exact)
+        .iter()
+        .map(|m| m.frequency_hz.to_bits())
+        .collect();
+    assert_eq!(distinct.len(), 18);
+}
+
+/// The jackknife standard deviation of frequency against the scatter over
+/// 20 independent 5-minute records (shorter than the acceptance's 20 min to
+/// keep the suite fast; the estimator is the same): the mean reported std
+/// is within a factor of 2 of the observed std for every mode.
+#[test]
+fn reported_frequency_std_matches_the_scatter_over_twenty_records() {
+    let (model, state) = ambient_model();
+    let exact = exact_modes(&state);
+    let seeds = 20;
+    let mut frequencies = vec![Vec::new(); exact.len()];
+    let mut reported = vec![Vec::new(); exact.len()];
+    for seed in 0..seeds {
+        let record = ambient_record(&model, &state, 300.0, 1000 + seed);
+        let result = run(&record, &OmaSettings::default());
+        for (m, ((_, shape), mode)) in exact.iter().zip(paired(&result, &exact)).enumerate() {
+            if mac_real(&mode.shape, shape) > 0.9 {
+                frequencies[m].push(mode.frequency_hz);
+                reported[m].extend(mode.frequency_std_hz);
+            }
+        }
+    }
+    let mut ratios = Vec::new();
+    for (m, (f, r)) in frequencies.iter().zip(&reported).enumerate() {
+        // The closest pair (73.49 / 73.99 Hz, 0.7 % apart) is not always
+        // separated in 5 minutes; everything else is found in every record.
+        let needed = if (73.0..74.5).contains(&exact[m].0) { 12 } else { 20 };
+        assert!(
+            f.len() >= needed,
+            "mode {m} found in only {} of {seeds} records",
+            f.len()
+        );
+        let mean = f.iter().sum::<f64>() / f.len() as f64;
+        let scatter = (f.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (f.len() - 1) as f64).sqrt();
+        let claimed = r.iter().sum::<f64>() / r.len() as f64;
+        ratios.push(claimed / scatter);
+        eprintln!(
+            "{:7.3} Hz: found in {:2}, scatter {scatter:.5} Hz, reported {claimed:.5} Hz",
+            exact[m].0,
+            f.len()
+        );
+    }
+    for (m, ratio) in ratios.iter().enumerate() {
+        assert!(
+            (0.5..=2.0).contains(ratio),
+            "mode at {:.3} Hz: reported/observed std {ratio:.2}",
+            exact[m].0
+        );
+    }
+}
