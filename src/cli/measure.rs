@@ -4,7 +4,7 @@ use super::parse_encoding;
 use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
 use crate::io::import::{self, CsvOptions};
-use crate::io::recording::{read_recording, RecordingWriter};
+use crate::io::recording::{read_recording, RecordedBlock, RecordingWriter};
 use crate::io::wire::{self, Encoding};
 use crate::outputs::publisher::Publisher;
 use crate::pipeline::estimate;
@@ -39,6 +39,18 @@ pub struct SimulateArgs {
     /// Measurement noise, fraction of each channel's RMS.
     #[arg(long, default_value_t = 0.02)]
     pub noise: f64,
+    /// Ambient excitation: number of unmeasured random force points (drawn from the seed).
+    #[arg(long, default_value_t = 4)]
+    pub sources: usize,
+    /// Ambient excitation: a force point at X,Y metres (repeatable; replaces --sources).
+    #[arg(long = "source-at", value_parser = parse_xy)]
+    pub source_at: Vec<(f64, f64)>,
+    /// Traffic excitation: vehicle speed, km/h.
+    #[arg(long, default_value_t = 60.0)]
+    pub speed_kmh: f64,
+    /// Traffic excitation: mean arrivals per minute over both lanes (Poisson).
+    #[arg(long, default_value_t = 12.0)]
+    pub vehicles_per_minute: f64,
     /// Samples per message, seconds.
     #[arg(long, default_value_t = 1.0)]
     pub block_seconds: f64,
@@ -190,8 +202,13 @@ pub fn simulate(a: SimulateArgs) -> Result<()> {
         block_seconds: a.block_seconds,
         start_ns,
         band: (cfg.frf.band[0].max(0.1), cfg.frf.band[1] * 1.1),
-        oversample: 16,
+        // An unmeasured force's hold loss only colours an unknown input.
+        oversample: if a.excitation.is_unmeasured() { 4 } else { 16 },
         scenario,
+        sources: a.sources,
+        source_xy: a.source_at,
+        speed_kmh: a.speed_kmh,
+        vehicles_per_minute: a.vehicles_per_minute,
     };
     let prefix = cfg.topic_prefix();
     let mut writer = a
@@ -247,28 +264,9 @@ fn simulator_publisher(cfg: &Config, encoding: Encoding, speed: f64) -> Result<P
 
 pub fn frf(a: FrfArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let input = &a.input;
-    let bytes = std::fs::read(input).with_context(|| format!("cannot read {}", input.display()))?;
-    let limits = crate::pipeline::block_limits(&cfg);
-    let (blocks, rejected) = read_recording(&bytes, &limits).with_context(|| format!("reading {}", input.display()))?;
-    for r in &rejected {
-        errln!("skipped a message on {} at {} ns: {}", r.topic, r.log_time, r.error);
-    }
-    let origin = blocks
-        .iter()
-        .map(|b| b.block.start_ns)
-        .min()
-        .context("the recording holds no channel blocks")?;
-    let when = |s: &Option<String>| -> Result<Option<i128>> {
-        s.as_ref()
-            .map(|t| match t.parse::<f64>() {
-                Ok(sec) => Ok(origin + (sec * 1e9).round() as i128),
-                Err(_) => wire::parse_timestamp(t)
-                    .with_context(|| format!("{t:?} is neither seconds nor an RFC 3339 timestamp")),
-            })
-            .transpose()
-    };
-    let report = estimate::estimate(&cfg, &blocks, when(&a.from)?, when(&a.to)?)?;
+    let blocks = read_recordings(&cfg, std::slice::from_ref(&a.input))?;
+    let (from, to) = span_bounds(&blocks, &a.from, &a.to)?;
+    let report = estimate::estimate(&cfg, &blocks, from, to)?;
     errln!(
         "{} samples from {}: {} segments used, {} rejected, {:.1} effective averages, {} FRFs × {} lines",
         report.samples,
@@ -285,4 +283,130 @@ pub fn frf(a: FrfArgs) -> Result<()> {
         None => outln!("{text}"),
     }
     Ok(())
+}
+
+/// Every channel block of the recordings, in file order; skipped messages
+/// are reported on stderr.
+fn read_recordings(cfg: &crate::config::Config, inputs: &[PathBuf]) -> Result<Vec<RecordedBlock>> {
+    let limits = crate::pipeline::block_limits(cfg);
+    let mut blocks = Vec::new();
+    for input in inputs {
+        let bytes = std::fs::read(input).with_context(|| format!("cannot read {}", input.display()))?;
+        let (mut read, rejected) =
+            read_recording(&bytes, &limits).with_context(|| format!("reading {}", input.display()))?;
+        for r in &rejected {
+            errln!(
+                "{}: skipped a message on {} at {} ns: {}",
+                input.display(),
+                r.topic,
+                r.log_time,
+                r.error
+            );
+        }
+        blocks.append(&mut read);
+    }
+    Ok(blocks)
+}
+
+/// `--from`/`--to` as absolute times: seconds from the recordings' first
+/// sample, or RFC 3339.
+fn span_bounds(
+    blocks: &[RecordedBlock],
+    from: &Option<String>,
+    to: &Option<String>,
+) -> Result<(Option<i128>, Option<i128>)> {
+    let origin = blocks
+        .iter()
+        .map(|b| b.block.start_ns)
+        .min()
+        .context("the recording holds no channel blocks")?;
+    let when = |s: &Option<String>| -> Result<Option<i128>> {
+        s.as_ref()
+            .map(|t| match t.parse::<f64>() {
+                Ok(sec) => Ok(origin + (sec * 1e9).round() as i128),
+                Err(_) => wire::parse_timestamp(t)
+                    .with_context(|| format!("{t:?} is neither seconds nor an RFC 3339 timestamp")),
+            })
+            .transpose()
+    };
+    Ok((when(from)?, when(to)?))
+}
+
+#[derive(Args)]
+pub struct OmaArgs {
+    /// Configuration file (TOML): its acceleration sensors and [oma] settings.
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Recordings (MCAP), read as one: their blocks must form continuous channels.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// Start of the analysed span: seconds from the recordings' start, or RFC 3339.
+    #[arg(long)]
+    pub from: Option<String>,
+    /// End of the analysed span: seconds from the recordings' start, or RFC 3339.
+    #[arg(long)]
+    pub to: Option<String>,
+    /// Print the modes as JSON (`{"modes":[…]}`) instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the modes JSON to this file (for `update --modes`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// `splinewatch oma`: output-only modal identification of a recorded span.
+pub fn oma(a: OmaArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let blocks = read_recordings(&cfg, &a.inputs)?;
+    let (from, to) = span_bounds(&blocks, &a.from, &a.to)?;
+    let report = crate::pipeline::oma::identify_span(&cfg, &blocks, from, to)?;
+    let stable = report.result.diagram.iter().filter(|p| p.stable).count();
+    errln!(
+        "{} samples ({:.1} s at {} Hz) of {} channels from {}: {} poles, {} stable, {} modes",
+        report.samples,
+        report.samples as f64 / report.fs,
+        report.fs,
+        report.sensors.len(),
+        wire::format_timestamp(report.start_ns),
+        report.result.diagram.len(),
+        stable,
+        report.result.modes.len()
+    );
+    let file = report.modes_file();
+    if let Some(path) = &a.out {
+        std::fs::write(path, serde_json::to_string_pretty(&file)?)
+            .with_context(|| format!("cannot write {}", path.display()))?;
+    }
+    if a.json {
+        outln!("{}", serde_json::to_string(&file)?);
+        return Ok(());
+    }
+    let or_dash = |v: Option<f64>, scale: f64, digits: usize| match v {
+        Some(x) => format!("{:.*}", digits, x * scale),
+        None => "-".into(),
+    };
+    outln!(" mode  frequency Hz    ± std Hz  damping %  ± std %    MPC  orders");
+    for (i, m) in report.result.modes.iter().enumerate() {
+        outln!(
+            "{:5}  {:12.4}  {:>10}  {:9.3}  {:>7}  {:5.3}  {:6}",
+            i + 1,
+            m.frequency_hz,
+            or_dash(m.frequency_std_hz, 1.0, 4),
+            100.0 * m.damping_ratio,
+            or_dash(m.damping_std, 100.0, 3),
+            m.mpc,
+            m.stable_orders
+        );
+    }
+    Ok(())
+}
+
+fn parse_xy(s: &str) -> Result<(f64, f64), String> {
+    let (x, y) = s.split_once(',').ok_or_else(|| format!("{s:?} is not X,Y (metres)"))?;
+    let number = |v: &str| {
+        v.trim()
+            .parse::<f64>()
+            .map_err(|_| format!("{v:?} in {s:?} is not a number"))
+    };
+    Ok((number(x)?, number(y)?))
 }

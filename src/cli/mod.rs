@@ -41,6 +41,9 @@ enum Command {
     Import(measure::ImportArgs),
     /// Estimate FRFs (Welch, [frf] settings) from a raw-input MCAP recording.
     Frf(measure::FrfArgs),
+    /// Output-only modal identification (SSI-cov, [oma] settings) of raw-input
+    /// MCAP recordings: frequencies, damping ratios, their standard deviations, shapes.
+    Oma(measure::OmaArgs),
     /// Run the monitoring pipeline over raw-input recordings as fast as the CPU allows.
     Replay(monitor::ReplayArgs),
     /// Run the monitoring daemon: zenoh ingest until SIGINT/SIGTERM.
@@ -68,6 +71,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Paper(args) => model::paper(args),
         Command::Simulate(args) => measure::simulate(args),
         Command::Frf(args) => measure::frf(args),
+        Command::Oma(args) => measure::oma(args),
         Command::Import(args) => measure::import(args),
         Command::Replay(args) => monitor::replay(args),
         Command::Run(args) => monitor::run(args),

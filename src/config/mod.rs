@@ -8,6 +8,7 @@
 
 mod frf;
 mod model;
+mod oma;
 mod output;
 mod schedule;
 mod setup;
@@ -19,9 +20,10 @@ pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
     MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, SupportConfig, MAX_CONTROL_POINTS,
 };
+pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use schedule::ScheduleConfig;
-pub use setup::{frf_setup, FrfSetup};
+pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 pub use updating::UpdatingConfig;
 pub use zenoh::ZenohConfig;
 
@@ -63,6 +65,8 @@ pub struct Config {
     pub output: OutputConfig,
     #[serde(default)]
     pub zenoh: ZenohConfig,
+    #[serde(default)]
+    pub oma: OmaConfig,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -165,6 +169,9 @@ impl Config {
         self.update_settings()?;
         // The sampling rate is only known from the data; check with a nominal one.
         self.welch_settings(256.0)?;
+        if self.is_output_only() || self.oma != OmaConfig::default() {
+            self.oma_settings()?;
+        }
         for (key, hours) in [
             ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
             ("output.results_rotate_hours", self.output.results_rotate_hours),

@@ -3,7 +3,7 @@
 use super::Config;
 use anyhow::{Context, Result};
 use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::FrfModel;
+use splinewatch_core::frf::{FrfModel, SensorPoint};
 
 /// The model, its sensors and damping, ready for FRF work.
 pub struct FrfSetup {
@@ -15,6 +15,12 @@ pub struct FrfSetup {
 
 /// Assembles the configured model with its sensors and damping curve.
 pub fn frf_setup(config: &Config) -> Result<FrfSetup> {
+    frf_setup_with_points(config, &[])
+}
+
+/// As [`frf_setup`], with `extra` points appended to the model's sensor list
+/// (after the configured sensors; the simulator's unmeasured force points).
+pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<FrfSetup> {
     let model = config.build_model()?;
     let sensors = config.build_sensors(&model.shell)?;
     if sensors.is_empty() {
@@ -22,7 +28,7 @@ pub fn frf_setup(config: &Config) -> Result<FrfSetup> {
     }
     let damping = config.build_damping()?;
     let kappa = model.springs.iter().map(|s| s.stiffness().to_vec()).collect();
-    let points: Vec<_> = sensors.iter().map(|(_, p)| *p).collect();
+    let points: Vec<_> = sensors.iter().map(|(_, p)| *p).chain(extra.iter().copied()).collect();
     let frf_model = FrfModel::new(model.assemble().context("assembling the model")?, &points)?;
     Ok(FrfSetup {
         model: frf_model,

@@ -1,4 +1,4 @@
-//! Bytes in and out: the console (never fatal), the wire format of channel blocks, MCAP recordings, FRF
+//! Bytes in and out: the console (never fatal), the wire format of channel blocks, MCAP recordings, FRF and identified-modes
 //! files, loggers' CSV and UFF 58 files, output-file creation and numbering,
 //! and salvaging unfinished MCAP.
 //! Room: the bottom of the application. May import: the core crate only.
@@ -7,6 +7,7 @@ pub mod console;
 pub mod files;
 pub mod frf_json;
 pub mod import;
+pub mod modes_json;
 pub mod recording;
 pub mod recover;
 pub mod wire;

@@ -77,19 +77,11 @@ pub fn estimate(
     to_ns: Option<i128>,
 ) -> Result<EstimateReport> {
     let (force, accels) = config.channel_roles()?;
-    let (f, xs) = channels(config, blocks, from_ns, to_ns, force, &accels)?;
-    let fs = f.fs;
-    let Some((start, samples)) = common_span(&f, &xs, from_ns, to_ns) else {
-        bail!("the channels have no common time span in the requested interval");
-    };
-    let index = |c: &ContinuousChannel, t: i128| -> Result<usize> {
-        let k = (t - c.start_ns) as f64 * c.fs / 1e9;
-        let r = k.round();
-        if (k - r).abs() > 0.01 {
-            bail!("channels are not sample-aligned (offset {:.3} samples)", k - r);
-        }
-        Ok(r.max(0.0) as usize)
-    };
+    let wanted: Vec<(usize, ChannelQuantity)> = std::iter::once((force, ChannelQuantity::Force))
+        .chain(accels.iter().map(|&i| (i, ChannelQuantity::Acceleration)))
+        .collect();
+    let span = aligned_span(config, blocks, from_ns, to_ns, &wanted)?;
+    let (start, samples, fs) = (span.start_ns, span.samples, span.fs);
     let (settings, estimator) = config.welch_settings(fs)?;
     if samples < settings.segment {
         bail!(
@@ -97,13 +89,10 @@ pub fn estimate(
             settings.segment
         );
     }
-    let slice = |c: &ContinuousChannel| -> Result<Vec<f64>> {
-        let a = index(c, start)?;
-        Ok(c.data[a..a + samples].to_vec())
-    };
-    let f_data = slice(&f)?;
-    let x_data: Vec<Vec<f64>> = xs.iter().map(slice).collect::<Result<_>>()?;
-    let mut welch = WelchEstimator::new(settings, xs.len())?;
+    let mut data = span.channels.into_iter();
+    let f_data = data.next().expect("the force channel comes first");
+    let x_data: Vec<Vec<f64>> = data.collect();
+    let mut welch = WelchEstimator::new(settings, accels.len())?;
     let refs: Vec<&[f64]> = x_data.iter().map(|v| v.as_slice()).collect();
     welch.push(&f_data, &refs)?;
     let counts = welch.counts();
@@ -128,16 +117,57 @@ pub fn estimate(
     })
 }
 
-/// The force channel and the acceleration channels, each concatenated from
-/// the blocks overlapping `[from_ns, to_ns)`, on one sampling rate.
+/// Channels cut to their common span on one sample grid.
+#[derive(Debug, Clone)]
+pub struct AlignedSpan {
+    pub start_ns: i128,
+    pub samples: usize,
+    pub fs: f64,
+    /// In the order asked for.
+    pub channels: Vec<Vec<f64>>,
+}
+
+/// The channels `wanted` (sensor index into `[[sensors]]`, quantity), each
+/// concatenated from the blocks overlapping `[from_ns, to_ns)`, on one
+/// sampling rate, cut to their common span (snapped to the first channel's
+/// grid).
+pub fn aligned_span(
+    config: &Config,
+    blocks: &[RecordedBlock],
+    from_ns: Option<i128>,
+    to_ns: Option<i128>,
+    wanted: &[(usize, ChannelQuantity)],
+) -> Result<AlignedSpan> {
+    let continuous = channels(config, blocks, from_ns, to_ns, wanted)?;
+    let Some((start, samples)) = common_span(&continuous, from_ns, to_ns) else {
+        bail!("the channels have no common time span in the requested interval");
+    };
+    let slice = |c: &ContinuousChannel| -> Result<Vec<f64>> {
+        let k = (start - c.start_ns) as f64 * c.fs / 1e9;
+        let r = k.round();
+        if (k - r).abs() > 0.01 {
+            bail!("channels are not sample-aligned (offset {:.3} samples)", k - r);
+        }
+        let a = r.max(0.0) as usize;
+        Ok(c.data[a..a + samples].to_vec())
+    };
+    Ok(AlignedSpan {
+        start_ns: start,
+        samples,
+        fs: continuous[0].fs,
+        channels: continuous.iter().map(slice).collect::<Result<_>>()?,
+    })
+}
+
+/// The `wanted` channels, each concatenated from the blocks overlapping
+/// `[from_ns, to_ns)`, on one sampling rate.
 fn channels(
     config: &Config,
     blocks: &[RecordedBlock],
     from_ns: Option<i128>,
     to_ns: Option<i128>,
-    force: usize,
-    accels: &[usize],
-) -> Result<(ContinuousChannel, Vec<ContinuousChannel>)> {
+    wanted: &[(usize, ChannelQuantity)],
+) -> Result<Vec<ContinuousChannel>> {
     let names: Vec<&str> = config.sensors.iter().map(|s| s.name.as_str()).collect();
     let mut by_channel: BTreeMap<(String, ChannelQuantity), Vec<&RecordedBlock>> = BTreeMap::new();
     // Only blocks overlapping the requested span take part, so a gap outside
@@ -152,58 +182,46 @@ fn channels(
             .or_default()
             .push(b);
     }
-    let channel = |name: &str, q: ChannelQuantity| -> Result<ContinuousChannel> {
-        let list = by_channel
-            .get(&(name.to_string(), q))
-            .map(|v| v.as_slice())
-            .unwrap_or(&[]);
-        concatenate(name, q, list)
-    };
-    let f = channel(names[force], ChannelQuantity::Force)?;
-    let xs: Vec<ContinuousChannel> = accels
+    let out: Vec<ContinuousChannel> = wanted
         .iter()
-        .map(|&i| channel(names[i], ChannelQuantity::Acceleration))
+        .map(|&(i, q)| {
+            let list = by_channel
+                .get(&(names[i].to_string(), q))
+                .map(|v| v.as_slice())
+                .unwrap_or(&[]);
+            concatenate(names[i], q, list)
+        })
         .collect::<Result<_>>()?;
-    let fs = f.fs;
-    for (x, &i) in xs.iter().zip(accels) {
+    let fs = out[0].fs;
+    for (x, &(i, _)) in out.iter().zip(wanted) {
         if (x.fs - fs).abs() > 1e-9 * fs {
             bail!(
-                "sample-rate mismatch: force {} at {fs} Hz, {} at {} Hz",
-                names[force],
+                "sample-rate mismatch: {} at {fs} Hz, {} at {} Hz",
+                names[wanted[0].0],
                 names[i],
                 x.fs
             );
         }
     }
-    Ok((f, xs))
+    Ok(out)
 }
 
 /// The channels' common span within `[from_ns, to_ns)`, its start snapped to
-/// the force channel's grid: (start, samples); `None` if none is common.
-fn common_span(
-    f: &ContinuousChannel,
-    xs: &[ContinuousChannel],
-    from_ns: Option<i128>,
-    to_ns: Option<i128>,
-) -> Option<(i128, usize)> {
-    let fs = f.fs;
-    // Common span on the force channel's sample grid.
+/// the first channel's grid: (start, samples); `None` if none is common.
+fn common_span(channels: &[ContinuousChannel], from_ns: Option<i128>, to_ns: Option<i128>) -> Option<(i128, usize)> {
+    let first = &channels[0];
+    let fs = first.fs;
     let end = |c: &ContinuousChannel| c.start_ns + (c.data.len() as f64 * 1e9 / c.fs).round() as i128;
-    let mut start = std::iter::once(f)
-        .chain(xs)
-        .map(|c| c.start_ns)
-        .max()
-        .expect("one channel");
-    let mut stop = std::iter::once(f).chain(xs).map(end).min().expect("one channel");
+    let mut start = channels.iter().map(|c| c.start_ns).max()?;
+    let mut stop = channels.iter().map(end).min()?;
     if let Some(t) = from_ns {
         start = start.max(t);
     }
     if let Some(t) = to_ns {
         stop = stop.min(t);
     }
-    // Snap the start to the force grid.
-    let k0 = ((start - f.start_ns) as f64 * fs / 1e9).ceil() as usize;
-    let start = f.start_ns + (k0 as f64 * 1e9 / fs).round() as i128;
+    let k0 = ((start - first.start_ns) as f64 * fs / 1e9).ceil() as usize;
+    let start = first.start_ns + (k0 as f64 * 1e9 / fs).round() as i128;
     (stop > start).then(|| (start, ((stop - start) as f64 * fs / 1e9).floor() as usize))
 }
 

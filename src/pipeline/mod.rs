@@ -20,6 +20,7 @@ mod align;
 pub mod estimate;
 mod frf_inbox;
 mod job;
+pub mod oma;
 mod reports;
 mod windows;
 

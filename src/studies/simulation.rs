@@ -8,7 +8,8 @@
 //! scenario changes updating parameters over time; the modal model is
 //! re-solved every `update_seconds` and the physical state carried over.
 
-use crate::config::{frf_setup, Config};
+use super::excitation::{self, SourceOptions, UnmeasuredSources};
+use crate::config::{frf_setup, frf_setup_with_points, Config, FrfSetup};
 use crate::io::wire::{ChannelBlock, ChannelQuantity};
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
@@ -18,16 +19,7 @@ use serde::Deserialize;
 use splinewatch_core::simulate::{band_limit, hammer_impacts, swept_sine, ModalSimulator};
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
-/// Kind of excitation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum Excitation {
-    /// Band-limited Gaussian random force.
-    Random,
-    /// Repeated linear sweeps across the band.
-    Sweep,
-    /// Hammer impacts (2 ms half-sines) at jittered intervals.
-    Impact,
-}
+pub use super::excitation::Excitation;
 
 /// A time-varying scenario (TOML):
 /// ```toml
@@ -99,6 +91,13 @@ pub struct SimulationOptions {
     pub band: (f64, f64),
     pub oversample: usize,
     pub scenario: Option<Scenario>,
+    /// Ambient: number of random source points (ignored with `source_xy`).
+    pub sources: usize,
+    /// Ambient: source points (x, y) in metres.
+    pub source_xy: Vec<(f64, f64)>,
+    /// Traffic: crossing speed and arrival rate over both lanes.
+    pub speed_kmh: f64,
+    pub vehicles_per_minute: f64,
 }
 
 impl SimulationOptions {
@@ -118,6 +117,20 @@ impl SimulationOptions {
             band: (config.frf.band[0].max(0.1), config.frf.band[1] * 1.1),
             oversample: 16,
             scenario: None,
+            sources: 4,
+            source_xy: Vec::new(),
+            speed_kmh: 60.0,
+            vehicles_per_minute: 12.0,
+        }
+    }
+
+    /// [`Self::random_excitation`] with ambient forces at four random points
+    /// (1 kN RMS each) instead of the measured force.
+    pub fn ambient_excitation(config: &Config, duration_seconds: f64, seed: u64) -> Self {
+        Self {
+            excitation: Excitation::Ambient,
+            oversample: 4,
+            ..Self::random_excitation(config, duration_seconds, seed)
         }
     }
 }
@@ -131,7 +144,7 @@ pub struct SimulationSummary {
 }
 
 /// Runs the simulation, handing every block to `sink` in time order (force
-/// first, then accelerations, per block interval).
+/// first when it is measured, then accelerations, per block interval).
 pub fn simulate(
     config: &Config,
     options: &SimulationOptions,
@@ -140,8 +153,8 @@ pub fn simulate(
     let o = options;
     let block_len = o.block_length()?;
     let total = (o.duration_seconds * o.fs).round() as usize;
-    let (force_sensor, accel_sensors) = config.channel_roles()?;
-    let setup = frf_setup(config)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
+    let (mut forcing, setup, accel_sensors) = Forcing::new(config, o, &mut rng)?;
     let parameters = config.build_parameters()?;
     let scenario = o.scenario.clone().unwrap_or_default();
     scenario.check(&parameters)?;
@@ -160,13 +173,11 @@ pub fn simulate(
     };
     let update_blocks = ((scenario.update_seconds / o.block_seconds).round() as usize).max(1);
     let dt = 1.0 / (o.fs * o.oversample as f64);
+    let sensors = setup.model.sensor_count();
     let mut state = setup.model.modal_state(&kappa_at(0.0), &setup.damping)?;
-    let mut sim = ModalSimulator::new(&state, setup.model.sensor_count(), force_sensor, dt);
-    let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-    let mut force = ForceSource::new(o, &mut rng);
+    let mut sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
     let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
     let mut noise_std: Option<Vec<f64>> = None;
-    let mut acc = vec![0.0; setup.model.sensor_count()];
     let mut summary = SimulationSummary::default();
     let mut produced = 0;
     let mut block_index = 0;
@@ -175,28 +186,16 @@ pub fn simulate(
         let t0 = produced as f64 / o.fs;
         if block_index > 0 && block_index % update_blocks == 0 && !scenario.changes.is_empty() {
             let (x, v) = sim.physical_state(&state);
-            let last = sim.last_force();
+            let last = sim.last_forces().to_vec();
             state = setup.model.modal_state(&kappa_at(t0), &setup.damping)?;
-            sim = ModalSimulator::new(&state, setup.model.sensor_count(), force_sensor, dt);
+            sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
             sim.set_physical_state(&state, &setup.model.assembled().mass, &x, &v);
-            sim.set_last_force(last);
+            sim.set_last_forces(&last);
             summary.model_updates += 1;
         }
-        let (mut f_block, mut a_block) = sample_block(
-            n,
-            o.oversample,
-            &mut sim,
-            &mut force,
-            &mut rng,
-            &accel_sensors,
-            &mut acc,
-        );
+        let (mut f_block, mut a_block) = forcing.sample_block(n, o.oversample, &mut sim, &mut rng, &accel_sensors);
         // Noise level fixed from the first block's clean RMS.
-        let stds = noise_std.get_or_insert_with(|| noise_levels(o.noise, &f_block, &a_block));
-        add_noise(&mut f_block, stds[0], &mut rng);
-        for (c, data) in a_block.iter_mut().enumerate() {
-            add_noise(data, stds[c + 1], &mut rng);
-        }
+        let stds = noise_std.get_or_insert_with(|| noise_levels(o.noise, f_block.as_deref(), &a_block));
         let start_ns = o.start_ns + (t0 * 1e9).round() as i128;
         let block = |name: usize, quantity: ChannelQuantity, data: Vec<f64>| ChannelBlock {
             name: names[name].clone(),
@@ -206,16 +205,107 @@ pub fn simulate(
             start_ns,
             data,
         };
-        sink(block(force_sensor, ChannelQuantity::Force, f_block))?;
-        for (c, data) in a_block.into_iter().enumerate() {
-            sink(block(accel_sensors[c], ChannelQuantity::Acceleration, data))?;
+        let mut noise = stds.iter();
+        if let (Some(data), Some(sensor)) = (f_block.as_mut(), forcing.measured_at) {
+            add_noise(data, *noise.next().expect("one level per channel"), &mut rng);
+            sink(block(sensor, ChannelQuantity::Force, std::mem::take(data)))?;
+            summary.blocks += 1;
         }
-        summary.blocks += 1 + accel_sensors.len();
+        for (data, &s) in a_block.iter_mut().zip(&accel_sensors) {
+            add_noise(data, *noise.next().expect("one level per channel"), &mut rng);
+            sink(block(s, ChannelQuantity::Acceleration, std::mem::take(data)))?;
+        }
+        summary.blocks += accel_sensors.len();
         produced += n;
         block_index += 1;
     }
     summary.samples_per_channel = produced;
     Ok(summary)
+}
+
+/// Where the forces act and what generates them.
+struct Forcing {
+    /// Indices into the model's sensor list (configured sensors, then the
+    /// unmeasured source points).
+    inputs: Vec<usize>,
+    /// The configured force sensor when the force is recorded.
+    measured_at: Option<usize>,
+    source: Source,
+}
+
+enum Source {
+    Measured(ForceSource),
+    Unmeasured(UnmeasuredSources),
+}
+
+impl Forcing {
+    /// The forcing, the model (with the source points appended) and the
+    /// recorded acceleration sensors.
+    fn new(config: &Config, o: &SimulationOptions, rng: &mut ChaCha8Rng) -> Result<(Self, FrfSetup, Vec<usize>)> {
+        if !o.excitation.is_unmeasured() {
+            let (force_sensor, accel_sensors) = config.channel_roles()?;
+            let forcing = Self {
+                inputs: vec![force_sensor],
+                measured_at: Some(force_sensor),
+                source: Source::Measured(ForceSource::new(o)),
+            };
+            return Ok((forcing, frf_setup(config)?, accel_sensors));
+        }
+        let accel_sensors = config.output_channels()?;
+        let shell = config.build_model()?.shell;
+        let sources = SourceOptions {
+            excitation: o.excitation,
+            fs_sim: o.fs * o.oversample as f64,
+            band: o.band,
+            force_rms: o.force_rms,
+            sources: o.sources,
+            source_xy: o.source_xy.clone(),
+            speed_kmh: o.speed_kmh,
+            vehicles_per_minute: o.vehicles_per_minute,
+        };
+        let points = excitation::source_points(&sources, shell.surface(), rng)?;
+        let setup = frf_setup_with_points(config, &points)?;
+        let first = config.sensors.len();
+        let forcing = Self {
+            inputs: (first..first + points.len()).collect(),
+            measured_at: None,
+            source: Source::Unmeasured(UnmeasuredSources::new(&sources, config, points.len(), rng)?),
+        };
+        Ok((forcing, setup, accel_sensors))
+    }
+
+    /// `n` samples of the recorded force (if measured) and of every
+    /// acceleration sensor: the modal recursion stepped `oversample` times
+    /// per sample (the forces drawn at the simulation rate), the last step kept.
+    fn sample_block(
+        &mut self,
+        n: usize,
+        oversample: usize,
+        sim: &mut ModalSimulator,
+        rng: &mut ChaCha8Rng,
+        accel_sensors: &[usize],
+    ) -> (Option<Vec<f64>>, Vec<Vec<f64>>) {
+        let mut f_block = self.measured_at.is_some().then(|| Vec::with_capacity(n));
+        let mut a_block: Vec<Vec<f64>> = accel_sensors.iter().map(|_| Vec::with_capacity(n)).collect();
+        let mut forces = vec![0.0; self.inputs.len()];
+        let mut acc = vec![0.0; sim.sensor_count()];
+        for _ in 0..n {
+            for _ in 0..oversample {
+                match &mut self.source {
+                    Source::Measured(source) => forces[0] = source.next(rng),
+                    Source::Unmeasured(sources) => sources.next(rng, &mut forces),
+                }
+                sim.step_forces(&forces, &mut acc);
+            }
+            if let Some(f) = f_block.as_mut() {
+                f.push(forces[0]);
+            }
+            for (c, &s) in accel_sensors.iter().enumerate() {
+                a_block[c].push(acc[s]);
+            }
+        }
+        (f_block, a_block)
+    }
 }
 
 impl SimulationOptions {
@@ -267,38 +357,13 @@ impl Scenario {
     }
 }
 
-/// `n` samples of the force and of every acceleration sensor: the modal
-/// recursion stepped `oversample` times per sample (the force drawn at the
-/// simulation rate), the last step kept.
-fn sample_block(
-    n: usize,
-    oversample: usize,
-    sim: &mut ModalSimulator,
-    force: &mut ForceSource,
-    rng: &mut ChaCha8Rng,
-    accel_sensors: &[usize],
-    acc: &mut [f64],
-) -> (Vec<f64>, Vec<Vec<f64>>) {
-    let mut f_block = Vec::with_capacity(n);
-    let mut a_block = vec![Vec::with_capacity(n); accel_sensors.len()];
-    for _ in 0..n {
-        let mut f = 0.0;
-        for _ in 0..oversample {
-            f = force.next(rng);
-            sim.step(f, acc);
-        }
-        f_block.push(f);
-        for (c, &s) in accel_sensors.iter().enumerate() {
-            a_block[c].push(acc[s]);
-        }
-    }
-    (f_block, a_block)
-}
-
-/// Measurement noise per channel (force first): `noise` × the clean RMS.
-fn noise_levels(noise: f64, force: &[f64], accelerations: &[Vec<f64>]) -> Vec<f64> {
+/// Measurement noise per recorded channel (force first, if recorded):
+/// `noise` × the clean RMS.
+fn noise_levels(noise: f64, force: Option<&[f64]>, accelerations: &[Vec<f64>]) -> Vec<f64> {
     let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / v.len() as f64).sqrt();
-    std::iter::once(rms(force))
+    force
+        .map(rms)
+        .into_iter()
         .chain(accelerations.iter().map(|a| rms(a)))
         .map(|r| noise * r)
         .collect()
@@ -330,7 +395,7 @@ impl ForceSource {
     /// Random force is band-limited in chunks of 2^18 samples (64 s at 4 kHz).
     const CHUNK: usize = 1 << 18;
 
-    fn new(o: &SimulationOptions, _rng: &mut ChaCha8Rng) -> Self {
+    fn new(o: &SimulationOptions) -> Self {
         Self {
             excitation: o.excitation,
             fs_sim: o.fs * o.oversample as f64,
@@ -370,6 +435,7 @@ impl ForceSource {
                     .map(|v| v * peak)
                     .collect()
             }
+            Excitation::Ambient | Excitation::Traffic => unreachable!("unmeasured sources have their own generator"),
             Excitation::Impact => {
                 // About one hit every 8 s, jittered by ±1 s, clear of the chunk end.
                 let seconds = n as f64 / self.fs_sim;

@@ -30,8 +30,6 @@ struct ModeRecursion {
     two_zeta_omega: f64,
     /// `a_{in_j,i}` of every input `j`.
     input_gains: Vec<f64>,
-    /// Modal force `Σ_j a_{in_j,i} f_j` at the last step.
-    last_modal_force: f64,
     /// Column `i` of the sensor amplitudes.
     output_gains: Vec<f64>,
     state: [f64; 2],
@@ -84,7 +82,6 @@ impl ModalSimulator {
                 omega2,
                 two_zeta_omega,
                 input_gains,
-                last_modal_force: 0.0,
                 output_gains: (0..sensors).map(|s| state.amplitude(s, i)).collect(),
                 state: [0.0, 0.0],
             });
@@ -97,6 +94,11 @@ impl ModalSimulator {
             sensors,
             last_forces: vec![0.0; inputs.len()],
         }
+    }
+
+    /// Sensors (points) the accelerations are written for.
+    pub fn sensor_count(&self) -> usize {
+        self.sensors
     }
 
     pub fn time_step(&self) -> f64 {
@@ -116,15 +118,22 @@ impl ModalSimulator {
         assert_eq!(out.len(), self.sensors);
         assert_eq!(f_next.len(), self.last_forces.len());
         out.fill(0.0);
+        // Many inputs are idle at any instant (traffic): sum only the active ones.
+        let active: Vec<usize> = (0..f_next.len())
+            .filter(|&j| f_next[j] != 0.0 || self.last_forces[j] != 0.0)
+            .collect();
         for m in &mut self.modes {
-            let u1: f64 = m.input_gains.iter().zip(f_next).map(|(g, f)| g * f).sum();
-            let u0 = m.last_modal_force;
-            let du = u1 - u0;
+            let (mut u0, mut du, mut u1) = (0.0, 0.0, 0.0);
+            for &j in &active {
+                let (g, f0, f1) = (m.input_gains[j], self.last_forces[j], f_next[j]);
+                u0 += g * f0;
+                du += g * (f1 - f0);
+                u1 += g * f1;
+            }
             let [q, v] = m.state;
             let q1 = m.phi[0][0] * q + m.phi[0][1] * v + m.g0[0] * u0 + m.g1[0] * du;
             let v1 = m.phi[1][0] * q + m.phi[1][1] * v + m.g0[1] * u0 + m.g1[1] * du;
             m.state = [q1, v1];
-            m.last_modal_force = u1;
             let acc = u1 - m.two_zeta_omega * v1 - m.omega2 * q1;
             for (o, g) in out.iter_mut().zip(&m.output_gains) {
                 *o += g * acc;
@@ -181,9 +190,6 @@ impl ModalSimulator {
     #[track_caller]
     pub fn set_last_forces(&mut self, forces: &[f64]) {
         self.last_forces.copy_from_slice(forces);
-        for m in &mut self.modes {
-            m.last_modal_force = m.input_gains.iter().zip(forces).map(|(g, f)| g * f).sum();
-        }
     }
 }
 

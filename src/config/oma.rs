@@ -1,0 +1,92 @@
+//! `[oma]`: output-only (operational) modal analysis, SSI-cov.
+
+use super::{err, Config, ConfigError};
+use serde::{Deserialize, Serialize};
+use splinewatch_core::oma::{ClusterCriteria, OmaSettings, StabilityCriteria};
+
+/// Settings of the identification (`[oma]`); every key is optional. The
+/// defaults suit a deck with modes from a few Hz to the band's top at 12
+/// channels: 40 block rows, orders 2–120, KOMA-like stabilisation.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OmaConfig {
+    /// Reference sensors (names); empty: every acceleration sensor.
+    pub references: Vec<String>,
+    pub block_rows: usize,
+    pub min_order: usize,
+    pub max_order: usize,
+    pub order_step: usize,
+    /// Band of the reported modes (Hz); default: `frf.band`.
+    pub band: Option<[f64; 2]>,
+    /// Correlation batches of the jackknife uncertainty.
+    pub batches: usize,
+    pub stability: StabilityCriteria,
+    pub clustering: ClusterCriteria,
+}
+
+impl Default for OmaConfig {
+    fn default() -> Self {
+        let d = OmaSettings::default();
+        Self {
+            references: Vec::new(),
+            block_rows: d.block_rows,
+            min_order: d.min_order,
+            max_order: d.max_order,
+            order_step: d.order_step,
+            band: None,
+            batches: d.batches,
+            stability: d.stability,
+            clustering: d.clustering,
+        }
+    }
+}
+
+impl Config {
+    /// The acceleration sensors (indices into `[[sensors]]`): the OMA outputs.
+    pub fn output_channels(&self) -> Result<Vec<usize>, ConfigError> {
+        let outputs: Vec<usize> = (0..self.sensors.len())
+            .filter(|&i| self.sensors[i].quantity.as_slice().iter().any(|q| q == "acceleration"))
+            .collect();
+        if outputs.is_empty() {
+            return Err(err("sensors", "no sensor measures acceleration"));
+        }
+        Ok(outputs)
+    }
+
+    /// True when no sensor measures force: the daemon then runs output-only.
+    pub fn is_output_only(&self) -> bool {
+        !self
+            .sensors
+            .iter()
+            .any(|s| s.quantity.as_slice().iter().any(|q| q == "force"))
+    }
+
+    /// The core settings and the reference channels (positions among
+    /// [`Self::output_channels`]).
+    pub fn oma_settings(&self) -> Result<(OmaSettings, Vec<usize>), ConfigError> {
+        let o = &self.oma;
+        let outputs = self.output_channels()?;
+        let references = o
+            .references
+            .iter()
+            .map(|name| {
+                outputs
+                    .iter()
+                    .position(|&i| &self.sensors[i].name == name)
+                    .ok_or_else(|| err("oma.references", format!("{name:?} is not an acceleration sensor")))
+            })
+            .collect::<Result<Vec<usize>, _>>()?;
+        let settings = OmaSettings {
+            block_rows: o.block_rows,
+            min_order: o.min_order,
+            max_order: o.max_order,
+            order_step: o.order_step,
+            band: o.band.unwrap_or(self.frf.band),
+            stability: o.stability,
+            clustering: o.clustering,
+            batches: o.batches,
+        };
+        settings.check().map_err(|e| err("oma", e))?;
+        Ok((settings, references))
+    }
+}

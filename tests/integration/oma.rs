@@ -1,0 +1,215 @@
+//! Output-only identification end to end: `simulate --excitation ambient`
+//! (and traffic) → MCAP → `splinewatch oma`, its JSON contract, and bad input.
+
+use crate::common::fresh_dir;
+use splinewatch::config::{frf_setup, load_config};
+use splinewatch::io::modes_json::ModesFile;
+use splinewatch_core::c64;
+use splinewatch_core::modal::ModeKind;
+use splinewatch_core::oma::shape::mac;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn splinewatch(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// The bundled model's bending modes below 80 Hz at the twelve sensors.
+fn model_modes() -> Vec<(f64, Vec<c64>)> {
+    let cfg = load_config(&Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello.toml")).unwrap();
+    let setup = frf_setup(&cfg).unwrap();
+    let state = setup.model.modal_state(&setup.kappa, &setup.damping).unwrap();
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending && state.modes.frequency_hz(i) < 80.0)
+        .map(|i| {
+            let shape = (0..12).map(|s| c64::new(state.amplitude(s, i), 0.0)).collect();
+            (state.modes.frequency_hz(i), shape)
+        })
+        .collect()
+}
+
+/// Every identified mode of `file` paired with the model mode of largest MAC:
+/// (model frequency, identified frequency, MAC).
+fn pairs(file: &ModesFile) -> Vec<(f64, f64, f64)> {
+    let exact = model_modes();
+    file.modes
+        .iter()
+        .map(|m| {
+            let shape: Vec<c64> = m.shape.iter().map(|s| c64::new(s.re, s.im)).collect();
+            let (f, value) = exact
+                .iter()
+                .map(|(f, e)| (*f, mac(&shape, e)))
+                .max_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap();
+            (f, m.frequency_hz, value)
+        })
+        .collect()
+}
+
+#[test]
+fn ambient_recording_to_oma_json_gives_the_model_modes() {
+    let dir = fresh_dir("oma-ambient");
+    let rec = dir.join("ambient.mcap");
+    let sim = splinewatch(&[
+        "simulate",
+        "--config",
+        "config/sinello.toml",
+        "--duration",
+        "600",
+        "--excitation",
+        "ambient",
+        "--seed",
+        "4",
+        "--out",
+        rec.to_str().unwrap(),
+    ]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    let out = dir.join("modes.json");
+    let o = splinewatch(&[
+        "oma",
+        "--config",
+        "config/sinello.toml",
+        rec.to_str().unwrap(),
+        "--json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // The JSON contract: modes with these keys, shapes named by sensor.
+    let value: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let first = &value["modes"][0];
+    for key in [
+        "frequency_hz",
+        "damping_ratio",
+        "frequency_std_hz",
+        "damping_std",
+        "shape",
+    ] {
+        assert!(first.get(key).is_some(), "missing {key} in {first}");
+    }
+    assert_eq!(first["shape"][0]["sensor"], "P1");
+    assert!(first["shape"][0]["re"].is_number() && first["shape"][0]["im"].is_number());
+    let file: ModesFile = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(file, ModesFile::read(&out).unwrap(), "--out holds the same modes");
+    // 10 minutes: every bending mode below 80 Hz but possibly the closest
+    // pair (73.49/73.99 Hz), each within 0.5 % and MAC > 0.9.
+    let found = pairs(&file);
+    for (f_model, f, value) in &found {
+        assert!(*value > 0.9, "mode at {f} Hz pairs with {f_model} Hz at MAC {value}");
+        assert!((f / f_model - 1.0).abs() < 0.005, "{f} Hz vs model {f_model} Hz");
+    }
+    let distinct: std::collections::BTreeSet<u64> = found.iter().map(|p| p.0.to_bits()).collect();
+    assert!(
+        distinct.len() >= 17,
+        "{} of 18 model modes found: {found:?}",
+        distinct.len()
+    );
+    // --from/--to select a span: 5 minutes still give the lower modes.
+    let o = splinewatch(&[
+        "oma",
+        "--config",
+        "config/sinello.toml",
+        rec.to_str().unwrap(),
+        "--from",
+        "60",
+        "--to",
+        "360",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("76800 samples (300.0 s at 256 Hz)"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(String::from_utf8_lossy(&o.stdout).contains("frequency Hz"));
+}
+
+#[test]
+fn traffic_recording_gives_the_lower_modes() {
+    let dir = fresh_dir("oma-traffic");
+    let rec = dir.join("traffic.mcap");
+    let sim = splinewatch(&[
+        "simulate",
+        "--config",
+        "config/sinello.toml",
+        "--duration",
+        "600",
+        "--excitation",
+        "traffic",
+        "--seed",
+        "2",
+        "--out",
+        rec.to_str().unwrap(),
+    ]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    let o = splinewatch(&[
+        "oma",
+        "--config",
+        "config/sinello.toml",
+        rec.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let file: ModesFile = serde_json::from_slice(&o.stdout).unwrap();
+    let good: Vec<(f64, f64, f64)> = pairs(&file).into_iter().filter(|p| p.2 > 0.9).collect();
+    // Moving loads excite the lower modes best; the first three must be there.
+    for f_model in model_modes().iter().take(3).map(|m| m.0) {
+        let hit = good.iter().find(|p| p.0 == f_model);
+        assert!(
+            hit.is_some_and(|p| (p.1 / p.0 - 1.0).abs() < 0.005),
+            "{f_model} Hz not identified: {good:?}"
+        );
+    }
+}
+
+#[test]
+fn bad_oma_input_is_a_clear_error() {
+    let dir = fresh_dir("oma-bad");
+    let rec = dir.join("short.mcap");
+    let sim = splinewatch(&[
+        "simulate",
+        "--config",
+        "config/sinello.toml",
+        "--duration",
+        "5",
+        "--excitation",
+        "ambient",
+        "--out",
+        rec.to_str().unwrap(),
+    ]);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+    let o = splinewatch(&["oma", "--config", "config/sinello.toml", rec.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("too short"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"));
+    // A reference that is not an acceleration sensor, and a bad setting.
+    let base = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello.toml")).unwrap();
+    for (extra, expected) in [
+        ("\n[oma]\nreferences = [\"P99\"]\n", "oma.references"),
+        (
+            "\n[oma]\nmin_order = 50\nmax_order = 10\n",
+            "min_order must not exceed max_order",
+        ),
+        ("\n[oma]\nblock_row = 4\n", "unknown field"),
+    ] {
+        let cfg = dir.join("bad.toml");
+        std::fs::write(&cfg, format!("{base}{extra}")).unwrap();
+        let o = splinewatch(&["oma", "--config", cfg.to_str().unwrap(), rec.to_str().unwrap()]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains(expected), "{extra}: {}", stderr(&o));
+    }
+    let o = splinewatch(&["oma", "--config", "config/sinello.toml", "Cargo.toml"]);
+    assert!(
+        !o.status.success() && !stderr(&o).contains("panicked"),
+        "{}",
+        stderr(&o)
+    );
+}
