@@ -195,3 +195,76 @@ fn reported_frequency_std_matches_the_scatter_over_twenty_records() {
         );
     }
 }
+
+/// Peer check: the committed fixture (tests/fixtures/make_oma_peer_fixture.py)
+/// holds 300 s of simulated ambient data at 128 Hz and the modes KOMA
+/// (koma-python `covssi`, `find_stable_poles`, `PoleClusterer`) identified
+/// in it with the same block rows, orders and stability criteria. Every
+/// KOMA mode has a splinewatch mode within 0.2 % and every splinewatch mode
+/// a KOMA one (KOMA's HDBSCAN splits 23.80 Hz into two clusters; both match
+/// the one splinewatch mode).
+#[test]
+fn koma_finds_the_same_modes_in_the_committed_fixture() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures");
+    let meta: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("oma_peer.json")).unwrap()).unwrap();
+    let bytes = std::fs::read(dir.join("oma_peer_data.i16")).unwrap();
+    let samples = meta["samples"].as_u64().unwrap() as usize;
+    let scales: Vec<f64> = meta["scales"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(bytes.len(), 2 * samples * scales.len());
+    let channels: Vec<Vec<f64>> = scales
+        .iter()
+        .enumerate()
+        .map(|(c, scale)| {
+            (0..samples)
+                .map(|k| {
+                    let at = 2 * (c * samples + k);
+                    f64::from(i16::from_le_bytes([bytes[at], bytes[at + 1]])) * scale
+                })
+                .collect()
+        })
+        .collect();
+    let settings = OmaSettings {
+        block_rows: meta["block_rows"].as_u64().unwrap() as usize,
+        min_order: 2,
+        max_order: 80,
+        band: [0.5, 55.0],
+        ..OmaSettings::default()
+    };
+    let views: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+    let correlations = OutputCorrelations::from_samples(&views, &[], settings.max_lag(), settings.batches).unwrap();
+    let ours = identify(&correlations, meta["fs_hz"].as_f64().unwrap(), &settings)
+        .unwrap()
+        .modes;
+    let koma: Vec<f64> = meta["koma_modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["frequency_hz"].as_f64().unwrap())
+        .collect();
+    let nearest =
+        |f: f64, list: &mut dyn Iterator<Item = f64>| list.map(|g| (g / f - 1.0).abs()).fold(f64::INFINITY, f64::min);
+    for &f in &koma {
+        let gap = nearest(f, &mut ours.iter().map(|m| m.frequency_hz));
+        eprintln!("KOMA {f:8.4} Hz: splinewatch within {:.4} %", 100.0 * gap);
+        assert!(
+            gap < 0.002,
+            "KOMA's {f:.4} Hz: nearest splinewatch mode {:.3} % away",
+            100.0 * gap
+        );
+    }
+    for m in &ours {
+        let gap = nearest(m.frequency_hz, &mut koma.iter().copied());
+        assert!(
+            gap < 0.002,
+            "splinewatch's {:.4} Hz: no KOMA mode within 0.2 %",
+            m.frequency_hz
+        );
+    }
+    assert!(ours.len() >= 9, "{} modes", ours.len());
+}
