@@ -109,6 +109,11 @@ pub struct ModalState {
 }
 
 impl ModalState {
+    /// Mode shapes on the union of the spring dofs (`|U| × modes`).
+    pub fn spring_shapes(&self) -> &Mat<f64> {
+        &self.phi_springs
+    }
+
     /// Modal amplitude of mode `i` at sensor `s` along its direction.
     pub fn amplitude(&self, sensor: usize, mode: usize) -> f64 {
         self.amplitudes[(sensor, mode)]
@@ -194,6 +199,12 @@ impl FrfModel {
 
     pub fn sensor_count(&self) -> usize {
         self.sensor_rows.len()
+    }
+
+    /// Positions of each `∂K/∂κ_j` block's dofs in the union of spring dofs
+    /// (the rows of [`ModalState::spring_shapes`]), blocks flattened over fields.
+    pub fn spring_block_positions(&self) -> &[Vec<usize>] {
+        &self.block_positions
     }
 
     /// Total number of spring coefficients over all fields.

@@ -3,6 +3,7 @@
 mod common;
 mod frf;
 mod modal;
+mod modal_sensitivity;
 mod oma;
 mod shell;
 mod simulate;
