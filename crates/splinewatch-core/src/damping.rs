@@ -98,6 +98,21 @@ impl DampingCurve {
         }
     }
 
+    /// `dζ/df` at `f` (1/Hz); zero outside the band, where ζ is held constant.
+    pub fn slope(&self, f: f64) -> f64 {
+        let width = self.f_end - self.f_start;
+        let u = (f - self.f_start) / width;
+        if !(0.0..=1.0).contains(&u) {
+            return 0.0;
+        }
+        let span = self.knots.span(u);
+        let (mut values, mut derivatives) = ([0.0; MAX_DEGREE + 1], [0.0; MAX_DEGREE + 1]);
+        self.knots
+            .basis_with_derivatives(span, u, &mut values, &mut derivatives);
+        let p = self.knots.degree();
+        (0..=p).map(|r| derivatives[r] * self.gamma[span - p + r]).sum::<f64>() / width
+    }
+
     /// Eq. (29): ζ(f).
     pub fn zeta(&self, f: f64) -> f64 {
         let mut b = vec![0.0; self.gamma.len()];

@@ -17,6 +17,7 @@ pub mod knots;
 pub mod linalg;
 pub mod material;
 pub mod modal;
+pub mod modal_residual;
 pub mod modal_sensitivity;
 pub mod model;
 pub mod oma;

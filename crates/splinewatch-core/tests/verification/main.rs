@@ -3,6 +3,7 @@
 mod common;
 mod frf;
 mod modal;
+mod modal_residual;
 mod modal_sensitivity;
 mod oma;
 mod shell;

@@ -1,0 +1,188 @@
+//! Modal residues for output-only updating: identified modes (from OMA)
+//! against the model's, paired by MAC, each residue scaled by the standard
+//! deviation the identification reported.
+//!
+//! Per paired mode, with `r = (model − identified)/σ`:
+//! - frequency: `(f_m − f_x)/σ_f`;
+//! - shape, the scaled shape difference at the sensors,
+//!   `(α a_m − φ_x)/σ_φ` with `φ_x` the identified shape rotated to its
+//!   max-real form (real part kept) and `α = a_mᵀφ_x / a_mᵀa_m` the
+//!   least-squares scale. Chosen over `1 − MAC`: one residue per sensor
+//!   instead of one per mode, weighted by each component's std, and a
+//!   non-zero gradient at the solution (1 − MAC is quadratic there, which
+//!   starves Gauss–Newton);
+//! - damping, against the curve so ζ(f) is still identified:
+//!   `(ζ(f_m) − ζ_x)/σ_ζ`.
+//!
+//! The Jacobian uses the eigen-derivatives of [`crate::modal_sensitivity`]
+//! (`∂f/∂κ = ∂λ/∂κ / (8π² f)`, `∂(α a)/∂κ = α ∂a + a ∂α`,
+//! `∂α = (φ_xᵀ∂a − 2α a_mᵀ∂a)/a_mᵀa_m`), `∂ζ(f_m)/∂κ = ζ'(f_m) ∂f/∂κ` and
+//! `∂ζ/∂γ_z = B_z(f_m)`. The pairing is redone at every evaluation (modes
+//! swap order as κ changes) and held fixed within one Jacobian.
+
+use crate::damping::DampingCurve;
+use crate::frf::{FrfModel, ModalState};
+use crate::modal::ModeKind;
+use crate::oma::shape::mac_real;
+use crate::updating::{Parameter, ParameterKind};
+use faer::{c64, Mat};
+use std::f64::consts::PI;
+
+/// An identified mode as the updating sees it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObservedMode {
+    pub frequency_hz: f64,
+    pub frequency_std_hz: f64,
+    pub damping_ratio: f64,
+    pub damping_std: f64,
+    /// `(model sensor index, component)` pairs.
+    pub shape: Vec<(usize, c64)>,
+    /// Standard deviation of every component of the shape scaled to a
+    /// largest component of 1.
+    pub shape_std: f64,
+}
+
+/// A pairing of an identified mode with a model mode.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ModePair {
+    pub observed: usize,
+    /// Index into the modal state's modes.
+    pub model: usize,
+    pub mac: f64,
+}
+
+/// Residues (and, if asked, `∂r/∂p`) at one model state.
+#[derive(Debug, Clone)]
+pub struct ModalResidue {
+    pub residual: Vec<f64>,
+    /// `residual.len() × parameters`; empty when not asked for.
+    pub jacobian: Mat<f64>,
+    pub pairs: Vec<ModePair>,
+}
+
+/// Pairs each observed mode with the flexible model mode of largest MAC
+/// (at the observed sensors), if at least `min_mac`; a model mode claimed
+/// twice goes to the higher MAC.
+pub fn pair_modes(state: &ModalState, observed: &[ObservedMode], min_mac: f64) -> Vec<ModePair> {
+    let mut pairs: Vec<ModePair> = Vec::new();
+    for (o, mode) in observed.iter().enumerate() {
+        let shape: Vec<c64> = mode.shape.iter().map(|&(_, v)| v).collect();
+        let best = (0..state.modes.len())
+            .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid)
+            .map(|i| {
+                let a: Vec<f64> = mode.shape.iter().map(|&(s, _)| state.amplitude(s, i)).collect();
+                (i, mac_real(&shape, &a))
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let Some((model, mac)) = best.filter(|b| b.1 >= min_mac) else {
+            continue;
+        };
+        match pairs.iter().position(|p| p.model == model) {
+            Some(k) if pairs[k].mac >= mac => {}
+            Some(k) => {
+                pairs[k] = ModePair {
+                    observed: o,
+                    model,
+                    mac,
+                }
+            }
+            None => pairs.push(ModePair {
+                observed: o,
+                model,
+                mac,
+            }),
+        }
+    }
+    pairs.sort_by_key(|p| p.observed);
+    pairs
+}
+
+/// The identified shape as a real vector: rotated by `e^{−iθ}`,
+/// `θ = ½ arg Σ φ²` (the max-real rotation), real part kept.
+fn real_shape(shape: &[(usize, c64)]) -> Vec<f64> {
+    let sum: c64 = shape.iter().map(|&(_, v)| v * v).sum();
+    let theta = 0.5 * sum.im.atan2(sum.re);
+    let rotate = c64::new(theta.cos(), -theta.sin());
+    shape.iter().map(|&(_, v)| (v * rotate).re).collect()
+}
+
+/// Residues of the `pairs` at `state` (see the module documentation).
+#[allow(
+    clippy::too_many_lines,
+    reason = "one pass per paired mode writing its frequency, shape and damping rows and their Jacobian columns side by side, as the module documentation derives them"
+)]
+pub fn modal_residue(
+    model: &FrfModel,
+    state: &ModalState,
+    damping: &DampingCurve,
+    observed: &[ObservedMode],
+    pairs: &[ModePair],
+    parameters: &[Parameter],
+    jacobian: bool,
+) -> ModalResidue {
+    let offsets: Vec<usize> = model
+        .assembled()
+        .spring_blocks
+        .iter()
+        .scan(0, |acc, blocks| {
+            let o = *acc;
+            *acc += blocks.len();
+            Some(o)
+        })
+        .collect();
+    let modes: Vec<usize> = pairs.iter().map(|p| p.model).collect();
+    let sens = jacobian.then(|| model.modal_sensitivities(state, &modes));
+    let rows: usize = pairs.iter().map(|p| 2 + observed[p.observed].shape.len()).sum();
+    let mut residual = Vec::with_capacity(rows);
+    let mut jac = if jacobian {
+        Mat::zeros(rows, parameters.len())
+    } else {
+        Mat::zeros(0, 0)
+    };
+    let mut basis = vec![0.0; damping.coefficients().len()];
+    for (k, pair) in pairs.iter().enumerate() {
+        let x = &observed[pair.observed];
+        let i = pair.model;
+        let f = state.modes.frequency_hz(i);
+        let phi = real_shape(&x.shape);
+        let a: Vec<f64> = x.shape.iter().map(|&(s, _)| state.amplitude(s, i)).collect();
+        let aa: f64 = a.iter().map(|v| v * v).sum();
+        let alpha = a.iter().zip(&phi).map(|(a, p)| a * p).sum::<f64>() / aa;
+        let zeta = damping.zeta(f);
+        let row0 = residual.len();
+        residual.push((f - x.frequency_hz) / x.frequency_std_hz);
+        residual.extend(a.iter().zip(&phi).map(|(a, p)| (alpha * a - p) / x.shape_std));
+        residual.push((zeta - x.damping_ratio) / x.damping_std);
+        let Some(sens) = &sens else {
+            continue;
+        };
+        damping.basis_at(f, &mut basis);
+        let slope = damping.slope(f);
+        let n = a.len();
+        for (c, par) in parameters.iter().enumerate() {
+            match par.kind {
+                ParameterKind::Spring { field, coefficient } => {
+                    let j = offsets[field] + coefficient;
+                    let df = sens.eigenvalue[(k, j)] / (8.0 * PI * PI * f);
+                    jac[(row0, c)] = df / x.frequency_std_hz;
+                    let da: Vec<f64> = x.shape.iter().map(|&(s, _)| sens.amplitude[k][(s, j)]).collect();
+                    let phi_da: f64 = phi.iter().zip(&da).map(|(p, d)| p * d).sum();
+                    let a_da: f64 = a.iter().zip(&da).map(|(a, d)| a * d).sum();
+                    let dalpha = (phi_da - 2.0 * alpha * a_da) / aa;
+                    for r in 0..n {
+                        jac[(row0 + 1 + r, c)] = (alpha * da[r] + a[r] * dalpha) / x.shape_std;
+                    }
+                    jac[(row0 + 1 + n, c)] = slope * df / x.damping_std;
+                }
+                ParameterKind::Damping { coefficient } => {
+                    jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;
+                }
+            }
+        }
+    }
+    ModalResidue {
+        residual,
+        jacobian: jac,
+        pairs: pairs.to_vec(),
+    }
+}
