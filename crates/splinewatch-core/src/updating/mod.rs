@@ -22,9 +22,15 @@
 
 use crate::damping::{DampingCurve, DampingError};
 use crate::frf::{FrfError, FrfEvaluation, FrfModel, FrfRequest, ModalState, Quantity};
-use faer::{c64, Mat, Side};
+use faer::{c64, Mat};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
+
+mod solver;
+use solver::uncertainty;
+pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved};
+#[cfg(test)]
+use solver::{norm2, normal_equations, quadratic, relative_offset, solve_damped};
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum UpdateError {
@@ -704,10 +710,6 @@ impl<'a> UpdateProblem<'a> {
     /// the result. `previous` (the point the last solve ended on) is used
     /// instead of evaluating the model at `start` when it is that model on
     /// these lines — the usual warm start; otherwise it is ignored.
-    #[allow(
-        clippy::too_many_lines,
-        reason = "the Levenberg-Marquardt loop of eq. (40)-(43) with its trial steps, stopping rules and the final covariance; split, its state would travel through many arguments"
-    )]
     #[track_caller]
     pub fn solve_from(
         &self,
@@ -716,181 +718,19 @@ impl<'a> UpdateProblem<'a> {
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<Solution, UpdateError> {
         assert_eq!(start.len(), self.parameters.len(), "one start value per parameter");
-        let bounds: Vec<(f64, f64)> = self.parameters.iter().map(|p| (p.lower, p.upper)).collect();
-        let to_p = |y: &[f64]| -> Vec<f64> {
-            y.iter()
-                .zip(&bounds)
-                .map(|(&y, &(a, b))| bounded_value(y, a, b))
-                .collect()
-        };
-        // The model is evaluated at the start values themselves (not at
-        // p(y(start)), which differs in the last bits), so that a warm start
-        // lands exactly on the point the previous solve ended on.
-        let mut p: Vec<f64> = start
-            .iter()
-            .zip(&bounds)
-            .map(|(&p, &(a, b))| {
-                let margin = 1e-6 * (b - a);
-                p.clamp(a + margin, b - margin)
-            })
-            .collect();
-        let mut y: Vec<f64> = p
-            .iter()
-            .zip(&bounds)
-            .map(|(&p, &(a, b))| unbounded_value(p, a, b))
-            .collect();
-        let n = y.len();
-        let (mut evaluations, mut state, mut current) = match self.reusable(previous, &p)? {
-            Some(point) => {
-                let current = self.weighted(&p, point.frfs.clone(), true)?;
-                (0, point.state.clone(), current)
-            }
-            None => {
-                let (state, current) = self.evaluate(&p, true)?;
-                (1, state, current)
-            }
-        };
-        let mut cost = 0.5 * norm2(&current.residual);
-        let mut iterations = vec![IterationRecord {
-            iteration: 0,
-            relative_residual: self.relative_residuals(&current.frfs.h).0,
-            cost,
-            parameters: p.clone(),
-            step_norm: 0.0,
-            damping: 0.0,
-            rejected_steps: 0,
-        }];
-        observer(&iterations[0]);
-        let chain = |jp: &Mat<f64>, y: &[f64]| -> Mat<f64> {
-            let dp_dy: Vec<f64> = y
-                .iter()
-                .zip(&bounds)
-                .map(|(&y, &(a, b))| bounded_derivative(y, a, b))
-                .collect();
-            Mat::from_fn(jp.nrows(), n, |r, c| jp[(r, c)] * dp_dy[c])
-        };
-        let mut jy = chain(&current.jacobian, &y);
-        let (mut a, mut g) = normal_equations(&jy, &current.residual);
-        let mut lambda = match self.settings.method {
-            Method::LevenbergMarquardt => self.settings.initial_damping,
-            Method::GaussNewton => 0.0,
-        };
-        let mut nu = 2.0;
-        let mut scale: Vec<f64> = (0..n).map(|i| a[(i, i)]).collect();
-        let mut stop = StopReason::MaxIterations;
-        let mut converged = false;
-        let mut rejected = 0;
-        let mut iteration = 0;
-        let m = current.residual.len();
-        let mut offset = relative_offset(&a, &g, cost, m);
-        while iteration < self.settings.max_iterations {
-            if cost == 0.0 {
-                stop = StopReason::ZeroResidual;
-                converged = true;
-                break;
-            }
-            if offset.is_some_and(|o| o < self.settings.offset_tolerance) {
-                stop = StopReason::RelativeOffset;
-                converged = true;
-                break;
-            }
-            for i in 0..n {
-                scale[i] = scale[i].max(a[(i, i)]);
-            }
-            let Some(step) = solve_damped(&a, &g, &scale, lambda) else {
-                lambda = (lambda * nu).max(1e-12);
-                nu *= 2.0;
-                continue;
-            };
-            let y_new: Vec<f64> = y.iter().zip(&step).map(|(y, s)| y + s).collect();
-            evaluations += 1;
-            // Residual only: the Jacobian is computed once a step is accepted.
-            let p_new = to_p(&y_new);
-            let trial = self
-                .state_at(&p_new)
-                .and_then(|state| self.evaluate_state(&p_new, &state, false).map(|e| (state, e)));
-            // A trial that fails to evaluate counts as a rejected step.
-            let (trial, new_cost) = match trial {
-                Ok(t) => {
-                    let c = 0.5 * norm2(&t.1.residual);
-                    (Some(t), c)
-                }
-                Err(UpdateError::NonFinite(_)) | Err(UpdateError::Model(_)) => (None, f64::INFINITY),
-                Err(e) => return Err(e),
-            };
-            // Predicted decrease of the linear model: -gᵀs - ½ sᵀAs.
-            let predicted = -dot(&g, &step) - 0.5 * quadratic(&a, &step);
-            let rho = (cost - new_cost) / predicted.max(f64::MIN_POSITIVE);
-            let accept = match self.settings.method {
-                Method::LevenbergMarquardt => rho > 1e-4,
-                Method::GaussNewton => trial.is_some(),
-            };
-            if !accept {
-                rejected += 1;
-                // As in MINPACK, a trust region shrunk below the step tolerance
-                // means no better point is resolvable: converged.
-                if norm2(&step).sqrt()
-                    <= self.settings.step_tolerance * (norm2(&y).sqrt() + self.settings.step_tolerance)
-                {
-                    stop = StopReason::StepTolerance;
-                    converged = true;
-                    break;
-                }
-                lambda *= nu;
-                nu *= 2.0;
-                if lambda > 1e16 {
-                    stop = StopReason::Stalled;
-                    break;
-                }
-                continue;
-            }
-            let (trial_state, _) = trial.expect("accepted steps evaluated");
-            let trial = self.evaluate_state(&p_new, &trial_state, true)?;
-            iteration += 1;
-            let step_norm = norm2(&step).sqrt();
-            let relative_decrease = (cost - new_cost) / cost;
-            let diverged = new_cost > cost;
-            y = y_new;
-            p = p_new;
-            state = trial_state;
-            current = trial;
-            cost = new_cost;
-            iterations.push(IterationRecord {
-                iteration,
-                relative_residual: self.relative_residuals(&current.frfs.h).0,
-                cost,
-                parameters: p.clone(),
-                step_norm,
-                damping: lambda,
-                rejected_steps: rejected,
-            });
-            observer(iterations.last().expect("just pushed"));
-            rejected = 0;
-            jy = chain(&current.jacobian, &y);
-            (a, g) = normal_equations(&jy, &current.residual);
-            offset = relative_offset(&a, &g, cost, m);
-            if self.settings.method == Method::LevenbergMarquardt {
-                lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-                nu = 2.0;
-            }
-            // A change within the tolerance, up or down, is convergence; only a
-            // real increase means Gauss–Newton diverged.
-            if relative_decrease.abs() < self.settings.cost_tolerance {
-                stop = StopReason::CostTolerance;
-                converged = true;
-                break;
-            }
-            if diverged {
-                stop = StopReason::Diverged;
-                break;
-            }
-            if step_norm <= self.settings.step_tolerance * (norm2(&y).sqrt() + self.settings.step_tolerance) {
-                stop = StopReason::StepTolerance;
-                converged = true;
-                break;
-            }
-        }
-        let (relative_residual, frf_relative_residuals) = self.relative_residuals(&current.frfs.h);
+        let solved = solver::levenberg_marquardt(self, start, previous, observer)?;
+        let (p, current, cost, stop, converged, offset) = (
+            solved.p,
+            solved.at,
+            solved.cost,
+            solved.stop,
+            solved.converged,
+            solved.offset,
+        );
+        let (iterations, evaluations) = (solved.iterations, solved.evaluations);
+        let (m, n) = (current.residual.len(), p.len());
+        let (state, frfs) = current.extra;
+        let (relative_residual, frf_relative_residuals) = self.relative_residuals(&frfs.h);
         let residual_variance = 2.0 * cost / (m - n) as f64;
         let (std, singular_values) = uncertainty(&current.jacobian, residual_variance);
         let condition_number = match (singular_values.first(), singular_values.last()) {
@@ -923,103 +763,58 @@ impl<'a> UpdateProblem<'a> {
             evaluations,
             lines_used: self.lines.len(),
         };
-        let point = self.point(&p, state, current.frfs)?;
+        let point = self.point(&p, state, frfs)?;
         Ok(Solution { result, point })
     }
 }
 
-fn norm2(v: &[f64]) -> f64 {
-    v.iter().map(|x| x * x).sum()
-}
+/// The FRF residues of eq. (36)–(39) as the shared solver's residual model.
+impl ResidualModel for UpdateProblem<'_> {
+    type Extra = (ModalState, FrfEvaluation);
+    type Previous = ModelPoint;
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-fn quadratic(a: &Mat<f64>, s: &[f64]) -> f64 {
-    (0..s.len())
-        .map(|i| s[i] * (0..s.len()).map(|j| a[(i, j)] * s[j]).sum::<f64>())
-        .sum()
-}
-
-/// Relative offset of Bates & Watts (1981, Technometrics 23(2)):
-/// `√(‖P r‖² / n) / √(‖(I - P) r‖² / (m - n))` with `P` the projection on the
-/// columns of `J`, i.e. the length of the full Gauss–Newton step
-/// `δ = -A⁻¹g` measured in standard errors, `√(δᵀAδ / n) / σ̂`, since
-/// `‖P r‖² = gᵀA⁻¹g`. Below 0.01 the remaining step is a hundredth of a
-/// standard error in root mean square over the `n` directions (no single
-/// parameter moves by more than `√n / 100` of its standard deviation), far
-/// below the statistical uncertainty, so further iterations change nothing
-/// that matters. Invariant to the parametrisation (`y` or `p`). `None` when `A`
-/// is singular or the residual vanishes.
-fn relative_offset(a: &Mat<f64>, g: &[f64], cost: f64, m: usize) -> Option<f64> {
-    let n = g.len();
-    let step = solve_damped(a, g, &vec![0.0; n], 0.0)?;
-    let projected = -dot(g, &step);
-    let unexplained = 2.0 * cost - projected;
-    let usable = m > n && projected.is_finite() && projected >= 0.0 && unexplained > 0.0;
-    if !usable {
-        return None;
+    fn parameters(&self) -> &[Parameter] {
+        &self.parameters
     }
-    Some((projected / n as f64).sqrt() / (unexplained / (m - n) as f64).sqrt())
-}
 
-/// `A = JᵀJ`, `g = Jᵀr` (gradient of ½‖r‖²).
-fn normal_equations(j: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Vec<f64>) {
-    let a = j.transpose() * j;
-    let g = (0..j.ncols())
-        .map(|c| (0..j.nrows()).map(|k| j[(k, c)] * r[k]).sum())
-        .collect();
-    (a, g)
-}
-
-/// Solves `(A + λ diag(scale)) s = -g` by Cholesky; `None` if not positive definite.
-fn solve_damped(a: &Mat<f64>, g: &[f64], scale: &[f64], lambda: f64) -> Option<Vec<f64>> {
-    let n = g.len();
-    let m = Mat::from_fn(n, n, |i, j| a[(i, j)] + if i == j { lambda * scale[i] } else { 0.0 });
-    let llt = m.llt(Side::Lower).ok()?;
-    let rhs = Mat::from_fn(n, 1, |i, _| -g[i]);
-    let s = faer::prelude::Solve::solve(&llt, &rhs);
-    let s: Vec<f64> = (0..n).map(|i| s[(i, 0)]).collect();
-    s.iter().all(|v| v.is_finite()).then_some(s)
-}
-
-/// Standard deviations `√diag(σ̂² (JᵀJ)⁻¹)` and the singular values of the
-/// column-normalised `J`. A direction with singular value below `1e-12` of
-/// the largest makes every parameter it involves unidentifiable (`None`).
-fn uncertainty(j: &Mat<f64>, variance: f64) -> (Vec<Option<f64>>, Vec<f64>) {
-    let n = j.ncols();
-    let norms: Vec<f64> = (0..n)
-        .map(|c| (0..j.nrows()).map(|r| j[(r, c)].powi(2)).sum::<f64>().sqrt())
-        .collect();
-    if norms.iter().any(|&c| c == 0.0 || !c.is_finite()) {
-        let sv = vec![0.0; n];
-        return (norms.iter().map(|_| None).collect(), sv);
+    fn settings(&self) -> &UpdateSettings {
+        &self.settings
     }
-    let js = Mat::from_fn(j.nrows(), n, |r, c| j[(r, c)] / norms[c]);
-    let Ok(svd) = js.thin_svd() else {
-        return (vec![None; n], vec![f64::NAN; n]);
-    };
-    let s: Vec<f64> = (0..n).map(|i| svd.S()[i]).collect();
-    let v = svd.V();
-    let smax = s[0];
-    let std = (0..n)
-        .map(|k| {
-            let mut acc = 0.0;
-            for i in 0..n {
-                let vki = v[(k, i)];
-                if s[i] <= 1e-12 * smax {
-                    if vki.abs() > 1e-8 {
-                        return None;
-                    }
-                    continue;
-                }
-                acc += vki * vki / (s[i] * s[i]);
+
+    fn first(&self, p: &[f64], previous: Option<&ModelPoint>) -> Result<(Evaluated<Self::Extra>, usize), UpdateError> {
+        let (state, evaluation, evaluations) = match self.reusable(previous, p)? {
+            Some(point) => (point.state.clone(), self.weighted(p, point.frfs.clone(), true)?, 0),
+            None => {
+                let (state, evaluation) = self.evaluate(p, true)?;
+                (state, evaluation, 1)
             }
-            Some((variance * acc).sqrt() / norms[k])
-        })
-        .collect();
-    (std, s)
+        };
+        Ok((evaluated(state, evaluation), evaluations))
+    }
+
+    fn residual(&self, p: &[f64]) -> Result<Evaluated<Self::Extra>, UpdateError> {
+        let state = self.state_at(p)?;
+        let evaluation = self.evaluate_state(p, &state, false)?;
+        Ok(evaluated(state, evaluation))
+    }
+
+    fn with_jacobian(&self, p: &[f64], trial: Evaluated<Self::Extra>) -> Result<Evaluated<Self::Extra>, UpdateError> {
+        let (state, _) = trial.extra;
+        let evaluation = self.evaluate_state(p, &state, true)?;
+        Ok(evaluated(state, evaluation))
+    }
+
+    fn relative_residual(&self, at: &Evaluated<Self::Extra>) -> f64 {
+        self.relative_residuals(&at.extra.1.h).0
+    }
+}
+
+fn evaluated(state: ModalState, evaluation: Evaluation) -> Evaluated<(ModalState, FrfEvaluation)> {
+    Evaluated {
+        residual: evaluation.residual,
+        jacobian: evaluation.jacobian,
+        extra: (state, evaluation.frfs),
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,341 @@
+//! The bounded Levenberg–Marquardt solver shared by every residual model
+//! (FRF residues, modal residues): eq. (40)–(43) with Moré's column scaling,
+//! gain-ratio acceptance, Nielsen's damping update and the stopping rules of
+//! [`UpdateSettings`]. A residual model only says how to evaluate residues
+//! and their Jacobian; the loop, the bounds transform and the covariance
+//! helpers are here, once.
+
+use super::{
+    bounded_derivative, bounded_value, unbounded_value, IterationRecord, Method, Parameter, StopReason, UpdateError,
+    UpdateSettings,
+};
+use faer::{Mat, Side};
+
+/// Residues (and the Jacobian `∂r/∂p` when asked) at one parameter point,
+/// with whatever else the model computed there (`extra`: the modal state,
+/// the FRFs…).
+#[derive(Debug, Clone)]
+pub struct Evaluated<E> {
+    pub residual: Vec<f64>,
+    /// `residual.len() × parameters`; empty when not asked for.
+    pub jacobian: Mat<f64>,
+    pub extra: E,
+}
+
+/// What the solver needs of a residual model; it minimises `½‖r(p)‖²` over
+/// the bounded parameters.
+pub trait ResidualModel {
+    /// What an evaluation carries besides the residues.
+    type Extra;
+    /// A previous solution the first evaluation may reuse (warm start).
+    type Previous;
+    fn parameters(&self) -> &[Parameter];
+    fn settings(&self) -> &UpdateSettings;
+    /// The first point, with its Jacobian, and the model evaluations it cost
+    /// (0 when `previous` is that point).
+    fn first(
+        &self,
+        p: &[f64],
+        previous: Option<&Self::Previous>,
+    ) -> Result<(Evaluated<Self::Extra>, usize), UpdateError>;
+    /// Residues only (a trial step).
+    fn residual(&self, p: &[f64]) -> Result<Evaluated<Self::Extra>, UpdateError>;
+    /// The Jacobian added to an accepted trial.
+    fn with_jacobian(&self, p: &[f64], trial: Evaluated<Self::Extra>) -> Result<Evaluated<Self::Extra>, UpdateError>;
+    /// The unweighted relative residual reported per iteration.
+    fn relative_residual(&self, at: &Evaluated<Self::Extra>) -> f64;
+}
+
+/// Where the solver stopped and how it got there.
+#[derive(Debug, Clone)]
+pub struct Solved<E> {
+    pub p: Vec<f64>,
+    pub at: Evaluated<E>,
+    pub iterations: Vec<IterationRecord>,
+    pub converged: bool,
+    pub stop: StopReason,
+    pub cost: f64,
+    pub offset: Option<f64>,
+    pub evaluations: usize,
+}
+
+/// Runs the bounded LM from `start` (warm start: values on or outside a
+/// bound are moved inside by 1e-6 of the range, where the transform of eq.
+/// (42) has a non-zero derivative).
+#[allow(
+    clippy::too_many_lines,
+    reason = "the Levenberg-Marquardt loop of eq. (40)-(43) with its trial steps and stopping rules; split, its state would travel through many arguments"
+)]
+#[track_caller]
+pub fn levenberg_marquardt<M: ResidualModel>(
+    model: &M,
+    start: &[f64],
+    previous: Option<&M::Previous>,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<Solved<M::Extra>, UpdateError> {
+    assert_eq!(start.len(), model.parameters().len(), "one start value per parameter");
+    let bounds: Vec<(f64, f64)> = model.parameters().iter().map(|p| (p.lower, p.upper)).collect();
+    let settings = model.settings();
+    let to_p = |y: &[f64]| -> Vec<f64> {
+        y.iter()
+            .zip(&bounds)
+            .map(|(&y, &(a, b))| bounded_value(y, a, b))
+            .collect()
+    };
+    // The model is evaluated at the start values themselves (not at
+    // p(y(start)), which differs in the last bits), so that a warm start
+    // lands exactly on the point the previous solve ended on.
+    let mut p: Vec<f64> = start
+        .iter()
+        .zip(&bounds)
+        .map(|(&p, &(a, b))| {
+            let margin = 1e-6 * (b - a);
+            p.clamp(a + margin, b - margin)
+        })
+        .collect();
+    let mut y: Vec<f64> = p
+        .iter()
+        .zip(&bounds)
+        .map(|(&p, &(a, b))| unbounded_value(p, a, b))
+        .collect();
+    let n = y.len();
+    let (mut current, mut evaluations) = model.first(&p, previous)?;
+    let mut cost = 0.5 * norm2(&current.residual);
+    let mut iterations = vec![IterationRecord {
+        iteration: 0,
+        relative_residual: model.relative_residual(&current),
+        cost,
+        parameters: p.clone(),
+        step_norm: 0.0,
+        damping: 0.0,
+        rejected_steps: 0,
+    }];
+    observer(&iterations[0]);
+    let chain = |jp: &Mat<f64>, y: &[f64]| -> Mat<f64> {
+        let dp_dy: Vec<f64> = y
+            .iter()
+            .zip(&bounds)
+            .map(|(&y, &(a, b))| bounded_derivative(y, a, b))
+            .collect();
+        Mat::from_fn(jp.nrows(), n, |r, c| jp[(r, c)] * dp_dy[c])
+    };
+    let mut jy = chain(&current.jacobian, &y);
+    let (mut a, mut g) = normal_equations(&jy, &current.residual);
+    let mut lambda = match settings.method {
+        Method::LevenbergMarquardt => settings.initial_damping,
+        Method::GaussNewton => 0.0,
+    };
+    let mut nu = 2.0;
+    let mut scale: Vec<f64> = (0..n).map(|i| a[(i, i)]).collect();
+    let mut stop = StopReason::MaxIterations;
+    let mut converged = false;
+    let mut rejected = 0;
+    let mut iteration = 0;
+    let m = current.residual.len();
+    let mut offset = relative_offset(&a, &g, cost, m);
+    while iteration < settings.max_iterations {
+        if cost == 0.0 {
+            stop = StopReason::ZeroResidual;
+            converged = true;
+            break;
+        }
+        if offset.is_some_and(|o| o < settings.offset_tolerance) {
+            stop = StopReason::RelativeOffset;
+            converged = true;
+            break;
+        }
+        for i in 0..n {
+            scale[i] = scale[i].max(a[(i, i)]);
+        }
+        let Some(step) = solve_damped(&a, &g, &scale, lambda) else {
+            lambda = (lambda * nu).max(1e-12);
+            nu *= 2.0;
+            continue;
+        };
+        let y_new: Vec<f64> = y.iter().zip(&step).map(|(y, s)| y + s).collect();
+        evaluations += 1;
+        // Residual only: the Jacobian is computed once a step is accepted.
+        let p_new = to_p(&y_new);
+        let trial = model.residual(&p_new);
+        // A trial that fails to evaluate counts as a rejected step.
+        let (trial, new_cost) = match trial {
+            Ok(t) => {
+                let c = 0.5 * norm2(&t.residual);
+                (Some(t), c)
+            }
+            Err(UpdateError::NonFinite(_)) | Err(UpdateError::Model(_)) => (None, f64::INFINITY),
+            Err(e) => return Err(e),
+        };
+        // Predicted decrease of the linear model: -gᵀs - ½ sᵀAs.
+        let predicted = -dot(&g, &step) - 0.5 * quadratic(&a, &step);
+        let rho = (cost - new_cost) / predicted.max(f64::MIN_POSITIVE);
+        let accept = match settings.method {
+            Method::LevenbergMarquardt => rho > 1e-4,
+            Method::GaussNewton => trial.is_some(),
+        };
+        if !accept {
+            rejected += 1;
+            // As in MINPACK, a trust region shrunk below the step tolerance
+            // means no better point is resolvable: converged.
+            if norm2(&step).sqrt() <= settings.step_tolerance * (norm2(&y).sqrt() + settings.step_tolerance) {
+                stop = StopReason::StepTolerance;
+                converged = true;
+                break;
+            }
+            lambda *= nu;
+            nu *= 2.0;
+            if lambda > 1e16 {
+                stop = StopReason::Stalled;
+                break;
+            }
+            continue;
+        }
+        let trial = model.with_jacobian(&p_new, trial.expect("accepted steps evaluated"))?;
+        iteration += 1;
+        let step_norm = norm2(&step).sqrt();
+        let relative_decrease = (cost - new_cost) / cost;
+        let diverged = new_cost > cost;
+        y = y_new;
+        p = p_new;
+        current = trial;
+        cost = new_cost;
+        iterations.push(IterationRecord {
+            iteration,
+            relative_residual: model.relative_residual(&current),
+            cost,
+            parameters: p.clone(),
+            step_norm,
+            damping: lambda,
+            rejected_steps: rejected,
+        });
+        observer(iterations.last().expect("just pushed"));
+        rejected = 0;
+        jy = chain(&current.jacobian, &y);
+        (a, g) = normal_equations(&jy, &current.residual);
+        offset = relative_offset(&a, &g, cost, m);
+        if settings.method == Method::LevenbergMarquardt {
+            lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
+            nu = 2.0;
+        }
+        // A change within the tolerance, up or down, is convergence; only a
+        // real increase means Gauss–Newton diverged.
+        if relative_decrease.abs() < settings.cost_tolerance {
+            stop = StopReason::CostTolerance;
+            converged = true;
+            break;
+        }
+        if diverged {
+            stop = StopReason::Diverged;
+            break;
+        }
+        if step_norm <= settings.step_tolerance * (norm2(&y).sqrt() + settings.step_tolerance) {
+            stop = StopReason::StepTolerance;
+            converged = true;
+            break;
+        }
+    }
+    Ok(Solved {
+        p,
+        at: current,
+        iterations,
+        converged,
+        stop,
+        cost,
+        offset,
+        evaluations,
+    })
+}
+
+pub(super) fn norm2(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum()
+}
+
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+pub(super) fn quadratic(a: &Mat<f64>, s: &[f64]) -> f64 {
+    (0..s.len())
+        .map(|i| s[i] * (0..s.len()).map(|j| a[(i, j)] * s[j]).sum::<f64>())
+        .sum()
+}
+
+/// Relative offset of Bates & Watts (1981, Technometrics 23(2)):
+/// `√(‖P r‖² / n) / √(‖(I - P) r‖² / (m - n))` with `P` the projection on the
+/// columns of `J`, i.e. the length of the full Gauss–Newton step
+/// `δ = -A⁻¹g` measured in standard errors, `√(δᵀAδ / n) / σ̂`, since
+/// `‖P r‖² = gᵀA⁻¹g`. Below 0.01 the remaining step is a hundredth of a
+/// standard error in root mean square over the `n` directions (no single
+/// parameter moves by more than `√n / 100` of its standard deviation), far
+/// below the statistical uncertainty, so further iterations change nothing
+/// that matters. Invariant to the parametrisation (`y` or `p`). `None` when `A`
+/// is singular or the residual vanishes.
+pub(super) fn relative_offset(a: &Mat<f64>, g: &[f64], cost: f64, m: usize) -> Option<f64> {
+    let n = g.len();
+    let step = solve_damped(a, g, &vec![0.0; n], 0.0)?;
+    let projected = -dot(g, &step);
+    let unexplained = 2.0 * cost - projected;
+    let usable = m > n && projected.is_finite() && projected >= 0.0 && unexplained > 0.0;
+    if !usable {
+        return None;
+    }
+    Some((projected / n as f64).sqrt() / (unexplained / (m - n) as f64).sqrt())
+}
+
+/// `A = JᵀJ`, `g = Jᵀr` (gradient of ½‖r‖²).
+pub(super) fn normal_equations(j: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Vec<f64>) {
+    let a = j.transpose() * j;
+    let g = (0..j.ncols())
+        .map(|c| (0..j.nrows()).map(|k| j[(k, c)] * r[k]).sum())
+        .collect();
+    (a, g)
+}
+
+/// Solves `(A + λ diag(scale)) s = -g` by Cholesky; `None` if not positive definite.
+pub(super) fn solve_damped(a: &Mat<f64>, g: &[f64], scale: &[f64], lambda: f64) -> Option<Vec<f64>> {
+    let n = g.len();
+    let m = Mat::from_fn(n, n, |i, j| a[(i, j)] + if i == j { lambda * scale[i] } else { 0.0 });
+    let llt = m.llt(Side::Lower).ok()?;
+    let rhs = Mat::from_fn(n, 1, |i, _| -g[i]);
+    let s = faer::prelude::Solve::solve(&llt, &rhs);
+    let s: Vec<f64> = (0..n).map(|i| s[(i, 0)]).collect();
+    s.iter().all(|v| v.is_finite()).then_some(s)
+}
+
+/// Standard deviations `√diag(σ̂² (JᵀJ)⁻¹)` and the singular values of the
+/// column-normalised `J`. A direction with singular value below `1e-12` of
+/// the largest makes every parameter it involves unidentifiable (`None`).
+pub(super) fn uncertainty(j: &Mat<f64>, variance: f64) -> (Vec<Option<f64>>, Vec<f64>) {
+    let n = j.ncols();
+    let norms: Vec<f64> = (0..n)
+        .map(|c| (0..j.nrows()).map(|r| j[(r, c)].powi(2)).sum::<f64>().sqrt())
+        .collect();
+    if norms.iter().any(|&c| c == 0.0 || !c.is_finite()) {
+        let sv = vec![0.0; n];
+        return (norms.iter().map(|_| None).collect(), sv);
+    }
+    let js = Mat::from_fn(j.nrows(), n, |r, c| j[(r, c)] / norms[c]);
+    let Ok(svd) = js.thin_svd() else {
+        return (vec![None; n], vec![f64::NAN; n]);
+    };
+    let s: Vec<f64> = (0..n).map(|i| svd.S()[i]).collect();
+    let v = svd.V();
+    let smax = s[0];
+    let std = (0..n)
+        .map(|k| {
+            let mut acc = 0.0;
+            for i in 0..n {
+                let vki = v[(k, i)];
+                if s[i] <= 1e-12 * smax {
+                    if vki.abs() > 1e-8 {
+                        return None;
+                    }
+                    continue;
+                }
+                acc += vki * vki / (s[i] * s[i]);
+            }
+            Some((variance * acc).sqrt() / norms[k])
+        })
+        .collect();
+    (std, s)
+}
