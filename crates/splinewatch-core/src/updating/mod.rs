@@ -26,8 +26,10 @@ use faer::{c64, Mat};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+mod modal;
 mod solver;
-use solver::uncertainty;
+pub use modal::{ModalSolution, ModalUpdateProblem};
+
 pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved};
 #[cfg(test)]
 use solver::{norm2, normal_equations, quadratic, relative_offset, solve_damped};
@@ -68,6 +70,51 @@ pub struct Parameter {
     pub kind: ParameterKind,
     pub lower: f64,
     pub upper: f64,
+}
+
+/// Every parameter names an existing coefficient and has finite,
+/// ordered, non-negative bounds; at least one is updated.
+pub(crate) fn check_parameters(
+    parameters: &[Parameter],
+    kappa: &[Vec<f64>],
+    damping: &DampingCurve,
+) -> Result<(), UpdateError> {
+    if parameters.is_empty() {
+        return Err(UpdateError::NoParameters);
+    }
+    for p in parameters {
+        let bad = |reason: String| {
+            Err(UpdateError::Parameter {
+                name: p.name.clone(),
+                reason,
+            })
+        };
+        if !(p.lower.is_finite() && p.upper.is_finite() && p.lower < p.upper) {
+            return bad(format!(
+                "bounds [{}, {}] must be finite with lower < upper",
+                p.lower, p.upper
+            ));
+        }
+        match p.kind {
+            ParameterKind::Spring { field, coefficient } => {
+                if kappa.get(field).is_none_or(|k| coefficient >= k.len()) {
+                    return bad("refers to a spring coefficient that does not exist".into());
+                }
+                if p.lower < 0.0 {
+                    return bad("a stiffness lower bound must be non-negative".into());
+                }
+            }
+            ParameterKind::Damping { coefficient } => {
+                if coefficient >= damping.coefficients().len() {
+                    return bad("refers to a damping coefficient that does not exist".into());
+                }
+                if p.lower < 0.0 {
+                    return bad("a damping lower bound must be non-negative".into());
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The values `parameters` take in the model given by spring coefficients
@@ -432,41 +479,7 @@ impl<'a> UpdateProblem<'a> {
         measured: &'a MeasuredSet,
         settings: UpdateSettings,
     ) -> Result<Self, UpdateError> {
-        if parameters.is_empty() {
-            return Err(UpdateError::NoParameters);
-        }
-        for p in &parameters {
-            let bad = |reason: String| {
-                Err(UpdateError::Parameter {
-                    name: p.name.clone(),
-                    reason,
-                })
-            };
-            if !(p.lower.is_finite() && p.upper.is_finite() && p.lower < p.upper) {
-                return bad(format!(
-                    "bounds [{}, {}] must be finite with lower < upper",
-                    p.lower, p.upper
-                ));
-            }
-            match p.kind {
-                ParameterKind::Spring { field, coefficient } => {
-                    if kappa.get(field).is_none_or(|k| coefficient >= k.len()) {
-                        return bad("refers to a spring coefficient that does not exist".into());
-                    }
-                    if p.lower < 0.0 {
-                        return bad("a stiffness lower bound must be non-negative".into());
-                    }
-                }
-                ParameterKind::Damping { coefficient } => {
-                    if coefficient >= damping.coefficients().len() {
-                        return bad("refers to a damping coefficient that does not exist".into());
-                    }
-                    if p.lower < 0.0 {
-                        return bad("a damping lower bound must be non-negative".into());
-                    }
-                }
-            }
-        }
+        check_parameters(&parameters, &kappa, &damping)?;
         for frf in measured.frfs() {
             if frf.output >= model.sensor_count() || frf.input >= model.sensor_count() {
                 return Err(UpdateError::Data(
@@ -728,27 +741,10 @@ impl<'a> UpdateProblem<'a> {
             solved.offset,
         );
         let (iterations, evaluations) = (solved.iterations, solved.evaluations);
-        let (m, n) = (current.residual.len(), p.len());
         let (state, frfs) = current.extra;
         let (relative_residual, frf_relative_residuals) = self.relative_residuals(&frfs.h);
-        let residual_variance = 2.0 * cost / (m - n) as f64;
-        let (std, singular_values) = uncertainty(&current.jacobian, residual_variance);
-        let condition_number = match (singular_values.first(), singular_values.last()) {
-            (Some(&hi), Some(&lo)) if lo > 0.0 => hi / lo,
-            _ => f64::INFINITY,
-        };
-        let parameters = self
-            .parameters
-            .iter()
-            .zip(p.iter().zip(std))
-            .map(|(par, (&value, std))| ParameterEstimate {
-                name: par.name.clone(),
-                value,
-                std,
-                lower: par.lower,
-                upper: par.upper,
-            })
-            .collect();
+        let (parameters, singular_values, condition_number, residual_variance) =
+            solver::estimates(&self.parameters, &p, &current.jacobian, cost);
         let result = UpdateResult {
             parameters,
             iterations,

@@ -6,8 +6,8 @@
 //! helpers are here, once.
 
 use super::{
-    bounded_derivative, bounded_value, unbounded_value, IterationRecord, Method, Parameter, StopReason, UpdateError,
-    UpdateSettings,
+    bounded_derivative, bounded_value, unbounded_value, IterationRecord, Method, Parameter, ParameterEstimate,
+    StopReason, UpdateError, UpdateSettings,
 };
 use faer::{Mat, Side};
 
@@ -338,4 +338,34 @@ pub(super) fn uncertainty(j: &Mat<f64>, variance: f64) -> (Vec<Option<f64>>, Vec
         })
         .collect();
     (std, s)
+}
+
+/// Estimates with their standard deviations (`σ̂² (JᵀJ)⁻¹`, `σ̂² = 2·cost/(m − n)`),
+/// the singular values of the column-normalised Jacobian, its condition
+/// number and `σ̂²`.
+pub(super) fn estimates(
+    parameters: &[Parameter],
+    p: &[f64],
+    jacobian: &Mat<f64>,
+    cost: f64,
+) -> (Vec<ParameterEstimate>, Vec<f64>, f64, f64) {
+    let (m, n) = (jacobian.nrows(), p.len());
+    let residual_variance = 2.0 * cost / (m - n) as f64;
+    let (std, singular_values) = uncertainty(jacobian, residual_variance);
+    let condition_number = match (singular_values.first(), singular_values.last()) {
+        (Some(&hi), Some(&lo)) if lo > 0.0 => hi / lo,
+        _ => f64::INFINITY,
+    };
+    let estimates = parameters
+        .iter()
+        .zip(p.iter().zip(std))
+        .map(|(par, (&value, std))| ParameterEstimate {
+            name: par.name.clone(),
+            value,
+            std,
+            lower: par.lower,
+            upper: par.upper,
+        })
+        .collect();
+    (estimates, singular_values, condition_number, residual_variance)
 }

@@ -1,0 +1,221 @@
+//! Modal-residue updating (output-only): the residues of
+//! [`crate::modal_residual`] as a [`ResidualModel`] of the shared solver.
+//! The pairing is redone at every evaluation, so a mode that changes order
+//! as κ moves is followed; the cost is compared across steps on whatever
+//! pairs each step has.
+
+use super::solver::{self, Evaluated, ResidualModel};
+use super::{check_parameters, IterationRecord, Parameter, ParameterKind, UpdateError, UpdateResult, UpdateSettings};
+use crate::damping::DampingCurve;
+use crate::frf::{FrfModel, ModalState};
+use crate::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
+
+/// Updating a model against identified modes.
+#[derive(Debug)]
+pub struct ModalUpdateProblem<'a> {
+    model: &'a FrfModel,
+    kappa: Vec<Vec<f64>>,
+    damping: DampingCurve,
+    parameters: Vec<Parameter>,
+    observed: &'a [ObservedMode],
+    settings: UpdateSettings,
+    /// Smallest MAC of a pair.
+    min_mac: f64,
+}
+
+/// The result and the pairs at the solution.
+#[derive(Debug, Clone)]
+pub struct ModalSolution {
+    pub result: UpdateResult,
+    pub pairs: Vec<ModePair>,
+}
+
+impl<'a> ModalUpdateProblem<'a> {
+    /// `kappa` and `damping` give the values of parameters not updated;
+    /// identified modes must be finite with positive standard deviations.
+    pub fn new(
+        model: &'a FrfModel,
+        kappa: Vec<Vec<f64>>,
+        damping: DampingCurve,
+        parameters: Vec<Parameter>,
+        observed: &'a [ObservedMode],
+        settings: UpdateSettings,
+        min_mac: f64,
+    ) -> Result<Self, UpdateError> {
+        check_parameters(&parameters, &kappa, &damping)?;
+        for (k, m) in observed.iter().enumerate() {
+            let positive = |v: f64| v.is_finite() && v > 0.0;
+            if !(positive(m.frequency_hz)
+                && positive(m.frequency_std_hz)
+                && positive(m.damping_std)
+                && positive(m.shape_std)
+                && m.damping_ratio.is_finite())
+            {
+                return Err(UpdateError::Data(format!(
+                    "identified mode {k}: frequency and the standard deviations must be positive and finite"
+                )));
+            }
+            if m.shape.is_empty()
+                || m.shape
+                    .iter()
+                    .any(|&(s, v)| s >= model.sensor_count() || !v.re.is_finite() || !v.im.is_finite())
+            {
+                return Err(UpdateError::Data(format!(
+                    "identified mode {k}: its shape must name model sensors and be finite"
+                )));
+            }
+        }
+        if !(0.0..1.0).contains(&min_mac) {
+            return Err(UpdateError::Data(format!(
+                "the pairing MAC threshold {min_mac} must be in [0, 1)"
+            )));
+        }
+        Ok(Self {
+            model,
+            kappa,
+            damping,
+            parameters,
+            observed,
+            settings,
+            min_mac,
+        })
+    }
+
+    /// Spring coefficients and damping curve at parameter values `p`.
+    pub fn model_at(&self, p: &[f64]) -> Result<(Vec<Vec<f64>>, DampingCurve), UpdateError> {
+        let mut kappa = self.kappa.clone();
+        let mut gamma = self.damping.coefficients().to_vec();
+        for (par, &v) in self.parameters.iter().zip(p) {
+            match par.kind {
+                ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
+                ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
+            }
+        }
+        Ok((kappa, self.damping.with_coefficients(gamma)?))
+    }
+
+    fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
+        let (kappa, damping) = self.model_at(p)?;
+        let state = self.model.modal_state(&kappa, &damping)?;
+        let pairs = pair_modes(&state, self.observed, self.min_mac);
+        let residue = modal_residue(
+            self.model,
+            &state,
+            &damping,
+            self.observed,
+            &pairs,
+            &self.parameters,
+            jacobian,
+        );
+        if residue.residual.len() <= self.parameters.len() {
+            return Err(UpdateError::Underdetermined {
+                residuals: residue.residual.len(),
+                parameters: self.parameters.len(),
+            });
+        }
+        if residue.residual.iter().any(|r| !r.is_finite()) {
+            return Err(UpdateError::NonFinite(p.to_vec()));
+        }
+        Ok(Evaluated {
+            residual: residue.residual,
+            jacobian: residue.jacobian,
+            extra: Extra { state, damping, pairs },
+        })
+    }
+
+    /// Runs the updating from `start` (warm start: the last accepted values).
+    pub fn solve(
+        &self,
+        start: &[f64],
+        observer: &mut dyn FnMut(&IterationRecord),
+    ) -> Result<ModalSolution, UpdateError> {
+        let solved = solver::levenberg_marquardt(self, start, None, observer)?;
+        let (parameters, singular_values, condition_number, residual_variance) =
+            solver::estimates(&self.parameters, &solved.p, &solved.at.jacobian, solved.cost);
+        let relative_residual = self.relative_residual(&solved.at);
+        let pairs = solved.at.extra.pairs;
+        let per_mode = pairs
+            .iter()
+            .map(|p| {
+                let f = solved.at.extra.state.modes.frequency_hz(p.model);
+                let x = self.observed[p.observed].frequency_hz;
+                ((f - x) / x).abs()
+            })
+            .collect();
+        let result = UpdateResult {
+            parameters,
+            iterations: solved.iterations,
+            converged: solved.converged,
+            stop_reason: solved.stop,
+            relative_residual,
+            frf_relative_residuals: per_mode,
+            singular_values,
+            condition_number,
+            residual_variance,
+            relative_offset: solved.offset,
+            evaluations: solved.evaluations,
+            lines_used: pairs.len(),
+        };
+        Ok(ModalSolution { result, pairs })
+    }
+}
+
+/// What a modal evaluation keeps.
+#[derive(Debug, Clone)]
+pub struct Extra {
+    pub state: ModalState,
+    pub damping: DampingCurve,
+    pub pairs: Vec<ModePair>,
+}
+
+impl ResidualModel for ModalUpdateProblem<'_> {
+    type Extra = Extra;
+    type Previous = ();
+
+    fn parameters(&self) -> &[Parameter] {
+        &self.parameters
+    }
+
+    fn settings(&self) -> &UpdateSettings {
+        &self.settings
+    }
+
+    fn first(&self, p: &[f64], _previous: Option<&()>) -> Result<(Evaluated<Extra>, usize), UpdateError> {
+        Ok((self.evaluate(p, true)?, 1))
+    }
+
+    fn residual(&self, p: &[f64]) -> Result<Evaluated<Extra>, UpdateError> {
+        self.evaluate(p, false)
+    }
+
+    fn with_jacobian(&self, _p: &[f64], trial: Evaluated<Extra>) -> Result<Evaluated<Extra>, UpdateError> {
+        let residue = modal_residue(
+            self.model,
+            &trial.extra.state,
+            &trial.extra.damping,
+            self.observed,
+            &trial.extra.pairs,
+            &self.parameters,
+            true,
+        );
+        Ok(Evaluated {
+            residual: residue.residual,
+            jacobian: residue.jacobian,
+            extra: trial.extra,
+        })
+    }
+
+    /// Root mean square relative frequency error over the paired modes.
+    fn relative_residual(&self, at: &Evaluated<Extra>) -> f64 {
+        let pairs = &at.extra.pairs;
+        let sum: f64 = pairs
+            .iter()
+            .map(|p| {
+                let f = at.extra.state.modes.frequency_hz(p.model);
+                let x = self.observed[p.observed].frequency_hz;
+                ((f - x) / x).powi(2)
+            })
+            .sum();
+        (sum / pairs.len().max(1) as f64).sqrt()
+    }
+}
