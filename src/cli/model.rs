@@ -65,8 +65,12 @@ pub struct UpdateArgs {
     #[arg(long)]
     pub config: PathBuf,
     /// Measured FRFs (FRF JSON).
+    #[arg(long, required_unless_present = "modes", conflicts_with = "modes")]
+    pub frf: Option<PathBuf>,
+    /// Identified modes (`splinewatch oma --json` output): output-only,
+    /// modal-residue updating.
     #[arg(long)]
-    pub frf: PathBuf,
+    pub modes: Option<PathBuf>,
     /// Start from a previous result (`update --json` output) instead of the config's values.
     #[arg(long)]
     pub start: Option<PathBuf>,
@@ -132,8 +136,6 @@ pub fn synth(a: SynthArgs) -> Result<()> {
 
 pub fn update(a: UpdateArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let frf_text =
-        std::fs::read_to_string(&a.frf).with_context(|| format!("cannot read FRF file {}", a.frf.display()))?;
     let start_text = a
         .start
         .as_ref()
@@ -149,14 +151,40 @@ pub fn update(a: UpdateArgs) -> Result<()> {
             it.rejected_steps
         );
     };
-    let result = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
-        .with_context(|| format!("updating against {}", a.frf.display()))?;
     let mut out = crate::io::console::Stdout;
+    let (result, pairs) = match (&a.frf, &a.modes) {
+        (Some(frf), _) => {
+            let frf_text =
+                std::fs::read_to_string(frf).with_context(|| format!("cannot read FRF file {}", frf.display()))?;
+            let result = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
+                .with_context(|| format!("updating against {}", frf.display()))?;
+            (result, None)
+        }
+        (None, Some(modes)) => {
+            let file = crate::io::modes_json::ModesFile::read(modes)?;
+            let solution = studies::update::update_from_modes(&cfg, &file, start_text.as_deref(), &mut progress)
+                .with_context(|| format!("updating against {}", modes.display()))?;
+            (solution.result, Some((file, solution.pairs)))
+        }
+        (None, None) => anyhow::bail!("give --frf FILE or --modes FILE"),
+    };
     if a.json {
         serde_json::to_writer(&mut out, &result)?;
         writeln!(out)?;
     } else {
         studies::write_update_table(&result, &mut out)?;
+        if let Some((file, pairs)) = pairs {
+            writeln!(out, "paired modes (identified → model, MAC):")?;
+            for p in pairs {
+                writeln!(
+                    out,
+                    "  {:9.4} Hz → model mode {:3}  MAC {:.3}",
+                    file.modes[p.observed].frequency_hz,
+                    p.model + 1,
+                    p.mac
+                )?;
+            }
+        }
     }
     out.flush()?;
     Ok(())

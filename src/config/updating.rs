@@ -57,6 +57,21 @@ pub struct UpdatingConfig {
     /// Initial Levenberg–Marquardt damping λ0, dimensionless (see `UpdateSettings::initial_damping`).
     #[serde(default = "default_initial_damping")]
     pub initial_damping: f64,
+    /// Modal-residue updating (`update --modes`): an identified mode pairs
+    /// with the model mode of largest MAC if it is at least this.
+    #[serde(default = "default_min_mac")]
+    pub min_mac: f64,
+    /// … and if their frequencies differ by at most this fraction.
+    #[serde(default = "default_max_frequency_gap")]
+    pub max_frequency_gap: f64,
+}
+
+fn default_max_frequency_gap() -> f64 {
+    0.1
+}
+
+fn default_min_mac() -> f64 {
+    0.8
 }
 
 fn default_method() -> Method {
@@ -126,6 +141,10 @@ impl Config {
         positive("step_tolerance", u.step_tolerance)?;
         positive("offset_tolerance", u.offset_tolerance)?;
         positive("initial_damping", u.initial_damping)?;
+        if !(0.0..1.0).contains(&u.min_mac) {
+            return Err(err("updating.min_mac", format!("must be in [0, 1), got {}", u.min_mac)));
+        }
+        positive("max_frequency_gap", u.max_frequency_gap)?;
         if u.max_iterations == 0 {
             return Err(err("updating.max_iterations", "must be at least 1"));
         }

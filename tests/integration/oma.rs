@@ -213,3 +213,116 @@ fn bad_oma_input_is_a_clear_error() {
         stderr(&o)
     );
 }
+
+/// Output-only updating end to end: 20 minutes of traffic, then of ambient
+/// data of the deck with `east.k2` at 60 % (the bundled bearing-damage
+/// scenario's loss, here from the start) → `oma --out` → `update --modes`:
+/// from the undamaged config values `east.k2` is found within 10 % of its
+/// new value and every other κ within 15 % (the targets; reached:
+/// see README). Traffic's spurious modes (43 and 49 Hz, ζ 4–5 %) stay
+/// unpaired thanks to the frequency gate.
+#[test]
+fn oma_then_update_modes_finds_the_bearing_loss() {
+    let dir = fresh_dir("oma-update");
+    let scenario = dir.join("loss.toml");
+    std::fs::write(
+        &scenario,
+        "update_seconds = 1200.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = -1.0\nend_minute = 0.0\nfactor = 0.6\n",
+    )
+    .unwrap();
+    let truth = [
+        ("west.k1", 0.4e9),
+        ("west.k2", 1.5e9),
+        ("west.k3", 1.8e9),
+        ("west.k4", 0.6e9),
+        ("east.k1", 1.5e9),
+        ("east.k2", 0.24e9),
+        ("east.k3", 0.5e9),
+        ("east.k4", 1.8e9),
+    ];
+    let modes = dir.join("modes.json");
+    for excitation in ["traffic", "ambient"] {
+        let rec = dir.join(format!("{excitation}.mcap"));
+        let sim = splinewatch(&[
+            "simulate",
+            "--config",
+            "config/sinello.toml",
+            "--duration",
+            "1200",
+            "--excitation",
+            excitation,
+            "--seed",
+            "5",
+            "--scenario",
+            scenario.to_str().unwrap(),
+            "--out",
+            rec.to_str().unwrap(),
+        ]);
+        assert!(sim.status.success(), "{}", stderr(&sim));
+        let o = splinewatch(&[
+            "oma",
+            "--config",
+            "config/sinello.toml",
+            rec.to_str().unwrap(),
+            "--out",
+            modes.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let u = splinewatch(&[
+            "update",
+            "--config",
+            "config/sinello.toml",
+            "--modes",
+            modes.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(u.status.success(), "{}", stderr(&u));
+        let result: serde_json::Value = serde_json::from_slice(&u.stdout).unwrap();
+        for (name, value) in truth {
+            let p = result["parameters"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["name"] == name)
+                .unwrap();
+            let error = p["value"].as_f64().unwrap() / value - 1.0;
+            let allowed = if name == "east.k2" { 0.10 } else { 0.15 };
+            assert!(error.abs() < allowed, "{excitation}: {name}: {:+.1} %", 100.0 * error);
+        }
+        assert_eq!(result["converged"], true, "{excitation}");
+    }
+    // The table names the pairs.
+    let t = splinewatch(&[
+        "update",
+        "--config",
+        "config/sinello.toml",
+        "--modes",
+        modes.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&t.stdout).contains("paired modes"));
+    // --frf and --modes exclude each other; a modes file naming an unknown sensor is an error.
+    let both = splinewatch(&[
+        "update",
+        "--config",
+        "config/sinello.toml",
+        "--modes",
+        "x.json",
+        "--frf",
+        "y.json",
+    ]);
+    assert!(!both.status.success());
+    let bad = dir.join("bad.json");
+    std::fs::write(
+        &bad,
+        std::fs::read_to_string(&modes).unwrap().replace("\"P3\"", "\"P99\""),
+    )
+    .unwrap();
+    let b = splinewatch(&[
+        "update",
+        "--config",
+        "config/sinello.toml",
+        "--modes",
+        bad.to_str().unwrap(),
+    ]);
+    assert!(!b.status.success() && stderr(&b).contains("P99"), "{}", stderr(&b));
+}

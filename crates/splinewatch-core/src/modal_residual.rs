@@ -61,14 +61,18 @@ pub struct ModalResidue {
 }
 
 /// Pairs each observed mode with the flexible model mode of largest MAC
-/// (at the observed sensors), if at least `min_mac`; a model mode claimed
-/// twice goes to the higher MAC.
-pub fn pair_modes(state: &ModalState, observed: &[ObservedMode], min_mac: f64) -> Vec<ModePair> {
+/// (at the observed sensors) among those within `max_gap` relative
+/// frequency, if that MAC is at least `min_mac`; a model mode claimed twice
+/// goes to the higher MAC. The frequency gate matters: twelve sensors
+/// cannot tell a low mode from some mode ten times higher (spatial
+/// aliasing), and a spurious identified mode would otherwise pair with it.
+pub fn pair_modes(state: &ModalState, observed: &[ObservedMode], min_mac: f64, max_gap: f64) -> Vec<ModePair> {
     let mut pairs: Vec<ModePair> = Vec::new();
     for (o, mode) in observed.iter().enumerate() {
         let shape: Vec<c64> = mode.shape.iter().map(|&(_, v)| v).collect();
         let best = (0..state.modes.len())
             .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid)
+            .filter(|&i| (state.modes.frequency_hz(i) - mode.frequency_hz).abs() <= max_gap * mode.frequency_hz)
             .map(|i| {
                 let a: Vec<f64> = mode.shape.iter().map(|&(s, _)| state.amplitude(s, i)).collect();
                 (i, mac_real(&shape, &a))

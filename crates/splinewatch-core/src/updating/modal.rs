@@ -19,8 +19,9 @@ pub struct ModalUpdateProblem<'a> {
     parameters: Vec<Parameter>,
     observed: &'a [ObservedMode],
     settings: UpdateSettings,
-    /// Smallest MAC of a pair.
+    /// Smallest MAC of a pair, largest relative frequency gap.
     min_mac: f64,
+    max_gap: f64,
 }
 
 /// The result and the pairs at the solution.
@@ -32,7 +33,9 @@ pub struct ModalSolution {
 
 impl<'a> ModalUpdateProblem<'a> {
     /// `kappa` and `damping` give the values of parameters not updated;
-    /// identified modes must be finite with positive standard deviations.
+    /// identified modes must be finite with positive standard deviations;
+    /// pairs need a MAC of at least `min_mac` within `max_gap` relative
+    /// frequency (see [`pair_modes`]).
     pub fn new(
         model: &'a FrfModel,
         kappa: Vec<Vec<f64>>,
@@ -40,7 +43,7 @@ impl<'a> ModalUpdateProblem<'a> {
         parameters: Vec<Parameter>,
         observed: &'a [ObservedMode],
         settings: UpdateSettings,
-        min_mac: f64,
+        (min_mac, max_gap): (f64, f64),
     ) -> Result<Self, UpdateError> {
         check_parameters(&parameters, &kappa, &damping)?;
         for (k, m) in observed.iter().enumerate() {
@@ -78,6 +81,7 @@ impl<'a> ModalUpdateProblem<'a> {
             observed,
             settings,
             min_mac,
+            max_gap,
         })
     }
 
@@ -97,7 +101,7 @@ impl<'a> ModalUpdateProblem<'a> {
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
         let state = self.model.modal_state(&kappa, &damping)?;
-        let pairs = pair_modes(&state, self.observed, self.min_mac);
+        let pairs = pair_modes(&state, self.observed, self.min_mac, self.max_gap);
         let residue = modal_residue(
             self.model,
             &state,

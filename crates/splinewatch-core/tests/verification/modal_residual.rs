@@ -65,7 +65,7 @@ fn modal_residue_jacobian_matches_central_differences() {
     };
     let p0: Vec<f64> = kappa.iter().flatten().chain(damping.coefficients()).copied().collect();
     let (state, d0) = at(&p0);
-    let pairs = pair_modes(&state, &observed, 0.8);
+    let pairs = pair_modes(&state, &observed, 0.8, 0.1);
     assert_eq!(pairs.len(), 18, "every identified mode pairs with its model mode");
     // A 40 % loss of east.k2 mixes the close pair (73.5/74.0 Hz): MAC 0.92–0.95 there.
     assert!(pairs.iter().all(|p| p.mac > 0.9), "{pairs:?}");
@@ -123,7 +123,7 @@ fn modal_updating_follows_a_bearing_loss() {
         parameters.clone(),
         &observed,
         UpdateSettings::default(),
-        0.8,
+        (0.8, 0.1),
     )
     .unwrap();
     let start: Vec<f64> = true_kappa()
@@ -182,7 +182,7 @@ fn modal_updating_follows_a_bearing_loss() {
         parameters,
         &noisy,
         UpdateSettings::default(),
-        0.8,
+        (0.8, 0.1),
     )
     .unwrap();
     let result = problem.solve(&start, &mut |_| {}).unwrap().result;
