@@ -1,16 +1,7 @@
 //! End-to-end tests of the `splinewatch` binary on the bundled configuration.
 
-use crate::common::fresh_dir;
+use crate::common::{fresh_dir, splinewatch};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn splinewatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
-}
 
 /// Writes a test input into the test's folder.
 fn temp_config(dir: &Path, name: &str, text: &str) -> PathBuf {

@@ -1,22 +1,14 @@
 //! Output-only identification end to end: `simulate --excitation ambient`
 //! (and traffic) → MCAP → `splinewatch oma`, its JSON contract, and bad input.
 
-use crate::common::fresh_dir;
+use crate::common::{fresh_dir, splinewatch};
 use splinewatch::config::{frf_setup, load_config};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch_core::c64;
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::oma::shape::mac;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn splinewatch(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the binary runs")
-}
+use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()

@@ -139,3 +139,12 @@ impl AsRef<std::path::Path> for TestDir {
         self.0.path()
     }
 }
+
+/// Runs the `splinewatch` binary in the repository root and waits for it.
+pub fn splinewatch(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the binary runs")
+}

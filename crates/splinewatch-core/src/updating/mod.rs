@@ -117,6 +117,24 @@ pub(crate) fn check_parameters(
     Ok(())
 }
 
+/// The base model (`kappa`, `damping`) with `parameters` set to `p`.
+pub(crate) fn model_at(
+    parameters: &[Parameter],
+    kappa: &[Vec<f64>],
+    damping: &DampingCurve,
+    p: &[f64],
+) -> Result<(Vec<Vec<f64>>, DampingCurve), UpdateError> {
+    let mut kappa = kappa.to_vec();
+    let mut gamma = damping.coefficients().to_vec();
+    for (par, &v) in parameters.iter().zip(p) {
+        match par.kind {
+            ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
+            ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
+        }
+    }
+    Ok((kappa, damping.with_coefficients(gamma)?))
+}
+
 /// The values `parameters` take in the model given by spring coefficients
 /// `kappa` (one vector per field) and `damping`.
 #[track_caller]
@@ -547,15 +565,7 @@ impl<'a> UpdateProblem<'a> {
 
     /// Spring coefficients and damping curve for parameter values `p`.
     pub fn model_at(&self, p: &[f64]) -> Result<(Vec<Vec<f64>>, DampingCurve), UpdateError> {
-        let mut kappa = self.kappa.clone();
-        let mut gamma = self.damping.coefficients().to_vec();
-        for (par, &v) in self.parameters.iter().zip(p) {
-            match par.kind {
-                ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
-                ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
-            }
-        }
-        Ok((kappa, self.damping.with_coefficients(gamma)?))
+        model_at(&self.parameters, &self.kappa, &self.damping, p)
     }
 
     /// Frequencies of the selected lines.

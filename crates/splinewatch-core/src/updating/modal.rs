@@ -5,7 +5,7 @@
 //! pairs each step has.
 
 use super::solver::{self, Evaluated, ResidualModel};
-use super::{check_parameters, IterationRecord, Parameter, ParameterKind, UpdateError, UpdateResult, UpdateSettings};
+use super::{check_parameters, IterationRecord, Parameter, UpdateError, UpdateResult, UpdateSettings};
 use crate::damping::DampingCurve;
 use crate::frf::{FrfModel, ModalState};
 use crate::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
@@ -87,15 +87,7 @@ impl<'a> ModalUpdateProblem<'a> {
 
     /// Spring coefficients and damping curve at parameter values `p`.
     pub fn model_at(&self, p: &[f64]) -> Result<(Vec<Vec<f64>>, DampingCurve), UpdateError> {
-        let mut kappa = self.kappa.clone();
-        let mut gamma = self.damping.coefficients().to_vec();
-        for (par, &v) in self.parameters.iter().zip(p) {
-            match par.kind {
-                ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
-                ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
-            }
-        }
-        Ok((kappa, self.damping.with_coefficients(gamma)?))
+        super::model_at(&self.parameters, &self.kappa, &self.damping, p)
     }
 
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
