@@ -91,6 +91,13 @@ pub struct Pipeline {
 
 impl Pipeline {
     pub fn new(config: &Config, schedule: ScheduleConfig, state: Option<AcceptedParameters>) -> Result<Self> {
+        if config.is_output_only() {
+            bail!(
+                "config: sensors: no sensor measures force, so this is an output-only config; the daemon and \
+                 replay do not run output-only monitoring yet: identify modes with `splinewatch oma` and update \
+                 with `splinewatch update --modes`"
+            );
+        }
         let setup = Arc::new(crate::config::frf_setup(config)?);
         let parameters = config.build_parameters()?;
         let settings = config.update_settings()?;

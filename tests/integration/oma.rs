@@ -198,6 +198,29 @@ fn bad_oma_input_is_a_clear_error() {
         assert!(!o.status.success());
         assert!(stderr(&o).contains(expected), "{extra}: {}", stderr(&o));
     }
+    // The daemon's pipeline says plainly that it does not run output-only yet.
+    let cfg = dir.join("output-only.toml");
+    std::fs::write(
+        &cfg,
+        base.replace(
+            "quantity = [\"force\", \"acceleration\"]",
+            "quantity = \"acceleration\"",
+        ),
+    )
+    .unwrap();
+    let r = splinewatch(&[
+        "replay",
+        "--config",
+        cfg.to_str().unwrap(),
+        rec.to_str().unwrap(),
+        "--out",
+        dir.join("r.mcap").to_str().unwrap(),
+    ]);
+    assert!(
+        !r.status.success() && stderr(&r).contains("output-only"),
+        "{}",
+        stderr(&r)
+    );
     let o = splinewatch(&["oma", "--config", "config/sinello.toml", "Cargo.toml"]);
     assert!(
         !o.status.success() && !stderr(&o).contains("panicked"),
