@@ -352,6 +352,9 @@ pub struct OmaArgs {
     /// Also write the modes JSON to this file (for `update --modes`).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write the stabilisation diagram and the modes with ±1σ to a Rerun `.rrd` file.
+    #[arg(long)]
+    pub rerun_save: Option<PathBuf>,
 }
 
 /// `splinewatch oma`: output-only modal identification of a recorded span.
@@ -372,6 +375,15 @@ pub fn oma(a: OmaArgs) -> Result<()> {
         stable,
         report.result.modes.len()
     );
+    if let Some(path) = &a.rerun_save {
+        let targets = crate::outputs::rerun::RerunTargets {
+            save: Some(path.clone()),
+            connect: None,
+        };
+        let mut rerun = crate::outputs::rerun::RerunOutput::open(&cfg, &targets)?;
+        rerun.log_oma(&report)?;
+        rerun.finish()?;
+    }
     let file = report.modes_file();
     if let Some(path) = &a.out {
         std::fs::write(path, serde_json::to_string_pretty(&file)?)

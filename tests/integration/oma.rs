@@ -105,6 +105,7 @@ fn ambient_recording_to_oma_json_gives_the_model_modes() {
         distinct.len()
     );
     // --from/--to select a span: 5 minutes still give the lower modes.
+    let rrd = dir.join("oma.rrd");
     let o = splinewatch(&[
         "oma",
         "--config",
@@ -114,8 +115,25 @@ fn ambient_recording_to_oma_json_gives_the_model_modes() {
         "60",
         "--to",
         "360",
+        "--rerun-save",
+        rrd.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // The Rerun file is finalised and holds the stabilisation diagram and the modes.
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
+    assert!(summary.footer);
+    for entity in [
+        "/oma/stabilisation",
+        "/oma/singular_values",
+        "/oma/modes/1/frequency_hz",
+        "/oma/modes/1/damping_percent",
+    ] {
+        assert!(
+            summary.entities.contains(entity),
+            "{entity} missing: {:?}",
+            summary.entities
+        );
+    }
     assert!(
         stderr(&o).contains("76800 samples (300.0 s at 256 Hz)"),
         "{}",

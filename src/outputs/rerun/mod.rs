@@ -10,10 +10,14 @@
 //!   frequency lines; `damping/zeta` (ζ(f) in %) and
 //!   `damping/coefficients` (γ_z at their Greville abscissae);
 //! - `deck/springs`: the deck mesh coloured by the identified spring field
-//!   r33 (N/m³); `deck/sensors`; `modes/<k>`: the first bending modes.
+//!   r33 (N/m³); `deck/sensors`; `modes/<k>`: the first bending modes;
+//! - `oma/stabilisation` (poles: frequency × order), `oma/singular_values`,
+//!   `oma/modes/<k>/{frequency_hz,damping_percent}` (value, ±1σ): an
+//!   output-only identification (`splinewatch oma --rerun-save`).
 
 mod blueprint;
 mod deck;
+mod oma;
 mod rrd;
 mod update;
 
