@@ -126,6 +126,18 @@ mod tests {
     use super::*;
 
     #[test]
+    fn slope_is_the_derivative_of_zeta_and_zero_outside_the_band() {
+        let c = DampingCurve::new(3, vec![0.01, 0.03, 0.012, 0.02, 0.008, 0.015], 5.0, 85.0).unwrap();
+        for f in [5.5, 17.3, 40.0, 61.2, 84.1] {
+            let h = 1e-5;
+            let fd = (c.zeta(f + h) - c.zeta(f - h)) / (2.0 * h);
+            assert!((c.slope(f) - fd).abs() < 1e-8, "{f}: {} vs {fd}", c.slope(f));
+        }
+        assert_eq!(c.slope(2.0), 0.0);
+        assert_eq!(c.slope(90.0), 0.0);
+    }
+
+    #[test]
     fn constant_coefficients_give_constant_damping_and_clamp_outside() {
         let c = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();
         for f in [-5.0, 0.0, 13.3, 79.9, 80.0, 200.0] {
