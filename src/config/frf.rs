@@ -142,13 +142,7 @@ impl Config {
                 ))
             }
         };
-        let accelerations = (0..self.sensors.len())
-            .filter(|&i| has(i, "acceleration"))
-            .collect::<Vec<_>>();
-        if accelerations.is_empty() {
-            return Err(err("sensors", "no sensor measures acceleration"));
-        }
-        Ok((force, accelerations))
+        Ok((force, self.output_channels()?))
     }
 }
 

@@ -98,6 +98,16 @@ pub fn source_points(
     }
 }
 
+/// `n` samples of Gaussian noise at `fs`, band-limited to `band` (FFT brick
+/// wall) and scaled to the RMS `rms`: the random force of every simulated
+/// excitation (measured or not).
+pub fn band_limited_noise(rng: &mut ChaCha8Rng, n: usize, fs: f64, band: (f64, f64), rms: f64) -> Vec<f64> {
+    let mut x: Vec<f64> = (0..n).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
+    band_limit(&mut x, fs, band.0, band.1);
+    let actual = (x.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+    x.iter().map(|v| v * rms / actual).collect()
+}
+
 /// One crossing vehicle.
 #[derive(Debug, Clone)]
 struct Vehicle {
@@ -173,7 +183,9 @@ impl UnmeasuredSources {
     pub fn next(&mut self, rng: &mut ChaCha8Rng, out: &mut [f64]) {
         if self.position == self.chunk.first().map_or(0, Vec::len) {
             self.offset += self.position;
-            self.chunk = (0..self.signals).map(|_| self.unit_noise(rng)).collect();
+            self.chunk = (0..self.signals)
+                .map(|_| band_limited_noise(rng, Self::CHUNK, self.fs_sim, self.band, 1.0))
+                .collect();
             self.position = 0;
         }
         let k = self.position;
@@ -186,14 +198,6 @@ impl UnmeasuredSources {
                 }
             }
         }
-    }
-
-    /// Gaussian noise band-limited to the band, unit RMS.
-    fn unit_noise(&self, rng: &mut ChaCha8Rng) -> Vec<f64> {
-        let mut x: Vec<f64> = (0..Self::CHUNK).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
-        band_limit(&mut x, self.fs_sim, self.band.0, self.band.1);
-        let rms = (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt();
-        x.iter().map(|v| v / rms).collect()
     }
 
     fn traffic(&mut self, rng: &mut ChaCha8Rng, k: usize, out: &mut [f64]) {

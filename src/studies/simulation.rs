@@ -16,7 +16,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::Deserialize;
-use splinewatch_core::simulate::{band_limit, hammer_impacts, swept_sine, ModalSimulator};
+use splinewatch_core::simulate::{hammer_impacts, swept_sine, ModalSimulator};
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
 pub use super::excitation::Excitation;
@@ -422,12 +422,7 @@ impl ForceSource {
         let n = Self::CHUNK;
         let peak = self.rms * std::f64::consts::SQRT_2;
         match self.excitation {
-            Excitation::Random => {
-                let mut x: Vec<f64> = (0..n).map(|_| rng.sample::<f64, _>(StandardNormal)).collect();
-                band_limit(&mut x, self.fs_sim, self.band.0, self.band.1);
-                let rms = (x.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
-                x.iter().map(|v| v * self.rms / rms).collect()
-            }
+            Excitation::Random => excitation::band_limited_noise(rng, n, self.fs_sim, self.band, self.rms),
             Excitation::Sweep => {
                 // One sweep per chunk, continuous phase at chunk starts (zero).
                 swept_sine(self.band.0, self.band.1, self.fs_sim, n)

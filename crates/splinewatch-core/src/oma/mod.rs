@@ -207,7 +207,7 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
     if clusters.is_empty() {
         return Err(OmaError::NoModes {
             stable: stable.len(),
-            min_poles: ((settings.clustering.min_fraction * by_order.len() as f64).ceil() as usize).max(2),
+            min_poles: settings.clustering.min_poles(by_order.len()),
         });
     }
     let modes = summarise(correlations, fs, settings, &orders, &clusters, &stable_poles);

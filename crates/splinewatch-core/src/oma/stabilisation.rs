@@ -68,6 +68,14 @@ impl Default for ClusterCriteria {
     }
 }
 
+impl ClusterCriteria {
+    /// Fewest poles a physical mode needs when `orders_computed` orders
+    /// were computed (at least 2).
+    pub fn min_poles(&self, orders_computed: usize) -> usize {
+        ((self.min_fraction * orders_computed as f64).ceil() as usize).max(2)
+    }
+}
+
 /// Distance between two poles used by clustering and by pairing.
 pub fn pole_distance(a: &Pole, b: &Pole) -> f64 {
     (a.frequency_hz - b.frequency_hz).abs() / a.frequency_hz.max(b.frequency_hz) + (1.0 - mac(&a.shape, &b.shape))
@@ -145,7 +153,7 @@ pub fn cluster(poles: &[&Pole], criteria: &ClusterCriteria, orders_computed: usi
     for &i in &by_frequency {
         groups.entry(root(&mut parent, i)).or_default().push(i);
     }
-    let min_poles = ((criteria.min_fraction * orders_computed as f64).ceil() as usize).max(2);
+    let min_poles = criteria.min_poles(orders_computed);
     let mut modes: Vec<Vec<usize>> = groups
         .into_values()
         .map(|members| one_per_order(poles, members))
