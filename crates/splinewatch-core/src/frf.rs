@@ -207,6 +207,16 @@ impl FrfModel {
         &self.block_positions
     }
 
+    /// Position of coefficient `coefficient` of spring field `field` among
+    /// all spring coefficients, fields flattened in order (the order of
+    /// `FrfEvaluation::dh_dkappa` and of the modal sensitivities).
+    #[track_caller]
+    pub fn flat_spring_index(&self, field: usize, coefficient: usize) -> usize {
+        let blocks = &self.assembled.spring_blocks;
+        assert!(coefficient < blocks[field].len(), "spring coefficient out of range");
+        blocks[..field].iter().map(Vec::len).sum::<usize>() + coefficient
+    }
+
     /// Total number of spring coefficients over all fields.
     pub fn spring_coefficient_count(&self) -> usize {
         self.block_positions.len()

@@ -124,16 +124,6 @@ pub fn modal_residue(
     parameters: &[Parameter],
     jacobian: bool,
 ) -> ModalResidue {
-    let offsets: Vec<usize> = model
-        .assembled()
-        .spring_blocks
-        .iter()
-        .scan(0, |acc, blocks| {
-            let o = *acc;
-            *acc += blocks.len();
-            Some(o)
-        })
-        .collect();
     let modes: Vec<usize> = pairs.iter().map(|p| p.model).collect();
     let sens = jacobian.then(|| model.modal_sensitivities(state, &modes));
     let rows: usize = pairs.iter().map(|p| 2 + observed[p.observed].shape.len()).sum();
@@ -166,7 +156,7 @@ pub fn modal_residue(
         for (c, par) in parameters.iter().enumerate() {
             match par.kind {
                 ParameterKind::Spring { field, coefficient } => {
-                    let j = offsets[field] + coefficient;
+                    let j = model.flat_spring_index(field, coefficient);
                     let df = sens.eigenvalue[(k, j)] / (8.0 * PI * PI * f);
                     jac[(row0, c)] = df / x.frequency_std_hz;
                     let da: Vec<f64> = x.shape.iter().map(|&(s, _)| sens.amplitude[k][(s, j)]).collect();

@@ -476,19 +476,12 @@ pub struct UpdateProblem<'a> {
     sqrt_weights: Vec<f64>,
 }
 
-struct Evaluation {
-    residual: Vec<f64>,
-    jacobian: Mat<f64>,
-    frfs: FrfEvaluation,
-}
+/// Residues and Jacobian with the model FRFs they came from.
+type Evaluation = Evaluated<FrfEvaluation>;
 
 impl<'a> UpdateProblem<'a> {
     /// `kappa` and `damping` give the values of parameters that are not
     /// updated; `parameters` lists the updated ones.
-    #[allow(
-        clippy::too_many_lines,
-        reason = "checks every argument against the model (named errors), then selects lines and weights; one constructor so an UpdateProblem that exists is valid"
-    )]
     pub fn new(
         model: &'a FrfModel,
         kappa: Vec<Vec<f64>>,
@@ -629,20 +622,12 @@ impl<'a> UpdateProblem<'a> {
         }
         let mut jac = Mat::<f64>::zeros(0, 0);
         if jacobian {
-            // Spring sensitivities are flattened over fields in field order.
-            let offsets: Vec<usize> = self
-                .kappa
-                .iter()
-                .scan(0, |acc, k| {
-                    let o = *acc;
-                    *acc += k.len();
-                    Some(o)
-                })
-                .collect();
             jac = Mat::zeros(residual.len(), self.parameters.len());
             for (c, par) in self.parameters.iter().enumerate() {
                 let column = match par.kind {
-                    ParameterKind::Spring { field, coefficient } => &frfs.dh_dkappa[offsets[field] + coefficient],
+                    ParameterKind::Spring { field, coefficient } => {
+                        &frfs.dh_dkappa[self.model.flat_spring_index(field, coefficient)]
+                    }
                     ParameterKind::Damping { coefficient } => &frfs.dh_dgamma[coefficient],
                 };
                 for k in 0..nl * nb {
@@ -655,7 +640,7 @@ impl<'a> UpdateProblem<'a> {
         Ok(Evaluation {
             residual,
             jacobian: jac,
-            frfs,
+            extra: frfs,
         })
     }
 
@@ -819,7 +804,7 @@ fn evaluated(state: ModalState, evaluation: Evaluation) -> Evaluated<(ModalState
     Evaluated {
         residual: evaluation.residual,
         jacobian: evaluation.jacobian,
-        extra: (state, evaluation.frfs),
+        extra: (state, evaluation.extra),
     }
 }
 
