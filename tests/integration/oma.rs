@@ -14,6 +14,26 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// `splinewatch simulate` on the bundled config into `out`; asserts success.
+fn simulate(out: &Path, excitation: &str, seconds: &str, seed: &str, extra: &[&str]) {
+    let mut args = vec![
+        "simulate",
+        "--config",
+        "config/sinello.toml",
+        "--duration",
+        seconds,
+        "--excitation",
+        excitation,
+        "--seed",
+        seed,
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let sim = splinewatch(&args);
+    assert!(sim.status.success(), "{}", stderr(&sim));
+}
+
 /// The bundled model's bending modes below 80 Hz at the twelve sensors.
 fn model_modes() -> Vec<(f64, Vec<c64>)> {
     let cfg = load_config(&Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello.toml")).unwrap();
@@ -50,20 +70,7 @@ fn pairs(file: &ModesFile) -> Vec<(f64, f64, f64)> {
 fn ambient_recording_to_oma_json_gives_the_model_modes() {
     let dir = fresh_dir("oma-ambient");
     let rec = dir.join("ambient.mcap");
-    let sim = splinewatch(&[
-        "simulate",
-        "--config",
-        "config/sinello.toml",
-        "--duration",
-        "600",
-        "--excitation",
-        "ambient",
-        "--seed",
-        "4",
-        "--out",
-        rec.to_str().unwrap(),
-    ]);
-    assert!(sim.status.success(), "{}", stderr(&sim));
+    simulate(&rec, "ambient", "600", "4", &[]);
     let out = dir.join("modes.json");
     let o = splinewatch(&[
         "oma",
@@ -146,20 +153,7 @@ fn ambient_recording_to_oma_json_gives_the_model_modes() {
 fn traffic_recording_gives_the_lower_modes() {
     let dir = fresh_dir("oma-traffic");
     let rec = dir.join("traffic.mcap");
-    let sim = splinewatch(&[
-        "simulate",
-        "--config",
-        "config/sinello.toml",
-        "--duration",
-        "600",
-        "--excitation",
-        "traffic",
-        "--seed",
-        "2",
-        "--out",
-        rec.to_str().unwrap(),
-    ]);
-    assert!(sim.status.success(), "{}", stderr(&sim));
+    simulate(&rec, "traffic", "600", "2", &[]);
     let o = splinewatch(&[
         "oma",
         "--config",
@@ -184,18 +178,7 @@ fn traffic_recording_gives_the_lower_modes() {
 fn bad_oma_input_is_a_clear_error() {
     let dir = fresh_dir("oma-bad");
     let rec = dir.join("short.mcap");
-    let sim = splinewatch(&[
-        "simulate",
-        "--config",
-        "config/sinello.toml",
-        "--duration",
-        "5",
-        "--excitation",
-        "ambient",
-        "--out",
-        rec.to_str().unwrap(),
-    ]);
-    assert!(sim.status.success(), "{}", stderr(&sim));
+    simulate(&rec, "ambient", "5", "0", &[]);
     let o = splinewatch(&["oma", "--config", "config/sinello.toml", rec.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("too short"), "{}", stderr(&o));
@@ -276,22 +259,13 @@ fn oma_then_update_modes_finds_the_bearing_loss() {
     let modes = dir.join("modes.json");
     for excitation in ["traffic", "ambient"] {
         let rec = dir.join(format!("{excitation}.mcap"));
-        let sim = splinewatch(&[
-            "simulate",
-            "--config",
-            "config/sinello.toml",
-            "--duration",
-            "1200",
-            "--excitation",
+        simulate(
+            &rec,
             excitation,
-            "--seed",
+            "1200",
             "5",
-            "--scenario",
-            scenario.to_str().unwrap(),
-            "--out",
-            rec.to_str().unwrap(),
-        ]);
-        assert!(sim.status.success(), "{}", stderr(&sim));
+            &["--scenario", scenario.to_str().unwrap()],
+        );
         let o = splinewatch(&[
             "oma",
             "--config",

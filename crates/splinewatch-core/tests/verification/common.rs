@@ -104,3 +104,20 @@ pub fn clamped_curved_panel() -> ShellModel {
         }],
     }
 }
+
+/// Gaussian samples (64-bit LCG and Box–Muller): deterministic per seed.
+pub fn gaussian(n: usize, seed: u64) -> Vec<f64> {
+    let mut state = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
+    let mut uniform = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 11) as f64 + 0.5) / ((1u64 << 53) as f64)
+    };
+    (0..n)
+        .map(|_| {
+            let (u1, u2) = (uniform(), uniform());
+            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+        })
+        .collect()
+}

@@ -1,7 +1,7 @@
 //! The modal residue's Jacobian against central differences, and the
 //! pairing, on the Sinello deck.
 
-use super::common::{sinello_model, sinello_sensors, true_kappa};
+use super::common::{gaussian, sinello_model, sinello_sensors, true_kappa};
 use splinewatch_core::c64;
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::{FrfModel, ModalState};
@@ -153,15 +153,9 @@ fn modal_updating_follows_a_bearing_loss() {
 
     // The same with the identification's noise: every frequency, damping
     // ratio and shape component perturbed by one draw of its std.
-    let mut seed = 17u64;
-    let mut normal = move || {
-        let mut uniform = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 + 0.5) / ((1u64 << 53) as f64)
-        };
-        let (u1, u2) = (uniform(), uniform());
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    };
+    let draws = gaussian(observed.len() * 14, 17);
+    let mut draw = draws.iter();
+    let mut normal = || *draw.next().expect("one draw per perturbed value");
     let noisy: Vec<ObservedMode> = observed
         .iter()
         .map(|m| ObservedMode {

@@ -2,7 +2,7 @@
 //! the Sinello deck: four uncorrelated band-limited random forces at points
 //! that carry no sensor, twelve vertical accelerometers, 2 % noise.
 
-use super::common::{sinello_model, sinello_sensors, true_kappa};
+use super::common::{gaussian, sinello_model, sinello_sensors, true_kappa};
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::{FrfModel, ModalState, SensorPoint};
 use splinewatch_core::modal::ModeKind;
@@ -14,23 +14,6 @@ const FS: f64 = 256.0;
 const OVERSAMPLE: usize = 4;
 /// Unmeasured force points (x, y) in metres, away from the sensors.
 const FORCE_XY: [(f64, f64); 4] = [(2.0, 1.0), (7.5, 6.5), (13.0, 3.5), (10.0, 8.2)];
-
-/// Gaussian samples (64-bit LCG and Box–Muller): deterministic per seed.
-fn gaussian(n: usize, seed: u64) -> Vec<f64> {
-    let mut state = seed.wrapping_mul(0x9E3779B97F4A7C15) | 1;
-    let mut uniform = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 11) as f64 + 0.5) / ((1u64 << 53) as f64)
-    };
-    (0..n)
-        .map(|_| {
-            let (u1, u2) = (uniform(), uniform());
-            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-        })
-        .collect()
-}
 
 /// The model with the force points appended to the sensors, and its state.
 fn ambient_model() -> (FrfModel, ModalState) {
