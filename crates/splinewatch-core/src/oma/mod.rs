@@ -183,6 +183,7 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
         correlations.channels(),
         correlations.references().len(),
         settings.block_rows,
+        settings.max_order,
         fs,
     )?;
     let mut orders = settings.orders(model.max_order());

@@ -52,12 +52,15 @@ pub struct SubspaceModel {
 
 impl SubspaceModel {
     /// `correlations` as [`super::OutputCorrelations::estimate`] lays them
-    /// out (`(max_lag + 1) × l × r`, lag-major), `max_lag ≥ 2p`.
+    /// out (`(max_lag + 1) × l × r`, lag-major), `max_lag ≥ 2p`; poles will
+    /// be asked for up to `max_order` (the Gram matrices are formed on that
+    /// many columns only).
     pub fn new(
         correlations: &[f64],
         channels: usize,
         references: usize,
         block_rows: usize,
+        max_order: usize,
         fs: f64,
     ) -> Result<Self, OmaError> {
         let (l, r, p) = (channels, references, block_rows);
@@ -73,7 +76,7 @@ impl SubspaceModel {
         if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
             return Err(OmaError::SingularHankel { order: 1 });
         }
-        let order_cap = (l * p).min(singular_values.len());
+        let order_cap = (l * p).min(singular_values.len()).min(max_order.max(1));
         let u = svd.U().subcols(0, order_cap);
         let rows = u.nrows();
         let (up, down) = (u.subrows(0, rows - l), u.subrows(l, rows - l));
@@ -92,7 +95,8 @@ impl SubspaceModel {
         &self.singular_values
     }
 
-    /// Largest usable order: `O↑` (`lp` rows) must have full column rank.
+    /// Largest usable order: `O↑` (`lp` rows) must have full column rank,
+    /// and at most the `max_order` given.
     pub fn max_order(&self) -> usize {
         self.gram_up.ncols()
     }
@@ -168,7 +172,7 @@ mod tests {
                 }
             }
         }
-        let model = SubspaceModel::new(&r, l, l, 10, fs).unwrap();
+        let model = SubspaceModel::new(&r, l, l, 10, usize::MAX, fs).unwrap();
         let poles = model.poles(4).unwrap();
         assert_eq!(poles.len(), 2);
         for (pole, ((f, zeta), shape)) in poles.iter().zip(modes.iter().zip(&shapes)) {
@@ -186,11 +190,11 @@ mod tests {
     #[test]
     fn too_few_lags_and_zero_data_are_errors() {
         assert!(matches!(
-            SubspaceModel::new(&[0.0; 9], 1, 1, 5, 10.0),
+            SubspaceModel::new(&[0.0; 9], 1, 1, 5, usize::MAX, 10.0),
             Err(OmaError::TooFewLags { block_rows: 5 })
         ));
         assert!(matches!(
-            SubspaceModel::new(&[0.0; 11], 1, 1, 5, 10.0),
+            SubspaceModel::new(&[0.0; 11], 1, 1, 5, usize::MAX, 10.0),
             Err(OmaError::SingularHankel { order: 1 })
         ));
     }

@@ -65,6 +65,12 @@ pub fn jackknife(
     if batches < 2 {
         return vec![None; modes.len()];
     }
+    // Replicates only need poles up to the highest order any mode uses.
+    let max_order = modes
+        .iter()
+        .flat_map(|m| m.members.iter().chain([&m.medoid]).map(|p| p.order))
+        .max()
+        .unwrap_or(1);
     for b in 0..batches {
         let r = correlations.estimate_without(Some(b));
         let Ok(model) = SubspaceModel::new(
@@ -72,6 +78,7 @@ pub fn jackknife(
             correlations.channels(),
             correlations.references().len(),
             block_rows,
+            max_order,
             fs,
         ) else {
             continue;
