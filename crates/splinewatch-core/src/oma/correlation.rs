@@ -10,6 +10,14 @@
 //! `(Σ S − S^b) / (Σ c − c^b)` feed the jackknife of [`super::uncertainty`].
 //! Sums are computed per batch by FFT (zero padded past `n_b + max_lag`, so
 //! no circular wrap), `O(l n log n + l r n)` per batch.
+//!
+//! **Missing samples.** A NaN marks a missing sample (the pipeline fills a
+//! gap with NaN). An instant is valid when every channel is finite there;
+//! means are taken over valid instants, invalid ones are set to zero, and a
+//! batch's count becomes the number of valid pairs `c_k^b = Σ_t m_{t+k} m_t`
+//! (`m` the validity mask): the estimate of correlations from gappy records
+//! (Parzen 1963, "On spectral analysis with missing observations"), which
+//! reduces to the one above without gaps.
 
 use super::OmaError;
 use faer::c64;
@@ -28,9 +36,11 @@ pub struct OutputCorrelations {
 }
 
 impl OutputCorrelations {
-    /// Correlations of `channels` (equal lengths, mean removed here) against
-    /// the reference channels `references` (indices into `channels`; empty
-    /// means all), for lags `0..=max_lag`, in `batches` batches.
+    /// Correlations of `channels` (equal lengths, mean removed here; NaN
+    /// marks a missing sample) against the reference channels `references`
+    /// (indices into `channels`; empty means all), for lags `0..=max_lag`,
+    /// in `batches` batches. Too few valid pairs (fewer than two batches
+    /// with pairs at every lag, for the jackknife) is [`OmaError::TooShort`].
     pub fn from_samples(
         channels: &[&[f64]],
         references: &[usize],
@@ -49,7 +59,7 @@ impl OutputCorrelations {
                 expected: n,
             });
         }
-        if let Some(bad) = channels.iter().position(|c| c.iter().any(|v| !v.is_finite())) {
+        if let Some(bad) = channels.iter().position(|c| c.iter().any(|v| v.is_infinite())) {
             return Err(OmaError::NonFinite { channel: bad });
         }
         let references: Vec<usize> = if references.is_empty() {
@@ -71,11 +81,17 @@ impl OutputCorrelations {
                 needed: 4 * (max_lag + 1) * batches,
             });
         }
+        let valid: Vec<bool> = (0..n).map(|t| channels.iter().all(|c| !c[t].is_nan())).collect();
+        let valid_count = valid.iter().filter(|&&v| v).count();
         let centred: Vec<Vec<f64>> = channels
             .iter()
             .map(|c| {
-                let mean = c.iter().sum::<f64>() / n as f64;
-                c.iter().map(|v| v - mean).collect()
+                let mean =
+                    c.iter().zip(&valid).filter(|(_, &v)| v).map(|(x, _)| x).sum::<f64>() / valid_count.max(1) as f64;
+                c.iter()
+                    .zip(&valid)
+                    .map(|(x, &v)| if v { x - mean } else { 0.0 })
+                    .collect()
             })
             .collect();
         let mut out = Self {
@@ -92,13 +108,22 @@ impl OutputCorrelations {
             let end = if b + 1 == batches { n } else { start + batch_len };
             let slices: Vec<&[f64]> = centred.iter().map(|c| &c[start..end]).collect();
             out.sums.push(out.batch_sums(&slices, &mut planner));
-            out.counts
-                .push((0..=max_lag).map(|k| (end - start - k) as f64).collect());
+            out.counts.push(pair_counts(&valid[start..end], max_lag));
+        }
+        // Every jackknife replicate (every batch but one) needs pairs at every lag.
+        let needed_batches = 2.min(batches);
+        let short = (0..=max_lag).any(|k| out.counts.iter().filter(|c| c[k] > 0.0).count() < needed_batches);
+        if short {
+            return Err(OmaError::TooShort {
+                samples: valid_count,
+                needed: 4 * (max_lag + 1) * batches,
+            });
         }
         Ok(out)
     }
 
-    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` of one batch, by FFT.
+    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` of one batch, by FFT (missing samples
+    /// are zeros, so they add nothing).
     fn batch_sums(&self, batch: &[&[f64]], planner: &mut RealFftPlanner<f64>) -> Vec<f64> {
         let (l, r, n) = (self.channels, self.references.len(), batch[0].len());
         let m = (n + self.max_lag + 1).next_power_of_two();
@@ -172,6 +197,17 @@ impl OutputCorrelations {
         }
         sum
     }
+}
+
+/// Valid pairs per lag, `Σ_t m_{t+k} m_t`: `n − k` without gaps.
+fn pair_counts(valid: &[bool], max_lag: usize) -> Vec<f64> {
+    let n = valid.len();
+    if valid.iter().all(|&v| v) {
+        return (0..=max_lag).map(|k| n.saturating_sub(k) as f64).collect();
+    }
+    (0..=max_lag)
+        .map(|k| (0..n.saturating_sub(k)).filter(|&t| valid[t] && valid[t + k]).count() as f64)
+        .collect()
 }
 
 #[cfg(test)]
@@ -261,6 +297,55 @@ mod tests {
         }
     }
 
+    /// The definition restricted to valid pairs: instants where every
+    /// channel is finite, means over those instants.
+    fn direct_with_gaps(y: &[Vec<f64>], max_lag: usize, batches: usize, skip: Option<usize>) -> Vec<f64> {
+        let (l, n) = (y.len(), y[0].len());
+        let valid: Vec<bool> = (0..n).map(|t| y.iter().all(|c| c[t].is_finite())).collect();
+        let count = valid.iter().filter(|&&v| v).count() as f64;
+        let means: Vec<f64> = y
+            .iter()
+            .map(|c| (0..n).filter(|&t| valid[t]).map(|t| c[t]).sum::<f64>() / count)
+            .collect();
+        let len = n / batches;
+        let mut out = vec![0.0; (max_lag + 1) * l * l];
+        for k in 0..=max_lag {
+            for a in 0..l {
+                for r in 0..l {
+                    let (mut s, mut c) = (0.0, 0.0);
+                    for b in (0..batches).filter(|&b| Some(b) != skip) {
+                        let end = if b + 1 == batches { n } else { (b + 1) * len };
+                        for t in (b * len..end - k).filter(|&t| valid[t] && valid[t + k]) {
+                            s += (y[a][t + k] - means[a]) * (y[r][t] - means[r]);
+                            c += 1.0;
+                        }
+                    }
+                    out[(k * l + a) * l + r] = s / c;
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn missing_samples_leave_out_exactly_their_pairs() {
+        let mut y = signals();
+        // A gap on one channel, a gap on all, and a lone missing sample.
+        y[1][100..180].fill(f64::NAN);
+        for c in &mut y {
+            c[600..640].fill(f64::NAN);
+        }
+        y[2][900] = f64::NAN;
+        let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+        let c = OutputCorrelations::from_samples(&views, &[], 12, 4).unwrap();
+        for skip in [None, Some(0), Some(2)] {
+            let want = direct_with_gaps(&y, 12, 4, skip);
+            for (g, w) in c.estimate_without(skip).iter().zip(&want) {
+                assert!((g - w).abs() < 1e-12, "{g} vs {w}");
+            }
+        }
+    }
+
     #[test]
     fn bad_input_is_named() {
         let y = signals();
@@ -274,11 +359,18 @@ mod tests {
             OutputCorrelations::from_samples(&uneven, &[], 5, 1),
             Err(OmaError::UnequalLengths { channel: 1, .. })
         ));
+        let infinite: Vec<f64> = y[1].iter().map(|v| v / 0.0).collect();
+        let with_inf: Vec<&[f64]> = vec![&y[0], &infinite];
+        assert!(matches!(
+            OutputCorrelations::from_samples(&with_inf, &[], 5, 1),
+            Err(OmaError::NonFinite { channel: 1 })
+        ));
+        // A channel that is missing throughout leaves no valid pair.
         let nan = vec![f64::NAN; 997];
         let with_nan: Vec<&[f64]> = vec![&y[0], &nan];
         assert!(matches!(
-            OutputCorrelations::from_samples(&with_nan, &[], 5, 1),
-            Err(OmaError::NonFinite { channel: 1 })
+            OutputCorrelations::from_samples(&with_nan, &[], 5, 2),
+            Err(OmaError::TooShort { samples: 0, .. })
         ));
         let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
         assert!(matches!(

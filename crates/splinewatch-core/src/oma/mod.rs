@@ -38,7 +38,7 @@ pub enum OmaError {
         len: usize,
         expected: usize,
     },
-    #[error("channel {channel} holds a NaN or an infinity")]
+    #[error("channel {channel} holds an infinity (a NaN marks a missing sample)")]
     NonFinite { channel: usize },
     #[error("reference channel {index} does not exist ({channels} channels)")]
     BadReference { index: usize, channels: usize },

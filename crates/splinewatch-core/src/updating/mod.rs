@@ -118,7 +118,7 @@ pub(crate) fn check_parameters(
 }
 
 /// The base model (`kappa`, `damping`) with `parameters` set to `p`.
-pub(crate) fn model_at(
+pub fn model_at(
     parameters: &[Parameter],
     kappa: &[Vec<f64>],
     damping: &DampingCurve,

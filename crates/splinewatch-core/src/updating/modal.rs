@@ -24,11 +24,12 @@ pub struct ModalUpdateProblem<'a> {
     max_gap: f64,
 }
 
-/// The result and the pairs at the solution.
+/// The result, the pairs and the model's modal state at the solution.
 #[derive(Debug, Clone)]
 pub struct ModalSolution {
     pub result: UpdateResult,
     pub pairs: Vec<ModePair>,
+    pub state: ModalState,
 }
 
 impl<'a> ModalUpdateProblem<'a> {
@@ -129,11 +130,11 @@ impl<'a> ModalUpdateProblem<'a> {
         let (parameters, singular_values, condition_number, residual_variance) =
             solver::estimates(&self.parameters, &solved.p, &solved.at.jacobian, solved.cost);
         let relative_residual = self.relative_residual(&solved.at);
-        let pairs = solved.at.extra.pairs;
+        let Extra { state, pairs, .. } = solved.at.extra;
         let per_mode = pairs
             .iter()
             .map(|p| {
-                let f = solved.at.extra.state.modes.frequency_hz(p.model);
+                let f = state.modes.frequency_hz(p.model);
                 let x = self.observed[p.observed].frequency_hz;
                 ((f - x) / x).abs()
             })
@@ -152,7 +153,7 @@ impl<'a> ModalUpdateProblem<'a> {
             evaluations: solved.evaluations,
             lines_used: pairs.len(),
         };
-        Ok(ModalSolution { result, pairs })
+        Ok(ModalSolution { result, pairs, state })
     }
 }
 
