@@ -12,6 +12,12 @@ use splinewatch_core::oma::{ClusterCriteria, OmaSettings, StabilityCriteria};
 pub struct OmaConfig {
     /// Reference sensors (names); empty: every acceleration sensor.
     pub references: Vec<String>,
+    /// Length of an identification window (s) for an output-only config;
+    /// default: `frf.window_seconds`. SSI-cov wants long windows: 10–30
+    /// minutes on a deck (≥ 1000 periods of the first mode).
+    pub window_seconds: Option<f64>,
+    /// Hop between window starts (s); default: the window (no overlap).
+    pub window_hop_seconds: Option<f64>,
     pub block_rows: usize,
     pub min_order: usize,
     pub max_order: usize,
@@ -29,6 +35,8 @@ impl Default for OmaConfig {
         let d = OmaSettings::default();
         Self {
             references: Vec::new(),
+            window_seconds: None,
+            window_hop_seconds: None,
             block_rows: d.block_rows,
             min_order: d.min_order,
             max_order: d.max_order,
@@ -61,6 +69,17 @@ impl Config {
             .any(|s| s.quantity.as_slice().iter().any(|q| q == "force"))
     }
 
+    /// The pipeline's analysis window and hop (s): `[oma]`'s for an
+    /// output-only config when given, `[frf]`'s otherwise.
+    pub fn analysis_window(&self) -> (f64, Option<f64>) {
+        if self.is_output_only() {
+            if let Some(w) = self.oma.window_seconds {
+                return (w, self.oma.window_hop_seconds);
+            }
+        }
+        (self.frf.window_seconds, self.frf.window_hop_seconds)
+    }
+
     /// The core settings and the reference channels (positions among
     /// [`Self::output_channels`]).
     pub fn oma_settings(&self) -> Result<(OmaSettings, Vec<usize>), ConfigError> {
@@ -87,6 +106,20 @@ impl Config {
             batches: o.batches,
         };
         settings.check().map_err(|e| err("oma", e))?;
+        if let Some(w) = o.window_seconds {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(err("oma.window_seconds", format!("must be positive, got {w}")));
+            }
+        }
+        if let Some(hop) = o.window_hop_seconds {
+            let window = o.window_seconds.unwrap_or(self.frf.window_seconds);
+            if !(hop.is_finite() && hop > 0.0 && hop <= window) {
+                return Err(err(
+                    "oma.window_hop_seconds",
+                    format!("must be positive and at most the window ({window} s), got {hop}"),
+                ));
+            }
+        }
         Ok((settings, references))
     }
 }

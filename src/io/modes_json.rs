@@ -8,7 +8,18 @@
 
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+use splinewatch_core::c64;
+use splinewatch_core::modal_residual::ObservedMode;
 use std::path::Path;
+
+/// Floors of the identified standard deviations used as weights: a
+/// std the identification could not give (`null`), or one below what the
+/// model can be expected to match (its own modelling error), is raised to
+/// these: 0.05 % of the frequency, 1e-3 absolute damping ratio, 0.02 of a
+/// unit-normalised shape component.
+const FREQUENCY_STD_FLOOR: f64 = 5e-4;
+const DAMPING_STD_FLOOR: f64 = 1e-3;
+const SHAPE_STD_FLOOR: f64 = 0.02;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ModesFile {
@@ -54,6 +65,48 @@ impl ModesFile {
             serde_json::from_str(&text).with_context(|| format!("{}: not a modes file", path.display()))?;
         file.check().with_context(|| path.display().to_string())?;
         Ok(file)
+    }
+
+    /// The identified modes on the model's sensors (`sensor_names`, the
+    /// config's order), with their standard deviations as updating weights
+    /// (raised to the floors above).
+    pub fn to_observed(&self, sensor_names: &[String]) -> Result<Vec<ObservedMode>> {
+        self.modes
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let shape = m
+                    .shape
+                    .iter()
+                    .map(|s| {
+                        let index = sensor_names
+                            .iter()
+                            .position(|n| n == &s.sensor)
+                            .with_context(|| format!("modes[{k}].shape: {:?} is not a config sensor", s.sensor))?;
+                        Ok((index, c64::new(s.re, s.im)))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                let largest = shape.iter().map(|(_, v)| v.norm()).fold(0.0, f64::max);
+                let stds: Vec<f64> = m.shape.iter().filter_map(|s| s.std).collect();
+                let shape_std = if stds.is_empty() || largest == 0.0 {
+                    SHAPE_STD_FLOOR
+                } else {
+                    ((stds.iter().map(|s| s * s).sum::<f64>() / stds.len() as f64).sqrt() / largest)
+                        .max(SHAPE_STD_FLOOR)
+                };
+                Ok(ObservedMode {
+                    frequency_hz: m.frequency_hz,
+                    frequency_std_hz: m
+                        .frequency_std_hz
+                        .unwrap_or(0.0)
+                        .max(FREQUENCY_STD_FLOOR * m.frequency_hz),
+                    damping_ratio: m.damping_ratio,
+                    damping_std: m.damping_std.unwrap_or(0.0).max(DAMPING_STD_FLOOR),
+                    shape,
+                    shape_std,
+                })
+            })
+            .collect()
     }
 
     pub fn check(&self) -> Result<()> {

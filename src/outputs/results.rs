@@ -3,7 +3,7 @@
 
 use crate::io::frf_json::FrfFile;
 use crate::io::wire::format_timestamp;
-use crate::pipeline::{Health, UpdateOutcome, WindowReport};
+use crate::pipeline::{Fit, Health, Measured, UpdateOutcome, WindowModes, WindowReport};
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -12,14 +12,14 @@ use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
 /// The result topics under `<prefix>/`, with their JSON Schemas.
-pub const TOPICS: [(&str, &str); 8] = [
+pub const TOPICS: [(&str, &str); 9] = [
     (
         "updating/parameters",
         r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}}}}"#,
     ),
     (
         "updating/residue",
-        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array","items":{"type":"object","properties":{"input":{"type":"string"},"output":{"type":"string"},"relative_residue":{"type":"array","items":{"type":"number"}}}}}}}"#,
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"frequency_hz":{"type":"array","items":{"type":"number"}},"frfs":{"type":"array","items":{"type":"object","properties":{"input":{"type":"string"},"output":{"type":"string"},"relative_residue":{"type":"array","items":{"type":"number"}}}}},"modes":{"type":"array","items":{"type":"object","properties":{"identified":{"type":"integer"},"model_mode":{"type":"integer"},"identified_frequency_hz":{"type":"number"},"model_frequency_hz":{"type":"number"},"relative_frequency_error":{"type":"number"},"normalised_frequency_residue":{"type":"number"},"identified_damping":{"type":"number"},"model_damping":{"type":"number"},"mac":{"type":"number"}}}}}}"#,
     ),
     (
         "updating/failures",
@@ -38,6 +38,10 @@ pub const TOPICS: [(&str, &str); 8] = [
         r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"modes":{"type":"array","items":{"type":"object","properties":{"index":{"type":"integer"},"frequency_hz":{"type":"number"},"damping_ratio":{"type":"number"},"kind":{"type":"string"}}}}}}"#,
     ),
     (
+        "oma/modes",
+        r#"{"type":"object","required":["time","window","modes"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"start":{"type":"string"},"duration_s":{"type":"number"},"fs_hz":{"type":"number"},"modes":{"type":"array","items":{"type":"object","required":["frequency_hz","damping_ratio","frequency_std_hz","damping_std","shape"],"properties":{"frequency_hz":{"type":"number"},"damping_ratio":{"type":"number"},"frequency_std_hz":{"type":["number","null"]},"damping_std":{"type":["number","null"]},"shape":{"type":"array","items":{"type":"object","properties":{"sensor":{"type":"string"},"re":{"type":"number"},"im":{"type":"number"},"std":{"type":"number"}}}},"mpc":{"type":"number"},"order":{"type":"integer"},"stable_orders":{"type":"integer"},"model_mode":{"type":["integer","null"]},"model_frequency_hz":{"type":["number","null"]},"mac":{"type":["number","null"]}}}}}}"#,
+    ),
+    (
         "health",
         r#"{"type":"object","properties":{"time":{"type":"string"},"blocks":{"type":"integer"},"rejected":{"type":"object"},"gaps":{"type":"integer"},"windows_accepted":{"type":"integer"},"windows_skipped":{"type":"object"},"update_runs":{"type":"integer"},"update_failures":{"type":"integer"},"queue_drops":{"type":"integer"},"recording_errors":{"type":"integer"},"results_errors":{"type":"integer"},"rerun_errors":{"type":"integer"},"log_writes_dropped":{"type":"integer"}}}"#,
     ),
@@ -47,9 +51,10 @@ pub const TOPICS: [(&str, &str); 8] = [
     ),
 ];
 
-/// JSON messages for a closed window.
-pub fn window_message(w: &WindowReport) -> Value {
-    json!({
+/// The messages of a closed window, as `(topic suffix, message)`: `windows`,
+/// and `oma/modes` when the window identified modes output-only.
+pub fn window_messages(w: &WindowReport) -> Vec<(&'static str, Value)> {
+    let mut window = json!({
         "index": w.index,
         "start": format_timestamp(w.start_ns),
         "end": format_timestamp(w.end_ns),
@@ -57,7 +62,32 @@ pub fn window_message(w: &WindowReport) -> Value {
         "segments_rejected": w.segments_rejected,
         "mean_coherence": w.mean_coherence,
         "skipped": w.skipped,
-    })
+    });
+    if let Some(f) = w.valid_fraction {
+        window["valid_fraction"] = json!(f);
+    }
+    let mut out = vec![("windows", window)];
+    if let Some(modes) = &w.modes {
+        out.push(("oma/modes", oma_modes_message(w, modes)));
+    }
+    out
+}
+
+/// `oma/modes`: the modes file of the window (so a message saved as a file
+/// is an `update --modes` input) with, per mode, its paired model mode
+/// (1-based, as the `modes` topic's `index`), that mode's frequency and the MAC.
+fn oma_modes_message(w: &WindowReport, modes: &WindowModes) -> Value {
+    let mut v = serde_json::to_value(modes.report.modes_file()).expect("plain data");
+    v["time"] = json!(format_timestamp(w.end_ns));
+    v["window"] = json!(w.index);
+    if let Some(entries) = v["modes"].as_array_mut() {
+        for (entry, pair) in entries.iter_mut().zip(&modes.pairs) {
+            entry["model_mode"] = json!(pair.as_ref().map(|p| p.model_mode + 1));
+            entry["model_frequency_hz"] = json!(pair.as_ref().map(|p| p.model_frequency_hz));
+            entry["mac"] = json!(pair.as_ref().map(|p| p.mac));
+        }
+    }
+    v
 }
 
 fn frf_message(time: &str, window: u64, frf: &FrfFile) -> Value {
@@ -70,7 +100,10 @@ fn frf_message(time: &str, window: u64, frf: &FrfFile) -> Value {
 /// The messages of an update outcome, as `(topic suffix, message)`.
 pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
     let time = format_timestamp(o.time_ns);
-    let mut out = vec![("frf/measured", frf_message(&time, o.window, &o.measured))];
+    let mut out = Vec::new();
+    if let Measured::Frf(frf) = &o.measured {
+        out.push(("frf/measured", frf_message(&time, o.window, frf)));
+    }
     match &o.result {
         Ok(r) => {
             out.push((
@@ -87,18 +120,40 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
                     "parameters": r.result.parameters,
                 }),
             ));
-            out.push((
-                "updating/residue",
-                json!({
-                    "time": time,
-                    "window": o.window,
-                    "frequency_hz": r.model.frequency_hz,
-                    "frfs": r.model.frfs.iter().zip(&r.residue).map(|(f, res)| json!({
-                        "input": f.input, "output": f.output, "relative_residue": res
-                    })).collect::<Vec<_>>(),
-                }),
-            ));
-            out.push(("frf/model", frf_message(&time, o.window, &r.model)));
+            match &r.fit {
+                Fit::Frf { model, residue } => {
+                    out.push((
+                        "updating/residue",
+                        json!({
+                            "time": time,
+                            "window": o.window,
+                            "frequency_hz": model.frequency_hz,
+                            "frfs": model.frfs.iter().zip(residue).map(|(f, res)| json!({
+                                "input": f.input, "output": f.output, "relative_residue": res
+                            })).collect::<Vec<_>>(),
+                        }),
+                    ));
+                    out.push(("frf/model", frf_message(&time, o.window, model)));
+                }
+                Fit::Modes(pairs) => out.push((
+                    "updating/residue",
+                    json!({
+                        "time": time,
+                        "window": o.window,
+                        "modes": pairs.iter().map(|p| json!({
+                            "identified": p.identified + 1,
+                            "model_mode": p.model_mode + 1,
+                            "identified_frequency_hz": p.identified_frequency_hz,
+                            "model_frequency_hz": p.model_frequency_hz,
+                            "relative_frequency_error": (p.model_frequency_hz - p.identified_frequency_hz) / p.identified_frequency_hz,
+                            "normalised_frequency_residue": (p.model_frequency_hz - p.identified_frequency_hz) / p.frequency_std_hz,
+                            "identified_damping": p.identified_damping,
+                            "model_damping": p.model_damping,
+                            "mac": p.mac,
+                        })).collect::<Vec<_>>(),
+                    }),
+                )),
+            }
             out.push((
                 "modes",
                 json!({

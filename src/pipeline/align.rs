@@ -46,23 +46,20 @@ impl Pipeline {
         }
         let most = rates.iter().map(|r| r.1).max().unwrap_or(0);
         let fs = rates.iter().find(|r| r.1 == most).expect("non-empty").0;
-        match self.config.welch_settings(fs) {
-            Ok((settings, estimator)) => {
-                self.window_samples = (self.config.frf.window_seconds * fs).round() as i64;
-                self.hop_samples = self
-                    .config
-                    .frf
-                    .window_hop_seconds
-                    .map_or(self.window_samples, |hop| ((hop * fs).round() as i64).max(1));
-                self.welch = Some((settings, estimator));
-            }
-            Err(_) => {
-                for _ in &pending {
-                    self.health.reject("bad_fs_for_frf_settings");
+        let (window_seconds, hop_seconds) = self.config.analysis_window();
+        if self.force.is_some() {
+            match self.config.welch_settings(fs) {
+                Ok(welch) => self.welch = Some(welch),
+                Err(_) => {
+                    for _ in &pending {
+                        self.health.reject("bad_fs_for_frf_settings");
+                    }
+                    return;
                 }
-                return;
             }
         }
+        self.window_samples = ((window_seconds * fs).round() as i64).max(1);
+        self.hop_samples = hop_seconds.map_or(self.window_samples, |hop| ((hop * fs).round() as i64).max(1));
         let mut starts: Vec<i128> = pending
             .iter()
             .filter(|b| same_rate(b.fs, fs))

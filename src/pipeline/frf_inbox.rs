@@ -10,7 +10,13 @@ impl Pipeline {
     /// arrived on the same frequency axis, the set becomes an update job
     /// (numbered after the windows, from 1 000 000) and the inbox empties. A
     /// message on another axis starts a new set. Returns the job, if any.
+    /// An output-only config has no force sensor to pair: its FRF messages
+    /// are rejected as `frf_without_force_sensor`.
     pub fn ingest_frf(&mut self, payload: &[u8], time_ns: i128) -> Option<UpdateJob> {
+        let Some(force) = self.force else {
+            self.health.reject("frf_without_force_sensor");
+            return None;
+        };
         let file = match std::str::from_utf8(payload).ok().and_then(|t| FrfFile::parse(t).ok()) {
             Some(f) => f,
             None => {
@@ -38,7 +44,7 @@ impl Pipeline {
         for e in file.frfs {
             self.frf_inbox.insert((e.input.clone(), e.output.clone()), e);
         }
-        let force = self.setup.sensor_names[self.force].clone();
+        let force = self.setup.sensor_names[force].clone();
         let wanted: Vec<(String, String)> = self
             .accels
             .iter()
@@ -59,6 +65,6 @@ impl Pipeline {
             frequency_hz,
             frfs,
         };
-        Some(self.job(1_000_000 + self.frf_sets - 1, time_ns, measured))
+        Some(self.job(1_000_000 + self.frf_sets - 1, time_ns, super::Measured::Frf(measured)))
     }
 }

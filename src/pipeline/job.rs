@@ -1,20 +1,38 @@
 //! Update jobs: everything one updating run needs, so it can run on another
-//! thread, and what it produced.
+//! thread, and what it produced. Two residual models share the job: FRF
+//! residues against measured FRFs, modal residues against the modes a
+//! window identified output-only.
 
 use crate::config::FrfSetup;
 use crate::io::frf_json::{FrfEntry, FrfFile};
+use crate::io::modes_json::ModesFile;
 use anyhow::{bail, Result};
 use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::ModalState;
 use splinewatch_core::modal::ModeKind;
-use splinewatch_core::updating::{ModelPoint, Parameter, UpdateProblem, UpdateResult, UpdateSettings};
+use splinewatch_core::updating::{
+    ModalUpdateProblem, ModelPoint, Parameter, UpdateProblem, UpdateResult, UpdateSettings,
+};
 use std::sync::Arc;
+
+/// What an update is fitted to.
+#[derive(Debug, Clone)]
+pub enum Measured {
+    /// FRFs estimated in a window, or received pre-computed.
+    Frf(FrfFile),
+    /// Modes identified output-only in a window (with their std).
+    Modes(ModesFile),
+}
 
 /// An updating run to do: owns everything it needs, so it can run on
 /// another thread.
 pub struct UpdateJob {
     pub window: u64,
     pub time_ns: i128,
-    pub measured: FrfFile,
+    pub measured: Measured,
+    /// Pairing of identified and model modes: smallest MAC, largest
+    /// relative frequency gap (modal residues only).
+    pub(super) pairing: (f64, f64),
     pub(super) setup: Arc<FrfSetup>,
     pub(super) parameters: Vec<Parameter>,
     pub(super) settings: UpdateSettings,
@@ -29,11 +47,43 @@ pub struct UpdateJob {
 pub struct UpdateOutcome {
     pub window: u64,
     pub time_ns: i128,
-    pub measured: FrfFile,
+    pub measured: Measured,
     pub result: Result<UpdateReport, String>,
     /// The model at the identified parameters, taken by [`Pipeline::apply`]
     /// for the next warm start (kept outcomes do not hold it: ~2 MB).
     pub(super) point: Option<Arc<ModelPoint>>,
+    /// The modal state there (modal residues), taken by
+    /// [`Pipeline::apply`] to pair the next windows' modes.
+    pub(super) state: Option<Arc<ModalState>>,
+}
+
+/// How the model fits what was measured.
+#[derive(Debug, Clone)]
+pub enum Fit {
+    Frf {
+        /// Model FRFs at the identified parameters, on the measured lines.
+        model: FrfFile,
+        /// `|h_x - h_a| / |h_x|` per FRF and line.
+        residue: Vec<Vec<f64>>,
+    },
+    /// One entry per paired mode.
+    Modes(Vec<PairedMode>),
+}
+
+/// An identified mode and its model mode at the identified parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PairedMode {
+    /// Index into the identified modes (the window's `oma/modes`).
+    pub identified: usize,
+    /// Index into the model's modes.
+    pub model_mode: usize,
+    pub identified_frequency_hz: f64,
+    pub model_frequency_hz: f64,
+    pub frequency_std_hz: f64,
+    pub identified_damping: f64,
+    /// ζ(f) of the damping curve at the model mode.
+    pub model_damping: f64,
+    pub mac: f64,
 }
 
 /// How many bending mode shapes an update report carries (for the views).
@@ -50,14 +100,11 @@ pub struct ModeShape {
 #[derive(Debug, Clone)]
 pub struct UpdateReport {
     pub result: UpdateResult,
-    /// Model FRFs at the identified parameters, on the measured lines.
-    pub model: FrfFile,
+    pub fit: Fit,
     /// `(frequency Hz, damping ratio, kind)` of the updated model below the band's top.
     pub modes: Vec<(f64, f64, ModeKind)>,
     /// The first [`BENDING_MODES_KEPT`] bending modes, with their shapes.
     pub bending_modes: Vec<ModeShape>,
-    /// `|h_x - h_a| / |h_x|` per FRF and line.
-    pub residue: Vec<Vec<f64>>,
     /// The identified spring coefficients (per field) and damping curve.
     pub kappa: Vec<Vec<f64>>,
     pub damping: DampingCurve,
@@ -65,9 +112,13 @@ pub struct UpdateReport {
 
 impl UpdateJob {
     pub fn run(self) -> UpdateOutcome {
-        let (result, point) = match self.compute() {
-            Ok((report, point)) => (Ok(report), Some(Arc::new(point))),
-            Err(e) => (Err(format!("{e:#}")), None),
+        let computed = match &self.measured {
+            Measured::Frf(frf) => self.compute_frf(frf).map(|(r, p)| (r, Some(Arc::new(p)), None)),
+            Measured::Modes(modes) => self.compute_modal(modes).map(|(r, s)| (r, None, Some(Arc::new(s)))),
+        };
+        let (result, point, state) = match computed {
+            Ok((report, point, state)) => (Ok(report), point, state),
+            Err(e) => (Err(format!("{e:#}")), None, None),
         };
         UpdateOutcome {
             window: self.window,
@@ -75,11 +126,59 @@ impl UpdateJob {
             measured: self.measured,
             result,
             point,
+            state,
         }
     }
 
-    fn compute(&self) -> Result<(UpdateReport, ModelPoint)> {
-        let measured = self.measured.to_measured(&self.setup.sensor_names)?;
+    /// Modal-residue updating against the modes a window identified.
+    fn compute_modal(&self, modes: &ModesFile) -> Result<(UpdateReport, ModalState)> {
+        let observed = modes.to_observed(&self.setup.sensor_names)?;
+        let problem = ModalUpdateProblem::new(
+            &self.setup.model,
+            self.setup.kappa.clone(),
+            self.setup.damping.clone(),
+            self.parameters.clone(),
+            &observed,
+            self.settings.clone(),
+            self.pairing,
+        )?;
+        let solution = problem.solve(&self.start, &mut |_| {})?;
+        let result = accepted(solution.result)?;
+        let (kappa, damping) = problem.model_at(&result.parameters.iter().map(|p| p.value).collect::<Vec<_>>())?;
+        let state = solution.state;
+        let pairs = solution
+            .pairs
+            .iter()
+            .map(|p| {
+                let (x, f) = (&observed[p.observed], state.modes.frequency_hz(p.model));
+                PairedMode {
+                    identified: p.observed,
+                    model_mode: p.model,
+                    identified_frequency_hz: x.frequency_hz,
+                    model_frequency_hz: f,
+                    frequency_std_hz: x.frequency_std_hz,
+                    identified_damping: x.damping_ratio,
+                    model_damping: state.zeta[p.model],
+                    mac: p.mac,
+                }
+            })
+            .collect();
+        // The model's modes up to the highest identified one, and a little above.
+        let top = observed.iter().map(|m| m.frequency_hz).fold(0.0, f64::max) * (1.0 + self.pairing.1);
+        let (modes, bending_modes) = model_modes(&state, top);
+        let report = UpdateReport {
+            result,
+            fit: Fit::Modes(pairs),
+            modes,
+            bending_modes,
+            kappa,
+            damping,
+        };
+        Ok((report, state))
+    }
+
+    fn compute_frf(&self, frf: &FrfFile) -> Result<(UpdateReport, ModelPoint)> {
+        let measured = frf.to_measured(&self.setup.sensor_names)?;
         let problem = UpdateProblem::new(
             &self.setup.model,
             self.setup.kappa.clone(),
@@ -89,13 +188,7 @@ impl UpdateJob {
             self.settings.clone(),
         )?;
         let solution = problem.solve_from(&self.start, self.previous.as_deref(), &mut |_| {})?;
-        let (result, point) = (solution.result, solution.point);
-        if result.parameters.iter().any(|p| !p.value.is_finite()) {
-            bail!("non-finite parameters");
-        }
-        if !result.converged {
-            bail!("the updating did not converge ({:?})", result.stop_reason);
-        }
+        let (result, point) = (accepted(solution.result)?, solution.point);
         let (state, h) = (point.state(), point.frfs());
         let lines = problem.line_frequencies().to_vec();
         let sel = problem.line_indices();
@@ -124,34 +217,54 @@ impl UpdateJob {
         }
         let (kappa, damping) = (point.kappa().to_vec(), point.damping().clone());
         let top = lines.last().copied().unwrap_or(0.0);
-        let modes = (0..state.modes.len())
-            .filter(|&i| state.modes.frequency_hz(i) <= top)
-            .map(|i| (state.modes.frequency_hz(i), state.zeta[i], state.modes.kinds[i]))
-            .collect();
-        let bending_modes = (0..state.modes.len())
-            .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
-            .take(BENDING_MODES_KEPT)
-            .map(|i| ModeShape {
-                frequency_hz: state.modes.frequency_hz(i),
-                damping_ratio: state.zeta[i],
-                shape: (0..state.modes.shapes.nrows())
-                    .map(|d| state.modes.shapes[(d, i)])
-                    .collect(),
-            })
-            .collect();
+        let (modes, bending_modes) = model_modes(state, top);
         let report = UpdateReport {
             result,
-            model: FrfFile {
-                quantity: self.measured.quantity,
-                frequency_hz: lines,
-                frfs: model_entries,
+            fit: Fit::Frf {
+                model: FrfFile {
+                    quantity: frf.quantity,
+                    frequency_hz: lines,
+                    frfs: model_entries,
+                },
+                residue,
             },
             modes,
             bending_modes,
-            residue,
             kappa,
             damping,
         };
         Ok((report, point))
     }
+}
+
+/// A result the pipeline accepts: finite and converged.
+fn accepted(result: UpdateResult) -> Result<UpdateResult> {
+    if result.parameters.iter().any(|p| !p.value.is_finite()) {
+        bail!("non-finite parameters");
+    }
+    if !result.converged {
+        bail!("the updating did not converge ({:?})", result.stop_reason);
+    }
+    Ok(result)
+}
+
+/// The model's modes up to `top` Hz, and its first
+/// [`BENDING_MODES_KEPT`] bending modes with their shapes.
+fn model_modes(state: &ModalState, top: f64) -> (Vec<(f64, f64, ModeKind)>, Vec<ModeShape>) {
+    let modes = (0..state.modes.len())
+        .filter(|&i| state.modes.frequency_hz(i) <= top)
+        .map(|i| (state.modes.frequency_hz(i), state.zeta[i], state.modes.kinds[i]))
+        .collect();
+    let bending_modes = (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
+        .take(BENDING_MODES_KEPT)
+        .map(|i| ModeShape {
+            frequency_hz: state.modes.frequency_hz(i),
+            damping_ratio: state.zeta[i],
+            shape: (0..state.modes.shapes.nrows())
+                .map(|d| state.modes.shapes[(d, i)])
+                .collect(),
+        })
+        .collect();
+    (modes, bending_modes)
 }

@@ -10,6 +10,12 @@
 //! - **Windows.** Aligned samples stream into a Welch estimator; at each
 //!   window end the FRFs are estimated and the window is accepted, or
 //!   skipped with a reason (too few clean segments, low coherence).
+//!   Output-only (no force sensor): the window keeps its samples, and at
+//!   its end SSI-cov identifies its modes (`oma.rs`), which are paired with
+//!   the model's at the last accepted parameters; a window is skipped for
+//!   too little valid data, too few stable poles, a singular Hankel matrix
+//!   or no pairable mode. Identification runs where the window closes
+//!   (about 1 s for 10 minutes of 12 channels, well under the window).
 //! - **Updating.** Every `update_every_windows` accepted windows an update
 //!   job is produced (warm-started from the last accepted parameters, the
 //!   config's values at first). The caller runs it (inline for replay, on a
@@ -24,17 +30,19 @@ pub mod oma;
 mod reports;
 mod windows;
 
-pub use job::{ModeShape, UpdateJob, UpdateOutcome, UpdateReport, BENDING_MODES_KEPT};
+pub use job::{Fit, Measured, ModeShape, PairedMode, UpdateJob, UpdateOutcome, UpdateReport, BENDING_MODES_KEPT};
+pub use oma::{ModelPair, WindowModes};
 pub use reports::{AcceptedParameters, Health, StateParameter, WindowReport};
 
 use crate::config::{Config, FrfSetup, ScheduleConfig};
-use crate::io::frf_json::{FrfEntry, FrfFile};
+use crate::io::frf_json::FrfEntry;
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Limits, WireError};
 use align::ChannelQueue;
 use anyhow::{bail, Result};
-use splinewatch_core::frf::Quantity;
+use oma::WindowIdentification;
+use splinewatch_core::frf::{ModalState, Quantity};
 use splinewatch_core::updating::{ModelPoint, Parameter, UpdateSettings};
-use splinewatch_core::welch::{Estimator, WelchEstimator, WelchSettings};
+use splinewatch_core::welch::{Estimator, WelchSettings};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 
@@ -54,9 +62,15 @@ pub struct Pipeline {
     setup: Arc<FrfSetup>,
     parameters: Vec<Parameter>,
     settings: UpdateSettings,
-    force: usize,
+    /// The force sensor; `None` for an output-only config.
+    force: Option<usize>,
     accels: Vec<usize>,
-    /// Channel identities in queue order: force first.
+    /// Output-only: how windows are identified.
+    identification: Option<WindowIdentification>,
+    /// Output-only: the model's modes at the last accepted parameters, to
+    /// pair identified modes with (computed when first needed).
+    model_state: Option<Arc<ModalState>>,
+    /// Channel identities in queue order: force first (if any).
     channels: Vec<(String, ChannelQuantity)>,
     queues: Vec<ChannelQueue>,
     fs: Option<f64>,
@@ -64,11 +78,11 @@ pub struct Pipeline {
     /// Blocks held until the sampling rate and time origin are agreed on
     /// (`establish_reference`).
     pending: Vec<ChannelBlock>,
-    /// Welch settings and FRF estimator, once the rate is known.
+    /// Welch settings and FRF estimator, once the rate is known (FRF path).
     welch: Option<(WelchSettings, Estimator)>,
     /// Windows being estimated (several when they overlap), oldest first:
     /// window `k` spans grid samples `[k·hop, k·hop + window_samples)`.
-    open: VecDeque<(u64, WelchEstimator)>,
+    open: VecDeque<(u64, windows::WindowData)>,
     window_samples: i64,
     hop_samples: i64,
     /// Grid index fed to the estimators so far.
@@ -91,17 +105,16 @@ pub struct Pipeline {
 
 impl Pipeline {
     pub fn new(config: &Config, schedule: ScheduleConfig, state: Option<AcceptedParameters>) -> Result<Self> {
-        if config.is_output_only() {
-            bail!(
-                "config: sensors: no sensor measures force, so this is an output-only config; the daemon and \
-                 replay do not run output-only monitoring yet: identify modes with `splinewatch oma` and update \
-                 with `splinewatch update --modes`"
-            );
-        }
         let setup = Arc::new(crate::config::frf_setup(config)?);
         let parameters = config.build_parameters()?;
         let settings = config.update_settings()?;
-        let (force, accels) = config.channel_roles()?;
+        let (force, accels, identification) = if config.is_output_only() {
+            let identification = WindowIdentification::new(config)?;
+            (None, config.output_channels()?, Some(identification))
+        } else {
+            let (force, accels) = config.channel_roles()?;
+            (Some(force), accels, None)
+        };
         if schedule.update_every_windows == 0 {
             bail!("config: schedule.update_every_windows: must be at least 1");
         }
@@ -121,7 +134,10 @@ impl Pipeline {
             }
         }
         let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
-        let mut channels = vec![(names[force].clone(), ChannelQuantity::Force)];
+        let mut channels: Vec<_> = force
+            .iter()
+            .map(|&f| (names[f].clone(), ChannelQuantity::Force))
+            .collect();
         channels.extend(
             accels
                 .iter()
@@ -143,6 +159,8 @@ impl Pipeline {
             settings,
             force,
             accels,
+            identification,
+            model_state: None,
             channels,
             queues,
             fs: None,
@@ -229,11 +247,12 @@ impl Pipeline {
             .position(|(n, q)| *n == block.name && *q == block.quantity)
     }
 
-    fn job(&self, window: u64, time_ns: i128, measured: FrfFile) -> UpdateJob {
+    fn job(&self, window: u64, time_ns: i128, measured: Measured) -> UpdateJob {
         UpdateJob {
             window,
             time_ns,
             measured,
+            pairing: (self.config.updating.min_mac, self.config.updating.max_frequency_gap),
             setup: Arc::clone(&self.setup),
             parameters: self.parameters.clone(),
             settings: self.settings.clone(),
@@ -273,6 +292,10 @@ impl Pipeline {
         match &outcome.result {
             Ok(report) => {
                 self.last_point = outcome.point.take();
+                self.model_state = outcome
+                    .state
+                    .take()
+                    .or_else(|| self.last_point.as_ref().map(|p| Arc::new(p.state().clone())));
                 self.last = Some(AcceptedParameters {
                     window: outcome.window,
                     time: crate::io::wire::format_timestamp(outcome.time_ns),

@@ -1,5 +1,7 @@
-//! Output-only identification of a span of recorded blocks: the acceleration
-//! channels aligned on one grid, then the core's SSI-cov (`[oma]` settings).
+//! Output-only identification: of a span of recorded blocks (the `oma`
+//! command: the acceleration channels aligned on one grid), and of one
+//! pipeline window (with its modes paired to the model's); both run the
+//! core's SSI-cov with the `[oma]` settings.
 
 use super::estimate::aligned_span;
 use crate::config::Config;
@@ -7,7 +9,9 @@ use crate::io::modes_json::{ModeEntry, ModesFile, ShapeEntry};
 use crate::io::recording::RecordedBlock;
 use crate::io::wire::{format_timestamp, ChannelQuantity};
 use anyhow::{Context, Result};
-use splinewatch_core::oma::{identify, OmaResult, OutputCorrelations};
+use splinewatch_core::frf::ModalState;
+use splinewatch_core::modal_residual::pair_modes;
+use splinewatch_core::oma::{identify, OmaError, OmaResult, OmaSettings, OutputCorrelations};
 
 /// What one identification used and found.
 #[derive(Debug, Clone)]
@@ -78,5 +82,110 @@ impl OmaReport {
             duration_s: Some(self.samples as f64 / self.fs),
             fs_hz: Some(self.fs),
         }
+    }
+}
+
+/// What the pipeline needs to identify a window output-only.
+#[derive(Debug, Clone)]
+pub(super) struct WindowIdentification {
+    pub(super) settings: OmaSettings,
+    /// Reference channels (positions among the outputs).
+    pub(super) references: Vec<usize>,
+    /// The acceleration sensors, in channel order.
+    pub(super) sensors: Vec<String>,
+    /// Pairing: smallest MAC, largest relative frequency gap (`[updating]`).
+    pub(super) min_mac: f64,
+    pub(super) max_gap: f64,
+}
+
+/// The output-only identification of one window and the pairing of its
+/// modes with the model's at the last accepted parameters.
+#[derive(Debug, Clone)]
+pub struct WindowModes {
+    pub report: OmaReport,
+    /// Per identified mode, its model mode, if one pairs.
+    pub pairs: Vec<Option<ModelPair>>,
+}
+
+/// The model mode an identified mode pairs with (MAC ≥ `updating.min_mac`
+/// within `updating.max_frequency_gap`, one model mode per identified one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelPair {
+    /// Index into the model's modes (rigid, membrane and bending, ascending).
+    pub model_mode: usize,
+    pub model_frequency_hz: f64,
+    pub mac: f64,
+    /// The model mode at the identified mode's sensors (same order).
+    pub model_shape: Vec<f64>,
+}
+
+impl WindowIdentification {
+    pub(super) fn new(config: &Config) -> Result<Self> {
+        let outputs = config.output_channels()?;
+        let (settings, references) = config.oma_settings()?;
+        Ok(Self {
+            settings,
+            references,
+            sensors: outputs.iter().map(|&i| config.sensors[i].name.clone()).collect(),
+            min_mac: config.updating.min_mac,
+            max_gap: config.updating.max_frequency_gap,
+        })
+    }
+
+    /// Identifies the modes of one window (`channels` in sensor order, NaN
+    /// for missing samples) and pairs them with `state`'s; the error is the
+    /// health reason the window is skipped for.
+    pub(super) fn run(
+        &self,
+        channels: &[Vec<f64>],
+        start_ns: i128,
+        fs: f64,
+        state: &ModalState,
+        sensor_names: &[String],
+    ) -> Result<WindowModes, &'static str> {
+        let views: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+        let result =
+            OutputCorrelations::from_samples(&views, &self.references, self.settings.max_lag(), self.settings.batches)
+                .and_then(|c| identify(&c, fs, &self.settings))
+                .map_err(|e| skip_reason(&e))?;
+        let report = OmaReport {
+            start_ns,
+            samples: channels.first().map_or(0, Vec::len),
+            fs,
+            sensors: self.sensors.clone(),
+            result,
+        };
+        let observed = report
+            .modes_file()
+            .to_observed(sensor_names)
+            .map_err(|_| "oma_failed")?;
+        let mut pairs = vec![None; observed.len()];
+        for p in pair_modes(state, &observed, self.min_mac, self.max_gap) {
+            pairs[p.observed] = Some(ModelPair {
+                model_mode: p.model,
+                model_frequency_hz: state.modes.frequency_hz(p.model),
+                mac: p.mac,
+                model_shape: observed[p.observed]
+                    .shape
+                    .iter()
+                    .map(|&(sensor, _)| state.amplitude(sensor, p.model))
+                    .collect(),
+            });
+        }
+        if pairs.iter().all(Option::is_none) {
+            return Err("no_pairable_mode");
+        }
+        Ok(WindowModes { report, pairs })
+    }
+}
+
+/// The health reason (`windows_skipped`) of a failed identification.
+fn skip_reason(e: &OmaError) -> &'static str {
+    match e {
+        OmaError::TooShort { .. } | OmaError::TooFewLags { .. } => "too_little_data",
+        OmaError::NoModes { .. } => "too_few_stable_poles",
+        OmaError::SingularHankel { .. } => "singular_hankel",
+        OmaError::SvdFailed | OmaError::EigenFailed { .. } => "oma_not_converged",
+        _ => "oma_failed",
     }
 }

@@ -1,9 +1,11 @@
 //! What the pipeline reports: health counters, closed windows and the
 //! accepted parameters that the state file keeps.
 
+use super::WindowModes;
 use crate::io::frf_json::FrfFile;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 /// Counters published on `<prefix>/health`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -71,4 +73,8 @@ pub struct WindowReport {
     /// `None` when accepted.
     pub skipped: Option<String>,
     pub frf: Option<FrfFile>,
+    /// Output-only: the share of instants with every channel valid.
+    pub valid_fraction: Option<f64>,
+    /// Output-only: the identified modes, paired with the model's.
+    pub modes: Option<Arc<WindowModes>>,
 }

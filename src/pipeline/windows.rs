@@ -1,20 +1,42 @@
-//! Windows: aligned samples stream into the open Welch estimators; a window
-//! that ends is accepted or skipped with a reason, and may trigger an update.
+//! Windows: aligned samples stream into the open windows (Welch estimators,
+//! or, output-only, the samples themselves); a window that ends is accepted
+//! or skipped with a reason, and may trigger an update.
 
 use super::align::ChannelQueue;
-use super::{Pipeline, UpdateJob, WindowReport};
+use super::{Measured, Pipeline, UpdateJob, WindowReport};
+use splinewatch_core::frf::ModalState;
 use splinewatch_core::welch::{WelchEstimator, WelchSettings};
+use std::sync::Arc;
+
+/// What an open window accumulates.
+pub(super) enum WindowData {
+    /// FRF path: the window's Welch estimator (force first).
+    Welch(Box<WelchEstimator>),
+    /// Output-only: the window's samples per output channel (NaN where missing).
+    Samples(Vec<Vec<f64>>),
+}
 
 impl Pipeline {
+    fn open_window(&self) -> WindowData {
+        match &self.welch {
+            Some((settings, _)) => WindowData::Welch(Box::new(
+                WelchEstimator::new(settings.clone(), self.accels.len()).expect("validated"),
+            )),
+            None => WindowData::Samples(vec![
+                Vec::with_capacity(self.window_samples as usize);
+                self.accels.len()
+            ]),
+        }
+    }
+
     /// Feeds every sample available on all channels to the open windows,
     /// opening and closing windows on the way.
     pub(super) fn feed(&mut self, windows: &mut Vec<WindowReport>, jobs: &mut Vec<UpdateJob>) {
         loop {
             let next_start = self.window_index as i64 * self.hop_samples;
             if next_start == self.fed {
-                let (settings, _) = self.welch.as_ref().expect("set with the reference");
-                let estimator = WelchEstimator::new(settings.clone(), self.accels.len()).expect("validated");
-                self.open.push_back((self.window_index, estimator));
+                let data = self.open_window();
+                self.open.push_back((self.window_index, data));
                 self.window_index += 1;
                 continue;
             }
@@ -30,41 +52,17 @@ impl Pipeline {
                 .map_or(i64::MAX, |(k, _)| *k as i64 * self.hop_samples + self.window_samples);
             let until = frontier.min(next_start).min(oldest_end);
             if until > self.fed {
-                let n = (until - self.fed) as usize;
-                let mut take = |q: &mut ChannelQueue| -> Vec<f64> {
-                    let skip = (self.fed - q.first).max(0) as usize;
-                    q.data.drain(..skip.min(q.data.len()));
-                    q.first += skip as i64;
-                    let v: Vec<f64> = q.data.drain(..n.min(q.data.len())).collect();
-                    q.first += v.len() as i64;
-                    v
-                };
-                let cols: Vec<Vec<f64>> = self.queues.iter_mut().map(&mut take).collect();
-                let outputs: Vec<&[f64]> = cols[1..].iter().map(|v| v.as_slice()).collect();
-                for (_, welch) in &mut self.open {
-                    welch.push(&cols[0], &outputs).expect("equal lengths by construction");
-                }
+                self.push_samples((until - self.fed) as usize);
                 self.fed = until;
             }
             if self.fed == oldest_end {
-                let (index, welch) = self.open.pop_front().expect("an open window ends here");
-                let report = self.close_window(index, welch);
+                let (index, data) = self.open.pop_front().expect("an open window ends here");
+                let report = match data {
+                    WindowData::Welch(welch) => self.close_window(index, *welch),
+                    WindowData::Samples(samples) => self.close_output_only(index, samples),
+                };
                 if report.skipped.is_none() {
-                    self.accepted_since_update += 1;
-                    let since = *self
-                        .last_update_ns
-                        .get_or_insert(self.t0.expect("set with the reference"));
-                    let due = match self.schedule.update_every_minutes {
-                        Some(minutes) => (report.end_ns - since) as f64 >= minutes * 60e9,
-                        None => self.accepted_since_update >= self.schedule.update_every_windows,
-                    };
-                    if due {
-                        self.accepted_since_update = 0;
-                        self.last_update_ns = Some(report.end_ns);
-                        if let Some(frf) = &report.frf {
-                            jobs.push(self.job(report.index, report.end_ns, frf.clone()));
-                        }
-                    }
+                    self.schedule_update(&report, jobs);
                 }
                 windows.push(report);
                 continue;
@@ -73,12 +71,67 @@ impl Pipeline {
         }
     }
 
-    fn close_window(&mut self, index: u64, welch: WelchEstimator) -> WindowReport {
+    /// Moves the next `n` aligned samples of every channel into the open windows.
+    fn push_samples(&mut self, n: usize) {
+        let fed = self.fed;
+        let take = |q: &mut ChannelQueue| -> Vec<f64> {
+            let skip = (fed - q.first).max(0) as usize;
+            q.data.drain(..skip.min(q.data.len()));
+            q.first += skip as i64;
+            let v: Vec<f64> = q.data.drain(..n.min(q.data.len())).collect();
+            q.first += v.len() as i64;
+            v
+        };
+        let cols: Vec<Vec<f64>> = self.queues.iter_mut().map(take).collect();
+        let first_output = usize::from(self.force.is_some());
+        let outputs: Vec<&[f64]> = cols[first_output..].iter().map(|v| v.as_slice()).collect();
+        for (_, data) in &mut self.open {
+            match data {
+                WindowData::Welch(welch) => welch.push(&cols[0], &outputs).expect("equal lengths by construction"),
+                WindowData::Samples(samples) => {
+                    for (s, c) in samples.iter_mut().zip(&outputs) {
+                        s.extend_from_slice(c);
+                    }
+                }
+            }
+        }
+    }
+
+    /// An accepted window counts towards the schedule; a due update becomes a job.
+    fn schedule_update(&mut self, report: &WindowReport, jobs: &mut Vec<UpdateJob>) {
+        self.accepted_since_update += 1;
+        let since = *self
+            .last_update_ns
+            .get_or_insert(self.t0.expect("set with the reference"));
+        let due = match self.schedule.update_every_minutes {
+            Some(minutes) => (report.end_ns - since) as f64 >= minutes * 60e9,
+            None => self.accepted_since_update >= self.schedule.update_every_windows,
+        };
+        if !due {
+            return;
+        }
+        self.accepted_since_update = 0;
+        self.last_update_ns = Some(report.end_ns);
+        let measured = match (&report.frf, &report.modes) {
+            (Some(frf), _) => Measured::Frf(frf.clone()),
+            (None, Some(modes)) => Measured::Modes(modes.report.modes_file()),
+            (None, None) => return,
+        };
+        jobs.push(self.job(report.index, report.end_ns, measured));
+    }
+
+    /// `(start, end)` of window `index` in measurement time (ns).
+    fn window_span(&self, index: u64) -> (i128, i128) {
         let fs = self.fs.expect("set with the reference");
         let t0 = self.t0.expect("set with the reference");
         let start = index as i64 * self.hop_samples;
         let start_ns = t0 + (start as f64 * 1e9 / fs).round() as i128;
         let end_ns = t0 + ((start + self.window_samples) as f64 * 1e9 / fs).round() as i128;
+        (start_ns, end_ns)
+    }
+
+    fn close_window(&mut self, index: u64, welch: WelchEstimator) -> WindowReport {
+        let (start_ns, end_ns) = self.window_span(index);
         let (_, estimator) = self.welch.as_ref().expect("set with the reference");
         let counts = welch.counts();
         self.health.segments_accepted += counts.accepted;
@@ -94,6 +147,8 @@ impl Pipeline {
             mean_coherence: Vec::new(),
             skipped: None,
             frf: None,
+            valid_fraction: None,
+            modes: None,
         };
         if (counts.accepted as f64) < self.schedule.min_segment_fraction * possible || counts.accepted == 0 {
             report.skipped = Some("too_little_data".into());
@@ -115,16 +170,78 @@ impl Pipeline {
             {
                 report.skipped = Some("low_coherence".into());
             } else {
-                report.frf = super::estimate::frf_file(&self.config, &est, self.force, &self.accels);
+                let force = self.force.expect("the FRF path has a force sensor");
+                report.frf = super::estimate::frf_file(&self.config, &est, force, &self.accels);
                 if report.frf.is_none() {
                     report.skipped = Some("no_lines_in_band".into());
                 }
             }
         }
+        self.count_window(&report);
+        report
+    }
+
+    /// Output-only: enough valid instants, then SSI-cov and the pairing with
+    /// the model's modes (see `oma.rs`).
+    fn close_output_only(&mut self, index: u64, samples: Vec<Vec<f64>>) -> WindowReport {
+        let (start_ns, end_ns) = self.window_span(index);
+        let n = samples.first().map_or(0, Vec::len);
+        let valid = (0..n).filter(|&t| samples.iter().all(|c| !c[t].is_nan())).count();
+        let fraction = valid as f64 / n.max(1) as f64;
+        let mut report = WindowReport {
+            index,
+            start_ns,
+            end_ns,
+            segments_accepted: 0,
+            segments_rejected: 0,
+            mean_coherence: Vec::new(),
+            skipped: None,
+            frf: None,
+            valid_fraction: Some(fraction),
+            modes: None,
+        };
+        if fraction < self.schedule.min_segment_fraction || valid == 0 {
+            report.skipped = Some("too_little_data".into());
+        } else {
+            match self.model_state() {
+                Ok(state) => {
+                    let fs = self.fs.expect("set with the reference");
+                    let identification = self.identification.as_ref().expect("output-only");
+                    match identification.run(&samples, start_ns, fs, &state, &self.setup.sensor_names) {
+                        Ok(modes) => report.modes = Some(Arc::new(modes)),
+                        Err(reason) => report.skipped = Some(reason.into()),
+                    }
+                }
+                Err(e) => {
+                    tracing::warn!(message = "the model's modes at the last parameters failed", error = %e);
+                    report.skipped = Some("model_failed".into());
+                }
+            }
+        }
+        self.count_window(&report);
+        report
+    }
+
+    /// The model's modal state at the last accepted parameters (cached).
+    fn model_state(&mut self) -> anyhow::Result<Arc<ModalState>> {
+        if let Some(s) = &self.model_state {
+            return Ok(Arc::clone(s));
+        }
+        let (kappa, damping) = splinewatch_core::updating::model_at(
+            &self.parameters,
+            &self.setup.kappa,
+            &self.setup.damping,
+            &self.start_values(),
+        )?;
+        let state = Arc::new(self.setup.model.modal_state(&kappa, &damping)?);
+        self.model_state = Some(Arc::clone(&state));
+        Ok(state)
+    }
+
+    fn count_window(&mut self, report: &WindowReport) {
         match &report.skipped {
             None => self.health.windows_accepted += 1,
             Some(reason) => *self.health.windows_skipped.entry(reason.clone()).or_insert(0) += 1,
         }
-        report
     }
 }

@@ -180,10 +180,22 @@ impl<W: Write + Seek> Outputs<'_, W> {
     fn handle(&mut self, pipeline: &mut Pipeline, windows: Vec<WindowReport>, jobs: Vec<UpdateJob>) -> Result<()> {
         for w in windows {
             self.last_time = w.end_ns;
-            self.out.write("windows", w.end_ns, &results::window_message(&w))?;
+            for (suffix, m) in results::window_messages(&w) {
+                self.out.write(suffix, w.end_ns, &m)?;
+            }
+            if let Some(v) = self.viewer.as_deref_mut() {
+                v.log_window(&w)?;
+            }
             let note = match &w.skipped {
                 Some(reason) => format!("window {} skipped: {reason}", w.index),
-                None => format!("window {} accepted ({} segments)", w.index, w.segments_accepted),
+                None => match &w.modes {
+                    Some(m) => format!(
+                        "window {} accepted ({} modes identified)",
+                        w.index,
+                        m.report.result.modes.len()
+                    ),
+                    None => format!("window {} accepted ({} segments)", w.index, w.segments_accepted),
+                },
             };
             self.report(Some(&note));
             self.summary.window_count += 1;

@@ -7,8 +7,6 @@ use crate::io::frf_json::FrfFile;
 use crate::io::modes_json::ModesFile;
 use anyhow::{Context, Result};
 use serde::Deserialize;
-use splinewatch_core::c64;
-use splinewatch_core::modal_residual::ObservedMode;
 use splinewatch_core::updating::{
     IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateProblem, UpdateResult,
 };
@@ -73,54 +71,6 @@ pub fn update(
     Ok(problem.solve_observed(&start, progress)?)
 }
 
-/// Floors of the identified standard deviations used as weights: a
-/// std the identification could not give (`null`), or one below what the
-/// model can be expected to match (its own modelling error), is raised to
-/// these: 0.05 % of the frequency, 1e-3 absolute damping ratio, 0.02 of a
-/// unit-normalised shape component.
-const FREQUENCY_STD_FLOOR: f64 = 5e-4;
-const DAMPING_STD_FLOOR: f64 = 1e-3;
-const SHAPE_STD_FLOOR: f64 = 0.02;
-
-/// The identified modes of a modes file (`oma --json`) on the model's sensors.
-pub fn observed_modes(file: &ModesFile, sensor_names: &[String]) -> Result<Vec<ObservedMode>> {
-    file.modes
-        .iter()
-        .enumerate()
-        .map(|(k, m)| {
-            let shape = m
-                .shape
-                .iter()
-                .map(|s| {
-                    let index = sensor_names
-                        .iter()
-                        .position(|n| n == &s.sensor)
-                        .with_context(|| format!("modes[{k}].shape: {:?} is not a config sensor", s.sensor))?;
-                    Ok((index, c64::new(s.re, s.im)))
-                })
-                .collect::<Result<Vec<_>>>()?;
-            let largest = shape.iter().map(|(_, v)| v.norm()).fold(0.0, f64::max);
-            let stds: Vec<f64> = m.shape.iter().filter_map(|s| s.std).collect();
-            let shape_std = if stds.is_empty() || largest == 0.0 {
-                SHAPE_STD_FLOOR
-            } else {
-                ((stds.iter().map(|s| s * s).sum::<f64>() / stds.len() as f64).sqrt() / largest).max(SHAPE_STD_FLOOR)
-            };
-            Ok(ObservedMode {
-                frequency_hz: m.frequency_hz,
-                frequency_std_hz: m
-                    .frequency_std_hz
-                    .unwrap_or(0.0)
-                    .max(FREQUENCY_STD_FLOOR * m.frequency_hz),
-                damping_ratio: m.damping_ratio,
-                damping_std: m.damping_std.unwrap_or(0.0).max(DAMPING_STD_FLOOR),
-                shape,
-                shape_std,
-            })
-        })
-        .collect()
-}
-
 /// `splinewatch update --modes`: modal-residue updating against identified modes.
 pub fn update_from_modes(
     config: &Config,
@@ -129,7 +79,7 @@ pub fn update_from_modes(
     progress: &mut dyn FnMut(&IterationRecord),
 ) -> Result<ModalSolution> {
     let setup = frf_setup(config)?;
-    let observed = observed_modes(modes, &setup.sensor_names)?;
+    let observed = modes.to_observed(&setup.sensor_names)?;
     let parameters = config.build_parameters()?;
     let settings = config.update_settings()?;
     let base = splinewatch_core::updating::base_values(&parameters, &setup.kappa, &setup.damping);

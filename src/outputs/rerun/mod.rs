@@ -13,7 +13,15 @@
 //!   r33 (N/m³); `deck/sensors`; `modes/<k>`: the first bending modes;
 //! - `oma/stabilisation` (poles: frequency × order), `oma/singular_values`,
 //!   `oma/modes/<k>/{frequency_hz,damping_percent}` (value, ±1σ): an
-//!   output-only identification (`splinewatch oma --rerun-save`).
+//!   output-only identification (`splinewatch oma --rerun-save`, and every
+//!   output-only window of the daemon and replay); per window also
+//!   `oma/trends/mode_<m>/{frequency_hz,damping_percent}` (value, ±1σ, by
+//!   the paired model mode `m`, so a trend follows one physical mode) and
+//!   `oma/shapes/mode_<m>/{identified,model}`: arrows at the sensors along
+//!   their directions, identified (real part, phase-aligned) and model
+//!   shape scaled to it;
+//! - `residual/modes/mode_<m>`: relative frequency error (%) per paired mode
+//!   of a modal-residue update.
 
 mod blueprint;
 mod deck;
@@ -24,7 +32,7 @@ mod update;
 pub use rrd::{inspect_rrd, RrdSummary};
 
 use crate::config::{frf_setup, Config, FrfSetup};
-use crate::pipeline::{Health, UpdateOutcome};
+use crate::pipeline::{Fit, Health, Measured, UpdateOutcome};
 use anyhow::{anyhow, Result};
 use deck::DeckGrid;
 use splinewatch_core::frf::SensorPoint;
@@ -181,8 +189,23 @@ impl RerunOutput {
             }
         };
         self.log_parameters(report)?;
-        self.log_frfs(&outcome.measured, "measured")?;
-        self.log_frfs(&report.model, "model")?;
+        if let Measured::Frf(frf) = &outcome.measured {
+            self.log_frfs(frf, "measured")?;
+        }
+        match &report.fit {
+            Fit::Frf { model, .. } => self.log_frfs(model, "model")?,
+            Fit::Modes(pairs) => {
+                for p in pairs {
+                    let error = 100.0 * (p.model_frequency_hz - p.identified_frequency_hz) / p.identified_frequency_hz;
+                    self.rec
+                        .log(
+                            format!("residual/modes/mode_{}", p.model_mode + 1).as_str(),
+                            &rerun::Scalars::new([error]),
+                        )
+                        .map_err(rerun_error)?;
+                }
+            }
+        }
         self.log_damping(&report.damping)?;
         self.log_spring_field(&report.kappa)?;
         self.log_modes(report)?;

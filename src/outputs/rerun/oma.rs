@@ -1,16 +1,121 @@
-//! One output-only identification in the Rerun stream: the stabilisation
+//! Output-only identifications in the Rerun stream: the stabilisation
 //! diagram (every pole at its order over frequency; grey unstable, blue
 //! stable, orange in a mode) over the Hankel matrix's leading singular
-//! values, and the identified frequencies and damping ratios with ±1σ.
+//! values, the identified frequencies and damping ratios with ±1σ; per
+//! pipeline window also the trends by paired model mode and the identified
+//! and model shapes at the sensors.
 
+use super::deck::f32x3;
 use super::{rerun_error, RerunOutput};
 use crate::pipeline::oma::OmaReport;
+use crate::pipeline::{WindowModes, WindowReport};
 use anyhow::Result;
 
 impl RerunOutput {
     /// Logs `report` at its span's start time.
     pub fn log_oma(&mut self, report: &OmaReport) -> Result<()> {
         self.set_time(report.start_ns);
+        self.log_identification(report)
+    }
+
+    /// Logs an output-only window's identification at the window's end (FRF
+    /// windows and skipped windows log nothing here).
+    pub fn log_window(&mut self, window: &WindowReport) -> Result<()> {
+        let Some(modes) = &window.modes else {
+            return Ok(());
+        };
+        self.rotate_if_due(window.end_ns)?;
+        self.set_time(window.end_ns);
+        self.log_identification(&modes.report)?;
+        self.log_trends(modes)?;
+        self.log_shapes(modes)
+    }
+
+    /// Frequency and damping (value, ±1σ) of each paired mode, by model mode.
+    fn log_trends(&mut self, modes: &WindowModes) -> Result<()> {
+        for (m, pair) in modes.report.result.modes.iter().zip(&modes.pairs) {
+            let Some(pair) = pair else { continue };
+            let (sf, sz) = (m.frequency_std_hz.unwrap_or(0.0), m.damping_std.unwrap_or(0.0));
+            let base = format!("oma/trends/mode_{}", pair.model_mode + 1);
+            for (what, v, s) in [
+                ("frequency_hz", m.frequency_hz, sf),
+                ("damping_percent", 100.0 * m.damping_ratio, 100.0 * sz),
+            ] {
+                let path = format!("{base}/{what}");
+                if self.named.insert(path.clone()) {
+                    self.rec
+                        .log_static(
+                            path.as_str(),
+                            &rerun::SeriesLines::new().with_names(["identified", "+1σ", "−1σ"]),
+                        )
+                        .map_err(rerun_error)?;
+                }
+                self.rec
+                    .log(path.as_str(), &rerun::Scalars::new([v, v + s, v - s]))
+                    .map_err(rerun_error)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Identified (real part; the shape is normalised to a largest component
+    /// of 1 + 0i) and model shapes (least-squares scaled to it) as arrows at
+    /// the sensors, along each sensor's direction.
+    fn log_shapes(&self, modes: &WindowModes) -> Result<()> {
+        let shell = &self.model.shell;
+        let sensors: Vec<_> = modes
+            .report
+            .sensors
+            .iter()
+            .map(|name| self.sensors.iter().find(|(n, _)| n == name).map(|(_, s)| s))
+            .collect();
+        for (m, pair) in modes.report.result.modes.iter().zip(&modes.pairs) {
+            let Some(pair) = pair else { continue };
+            let identified: Vec<f64> = m.shape.iter().map(|v| v.re).collect();
+            let mm: f64 = pair.model_shape.iter().map(|v| v * v).sum();
+            let scale = identified
+                .iter()
+                .zip(&pair.model_shape)
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+                / mm.max(f64::MIN_POSITIVE);
+            let model: Vec<f64> = pair.model_shape.iter().map(|v| scale * v).collect();
+            let length = 0.1 * self.grid.span;
+            for (which, values, color) in [
+                ("identified", &identified, rerun::Color::from_rgb(230, 120, 20)),
+                ("model", &model, rerun::Color::from_rgb(30, 110, 200)),
+            ] {
+                let (origins, vectors): (Vec<[f32; 3]>, Vec<[f32; 3]>) = sensors
+                    .iter()
+                    .zip(values)
+                    .filter_map(|(s, v)| s.map(|s| (s, v)))
+                    .map(|(s, v)| {
+                        let d = s.direction;
+                        (
+                            f32x3(shell.position(s.xi, s.eta, 1.0)),
+                            [
+                                (length * v * d[0]) as f32,
+                                (length * v * d[1]) as f32,
+                                (length * v * d[2]) as f32,
+                            ],
+                        )
+                    })
+                    .unzip();
+                self.rec
+                    .log(
+                        format!("oma/shapes/mode_{}/{which}", pair.model_mode + 1).as_str(),
+                        &rerun::Arrows3D::from_vectors(vectors)
+                            .with_origins(origins)
+                            .with_colors([color]),
+                    )
+                    .map_err(rerun_error)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The diagram, singular values and modes of one identification.
+    fn log_identification(&mut self, report: &OmaReport) -> Result<()> {
         let poles = &report.result.diagram;
         let positions: Vec<[f32; 2]> = poles.iter().map(|p| [p.frequency_hz as f32, p.order as f32]).collect();
         let colors: Vec<rerun::Color> = poles

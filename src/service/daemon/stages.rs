@@ -242,16 +242,26 @@ impl Daemon {
 
     /// Writes, publishes, counts and logs a closed window.
     fn report_window(&mut self, w: &WindowReport, link: &ZenohLink) {
-        let m = results::window_message(w);
-        self.results.write("windows", w.end_ns, &m);
-        link.publish("windows", &m);
+        for (suffix, m) in results::window_messages(w) {
+            self.results.write(suffix, w.end_ns, &m);
+            link.publish(suffix, &m);
+        }
+        if let Some(v) = self.viewer.as_mut() {
+            count_output_error(
+                v.log_window(w),
+                &mut self.pipeline.health_mut().rerun_errors,
+                100,
+                "Rerun",
+            );
+        }
         self.summary.windows += 1;
         self.last_time = w.end_ns;
         match &w.skipped {
             None => tracing::info!(
                 message = "window accepted",
                 window = w.index,
-                segments = w.segments_accepted
+                segments = w.segments_accepted,
+                identified_modes = w.modes.as_ref().map_or(0, |m| m.report.result.modes.len())
             ),
             Some(r) => tracing::warn!(message = "window skipped", window = w.index, reason = %r),
         }
