@@ -123,3 +123,32 @@ impl Config {
         Ok((settings, references))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ambient_example_is_the_bundled_deck_without_its_force_sensor() {
+        let ambient = Config::from_toml(include_str!("../../config/sinello-ambient.toml")).unwrap();
+        let bundled = Config::from_toml(include_str!("../../config/sinello.toml")).unwrap();
+        assert!(ambient.is_output_only() && !bundled.is_output_only());
+        assert_eq!(
+            serde_json::to_value(&ambient.model).unwrap(),
+            serde_json::to_value(&bundled.model).unwrap()
+        );
+        let sensors = |c: &Config| -> Vec<serde_json::Value> {
+            c.sensors
+                .iter()
+                .map(|s| {
+                    let mut v = serde_json::to_value(s).unwrap();
+                    v["quantity"] = serde_json::Value::Null;
+                    v
+                })
+                .collect()
+        };
+        assert_eq!(sensors(&ambient), sensors(&bundled));
+        assert_eq!(ambient.analysis_window(), (1200.0, None));
+        assert_eq!(bundled.analysis_window(), (20.0, None));
+    }
+}

@@ -40,6 +40,11 @@ impl Publisher {
         })
     }
 
+    /// The publisher's zenoh session (e.g. to subscribe to results on the same link).
+    pub fn session(&self) -> &zenoh::Session {
+        &self.session
+    }
+
     pub fn publish(&mut self, block: &wire::ChannelBlock) -> Result<()> {
         if self.speed > 0.0 {
             let (t0, w0) = *self.origin.get_or_insert((block.start_ns, std::time::Instant::now()));

@@ -425,4 +425,107 @@ mod tests {
         assert!(windows[0].segments_rejected >= 2, "{:?}", windows[0].segments_rejected);
         assert_eq!(windows[1].segments_rejected, 0);
     }
+
+    /// The bundled output-only config with one-minute windows and a smaller
+    /// Hankel matrix, so a window is quick to identify.
+    fn output_only_config() -> Config {
+        let text = include_str!("../../config/sinello-ambient.toml")
+            .replace("window_seconds = 1200.0", "window_seconds = 60.0")
+            .replace("block_rows = 40", "block_rows = 20")
+            .replace("max_order = 120", "max_order = 40");
+        Config::from_toml(&text).unwrap()
+    }
+
+    /// Feeds `seconds` of one-second blocks on P1–P12 with `value(channel, t)`;
+    /// returns the closed windows.
+    fn feed_outputs(p: &mut Pipeline, seconds: usize, value: &mut dyn FnMut(usize, usize) -> f64) -> Vec<WindowReport> {
+        let mut windows = Vec::new();
+        let mut t = 0;
+        for s in 0..seconds {
+            for c in 0..12 {
+                let mut b = block(
+                    &format!("P{}", c + 1),
+                    ChannelQuantity::Acceleration,
+                    s as f64,
+                    256,
+                    256.0,
+                );
+                b.data = (0..256).map(|k| value(c, t + k)).collect();
+                windows.extend(p.ingest(b).0);
+            }
+            t += 256;
+        }
+        windows
+    }
+
+    /// A small deterministic generator (xorshift) of standard normal values.
+    fn normal(state: &mut u64) -> f64 {
+        let mut uniform = || {
+            *state ^= *state << 13;
+            *state ^= *state >> 7;
+            *state ^= *state << 17;
+            (*state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (u, v) = (uniform().max(1e-300), uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+
+    #[test]
+    fn output_only_windows_are_skipped_with_their_reason() {
+        // A silent deck: the Hankel matrix is singular.
+        let mut p = Pipeline::new(&output_only_config(), ScheduleConfig::default(), None).unwrap();
+        let w = feed_outputs(&mut p, 61, &mut |_, _| 0.0);
+        assert_eq!(w.len(), 1);
+        assert_eq!(w[0].skipped.as_deref(), Some("singular_hankel"), "{:?}", w[0].skipped);
+
+        // P5 silent for 40 of the 60 seconds: too little valid data.
+        let mut p = Pipeline::new(&output_only_config(), ScheduleConfig::default(), None).unwrap();
+        let mut rng = 7u64;
+        let mut windows = Vec::new();
+        for s in 0..61 {
+            for c in 0..12 {
+                if c == 4 && (10..50).contains(&s) {
+                    continue;
+                }
+                let mut b = block(
+                    &format!("P{}", c + 1),
+                    ChannelQuantity::Acceleration,
+                    s as f64,
+                    256,
+                    256.0,
+                );
+                b.data = (0..256).map(|_| normal(&mut rng)).collect();
+                windows.extend(p.ingest(b).0);
+            }
+        }
+        assert_eq!(windows[0].skipped.as_deref(), Some("too_little_data"));
+        assert!(
+            windows[0].valid_fraction.unwrap() < 0.4,
+            "{:?}",
+            windows[0].valid_fraction
+        );
+
+        // One lightly damped 2 Hz mode, the same at every sensor: identified,
+        // but no model mode is near it.
+        let mut p = Pipeline::new(&output_only_config(), ScheduleConfig::default(), None).unwrap();
+        let (dt, f, zeta) = (1.0 / 256.0, 2.0, 0.02);
+        let w0 = 2.0 * std::f64::consts::PI * f;
+        let (a1, a2) = (
+            2.0 * (-zeta * w0 * dt).exp() * (w0 * dt).cos(),
+            -(-2.0 * zeta * w0 * dt).exp(),
+        );
+        let (mut y1, mut y2, mut rng) = (0.0, 0.0, 11u64);
+        let mut mode = Vec::new();
+        for _ in 0..61 * 256 {
+            let y = a1 * y1 + a2 * y2 + normal(&mut rng);
+            (y2, y1) = (y1, y);
+            mode.push(y);
+        }
+        let mut noise = 13u64;
+        let w = feed_outputs(&mut p, 61, &mut |_, t| mode[t] + 0.05 * normal(&mut noise));
+        assert_eq!(w[0].skipped.as_deref(), Some("no_pairable_mode"), "{:?}", w[0].skipped);
+        let h = p.health();
+        assert_eq!(h.windows_accepted, 0);
+        assert_eq!(h.windows_skipped.get("no_pairable_mode"), Some(&1));
+    }
 }

@@ -333,3 +333,116 @@ fn oma_then_update_modes_finds_the_bearing_loss() {
     ]);
     assert!(!b.status.success() && stderr(&b).contains("P99"), "{}", stderr(&b));
 }
+
+/// The monitoring pipeline output-only (`replay` of an output-only config,
+/// the daemon's code path): 40 minutes of ambient data where `east.k2` loses
+/// 40 % between minutes 19 and 20, in 10-minute windows, each identified
+/// and updated (warm-started). Before the loss `east.k2` stays within 10 %
+/// of its value, after it within 10 % of the new one, every other κ within
+/// 15 % throughout; every window publishes `oma/modes` with its pairing.
+#[test]
+fn output_only_replay_follows_the_bearing_damage() {
+    let dir = fresh_dir("oma-replay");
+    let scenario = dir.join("loss.toml");
+    std::fs::write(
+        &scenario,
+        "update_seconds = 30.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = 19.0\nend_minute = 20.0\nfactor = 0.6\n",
+    )
+    .unwrap();
+    let rec = dir.join("ambient.mcap");
+    simulate(
+        &rec,
+        "ambient",
+        "2400",
+        "7",
+        &["--scenario", scenario.to_str().unwrap()],
+    );
+    let config = dir.join("ambient.toml");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-ambient.toml"))
+        .unwrap()
+        .replace("window_seconds = 1200.0", "window_seconds = 600.0");
+    std::fs::write(&config, text).unwrap();
+    let results = dir.join("results.mcap");
+    let o = splinewatch(&[
+        "replay",
+        "--config",
+        config.to_str().unwrap(),
+        rec.to_str().unwrap(),
+        "--out",
+        results.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let bytes = std::fs::read(&results).unwrap();
+    let mut by_topic: std::collections::BTreeMap<String, Vec<serde_json::Value>> = Default::default();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let suffix = m
+            .channel
+            .topic
+            .trim_start_matches("bridge/sinello-span2-ambient/")
+            .to_string();
+        by_topic
+            .entry(suffix)
+            .or_default()
+            .push(serde_json::from_slice(&m.data).unwrap());
+    }
+    assert!(!by_topic.contains_key("frf/measured") && !by_topic.contains_key("frf/model"));
+    let windows = &by_topic["windows"];
+    assert_eq!(windows.len(), 4);
+    assert!(windows
+        .iter()
+        .all(|w| w["skipped"].is_null() && w["valid_fraction"] == 1.0));
+    let identified = &by_topic["oma/modes"];
+    assert_eq!(identified.len(), 4);
+    for w in identified {
+        let modes = w["modes"].as_array().unwrap();
+        let paired = modes.iter().filter(|m| m["model_mode"].is_u64()).count();
+        assert!(
+            paired >= 15,
+            "window {}: {paired} of {} modes paired",
+            w["window"],
+            modes.len()
+        );
+        for m in modes.iter().filter(|m| m["model_mode"].is_u64()) {
+            assert!(m["mac"].as_f64().unwrap() >= 0.8);
+            assert!(m["frequency_std_hz"].as_f64().unwrap() > 0.0);
+            assert_eq!(m["shape"].as_array().unwrap().len(), 12);
+        }
+    }
+    // Saved as a file, an oma/modes message is an `update --modes` input.
+    let file: ModesFile = serde_json::from_value(identified[0].clone()).unwrap();
+    file.check().unwrap();
+    let residue = &by_topic["updating/residue"];
+    assert!(residue.iter().all(|r| r["modes"].as_array().unwrap().len() >= 15));
+    let updates = &by_topic["updating/parameters"];
+    assert_eq!(updates.len(), 4);
+    let truth = [
+        ("west.k1", 0.4e9),
+        ("west.k2", 1.5e9),
+        ("west.k3", 1.8e9),
+        ("west.k4", 0.6e9),
+        ("east.k1", 1.5e9),
+        ("east.k3", 0.5e9),
+        ("east.k4", 1.8e9),
+    ];
+    for (k, u) in updates.iter().enumerate() {
+        assert_eq!(u["converged"], true);
+        let value = |name: &str| {
+            u["parameters"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|p| p["name"] == name)
+                .unwrap()["value"]
+                .as_f64()
+                .unwrap()
+        };
+        let k2 = if k < 2 { 0.4e9 } else { 0.24e9 };
+        let error = value("east.k2") / k2 - 1.0;
+        assert!(error.abs() < 0.10, "window {k}: east.k2 {:+.1} %", 100.0 * error);
+        for (name, v) in truth {
+            let error = value(name) / v - 1.0;
+            assert!(error.abs() < 0.15, "window {k}: {name} {:+.1} %", 100.0 * error);
+        }
+    }
+}
