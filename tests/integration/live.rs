@@ -430,3 +430,96 @@ fn spawn_client_daemon(dir: &Path, endpoint: &str) -> (KillOnDrop, PathBuf, Path
     );
     (daemon, config, state)
 }
+
+/// Output-only over zenoh on loopback: 10 minutes of ambient data (no force
+/// channel) published live to the daemon of the bundled output-only config
+/// (5-minute windows): each window's identified modes arrive on
+/// `<prefix>/oma/modes`, every window is updated, and the live parameters
+/// equal the offline replay's of the same blocks.
+#[test]
+fn live_output_only_run_publishes_modes_and_agrees_with_replay() {
+    use std::sync::{Arc, Mutex};
+    use zenoh::Wait;
+    let out = temp("output-only");
+    let rec = out.join("ambient.mcap");
+    let sim = crate::common::splinewatch(&[
+        "simulate",
+        "--config",
+        "config/sinello-ambient.toml",
+        "--duration",
+        "600",
+        "--excitation",
+        "ambient",
+        "--seed",
+        "3",
+        "--out",
+        rec.to_str().unwrap(),
+    ]);
+    assert!(sim.status.success(), "{}", String::from_utf8_lossy(&sim.stderr));
+    let text = std::fs::read_to_string(root().join("config/sinello-ambient.toml"))
+        .unwrap()
+        .replace("window_seconds = 1200.0", "window_seconds = 300.0");
+    let cfg = splinewatch::config::Config::from_toml(&text).unwrap();
+    let bytes = std::fs::read(&rec).unwrap();
+    let (blocks, _) =
+        splinewatch::io::recording::read_recording(&bytes, &splinewatch::io::wire::Limits::default()).unwrap();
+    let received: Arc<Mutex<Vec<serde_json::Value>>> = Arc::default();
+    let sink = Arc::clone(&received);
+    let live =
+        splinewatch::service::demo::run_with_source(cfg.clone(), &out, 40.0, usize::MAX, move |cfg, publisher| {
+            let seen = Arc::clone(&sink);
+            let _subscriber = publisher
+                .session()
+                .declare_subscriber(format!("{}/oma/modes", cfg.topic_prefix()))
+                .callback(move |s| {
+                    let v = serde_json::from_slice(&s.payload().to_bytes()).expect("a JSON message");
+                    seen.lock().unwrap().push(v);
+                })
+                .wait()
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            for b in &blocks {
+                publisher.publish(&b.block)?;
+            }
+            // The last window is identified after its last block: wait for it.
+            let start = std::time::Instant::now();
+            while sink.lock().unwrap().len() < 2 && start.elapsed().as_secs() < 60 {
+                std::thread::sleep(std::time::Duration::from_millis(100));
+            }
+            Ok(blocks.len() as u64)
+        })
+        .unwrap();
+    let received = received.lock().unwrap();
+    assert_eq!(received.len(), 2, "oma/modes messages over zenoh");
+    for m in received.iter() {
+        assert!(m["modes"].as_array().unwrap().len() >= 15, "{}", m["window"]);
+    }
+    assert_eq!(live.updates.len(), 2);
+    // Rerun: the stabilisation diagram, trends and shapes by model mode, per-mode residues.
+    let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(out.join("results.rrd")).unwrap()).unwrap();
+    for prefix in [
+        "/oma/stabilisation",
+        "/oma/trends/mode_4/frequency_hz",
+        "/oma/shapes/mode_4/identified",
+        "/oma/shapes/mode_4/model",
+        "/residual/modes/mode_4",
+        "/parameters/springs/east.k2",
+    ] {
+        assert!(rrd.entities.iter().any(|e| e == prefix), "{prefix} not in {:?}", rrd.entities);
+    }
+    let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+    let offline = replay(&cfg, &[&bytes], &mut writer, Default::default(), &mut |_, _| {}).unwrap();
+    let params = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
+        u.result
+            .as_ref()
+            .unwrap()
+            .result
+            .parameters
+            .iter()
+            .map(|p| p.value)
+            .collect()
+    };
+    assert_eq!(offline.updates.len(), 2);
+    for (a, b) in live.updates.iter().zip(&offline.updates) {
+        assert_eq!(params(a), params(b), "window {}", a.window);
+    }
+}
