@@ -11,7 +11,9 @@ use crate::io::wire::{format_timestamp, ChannelQuantity};
 use anyhow::{Context, Result};
 use splinewatch_core::frf::ModalState;
 use splinewatch_core::modal_residual::pair_modes;
-use splinewatch_core::oma::{identify, OmaError, OmaResult, OmaSettings, OutputCorrelations};
+use splinewatch_core::oma::{
+    identify, spectral_singular_values, OmaError, OmaResult, OmaSettings, OutputCorrelations, SpectralSingularValues,
+};
 
 /// What one identification used and found.
 #[derive(Debug, Clone)]
@@ -22,6 +24,17 @@ pub struct OmaReport {
     /// The acceleration sensors, in the order of the shapes.
     pub sensors: Vec<String>,
     pub result: OmaResult,
+    /// Singular values of the output spectral matrix (the diagram's
+    /// backdrop); `None` for a span shorter than one segment.
+    pub spectrum: Option<SpectralSingularValues>,
+}
+
+/// Segments of the spectral matrix: 8 s (0.125 Hz lines, enough to part the
+/// bundled deck's closest pair, 0.5 Hz apart).
+const SPECTRUM_SEGMENT_SECONDS: f64 = 8.0;
+
+fn spectrum(channels: &[&[f64]], fs: f64) -> Option<SpectralSingularValues> {
+    spectral_singular_values(channels, fs, (SPECTRUM_SEGMENT_SECONDS * fs).round() as usize).ok()
 }
 
 /// Identifies the modes over `[from_ns, to_ns)` of the recording.
@@ -45,6 +58,7 @@ pub fn identify_span(
         fs: span.fs,
         sensors: outputs.iter().map(|&i| config.sensors[i].name.clone()).collect(),
         result,
+        spectrum: spectrum(&views, span.fs),
     })
 }
 
@@ -154,6 +168,7 @@ impl WindowIdentification {
             fs,
             sensors: self.sensors.clone(),
             result,
+            spectrum: spectrum(&views, fs),
         };
         let observed = report
             .modes_file()

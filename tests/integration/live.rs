@@ -498,13 +498,18 @@ fn live_output_only_run_publishes_modes_and_agrees_with_replay() {
     let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(out.join("results.rrd")).unwrap()).unwrap();
     for prefix in [
         "/oma/stabilisation",
+        "/oma/stabilisation/first_singular_value",
         "/oma/trends/mode_4/frequency_hz",
         "/oma/shapes/mode_4/identified",
         "/oma/shapes/mode_4/model",
         "/residual/modes/mode_4",
         "/parameters/springs/east.k2",
     ] {
-        assert!(rrd.entities.iter().any(|e| e == prefix), "{prefix} not in {:?}", rrd.entities);
+        assert!(
+            rrd.entities.iter().any(|e| e == prefix),
+            "{prefix} not in {:?}",
+            rrd.entities
+        );
     }
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
     let offline = replay(&cfg, &[&bytes], &mut writer, Default::default(), &mut |_, _| {}).unwrap();

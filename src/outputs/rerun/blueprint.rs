@@ -6,11 +6,15 @@ use super::{rerun_error, RerunOutput, MODES_SHOWN};
 use anyhow::{anyhow, Result};
 use rerun::blueprint::BarChartView;
 use rerun::blueprint::{
-    Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial3DView, Tabs, TimeSeriesView, Vertical,
+    Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView, Tabs, TimeSeriesView,
+    Vertical,
 };
 use splinewatch_core::frf::SensorPoint;
 
 impl RerunOutput {
+    /// The layout: trends left, the deck in the middle, and on the right the
+    /// FRFs (FRF path) or the stabilisation diagram, identified-frequency
+    /// trends and shapes at the sensors (output-only).
     pub(super) fn send_blueprint(&self) -> Result<()> {
         let frf_tabs = |what: &str| -> ContainerLike {
             Tabs::new(self.setup.sensor_names.iter().map(|o| {
@@ -42,12 +46,31 @@ impl RerunOutput {
                 mode_tabs.into(),
             ])
             .into(),
-            Vertical::new([
-                frf_tabs("magnitude"),
-                frf_tabs("phase"),
-                BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
-            ])
-            .into(),
+            if self.output_only {
+                Vertical::new([
+                    Spatial2DView::new(
+                        "Stabilisation diagram (order × Hz) over the spectral matrix's first singular value",
+                    )
+                    .with_origin("/oma/stabilisation")
+                    .into(),
+                    TimeSeriesView::new("Identified frequencies by model mode (Hz, ±1σ)")
+                        .with_origin("/oma/trends")
+                        .into(),
+                    Spatial3DView::new("Shapes at the sensors: identified (orange), model (blue)")
+                        .with_origin("/")
+                        .with_contents(["/deck/sensors", "/oma/shapes/**"])
+                        .into(),
+                    BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
+                ])
+                .into()
+            } else {
+                Vertical::new([
+                    frf_tabs("magnitude"),
+                    frf_tabs("phase"),
+                    BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
+                ])
+                .into()
+            },
         ]));
         blueprint
             .send(

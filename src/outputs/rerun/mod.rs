@@ -11,7 +11,9 @@
 //!   `damping/coefficients` (γ_z at their Greville abscissae);
 //! - `deck/springs`: the deck mesh coloured by the identified spring field
 //!   r33 (N/m³); `deck/sensors`; `modes/<k>`: the first bending modes;
-//! - `oma/stabilisation` (poles: frequency × order), `oma/singular_values`,
+//! - `oma/stabilisation` (poles: frequency × order; its child
+//!   `first_singular_value`: the output spectral matrix's, log scale mapped
+//!   onto the order axis), `oma/singular_values` (Hankel),
 //!   `oma/modes/<k>/{frequency_hz,damping_percent}` (value, ±1σ): an
 //!   output-only identification (`splinewatch oma --rerun-save`, and every
 //!   output-only window of the daemon and replay); per window also
@@ -70,6 +72,8 @@ pub struct RerunOutput {
     targets: RerunTargets,
     sensors: Vec<(String, SensorPoint)>,
     rotate_ns: i128,
+    /// An output-only config (the blueprint shows OMA views instead of FRFs).
+    output_only: bool,
     /// Measurement time of the open file's first message.
     file_start_ns: Option<i128>,
 }
@@ -93,6 +97,7 @@ impl RerunOutput {
             targets: targets.clone(),
             sensors,
             rotate_ns: (config.output.rerun_rotate_hours * 3600e9) as i128,
+            output_only: config.is_output_only(),
             file_start_ns: None,
         };
         out.attach_sinks(None)?;

@@ -1,7 +1,7 @@
 //! Output-only identifications in the Rerun stream: the stabilisation
 //! diagram (every pole at its order over frequency; grey unstable, blue
-//! stable, orange in a mode) over the Hankel matrix's leading singular
-//! values, the identified frequencies and damping ratios with ±1σ; per
+//! stable, orange in a mode) over the first singular value of the output
+//! spectral matrix, the Hankel matrix's leading singular values, the identified frequencies and damping ratios with ±1σ; per
 //! pipeline window also the trends by paired model mode and the identified
 //! and model shapes at the sensors.
 
@@ -134,6 +134,14 @@ impl RerunOutput {
                     .with_radii([rerun::Radius::new_ui_points(2.0)]),
             )
             .map_err(rerun_error)?;
+        if let Some(line) = first_singular_value_line(report) {
+            self.rec
+                .log(
+                    "oma/stabilisation/first_singular_value",
+                    &rerun::LineStrips2D::new([line]).with_colors([rerun::Color::from_rgb(90, 90, 90)]),
+                )
+                .map_err(rerun_error)?;
+        }
         let singular: Vec<f64> = report.result.singular_values.iter().take(200).copied().collect();
         self.rec
             .log("oma/singular_values", &rerun::BarChart::new(singular))
@@ -160,4 +168,34 @@ impl RerunOutput {
         }
         Ok(())
     }
+}
+
+/// The first singular value of the spectral matrix over the diagram's
+/// frequencies, on its order axis: `log10` mapped onto `[0, highest order]`
+/// (the secondary axis of ARTeMIS's and pyOMA2's diagrams).
+fn first_singular_value_line(report: &OmaReport) -> Option<Vec<[f32; 2]>> {
+    let spectrum = report.spectrum.as_ref()?;
+    let top_order = report.result.diagram.iter().map(|p| p.order).max()? as f64;
+    let top_frequency = 1.05 * report.result.diagram.iter().map(|p| p.frequency_hz).fold(0.0, f64::max);
+    let points: Vec<(f64, f64)> = spectrum
+        .frequencies_hz
+        .iter()
+        .zip(spectrum.first())
+        .filter(|(f, v)| **f > 0.0 && **f <= top_frequency && *v > 0.0)
+        .map(|(f, v)| (*f, v.log10()))
+        .collect();
+    let (lo, hi) = points
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, v)| {
+            (lo.min(*v), hi.max(*v))
+        });
+    if points.len() < 2 || hi <= lo {
+        return None;
+    }
+    Some(
+        points
+            .iter()
+            .map(|(f, v)| [*f as f32, (top_order * (v - lo) / (hi - lo)) as f32])
+            .collect(),
+    )
 }

@@ -16,11 +16,13 @@
 
 pub mod correlation;
 pub mod shape;
+pub mod spectrum;
 pub mod ssi;
 pub mod stabilisation;
 pub mod uncertainty;
 
 pub use correlation::OutputCorrelations;
+pub use spectrum::{spectral_singular_values, SpectralSingularValues};
 pub use ssi::{Pole, SubspaceModel};
 pub use stabilisation::{ClusterCriteria, StabilityCriteria};
 
