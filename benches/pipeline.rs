@@ -1,6 +1,7 @@
-//! Replay throughput of the bundled recording (with its updates), and the
-//! ingest cost of the pipeline per 1000 samples (decode + align + Welch,
-//! no updates). Run: `cargo bench --bench pipeline`.
+//! Replay throughput of the bundled recording (with its updates), of one
+//! simulated hour on the FRF path and output-only, and the ingest cost of
+//! the pipeline per 1000 samples (decode + align + Welch, no updates).
+//! Run: `cargo bench --bench pipeline`.
 
 use splinewatch::config::load_config;
 use splinewatch::config::ScheduleConfig;
@@ -35,6 +36,27 @@ fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
     let mut cfg = load_config(&root().join("config/sinello.toml")).unwrap();
     cfg.frf.window_seconds = 600.0;
     let options = SimulationOptions::random_excitation(&cfg, 3600.0, 7);
+    let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), Encoding::Cbor).unwrap();
+    let prefix = cfg.topic_prefix();
+    simulate(&cfg, &options, &mut |b| writer.write_block(&prefix, &b).map(|_| ())).unwrap();
+    let bytes = writer.finish().unwrap().into_inner();
+    bencher.bench(|| {
+        let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
+        let summary = replay(&cfg, &[&bytes], &mut w, Default::default(), &mut |_, _| {}).unwrap();
+        assert_eq!(summary.updates.len(), 6);
+        summary
+    });
+}
+
+/// One hour of output-only ambient data (twelve accelerations, four
+/// unmeasured forces; simulated once, in memory) replayed with the bundled
+/// output-only config in 10-minute windows: per window SSI-cov with its
+/// jackknife, the pairing, and a warm-started modal-residue update.
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn replay_one_hour_output_only(bencher: divan::Bencher) {
+    let mut cfg = load_config(&root().join("config/sinello-ambient.toml")).unwrap();
+    cfg.oma.window_seconds = Some(600.0);
+    let options = SimulationOptions::ambient_excitation(&cfg, 3600.0, 7);
     let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), Encoding::Cbor).unwrap();
     let prefix = cfg.topic_prefix();
     simulate(&cfg, &options, &mut |b| writer.write_block(&prefix, &b).map(|_| ())).unwrap();

@@ -61,7 +61,7 @@ pub fn jackknife(
     max_distance: f64,
 ) -> Vec<Option<Spread>> {
     let batches = correlations.batches();
-    let mut found: Vec<Vec<(f64, f64, Vec<c64>)>> = vec![Vec::new(); modes.len()];
+    let mut found: Vec<Vec<Replicate>> = vec![Vec::new(); modes.len()];
     if batches < 2 {
         return vec![None; modes.len()];
     }
@@ -71,20 +71,72 @@ pub fn jackknife(
         .flat_map(|m| m.members.iter().chain([&m.medoid]).map(|p| p.order))
         .max()
         .unwrap_or(1);
-    for b in 0..batches {
-        let r = correlations.estimate_without(Some(b));
-        let Ok(model) = SubspaceModel::new(
-            &r,
-            correlations.channels(),
-            correlations.references().len(),
-            block_rows,
-            max_order,
-            fs,
-        ) else {
-            continue;
-        };
-        let mut by_order: BTreeMap<usize, Vec<Pole>> = BTreeMap::new();
-        for (m, mode) in modes.iter().enumerate() {
+    // Replicates are independent: spread over up to four threads, gathered
+    // in batch order, so the result is the same whatever the thread count.
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 4);
+    let replicate = |b: usize| replicate_modes(correlations, b, block_rows, fs, max_order, modes, max_distance);
+    let per_batch: Vec<Vec<Option<Replicate>>> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|t| {
+                let replicate = &replicate;
+                scope.spawn(move || {
+                    (t..batches)
+                        .step_by(threads)
+                        .map(|b| (b, replicate(b)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        let mut all: Vec<_> = workers
+            .into_iter()
+            .flat_map(|w| w.join().expect("a jackknife replicate panicked"))
+            .collect();
+        all.sort_by_key(|(b, _)| *b);
+        all.into_iter().map(|(_, r)| r).collect()
+    });
+    for replicate in per_batch {
+        for (m, found_here) in replicate.into_iter().enumerate() {
+            if let Some(v) = found_here {
+                found[m].push(v);
+            }
+        }
+    }
+    found
+        .into_iter()
+        .map(|reps| (reps.len() >= 2).then(|| spread(&reps)))
+        .collect()
+}
+
+/// A mode in one replicate: frequency, damping ratio, aligned shape.
+type Replicate = (f64, f64, Vec<c64>);
+
+/// One delete-one-batch replicate (batch `left_out`): per mode, the
+/// medians of its poles' nearest replicate poles and the medoid's shape,
+/// or `None` when the replicate lost the mode (or its SVD failed).
+fn replicate_modes(
+    correlations: &OutputCorrelations,
+    left_out: usize,
+    block_rows: usize,
+    fs: f64,
+    max_order: usize,
+    modes: &[ModePoles<'_>],
+    max_distance: f64,
+) -> Vec<Option<Replicate>> {
+    let r = correlations.estimate_without(Some(left_out));
+    let Ok(model) = SubspaceModel::new(
+        &r,
+        correlations.channels(),
+        correlations.references().len(),
+        block_rows,
+        max_order,
+        fs,
+    ) else {
+        return vec![None; modes.len()];
+    };
+    let mut by_order: BTreeMap<usize, Vec<Pole>> = BTreeMap::new();
+    modes
+        .iter()
+        .map(|mode| {
             let mut nearest = |reference: &Pole| -> Option<Pole> {
                 let poles = by_order
                     .entry(reference.order)
@@ -96,21 +148,15 @@ pub fn jackknife(
                     .filter(|(d, _)| *d <= max_distance)
                     .map(|(_, p)| p.clone())
             };
-            let Some(medoid) = nearest(mode.medoid) else {
-                continue;
-            };
+            let medoid = nearest(mode.medoid)?;
             let matched: Vec<Pole> = mode.members.iter().filter_map(|p| nearest(p)).collect();
             let replicate = ModePoles {
                 members: matched.iter().collect(),
                 medoid: &medoid,
             };
             let (f, zeta) = replicate.medians();
-            found[m].push((f, zeta, aligned(&medoid.shape, &mode.medoid.shape)));
-        }
-    }
-    found
-        .into_iter()
-        .map(|reps| (reps.len() >= 2).then(|| spread(&reps)))
+            Some((f, zeta, aligned(&medoid.shape, &mode.medoid.shape)))
+        })
         .collect()
 }
 
