@@ -149,7 +149,12 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         v.finish()?;
     }
     let seconds = t0.elapsed().as_secs_f64();
-    let span = summary.window_count as f64 * cfg.frf.window_seconds;
+    // Measurement time covered by the closed windows (they may overlap).
+    let (window, hop) = cfg.analysis_window();
+    let span = match summary.window_count {
+        0 => 0.0,
+        n => (n - 1) as f64 * hop.unwrap_or(window) + window,
+    };
     errln!(
         "replayed {} messages: {} windows ({} accepted), {} updates in {seconds:.2} s ({:.0}× real time); results in {}",
         summary.messages,
