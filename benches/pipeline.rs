@@ -18,6 +18,14 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// A simulated recording, in memory (CBOR blocks in MCAP).
+fn recording(cfg: &splinewatch::config::Config, options: &SimulationOptions) -> Vec<u8> {
+    let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), Encoding::Cbor).unwrap();
+    let prefix = cfg.topic_prefix();
+    simulate(cfg, options, &mut |b| writer.write_block(&prefix, &b).map(|_| ())).unwrap();
+    writer.finish().unwrap().into_inner()
+}
+
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn replay_bundled_recording(bencher: divan::Bencher) {
     let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
@@ -35,11 +43,7 @@ fn replay_bundled_recording(bencher: divan::Bencher) {
 fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
     let mut cfg = load_config(&root().join("config/sinello.toml")).unwrap();
     cfg.frf.window_seconds = 600.0;
-    let options = SimulationOptions::random_excitation(&cfg, 3600.0, 7);
-    let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), Encoding::Cbor).unwrap();
-    let prefix = cfg.topic_prefix();
-    simulate(&cfg, &options, &mut |b| writer.write_block(&prefix, &b).map(|_| ())).unwrap();
-    let bytes = writer.finish().unwrap().into_inner();
+    let bytes = recording(&cfg, &SimulationOptions::random_excitation(&cfg, 3600.0, 7));
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
         let summary = replay(&cfg, &[&bytes], &mut w, Default::default(), &mut |_, _| {}).unwrap();
@@ -56,11 +60,7 @@ fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
 fn replay_one_hour_output_only(bencher: divan::Bencher) {
     let mut cfg = load_config(&root().join("config/sinello-ambient.toml")).unwrap();
     cfg.oma.window_seconds = Some(600.0);
-    let options = SimulationOptions::ambient_excitation(&cfg, 3600.0, 7);
-    let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), Encoding::Cbor).unwrap();
-    let prefix = cfg.topic_prefix();
-    simulate(&cfg, &options, &mut |b| writer.write_block(&prefix, &b).map(|_| ())).unwrap();
-    let bytes = writer.finish().unwrap().into_inner();
+    let bytes = recording(&cfg, &SimulationOptions::ambient_excitation(&cfg, 3600.0, 7));
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
         let summary = replay(&cfg, &[&bytes], &mut w, Default::default(), &mut |_, _| {}).unwrap();

@@ -106,19 +106,21 @@ fn live_and_replay_agree_on_the_bundled_recording() {
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
     let offline = replay(&cfg, &[&bytes], &mut writer, Default::default(), &mut |_, _| {}).unwrap();
     assert_eq!(live.updates.len(), offline.updates.len());
-    let params = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
-        u.result
-            .as_ref()
-            .unwrap()
-            .result
-            .parameters
-            .iter()
-            .map(|p| p.value)
-            .collect()
-    };
     for (a, b) in live.updates.iter().zip(&offline.updates) {
-        assert_eq!(params(a), params(b), "window {}", a.window);
+        assert_eq!(parameter_values(a), parameter_values(b), "window {}", a.window);
     }
+}
+
+/// The identified values of an accepted update, in parameter order.
+fn parameter_values(u: &splinewatch::pipeline::UpdateOutcome) -> Vec<f64> {
+    u.result
+        .as_ref()
+        .unwrap()
+        .result
+        .parameters
+        .iter()
+        .map(|p| p.value)
+        .collect()
 }
 
 #[cfg(unix)]
@@ -513,18 +515,8 @@ fn live_output_only_run_publishes_modes_and_agrees_with_replay() {
     }
     let mut writer = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
     let offline = replay(&cfg, &[&bytes], &mut writer, Default::default(), &mut |_, _| {}).unwrap();
-    let params = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
-        u.result
-            .as_ref()
-            .unwrap()
-            .result
-            .parameters
-            .iter()
-            .map(|p| p.value)
-            .collect()
-    };
     assert_eq!(offline.updates.len(), 2);
     for (a, b) in live.updates.iter().zip(&offline.updates) {
-        assert_eq!(params(a), params(b), "window {}", a.window);
+        assert_eq!(parameter_values(a), parameter_values(b), "window {}", a.window);
     }
 }

@@ -66,6 +66,70 @@ fn pairs(file: &ModesFile) -> Vec<(f64, f64, f64)> {
         .collect()
 }
 
+/// A scenario where `east.k2` loses 40 % between `start` and `end` minutes
+/// (negative: before the record), re-solved every `update_seconds`.
+fn loss_scenario(dir: &Path, start: f64, end: f64, update_seconds: f64) -> std::path::PathBuf {
+    let path = dir.join("loss.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "update_seconds = {update_seconds}\n[[change]]\nparameter = \"east.k2\"\nstart_minute = {start}\nend_minute = {end}\nfactor = 0.6\n"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+/// The deck's κ after the scenario's loss (`east.k2` at 60 %).
+const DAMAGED_KAPPA: [(&str, f64); 8] = [
+    ("west.k1", 0.4e9),
+    ("west.k2", 1.5e9),
+    ("west.k3", 1.8e9),
+    ("west.k4", 0.6e9),
+    ("east.k1", 1.5e9),
+    ("east.k2", 0.24e9),
+    ("east.k3", 0.5e9),
+    ("east.k4", 1.8e9),
+];
+
+/// `splinewatch replay` of `rec` with the bundled output-only config in
+/// `window_seconds` windows, results and state in `dir`; asserts success.
+fn replay_output_only(dir: &Path, rec: &Path, window_seconds: f64) -> (std::path::PathBuf, std::path::PathBuf) {
+    let config = dir.join("output-only.toml");
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-ambient.toml"))
+        .unwrap()
+        .replace(
+            "window_seconds = 1200.0",
+            &format!("window_seconds = {window_seconds:.1}"),
+        );
+    std::fs::write(&config, text).unwrap();
+    let (results, state) = (dir.join("results.mcap"), dir.join("state.json"));
+    let o = splinewatch(&[
+        "replay",
+        "--config",
+        config.to_str().unwrap(),
+        rec.to_str().unwrap(),
+        "--out",
+        results.to_str().unwrap(),
+        "--state",
+        state.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    (results, state)
+}
+
+/// Relative error of parameter `name` in a `parameters` list (results
+/// message or state file).
+fn relative_error(parameters: &serde_json::Value, name: &str, truth: f64) -> f64 {
+    let p = parameters
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == name)
+        .unwrap();
+    p["value"].as_f64().unwrap() / truth - 1.0
+}
+
 #[test]
 fn ambient_recording_to_oma_json_gives_the_model_modes() {
     let dir = fresh_dir("oma-ambient");
@@ -242,22 +306,7 @@ fn bad_oma_input_is_a_clear_error() {
 #[test]
 fn oma_then_update_modes_finds_the_bearing_loss() {
     let dir = fresh_dir("oma-update");
-    let scenario = dir.join("loss.toml");
-    std::fs::write(
-        &scenario,
-        "update_seconds = 1200.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = -1.0\nend_minute = 0.0\nfactor = 0.6\n",
-    )
-    .unwrap();
-    let truth = [
-        ("west.k1", 0.4e9),
-        ("west.k2", 1.5e9),
-        ("west.k3", 1.8e9),
-        ("west.k4", 0.6e9),
-        ("east.k1", 1.5e9),
-        ("east.k2", 0.24e9),
-        ("east.k3", 0.5e9),
-        ("east.k4", 1.8e9),
-    ];
+    let scenario = loss_scenario(&dir, -1.0, 0.0, 1200.0);
     let modes = dir.join("modes.json");
     for excitation in ["traffic", "ambient"] {
         let rec = dir.join(format!("{excitation}.mcap"));
@@ -287,14 +336,8 @@ fn oma_then_update_modes_finds_the_bearing_loss() {
         ]);
         assert!(u.status.success(), "{}", stderr(&u));
         let result: serde_json::Value = serde_json::from_slice(&u.stdout).unwrap();
-        for (name, value) in truth {
-            let p = result["parameters"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|p| p["name"] == name)
-                .unwrap();
-            let error = p["value"].as_f64().unwrap() / value - 1.0;
+        for (name, value) in DAMAGED_KAPPA {
+            let error = relative_error(&result["parameters"], name, value);
             let allowed = if name == "east.k2" { 0.10 } else { 0.15 };
             assert!(error.abs() < allowed, "{excitation}: {name}: {:+.1} %", 100.0 * error);
         }
@@ -345,12 +388,7 @@ fn oma_then_update_modes_finds_the_bearing_loss() {
 #[test]
 fn output_only_replay_follows_the_bearing_damage() {
     let dir = fresh_dir("oma-replay");
-    let scenario = dir.join("loss.toml");
-    std::fs::write(
-        &scenario,
-        "update_seconds = 30.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = 19.0\nend_minute = 20.0\nfactor = 0.6\n",
-    )
-    .unwrap();
+    let scenario = loss_scenario(&dir, 19.0, 20.0, 30.0);
     let rec = dir.join("ambient.mcap");
     simulate(
         &rec,
@@ -359,21 +397,7 @@ fn output_only_replay_follows_the_bearing_damage() {
         "7",
         &["--scenario", scenario.to_str().unwrap()],
     );
-    let config = dir.join("ambient.toml");
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-ambient.toml"))
-        .unwrap()
-        .replace("window_seconds = 1200.0", "window_seconds = 600.0");
-    std::fs::write(&config, text).unwrap();
-    let results = dir.join("results.mcap");
-    let o = splinewatch(&[
-        "replay",
-        "--config",
-        config.to_str().unwrap(),
-        rec.to_str().unwrap(),
-        "--out",
-        results.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let (results, _) = replay_output_only(&dir, &rec, 600.0);
     let bytes = std::fs::read(&results).unwrap();
     let mut by_topic: std::collections::BTreeMap<String, Vec<serde_json::Value>> = Default::default();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
@@ -457,12 +481,7 @@ fn output_only_replay_follows_the_bearing_damage() {
 #[test]
 fn output_only_replay_of_traffic_in_an_hour_window_finds_the_loss() {
     let dir = fresh_dir("oma-traffic-replay");
-    let scenario = dir.join("loss.toml");
-    std::fs::write(
-        &scenario,
-        "update_seconds = 3600.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = -1.0\nend_minute = 0.0\nfactor = 0.6\n",
-    )
-    .unwrap();
+    let scenario = loss_scenario(&dir, -1.0, 0.0, 3600.0);
     let rec = dir.join("traffic.mcap");
     simulate(
         &rec,
@@ -471,23 +490,7 @@ fn output_only_replay_of_traffic_in_an_hour_window_finds_the_loss() {
         "8",
         &["--scenario", scenario.to_str().unwrap()],
     );
-    let config = dir.join("traffic.toml");
-    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-ambient.toml"))
-        .unwrap()
-        .replace("window_seconds = 1200.0", "window_seconds = 3600.0");
-    std::fs::write(&config, text).unwrap();
-    let state = dir.join("state.json");
-    let o = splinewatch(&[
-        "replay",
-        "--config",
-        config.to_str().unwrap(),
-        rec.to_str().unwrap(),
-        "--out",
-        dir.join("results.mcap").to_str().unwrap(),
-        "--state",
-        state.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, state) = replay_output_only(&dir, &rec, 3600.0);
     let accepted: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&state).unwrap()).unwrap();
     let truth = [
         ("west.k1", 0.4e9),

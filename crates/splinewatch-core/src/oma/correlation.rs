@@ -47,18 +47,8 @@ impl OutputCorrelations {
         max_lag: usize,
         batches: usize,
     ) -> Result<Self, OmaError> {
+        let n = super::channel_length(channels)?;
         let l = channels.len();
-        if l == 0 {
-            return Err(OmaError::NoChannels);
-        }
-        let n = channels[0].len();
-        if let Some(bad) = channels.iter().position(|c| c.len() != n) {
-            return Err(OmaError::UnequalLengths {
-                channel: bad,
-                len: channels[bad].len(),
-                expected: n,
-            });
-        }
         if let Some(bad) = channels.iter().position(|c| c.iter().any(|v| v.is_infinite())) {
             return Err(OmaError::NonFinite { channel: bad });
         }
@@ -214,37 +204,6 @@ fn pair_counts(valid: &[bool], max_lag: usize) -> Vec<f64> {
 mod tests {
     use super::*;
 
-    /// Direct `O(n · lags)` sums, the definition.
-    fn direct(y: &[Vec<f64>], max_lag: usize, batches: usize, skip: Option<usize>) -> Vec<f64> {
-        let l = y.len();
-        let n = y[0].len();
-        let centred: Vec<Vec<f64>> = y
-            .iter()
-            .map(|c| {
-                let m = c.iter().sum::<f64>() / n as f64;
-                c.iter().map(|v| v - m).collect()
-            })
-            .collect();
-        let len = n / batches;
-        let mut out = vec![0.0; (max_lag + 1) * l * l];
-        for k in 0..=max_lag {
-            for a in 0..l {
-                for r in 0..l {
-                    let (mut s, mut c) = (0.0, 0.0);
-                    for b in (0..batches).filter(|&b| Some(b) != skip) {
-                        let end = if b + 1 == batches { n } else { (b + 1) * len };
-                        for t in b * len..end - k {
-                            s += centred[a][t + k] * centred[r][t];
-                            c += 1.0;
-                        }
-                    }
-                    out[(k * l + a) * l + r] = s / c;
-                }
-            }
-        }
-        out
-    }
-
     fn signals() -> Vec<Vec<f64>> {
         // Deterministic, non-periodic, correlated channels.
         let base: Vec<f64> = (0..997).map(|t| ((t * t) as f64 * 0.37).sin() + 0.3).collect();
@@ -264,7 +223,7 @@ mod tests {
         let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
         for batches in [1, 3] {
             let c = OutputCorrelations::from_samples(&views, &[], 20, batches).unwrap();
-            let want = direct(&y, 20, batches, None);
+            let want = direct_with_gaps(&y, 20, batches, None);
             for (g, w) in c.estimate().iter().zip(&want) {
                 assert!((g - w).abs() < 1e-12, "{g} vs {w}");
             }
@@ -290,15 +249,15 @@ mod tests {
         let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
         let c = OutputCorrelations::from_samples(&views, &[], 4, 4).unwrap();
         for b in 0..4 {
-            let want = direct(&y, 4, 4, Some(b));
+            let want = direct_with_gaps(&y, 4, 4, Some(b));
             for (g, w) in c.estimate_without(Some(b)).iter().zip(&want) {
                 assert!((g - w).abs() < 1e-12, "{g} vs {w}");
             }
         }
     }
 
-    /// The definition restricted to valid pairs: instants where every
-    /// channel is finite, means over those instants.
+    /// Direct `O(n · lags)` sums, the definition, restricted to valid pairs:
+    /// instants where every channel is finite, means over those instants.
     fn direct_with_gaps(y: &[Vec<f64>], max_lag: usize, batches: usize, skip: Option<usize>) -> Vec<f64> {
         let (l, n) = (y.len(), y[0].len());
         let valid: Vec<bool> = (0..n).map(|t| y.iter().all(|c| c[t].is_finite())).collect();

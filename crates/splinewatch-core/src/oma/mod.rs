@@ -62,6 +62,20 @@ pub enum OmaError {
     InvalidSettings(String),
 }
 
+/// Checks that there are channels and that all are as long as the first;
+/// returns that length.
+pub(crate) fn channel_length(channels: &[&[f64]]) -> Result<usize, OmaError> {
+    let n = channels.first().ok_or(OmaError::NoChannels)?.len();
+    match channels.iter().position(|c| c.len() != n) {
+        Some(bad) => Err(OmaError::UnequalLengths {
+            channel: bad,
+            len: channels[bad].len(),
+            expected: n,
+        }),
+        None => Ok(n),
+    }
+}
+
 /// Settings of one identification (the `[oma]` config section).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

@@ -39,18 +39,8 @@ pub fn spectral_singular_values(
     fs: f64,
     segment: usize,
 ) -> Result<SpectralSingularValues, OmaError> {
+    let n = super::channel_length(channels)?;
     let l = channels.len();
-    if l == 0 {
-        return Err(OmaError::NoChannels);
-    }
-    let n = channels[0].len();
-    if let Some(bad) = channels.iter().position(|c| c.len() != n) {
-        return Err(OmaError::UnequalLengths {
-            channel: bad,
-            len: channels[bad].len(),
-            expected: n,
-        });
-    }
     if segment < 2 || n < segment {
         return Err(OmaError::TooShort {
             samples: n,
