@@ -307,17 +307,7 @@ fn raw_input_recording_rotates_and_replays_to_the_live_results() {
     assert_eq!(live.updates.len(), offline.updates.len());
     assert!(!live.updates.is_empty());
     for (a, b) in live.updates.iter().zip(&offline.updates) {
-        let values = |u: &splinewatch::pipeline::UpdateOutcome| -> Vec<f64> {
-            u.result
-                .as_ref()
-                .unwrap()
-                .result
-                .parameters
-                .iter()
-                .map(|p| p.value)
-                .collect()
-        };
-        assert_eq!(values(a), values(b), "window {}", a.window);
+        assert_eq!(parameter_values(a), parameter_values(b), "window {}", a.window);
     }
 }
 

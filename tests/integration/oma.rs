@@ -492,24 +492,8 @@ fn output_only_replay_of_traffic_in_an_hour_window_finds_the_loss() {
     );
     let (_, state) = replay_output_only(&dir, &rec, 3600.0);
     let accepted: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&state).unwrap()).unwrap();
-    let truth = [
-        ("west.k1", 0.4e9),
-        ("west.k2", 1.5e9),
-        ("west.k3", 1.8e9),
-        ("west.k4", 0.6e9),
-        ("east.k1", 1.5e9),
-        ("east.k2", 0.24e9),
-        ("east.k3", 0.5e9),
-        ("east.k4", 1.8e9),
-    ];
-    for (name, value) in truth {
-        let p = accepted["parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p["name"] == name)
-            .unwrap();
-        let error = p["value"].as_f64().unwrap() / value - 1.0;
+    for (name, value) in DAMAGED_KAPPA {
+        let error = relative_error(&accepted["parameters"], name, value);
         let allowed = if name == "east.k2" { 0.10 } else { 0.15 };
         assert!(error.abs() < allowed, "{name}: {:+.1} %", 100.0 * error);
     }
