@@ -56,9 +56,9 @@ impl RerunOutput {
                     TimeSeriesView::new("Identified frequencies by model mode (Hz, ±1σ)")
                         .with_origin("/oma/trends")
                         .into(),
-                    Spatial3DView::new("Shapes at the sensors: identified (orange), model (blue)")
+                    Spatial3DView::new("Shapes at the sensors on the deck: identified (orange), model (blue)")
                         .with_origin("/")
-                        .with_contents(["/deck/sensors", "/oma/shapes/**"])
+                        .with_contents(["/deck/springs", "/deck/sensors", "/oma/shapes/**"])
                         .into(),
                     BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
                 ])
