@@ -86,7 +86,8 @@ fn live_zenoh_run_tracks_a_bearing_damage() {
         if matches!(suffix, "updating/failures" | "oma/modes") {
             continue;
         }
-        let ch = s.channels.values().find(|c| c.topic.ends_with(suffix)).unwrap();
+        let topic = format!("{}/{suffix}", cfg.topic_prefix());
+        let ch = s.channels.values().find(|c| c.topic == topic).unwrap();
         assert!(counts.get(&ch.id).copied().unwrap_or(0) > 0, "{suffix}");
     }
     // The state file holds the last accepted parameters.
