@@ -24,6 +24,7 @@ pub mod oma;
 pub mod quadrature;
 pub mod shell;
 pub mod springs;
+pub mod stiffness_field;
 pub mod surface;
 pub mod updating;
 pub mod vec3;

@@ -316,18 +316,6 @@ impl Shell {
             .filter(|(_, c)| c.iter().any(|&x| x != 0.0))
             .collect()
     }
-
-    /// Calls `f(ξ-span, η-span)` for every non-empty knot span, each as
-    /// `(start, end)` parameter intervals.
-    pub(crate) fn for_each_span(&self, mut f: impl FnMut((f64, f64), (f64, f64))) {
-        let bx = self.surface.xi().breakpoints();
-        let be = self.surface.eta().breakpoints();
-        for wx in bx.windows(2) {
-            for we in be.windows(2) {
-                f((wx[0], wx[1]), (we[0], we[1]));
-            }
-        }
-    }
 }
 
 fn positive(name: &'static str, value: f64) -> Result<(), ShellError> {
@@ -357,98 +345,177 @@ fn lamina_frame(jac: &[Vec3; 3], angle: f64) -> Option<[Vec3; 3]> {
     Some([e1, e2, e3])
 }
 
-/// Assembles eq. (16) and eq. (17) over every knot span.
+/// What the quadrature of eq. (16)–(17) gives at one point: the strain rows
+/// `B` (6 × n, lamina frame), `E' B`, the displacement rows `N` (3 × n) and
+/// the global dof of every column.
+pub(crate) struct PointRows {
+    pub(crate) b: Mat<f64>,
+    pub(crate) eb: Mat<f64>,
+    pub(crate) n: Mat<f64>,
+    pub(crate) dofs: Vec<usize>,
+}
+
+/// Gauss points per direction: `extra` more than the `p + 1` that integrate
+/// eq. (16)–(17) of a flat shell exactly (a stiffness field of degree `d`
+/// multiplies the integrand by a polynomial of degree `d`: `⌈d/2⌉` more).
+pub(crate) struct Quadrature {
+    pub(crate) extra: (usize, usize),
+    /// Cuts of the ξ and η domains besides the shell's own breakpoints.
+    pub(crate) cuts: (Vec<f64>, Vec<f64>),
+}
+
+/// A step of the quadrature loop ([`integrate`]).
+pub(crate) enum QuadratureStep<'a> {
+    /// A Gauss point at `(ξ, η)` with volume weight `w`.
+    Point {
+        xi: f64,
+        eta: f64,
+        w: f64,
+        rows: &'a PointRows,
+    },
+    /// The end of a span whose local columns map to `dofs`.
+    SpanEnd { dofs: &'a [usize] },
+}
+
+/// The quadrature loop of eq. (16)–(17): every knot span of the shell (cut
+/// further at `quadrature.cuts`), every Gauss point, then the span's end.
 #[allow(
     clippy::too_many_lines,
-    reason = "the quadrature loop of eq. (16)-(17): span, Gauss point, local frame, strain rows and the two products read as one nest"
+    reason = "the quadrature loop of eq. (16)-(17): span, Gauss point, local frame and strain rows read as one nest"
 )]
+pub(crate) fn integrate(
+    shell: &Shell,
+    material: &OrthotropicMaterial,
+    quadrature: &Quadrature,
+    mut visit: impl FnMut(QuadratureStep<'_>),
+) -> Result<(), ShellError> {
+    let (p, q) = (shell.surface.xi().degree(), shell.surface.eta().degree());
+    let (gx, ge, gt) = (
+        GaussLegendre::new(p + 1 + quadrature.extra.0),
+        GaussLegendre::new(q + 1 + quadrature.extra.1),
+        GaussLegendre::new(2),
+    );
+    let nloc = DOFS_PER_CONTROL_POINT * (p + 1) * (q + 1);
+    let e_local = material.local_matrix();
+    let mut rows = PointRows {
+        b: Mat::<f64>::zeros(6, nloc),
+        eb: Mat::<f64>::zeros(6, nloc),
+        n: Mat::<f64>::zeros(3, nloc),
+        dofs: vec![0usize; nloc],
+    };
+    let mut pt = ShellPoint::new_empty();
+    let cut = |own: Vec<f64>, extra: &[f64]| {
+        let (a, b) = (own[0], own[own.len() - 1]);
+        let mut all: Vec<f64> = own;
+        all.extend(extra.iter().copied().filter(|&k| k > a && k < b));
+        all.sort_by(f64::total_cmp);
+        all.dedup();
+        all
+    };
+    let bx = cut(shell.surface.xi().breakpoints(), &quadrature.cuts.0);
+    let be = cut(shell.surface.eta().breakpoints(), &quadrature.cuts.1);
+    for wx in bx.windows(2) {
+        for we in be.windows(2) {
+            for (xi, wxi) in gx.mapped(wx[0], wx[1]) {
+                for (eta, weta) in ge.mapped(we[0], we[1]) {
+                    for (tau, wt) in gt.mapped(0.0, 1.0) {
+                        shell.evaluate_into(xi, eta, tau, &mut pt);
+                        let (det, jinv) = det_inverse(&pt.jacobian);
+                        let frame = lamina_frame(&pt.jacobian, material.angle_rad());
+                        let Some(frame) = frame.filter(|_| det > 0.0 && det.is_finite()) else {
+                            return Err(ShellError::InvertedJacobian { xi, eta, tau });
+                        };
+                        for k in 0..pt.count {
+                            for (d, s) in shell.dof_shapes(&pt, k).into_iter().enumerate() {
+                                let col = DOFS_PER_CONTROL_POINT * k + d;
+                                rows.dofs[col] = s.dof;
+                                // G = g ⊗ ∇ψ; in the lamina frame G' = (R g) ⊗ (R ∇ψ).
+                                let grad = mat_vec(&jinv, s.dpsi);
+                                let a = mat_vec(&frame, s.g);
+                                let c = mat_vec(&frame, grad);
+                                let strain = [
+                                    a[0] * c[0],
+                                    a[1] * c[1],
+                                    a[2] * c[2],
+                                    a[0] * c[1] + a[1] * c[0],
+                                    a[1] * c[2] + a[2] * c[1],
+                                    a[0] * c[2] + a[2] * c[0],
+                                ];
+                                for r in 0..6 {
+                                    rows.b[(r, col)] = strain[r];
+                                    rows.eb[(r, col)] = (0..6).map(|s| e_local[r][s] * strain[s]).sum();
+                                }
+                                let nc = scale(s.g, s.psi);
+                                for r in 0..3 {
+                                    rows.n[(r, col)] = nc[r];
+                                }
+                            }
+                        }
+                        visit(QuadratureStep::Point {
+                            xi,
+                            eta,
+                            w: wxi * weta * wt * det,
+                            rows: &rows,
+                        });
+                    }
+                }
+            }
+            visit(QuadratureStep::SpanEnd { dofs: &rows.dofs });
+        }
+    }
+    Ok(())
+}
+
+/// `target[dofs, dofs] += local`.
+pub(crate) fn scatter(target: &mut Mat<f64>, local: &Mat<f64>, dofs: &[usize]) {
+    for (r, &dr) in dofs.iter().enumerate() {
+        for (c, &dc) in dofs.iter().enumerate() {
+            target[(dr, dc)] += local[(r, c)];
+        }
+    }
+}
+
+/// Assembles eq. (16) and eq. (17) over every knot span.
 pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMatrices, ShellError> {
     let ndof = shell.dof_count();
     let mut stiffness = Mat::<f64>::zeros(ndof, ndof);
     let mut mass = Mat::<f64>::zeros(ndof, ndof);
     let (p, q) = (shell.surface.xi().degree(), shell.surface.eta().degree());
-    let (gx, ge, gt) = (
-        GaussLegendre::new(p + 1),
-        GaussLegendre::new(q + 1),
-        GaussLegendre::new(2),
-    );
     let nloc = DOFS_PER_CONTROL_POINT * (p + 1) * (q + 1);
-    let e_local = material.local_matrix();
     let rho = material.density();
     let mut k_loc = Mat::<f64>::zeros(nloc, nloc);
     let mut m_loc = Mat::<f64>::zeros(nloc, nloc);
-    let mut b = Mat::<f64>::zeros(6, nloc);
-    let mut eb = Mat::<f64>::zeros(6, nloc);
-    let mut nmat = Mat::<f64>::zeros(3, nloc);
-    let mut dofs = vec![0usize; nloc];
-    let mut pt = ShellPoint::new_empty();
-    let mut failure = None;
-    shell.for_each_span(|(xa, xb), (ea, eb_)| {
-        if failure.is_some() {
-            return;
+    let exact = Quadrature {
+        extra: (0, 0),
+        cuts: (Vec::new(), Vec::new()),
+    };
+    integrate(shell, material, &exact, |step| match step {
+        QuadratureStep::Point { w, rows, .. } => {
+            matmul(
+                k_loc.as_mut(),
+                Accum::Add,
+                rows.b.transpose(),
+                rows.eb.as_ref(),
+                w,
+                Par::Seq,
+            );
+            matmul(
+                m_loc.as_mut(),
+                Accum::Add,
+                rows.n.transpose(),
+                rows.n.as_ref(),
+                rho * w,
+                Par::Seq,
+            );
         }
-        k_loc.fill(0.0);
-        m_loc.fill(0.0);
-        for (xi, wx) in gx.mapped(xa, xb) {
-            for (eta, we) in ge.mapped(ea, eb_) {
-                for (tau, wt) in gt.mapped(0.0, 1.0) {
-                    shell.evaluate_into(xi, eta, tau, &mut pt);
-                    let (det, jinv) = det_inverse(&pt.jacobian);
-                    let frame = lamina_frame(&pt.jacobian, material.angle_rad());
-                    let Some(frame) = frame.filter(|_| det > 0.0 && det.is_finite()) else {
-                        failure = Some(ShellError::InvertedJacobian { xi, eta, tau });
-                        return;
-                    };
-                    let w = wx * we * wt * det;
-                    for k in 0..pt.count {
-                        for (d, s) in shell.dof_shapes(&pt, k).into_iter().enumerate() {
-                            let col = DOFS_PER_CONTROL_POINT * k + d;
-                            dofs[col] = s.dof;
-                            // G = g ⊗ ∇ψ; in the lamina frame G' = (R g) ⊗ (R ∇ψ).
-                            let grad = mat_vec(&jinv, s.dpsi);
-                            let a = mat_vec(&frame, s.g);
-                            let c = mat_vec(&frame, grad);
-                            let strain = [
-                                a[0] * c[0],
-                                a[1] * c[1],
-                                a[2] * c[2],
-                                a[0] * c[1] + a[1] * c[0],
-                                a[1] * c[2] + a[2] * c[1],
-                                a[0] * c[2] + a[2] * c[0],
-                            ];
-                            for r in 0..6 {
-                                b[(r, col)] = strain[r];
-                                eb[(r, col)] = (0..6).map(|s| e_local[r][s] * strain[s]).sum();
-                            }
-                            let nc = scale(s.g, s.psi);
-                            for r in 0..3 {
-                                nmat[(r, col)] = nc[r];
-                            }
-                        }
-                    }
-                    matmul(k_loc.as_mut(), Accum::Add, b.transpose(), eb.as_ref(), w, Par::Seq);
-                    matmul(
-                        m_loc.as_mut(),
-                        Accum::Add,
-                        nmat.transpose(),
-                        nmat.as_ref(),
-                        rho * w,
-                        Par::Seq,
-                    );
-                }
-            }
+        QuadratureStep::SpanEnd { dofs } => {
+            scatter(&mut stiffness, &k_loc, dofs);
+            scatter(&mut mass, &m_loc, dofs);
+            k_loc.fill(0.0);
+            m_loc.fill(0.0);
         }
-        for r in 0..nloc {
-            for c in 0..nloc {
-                stiffness[(dofs[r], dofs[c])] += k_loc[(r, c)];
-                mass[(dofs[r], dofs[c])] += m_loc[(r, c)];
-            }
-        }
-    });
-    match failure {
-        Some(e) => Err(e),
-        None => Ok(ShellMatrices { stiffness, mass }),
-    }
+    })?;
+    Ok(ShellMatrices { stiffness, mass })
 }
 
 #[cfg(test)]

@@ -1,0 +1,287 @@
+//! Stiffness fields of the deck itself: a B-spline multiplier of the
+//! material stiffness, `θ(ξ,η) = Σ_ij B_i(ξ) B_j(η) θ_ij` (the isogeometric
+//! counterpart of the spring fields of eq. 20, and of Teughels & De Roeck's
+//! "damage functions", J. Sound Vib. 2004). Coefficients are stored `η`
+//! fastest, `θ = 1` is the nominal material.
+//!
+//! The stiffness of eq. (16) with the multiplier is `∫ θ Bᵀ E' B dV`, linear
+//! in θ: `K_f(θ) = K_f + Σ_ij (θ_ij − 1) ∂K/∂θ_ij` with
+//! `∂K/∂θ_ij = ∫_field B_ij(ξ,η) Bᵀ E' B dV`, assembled once in one
+//! quadrature pass that splits the integrand by coefficient (the B-splines
+//! of the field sum to one, so `Σ_ij ∂K/∂θ_ij` is the field's part of
+//! `K_f`). Outside its rectangle a field leaves the material as it is; with
+//! several fields their deviations `θ − 1` add. A single-coefficient field
+//! over the whole deck is a global modulus scale: the temperature-driven
+//! stiffness change of the deck material.
+//!
+//! Quadrature splits at the knots of the shell and of the field, with
+//! `⌈d/2⌉` Gauss points more per direction than eq. (16) needs for a field
+//! of degree `d` (exact for a flat shell).
+
+use crate::knots::KnotVector;
+use crate::material::OrthotropicMaterial;
+use crate::shell::{self, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum StiffnessFieldError {
+    #[error("{found} coefficients given, the knot vectors define {expected} basis functions")]
+    CoefficientCount { found: usize, expected: usize },
+    #[error("coefficient {index} must be finite and positive, got {value}")]
+    Coefficient { index: usize, value: f64 },
+    #[error("the field's {axis} domain [{start}, {end}] is not inside the shell's [{shell_start}, {shell_end}]")]
+    OutsideShell {
+        axis: &'static str,
+        start: f64,
+        end: f64,
+        shell_start: f64,
+        shell_end: f64,
+    },
+    #[error("shell: {0}")]
+    Shell(#[from] ShellError),
+}
+
+/// A validated stiffness multiplier field.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StiffnessField {
+    xi: KnotVector,
+    eta: KnotVector,
+    coefficients: Vec<f64>,
+}
+
+impl StiffnessField {
+    pub fn new(xi: KnotVector, eta: KnotVector, coefficients: Vec<f64>) -> Result<Self, StiffnessFieldError> {
+        let expected = xi.basis_count() * eta.basis_count();
+        if coefficients.len() != expected {
+            return Err(StiffnessFieldError::CoefficientCount {
+                found: coefficients.len(),
+                expected,
+            });
+        }
+        if let Some(index) = coefficients.iter().position(|c| !(c.is_finite() && *c > 0.0)) {
+            return Err(StiffnessFieldError::Coefficient {
+                index,
+                value: coefficients[index],
+            });
+        }
+        Ok(Self { xi, eta, coefficients })
+    }
+
+    pub fn coefficients(&self) -> &[f64] {
+        &self.coefficients
+    }
+
+    pub fn coefficient_count(&self) -> usize {
+        self.coefficients.len()
+    }
+
+    pub fn xi(&self) -> &KnotVector {
+        &self.xi
+    }
+
+    pub fn eta(&self) -> &KnotVector {
+        &self.eta
+    }
+
+    /// `θ(ξ, η)` for the coefficients `theta`; 1 outside the field's rectangle.
+    #[track_caller]
+    pub fn value_with(&self, theta: &[f64], xi: f64, eta: f64) -> f64 {
+        assert_eq!(theta.len(), self.coefficients.len());
+        if !(self.xi.contains(xi) && self.eta.contains(eta)) {
+            return 1.0;
+        }
+        self.basis(xi, eta).map(|(k, w)| w * theta[k]).sum()
+    }
+
+    /// The non-zero `(index, B_i(ξ) B_j(η))` at a point of the rectangle.
+    fn basis(&self, xi: f64, eta: f64) -> impl Iterator<Item = (usize, f64)> {
+        let bx = self.xi.dense_basis(xi);
+        let be = self.eta.dense_basis(eta);
+        let ne = be.len();
+        bx.into_iter()
+            .enumerate()
+            .flat_map(move |(i, a)| {
+                let be = be.clone();
+                be.into_iter().enumerate().map(move |(j, b)| (i * ne + j, a * b))
+            })
+            .filter(|(_, w)| *w != 0.0)
+    }
+
+    /// `∂K/∂θ_ij` for every coefficient (`ndof × ndof`, unconstrained dofs).
+    pub fn coefficient_matrices(
+        &self,
+        shell: &Shell,
+        material: &OrthotropicMaterial,
+    ) -> Result<Vec<Mat<f64>>, StiffnessFieldError> {
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+        for (axis, own, of_shell) in [("xi", &self.xi, kx), ("eta", &self.eta, ke)] {
+            let ((a, b), (sa, sb)) = (own.domain(), of_shell.domain());
+            if a < sa || b > sb {
+                return Err(StiffnessFieldError::OutsideShell {
+                    axis,
+                    start: a,
+                    end: b,
+                    shell_start: sa,
+                    shell_end: sb,
+                });
+            }
+        }
+        let ndof = shell.dof_count();
+        let count = self.coefficient_count();
+        let nloc = DOFS_PER_CONTROL_POINT * (kx.degree() + 1) * (ke.degree() + 1);
+        let mut out = vec![Mat::<f64>::zeros(ndof, ndof); count];
+        let mut local = vec![Mat::<f64>::zeros(nloc, nloc); count];
+        let mut used = vec![false; count];
+        let quadrature = shell::Quadrature {
+            extra: (self.xi.degree().div_ceil(2), self.eta.degree().div_ceil(2)),
+            cuts: (self.xi.breakpoints(), self.eta.breakpoints()),
+        };
+        shell::integrate(shell, material, &quadrature, |step| match step {
+            QuadratureStep::Point { xi, eta, w, rows } => {
+                // Half-open spans: a point on the field's boundary belongs to
+                // one side only, and Gauss points never sit on a cut.
+                if !(self.xi.contains(xi) && self.eta.contains(eta)) {
+                    return;
+                }
+                for (k, bk) in self.basis(xi, eta) {
+                    matmul(
+                        local[k].as_mut(),
+                        Accum::Add,
+                        rows.b.transpose(),
+                        rows.eb.as_ref(),
+                        w * bk,
+                        Par::Seq,
+                    );
+                    used[k] = true;
+                }
+            }
+            QuadratureStep::SpanEnd { dofs } => {
+                for k in 0..count {
+                    if std::mem::replace(&mut used[k], false) {
+                        shell::scatter(&mut out[k], &local[k], dofs);
+                        local[k].fill(0.0);
+                    }
+                }
+            }
+        })?;
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_fields_are_named() {
+        let k = |v: Vec<f64>, d| KnotVector::new(v, d).unwrap();
+        let e = StiffnessField::new(k(vec![0.0, 0.0, 1.0, 1.0], 1), k(vec![0.0, 1.0], 0), vec![1.0]);
+        assert!(matches!(
+            e,
+            Err(StiffnessFieldError::CoefficientCount { found: 1, expected: 2 })
+        ));
+        let e = StiffnessField::new(k(vec![0.0, 1.0], 0), k(vec![0.0, 1.0], 0), vec![0.0]);
+        assert!(matches!(e, Err(StiffnessFieldError::Coefficient { index: 0, .. })));
+        let f = StiffnessField::new(k(vec![0.0, 0.0, 1.0, 1.0], 1), k(vec![0.0, 1.0], 0), vec![0.5, 1.5]).unwrap();
+        assert!((f.value_with(&[0.5, 1.5], 0.25, 0.3) - 0.75).abs() < 1e-15);
+        assert_eq!(f.value_with(&[0.5, 1.5], 1.5, 0.3), 1.0);
+    }
+
+    fn plate() -> (Shell, OrthotropicMaterial) {
+        let shell = Shell::rectangular_plate(4.0, 2.0, 0.2, [3, 3], [7, 5]).unwrap();
+        (shell, OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap())
+    }
+
+    fn relative_difference(a: &Mat<f64>, b: &Mat<f64>) -> f64 {
+        (a - b).norm_max() / b.norm_max()
+    }
+
+    fn uniform(degree: usize, count: usize) -> KnotVector {
+        KnotVector::uniform(degree, count, 0.0, 1.0).unwrap()
+    }
+
+    /// θ = 0.8 on a one-coefficient field over the deck is the material
+    /// with every modulus scaled by 0.8: E' is linear in the moduli at fixed ν.
+    #[test]
+    fn a_global_scale_is_the_scaled_material() {
+        let (shell, material) = plate();
+        let weak = OrthotropicMaterial::isotropic(0.8 * 30e9, 0.2, 2500.0).unwrap();
+        let field = StiffnessField::new(uniform(0, 1), uniform(0, 1), vec![1.0]).unwrap();
+        let d = field.coefficient_matrices(&shell, &material).unwrap();
+        let nominal = shell::assemble(&shell, &material).unwrap().stiffness;
+        let scaled = &nominal + &d[0] * (0.8 - 1.0);
+        let want = shell::assemble(&shell, &weak).unwrap().stiffness;
+        assert!(
+            relative_difference(&scaled, &want) < 1e-13,
+            "{}",
+            relative_difference(&scaled, &want)
+        );
+    }
+
+    /// The field's B-splines sum to one, so its derivative matrices sum to
+    /// `K_f` (a 4 × 2 field of degree 1 whose knots cut the net's spans);
+    /// each is symmetric.
+    #[test]
+    fn the_derivative_matrices_partition_the_stiffness() {
+        let (shell, material) = plate();
+        let field = StiffnessField::new(uniform(1, 4), uniform(1, 2), vec![1.0; 8]).unwrap();
+        let d = field.coefficient_matrices(&shell, &material).unwrap();
+        let nominal = shell::assemble(&shell, &material).unwrap().stiffness;
+        let mut sum = Mat::<f64>::zeros(nominal.nrows(), nominal.ncols());
+        for m in &d {
+            assert!(relative_difference(&m.transpose().to_owned(), m) < 1e-14);
+            sum += m;
+        }
+        assert!(
+            relative_difference(&sum, &nominal) < 1e-12,
+            "{}",
+            relative_difference(&sum, &nominal)
+        );
+    }
+
+    /// A degree-0 field cut at ξ = 0.5 (not a knot of the net): its first
+    /// coefficient's matrix is the stiffness of the half ξ < 0.5 alone,
+    /// integrated independently here point by point over that half.
+    #[test]
+    fn a_patch_is_the_stiffness_of_its_subdomain() {
+        let (shell, material) = plate();
+        let xi = KnotVector::new(vec![0.0, 0.5, 1.0], 0).unwrap();
+        let field = StiffnessField::new(xi, uniform(0, 1), vec![0.7, 1.0]).unwrap();
+        let d = field.coefficient_matrices(&shell, &material).unwrap();
+        let ndof = shell.dof_count();
+        let mut half = Mat::<f64>::zeros(ndof, ndof);
+        let nloc = DOFS_PER_CONTROL_POINT * 4 * 4; // degree 3 × 3: 4 × 4 control points per span
+        let mut local = Mat::<f64>::zeros(nloc, nloc);
+        let quadrature = shell::Quadrature {
+            extra: (0, 0),
+            cuts: (vec![0.5], Vec::new()),
+        };
+        shell::integrate(&shell, &material, &quadrature, |step| match step {
+            QuadratureStep::Point { xi, w, rows, .. } => {
+                if xi < 0.5 {
+                    matmul(
+                        local.as_mut(),
+                        Accum::Add,
+                        rows.b.transpose(),
+                        rows.eb.as_ref(),
+                        w,
+                        Par::Seq,
+                    );
+                }
+            }
+            QuadratureStep::SpanEnd { dofs } => {
+                shell::scatter(&mut half, &local, dofs);
+                local.fill(0.0);
+            }
+        })
+        .unwrap();
+        assert!(relative_difference(&d[0], &half) < 1e-13);
+        // θ = (0.7, 1): the plate with its left half 30 % softer.
+        let nominal = shell::assemble(&shell, &material).unwrap().stiffness;
+        let softened = &nominal + &d[0] * (0.7 - 1.0);
+        let energy = |k: &Mat<f64>| (0..ndof).map(|i| k[(i, i)]).sum::<f64>();
+        assert!(energy(&softened) < energy(&nominal));
+    }
+}
