@@ -236,6 +236,7 @@ impl Config {
             shell,
             material,
             springs,
+            stiffness_fields: Vec::new(),
             constraints,
         };
         // Surface the spring/shell compatibility errors here, with their key.

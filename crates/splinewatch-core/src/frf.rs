@@ -229,6 +229,18 @@ impl FrfModel {
         Ok(self.modal_state_from(modes, damping))
     }
 
+    /// [`Self::modal_state`] with stiffness-field coefficients `theta` (one
+    /// vector per field of the assembled model).
+    pub fn modal_state_with_fields(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        damping: &DampingCurve,
+    ) -> Result<ModalState, FrfError> {
+        let modes = self.assembled.modes_with_fields(kappa, theta)?;
+        Ok(self.modal_state_from(modes, damping))
+    }
+
     /// Builds the modal state from already computed modes.
     pub fn modal_state_from(&self, modes: Modes, damping: &DampingCurve) -> ModalState {
         let nm = modes.len();

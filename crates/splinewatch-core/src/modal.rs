@@ -143,6 +143,15 @@ impl ScaledPencil {
         Ok(Self { scale, l, a_free })
     }
 
+    /// `L⁻¹ S X S L⁻ᵀ` of a symmetric `X` on the block's dofs (how `K`
+    /// enters the standard problem), symmetrised.
+    fn congruence(&self, x: Mat<f64>) -> Mat<f64> {
+        let y = self.forward(x);
+        let a = self.forward(y.transpose().to_owned());
+        let n = a.nrows();
+        Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+    }
+
     /// `L⁻¹ S X` for rows `X` on the block's dofs.
     fn forward(&self, mut x: Mat<f64>) -> Mat<f64> {
         for j in 0..x.ncols() {
@@ -178,9 +187,18 @@ impl ScaledPencil {
 /// `W = L⁻¹ S Tᵀ E_U` (`U`: the spring dofs, `|U|` columns) and calls the
 /// symmetric eigensolver on its own size. The eigenpairs of a block-diagonal
 /// pencil are those of its blocks, so this is exact, not an approximation.
+///
+/// Stiffness fields of the deck ([`crate::stiffness_field`]) change `K_f`
+/// itself, `K_f(θ) = K_f + Σ_k (θ_k − 1) ∂K/∂θ_k`: no longer low rank, but
+/// still linear, so each `∂K/∂θ_k` is transformed once per component,
+/// `A_k = L⁻¹ S Tᵀ ∂K/∂θ_k T S L⁻ᵀ`, and a solve adds `Σ (θ_k − 1) A_k` to
+/// `A`: one weighted sum of dense blocks and the eigensolver, never a new
+/// Cholesky factorisation or re-assembly (the mass does not depend on θ).
 #[derive(Debug, Clone)]
 pub struct ModalSolver {
     free: usize,
+    /// Stiffness-field coefficients (`∂K/∂θ_k`), flattened over fields.
+    field_count: usize,
     /// Positions in `U` and values of every `∂K/∂κ_j`, flattened over fields.
     blocks: Vec<(Vec<usize>, Mat<f64>)>,
     spring_dof_count: usize,
@@ -196,19 +214,33 @@ struct Component {
     springs: Vec<usize>,
     /// `L⁻¹ S (Tᵀ E_U)[dofs, springs]`.
     w: Mat<f64>,
-    /// Eigenvalues and block shapes when no spring reaches the component.
+    /// Transformed `∂K/∂θ_k` reaching this component: `(k, A_k)`.
+    fields: Vec<(usize, Mat<f64>)>,
+    /// Eigenvalues and block shapes when no spring or field reaches the component.
     fixed: Option<(Vec<f64>, Mat<f64>)>,
 }
 
 impl ModalSolver {
-    #[allow(
-        clippy::too_many_lines,
-        reason = "the preparation steps (components, Jacobi scaling, Cholesky of M, transformed K_f, spring columns) share the per-component index maps"
-    )]
     pub fn new(
         free_stiffness: &Mat<f64>,
         mass: &Mat<f64>,
         spring_blocks: &[&LowRankBlock],
+        reduction: &DofReduction,
+    ) -> Result<Self, ModalError> {
+        Self::with_fields(free_stiffness, mass, spring_blocks, &[], reduction)
+    }
+
+    /// As [`Self::new`], with the derivative matrices `∂K/∂θ_k` of stiffness
+    /// fields (unconstrained dofs, flattened over fields).
+    #[allow(
+        clippy::too_many_lines,
+        reason = "the preparation steps (components, Jacobi scaling, Cholesky of M, transformed K_f, spring columns, field blocks) share the per-component index maps"
+    )]
+    pub fn with_fields(
+        free_stiffness: &Mat<f64>,
+        mass: &Mat<f64>,
+        spring_blocks: &[&LowRankBlock],
+        field_matrices: &[&Mat<f64>],
         reduction: &DofReduction,
     ) -> Result<Self, ModalError> {
         let n = reduction.free_count();
@@ -216,6 +248,7 @@ impl ModalSolver {
             return Err(ModalError::NoFreeDofs);
         }
         let (kr, mr) = (reduction.reduce(free_stiffness), reduction.reduce(mass));
+        let fields_reduced: Vec<Mat<f64>> = field_matrices.iter().map(|m| reduction.reduce(m)).collect();
         // Rows of T: the reduced dofs (and weights) each full dof enters.
         let mut rows_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); reduction.full_count()];
         for (c, col) in reduction.columns().iter().enumerate() {
@@ -288,7 +321,15 @@ impl ModalSolver {
                     .sum()
             });
             let w = pencil.forward(reach);
-            let fixed = if springs.is_empty() {
+            let fields: Vec<(usize, Mat<f64>)> = fields_reduced
+                .iter()
+                .enumerate()
+                .filter_map(|(k, m)| {
+                    let block = Mat::from_fn(dofs.len(), dofs.len(), |i, j| m[(dofs[i], dofs[j])]);
+                    (block.norm_max() > 0.0).then(|| (k, pencil.congruence(block)))
+                })
+                .collect();
+            let fixed = if springs.is_empty() && fields.is_empty() {
                 let (omega2, y) = symmetric_eigen(&pencil.a_free)?;
                 Some((omega2, pencil.back_transform(y)))
             } else {
@@ -299,11 +340,13 @@ impl ModalSolver {
                 pencil,
                 springs,
                 w,
+                fields,
                 fixed,
             });
         }
         Ok(Self {
             free: n,
+            field_count: field_matrices.len(),
             blocks,
             spring_dof_count: spring_dofs.len(),
             components,
@@ -319,7 +362,19 @@ impl ModalSolver {
     /// spring coefficients `kappa`, flattened in block order.
     #[track_caller]
     pub fn solve(&self, kappa: &[f64]) -> Result<(Vec<f64>, Mat<f64>), ModalError> {
+        self.solve_with_fields(kappa, &vec![1.0; self.field_count])
+    }
+
+    /// [`Self::solve`] with stiffness-field coefficients `theta` (flattened
+    /// over fields; 1 = nominal).
+    #[track_caller]
+    pub fn solve_with_fields(&self, kappa: &[f64], theta: &[f64]) -> Result<(Vec<f64>, Mat<f64>), ModalError> {
         assert_eq!(kappa.len(), self.blocks.len(), "one coefficient per spring block");
+        assert_eq!(
+            theta.len(),
+            self.field_count,
+            "one coefficient per stiffness-field block"
+        );
         let nu = self.spring_dof_count;
         let mut delta = Mat::<f64>::zeros(nu, nu);
         for ((pos, values), &k) in self.blocks.iter().zip(kappa) {
@@ -341,6 +396,12 @@ impl ModalSolver {
                     let wd = &c.w * &d;
                     let mut a = c.pencil.a_free.clone();
                     matmul(a.as_mut(), Accum::Add, wd.as_ref(), c.w.transpose(), 1.0, Par::Seq);
+                    for (k, ak) in &c.fields {
+                        let deviation = theta[*k] - 1.0;
+                        if deviation != 0.0 {
+                            a += ak * deviation;
+                        }
+                    }
                     let (omega2, y) = symmetric_eigen(&a)?;
                     Cow::Owned((omega2, c.pencil.back_transform(y)))
                 }
@@ -362,15 +423,24 @@ impl ModalSolver {
         Ok((pairs.iter().map(|p| p.0).collect(), shapes))
     }
 
-    /// All modes for `kappa`: [`Self::solve`], expanded and classified.
+    /// All modes for `kappa` (and the fields' `theta`, flattened; empty:
+    /// nominal): [`Self::solve_with_fields`], expanded and classified.
     pub fn modes(
         &self,
         kappa: &[f64],
+        theta: &[f64],
         reduction: &DofReduction,
         mass: &Mat<f64>,
         shell: &Shell,
     ) -> Result<Modes, ModalError> {
-        let (omega2, y) = self.solve(kappa)?;
+        let nominal;
+        let theta = if theta.is_empty() {
+            nominal = vec![1.0; self.field_count];
+            &nominal
+        } else {
+            theta
+        };
+        let (omega2, y) = self.solve_with_fields(kappa, theta)?;
         let shapes = reduction.expand(&y);
         let kinds = classify(&omega2, &shapes, mass, shell);
         Ok(Modes { omega2, shapes, kinds })

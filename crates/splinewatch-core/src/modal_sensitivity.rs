@@ -1,5 +1,6 @@
-//! Derivatives of the modes with respect to the spring coefficients: the
-//! sensitivities of a modal residue (output-only updating).
+//! Derivatives of the modes with respect to the spring coefficients and
+//! the stiffness-field coefficients: the sensitivities of a modal residue
+//! (output-only updating).
 //!
 //! With mass-normalised modes and `M` independent of `κ` (eq. 23: only `K`
 //! depends on the springs), Fox & Kapoor (1968) give
@@ -11,6 +12,10 @@
 //! dofs, `ModalState::phi_springs`). Modes nearly equal to `λ_i`
 //! (`|λ_i − λ_k| ≤ 1e-9 λ_i`: a repeated eigenvalue, where the derivative of
 //! an individual eigenvector is not defined) are left out of the sum.
+//!
+//! For a stiffness field `∂K/∂θ_k` is dense over the field's part of the
+//! deck: the couplings `C = Φᵀ (∂K/∂θ_k) Φ` of every mode pair are formed
+//! with two products per coefficient, and the same expansion applies.
 
 use crate::frf::{FrfModel, ModalState};
 use faer::Mat;
@@ -30,11 +35,9 @@ pub struct ModalSensitivities {
 impl FrfModel {
     /// Eigenvalue and sensor-amplitude derivatives of `modes` at `state`.
     pub fn modal_sensitivities(&self, state: &ModalState, modes: &[usize]) -> ModalSensitivities {
-        let nm = state.modes.len();
         let blocks: Vec<_> = self.assembled().spring_blocks.iter().flatten().collect();
         let positions = self.spring_block_positions();
         let phi_u = state.spring_shapes();
-        let lambda = &state.modes.omega2;
         let sensors = self.sensor_count();
         let mut eigenvalue = Mat::zeros(modes.len(), blocks.len());
         let mut amplitude = Vec::with_capacity(modes.len());
@@ -46,20 +49,8 @@ impl FrfModel {
                     .map(|a| (0..pos.len()).map(|b| block.values[(a, b)] * phi_u[(pos[b], i)]).sum())
                     .collect();
                 let coupling = |k: usize| -> f64 { (0..pos.len()).map(|a| phi_u[(pos[a], k)] * w[a]).sum() };
+                expand(state, i, coupling, &mut da, j);
                 eigenvalue[(row, j)] = coupling(i);
-                for k in 0..nm {
-                    let gap = lambda[i] - lambda[k];
-                    if k == i || gap.abs() <= 1e-9 * lambda[i].abs() {
-                        continue;
-                    }
-                    let factor = coupling(k) / gap;
-                    if factor == 0.0 {
-                        continue;
-                    }
-                    for s in 0..sensors {
-                        da[(s, j)] += state.amplitude(s, k) * factor;
-                    }
-                }
             }
             amplitude.push(da);
         }
@@ -67,6 +58,51 @@ impl FrfModel {
             modes: modes.to_vec(),
             eigenvalue,
             amplitude,
+        }
+    }
+
+    /// Eigenvalue and sensor-amplitude derivatives of `modes` at `state`
+    /// with respect to every stiffness-field coefficient θ (fields flattened
+    /// in order); `state` must come from the same coefficients
+    /// ([`FrfModel::modal_state_with_fields`]).
+    pub fn field_sensitivities(&self, state: &ModalState, modes: &[usize]) -> ModalSensitivities {
+        let matrices: Vec<_> = self.assembled().field_matrices.iter().flatten().collect();
+        let phi = &state.modes.shapes;
+        let sensors = self.sensor_count();
+        let mut eigenvalue = Mat::zeros(modes.len(), matrices.len());
+        let mut amplitude = vec![Mat::zeros(sensors, matrices.len()); modes.len()];
+        for (j, dk) in matrices.iter().enumerate() {
+            // C = Φᵀ (∂K/∂θ_j) Φ: every coupling at once.
+            let couplings = phi.transpose() * (*dk * phi);
+            for (row, &i) in modes.iter().enumerate() {
+                eigenvalue[(row, j)] = couplings[(i, i)];
+                expand(state, i, |k| couplings[(k, i)], &mut amplitude[row], j);
+            }
+        }
+        ModalSensitivities {
+            modes: modes.to_vec(),
+            eigenvalue,
+            amplitude,
+        }
+    }
+}
+
+/// Adds to column `j` of `da` the modal expansion of `∂a_{·,i}`:
+/// `Σ_{k≠i} a_{·,k} coupling(k) / (λ_i − λ_k)`, skipping (nearly) repeated
+/// eigenvalues.
+fn expand(state: &ModalState, i: usize, coupling: impl Fn(usize) -> f64, da: &mut Mat<f64>, j: usize) {
+    let lambda = &state.modes.omega2;
+    for k in 0..state.modes.len() {
+        let gap = lambda[i] - lambda[k];
+        if k == i || gap.abs() <= 1e-9 * lambda[i].abs() {
+            continue;
+        }
+        let factor = coupling(k) / gap;
+        if factor == 0.0 {
+            continue;
+        }
+        for s in 0..da.nrows() {
+            da[(s, j)] += state.amplitude(s, k) * factor;
         }
     }
 }

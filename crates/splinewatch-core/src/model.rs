@@ -1,14 +1,17 @@
 //! The complete structural model: shell + material + springs + supports.
 //!
-//! `K = K_f + ΔK(κ)` (eq. 23) with `ΔK(κ) = Σ_fields Σ_j κ_j ∂K/∂κ_j` (eq. 22).
-//! [`AssembledModel`] keeps `K_f`, `M` and every `∂K/∂κ_j` so that a change
-//! of spring coefficients (the updating loop) costs only the low-rank sums.
+//! `K = K_f(θ) + ΔK(κ)` (eq. 23) with `ΔK(κ) = Σ_fields Σ_j κ_j ∂K/∂κ_j`
+//! (eq. 22) and, for stiffness fields of the deck,
+//! `K_f(θ) = K_f + Σ_fields Σ_k (θ_k − 1) ∂K/∂θ_k` ([`crate::stiffness_field`]).
+//! [`AssembledModel`] keeps `K_f`, `M`, every `∂K/∂κ_j` and `∂K/∂θ_k` so that
+//! a change of coefficients (the updating loop) costs only the weighted sums.
 
 use crate::constraints::{DofReduction, EdgeConstraint};
 use crate::material::OrthotropicMaterial;
 use crate::modal::{ModalError, ModalSolver, Modes};
 use crate::shell::{self, Shell, ShellError};
 use crate::springs::{LowRankBlock, SpringError, SpringField};
+use crate::stiffness_field::{StiffnessField, StiffnessFieldError};
 use faer::Mat;
 use std::sync::OnceLock;
 use thiserror::Error;
@@ -19,10 +22,18 @@ pub enum ModelError {
     Shell(#[from] ShellError),
     #[error("spring field {index}: {source}")]
     Spring { index: usize, source: SpringError },
+    #[error("stiffness field {index}: {source}")]
+    StiffnessField { index: usize, source: StiffnessFieldError },
     #[error("modes: {0}")]
     Modal(#[from] ModalError),
     #[error("spring field {field}: {found} coefficients given, {expected} expected")]
     CoefficientCount {
+        field: usize,
+        found: usize,
+        expected: usize,
+    },
+    #[error("stiffness field {field}: {found} coefficients given, {expected} expected")]
+    FieldCoefficientCount {
         field: usize,
         found: usize,
         expected: usize,
@@ -35,6 +46,8 @@ pub struct ShellModel {
     pub shell: Shell,
     pub material: OrthotropicMaterial,
     pub springs: Vec<SpringField>,
+    /// Stiffness multiplier fields of the deck (none: the nominal material).
+    pub stiffness_fields: Vec<StiffnessField>,
     pub constraints: Vec<EdgeConstraint>,
 }
 
@@ -50,6 +63,10 @@ pub struct AssembledModel {
     pub spring_blocks: Vec<Vec<LowRankBlock>>,
     /// The spring coefficients the model was built with.
     pub spring_stiffness: Vec<Vec<f64>>,
+    /// `∂K/∂θ_k` per stiffness field and coefficient (unconstrained dofs).
+    pub field_matrices: Vec<Vec<Mat<f64>>>,
+    /// The stiffness-field coefficients the model was built with.
+    pub field_coefficients: Vec<Vec<f64>>,
     pub reduction: DofReduction,
     /// Built on the first modal solve from the fields above (read-only after
     /// assembly).
@@ -68,12 +85,27 @@ impl ShellModel {
                     .map_err(|source| ModelError::Spring { index, source })
             })
             .collect::<Result<Vec<_>, _>>()?;
+        let field_matrices = self
+            .stiffness_fields
+            .iter()
+            .enumerate()
+            .map(|(index, f)| {
+                f.coefficient_matrices(&self.shell, &self.material)
+                    .map_err(|source| ModelError::StiffnessField { index, source })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         Ok(AssembledModel {
             shell: self.shell.clone(),
             free_stiffness: mats.stiffness,
             mass: mats.mass,
             spring_blocks,
             spring_stiffness: self.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
+            field_matrices,
+            field_coefficients: self
+                .stiffness_fields
+                .iter()
+                .map(|f| f.coefficients().to_vec())
+                .collect(),
             reduction: DofReduction::new(&self.shell, &self.constraints),
             modal: OnceLock::new(),
         })
@@ -85,10 +117,25 @@ impl AssembledModel {
         self.mass.nrows()
     }
 
-    /// `K_f + ΔK(κ)` for the given coefficients, one vector per spring field.
+    /// `K_f(θ) + ΔK(κ)` for the given spring coefficients (one vector per
+    /// spring field) and the model's own stiffness-field coefficients.
     pub fn stiffness_with(&self, kappa: &[Vec<f64>]) -> Result<Mat<f64>, ModelError> {
+        self.stiffness_with_fields(kappa, &self.field_coefficients)
+    }
+
+    /// `K_f(θ) + ΔK(κ)` for spring coefficients `kappa` and stiffness-field
+    /// coefficients `theta` (one vector per field of each kind).
+    pub fn stiffness_with_fields(&self, kappa: &[Vec<f64>], theta: &[Vec<f64>]) -> Result<Mat<f64>, ModelError> {
         self.check_coefficient_counts(kappa)?;
+        self.check_field_counts(theta)?;
         let mut k = self.free_stiffness.clone();
+        for (matrices, coefficients) in self.field_matrices.iter().zip(theta) {
+            for (m, &t) in matrices.iter().zip(coefficients) {
+                if t != 1.0 {
+                    k += m * (t - 1.0);
+                }
+            }
+        }
         for (blocks, coeffs) in self.spring_blocks.iter().zip(kappa) {
             for (b, &c) in blocks.iter().zip(coeffs) {
                 b.add_scaled_to(&mut k, c);
@@ -117,18 +164,42 @@ impl AssembledModel {
         Ok(())
     }
 
+    fn check_field_counts(&self, theta: &[Vec<f64>]) -> Result<(), ModelError> {
+        let counts = |v: &[Vec<f64>]| v.iter().map(Vec::len).collect::<Vec<_>>();
+        let expected: Vec<usize> = self.field_matrices.iter().map(Vec::len).collect();
+        let found = counts(theta);
+        if found != expected {
+            let field = found.iter().zip(&expected).take_while(|(a, b)| a == b).count();
+            return Err(ModelError::FieldCoefficientCount {
+                field,
+                found: found.get(field).copied().unwrap_or(0),
+                expected: expected.get(field).copied().unwrap_or(0),
+            });
+        }
+        Ok(())
+    }
+
     /// `K_f + ΔK` with the coefficients the model was built with.
     pub fn stiffness(&self) -> Mat<f64> {
         self.stiffness_with(&self.spring_stiffness)
             .expect("built with matching coefficient counts")
     }
 
-    /// All modes for the given spring coefficients.
+    /// All modes for the given spring coefficients (the model's own
+    /// stiffness-field coefficients).
     pub fn modes_with(&self, kappa: &[Vec<f64>]) -> Result<Modes, ModelError> {
+        self.modes_with_fields(kappa, &self.field_coefficients)
+    }
+
+    /// All modes for spring coefficients `kappa` and stiffness-field
+    /// coefficients `theta`.
+    pub fn modes_with_fields(&self, kappa: &[Vec<f64>], theta: &[Vec<f64>]) -> Result<Modes, ModelError> {
         self.check_coefficient_counts(kappa)?;
+        self.check_field_counts(theta)?;
         let flat: Vec<f64> = kappa.iter().flatten().copied().collect();
+        let theta: Vec<f64> = theta.iter().flatten().copied().collect();
         let solver = self.modal_solver()?;
-        Ok(solver.modes(&flat, &self.reduction, &self.mass, &self.shell)?)
+        Ok(solver.modes(&flat, &theta, &self.reduction, &self.mass, &self.shell)?)
     }
 
     /// The prepared eigen-solver (see [`ModalSolver`]).
@@ -136,7 +207,8 @@ impl AssembledModel {
         self.modal
             .get_or_init(|| {
                 let blocks: Vec<&LowRankBlock> = self.spring_blocks.iter().flatten().collect();
-                ModalSolver::new(&self.free_stiffness, &self.mass, &blocks, &self.reduction)
+                let fields: Vec<&Mat<f64>> = self.field_matrices.iter().flatten().collect();
+                ModalSolver::with_fields(&self.free_stiffness, &self.mass, &blocks, &fields, &self.reduction)
             })
             .as_ref()
             .map_err(Clone::clone)

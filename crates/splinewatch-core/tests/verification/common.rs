@@ -56,6 +56,7 @@ pub fn sinello_model() -> ShellModel {
         shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
         material: sinello_material(),
         springs: sinello_springs(),
+        stiffness_fields: vec![],
         constraints: vec![],
     }
 }
@@ -98,6 +99,7 @@ pub fn clamped_curved_panel() -> ShellModel {
         shell: Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
         material: sinello_material(),
         springs: sinello_springs(),
+        stiffness_fields: vec![],
         constraints: vec![EdgeConstraint {
             edge: Edge::Eta0,
             kind: SupportKind::Clamped,

@@ -78,6 +78,7 @@ fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
         shell: Shell::rectangular_plate(4.0, 4.0, 0.1, [3, 3], [10, 10]).unwrap(),
         material: OrthotropicMaterial::isotropic(30e9, 0.2, 2400.0).unwrap(),
         springs: vec![],
+        stiffness_fields: vec![],
         constraints: [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1]
             .into_iter()
             .map(|edge| EdgeConstraint {

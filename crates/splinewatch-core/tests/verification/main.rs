@@ -8,5 +8,6 @@ mod modal_sensitivity;
 mod oma;
 mod shell;
 mod simulate;
+mod stiffness_field;
 mod updating;
 mod welch;

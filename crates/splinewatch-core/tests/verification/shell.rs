@@ -41,6 +41,7 @@ fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial
         shell: Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
         material: material.clone(),
         springs: vec![],
+        stiffness_fields: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
     }
 }
@@ -183,6 +184,7 @@ fn cylindrical_panel_matches_donnell() {
         shell: Shell::cylindrical_panel(length, radius, angle, h, [4, 4], [16, 16]).unwrap(),
         material: OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
         springs: vec![],
+        stiffness_fields: Vec::new(),
         constraints: all_edges(SupportKind::ShearDiaphragm),
     };
     let modes = model.assemble().unwrap().modes().unwrap();
@@ -206,6 +208,7 @@ fn free_plate_has_six_rigid_modes() {
         shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
         material: sinello_material(),
         springs: vec![],
+        stiffness_fields: Vec::new(),
         constraints: vec![],
     };
     let modes = model.assemble().unwrap().modes().unwrap();
@@ -220,6 +223,7 @@ fn vertical_springs_leave_three_in_plane_rigid_modes() {
         shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
         material: sinello_material(),
         springs: sinello_springs(),
+        stiffness_fields: Vec::new(),
         constraints: vec![],
     };
     let modes = model.assemble().unwrap().modes().unwrap();
@@ -246,6 +250,7 @@ fn sinello_deck_has_thirty_modes_below_80_hz() {
         shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
         material: sinello_material(),
         springs: sinello_springs(),
+        stiffness_fields: Vec::new(),
         constraints: vec![],
     };
     let modes = model.assemble().unwrap().modes().unwrap();
@@ -324,6 +329,7 @@ fn material_angle_rotates_the_orthotropy() {
             shell: Shell::rectangular_plate(4.0, 3.0, 0.2, [3, 3], [8, 7]).unwrap(),
             material: OrthotropicMaterial::new(p).unwrap(),
             springs: vec![],
+            stiffness_fields: Vec::new(),
             constraints: all_edges(SupportKind::SimplySupported),
         };
         bending_frequencies(&model, 8)

@@ -1,0 +1,149 @@
+//! Stiffness fields of the deck (B-spline multipliers of the material
+//! stiffness) on the Sinello deck: a global scale against the scaled
+//! material, the modal solver's fast path against the dense solve, and the
+//! eigen-derivatives against central differences.
+
+use super::common::{sinello_material, sinello_model, sinello_sensors, true_kappa};
+use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::frf::FrfModel;
+use splinewatch_core::knots::KnotVector;
+use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::modal::{self, ModeKind};
+use splinewatch_core::model::ShellModel;
+use splinewatch_core::stiffness_field::StiffnessField;
+
+fn field(degree: [usize; 2], count: [usize; 2]) -> StiffnessField {
+    let knots = |d, n| KnotVector::uniform(d, n, 0.0, 1.0).unwrap();
+    StiffnessField::new(
+        knots(degree[0], count[0]),
+        knots(degree[1], count[1]),
+        vec![1.0; count[0] * count[1]],
+    )
+    .unwrap()
+}
+
+fn with_fields(fields: Vec<StiffnessField>) -> ShellModel {
+    ShellModel {
+        stiffness_fields: fields,
+        ..sinello_model()
+    }
+}
+
+/// θ = 0.8 on a one-coefficient field over the deck gives the modes of the
+/// deck whose moduli are all scaled by 0.8 (the springs unchanged): every
+/// frequency within 1e-10 relative (the tolerance; round-off of two
+/// different sums of the same matrices).
+#[test]
+fn a_global_scale_gives_the_modes_of_the_scaled_material() {
+    let scaled = with_fields(vec![field([0, 0], [1, 1])]).assemble().unwrap();
+    let modes = scaled.modes_with_fields(&true_kappa(), &[vec![0.8]]).unwrap();
+    let m = sinello_material();
+    let weak = OrthotropicMaterial::new(OrthotropicParameters {
+        e1: 0.8 * m.e1(),
+        e2: 0.8 * m.e2(),
+        g12: 0.8 * m.g12(),
+        g13: 0.8 * m.g13(),
+        g23: 0.8 * m.g23(),
+        nu12: 0.3,
+        density: 975.0,
+        angle_deg: 0.0,
+        shear_correction: 5.0 / 6.0,
+    })
+    .unwrap();
+    let reference = ShellModel {
+        material: weak,
+        ..sinello_model()
+    }
+    .assemble()
+    .unwrap()
+    .modes_with(&true_kappa())
+    .unwrap();
+    let top = reference.omega2.iter().copied().fold(0.0, f64::max);
+    for i in 0..modes.len() {
+        if modes.kinds[i] == ModeKind::Rigid {
+            continue;
+        }
+        let (a, b) = (modes.omega2[i], reference.omega2[i]);
+        assert!(
+            (a - b).abs() <= 1e-10 * b.abs().max(1e-12 * top),
+            "mode {i}: {a} vs {b}"
+        );
+    }
+}
+
+/// A 4 × 2 field of degree 1 with coefficients between 0.6 and 1.3: the
+/// modal solver's transformed derivative blocks give the dense solve's
+/// eigenvalues (1e-10 relative for every elastic mode).
+#[test]
+fn the_fast_path_equals_the_dense_solve() {
+    let assembled = with_fields(vec![field([1, 1], [4, 2])]).assemble().unwrap();
+    let theta = vec![vec![0.6, 1.1, 0.9, 1.3, 1.0, 0.7, 1.2, 0.8]];
+    let fast = assembled.modes_with_fields(&true_kappa(), &theta).unwrap();
+    let k = assembled.stiffness_with_fields(&true_kappa(), &theta).unwrap();
+    let dense = modal::solve(&k, &assembled.mass, &assembled.reduction, &assembled.shell).unwrap();
+    assert_eq!(fast.len(), dense.len());
+    let top = dense.omega2.iter().copied().fold(0.0, f64::max);
+    for i in 0..fast.len() {
+        if dense.kinds[i] == ModeKind::Rigid {
+            continue;
+        }
+        let (a, b) = (fast.omega2[i], dense.omega2[i]);
+        assert!(
+            (a - b).abs() <= 1e-10 * b.abs().max(1e-12 * top),
+            "mode {i}: {a} vs {b}"
+        );
+    }
+}
+
+/// `∂λ/∂θ` and the sensor amplitudes' derivatives of every bending mode
+/// below 80 Hz, for every coefficient of a 4 × 2 field, against central
+/// differences (step 1e-4: truncation ~1e-8); tolerances as for the springs:
+/// 1e-7 relative for λ, 1e-6 of the largest amplitude for the shapes.
+#[test]
+fn field_derivatives_match_central_differences() {
+    let model = FrfModel::new(
+        with_fields(vec![field([1, 1], [4, 2])]).assemble().unwrap(),
+        &sinello_sensors(),
+    )
+    .unwrap();
+    let damping = DampingCurve::new(2, vec![0.01; 7], 0.0, 80.0).unwrap();
+    let kappa = true_kappa();
+    let theta = vec![vec![1.0, 0.9, 1.1, 0.8, 1.0, 1.2, 0.95, 1.05]];
+    let state = model.modal_state_with_fields(&kappa, &theta, &damping).unwrap();
+    let modes: Vec<usize> = (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending && state.modes.frequency_hz(i) < 80.0)
+        .collect();
+    assert!(modes.len() >= 15, "{} bending modes", modes.len());
+    let analytic = model.field_sensitivities(&state, &modes);
+    let sensors = model.sensor_count();
+    let (mut worst_lambda, mut worst_shape) = (0.0f64, 0.0f64);
+    for j in 0..theta[0].len() {
+        let h = 1e-4;
+        let at = |sign: f64| {
+            let mut t = theta.clone();
+            t[0][j] += sign * h;
+            model.modal_state_with_fields(&kappa, &t, &damping).unwrap()
+        };
+        let (plus, minus) = (at(1.0), at(-1.0));
+        for (row, &i) in modes.iter().enumerate() {
+            let fd = (plus.modes.omega2[i] - minus.modes.omega2[i]) / (2.0 * h);
+            let got = analytic.eigenvalue[(row, j)];
+            let scale = state.modes.omega2[i];
+            worst_lambda = worst_lambda.max((got - fd).abs() / scale);
+            assert!((got - fd).abs() <= 1e-7 * scale, "λ{i} θ{j}: {got} vs {fd}");
+            let sign = |s: &splinewatch_core::frf::ModalState| {
+                let d: f64 = (0..sensors).map(|r| s.amplitude(r, i) * state.amplitude(r, i)).sum();
+                d.signum()
+            };
+            let (sp, sm) = (sign(&plus), sign(&minus));
+            let largest = (0..sensors).map(|r| state.amplitude(r, i).abs()).fold(0.0, f64::max);
+            for r in 0..sensors {
+                let fd = (sp * plus.amplitude(r, i) - sm * minus.amplitude(r, i)) / (2.0 * h);
+                let got = analytic.amplitude[row][(r, j)];
+                worst_shape = worst_shape.max((got - fd).abs() / largest);
+                assert!((got - fd).abs() <= 1e-6 * largest, "a({r},{i}) θ{j}: {got} vs {fd}");
+            }
+        }
+    }
+    eprintln!("worst relative error: λ {worst_lambda:.1e}, amplitudes {worst_shape:.1e}");
+}
