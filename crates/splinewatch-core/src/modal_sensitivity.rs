@@ -17,8 +17,11 @@
 //! deck: the couplings `C = Φᵀ (∂K/∂θ_k) Φ` of every mode pair are formed
 //! with two products per coefficient, and the same expansion applies.
 
-use crate::frf::{FrfModel, ModalState};
-use faer::Mat;
+use crate::damping::DampingCurve;
+use crate::frf::{FrfModel, FrfRequest, ModalState};
+use crate::modal::ModeKind;
+use faer::{c64, Mat};
+use std::f64::consts::PI;
 
 /// Derivatives of selected modes with respect to every spring coefficient
 /// (fields flattened in order, as `FrfEvaluation::dh_dkappa`).
@@ -84,6 +87,70 @@ impl FrfModel {
             eigenvalue,
             amplitude,
         }
+    }
+}
+
+impl FrfModel {
+    /// `∂H/∂θ_k` of the FRFs of `request` for every stiffness-field
+    /// coefficient (fields flattened; pair-major `[pair * n_f + line]` as
+    /// [`crate::frf::FrfEvaluation::h`]), by the chain rule through the
+    /// modal superposition `H_rs = Σ_i a_ri a_si q_i`,
+    /// `q_i = 1 / (ω_i² − ω² + 2j ζ_i ω_i ω)` (eq. 31 with eq. 28):
+    /// `∂H_rs = Σ_i (∂a_ri a_si + a_ri ∂a_si) q_i
+    ///        − a_ri a_si q_i² (∂λ_i + 2j ω (ζ_i ∂ω_i + ω_i ζ'(f_i) ∂f_i))`,
+    /// with the eigen-derivatives of [`Self::field_sensitivities`] over every
+    /// mode (the expansion is then exact) and `ζ'` the damping curve's slope:
+    /// the derivative of exactly the FRF [`FrfModel::evaluate`] computes.
+    pub fn field_frf_sensitivities(
+        &self,
+        state: &ModalState,
+        damping: &DampingCurve,
+        request: FrfRequest<'_>,
+    ) -> Vec<Vec<c64>> {
+        let nm = state.modes.len();
+        let all: Vec<usize> = (0..nm).collect();
+        let sens = self.field_sensitivities(state, &all);
+        let (nf, np) = (request.frequencies_hz.len(), request.pairs.len());
+        let omega: Vec<f64> = (0..nm).map(|i| state.modes.omega2[i].max(0.0).sqrt()).collect();
+        let mut out = vec![vec![c64::new(0.0, 0.0); np * nf]; sens.eigenvalue.ncols()];
+        for (k, dh) in out.iter_mut().enumerate() {
+            // ∂ω_i and ∂ζ_i = ζ'(f_i) ∂f_i of every mode for this coefficient.
+            let d_omega: Vec<f64> = (0..nm)
+                .map(|i| {
+                    if omega[i] > 0.0 {
+                        sens.eigenvalue[(i, k)] / (2.0 * omega[i])
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            let d_zeta: Vec<f64> = (0..nm)
+                .map(|i| match state.modes.kinds[i] {
+                    // Rigid modes carry no damping (eq. 28 is not applied to them).
+                    ModeKind::Rigid => 0.0,
+                    _ => damping.slope(omega[i] / (2.0 * PI)) * d_omega[i] / (2.0 * PI),
+                })
+                .collect();
+            for (f, &hz) in request.frequencies_hz.iter().enumerate() {
+                let w = 2.0 * PI * hz;
+                let factor = request.quantity.factor(w);
+                for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                    let mut sum = c64::new(0.0, 0.0);
+                    for i in 0..nm {
+                        let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
+                        let q = c64::new(omega[i] * omega[i] - w * w, 2.0 * state.zeta[i] * omega[i] * w).inv();
+                        let da = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
+                        let d_denominator = c64::new(
+                            sens.eigenvalue[(i, k)],
+                            2.0 * w * (state.zeta[i] * d_omega[i] + omega[i] * d_zeta[i]),
+                        );
+                        sum += q * da - q * q * d_denominator * (ar * as_);
+                    }
+                    dh[p * nf + f] = sum * factor;
+                }
+            }
+        }
+        out
     }
 }
 
