@@ -264,7 +264,12 @@ impl Pipeline {
     /// The last accepted parameters (the config's values for those never
     /// updated).
     fn start_values(&self) -> Vec<f64> {
-        let base = splinewatch_core::updating::base_values(&self.parameters, &self.setup.kappa, &self.setup.damping);
+        let base = splinewatch_core::updating::base_values(
+            &self.parameters,
+            &self.setup.kappa,
+            &self.setup.model.assembled().field_coefficients,
+            &self.setup.damping,
+        );
         match &self.last {
             Some(last) => self
                 .parameters

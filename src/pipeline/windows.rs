@@ -227,13 +227,15 @@ impl Pipeline {
         if let Some(s) = &self.model_state {
             return Ok(Arc::clone(s));
         }
-        let (kappa, damping) = splinewatch_core::updating::model_at(
+        let start = self.start_values();
+        let (kappa, damping) =
+            splinewatch_core::updating::model_at(&self.parameters, &self.setup.kappa, &self.setup.damping, &start)?;
+        let theta = splinewatch_core::updating::fields_at(
             &self.parameters,
-            &self.setup.kappa,
-            &self.setup.damping,
-            &self.start_values(),
-        )?;
-        let state = Arc::new(self.setup.model.modal_state(&kappa, &damping)?);
+            &self.setup.model.assembled().field_coefficients,
+            &start,
+        );
+        let state = Arc::new(self.setup.model.modal_state_with_fields(&kappa, &theta, &damping)?);
         self.model_state = Some(Arc::clone(&state));
         Ok(state)
     }

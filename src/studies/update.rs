@@ -82,7 +82,12 @@ pub fn update_from_modes(
     let observed = modes.to_observed(&setup.sensor_names)?;
     let parameters = config.build_parameters()?;
     let settings = config.update_settings()?;
-    let base = splinewatch_core::updating::base_values(&parameters, &setup.kappa, &setup.damping);
+    let base = splinewatch_core::updating::base_values(
+        &parameters,
+        &setup.kappa,
+        &setup.model.assembled().field_coefficients,
+        &setup.damping,
+    );
     let problem = ModalUpdateProblem::new(
         &setup.model,
         setup.kappa.clone(),

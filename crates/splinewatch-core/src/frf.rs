@@ -91,6 +91,10 @@ pub struct FrfEvaluation {
     pub dh_dkappa: Vec<Vec<c64>>,
     /// One vector per damping coefficient.
     pub dh_dgamma: Vec<Vec<c64>>,
+    /// One vector per stiffness-field coefficient (fields flattened): filled
+    /// by the updating when it updates fields
+    /// ([`FrfModel::field_frf_sensitivities`]), empty otherwise.
+    pub dh_dtheta: Vec<Vec<c64>>,
 }
 
 /// The modal model at one parameter point.
@@ -215,6 +219,16 @@ impl FrfModel {
         let blocks = &self.assembled.spring_blocks;
         assert!(coefficient < blocks[field].len(), "spring coefficient out of range");
         blocks[..field].iter().map(Vec::len).sum::<usize>() + coefficient
+    }
+
+    /// Index of stiffness-field coefficient `coefficient` of field `field`
+    /// among all fields' coefficients (the columns of
+    /// [`FrfModel::field_sensitivities`]).
+    #[track_caller]
+    pub fn flat_field_index(&self, field: usize, coefficient: usize) -> usize {
+        let fields = &self.assembled.field_matrices;
+        assert!(coefficient < fields[field].len(), "no such stiffness-field coefficient");
+        fields[..field].iter().map(Vec::len).sum::<usize>() + coefficient
     }
 
     /// Total number of spring coefficients over all fields.
@@ -343,6 +357,7 @@ impl FrfModel {
             dh_dkappa: (0..first.dh_dkappa.len())
                 .map(|j| merge(&|e| &e.dh_dkappa[j]))
                 .collect(),
+            dh_dtheta: Vec::new(),
             dh_dgamma: (0..first.dh_dgamma.len())
                 .map(|z| merge(&|e| &e.dh_dgamma[z]))
                 .collect(),
@@ -591,6 +606,7 @@ impl FrfModel {
             h,
             dh_dkappa,
             dh_dgamma,
+            dh_dtheta: Vec::new(),
         }
     }
 

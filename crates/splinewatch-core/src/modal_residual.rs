@@ -126,6 +126,10 @@ pub fn modal_residue(
 ) -> ModalResidue {
     let modes: Vec<usize> = pairs.iter().map(|p| p.model).collect();
     let sens = jacobian.then(|| model.modal_sensitivities(state, &modes));
+    let has_fields = parameters
+        .iter()
+        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
+    let field_sens = (jacobian && has_fields).then(|| model.field_sensitivities(state, &modes));
     let rows: usize = pairs.iter().map(|p| 2 + observed[p.observed].shape.len()).sum();
     let mut residual = Vec::with_capacity(rows);
     let mut jac = if jacobian {
@@ -154,19 +158,27 @@ pub fn modal_residue(
         let slope = damping.slope(f);
         let n = a.len();
         for (c, par) in parameters.iter().enumerate() {
+            // The rows of a stiffness parameter (spring κ or field θ) from
+            // the mode's ∂λ and ∂a at the sensors in column j of `s`.
+            let mut stiffness_rows = |s: &crate::modal_sensitivity::ModalSensitivities, j: usize| {
+                let df = s.eigenvalue[(k, j)] / (8.0 * PI * PI * f);
+                jac[(row0, c)] = df / x.frequency_std_hz;
+                let da: Vec<f64> = x.shape.iter().map(|&(sensor, _)| s.amplitude[k][(sensor, j)]).collect();
+                let phi_da: f64 = phi.iter().zip(&da).map(|(p, d)| p * d).sum();
+                let a_da: f64 = a.iter().zip(&da).map(|(a, d)| a * d).sum();
+                let dalpha = (phi_da - 2.0 * alpha * a_da) / aa;
+                for r in 0..n {
+                    jac[(row0 + 1 + r, c)] = (alpha * da[r] + a[r] * dalpha) / x.shape_std;
+                }
+                jac[(row0 + 1 + n, c)] = slope * df / x.damping_std;
+            };
             match par.kind {
                 ParameterKind::Spring { field, coefficient } => {
-                    let j = model.flat_spring_index(field, coefficient);
-                    let df = sens.eigenvalue[(k, j)] / (8.0 * PI * PI * f);
-                    jac[(row0, c)] = df / x.frequency_std_hz;
-                    let da: Vec<f64> = x.shape.iter().map(|&(s, _)| sens.amplitude[k][(s, j)]).collect();
-                    let phi_da: f64 = phi.iter().zip(&da).map(|(p, d)| p * d).sum();
-                    let a_da: f64 = a.iter().zip(&da).map(|(a, d)| a * d).sum();
-                    let dalpha = (phi_da - 2.0 * alpha * a_da) / aa;
-                    for r in 0..n {
-                        jac[(row0 + 1 + r, c)] = (alpha * da[r] + a[r] * dalpha) / x.shape_std;
-                    }
-                    jac[(row0 + 1 + n, c)] = slope * df / x.damping_std;
+                    stiffness_rows(sens, model.flat_spring_index(field, coefficient));
+                }
+                ParameterKind::Stiffness { field, coefficient } => {
+                    let fs = field_sens.as_ref().expect("computed when a field is updated");
+                    stiffness_rows(fs, model.flat_field_index(field, coefficient));
                 }
                 ParameterKind::Damping { coefficient } => {
                     jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;

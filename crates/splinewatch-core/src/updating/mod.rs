@@ -59,6 +59,9 @@ pub enum UpdateError {
 pub enum ParameterKind {
     /// Coefficient `coefficient` of spring field `field`.
     Spring { field: usize, coefficient: usize },
+    /// Coefficient θ `coefficient` of stiffness field `field` of the deck
+    /// ([`crate::stiffness_field`]).
+    Stiffness { field: usize, coefficient: usize },
     /// Damping coefficient γ_z.
     Damping { coefficient: usize },
 }
@@ -77,6 +80,7 @@ pub struct Parameter {
 pub(crate) fn check_parameters(
     parameters: &[Parameter],
     kappa: &[Vec<f64>],
+    theta: &[Vec<f64>],
     damping: &DampingCurve,
 ) -> Result<(), UpdateError> {
     if parameters.is_empty() {
@@ -104,6 +108,14 @@ pub(crate) fn check_parameters(
                     return bad("a stiffness lower bound must be non-negative".into());
                 }
             }
+            ParameterKind::Stiffness { field, coefficient } => {
+                if theta.get(field).is_none_or(|t| coefficient >= t.len()) {
+                    return bad("refers to a stiffness-field coefficient that does not exist".into());
+                }
+                if p.lower <= 0.0 {
+                    return bad("a stiffness multiplier's lower bound must be positive".into());
+                }
+            }
             ParameterKind::Damping { coefficient } => {
                 if coefficient >= damping.coefficients().len() {
                     return bad("refers to a damping coefficient that does not exist".into());
@@ -117,7 +129,9 @@ pub(crate) fn check_parameters(
     Ok(())
 }
 
-/// The base model (`kappa`, `damping`) with `parameters` set to `p`.
+/// The base model's spring coefficients and damping curve (`kappa`,
+/// `damping`) with `parameters` set to `p`; stiffness-field parameters are
+/// set by [`fields_at`].
 pub fn model_at(
     parameters: &[Parameter],
     kappa: &[Vec<f64>],
@@ -130,19 +144,39 @@ pub fn model_at(
         match par.kind {
             ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
             ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
+            ParameterKind::Stiffness { .. } => {}
         }
     }
     Ok((kappa, damping.with_coefficients(gamma)?))
 }
 
+/// The base stiffness-field coefficients `theta` with the field
+/// parameters among `parameters` set to `p`.
+pub fn fields_at(parameters: &[Parameter], theta: &[Vec<f64>], p: &[f64]) -> Vec<Vec<f64>> {
+    let mut theta = theta.to_vec();
+    for (par, &v) in parameters.iter().zip(p) {
+        if let ParameterKind::Stiffness { field, coefficient } = par.kind {
+            theta[field][coefficient] = v;
+        }
+    }
+    theta
+}
+
 /// The values `parameters` take in the model given by spring coefficients
-/// `kappa` (one vector per field) and `damping`.
+/// `kappa` (one vector per field), stiffness-field coefficients `theta` and
+/// `damping`.
 #[track_caller]
-pub fn base_values(parameters: &[Parameter], kappa: &[Vec<f64>], damping: &DampingCurve) -> Vec<f64> {
+pub fn base_values(
+    parameters: &[Parameter],
+    kappa: &[Vec<f64>],
+    theta: &[Vec<f64>],
+    damping: &DampingCurve,
+) -> Vec<f64> {
     parameters
         .iter()
         .map(|p| match p.kind {
             ParameterKind::Spring { field, coefficient } => kappa[field][coefficient],
+            ParameterKind::Stiffness { field, coefficient } => theta[field][coefficient],
             ParameterKind::Damping { coefficient } => damping.coefficients()[coefficient],
         })
         .collect()
@@ -420,6 +454,7 @@ pub struct UpdateResult {
 pub struct ModelPoint {
     model_id: u64,
     kappa: Vec<Vec<f64>>,
+    theta: Vec<Vec<f64>>,
     damping: DampingCurve,
     frequencies: Vec<f64>,
     pairs: Vec<(usize, usize)>,
@@ -446,6 +481,11 @@ impl ModelPoint {
         &self.kappa
     }
 
+    /// Stiffness-field coefficients per field at this point.
+    pub fn theta(&self) -> &[Vec<f64>] {
+        &self.theta
+    }
+
     /// The damping curve ζ(f) at this point.
     pub fn damping(&self) -> &DampingCurve {
         &self.damping
@@ -465,6 +505,8 @@ pub struct Solution {
 pub struct UpdateProblem<'a> {
     model: &'a FrfModel,
     kappa: Vec<Vec<f64>>,
+    /// Stiffness-field coefficients of parameters not updated: the model's.
+    theta: Vec<Vec<f64>>,
     damping: DampingCurve,
     parameters: Vec<Parameter>,
     measured: &'a MeasuredSet,
@@ -480,8 +522,9 @@ pub struct UpdateProblem<'a> {
 type Evaluation = Evaluated<FrfEvaluation>;
 
 impl<'a> UpdateProblem<'a> {
-    /// `kappa` and `damping` give the values of parameters that are not
-    /// updated; `parameters` lists the updated ones.
+    /// `kappa` and `damping` (and the model's own stiffness-field
+    /// coefficients) give the values of parameters that are not updated;
+    /// `parameters` lists the updated ones.
     pub fn new(
         model: &'a FrfModel,
         kappa: Vec<Vec<f64>>,
@@ -490,7 +533,8 @@ impl<'a> UpdateProblem<'a> {
         measured: &'a MeasuredSet,
         settings: UpdateSettings,
     ) -> Result<Self, UpdateError> {
-        check_parameters(&parameters, &kappa, &damping)?;
+        let theta = model.assembled().field_coefficients.clone();
+        check_parameters(&parameters, &kappa, &theta, &damping)?;
         for frf in measured.frfs() {
             if frf.output >= model.sensor_count() || frf.input >= model.sensor_count() {
                 return Err(UpdateError::Data(
@@ -536,6 +580,7 @@ impl<'a> UpdateProblem<'a> {
         Ok(Self {
             model,
             kappa,
+            theta,
             damping,
             parameters,
             measured,
@@ -553,7 +598,12 @@ impl<'a> UpdateProblem<'a> {
 
     /// The current value of each parameter in the base model.
     pub fn base_values(&self) -> Vec<f64> {
-        base_values(&self.parameters, &self.kappa, &self.damping)
+        base_values(&self.parameters, &self.kappa, &self.theta, &self.damping)
+    }
+
+    /// Stiffness-field coefficients for parameter values `p`.
+    pub fn fields_at(&self, p: &[f64]) -> Vec<Vec<f64>> {
+        fields_at(&self.parameters, &self.theta, p)
     }
 
     /// Spring coefficients and damping curve for parameter values `p`.
@@ -578,7 +628,9 @@ impl<'a> UpdateProblem<'a> {
     /// The modal model at parameter values `p`.
     pub fn state_at(&self, p: &[f64]) -> Result<ModalState, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
-        Ok(self.model.modal_state(&kappa, &damping)?)
+        Ok(self
+            .model
+            .modal_state_with_fields(&kappa, &self.fields_at(p), &damping)?)
     }
 
     fn request(&self) -> FrfRequest<'_> {
@@ -598,9 +650,17 @@ impl<'a> UpdateProblem<'a> {
 
     /// [`Self::evaluate`] for a computed modal state.
     fn evaluate_state(&self, p: &[f64], state: &ModalState, jacobian: bool) -> Result<Evaluation, UpdateError> {
-        let frfs = self
+        let mut frfs = self
             .model
             .evaluate_on_threads(state, self.request(), jacobian, self.settings.threads);
+        let fields = self
+            .parameters
+            .iter()
+            .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
+        if jacobian && fields {
+            let (_, damping) = self.model_at(p)?;
+            frfs.dh_dtheta = self.model.field_frf_sensitivities(state, &damping, self.request());
+        }
         self.weighted(p, frfs, jacobian)
     }
 
@@ -628,6 +688,9 @@ impl<'a> UpdateProblem<'a> {
                     ParameterKind::Spring { field, coefficient } => {
                         &frfs.dh_dkappa[self.model.flat_spring_index(field, coefficient)]
                     }
+                    ParameterKind::Stiffness { field, coefficient } => {
+                        &frfs.dh_dtheta[self.model.flat_field_index(field, coefficient)]
+                    }
                     ParameterKind::Damping { coefficient } => &frfs.dh_dgamma[coefficient],
                 };
                 for k in 0..nl * nb {
@@ -650,11 +713,14 @@ impl<'a> UpdateProblem<'a> {
             return Ok(None);
         };
         let (kappa, damping) = self.model_at(p)?;
+        let theta = self.fields_at(p);
         let same =
             |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
         let matches = point.model_id == self.model.id()
             && point.kappa.len() == kappa.len()
             && point.kappa.iter().zip(&kappa).all(|(a, b)| same(a, b))
+            && point.theta.len() == theta.len()
+            && point.theta.iter().zip(&theta).all(|(a, b)| same(a, b))
             && same(point.damping.coefficients(), damping.coefficients())
             && same(&point.frequencies, &self.frequencies)
             && point.pairs == self.pairs
@@ -667,6 +733,7 @@ impl<'a> UpdateProblem<'a> {
         Ok(ModelPoint {
             model_id: self.model.id(),
             kappa,
+            theta: self.fields_at(p),
             damping,
             frequencies: self.frequencies.clone(),
             pairs: self.pairs.clone(),

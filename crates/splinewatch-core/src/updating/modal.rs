@@ -15,6 +15,8 @@ use crate::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
 pub struct ModalUpdateProblem<'a> {
     model: &'a FrfModel,
     kappa: Vec<Vec<f64>>,
+    /// Stiffness-field coefficients of parameters not updated: the model's.
+    theta: Vec<Vec<f64>>,
     damping: DampingCurve,
     parameters: Vec<Parameter>,
     observed: &'a [ObservedMode],
@@ -46,7 +48,8 @@ impl<'a> ModalUpdateProblem<'a> {
         settings: UpdateSettings,
         (min_mac, max_gap): (f64, f64),
     ) -> Result<Self, UpdateError> {
-        check_parameters(&parameters, &kappa, &damping)?;
+        let theta = model.assembled().field_coefficients.clone();
+        check_parameters(&parameters, &kappa, &theta, &damping)?;
         for (k, m) in observed.iter().enumerate() {
             let positive = |v: f64| v.is_finite() && v > 0.0;
             if !(positive(m.frequency_hz)
@@ -77,6 +80,7 @@ impl<'a> ModalUpdateProblem<'a> {
         Ok(Self {
             model,
             kappa,
+            theta,
             damping,
             parameters,
             observed,
@@ -91,9 +95,16 @@ impl<'a> ModalUpdateProblem<'a> {
         super::model_at(&self.parameters, &self.kappa, &self.damping, p)
     }
 
+    /// Stiffness-field coefficients at parameter values `p`.
+    pub fn fields_at(&self, p: &[f64]) -> Vec<Vec<f64>> {
+        super::fields_at(&self.parameters, &self.theta, p)
+    }
+
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
-        let state = self.model.modal_state(&kappa, &damping)?;
+        let state = self
+            .model
+            .modal_state_with_fields(&kappa, &self.fields_at(p), &damping)?;
         let pairs = pair_modes(&state, self.observed, self.min_mac, self.max_gap);
         let residue = modal_residue(
             self.model,
