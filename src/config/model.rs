@@ -11,6 +11,7 @@ use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::shell::{Shell, ShellError};
 use splinewatch_core::springs::{Face, SpringDirection, SpringField};
+use splinewatch_core::stiffness_field::StiffnessField;
 use splinewatch_core::surface::Direction;
 
 /// Largest control net accepted (5 dofs each; the dense eigen-solve of
@@ -25,6 +26,8 @@ pub struct ModelConfig {
     pub material: MaterialConfig,
     #[serde(default)]
     pub springs: Vec<SpringConfig>,
+    #[serde(default)]
+    pub stiffness_fields: Vec<StiffnessFieldConfig>,
     #[serde(default)]
     pub constraints: Vec<ConstraintConfig>,
     pub damping: Option<DampingConfig>,
@@ -179,6 +182,31 @@ pub struct SpringConfig {
     pub update: bool,
 }
 
+/// `[[model.stiffness_fields]]`: a B-spline multiplier θ(ξ, η) of the deck's
+/// material stiffness over its own clamped knot vectors (1.0 = nominal).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct StiffnessFieldConfig {
+    pub name: String,
+    pub knots_xi: Vec<f64>,
+    pub degree_xi: usize,
+    pub knots_eta: Vec<f64>,
+    pub degree_eta: usize,
+    /// What θ multiplies: `"all"` (membrane, bending and shear together).
+    #[serde(default = "default_scales")]
+    pub scales: String,
+    /// Start values θ, η fastest; default 1.0 everywhere.
+    pub coefficients: Option<Vec<f64>>,
+    /// `[lower, upper]` for every coefficient when updating.
+    pub bounds: Option<[f64; 2]>,
+    #[serde(default = "default_true")]
+    pub update: bool,
+}
+
+fn default_scales() -> String {
+    "all".into()
+}
+
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum EdgeConfig {
@@ -232,11 +260,27 @@ impl Config {
                 },
             })
             .collect();
+        let stiffness_fields = m
+            .stiffness_fields
+            .iter()
+            .enumerate()
+            .map(|(i, f)| build_stiffness_field(i, f, &shell))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut names: Vec<&str> = m.springs.iter().map(|s| s.name.as_str()).collect();
+        for (i, f) in m.stiffness_fields.iter().enumerate() {
+            if names.contains(&f.name.as_str()) || f.name == "damping" {
+                return Err(err(
+                    format!("model.stiffness_fields[{i}].name"),
+                    format!("{:?} is already the name of a spring field or of the damping", f.name),
+                ));
+            }
+            names.push(&f.name);
+        }
         let model = ShellModel {
             shell,
             material,
             springs,
-            stiffness_fields: Vec::new(),
+            stiffness_fields,
             constraints,
         };
         // Surface the spring/shell compatibility errors here, with their key.
@@ -350,6 +394,40 @@ fn shell_error_key(e: &ShellError) -> String {
         ShellError::Surface(_) | ShellError::Knot(_) => "model.discretization.control_points".into(),
         _ => "model.geometry".into(),
     }
+}
+
+fn build_stiffness_field(i: usize, f: &StiffnessFieldConfig, shell: &Shell) -> Result<StiffnessField, ConfigError> {
+    let key = |k: &str| format!("model.stiffness_fields[{i}].{k}");
+    if f.scales != "all" {
+        return Err(err(
+            key("scales"),
+            format!(
+                "{:?}: only \"all\" (membrane, bending and shear together) is supported so far",
+                f.scales
+            ),
+        ));
+    }
+    let xi = KnotVector::new(f.knots_xi.clone(), f.degree_xi).map_err(|e| err(key("knots_xi"), e))?;
+    let eta = KnotVector::new(f.knots_eta.clone(), f.degree_eta).map_err(|e| err(key("knots_eta"), e))?;
+    let count = xi.basis_count() * eta.basis_count();
+    let coefficients = f.coefficients.clone().unwrap_or_else(|| vec![1.0; count]);
+    if let Some([lo, hi]) = f.bounds {
+        if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
+            return Err(err(
+                key("bounds"),
+                format!("[{lo}, {hi}] must satisfy 0 < lower < upper"),
+            ));
+        }
+    }
+    let field = StiffnessField::new(xi, eta, coefficients).map_err(|e| err(key("coefficients"), e))?;
+    field.check_inside(shell).map_err(|e| {
+        let axis = match &e {
+            splinewatch_core::stiffness_field::StiffnessFieldError::OutsideShell { axis, .. } => *axis,
+            _ => "xi",
+        };
+        err(key(&format!("knots_{axis}")), e)
+    })?;
+    Ok(field)
 }
 
 fn build_spring(i: usize, s: &SpringConfig) -> Result<SpringField, ConfigError> {
@@ -466,5 +544,80 @@ impl Config {
             ));
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod stiffness_field_tests {
+    use super::*;
+
+    fn with_field(section: &str) -> Result<Config, ConfigError> {
+        let text = format!("{}\n{section}", include_str!("../../config/sinello.toml"));
+        let config = Config::from_toml(&text)?;
+        config.build_model()?;
+        Ok(config)
+    }
+
+    const REGIONS: &str = r#"
+[[model.stiffness_fields]]
+name = "deck"
+knots_xi = [0.0, 0.25, 0.5, 0.75, 1.0]
+degree_xi = 0
+knots_eta = [0.0, 0.5, 1.0]
+degree_eta = 0
+bounds = [0.3, 1.5]
+"#;
+
+    #[test]
+    fn a_field_becomes_model_coefficients_and_parameters() {
+        let config = with_field(REGIONS).unwrap();
+        let model = config.build_model().unwrap();
+        assert_eq!(model.stiffness_fields.len(), 1);
+        assert_eq!(model.stiffness_fields[0].coefficients(), &[1.0; 8]);
+        let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
+        let fields: Vec<&String> = names.iter().filter(|n| n.starts_with("deck.s")).collect();
+        assert_eq!(fields.len(), 8);
+        assert_eq!(fields[0], "deck.s1");
+        assert_eq!(fields[7], "deck.s8");
+        // Not updated: no parameters, the coefficients still set the model.
+        let fixed = with_field(&REGIONS.replace(
+            "bounds = [0.3, 1.5]",
+            "update = false\ncoefficients = [1, 1, 1, 1, 1, 0.7, 1, 1]",
+        ))
+        .unwrap();
+        assert!(!fixed
+            .build_parameters()
+            .unwrap()
+            .iter()
+            .any(|p| p.name.starts_with("deck.")));
+        assert_eq!(fixed.build_model().unwrap().stiffness_fields[0].coefficients()[5], 0.7);
+    }
+
+    #[test]
+    fn bad_fields_name_their_key() {
+        let message = |section: String| with_field(&section).unwrap_err().to_string();
+        assert!(
+            message(REGIONS.replace("name = \"deck\"", "name = \"east\"")).contains("model.stiffness_fields[0].name")
+        );
+        assert!(message(REGIONS.replace("bounds", "scales = \"bending\"\nbounds"))
+            .contains("model.stiffness_fields[0].scales"));
+        assert!(
+            message(REGIONS.replace("bounds = [0.3, 1.5]", "coefficients = [1.0, 2.0]"))
+                .contains("model.stiffness_fields[0].coefficients")
+        );
+        assert!(message(REGIONS.replace("[0.3, 1.5]", "[0.0, 1.5]")).contains("model.stiffness_fields[0].bounds"));
+        assert!(message(REGIONS.replace("[0.0, 0.5, 1.0]", "[0.0, 0.5, 1.2]"))
+            .contains("model.stiffness_fields[0].knots_eta"));
+        let no_bounds = Config::from_toml(&format!(
+            "{}\n{}",
+            include_str!("../../config/sinello.toml"),
+            REGIONS.replace("bounds = [0.3, 1.5]", "")
+        ))
+        .unwrap();
+        assert!(no_bounds
+            .build_parameters()
+            .unwrap_err()
+            .to_string()
+            .contains("model.stiffness_fields[0].bounds"));
     }
 }

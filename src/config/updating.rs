@@ -89,7 +89,8 @@ impl Default for UpdatingConfig {
 
 impl Config {
     /// The updating parameters: `<spring>.k<j>` for spring fields with
-    /// `update = true` (j from 1, η fastest) and `damping.g<z>`.
+    /// `update = true` (j from 1, η fastest), `<field>.s<j>` for stiffness
+    /// fields with `update = true`, and `damping.g<z>`.
     pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
         let mut out = Vec::new();
         for (field, s) in self.model.springs.iter().enumerate() {
@@ -103,6 +104,32 @@ impl Config {
                 out.push(Parameter {
                     name: format!("{}.k{}", s.name, coefficient + 1),
                     kind: ParameterKind::Spring { field, coefficient },
+                    lower,
+                    upper,
+                });
+            }
+        }
+        for (field, f) in self.model.stiffness_fields.iter().enumerate() {
+            if !f.update {
+                continue;
+            }
+            let [lower, upper] = f.bounds.ok_or_else(|| {
+                err(
+                    format!("model.stiffness_fields[{field}].bounds"),
+                    "required when update = true",
+                )
+            })?;
+            let count = f.coefficients.as_ref().map_or_else(
+                || {
+                    let n = |knots: &[f64], degree: usize| knots.len().saturating_sub(degree + 1);
+                    n(&f.knots_xi, f.degree_xi) * n(&f.knots_eta, f.degree_eta)
+                },
+                Vec::len,
+            );
+            for coefficient in 0..count {
+                out.push(Parameter {
+                    name: format!("{}.s{}", f.name, coefficient + 1),
+                    kind: ParameterKind::Stiffness { field, coefficient },
                     lower,
                     upper,
                 });

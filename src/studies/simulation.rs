@@ -158,23 +158,14 @@ pub fn simulate(
     let parameters = config.build_parameters()?;
     let scenario = o.scenario.clone().unwrap_or_default();
     scenario.check(&parameters)?;
-    let kappa_at = |t: f64| -> Vec<Vec<f64>> {
-        let mut k = setup.kappa.clone();
-        for c in &scenario.changes {
-            let p = parameters
-                .iter()
-                .find(|p| p.name == c.parameter)
-                .expect("checked above");
-            if let ParameterKind::Spring { field, coefficient } = p.kind {
-                k[field][coefficient] = setup.kappa[field][coefficient] * c.factor_at(t);
-            }
-        }
-        k
+    let state_at = |t: f64| {
+        let (k, theta) = scenario.coefficients_at(&setup, &parameters, t);
+        setup.model.modal_state_with_fields(&k, &theta, &setup.damping)
     };
     let update_blocks = ((scenario.update_seconds / o.block_seconds).round() as usize).max(1);
     let dt = 1.0 / (o.fs * o.oversample as f64);
     let sensors = setup.model.sensor_count();
-    let mut state = setup.model.modal_state(&kappa_at(0.0), &setup.damping)?;
+    let mut state = state_at(0.0)?;
     let mut sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
     let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
     let mut noise_std: Option<Vec<f64>> = None;
@@ -187,7 +178,7 @@ pub fn simulate(
         if block_index > 0 && block_index % update_blocks == 0 && !scenario.changes.is_empty() {
             let (x, v) = sim.physical_state(&state);
             let last = sim.last_forces().to_vec();
-            state = setup.model.modal_state(&kappa_at(t0), &setup.damping)?;
+            state = state_at(t0)?;
             sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
             sim.set_physical_state(&state, &setup.model.assembled().mass, &x, &v);
             sim.set_last_forces(&last);
@@ -338,11 +329,40 @@ impl SimulationOptions {
 
 impl Scenario {
     /// Every change names an updating parameter and is well formed.
+    /// Spring and stiffness-field coefficients at time `t` (s): the config's
+    /// values times the changes' factors.
+    fn coefficients_at(&self, setup: &FrfSetup, parameters: &[Parameter], t: f64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let base_theta = &setup.model.assembled().field_coefficients;
+        let (mut k, mut theta) = (setup.kappa.clone(), base_theta.clone());
+        for c in &self.changes {
+            let p = parameters
+                .iter()
+                .find(|p| p.name == c.parameter)
+                .expect("checked by Scenario::check");
+            match p.kind {
+                ParameterKind::Spring { field, coefficient } => {
+                    k[field][coefficient] = setup.kappa[field][coefficient] * c.factor_at(t);
+                }
+                ParameterKind::Stiffness { field, coefficient } => {
+                    theta[field][coefficient] = base_theta[field][coefficient] * c.factor_at(t);
+                }
+                ParameterKind::Damping { .. } => {}
+            }
+        }
+        (k, theta)
+    }
+
     fn check(&self, parameters: &[Parameter]) -> Result<()> {
         for c in &self.changes {
-            if !parameters.iter().any(|p| p.name == c.parameter) {
+            let Some(p) = parameters.iter().find(|p| p.name == c.parameter) else {
                 bail!(
                     "scenario: {:?} is not an updating parameter of this config",
+                    c.parameter
+                );
+            };
+            if matches!(p.kind, ParameterKind::Damping { .. }) {
+                bail!(
+                    "scenario: {:?}: scenarios change spring or stiffness-field coefficients, not the damping curve",
                     c.parameter
                 );
             }

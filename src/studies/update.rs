@@ -104,10 +104,13 @@ pub fn update_from_modes(
     Ok(problem.solve(&start, progress)?)
 }
 
-/// The unit of a parameter: spring coefficients κ in N/m³ (eq. 19), the
-/// damping curve's coefficients γ are ratios.
+/// The unit of a parameter: spring coefficients κ (`<spring>.k<j>`) in
+/// N/m³ (eq. 19); the damping curve's γ (`damping.g<z>`) and stiffness-field
+/// multipliers θ (`<field>.s<j>`) are ratios.
 pub fn parameter_unit(name: &str) -> &'static str {
-    if name.starts_with("damping.") {
+    let last = name.rsplit('.').next().unwrap_or("");
+    let field_multiplier = last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit());
+    if name.starts_with("damping.") || field_multiplier {
         "-"
     } else {
         "N/m³"

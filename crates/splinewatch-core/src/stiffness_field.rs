@@ -109,12 +109,8 @@ impl StiffnessField {
             .filter(|(_, w)| *w != 0.0)
     }
 
-    /// `∂K/∂θ_ij` for every coefficient (`ndof × ndof`, unconstrained dofs).
-    pub fn coefficient_matrices(
-        &self,
-        shell: &Shell,
-        material: &OrthotropicMaterial,
-    ) -> Result<Vec<Mat<f64>>, StiffnessFieldError> {
+    /// The field's rectangle must lie in the shell's parameter domain.
+    pub fn check_inside(&self, shell: &Shell) -> Result<(), StiffnessFieldError> {
         let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
         for (axis, own, of_shell) in [("xi", &self.xi, kx), ("eta", &self.eta, ke)] {
             let ((a, b), (sa, sb)) = (own.domain(), of_shell.domain());
@@ -128,6 +124,17 @@ impl StiffnessField {
                 });
             }
         }
+        Ok(())
+    }
+
+    /// `∂K/∂θ_ij` for every coefficient (`ndof × ndof`, unconstrained dofs).
+    pub fn coefficient_matrices(
+        &self,
+        shell: &Shell,
+        material: &OrthotropicMaterial,
+    ) -> Result<Vec<Mat<f64>>, StiffnessFieldError> {
+        self.check_inside(shell)?;
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
         let ndof = shell.dof_count();
         let count = self.coefficient_count();
         let nloc = DOFS_PER_CONTROL_POINT * (kx.degree() + 1) * (ke.degree() + 1);
