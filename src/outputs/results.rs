@@ -15,7 +15,7 @@ use std::path::Path;
 pub const TOPICS: [(&str, &str); 9] = [
     (
         "updating/parameters",
-        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}}}}"#,
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}}}}"#,
     ),
     (
         "updating/residue",
@@ -118,6 +118,7 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
                     "condition_number": if r.result.condition_number.is_finite() { json!(r.result.condition_number) } else { Value::Null },
                     "relative_offset": r.result.relative_offset,
                     "parameters": r.result.parameters,
+                    "correlations": r.result.correlations,
                 }),
             ));
             match &r.fit {

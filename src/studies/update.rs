@@ -167,5 +167,14 @@ pub fn write_update_table(result: &UpdateResult, out: &mut impl Write) -> Result
         result.relative_residual,
         result.condition_number
     )?;
+    if !result.correlations.is_empty() {
+        let pairs: Vec<String> = result
+            .correlations
+            .iter()
+            .take(3)
+            .map(|c| format!("{}–{} {:+.2}", c.a, c.b, c.rho))
+            .collect();
+        writeln!(out, "most correlated estimates (ρ): {}", pairs.join(", "))?;
+    }
     Ok(())
 }

@@ -30,7 +30,7 @@ mod modal;
 mod solver;
 pub use modal::{ModalSolution, ModalUpdateProblem};
 
-pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved};
+pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved, REPORTED_CORRELATIONS};
 #[cfg(test)]
 use solver::{norm2, normal_equations, quadratic, relative_offset, solve_damped};
 
@@ -418,6 +418,16 @@ pub enum StopReason {
     Diverged,
 }
 
+/// The correlation of two parameters' estimates, `ρ = C_ab / √(C_aa C_bb)`
+/// with `C = σ̂² (JᵀJ)⁻¹`: near ±1 the data cannot tell them apart (a
+/// stiffness field trading off against a spring field).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParameterCorrelation {
+    pub a: String,
+    pub b: String,
+    pub rho: f64,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct UpdateResult {
     pub parameters: Vec<ParameterEstimate>,
@@ -441,6 +451,11 @@ pub struct UpdateResult {
     /// from the previous solve is not one.
     pub evaluations: usize,
     pub lines_used: usize,
+    /// The most correlated parameter pairs (at most
+    /// [`REPORTED_CORRELATIONS`], largest |ρ| first); empty when
+    /// `JᵀJ` is singular.
+    #[serde(default)]
+    pub correlations: Vec<ParameterCorrelation>,
 }
 
 /// The model at one parameter point, with its FRFs and sensitivities on an
@@ -805,21 +820,21 @@ impl<'a> UpdateProblem<'a> {
         let (iterations, evaluations) = (solved.iterations, solved.evaluations);
         let (state, frfs) = current.extra;
         let (relative_residual, frf_relative_residuals) = self.relative_residuals(&frfs.h);
-        let (parameters, singular_values, condition_number, residual_variance) =
-            solver::estimates(&self.parameters, &p, &current.jacobian, cost);
+        let e = solver::estimates(&self.parameters, &p, &current.jacobian, cost);
         let result = UpdateResult {
-            parameters,
+            parameters: e.parameters,
             iterations,
             converged,
             stop_reason: stop,
             relative_residual,
             frf_relative_residuals,
-            singular_values,
-            condition_number,
-            residual_variance,
+            singular_values: e.singular_values,
+            condition_number: e.condition_number,
+            residual_variance: e.residual_variance,
             relative_offset: offset,
             evaluations,
             lines_used: self.lines.len(),
+            correlations: e.correlations,
         };
         let point = self.point(&p, state, frfs)?;
         Ok(Solution { result, point })

@@ -138,8 +138,7 @@ impl<'a> ModalUpdateProblem<'a> {
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<ModalSolution, UpdateError> {
         let solved = solver::levenberg_marquardt(self, start, None, observer)?;
-        let (parameters, singular_values, condition_number, residual_variance) =
-            solver::estimates(&self.parameters, &solved.p, &solved.at.jacobian, solved.cost);
+        let e = solver::estimates(&self.parameters, &solved.p, &solved.at.jacobian, solved.cost);
         let relative_residual = self.relative_residual(&solved.at);
         let Extra { state, pairs, .. } = solved.at.extra;
         let per_mode = pairs
@@ -151,18 +150,19 @@ impl<'a> ModalUpdateProblem<'a> {
             })
             .collect();
         let result = UpdateResult {
-            parameters,
+            parameters: e.parameters,
             iterations: solved.iterations,
             converged: solved.converged,
             stop_reason: solved.stop,
             relative_residual,
             frf_relative_residuals: per_mode,
-            singular_values,
-            condition_number,
-            residual_variance,
+            singular_values: e.singular_values,
+            condition_number: e.condition_number,
+            residual_variance: e.residual_variance,
             relative_offset: solved.offset,
             evaluations: solved.evaluations,
             lines_used: pairs.len(),
+            correlations: e.correlations,
         };
         Ok(ModalSolution { result, pairs, state })
     }
