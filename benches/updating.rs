@@ -53,6 +53,39 @@ fn one_evaluation(bencher: divan::Bencher) {
     });
 }
 
+/// The same evaluation with a 4 × 2 stiffness field of the deck updated
+/// too: 8 κ + 8 θ + 7 γ columns (the θ columns by the modal chain,
+/// `FrfModel::field_frf_sensitivities`, over every mode).
+#[divan::bench(sample_count = 10)]
+fn one_evaluation_with_a_stiffness_field(bencher: divan::Bencher) {
+    let (_, mut model) = bundled_configs(root()).unwrap();
+    model.model.stiffness_fields.push(
+        toml::from_str(
+            "name = \"deck\"\nknots_xi = [0.0, 0.25, 0.5, 0.75, 1.0]\ndegree_xi = 0\n\
+             knots_eta = [0.0, 0.5, 1.0]\ndegree_eta = 0\nbounds = [0.3, 1.5]",
+        )
+        .unwrap(),
+    );
+    let setup = splinewatch::config::frf_setup(&model).unwrap();
+    let theta = setup.model.assembled().field_coefficients.clone();
+    let freqs: Vec<f64> = (0..796).map(|k| 0.5 + 0.1 * k as f64).collect();
+    let pairs: Vec<(usize, usize)> = (0..12).map(|r| (r, 0)).collect();
+    bencher.bench(|| {
+        let state = setup
+            .model
+            .modal_state_with_fields(&setup.kappa, &theta, &setup.damping)
+            .unwrap();
+        let mut e = paper_case(&setup, &state);
+        let request = FrfRequest {
+            frequencies_hz: &freqs,
+            pairs: &pairs,
+            quantity: Quantity::Accelerance,
+        };
+        e.dh_dtheta = setup.model.field_frf_sensitivities(&state, &setup.damping, request);
+        e
+    });
+}
+
 #[divan::bench(sample_count = 5, sample_size = 1)]
 fn whole_updating_12_sensors(bencher: divan::Bencher) {
     let (truth, model) = bundled_configs(root()).unwrap();

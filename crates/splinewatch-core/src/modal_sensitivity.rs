@@ -112,39 +112,42 @@ impl FrfModel {
         let sens = self.field_sensitivities(state, &all);
         let (nf, np) = (request.frequencies_hz.len(), request.pairs.len());
         let omega: Vec<f64> = (0..nm).map(|i| state.modes.omega2[i].max(0.0).sqrt()).collect();
-        let mut out = vec![vec![c64::new(0.0, 0.0); np * nf]; sens.eigenvalue.ncols()];
-        for (k, dh) in out.iter_mut().enumerate() {
-            // ∂ω_i and ∂ζ_i = ζ'(f_i) ∂f_i of every mode for this coefficient.
-            let d_omega: Vec<f64> = (0..nm)
-                .map(|i| {
-                    if omega[i] > 0.0 {
-                        sens.eigenvalue[(i, k)] / (2.0 * omega[i])
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
-            let d_zeta: Vec<f64> = (0..nm)
-                .map(|i| match state.modes.kinds[i] {
-                    // Rigid modes carry no damping (eq. 28 is not applied to them).
-                    ModeKind::Rigid => 0.0,
-                    _ => damping.slope(omega[i] / (2.0 * PI)) * d_omega[i] / (2.0 * PI),
-                })
-                .collect();
-            for (f, &hz) in request.frequencies_hz.iter().enumerate() {
-                let w = 2.0 * PI * hz;
-                let factor = request.quantity.factor(w);
+        let nk = sens.eigenvalue.ncols();
+        let mut out = vec![vec![c64::new(0.0, 0.0); np * nf]; nk];
+        // ∂ω_i and ∂ζ_i = ζ'(f_i) ∂f_i of every mode for every coefficient.
+        let d_omega = Mat::from_fn(nm, nk, |i, k| {
+            if omega[i] > 0.0 {
+                sens.eigenvalue[(i, k)] / (2.0 * omega[i])
+            } else {
+                0.0
+            }
+        });
+        let slope: Vec<f64> = (0..nm)
+            .map(|i| match state.modes.kinds[i] {
+                // Rigid modes carry no damping (eq. 28 is not applied to them).
+                ModeKind::Rigid => 0.0,
+                _ => damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI),
+            })
+            .collect();
+        let mut q = vec![c64::new(0.0, 0.0); nm];
+        for (f, &hz) in request.frequencies_hz.iter().enumerate() {
+            let w = 2.0 * PI * hz;
+            let factor = request.quantity.factor(w);
+            for i in 0..nm {
+                q[i] = c64::new(omega[i] * omega[i] - w * w, 2.0 * state.zeta[i] * omega[i] * w).inv();
+            }
+            for (k, dh) in out.iter_mut().enumerate() {
                 for (p, &(r, s)) in request.pairs.iter().enumerate() {
                     let mut sum = c64::new(0.0, 0.0);
                     for i in 0..nm {
                         let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
-                        let q = c64::new(omega[i] * omega[i] - w * w, 2.0 * state.zeta[i] * omega[i] * w).inv();
                         let da = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
+                        let dw = d_omega[(i, k)];
                         let d_denominator = c64::new(
                             sens.eigenvalue[(i, k)],
-                            2.0 * w * (state.zeta[i] * d_omega[i] + omega[i] * d_zeta[i]),
+                            2.0 * w * (state.zeta[i] * dw + omega[i] * slope[i] * dw),
                         );
-                        sum += q * da - q * q * d_denominator * (ar * as_);
+                        sum += q[i] * (c64::new(da, 0.0) - q[i] * d_denominator * (ar * as_));
                     }
                     dh[p * nf + f] = sum * factor;
                 }
