@@ -107,6 +107,9 @@ pub struct UpdateReport {
     pub bending_modes: Vec<ModeShape>,
     /// The identified spring coefficients (per field) and damping curve.
     pub kappa: Vec<Vec<f64>>,
+    /// The identified stiffness-field coefficients (per field; empty
+    /// without stiffness fields).
+    pub theta: Vec<Vec<f64>>,
     pub damping: DampingCurve,
 }
 
@@ -144,7 +147,9 @@ impl UpdateJob {
         )?;
         let solution = problem.solve(&self.start, &mut |_| {})?;
         let result = accepted(solution.result)?;
-        let (kappa, damping) = problem.model_at(&result.parameters.iter().map(|p| p.value).collect::<Vec<_>>())?;
+        let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
+        let (kappa, damping) = problem.model_at(&values)?;
+        let theta = problem.fields_at(&values);
         let state = solution.state;
         let pairs = solution
             .pairs
@@ -172,6 +177,7 @@ impl UpdateJob {
             modes,
             bending_modes,
             kappa,
+            theta,
             damping,
         };
         Ok((report, state))
@@ -216,6 +222,7 @@ impl UpdateJob {
             );
         }
         let (kappa, damping) = (point.kappa().to_vec(), point.damping().clone());
+        let theta = point.theta().to_vec();
         let top = lines.last().copied().unwrap_or(0.0);
         let (modes, bending_modes) = model_modes(state, top);
         let report = UpdateReport {
@@ -231,6 +238,7 @@ impl UpdateJob {
             modes,
             bending_modes,
             kappa,
+            theta,
             damping,
         };
         Ok((report, point))

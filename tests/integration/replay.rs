@@ -440,3 +440,34 @@ fn a_job_that_waited_starts_from_the_latest_result() {
         assert!((a - b).abs() < 0.1 * std, "{}: {a} vs {b}, σ {std}", p.name);
     }
 }
+
+/// A config with a global modulus scale (one stiffness-field coefficient,
+/// updated with the springs) replays the bundled recording: `deck.s1` is on
+/// the parameters topic with the most correlated pairs, near 1 (the data
+/// were simulated with the nominal material), and the .rrd has the
+/// multiplier's trend and its deck view.
+#[test]
+fn a_global_modulus_scale_is_updated_reported_and_drawn() {
+    let text = format!(
+        "{}\n[[model.stiffness_fields]]\nname = \"deck\"\nknots_xi = [0.0, 1.0]\ndegree_xi = 0\n\
+         knots_eta = [0.0, 1.0]\ndegree_eta = 0\nbounds = [0.5, 1.5]\n",
+        std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()
+    );
+    let cfg = Config::from_toml(&text).unwrap();
+    let dir = fresh_dir("modulus-scale");
+    let path = dir.join("replay.rrd");
+    let targets = splinewatch::outputs::rerun::RerunTargets {
+        save: Some(path.clone()),
+        connect: None,
+    };
+    let summary = replay_into_rerun(&cfg, &targets);
+    let last = summary.updates.back().unwrap().result.as_ref().unwrap();
+    let scale = last.result.parameters.iter().find(|p| p.name == "deck.s1").unwrap();
+    assert!((scale.value - 1.0).abs() < 0.02, "deck.s1 = {}", scale.value);
+    assert!(!last.result.correlations.is_empty());
+    assert_eq!(last.theta, vec![vec![scale.value]]);
+    let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&path).unwrap()).unwrap();
+    for entity in ["/parameters/fields/deck.s1", "/deck/stiffness"] {
+        assert!(rrd.entities.contains(entity), "{entity} missing: {:?}", rrd.entities);
+    }
+}

@@ -37,15 +37,15 @@ impl RerunOutput {
                 TimeSeriesView::new("Damping coefficients (±1σ)")
                     .with_origin("/parameters/damping")
                     .into(),
+                TimeSeriesView::new("Stiffness multipliers θ (±1σ)")
+                    .with_origin("/parameters/fields")
+                    .with_visible(!self.model.stiffness_fields.is_empty())
+                    .into(),
                 TimeSeriesView::new("Relative residual").with_origin("/residual").into(),
                 TimeSeriesView::new("Health").with_origin("/health").into(),
             ])
             .into(),
-            Vertical::new([
-                Spatial3DView::new("Deck: spring field r33").with_origin("/deck").into(),
-                mode_tabs.into(),
-            ])
-            .into(),
+            Vertical::new([self.deck_views(), mode_tabs.into()]).into(),
             if self.output_only {
                 Vertical::new([
                     Spatial2DView::new(
@@ -81,6 +81,24 @@ impl RerunOutput {
                 },
             )
             .map_err(|e| anyhow!("sending the Rerun blueprint: {e}"))
+    }
+
+    /// The deck coloured by the spring field r33 and, with stiffness
+    /// fields, by the identified multiplier θ: one tab each.
+    fn deck_views(&self) -> ContainerLike {
+        let mut views: Vec<ContainerLike> = vec![Spatial3DView::new("Deck: spring field r33")
+            .with_origin("/deck")
+            .with_contents(["/deck/springs", "/deck/sensors"])
+            .into()];
+        if !self.model.stiffness_fields.is_empty() {
+            views.push(
+                Spatial3DView::new("Deck: stiffness multiplier θ (0.5 → 1.5)")
+                    .with_origin("/deck")
+                    .with_contents(["/deck/stiffness", "/deck/sensors"])
+                    .into(),
+            );
+        }
+        Tabs::new(views).into()
     }
 
     pub(super) fn log_sensors(&self, sensors: &[(String, SensorPoint)]) -> Result<()> {

@@ -102,6 +102,21 @@ impl DeckGrid {
             .collect()
     }
 
+    /// The stiffness multiplier `1 + Σ_fields (θ_f(ξ,η) − 1)` at each vertex.
+    pub(super) fn stiffness_multiplier(&self, model: &ShellModel, theta: &[Vec<f64>]) -> Vec<f64> {
+        self.params
+            .iter()
+            .map(|&(x, y)| {
+                1.0 + model
+                    .stiffness_fields
+                    .iter()
+                    .zip(theta)
+                    .map(|(f, t)| f.value_with(t, x, y) - 1.0)
+                    .sum::<f64>()
+            })
+            .collect()
+    }
+
     /// Displacement along the surface normal at each vertex of the shape
     /// with generalised dof values `shape(dof)`.
     pub(super) fn normal_displacement(&self, model: &ShellModel, shape: impl Fn(usize) -> f64) -> Vec<f64> {

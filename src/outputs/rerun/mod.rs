@@ -3,14 +3,17 @@
 //!
 //! Timelines: `measurement_time` (the data's own clock) and `update` (the
 //! update index). Entities:
-//! - `parameters/springs/<name>`, `parameters/damping/<name>`: the value and
-//!   ±1σ as three series; `residual/relative`; `health/<counter>`;
+//! - `parameters/springs/<name>`, `parameters/fields/<name>` (stiffness
+//!   multipliers θ), `parameters/damping/<name>`: the value and ±1σ as three
+//!   series; `residual/relative`; `health/<counter>`;
 //! - `frf/<output>/magnitude/{measured,model}` (dB) and
 //!   `frf/<output>/phase/{measured,model}` (degrees), bar charts over the
 //!   frequency lines; `damping/zeta` (ζ(f) in %) and
 //!   `damping/coefficients` (γ_z at their Greville abscissae);
 //! - `deck/springs`: the deck mesh coloured by the identified spring field
-//!   r33 (N/m³); `deck/sensors`; `modes/<k>`: the first bending modes;
+//!   r33 (N/m³); `deck/stiffness` (with stiffness fields): coloured by the
+//!   identified multiplier θ (0.5 → 1.5); `deck/sensors`; `modes/<k>`: the
+//!   first bending modes;
 //! - `oma/stabilisation` (poles: frequency × order; its child
 //!   `first_singular_value`: the output spectral matrix's, log scale mapped
 //!   onto the order axis), `oma/singular_values` (Hankel),
@@ -139,8 +142,9 @@ impl RerunOutput {
         self.log_sensors(&self.sensors)?;
         // The mesh topology never changes: logged once per file, static;
         // updates only carry vertex positions and colours.
-        let mesh_paths =
-            std::iter::once("deck/springs".to_string()).chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
+        let mesh_paths = ["deck/springs".to_string(), "deck/stiffness".to_string()]
+            .into_iter()
+            .chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
         for path in mesh_paths {
             self.rec
                 .log_static(
@@ -213,6 +217,7 @@ impl RerunOutput {
         }
         self.log_damping(&report.damping)?;
         self.log_spring_field(&report.kappa)?;
+        self.log_stiffness_field(&report.theta)?;
         self.log_modes(report)?;
         Ok(())
     }

@@ -12,11 +12,7 @@ impl RerunOutput {
     /// Value and ±1σ of every parameter, and the relative residual.
     pub(super) fn log_parameters(&mut self, report: &UpdateReport) -> Result<()> {
         for p in &report.result.parameters {
-            let group = if p.name.starts_with("damping.") {
-                "damping"
-            } else {
-                "springs"
-            };
+            let group = parameter_group(&p.name);
             let path = format!("parameters/{group}/{}", p.name);
             let sigma = p.std.unwrap_or(0.0);
             if self.named.insert(path.clone()) {
@@ -71,6 +67,28 @@ impl RerunOutput {
                 &rerun::BarChart::new(gamma.as_slice())
                     .with_abscissa(at.as_slice())
                     .with_widths([((f1 - f0) / (4 * gamma.len().max(1)) as f64) as f32]),
+            )
+            .map_err(rerun_error)?;
+        Ok(())
+    }
+
+    /// The identified stiffness multiplier θ on the deck (only with
+    /// stiffness fields): colour 0.5 → 1.5 over the map, 1 in the middle.
+    pub(super) fn log_stiffness_field(&self, theta: &[Vec<f64>]) -> Result<()> {
+        if self.model.stiffness_fields.is_empty() {
+            return Ok(());
+        }
+        let multiplier = self.grid.stiffness_multiplier(&self.model, theta);
+        let colors: Vec<rerun::Color> = multiplier
+            .iter()
+            .map(|&v| colormap((v - 0.5).clamp(0.0, 1.0)))
+            .collect();
+        self.rec
+            .log(
+                "deck/stiffness",
+                &rerun::Mesh3D::update_fields()
+                    .with_vertex_positions(self.grid.positions.clone())
+                    .with_vertex_colors(colors),
             )
             .map_err(rerun_error)?;
         Ok(())
@@ -162,5 +180,18 @@ impl RerunOutput {
                 .map_err(rerun_error)?;
         }
         Ok(())
+    }
+}
+
+/// The trend group of a parameter: `damping` (`damping.g<z>`), `fields`
+/// (stiffness multipliers `<field>.s<j>`) or `springs` (`<spring>.k<j>`).
+pub(super) fn parameter_group(name: &str) -> &'static str {
+    let last = name.rsplit('.').next().unwrap_or("");
+    if name.starts_with("damping.") {
+        "damping"
+    } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
+        "fields"
+    } else {
+        "springs"
     }
 }
