@@ -467,7 +467,11 @@ fn a_global_modulus_scale_is_updated_reported_and_drawn() {
     assert!(!last.result.correlations.is_empty());
     assert_eq!(last.theta, vec![vec![scale.value]]);
     let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&path).unwrap()).unwrap();
-    for entity in ["/parameters/fields/deck.s1", "/deck/stiffness"] {
+    for entity in [
+        "/parameters/fields/deck.s1",
+        "/deck/stiffness",
+        "/deck/stiffness_change",
+    ] {
         assert!(rrd.entities.contains(entity), "{entity} missing: {:?}", rrd.entities);
     }
 }

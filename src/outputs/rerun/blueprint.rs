@@ -97,6 +97,12 @@ impl RerunOutput {
                     .with_contents(["/deck/stiffness", "/deck/sensors"])
                     .into(),
             );
+            views.push(
+                Spatial3DView::new("Deck: change of θ since the first update (−3σ → +3σ)")
+                    .with_origin("/deck")
+                    .with_contents(["/deck/stiffness_change", "/deck/sensors"])
+                    .into(),
+            );
         }
         Tabs::new(views).into()
     }

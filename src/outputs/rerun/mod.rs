@@ -12,7 +12,8 @@
 //!   `damping/coefficients` (γ_z at their Greville abscissae);
 //! - `deck/springs`: the deck mesh coloured by the identified spring field
 //!   r33 (N/m³); `deck/stiffness` (with stiffness fields): coloured by the
-//!   identified multiplier θ (0.5 → 1.5); `deck/sensors`; `modes/<k>`: the
+//!   identified multiplier θ (0.5 → 1.5), `deck/stiffness_change`: by the
+//!   standardised change of θ since the first update (−3σ → +3σ); `deck/sensors`; `modes/<k>`: the
 //!   first bending modes;
 //! - `oma/stabilisation` (poles: frequency × order; its child
 //!   `first_singular_value`: the output spectral matrix's, log scale mapped
@@ -64,6 +65,9 @@ const MODES_SHOWN: usize = crate::pipeline::BENDING_MODES_KEPT;
 /// Grid of the deck mesh along ξ and η (spring knots are added to it).
 const GRID: (usize, usize) = (49, 25);
 
+/// θ and σ per stiffness field and coefficient.
+type FieldReference = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 pub struct RerunOutput {
     rec: rerun::RecordingStream,
     setup: FrfSetup,
@@ -77,6 +81,11 @@ pub struct RerunOutput {
     rotate_ns: i128,
     /// An output-only config (the blueprint shows OMA views instead of FRFs).
     output_only: bool,
+    /// Names of the stiffness fields (their parameters are `<name>.s<j>`).
+    field_names: Vec<String>,
+    /// θ and σ of the first update with stiffness fields: the reference of
+    /// the standardised change.
+    first_fields: Option<FieldReference>,
     /// Measurement time of the open file's first message.
     file_start_ns: Option<i128>,
 }
@@ -101,6 +110,8 @@ impl RerunOutput {
             sensors,
             rotate_ns: (config.output.rerun_rotate_hours * 3600e9) as i128,
             output_only: config.is_output_only(),
+            field_names: config.model.stiffness_fields.iter().map(|f| f.name.clone()).collect(),
+            first_fields: None,
             file_start_ns: None,
         };
         out.attach_sinks(None)?;
@@ -142,7 +153,8 @@ impl RerunOutput {
         self.log_sensors(&self.sensors)?;
         // The mesh topology never changes: logged once per file, static;
         // updates only carry vertex positions and colours.
-        let mesh_paths = ["deck/springs".to_string(), "deck/stiffness".to_string()]
+        let mesh_paths = ["deck/springs", "deck/stiffness", "deck/stiffness_change"]
+            .map(String::from)
             .into_iter()
             .chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
         for path in mesh_paths {
@@ -217,7 +229,7 @@ impl RerunOutput {
         }
         self.log_damping(&report.damping)?;
         self.log_spring_field(&report.kappa)?;
-        self.log_stiffness_field(&report.theta)?;
+        self.log_stiffness_field(report)?;
         self.log_modes(report)?;
         Ok(())
     }

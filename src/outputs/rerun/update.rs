@@ -73,22 +73,65 @@ impl RerunOutput {
     }
 
     /// The identified stiffness multiplier θ on the deck (only with
-    /// stiffness fields): colour 0.5 → 1.5 over the map, 1 in the middle.
-    pub(super) fn log_stiffness_field(&self, theta: &[Vec<f64>]) -> Result<()> {
+    /// stiffness fields): colour 0.5 → 1.5 over the map, 1 in the middle;
+    /// from the second update on also the standardised change from the
+    /// first, `(θ − θ₀)/√(σ² + σ₀²)` per coefficient, on its own mesh
+    /// (−3 → +3 over the map).
+    pub(super) fn log_stiffness_field(&mut self, report: &UpdateReport) -> Result<()> {
         if self.model.stiffness_fields.is_empty() {
             return Ok(());
         }
+        let theta = &report.theta;
         let multiplier = self.grid.stiffness_multiplier(&self.model, theta);
-        let colors: Vec<rerun::Color> = multiplier
+        self.log_deck_colours("deck/stiffness", multiplier.iter().map(|&v| colormap(v - 0.5)))?;
+        // σ of every coefficient (0 when not updated or unidentifiable).
+        let sigma: Vec<Vec<f64>> = self
+            .field_names
             .iter()
-            .map(|&v| colormap((v - 0.5).clamp(0.0, 1.0)))
+            .zip(theta)
+            .map(|(name, values)| {
+                (0..values.len())
+                    .map(|j| {
+                        let key = format!("{name}.s{}", j + 1);
+                        let p = report.result.parameters.iter().find(|p| p.name == key);
+                        p.and_then(|p| p.std).unwrap_or(0.0)
+                    })
+                    .collect()
+            })
             .collect();
+        let Some((theta0, sigma0)) = &self.first_fields else {
+            self.first_fields = Some((theta.clone(), sigma));
+            return Ok(());
+        };
+        // θ' = 1 + z evaluates the standardised change as a multiplier field.
+        let shifted: Vec<Vec<f64>> = theta
+            .iter()
+            .zip(theta0)
+            .zip(sigma.iter().zip(sigma0))
+            .map(|((t, t0), (s, s0))| {
+                (0..t.len())
+                    .map(|j| {
+                        let scale = (s[j] * s[j] + s0[j] * s0[j]).sqrt();
+                        1.0 + if scale > 0.0 { (t[j] - t0[j]) / scale } else { 0.0 }
+                    })
+                    .collect()
+            })
+            .collect();
+        let z = self.grid.stiffness_multiplier(&self.model, &shifted);
+        self.log_deck_colours(
+            "deck/stiffness_change",
+            z.iter().map(|&v| colormap(0.5 + (v - 1.0) / 6.0)),
+        )
+    }
+
+    /// The deck mesh at `path` with one colour per vertex.
+    fn log_deck_colours(&self, path: &str, colors: impl Iterator<Item = rerun::Color>) -> Result<()> {
         self.rec
             .log(
-                "deck/stiffness",
+                path,
                 &rerun::Mesh3D::update_fields()
                     .with_vertex_positions(self.grid.positions.clone())
-                    .with_vertex_colors(colors),
+                    .with_vertex_colors(colors.collect::<Vec<_>>()),
             )
             .map_err(rerun_error)?;
         Ok(())
