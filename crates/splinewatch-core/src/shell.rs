@@ -307,6 +307,19 @@ impl Shell {
     }
 
     /// Eq. (3) at one point: the non-zero columns of `N` as `(dof, N column)`.
+    /// The first axis (`"xi"` or `"eta"`) along which the rectangle of the
+    /// knot vectors `xi` × `eta` leaves the shell's parameter domain, as
+    /// `(axis, start, end, shell start, shell end)` (a field must lie inside).
+    pub fn outside_domain(&self, xi: &KnotVector, eta: &KnotVector) -> Option<(&'static str, f64, f64, f64, f64)> {
+        let (kx, ke) = (self.surface.xi(), self.surface.eta());
+        [("xi", xi, kx), ("eta", eta, ke)]
+            .into_iter()
+            .find_map(|(axis, own, of_shell)| {
+                let ((a, b), (sa, sb)) = (own.domain(), of_shell.domain());
+                (a < sa || b > sb).then_some((axis, a, b, sa, sb))
+            })
+    }
+
     pub fn shape_functions(&self, xi: f64, eta: f64, tau: f64) -> Vec<(usize, Vec3)> {
         let mut pt = ShellPoint::new_empty();
         self.evaluate_into(xi, eta, tau, &mut pt);

@@ -185,18 +185,14 @@ impl SpringField {
 
     /// `∂ΔK/∂κ_j` for every coefficient `j` (eq. 22 with a unit κ_j).
     pub fn coefficient_matrices(&self, shell: &Shell) -> Result<Vec<LowRankBlock>, SpringError> {
-        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-        for (axis, own, of_shell) in [("xi", &self.xi, kx), ("eta", &self.eta, ke)] {
-            let ((a, b), (sa, sb)) = (own.domain(), of_shell.domain());
-            if a < sa || b > sb {
-                return Err(SpringError::OutsideShell {
-                    axis,
-                    start: a,
-                    end: b,
-                    shell_start: sa,
-                    shell_end: sb,
-                });
-            }
+        if let Some((axis, start, end, shell_start, shell_end)) = shell.outside_domain(&self.xi, &self.eta) {
+            return Err(SpringError::OutsideShell {
+                axis,
+                start,
+                end,
+                shell_start,
+                shell_end,
+            });
         }
         let count = self.coefficient_count();
         // Pass 1: which dofs each block touches.

@@ -111,20 +111,16 @@ impl StiffnessField {
 
     /// The field's rectangle must lie in the shell's parameter domain.
     pub fn check_inside(&self, shell: &Shell) -> Result<(), StiffnessFieldError> {
-        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-        for (axis, own, of_shell) in [("xi", &self.xi, kx), ("eta", &self.eta, ke)] {
-            let ((a, b), (sa, sb)) = (own.domain(), of_shell.domain());
-            if a < sa || b > sb {
-                return Err(StiffnessFieldError::OutsideShell {
-                    axis,
-                    start: a,
-                    end: b,
-                    shell_start: sa,
-                    shell_end: sb,
-                });
-            }
+        match shell.outside_domain(&self.xi, &self.eta) {
+            Some((axis, start, end, shell_start, shell_end)) => Err(StiffnessFieldError::OutsideShell {
+                axis,
+                start,
+                end,
+                shell_start,
+                shell_end,
+            }),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// `∂K/∂θ_ij` for every coefficient (`ndof × ndof`, unconstrained dofs).

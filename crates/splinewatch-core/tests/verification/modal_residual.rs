@@ -49,6 +49,39 @@ fn observed_from(state: &ModalState) -> Vec<ObservedMode> {
         .collect()
 }
 
+/// Every column of `jacobian` against central differences of `residual`
+/// (step `step(c)` on parameter `c` of `p0`), within 1e-5 of the column's
+/// largest entry; returns the worst relative error.
+fn check_columns(
+    jacobian: &splinewatch_core::Mat<f64>,
+    p0: &[f64],
+    names: &[String],
+    step: impl Fn(usize) -> f64,
+    residual: impl Fn(&[f64]) -> Vec<f64>,
+) -> f64 {
+    let mut worst = 0.0f64;
+    for c in 0..p0.len() {
+        let h = step(c);
+        let at = |sign: f64| {
+            let mut p = p0.to_vec();
+            p[c] += sign * h;
+            residual(&p)
+        };
+        let (plus, minus) = (at(1.0), at(-1.0));
+        let column_scale = (0..jacobian.nrows())
+            .map(|r| jacobian[(r, c)].abs())
+            .fold(0.0, f64::max)
+            .max(1e-30);
+        for r in 0..jacobian.nrows() {
+            let fd = (plus[r] - minus[r]) / (2.0 * h);
+            let error = (jacobian[(r, c)] - fd).abs() / column_scale;
+            worst = worst.max(error);
+            assert!(error < 1e-5, "row {r}, {}: {} vs {fd}", names[c], jacobian[(r, c)]);
+        }
+    }
+    worst
+}
+
 #[test]
 fn modal_residue_jacobian_matches_central_differences() {
     let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
@@ -71,32 +104,12 @@ fn modal_residue_jacobian_matches_central_differences() {
     assert!(pairs.iter().all(|p| p.mac > 0.9), "{pairs:?}");
     let base = modal_residue(&model, &state, &d0, &observed, &pairs, &parameters, true);
     assert_eq!(base.residual.len(), 18 * 14);
-    let mut worst = 0.0f64;
-    for c in 0..parameters.len() {
-        let h = if c < 8 { 1e-5 * p0[c] } else { 1e-6 };
-        let residual = |sign: f64| {
-            let mut p = p0.clone();
-            p[c] += sign * h;
-            let (s, d) = at(&p);
-            modal_residue(&model, &s, &d, &observed, &pairs, &parameters, false).residual
-        };
-        let (plus, minus) = (residual(1.0), residual(-1.0));
-        let column_scale = (0..base.residual.len())
-            .map(|r| base.jacobian[(r, c)].abs())
-            .fold(0.0, f64::max)
-            .max(1e-30);
-        for r in 0..base.residual.len() {
-            let fd = (plus[r] - minus[r]) / (2.0 * h);
-            let error = (base.jacobian[(r, c)] - fd).abs() / column_scale;
-            worst = worst.max(error);
-            assert!(
-                error < 1e-5,
-                "row {r}, {}: {} vs {fd}",
-                parameters[c].name,
-                base.jacobian[(r, c)]
-            );
-        }
-    }
+    let names: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
+    let step = |c: usize| if c < 8 { 1e-5 * p0[c] } else { 1e-6 };
+    let worst = check_columns(&base.jacobian, &p0, &names, step, |p| {
+        let (s, d) = at(p);
+        modal_residue(&model, &s, &d, &observed, &pairs, &parameters, false).residual
+    });
     eprintln!("worst Jacobian error relative to its column's largest entry: {worst:.1e}");
 }
 
@@ -146,31 +159,14 @@ fn modal_residue_jacobian_for_a_stiffness_field_matches_central_differences() {
     let pairs = pair_modes(&state, &observed, 0.8, 0.1);
     assert!(pairs.len() >= 15, "{} pairs", pairs.len());
     let base = modal_residue(&model, &state, &damping, &observed, &pairs, &parameters, true);
-    let mut worst = 0.0f64;
-    for c in 0..parameters.len() {
-        let h = 1e-5 * p0[c];
-        let residual = |sign: f64| {
-            let mut p = p0.clone();
-            p[c] += sign * h;
-            modal_residue(&model, &at(&p), &damping, &observed, &pairs, &parameters, false).residual
-        };
-        let (plus, minus) = (residual(1.0), residual(-1.0));
-        let column_scale = (0..base.residual.len())
-            .map(|r| base.jacobian[(r, c)].abs())
-            .fold(0.0, f64::max)
-            .max(1e-30);
-        for r in 0..base.residual.len() {
-            let fd = (plus[r] - minus[r]) / (2.0 * h);
-            let error = (base.jacobian[(r, c)] - fd).abs() / column_scale;
-            worst = worst.max(error);
-            assert!(
-                error < 1e-5,
-                "row {r}, {}: {} vs {fd}",
-                parameters[c].name,
-                base.jacobian[(r, c)]
-            );
-        }
-    }
+    let names: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
+    let worst = check_columns(
+        &base.jacobian,
+        &p0,
+        &names,
+        |c| 1e-5 * p0[c],
+        |p| modal_residue(&model, &at(p), &damping, &observed, &pairs, &parameters, false).residual,
+    );
     eprintln!("worst field Jacobian error relative to its column's largest entry: {worst:.1e}");
 }
 
