@@ -162,6 +162,21 @@ pub fn fields_at(parameters: &[Parameter], theta: &[Vec<f64>], p: &[f64]) -> Vec
     theta
 }
 
+/// The modal state of `model` with `parameters` set to `p` over the base
+/// spring coefficients `kappa`, `damping` and the model's own stiffness-field
+/// coefficients, with the damping curve there.
+pub(crate) fn modal_state_at(
+    model: &FrfModel,
+    parameters: &[Parameter],
+    kappa: &[Vec<f64>],
+    damping: &DampingCurve,
+    p: &[f64],
+) -> Result<(ModalState, DampingCurve), UpdateError> {
+    let (kappa, damping) = model_at(parameters, kappa, damping, p)?;
+    let theta = fields_at(parameters, &model.assembled().field_coefficients, p);
+    Ok((model.modal_state_with_fields(&kappa, &theta, &damping)?, damping))
+}
+
 /// The values `parameters` take in the model given by spring coefficients
 /// `kappa` (one vector per field), stiffness-field coefficients `theta` and
 /// `damping`.
@@ -520,8 +535,6 @@ pub struct Solution {
 pub struct UpdateProblem<'a> {
     model: &'a FrfModel,
     kappa: Vec<Vec<f64>>,
-    /// Stiffness-field coefficients of parameters not updated: the model's.
-    theta: Vec<Vec<f64>>,
     damping: DampingCurve,
     parameters: Vec<Parameter>,
     measured: &'a MeasuredSet,
@@ -548,8 +561,7 @@ impl<'a> UpdateProblem<'a> {
         measured: &'a MeasuredSet,
         settings: UpdateSettings,
     ) -> Result<Self, UpdateError> {
-        let theta = model.assembled().field_coefficients.clone();
-        check_parameters(&parameters, &kappa, &theta, &damping)?;
+        check_parameters(&parameters, &kappa, &model.assembled().field_coefficients, &damping)?;
         for frf in measured.frfs() {
             if frf.output >= model.sensor_count() || frf.input >= model.sensor_count() {
                 return Err(UpdateError::Data(
@@ -595,7 +607,6 @@ impl<'a> UpdateProblem<'a> {
         Ok(Self {
             model,
             kappa,
-            theta,
             damping,
             parameters,
             measured,
@@ -613,12 +624,17 @@ impl<'a> UpdateProblem<'a> {
 
     /// The current value of each parameter in the base model.
     pub fn base_values(&self) -> Vec<f64> {
-        base_values(&self.parameters, &self.kappa, &self.theta, &self.damping)
+        base_values(
+            &self.parameters,
+            &self.kappa,
+            &self.model.assembled().field_coefficients,
+            &self.damping,
+        )
     }
 
     /// Stiffness-field coefficients for parameter values `p`.
     pub fn fields_at(&self, p: &[f64]) -> Vec<Vec<f64>> {
-        fields_at(&self.parameters, &self.theta, p)
+        fields_at(&self.parameters, &self.model.assembled().field_coefficients, p)
     }
 
     /// Spring coefficients and damping curve for parameter values `p`.
@@ -642,10 +658,7 @@ impl<'a> UpdateProblem<'a> {
 
     /// The modal model at parameter values `p`.
     pub fn state_at(&self, p: &[f64]) -> Result<ModalState, UpdateError> {
-        let (kappa, damping) = self.model_at(p)?;
-        Ok(self
-            .model
-            .modal_state_with_fields(&kappa, &self.fields_at(p), &damping)?)
+        Ok(modal_state_at(self.model, &self.parameters, &self.kappa, &self.damping, p)?.0)
     }
 
     fn request(&self) -> FrfRequest<'_> {

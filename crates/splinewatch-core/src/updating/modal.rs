@@ -15,8 +15,6 @@ use crate::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
 pub struct ModalUpdateProblem<'a> {
     model: &'a FrfModel,
     kappa: Vec<Vec<f64>>,
-    /// Stiffness-field coefficients of parameters not updated: the model's.
-    theta: Vec<Vec<f64>>,
     damping: DampingCurve,
     parameters: Vec<Parameter>,
     observed: &'a [ObservedMode],
@@ -48,8 +46,7 @@ impl<'a> ModalUpdateProblem<'a> {
         settings: UpdateSettings,
         (min_mac, max_gap): (f64, f64),
     ) -> Result<Self, UpdateError> {
-        let theta = model.assembled().field_coefficients.clone();
-        check_parameters(&parameters, &kappa, &theta, &damping)?;
+        check_parameters(&parameters, &kappa, &model.assembled().field_coefficients, &damping)?;
         for (k, m) in observed.iter().enumerate() {
             let positive = |v: f64| v.is_finite() && v > 0.0;
             if !(positive(m.frequency_hz)
@@ -80,7 +77,6 @@ impl<'a> ModalUpdateProblem<'a> {
         Ok(Self {
             model,
             kappa,
-            theta,
             damping,
             parameters,
             observed,
@@ -97,7 +93,7 @@ impl<'a> ModalUpdateProblem<'a> {
 
     /// Stiffness-field coefficients at parameter values `p`.
     pub fn fields_at(&self, p: &[f64]) -> Vec<Vec<f64>> {
-        super::fields_at(&self.parameters, &self.theta, p)
+        super::fields_at(&self.parameters, &self.model.assembled().field_coefficients, p)
     }
 
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
