@@ -420,13 +420,9 @@ fn build_stiffness_field(i: usize, f: &StiffnessFieldConfig, shell: &Shell) -> R
         }
     }
     let field = StiffnessField::new(xi, eta, coefficients).map_err(|e| err(key("coefficients"), e))?;
-    field.check_inside(shell).map_err(|e| {
-        let axis = match &e {
-            splinewatch_core::stiffness_field::StiffnessFieldError::OutsideShell { axis, .. } => *axis,
-            _ => "xi",
-        };
-        err(key(&format!("knots_{axis}")), e)
-    })?;
+    field
+        .check_inside(shell)
+        .map_err(|e| err(key(&format!("knots_{}", e.axis)), e))?;
     Ok(field)
 }
 

@@ -32,6 +32,18 @@ pub const DOFS_PER_CONTROL_POINT: usize = 5;
 /// Most control points with non-zero basis functions at one point.
 pub const MAX_LOCAL: usize = (MAX_DEGREE + 1) * (MAX_DEGREE + 1);
 
+/// A field's rectangle reaching outside the shell's parameter domain.
+#[derive(Debug, Clone, PartialEq, Error)]
+#[error("the field's {axis} domain [{start}, {end}] is not inside the shell's [{shell_start}, {shell_end}]")]
+pub struct OutsideDomain {
+    /// `"xi"` or `"eta"`.
+    pub axis: &'static str,
+    pub start: f64,
+    pub end: f64,
+    pub shell_start: f64,
+    pub shell_end: f64,
+}
+
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ShellError {
     #[error("{0}")]
@@ -306,20 +318,26 @@ impl Shell {
         ]
     }
 
-    /// Eq. (3) at one point: the non-zero columns of `N` as `(dof, N column)`.
-    /// The first axis (`"xi"` or `"eta"`) along which the rectangle of the
-    /// knot vectors `xi` × `eta` leaves the shell's parameter domain, as
-    /// `(axis, start, end, shell start, shell end)` (a field must lie inside).
-    pub fn outside_domain(&self, xi: &KnotVector, eta: &KnotVector) -> Option<(&'static str, f64, f64, f64, f64)> {
+    /// Checks that the rectangle of the knot vectors `xi` × `eta` (a spring
+    /// or stiffness field's) lies in the shell's parameter domain.
+    pub fn check_inside(&self, xi: &KnotVector, eta: &KnotVector) -> Result<(), OutsideDomain> {
         let (kx, ke) = (self.surface.xi(), self.surface.eta());
-        [("xi", xi, kx), ("eta", eta, ke)]
-            .into_iter()
-            .find_map(|(axis, own, of_shell)| {
-                let ((a, b), (sa, sb)) = (own.domain(), of_shell.domain());
-                (a < sa || b > sb).then_some((axis, a, b, sa, sb))
-            })
+        for (axis, own, of_shell) in [("xi", xi, kx), ("eta", eta, ke)] {
+            let ((start, end), (shell_start, shell_end)) = (own.domain(), of_shell.domain());
+            if start < shell_start || end > shell_end {
+                return Err(OutsideDomain {
+                    axis,
+                    start,
+                    end,
+                    shell_start,
+                    shell_end,
+                });
+            }
+        }
+        Ok(())
     }
 
+    /// Eq. (3) at one point: the non-zero columns of `N` as `(dof, N column)`.
     pub fn shape_functions(&self, xi: f64, eta: f64, tau: f64) -> Vec<(usize, Vec3)> {
         let mut pt = ShellPoint::new_empty();
         self.evaluate_into(xi, eta, tau, &mut pt);

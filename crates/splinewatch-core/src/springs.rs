@@ -17,7 +17,7 @@
 
 use crate::knots::{KnotVector, MAX_DEGREE};
 use crate::quadrature::GaussLegendre;
-use crate::shell::{Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
+use crate::shell::{OutsideDomain, Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
 use crate::vec3::{cross, dot, norm, normalize, scale, Vec3};
 use faer::Mat;
 use std::collections::BTreeSet;
@@ -31,14 +31,8 @@ pub enum SpringError {
     Coefficient { index: usize, value: f64 },
     #[error("direction must be a finite non-zero vector")]
     Direction,
-    #[error("the field's {axis} domain [{start}, {end}] is not inside the shell's [{shell_start}, {shell_end}]")]
-    OutsideShell {
-        axis: &'static str,
-        start: f64,
-        end: f64,
-        shell_start: f64,
-        shell_end: f64,
-    },
+    #[error("{0}")]
+    OutsideShell(#[from] OutsideDomain),
 }
 
 /// Which face of the shell the springs act on.
@@ -185,15 +179,7 @@ impl SpringField {
 
     /// `∂ΔK/∂κ_j` for every coefficient `j` (eq. 22 with a unit κ_j).
     pub fn coefficient_matrices(&self, shell: &Shell) -> Result<Vec<LowRankBlock>, SpringError> {
-        if let Some((axis, start, end, shell_start, shell_end)) = shell.outside_domain(&self.xi, &self.eta) {
-            return Err(SpringError::OutsideShell {
-                axis,
-                start,
-                end,
-                shell_start,
-                shell_end,
-            });
-        }
+        shell.check_inside(&self.xi, &self.eta)?;
         let count = self.coefficient_count();
         // Pass 1: which dofs each block touches.
         let mut touched: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); count];

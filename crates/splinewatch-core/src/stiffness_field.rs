@@ -20,7 +20,7 @@
 
 use crate::knots::KnotVector;
 use crate::material::OrthotropicMaterial;
-use crate::shell::{self, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
+use crate::shell::{self, OutsideDomain, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use thiserror::Error;
@@ -31,14 +31,8 @@ pub enum StiffnessFieldError {
     CoefficientCount { found: usize, expected: usize },
     #[error("coefficient {index} must be finite and positive, got {value}")]
     Coefficient { index: usize, value: f64 },
-    #[error("the field's {axis} domain [{start}, {end}] is not inside the shell's [{shell_start}, {shell_end}]")]
-    OutsideShell {
-        axis: &'static str,
-        start: f64,
-        end: f64,
-        shell_start: f64,
-        shell_end: f64,
-    },
+    #[error("{0}")]
+    OutsideShell(#[from] OutsideDomain),
     #[error("shell: {0}")]
     Shell(#[from] ShellError),
 }
@@ -110,17 +104,8 @@ impl StiffnessField {
     }
 
     /// The field's rectangle must lie in the shell's parameter domain.
-    pub fn check_inside(&self, shell: &Shell) -> Result<(), StiffnessFieldError> {
-        match shell.outside_domain(&self.xi, &self.eta) {
-            Some((axis, start, end, shell_start, shell_end)) => Err(StiffnessFieldError::OutsideShell {
-                axis,
-                start,
-                end,
-                shell_start,
-                shell_end,
-            }),
-            None => Ok(()),
-        }
+    pub fn check_inside(&self, shell: &Shell) -> Result<(), OutsideDomain> {
+        shell.check_inside(&self.xi, &self.eta)
     }
 
     /// `∂K/∂θ_ij` for every coefficient (`ndof × ndof`, unconstrained dofs).
