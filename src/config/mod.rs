@@ -24,7 +24,7 @@ pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use schedule::ScheduleConfig;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
-pub use updating::UpdatingConfig;
+pub use updating::{parameter_family, ParameterFamily, UpdatingConfig};
 pub use zenoh::ZenohConfig;
 
 use anyhow::Context;

@@ -87,6 +87,30 @@ impl Default for UpdatingConfig {
     }
 }
 
+/// What an updating parameter's name (as [`Config::build_parameters`]
+/// makes them) stands for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParameterFamily {
+    /// `<spring>.k<j>`: a spring coefficient κ, N/m³.
+    Spring,
+    /// `<field>.s<j>`: a stiffness-field multiplier θ, a ratio.
+    StiffnessField,
+    /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
+    Damping,
+}
+
+/// The family of the parameter named `name`.
+pub fn parameter_family(name: &str) -> ParameterFamily {
+    let last = name.rsplit('.').next().unwrap_or("");
+    if name.starts_with("damping.") {
+        ParameterFamily::Damping
+    } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
+        ParameterFamily::StiffnessField
+    } else {
+        ParameterFamily::Spring
+    }
+}
+
 impl Config {
     /// The updating parameters: `<spring>.k<j>` for spring fields with
     /// `update = true` (j from 1, η fastest), `<field>.s<j>` for stiffness

@@ -108,12 +108,9 @@ pub fn update_from_modes(
 /// N/m³ (eq. 19); the damping curve's γ (`damping.g<z>`) and stiffness-field
 /// multipliers θ (`<field>.s<j>`) are ratios.
 pub fn parameter_unit(name: &str) -> &'static str {
-    let last = name.rsplit('.').next().unwrap_or("");
-    let field_multiplier = last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit());
-    if name.starts_with("damping.") || field_multiplier {
-        "-"
-    } else {
-        "N/m³"
+    match crate::config::parameter_family(name) {
+        crate::config::ParameterFamily::Spring => "N/m³",
+        _ => "-",
     }
 }
 

@@ -226,15 +226,12 @@ impl RerunOutput {
     }
 }
 
-/// The trend group of a parameter: `damping` (`damping.g<z>`), `fields`
-/// (stiffness multipliers `<field>.s<j>`) or `springs` (`<spring>.k<j>`).
+/// The trend group of a parameter: `springs` (`<spring>.k<j>`), `fields`
+/// (stiffness multipliers `<field>.s<j>`) or `damping` (`damping.g<z>`).
 pub(super) fn parameter_group(name: &str) -> &'static str {
-    let last = name.rsplit('.').next().unwrap_or("");
-    if name.starts_with("damping.") {
-        "damping"
-    } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
-        "fields"
-    } else {
-        "springs"
+    match crate::config::parameter_family(name) {
+        crate::config::ParameterFamily::Spring => "springs",
+        crate::config::ParameterFamily::StiffnessField => "fields",
+        crate::config::ParameterFamily::Damping => "damping",
     }
 }
