@@ -1,12 +1,15 @@
 //! Shared fixtures: the paper's Sinello deck and its sensors.
 
 use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::frf::SensorPoint;
+use splinewatch_core::frf::{ModalState, SensorPoint};
 use splinewatch_core::knots::KnotVector;
 use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::modal::ModeKind;
+use splinewatch_core::modal_sensitivity::ModalSensitivities;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::shell::Shell;
 use splinewatch_core::springs::{Face, SpringDirection, SpringField};
+use splinewatch_core::updating::{Parameter, ParameterKind};
 
 pub fn sinello_material() -> OrthotropicMaterial {
     OrthotropicMaterial::new(OrthotropicParameters {
@@ -122,4 +125,68 @@ pub fn gaussian(n: usize, seed: u64) -> Vec<f64> {
             (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
         })
         .collect()
+}
+
+/// The eight spring coefficients of the Sinello deck as updating
+/// parameters (`f<field>.k<j>`, bounds 1e7–5e9 N/m³).
+pub fn spring_parameters() -> Vec<Parameter> {
+    (0..2)
+        .flat_map(|field| {
+            (0..4).map(move |coefficient| Parameter {
+                name: format!("f{field}.k{}", coefficient + 1),
+                kind: ParameterKind::Spring { field, coefficient },
+                lower: 1e7,
+                upper: 5e9,
+            })
+        })
+        .collect()
+}
+
+/// The bending modes of `state` below 80 Hz.
+pub fn bending_modes_below_80_hz(state: &ModalState) -> Vec<usize> {
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending && state.modes.frequency_hz(i) < 80.0)
+        .collect()
+}
+
+/// Column `column` of `analytic` (`∂λ` and `∂a` at the sensors of `state`'s
+/// modes `analytic.modes`) against central differences of the states
+/// `plus` and `minus` at the parameter ± `h`. `unit` is the parameter's
+/// size (κ for a spring, 1 for a multiplier θ): `∂λ` must be within
+/// 1e-7 λ/unit and `∂a` within 1e-6 of the mode's largest amplitude/unit
+/// (mass-normalised shapes are aligned in sign with `state`'s first).
+/// Returns the worst errors in those units.
+pub fn check_eigen_derivatives(
+    state: &ModalState,
+    (plus, minus): (&ModalState, &ModalState),
+    h: f64,
+    unit: f64,
+    analytic: &ModalSensitivities,
+    column: usize,
+) -> (f64, f64) {
+    let sensors = analytic.amplitude.first().map_or(0, |a| a.nrows());
+    let (mut worst_lambda, mut worst_shape) = (0.0f64, 0.0f64);
+    for (row, &i) in analytic.modes.iter().enumerate() {
+        let fd = (plus.modes.omega2[i] - minus.modes.omega2[i]) / (2.0 * h);
+        let got = analytic.eigenvalue[(row, column)];
+        let scale = state.modes.omega2[i] / unit;
+        worst_lambda = worst_lambda.max((got - fd).abs() / scale);
+        assert!((got - fd).abs() <= 1e-7 * scale, "λ{i}, column {column}: {got} vs {fd}");
+        let sign = |s: &ModalState| {
+            let d: f64 = (0..sensors).map(|r| s.amplitude(r, i) * state.amplitude(r, i)).sum();
+            d.signum()
+        };
+        let (sp, sm) = (sign(plus), sign(minus));
+        let largest = (0..sensors).map(|r| state.amplitude(r, i).abs()).fold(0.0, f64::max) / unit;
+        for r in 0..sensors {
+            let fd = (sp * plus.amplitude(r, i) - sm * minus.amplitude(r, i)) / (2.0 * h);
+            let got = analytic.amplitude[row][(r, column)];
+            worst_shape = worst_shape.max((got - fd).abs() / largest);
+            assert!(
+                (got - fd).abs() <= 1e-6 * largest,
+                "a({r},{i}), column {column}: {got} vs {fd}"
+            );
+        }
+    }
+    (worst_lambda, worst_shape)
 }

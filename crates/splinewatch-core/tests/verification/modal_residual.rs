@@ -1,37 +1,30 @@
 //! The modal residue's Jacobian against central differences, and the
 //! pairing, on the Sinello deck.
 
-use super::common::{gaussian, sinello_model, sinello_sensors, true_kappa};
+use super::common::{
+    bending_modes_below_80_hz, gaussian, sinello_model, sinello_sensors, spring_parameters, true_kappa,
+};
 use splinewatch_core::c64;
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::{FrfModel, ModalState};
-use splinewatch_core::modal::ModeKind;
 use splinewatch_core::modal_residual::{modal_residue, pair_modes, ObservedMode};
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
 fn parameters() -> Vec<Parameter> {
-    let springs = (0..2).flat_map(|field| {
-        (0..4).map(move |coefficient| Parameter {
-            name: format!("s{field}.k{}", coefficient + 1),
-            kind: ParameterKind::Spring { field, coefficient },
-            lower: 1e7,
-            upper: 5e9,
-        })
-    });
     let damping = (0..7).map(|coefficient| Parameter {
         name: format!("damping.g{}", coefficient + 1),
         kind: ParameterKind::Damping { coefficient },
         lower: 1e-4,
         upper: 0.1,
     });
-    springs.chain(damping).collect()
+    spring_parameters().into_iter().chain(damping).collect()
 }
 
 /// The bending modes below 80 Hz of `state` as identified modes, with a
 /// rotated (complex) shape and typical standard deviations.
 fn observed_from(state: &ModalState) -> Vec<ObservedMode> {
-    (0..state.modes.len())
-        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending && state.modes.frequency_hz(i) < 80.0)
+    bending_modes_below_80_hz(state)
+        .into_iter()
         .map(|i| {
             let f = state.modes.frequency_hz(i);
             let largest = (0..12).map(|s| state.amplitude(s, i).abs()).fold(0.0, f64::max);

@@ -3,7 +3,10 @@
 //! material, the modal solver's fast path against the dense solve, and the
 //! eigen-derivatives against central differences.
 
-use super::common::{gaussian, sinello_material, sinello_model, sinello_sensors, true_kappa};
+use super::common::{
+    bending_modes_below_80_hz, check_eigen_derivatives, gaussian, sinello_material, sinello_model, sinello_sensors,
+    spring_parameters, true_kappa,
+};
 use splinewatch_core::c64;
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity};
@@ -112,12 +115,9 @@ fn field_derivatives_match_central_differences() {
     let kappa = true_kappa();
     let theta = vec![vec![1.0, 0.9, 1.1, 0.8, 1.0, 1.2, 0.95, 1.05]];
     let state = model.modal_state_with_fields(&kappa, &theta, &damping).unwrap();
-    let modes: Vec<usize> = (0..state.modes.len())
-        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending && state.modes.frequency_hz(i) < 80.0)
-        .collect();
+    let modes = bending_modes_below_80_hz(&state);
     assert!(modes.len() >= 15, "{} bending modes", modes.len());
     let analytic = model.field_sensitivities(&state, &modes);
-    let sensors = model.sensor_count();
     let (mut worst_lambda, mut worst_shape) = (0.0f64, 0.0f64);
     for j in 0..theta[0].len() {
         let h = 1e-4;
@@ -127,25 +127,9 @@ fn field_derivatives_match_central_differences() {
             model.modal_state_with_fields(&kappa, &t, &damping).unwrap()
         };
         let (plus, minus) = (at(1.0), at(-1.0));
-        for (row, &i) in modes.iter().enumerate() {
-            let fd = (plus.modes.omega2[i] - minus.modes.omega2[i]) / (2.0 * h);
-            let got = analytic.eigenvalue[(row, j)];
-            let scale = state.modes.omega2[i];
-            worst_lambda = worst_lambda.max((got - fd).abs() / scale);
-            assert!((got - fd).abs() <= 1e-7 * scale, "λ{i} θ{j}: {got} vs {fd}");
-            let sign = |s: &splinewatch_core::frf::ModalState| {
-                let d: f64 = (0..sensors).map(|r| s.amplitude(r, i) * state.amplitude(r, i)).sum();
-                d.signum()
-            };
-            let (sp, sm) = (sign(&plus), sign(&minus));
-            let largest = (0..sensors).map(|r| state.amplitude(r, i).abs()).fold(0.0, f64::max);
-            for r in 0..sensors {
-                let fd = (sp * plus.amplitude(r, i) - sm * minus.amplitude(r, i)) / (2.0 * h);
-                let got = analytic.amplitude[row][(r, j)];
-                worst_shape = worst_shape.max((got - fd).abs() / largest);
-                assert!((got - fd).abs() <= 1e-6 * largest, "a({r},{i}) θ{j}: {got} vs {fd}");
-            }
-        }
+        let (l, a) = check_eigen_derivatives(&state, (&plus, &minus), h, 1.0, &analytic, j);
+        worst_lambda = worst_lambda.max(l);
+        worst_shape = worst_shape.max(a);
     }
     eprintln!("worst relative error: λ {worst_lambda:.1e}, amplitudes {worst_shape:.1e}");
 }
@@ -262,16 +246,7 @@ fn a_local_stiffness_loss_is_found_in_its_region_with_the_springs_updated() {
         })
         .collect();
     let measured = MeasuredSet::new(Quantity::Accelerance, lines.clone(), frfs).unwrap();
-    let mut parameters: Vec<Parameter> = (0..2)
-        .flat_map(|field| {
-            (0..4).map(move |coefficient| Parameter {
-                name: format!("f{field}.k{}", coefficient + 1),
-                kind: ParameterKind::Spring { field, coefficient },
-                lower: 1e7,
-                upper: 5e9,
-            })
-        })
-        .collect();
+    let mut parameters = spring_parameters();
     parameters.extend((0..8).map(|coefficient| Parameter {
         name: format!("deck.s{}", coefficient + 1),
         kind: ParameterKind::Stiffness { field: 0, coefficient },

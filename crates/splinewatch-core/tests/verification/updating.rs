@@ -1,26 +1,12 @@
 //! The updating loop on the Sinello deck: weighting and error paths.
 
-use super::common::{sinello_model, sinello_sensors, true_kappa};
+use super::common::{sinello_model, sinello_sensors, spring_parameters, true_kappa};
 use splinewatch_core::c64;
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity};
 use splinewatch_core::updating::{
-    LineSelection, MeasuredFrf, MeasuredSet, Parameter, ParameterKind, UpdateError, UpdateProblem, UpdateSettings,
-    Weighting,
+    LineSelection, MeasuredFrf, MeasuredSet, UpdateError, UpdateProblem, UpdateSettings, Weighting,
 };
-
-fn spring_parameters() -> Vec<Parameter> {
-    (0..2)
-        .flat_map(|field| {
-            (0..4).map(move |coefficient| Parameter {
-                name: format!("f{field}.k{}", coefficient + 1),
-                kind: ParameterKind::Spring { field, coefficient },
-                lower: 1e7,
-                upper: 5e9,
-            })
-        })
-        .collect()
-}
 
 /// Noise-free accelerances of the true model at P1..P4 for input P1, with a
 /// band of lines (30–40 Hz) corrupted by a 30 % error and flagged by low
