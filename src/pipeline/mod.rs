@@ -441,13 +441,18 @@ mod tests {
         Config::from_toml(&text).unwrap()
     }
 
-    /// Feeds `seconds` of one-second blocks on P1–P12 with `value(channel, t)`;
-    /// returns the closed windows.
-    fn feed_outputs(p: &mut Pipeline, seconds: usize, value: &mut dyn FnMut(usize, usize) -> f64) -> Vec<WindowReport> {
+    /// Feeds `seconds` of one-second blocks on P1–P12 with `value(channel, t)`,
+    /// but no block where `missing(channel, second)`; returns the closed windows.
+    fn feed_outputs(
+        p: &mut Pipeline,
+        seconds: usize,
+        missing: &dyn Fn(usize, usize) -> bool,
+        value: &mut dyn FnMut(usize, usize) -> f64,
+    ) -> Vec<WindowReport> {
         let mut windows = Vec::new();
         let mut t = 0;
         for s in 0..seconds {
-            for c in 0..12 {
+            for c in (0..12).filter(|&c| !missing(c, s)) {
                 let mut b = block(
                     &format!("P{}", c + 1),
                     ChannelQuantity::Acceleration,
@@ -479,30 +484,16 @@ mod tests {
     fn output_only_windows_are_skipped_with_their_reason() {
         // A silent deck: the Hankel matrix is singular.
         let mut p = Pipeline::new(&output_only_config(), ScheduleConfig::default(), None).unwrap();
-        let w = feed_outputs(&mut p, 61, &mut |_, _| 0.0);
+        let w = feed_outputs(&mut p, 61, &|_, _| false, &mut |_, _| 0.0);
         assert_eq!(w.len(), 1);
         assert_eq!(w[0].skipped.as_deref(), Some("singular_hankel"), "{:?}", w[0].skipped);
 
         // P5 silent for 40 of the 60 seconds: too little valid data.
         let mut p = Pipeline::new(&output_only_config(), ScheduleConfig::default(), None).unwrap();
         let mut rng = 7u64;
-        let mut windows = Vec::new();
-        for s in 0..61 {
-            for c in 0..12 {
-                if c == 4 && (10..50).contains(&s) {
-                    continue;
-                }
-                let mut b = block(
-                    &format!("P{}", c + 1),
-                    ChannelQuantity::Acceleration,
-                    s as f64,
-                    256,
-                    256.0,
-                );
-                b.data = (0..256).map(|_| normal(&mut rng)).collect();
-                windows.extend(p.ingest(b).0);
-            }
-        }
+        let windows = feed_outputs(&mut p, 61, &|c, s| c == 4 && (10..50).contains(&s), &mut |_, _| {
+            normal(&mut rng)
+        });
         assert_eq!(windows[0].skipped.as_deref(), Some("too_little_data"));
         assert!(
             windows[0].valid_fraction.unwrap() < 0.4,
@@ -527,7 +518,9 @@ mod tests {
             mode.push(y);
         }
         let mut noise = 13u64;
-        let w = feed_outputs(&mut p, 61, &mut |_, t| mode[t] + 0.05 * normal(&mut noise));
+        let w = feed_outputs(&mut p, 61, &|_, _| false, &mut |_, t| {
+            mode[t] + 0.05 * normal(&mut noise)
+        });
         assert_eq!(w[0].skipped.as_deref(), Some("no_pairable_mode"), "{:?}", w[0].skipped);
         let h = p.health();
         assert_eq!(h.windows_accepted, 0);

@@ -29,15 +29,7 @@ fn live_zenoh_run_tracks_a_bearing_damage() {
     let duration = 300.0;
     let summary = run_live(&root().join("config/sinello.toml"), &out, duration, 40.0, 11).unwrap();
     let value = |u: &splinewatch::pipeline::UpdateOutcome, name: &str| {
-        u.result
-            .as_ref()
-            .unwrap()
-            .result
-            .parameters
-            .iter()
-            .find(|p| p.name == name)
-            .unwrap()
-            .value
+        estimates(u).iter().find(|p| p.name == name).unwrap().value
     };
     let ok: Vec<_> = summary.updates.iter().filter(|u| u.result.is_ok()).collect();
     assert!(ok.len() >= 10, "{} updates", ok.len());
@@ -113,16 +105,14 @@ fn live_and_replay_agree_on_the_bundled_recording() {
     }
 }
 
+/// The parameter estimates of an accepted update.
+fn estimates(u: &splinewatch::pipeline::UpdateOutcome) -> &[splinewatch_core::updating::ParameterEstimate] {
+    &u.result.as_ref().unwrap().result.parameters
+}
+
 /// The identified values of an accepted update, in parameter order.
 fn parameter_values(u: &splinewatch::pipeline::UpdateOutcome) -> Vec<f64> {
-    u.result
-        .as_ref()
-        .unwrap()
-        .result
-        .parameters
-        .iter()
-        .map(|p| p.value)
-        .collect()
+    estimates(u).iter().map(|p| p.value).collect()
 }
 
 #[cfg(unix)]
