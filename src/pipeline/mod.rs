@@ -39,7 +39,7 @@ use crate::io::frf_json::FrfEntry;
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Limits, WireError};
 use align::ChannelQueue;
 use anyhow::{bail, Result};
-use oma::WindowIdentification;
+use oma::Identification;
 use splinewatch_core::frf::{ModalState, Quantity};
 use splinewatch_core::updating::{ModelPoint, Parameter, UpdateSettings};
 use splinewatch_core::welch::{Estimator, WelchSettings};
@@ -66,7 +66,7 @@ pub struct Pipeline {
     force: Option<usize>,
     accels: Vec<usize>,
     /// Output-only: how windows are identified.
-    identification: Option<WindowIdentification>,
+    identification: Option<Identification>,
     /// Output-only: the model's modes at the last accepted parameters, to
     /// pair identified modes with (computed when first needed).
     model_state: Option<Arc<ModalState>>,
@@ -109,7 +109,7 @@ impl Pipeline {
         let parameters = config.build_parameters()?;
         let settings = config.update_settings()?;
         let (force, accels, identification) = if config.is_output_only() {
-            let identification = WindowIdentification::new(config)?;
+            let identification = Identification::new(config)?;
             (None, config.output_channels()?, Some(identification))
         } else {
             let (force, accels) = config.channel_roles()?;

@@ -44,22 +44,13 @@ pub fn identify_span(
     from_ns: Option<i128>,
     to_ns: Option<i128>,
 ) -> Result<OmaReport> {
+    let identification = Identification::new(config)?;
     let outputs = config.output_channels()?;
-    let (settings, references) = config.oma_settings()?;
     let wanted: Vec<(usize, ChannelQuantity)> = outputs.iter().map(|&i| (i, ChannelQuantity::Acceleration)).collect();
     let span = aligned_span(config, blocks, from_ns, to_ns, &wanted)?;
-    let views: Vec<&[f64]> = span.channels.iter().map(Vec::as_slice).collect();
-    let correlations = OutputCorrelations::from_samples(&views, &references, settings.max_lag(), settings.batches)
-        .context("output correlations")?;
-    let result = identify(&correlations, span.fs, &settings).context("SSI-cov")?;
-    Ok(OmaReport {
-        start_ns: span.start_ns,
-        samples: span.samples,
-        fs: span.fs,
-        sensors: outputs.iter().map(|&i| config.sensors[i].name.clone()).collect(),
-        result,
-        spectrum: spectrum(&views, span.fs),
-    })
+    identification
+        .identify(&span.channels, span.start_ns, span.fs)
+        .context("SSI-cov")
 }
 
 impl OmaReport {
@@ -99,9 +90,10 @@ impl OmaReport {
     }
 }
 
-/// What the pipeline needs to identify a window output-only.
+/// How the acceleration channels are identified (the `[oma]` settings and
+/// the `[updating]` pairing): a recorded span, or a pipeline window.
 #[derive(Debug, Clone)]
-pub(super) struct WindowIdentification {
+pub(super) struct Identification {
     pub(super) settings: OmaSettings,
     /// Reference channels (positions among the outputs).
     pub(super) references: Vec<usize>,
@@ -133,7 +125,7 @@ pub struct ModelPair {
     pub model_shape: Vec<f64>,
 }
 
-impl WindowIdentification {
+impl Identification {
     pub(super) fn new(config: &Config) -> Result<Self> {
         let outputs = config.output_channels()?;
         let (settings, references) = config.oma_settings()?;
@@ -146,9 +138,24 @@ impl WindowIdentification {
         })
     }
 
-    /// Identifies the modes of one window (`channels` in sensor order, NaN
-    /// for missing samples) and pairs them with `state`'s; the error is the
-    /// health reason the window is skipped for.
+    /// SSI-cov of `channels` (the acceleration sensors in order, sampled at
+    /// `fs` from `start_ns`; NaN for missing samples).
+    fn identify(&self, channels: &[Vec<f64>], start_ns: i128, fs: f64) -> Result<OmaReport, OmaError> {
+        let views: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+        let correlations =
+            OutputCorrelations::from_samples(&views, &self.references, self.settings.max_lag(), self.settings.batches)?;
+        Ok(OmaReport {
+            start_ns,
+            samples: channels.first().map_or(0, Vec::len),
+            fs,
+            sensors: self.sensors.clone(),
+            result: identify(&correlations, fs, &self.settings)?,
+            spectrum: spectrum(&views, fs),
+        })
+    }
+
+    /// Identifies the modes of one window and pairs them with `state`'s;
+    /// the error is the health reason the window is skipped for.
     pub(super) fn run(
         &self,
         channels: &[Vec<f64>],
@@ -157,19 +164,7 @@ impl WindowIdentification {
         state: &ModalState,
         sensor_names: &[String],
     ) -> Result<WindowModes, &'static str> {
-        let views: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
-        let result =
-            OutputCorrelations::from_samples(&views, &self.references, self.settings.max_lag(), self.settings.batches)
-                .and_then(|c| identify(&c, fs, &self.settings))
-                .map_err(|e| skip_reason(&e))?;
-        let report = OmaReport {
-            start_ns,
-            samples: channels.first().map_or(0, Vec::len),
-            fs,
-            sensors: self.sensors.clone(),
-            result,
-            spectrum: spectrum(&views, fs),
-        };
+        let report = self.identify(channels, start_ns, fs).map_err(|e| skip_reason(&e))?;
         let observed = report
             .modes_file()
             .to_observed(sensor_names)

@@ -227,15 +227,14 @@ impl Pipeline {
         if let Some(s) = &self.model_state {
             return Ok(Arc::clone(s));
         }
-        let start = self.start_values();
-        let (kappa, damping) =
-            splinewatch_core::updating::model_at(&self.parameters, &self.setup.kappa, &self.setup.damping, &start)?;
-        let theta = splinewatch_core::updating::fields_at(
+        let (state, _) = splinewatch_core::updating::modal_state_at(
+            &self.setup.model,
             &self.parameters,
-            &self.setup.model.assembled().field_coefficients,
-            &start,
-        );
-        let state = Arc::new(self.setup.model.modal_state_with_fields(&kappa, &theta, &damping)?);
+            &self.setup.kappa,
+            &self.setup.damping,
+            &self.start_values(),
+        )?;
+        let state = Arc::new(state);
         self.model_state = Some(Arc::clone(&state));
         Ok(state)
     }

@@ -165,7 +165,7 @@ pub fn fields_at(parameters: &[Parameter], theta: &[Vec<f64>], p: &[f64]) -> Vec
 /// The modal state of `model` with `parameters` set to `p` over the base
 /// spring coefficients `kappa`, `damping` and the model's own stiffness-field
 /// coefficients, with the damping curve there.
-pub(crate) fn modal_state_at(
+pub fn modal_state_at(
     model: &FrfModel,
     parameters: &[Parameter],
     kappa: &[Vec<f64>],
