@@ -41,18 +41,7 @@ impl RerunOutput {
                 ("frequency_hz", m.frequency_hz, sf),
                 ("damping_percent", 100.0 * m.damping_ratio, 100.0 * sz),
             ] {
-                let path = format!("{base}/{what}");
-                if self.named.insert(path.clone()) {
-                    self.rec
-                        .log_static(
-                            path.as_str(),
-                            &rerun::SeriesLines::new().with_names(["identified", "+1σ", "−1σ"]),
-                        )
-                        .map_err(rerun_error)?;
-                }
-                self.rec
-                    .log(path.as_str(), &rerun::Scalars::new([v, v + s, v - s]))
-                    .map_err(rerun_error)?;
+                self.log_band(&format!("{base}/{what}"), v, s)?;
             }
         }
         Ok(())
@@ -147,24 +136,13 @@ impl RerunOutput {
             .log("oma/singular_values", &rerun::BarChart::new(singular))
             .map_err(rerun_error)?;
         for (k, m) in report.result.modes.iter().enumerate() {
-            let sigma_f = m.frequency_std_hz.unwrap_or(0.0);
-            let sigma_z = m.damping_std.unwrap_or(0.0);
-            self.rec
-                .log(
-                    format!("oma/modes/{}/frequency_hz", k + 1).as_str(),
-                    &rerun::Scalars::new([m.frequency_hz, m.frequency_hz + sigma_f, m.frequency_hz - sigma_f]),
-                )
-                .map_err(rerun_error)?;
-            self.rec
-                .log(
-                    format!("oma/modes/{}/damping_percent", k + 1).as_str(),
-                    &rerun::Scalars::new([
-                        100.0 * m.damping_ratio,
-                        100.0 * (m.damping_ratio + sigma_z),
-                        100.0 * (m.damping_ratio - sigma_z),
-                    ]),
-                )
-                .map_err(rerun_error)?;
+            let (sigma_f, sigma_z) = (m.frequency_std_hz.unwrap_or(0.0), m.damping_std.unwrap_or(0.0));
+            self.log_band(&format!("oma/modes/{}/frequency_hz", k + 1), m.frequency_hz, sigma_f)?;
+            self.log_band(
+                &format!("oma/modes/{}/damping_percent", k + 1),
+                100.0 * m.damping_ratio,
+                100.0 * sigma_z,
+            )?;
         }
         Ok(())
     }

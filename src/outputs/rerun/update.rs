@@ -12,35 +12,37 @@ impl RerunOutput {
     /// Value and ±1σ of every parameter, and the relative residual.
     pub(super) fn log_parameters(&mut self, report: &UpdateReport) -> Result<()> {
         for p in &report.result.parameters {
-            let group = parameter_group(&p.name);
-            let path = format!("parameters/{group}/{}", p.name);
-            let sigma = p.std.unwrap_or(0.0);
-            if self.named.insert(path.clone()) {
-                self.rec
-                    .log_static(
-                        path.as_str(),
-                        &rerun::SeriesLines::new()
-                            .with_names(["value", "+1σ", "−1σ"])
-                            .with_colors([
-                                rerun::Color::from_rgb(30, 110, 200),
-                                rerun::Color::from_rgb(150, 180, 220),
-                                rerun::Color::from_rgb(150, 180, 220),
-                            ]),
-                    )
-                    .map_err(rerun_error)?;
-            }
-            self.rec
-                .log(
-                    path.as_str(),
-                    &rerun::Scalars::new([p.value, p.value + sigma, p.value - sigma]),
-                )
-                .map_err(rerun_error)?;
+            let path = format!("parameters/{}/{}", parameter_group(&p.name), p.name);
+            self.log_band(&path, p.value, p.std.unwrap_or(0.0))?;
         }
         self.rec
             .log(
                 "residual/relative",
                 &rerun::Scalars::new([report.result.relative_residual]),
             )
+            .map_err(rerun_error)?;
+        Ok(())
+    }
+
+    /// A trend with its ±1σ band at `path`: three series, named and
+    /// coloured once per file.
+    pub(super) fn log_band(&mut self, path: &str, value: f64, sigma: f64) -> Result<()> {
+        if self.named.insert(path.to_string()) {
+            self.rec
+                .log_static(
+                    path,
+                    &rerun::SeriesLines::new()
+                        .with_names(["value", "+1σ", "−1σ"])
+                        .with_colors([
+                            rerun::Color::from_rgb(30, 110, 200),
+                            rerun::Color::from_rgb(150, 180, 220),
+                            rerun::Color::from_rgb(150, 180, 220),
+                        ]),
+                )
+                .map_err(rerun_error)?;
+        }
+        self.rec
+            .log(path, &rerun::Scalars::new([value, value + sigma, value - sigma]))
             .map_err(rerun_error)?;
         Ok(())
     }
