@@ -261,6 +261,26 @@ impl KnotVector {
         out
     }
 
+    /// The non-zero tensor-product basis values `B_i(u) B_j(v)` of `self` ×
+    /// `eta` at `(u, v)` as `(i·n_η + j, value)` (η fastest), into `out`
+    /// (cleared first).
+    pub fn tensor_basis_into(&self, eta: &KnotVector, u: f64, v: f64, out: &mut Vec<(usize, f64)>) {
+        let (si, sj) = (self.span(u), eta.span(v));
+        let (mut bx, mut be) = ([0.0; MAX_DEGREE + 1], [0.0; MAX_DEGREE + 1]);
+        self.basis(si, u, &mut bx);
+        eta.basis(sj, v, &mut be);
+        let ne = eta.basis_count();
+        out.clear();
+        for a in 0..=self.degree {
+            for b in 0..=eta.degree {
+                let w = bx[a] * be[b];
+                if w != 0.0 {
+                    out.push(((si - self.degree + a) * ne + (sj - eta.degree + b), w));
+                }
+            }
+        }
+    }
+
     /// Whether `u` lies in the closed domain `[a, b]`.
     pub fn contains(&self, u: f64) -> bool {
         let (a, b) = self.domain();

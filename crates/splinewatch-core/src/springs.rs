@@ -162,14 +162,9 @@ impl SpringField {
         if !(self.xi.contains(xi) && self.eta.contains(eta)) {
             return 0.0;
         }
-        let bx = self.xi.dense_basis(xi);
-        let be = self.eta.dense_basis(eta);
-        let ne = be.len();
-        bx.iter()
-            .enumerate()
-            .flat_map(|(i, &a)| be.iter().enumerate().map(move |(j, &b)| (i * ne + j, a * b)))
-            .map(|(k, w)| w * kappa[k])
-            .sum()
+        let mut basis = Vec::new();
+        self.xi.tensor_basis_into(&self.eta, xi, eta, &mut basis);
+        basis.iter().map(|&(k, w)| w * kappa[k]).sum()
     }
 
     /// Eq. (20) with the field's own coefficients.
@@ -247,10 +242,8 @@ impl SpringField {
             points(ke.degree(), self.eta.degree()),
         );
         let tau = self.face.tau();
-        let ne = self.eta.basis_count();
         let mut pt = crate::shell::ShellPoint::new_empty();
         let mut basis: Vec<(usize, f64)> = Vec::with_capacity((MAX_DEGREE + 1) * (MAX_DEGREE + 1));
-        let (mut bx, mut be) = ([0.0; MAX_DEGREE + 1], [0.0; MAX_DEGREE + 1]);
         for wx in cx.windows(2) {
             for we in ce.windows(2) {
                 for (xi, wxi) in gx.mapped(wx[0], wx[1]) {
@@ -262,19 +255,7 @@ impl SpringField {
                             SpringDirection::Fixed(v) => v,
                             SpringDirection::Normal => scale(area, 1.0 / norm(area)),
                         };
-                        let (si, sj) = (self.xi.span(xi), self.eta.span(eta));
-                        self.xi.basis(si, xi, &mut bx);
-                        self.eta.basis(sj, eta, &mut be);
-                        basis.clear();
-                        for a in 0..=self.xi.degree() {
-                            for b in 0..=self.eta.degree() {
-                                let v = bx[a] * be[b];
-                                if v != 0.0 {
-                                    let j = (si - self.xi.degree() + a) * ne + (sj - self.eta.degree() + b);
-                                    basis.push((j, v));
-                                }
-                            }
-                        }
+                        self.xi.tensor_basis_into(&self.eta, xi, eta, &mut basis);
                         f(&pt, weight, normal, &basis);
                     }
                 }

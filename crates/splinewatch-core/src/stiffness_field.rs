@@ -86,21 +86,9 @@ impl StiffnessField {
         if !(self.xi.contains(xi) && self.eta.contains(eta)) {
             return 1.0;
         }
-        self.basis(xi, eta).map(|(k, w)| w * theta[k]).sum()
-    }
-
-    /// The non-zero `(index, B_i(ξ) B_j(η))` at a point of the rectangle.
-    fn basis(&self, xi: f64, eta: f64) -> impl Iterator<Item = (usize, f64)> {
-        let bx = self.xi.dense_basis(xi);
-        let be = self.eta.dense_basis(eta);
-        let ne = be.len();
-        bx.into_iter()
-            .enumerate()
-            .flat_map(move |(i, a)| {
-                let be = be.clone();
-                be.into_iter().enumerate().map(move |(j, b)| (i * ne + j, a * b))
-            })
-            .filter(|(_, w)| *w != 0.0)
+        let mut basis = Vec::new();
+        self.xi.tensor_basis_into(&self.eta, xi, eta, &mut basis);
+        basis.iter().map(|&(k, w)| w * theta[k]).sum()
     }
 
     /// The field's rectangle must lie in the shell's parameter domain.
@@ -122,6 +110,7 @@ impl StiffnessField {
         let mut out = vec![Mat::<f64>::zeros(ndof, ndof); count];
         let mut local = vec![Mat::<f64>::zeros(nloc, nloc); count];
         let mut used = vec![false; count];
+        let mut basis = Vec::new();
         let quadrature = shell::Quadrature {
             extra: (self.xi.degree().div_ceil(2), self.eta.degree().div_ceil(2)),
             cuts: (self.xi.breakpoints(), self.eta.breakpoints()),
@@ -133,7 +122,8 @@ impl StiffnessField {
                 if !(self.xi.contains(xi) && self.eta.contains(eta)) {
                     return;
                 }
-                for (k, bk) in self.basis(xi, eta) {
+                self.xi.tensor_basis_into(&self.eta, xi, eta, &mut basis);
+                for &(k, bk) in &basis {
                     matmul(
                         local[k].as_mut(),
                         Accum::Add,
