@@ -145,38 +145,17 @@ impl AssembledModel {
     }
 
     fn check_coefficient_counts(&self, kappa: &[Vec<f64>]) -> Result<(), ModelError> {
-        if kappa.len() != self.spring_blocks.len() {
-            return Err(ModelError::CoefficientCount {
-                field: kappa.len().min(self.spring_blocks.len()),
-                found: kappa.len(),
-                expected: self.spring_blocks.len(),
-            });
+        match count_mismatch(self.spring_blocks.iter().map(Vec::len), kappa) {
+            Some((field, found, expected)) => Err(ModelError::CoefficientCount { field, found, expected }),
+            None => Ok(()),
         }
-        for (field, (blocks, coeffs)) in self.spring_blocks.iter().zip(kappa).enumerate() {
-            if coeffs.len() != blocks.len() {
-                return Err(ModelError::CoefficientCount {
-                    field,
-                    found: coeffs.len(),
-                    expected: blocks.len(),
-                });
-            }
-        }
-        Ok(())
     }
 
     fn check_field_counts(&self, theta: &[Vec<f64>]) -> Result<(), ModelError> {
-        let counts = |v: &[Vec<f64>]| v.iter().map(Vec::len).collect::<Vec<_>>();
-        let expected: Vec<usize> = self.field_matrices.iter().map(Vec::len).collect();
-        let found = counts(theta);
-        if found != expected {
-            let field = found.iter().zip(&expected).take_while(|(a, b)| a == b).count();
-            return Err(ModelError::FieldCoefficientCount {
-                field,
-                found: found.get(field).copied().unwrap_or(0),
-                expected: expected.get(field).copied().unwrap_or(0),
-            });
+        match count_mismatch(self.field_matrices.iter().map(Vec::len), theta) {
+            Some((field, found, expected)) => Err(ModelError::FieldCoefficientCount { field, found, expected }),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// `K_f + ΔK` with the coefficients the model was built with.
@@ -218,4 +197,18 @@ impl AssembledModel {
     pub fn modes(&self) -> Result<Modes, ModelError> {
         self.modes_with(&self.spring_stiffness)
     }
+}
+
+/// The first mismatch between the coefficient vectors `given` and the
+/// `expected` count per field, as `(field, found, expected)`: the number of
+/// fields first (reported at the shorter length), then each field's count.
+fn count_mismatch(expected: impl ExactSizeIterator<Item = usize>, given: &[Vec<f64>]) -> Option<(usize, usize, usize)> {
+    if expected.len() != given.len() {
+        return Some((expected.len().min(given.len()), given.len(), expected.len()));
+    }
+    expected
+        .zip(given)
+        .enumerate()
+        .find(|(_, (n, g))| g.len() != *n)
+        .map(|(field, (n, g))| (field, g.len(), n))
 }
