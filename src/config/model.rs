@@ -203,6 +203,19 @@ pub struct StiffnessFieldConfig {
     pub update: bool,
 }
 
+impl StiffnessFieldConfig {
+    /// Coefficients the clamped knot vectors define (as
+    /// `KnotVector::basis_count`; the vectors are validated by `build_model`),
+    /// or the count of `coefficients` when given.
+    pub fn coefficient_count(&self) -> usize {
+        let n = |knots: &[f64], degree: usize| knots.len().saturating_sub(degree + 1);
+        self.coefficients.as_ref().map_or_else(
+            || n(&self.knots_xi, self.degree_xi) * n(&self.knots_eta, self.degree_eta),
+            Vec::len,
+        )
+    }
+}
+
 fn default_scales() -> String {
     "all".into()
 }
@@ -409,8 +422,10 @@ fn build_stiffness_field(i: usize, f: &StiffnessFieldConfig, shell: &Shell) -> R
     }
     let xi = KnotVector::new(f.knots_xi.clone(), f.degree_xi).map_err(|e| err(key("knots_xi"), e))?;
     let eta = KnotVector::new(f.knots_eta.clone(), f.degree_eta).map_err(|e| err(key("knots_eta"), e))?;
-    let count = xi.basis_count() * eta.basis_count();
-    let coefficients = f.coefficients.clone().unwrap_or_else(|| vec![1.0; count]);
+    let coefficients = f
+        .coefficients
+        .clone()
+        .unwrap_or_else(|| vec![1.0; xi.basis_count() * eta.basis_count()]);
     if let Some([lo, hi]) = f.bounds {
         if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
             return Err(err(

@@ -87,6 +87,26 @@ impl Default for UpdatingConfig {
     }
 }
 
+/// The parameters `<prefix><j>` (j from 1) of one updated group of `count`
+/// coefficients, with the group's bounds (required: `bounds_key` names them).
+fn coefficient_parameters(
+    bounds_key: &str,
+    bounds: Option<[f64; 2]>,
+    prefix: &str,
+    count: usize,
+    kind: impl Fn(usize) -> ParameterKind,
+) -> Result<Vec<Parameter>, ConfigError> {
+    let [lower, upper] = bounds.ok_or_else(|| err(bounds_key, "required when update = true"))?;
+    Ok((0..count)
+        .map(|coefficient| Parameter {
+            name: format!("{prefix}{}", coefficient + 1),
+            kind: kind(coefficient),
+            lower,
+            upper,
+        })
+        .collect())
+}
+
 /// What an updating parameter's name (as [`Config::build_parameters`]
 /// makes them) stands for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -117,60 +137,32 @@ impl Config {
     /// fields with `update = true`, and `damping.g<z>`.
     pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
         let mut out = Vec::new();
-        for (field, s) in self.model.springs.iter().enumerate() {
-            if !s.update {
-                continue;
-            }
-            let [lower, upper] = s
-                .bounds
-                .ok_or_else(|| err(format!("model.springs[{field}].bounds"), "required when update = true"))?;
-            for coefficient in 0..s.stiffness.len() {
-                out.push(Parameter {
-                    name: format!("{}.k{}", s.name, coefficient + 1),
-                    kind: ParameterKind::Spring { field, coefficient },
-                    lower,
-                    upper,
-                });
-            }
+        for (field, s) in self.model.springs.iter().enumerate().filter(|(_, s)| s.update) {
+            out.extend(coefficient_parameters(
+                &format!("model.springs[{field}].bounds"),
+                s.bounds,
+                &format!("{}.k", s.name),
+                s.stiffness.len(),
+                |coefficient| ParameterKind::Spring { field, coefficient },
+            )?);
         }
-        for (field, f) in self.model.stiffness_fields.iter().enumerate() {
-            if !f.update {
-                continue;
-            }
-            let [lower, upper] = f.bounds.ok_or_else(|| {
-                err(
-                    format!("model.stiffness_fields[{field}].bounds"),
-                    "required when update = true",
-                )
-            })?;
-            let count = f.coefficients.as_ref().map_or_else(
-                || {
-                    let n = |knots: &[f64], degree: usize| knots.len().saturating_sub(degree + 1);
-                    n(&f.knots_xi, f.degree_xi) * n(&f.knots_eta, f.degree_eta)
-                },
-                Vec::len,
-            );
-            for coefficient in 0..count {
-                out.push(Parameter {
-                    name: format!("{}.s{}", f.name, coefficient + 1),
-                    kind: ParameterKind::Stiffness { field, coefficient },
-                    lower,
-                    upper,
-                });
-            }
+        for (field, f) in self.model.stiffness_fields.iter().enumerate().filter(|(_, f)| f.update) {
+            out.extend(coefficient_parameters(
+                &format!("model.stiffness_fields[{field}].bounds"),
+                f.bounds,
+                &format!("{}.s", f.name),
+                f.coefficient_count(),
+                |coefficient| ParameterKind::Stiffness { field, coefficient },
+            )?);
         }
         if let Some(d) = self.model.damping.as_ref().filter(|d| d.update) {
-            let [lower, upper] = d
-                .bounds
-                .ok_or_else(|| err("model.damping.bounds", "required when update = true"))?;
-            for coefficient in 0..d.coefficients.len() {
-                out.push(Parameter {
-                    name: format!("damping.g{}", coefficient + 1),
-                    kind: ParameterKind::Damping { coefficient },
-                    lower,
-                    upper,
-                });
-            }
+            out.extend(coefficient_parameters(
+                "model.damping.bounds",
+                d.bounds,
+                "damping.g",
+                d.coefficients.len(),
+                |coefficient| ParameterKind::Damping { coefficient },
+            )?);
         }
         Ok(out)
     }
