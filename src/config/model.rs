@@ -11,7 +11,7 @@ use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::shell::{Shell, ShellError};
 use splinewatch_core::springs::{Face, SpringDirection, SpringField};
-use splinewatch_core::stiffness_field::StiffnessField;
+use splinewatch_core::stiffness_field::{StiffnessField, StiffnessScale};
 use splinewatch_core::surface::Direction;
 
 /// Largest control net accepted (5 dofs each; the dense eigen-solve of
@@ -192,7 +192,8 @@ pub struct StiffnessFieldConfig {
     pub degree_xi: usize,
     pub knots_eta: Vec<f64>,
     pub degree_eta: usize,
-    /// What θ multiplies: `"all"` (membrane, bending and shear together).
+    /// What θ multiplies: `"all"` (membrane, bending and shear together),
+    /// `"membrane"`, `"bending"` or `"shear"`.
     #[serde(default = "default_scales")]
     pub scales: String,
     /// Start values θ, η fastest; default 1.0 everywhere.
@@ -411,15 +412,12 @@ fn shell_error_key(e: &ShellError) -> String {
 
 fn build_stiffness_field(i: usize, f: &StiffnessFieldConfig, shell: &Shell) -> Result<StiffnessField, ConfigError> {
     let key = |k: &str| format!("model.stiffness_fields[{i}].{k}");
-    if f.scales != "all" {
-        return Err(err(
+    let scale = StiffnessScale::parse(&f.scales).ok_or_else(|| {
+        err(
             key("scales"),
-            format!(
-                "{:?}: only \"all\" (membrane, bending and shear together) is supported so far",
-                f.scales
-            ),
-        ));
-    }
+            format!("{:?}: expected one of {:?}", f.scales, StiffnessScale::NAMES),
+        )
+    })?;
     let xi = KnotVector::new(f.knots_xi.clone(), f.degree_xi).map_err(|e| err(key("knots_xi"), e))?;
     let eta = KnotVector::new(f.knots_eta.clone(), f.degree_eta).map_err(|e| err(key("knots_eta"), e))?;
     let coefficients = f
@@ -434,7 +432,9 @@ fn build_stiffness_field(i: usize, f: &StiffnessFieldConfig, shell: &Shell) -> R
             ));
         }
     }
-    let field = StiffnessField::new(xi, eta, coefficients).map_err(|e| err(key("coefficients"), e))?;
+    let field = StiffnessField::new(xi, eta, coefficients)
+        .map_err(|e| err(key("coefficients"), e))?
+        .with_scale(scale);
     field
         .check_inside(shell)
         .map_err(|e| err(key(&format!("knots_{}", e.axis)), e))?;
@@ -610,8 +610,14 @@ bounds = [0.3, 1.5]
         assert!(
             message(REGIONS.replace("name = \"deck\"", "name = \"east\"")).contains("model.stiffness_fields[0].name")
         );
-        assert!(message(REGIONS.replace("bounds", "scales = \"bending\"\nbounds"))
-            .contains("model.stiffness_fields[0].scales"));
+        assert!(
+            message(REGIONS.replace("bounds", "scales = \"E1\"\nbounds")).contains("model.stiffness_fields[0].scales")
+        );
+        let bending = with_field(&REGIONS.replace("bounds", "scales = \"bending\"\nbounds")).unwrap();
+        assert_eq!(
+            bending.build_model().unwrap().stiffness_fields[0].scale(),
+            StiffnessScale::Bending
+        );
         assert!(
             message(REGIONS.replace("bounds = [0.3, 1.5]", "coefficients = [1.0, 2.0]"))
                 .contains("model.stiffness_fields[0].coefficients")

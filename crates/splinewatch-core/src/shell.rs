@@ -397,10 +397,12 @@ pub(crate) struct Quadrature {
 
 /// A step of the quadrature loop ([`integrate`]).
 pub(crate) enum QuadratureStep<'a> {
-    /// A Gauss point at `(ξ, η)` with volume weight `w`.
+    /// A Gauss point at `(ξ, η)` with volume weight `w`; `layer` is 0 or 1,
+    /// the thickness Gauss point (the two layers of one `(ξ, η)` come in a row).
     Point {
         xi: f64,
         eta: f64,
+        layer: usize,
         w: f64,
         rows: &'a PointRows,
     },
@@ -449,7 +451,7 @@ pub(crate) fn integrate(
         for we in be.windows(2) {
             for (xi, wxi) in gx.mapped(wx[0], wx[1]) {
                 for (eta, weta) in ge.mapped(we[0], we[1]) {
-                    for (tau, wt) in gt.mapped(0.0, 1.0) {
+                    for (layer, (tau, wt)) in gt.mapped(0.0, 1.0).enumerate() {
                         shell.evaluate_into(xi, eta, tau, &mut pt);
                         let (det, jinv) = det_inverse(&pt.jacobian);
                         let frame = lamina_frame(&pt.jacobian, material.angle_rad());
@@ -485,6 +487,7 @@ pub(crate) fn integrate(
                         visit(QuadratureStep::Point {
                             xi,
                             eta,
+                            layer,
                             w: wxi * weta * wt * det,
                             rows: &rows,
                         });

@@ -14,6 +14,17 @@
 //! over the whole deck is a global modulus scale: the temperature-driven
 //! stiffness change of the deck material.
 //!
+//! A field scales all of `E'` (`StiffnessScale::All`), or one part of the
+//! section's stiffness: with the two thickness Gauss points `ζ = ±c` of
+//! eq. (16), the in-plane strain rows at a point are `B± = B₀ ± δ` with the
+//! mid-surface (membrane) rows `B₀ = (B₊ + B₋)/2` and the bending rows
+//! `δ = (B₊ − B₋)/2`, so the in-plane integrand splits exactly into
+//! `(w₊ + w₋) B₀ᵀE'B₀` (membrane), `(w₊ + w₋) δᵀE'δ` (bending) and the
+//! coupling `(w₊ − w₋)(B₀ᵀE'δ + δᵀE'B₀)`, which vanishes on a flat shell of
+//! constant thickness and is shared half and half otherwise (so the three
+//! parts add up to the whole); the transverse shear rows (γ₂₃, γ₁₃; `E'` has
+//! no in-plane/shear coupling in the lamina frame) are the shear part.
+//!
 //! Quadrature splits at the knots of the shell and of the field, with
 //! `⌈d/2⌉` Gauss points more per direction than eq. (16) needs for a field
 //! of degree `d` (exact for a flat shell).
@@ -22,7 +33,7 @@ use crate::knots::KnotVector;
 use crate::material::OrthotropicMaterial;
 use crate::shell::{self, OutsideDomain, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::{unzip, zip, Accum, Mat, Par};
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -37,12 +48,50 @@ pub enum StiffnessFieldError {
     Shell(#[from] ShellError),
 }
 
+/// What part of the section's stiffness a field multiplies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StiffnessScale {
+    /// Membrane, bending and shear together (the moduli themselves).
+    #[default]
+    All,
+    /// The mid-surface (in-plane stretching) stiffness.
+    Membrane,
+    /// The bending stiffness (in-plane strains varying through the thickness).
+    Bending,
+    /// The transverse shear stiffness.
+    Shear,
+}
+
+impl StiffnessScale {
+    pub const NAMES: [&'static str; 4] = ["all", "membrane", "bending", "shear"];
+
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "all" => Some(Self::All),
+            "membrane" => Some(Self::Membrane),
+            "bending" => Some(Self::Bending),
+            "shear" => Some(Self::Shear),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::All => "all",
+            Self::Membrane => "membrane",
+            Self::Bending => "bending",
+            Self::Shear => "shear",
+        }
+    }
+}
+
 /// A validated stiffness multiplier field.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StiffnessField {
     xi: KnotVector,
     eta: KnotVector,
     coefficients: Vec<f64>,
+    scale: StiffnessScale,
 }
 
 impl StiffnessField {
@@ -60,7 +109,22 @@ impl StiffnessField {
                 value: coefficients[index],
             });
         }
-        Ok(Self { xi, eta, coefficients })
+        Ok(Self {
+            xi,
+            eta,
+            coefficients,
+            scale: StiffnessScale::All,
+        })
+    }
+
+    /// The same field multiplying `scale` only.
+    #[must_use]
+    pub fn with_scale(self, scale: StiffnessScale) -> Self {
+        Self { scale, ..self }
+    }
+
+    pub fn scale(&self) -> StiffnessScale {
+        self.scale
     }
 
     pub fn coefficients(&self) -> &[f64] {
@@ -111,27 +175,30 @@ impl StiffnessField {
         let mut local = vec![Mat::<f64>::zeros(nloc, nloc); count];
         let mut used = vec![false; count];
         let mut basis = Vec::new();
+        let mut section = SectionSplit::new(self.scale, nloc);
         let quadrature = shell::Quadrature {
             extra: (self.xi.degree().div_ceil(2), self.eta.degree().div_ceil(2)),
             cuts: (self.xi.breakpoints(), self.eta.breakpoints()),
         };
         shell::integrate(shell, material, &quadrature, |step| match step {
-            QuadratureStep::Point { xi, eta, w, rows } => {
+            QuadratureStep::Point {
+                xi,
+                eta,
+                layer,
+                w,
+                rows,
+            } => {
                 // Half-open spans: a point on the field's boundary belongs to
                 // one side only, and Gauss points never sit on a cut.
                 if !(self.xi.contains(xi) && self.eta.contains(eta)) {
                     return;
                 }
+                let Some(integrand) = section.integrand(layer, w, rows) else {
+                    return;
+                };
                 self.xi.tensor_basis_into(&self.eta, xi, eta, &mut basis);
                 for &(k, bk) in &basis {
-                    matmul(
-                        local[k].as_mut(),
-                        Accum::Add,
-                        rows.b.transpose(),
-                        rows.eb.as_ref(),
-                        w * bk,
-                        Par::Seq,
-                    );
+                    zip!(local[k].as_mut(), integrand.as_ref()).for_each(|unzip!(l, i)| *l += bk * *i);
                     used[k] = true;
                 }
             }
@@ -145,6 +212,73 @@ impl StiffnessField {
             }
         })?;
         Ok(out)
+    }
+}
+
+/// Rows 0–3 of the strain (ε₁₁, ε₂₂, ε₃₃, γ₁₂) are in-plane, rows 4–5 (γ₂₃,
+/// γ₁₃) transverse shear.
+const IN_PLANE_ROWS: usize = 4;
+const SHEAR_ROWS: usize = 2;
+
+/// The weighted integrand `w Bᵀ E' B` of one `(ξ, η)`, or the part of it a
+/// [`StiffnessScale`] selects (module docs): sums over the two thickness
+/// layers, ready after the second.
+struct SectionSplit {
+    scale: StiffnessScale,
+    integrand: Mat<f64>,
+    /// The first layer's in-plane rows `B₋`, `E'B₋` and weight `w₋`.
+    lower: (Mat<f64>, Mat<f64>, f64),
+}
+
+impl SectionSplit {
+    fn new(scale: StiffnessScale, nloc: usize) -> Self {
+        Self {
+            scale,
+            integrand: Mat::zeros(nloc, nloc),
+            lower: (Mat::zeros(IN_PLANE_ROWS, nloc), Mat::zeros(IN_PLANE_ROWS, nloc), 0.0),
+        }
+    }
+
+    fn integrand(&mut self, layer: usize, w: f64, rows: &shell::PointRows) -> Option<&Mat<f64>> {
+        let add = |target: &mut Mat<f64>, b: faer::MatRef<'_, f64>, eb: faer::MatRef<'_, f64>, w: f64| {
+            matmul(target.as_mut(), Accum::Add, b.transpose(), eb, w, Par::Seq);
+        };
+        if layer == 0 {
+            self.integrand.fill(0.0);
+        }
+        match self.scale {
+            StiffnessScale::All => add(&mut self.integrand, rows.b.as_ref(), rows.eb.as_ref(), w),
+            StiffnessScale::Shear => add(
+                &mut self.integrand,
+                rows.b.subrows(IN_PLANE_ROWS, SHEAR_ROWS),
+                rows.eb.subrows(IN_PLANE_ROWS, SHEAR_ROWS),
+                w,
+            ),
+            StiffnessScale::Membrane | StiffnessScale::Bending if layer == 0 => {
+                self.lower.0.copy_from(rows.b.subrows(0, IN_PLANE_ROWS));
+                self.lower.1.copy_from(rows.eb.subrows(0, IN_PLANE_ROWS));
+                self.lower.2 = w;
+            }
+            StiffnessScale::Membrane | StiffnessScale::Bending => {
+                let (b_lo, eb_lo, w_lo) = (&self.lower.0, &self.lower.1, self.lower.2);
+                let (b_hi, eb_hi) = (rows.b.subrows(0, IN_PLANE_ROWS), rows.eb.subrows(0, IN_PLANE_ROWS));
+                let mid = (b_hi + b_lo) * 0.5;
+                let e_mid = (eb_hi + eb_lo) * 0.5;
+                let slope = (b_hi - b_lo) * 0.5;
+                let e_slope = (eb_hi - eb_lo) * 0.5;
+                let (own, other) = if self.scale == StiffnessScale::Membrane {
+                    ((&mid, &e_mid), (&slope, &e_slope))
+                } else {
+                    ((&slope, &e_slope), (&mid, &e_mid))
+                };
+                add(&mut self.integrand, own.0.as_ref(), own.1.as_ref(), w + w_lo);
+                // Half the coupling (w₊ − w₋)(B₀ᵀE'δ + δᵀE'B₀).
+                let half = 0.5 * (w - w_lo);
+                add(&mut self.integrand, own.0.as_ref(), other.1.as_ref(), half);
+                add(&mut self.integrand, other.0.as_ref(), own.1.as_ref(), half);
+            }
+        }
+        (layer == 1).then_some(&self.integrand)
     }
 }
 
@@ -261,5 +395,55 @@ mod tests {
         let softened = &nominal + &d[0] * (0.7 - 1.0);
         let energy = |k: &Mat<f64>| (0..ndof).map(|i| k[(i, i)]).sum::<f64>();
         assert!(energy(&softened) < energy(&nominal));
+    }
+
+    /// Membrane, bending and shear parts add up to the whole, on a curved
+    /// panel (where the membrane–bending coupling is not zero and is shared)
+    /// and on the flat plate (where it is zero: the membrane part has no
+    /// entry on a rotation dof).
+    #[test]
+    fn the_section_parts_add_up_to_the_whole() {
+        let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
+        let panel = Shell::cylindrical_panel(4.0, 3.0, 1.2, 0.2, [3, 3], [6, 5]).unwrap();
+        let (plate, _) = plate();
+        for shell in [&panel, &plate] {
+            let part = |scale| {
+                let field = StiffnessField::new(uniform(1, 2), uniform(0, 1), vec![1.0; 2])
+                    .unwrap()
+                    .with_scale(scale);
+                field.coefficient_matrices(shell, &material).unwrap()
+            };
+            let all = part(StiffnessScale::All);
+            let parts = [
+                part(StiffnessScale::Membrane),
+                part(StiffnessScale::Bending),
+                part(StiffnessScale::Shear),
+            ];
+            for k in 0..2 {
+                let sum = &parts[0][k] + &parts[1][k] + &parts[2][k];
+                let error = relative_difference(&sum, &all[k]);
+                assert!(error < 1e-12, "coefficient {k}: {error}");
+                for p in &parts {
+                    assert!(relative_difference(&p[k].transpose().to_owned(), &p[k]) < 1e-14);
+                    assert!(p[k].norm_max() > 1e-3 * all[k].norm_max());
+                }
+            }
+        }
+        // Flat plate: dofs 3k..3k+2 translate control point k, 3k+3.. rotate it.
+        let membrane = StiffnessField::new(uniform(0, 1), uniform(0, 1), vec![1.0])
+            .unwrap()
+            .with_scale(StiffnessScale::Membrane)
+            .coefficient_matrices(&plate, &material)
+            .unwrap();
+        let rotations: Vec<usize> = (0..plate.dof_count())
+            .filter(|d| d % DOFS_PER_CONTROL_POINT >= 3)
+            .collect();
+        let on_rotations = rotations.iter().map(|&d| membrane[0][(d, d)].abs()).fold(0.0, f64::max);
+        assert!(on_rotations < 1e-12 * membrane[0].norm_max(), "{on_rotations}");
+        assert_eq!(StiffnessScale::parse("bending"), Some(StiffnessScale::Bending));
+        assert_eq!(StiffnessScale::parse("E1"), None);
+        for name in StiffnessScale::NAMES {
+            assert_eq!(StiffnessScale::parse(name).unwrap().name(), name);
+        }
     }
 }

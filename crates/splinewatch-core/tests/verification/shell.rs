@@ -4,10 +4,12 @@
 use super::common::{clamped_curved_panel, sinello_material, sinello_springs};
 use faer::{Mat, Side};
 use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::knots::KnotVector;
 use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::shell::Shell;
+use splinewatch_core::stiffness_field::{StiffnessField, StiffnessScale};
 use std::f64::consts::PI;
 
 fn all_edges(kind: SupportKind) -> Vec<EdgeConstraint> {
@@ -49,11 +51,17 @@ fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial
 /// Navier solution of a simply supported, specially orthotropic Mindlin
 /// plate (Reddy, *Theory and Analysis of Elastic Plates and Shells*, §10.2):
 /// for each (m, n) the lowest root of the 3×3 pencil in (w, φx, φy),
-/// with rotary inertia ρh³/12.
-fn mindlin_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count: usize) -> Vec<f64> {
-    let [d11, d22, d12, d66] = bending_rigidities(mat, h);
-    let a55 = mat.shear_correction() * mat.g13() * h;
-    let a44 = mat.shear_correction() * mat.g23() * h;
+/// with rotary inertia ρh³/12; `[bending, shear]` scale the rigidities
+/// `D_ij` and `A_44`, `A_55`.
+fn mindlin_navier_hz(
+    mat: &OrthotropicMaterial,
+    (a, b, h): (f64, f64, f64),
+    [bending, shear]: [f64; 2],
+    count: usize,
+) -> Vec<f64> {
+    let [d11, d22, d12, d66] = bending_rigidities(mat, h).map(|d| bending * d);
+    let a55 = shear * mat.shear_correction() * mat.g13() * h;
+    let a44 = shear * mat.shear_correction() * mat.g23() * h;
     let rho = mat.density();
     let mut out = Vec::new();
     for m in 1..=12 {
@@ -123,7 +131,7 @@ fn simply_supported_orthotropic_mindlin_plate_matches_navier() {
     let (a, b, h) = (16.0, 9.0, 1.6);
     let mat = sinello_material();
     let model = simply_supported_plate(a, b, h, &mat);
-    let exact = mindlin_navier_hz(&mat, a, b, h, 10);
+    let exact = mindlin_navier_hz(&mat, (a, b, h), [1.0, 1.0], 10);
     let fe = bending_frequencies(&model, 10);
     assert_close(&fe, &exact, 5e-3, "Mindlin Navier");
     let kirchhoff = kirchhoff_navier_hz(&mat, a, b, h, 10);
@@ -144,10 +152,12 @@ fn thin_simply_supported_plate_matches_kirchhoff() {
 /// shear-diaphragm supports on all edges (Leissa, *Vibration of Shells*,
 /// NASA SP-288, §2.1, with the circumferential wave number n = kπ/Φ):
 /// Ω² are the eigenvalues of the symmetric 3×3 matrix below, in units of
-/// E / (ρ (1 - ν²) R²).
+/// E / (ρ (1 - ν²) R²); `[membrane, bending]` scale the stretching terms and
+/// the bending term `k (λ² + n²)²`.
 fn donnell_panel_hz(
     (e, nu, rho): (f64, f64, f64),
     (length, radius, angle, h): (f64, f64, f64, f64),
+    [membrane, bending]: [f64; 2],
     count: usize,
 ) -> Vec<f64> {
     let kk = h * h / (12.0 * radius * radius);
@@ -157,12 +167,12 @@ fn donnell_panel_hz(
             let l = m as f64 * PI * radius / length;
             let n = k as f64 * PI / angle;
             let a = Mat::from_fn(3, 3, |i, j| match (i, j) {
-                (0, 0) => l * l + 0.5 * (1.0 - nu) * n * n,
-                (1, 1) => 0.5 * (1.0 - nu) * l * l + n * n,
-                (2, 2) => 1.0 + kk * (l * l + n * n).powi(2),
-                (0, 1) | (1, 0) => 0.5 * (1.0 + nu) * l * n,
-                (0, 2) | (2, 0) => nu * l,
-                _ => n,
+                (0, 0) => membrane * (l * l + 0.5 * (1.0 - nu) * n * n),
+                (1, 1) => membrane * (0.5 * (1.0 - nu) * l * l + n * n),
+                (2, 2) => membrane + bending * kk * (l * l + n * n).powi(2),
+                (0, 1) | (1, 0) => membrane * 0.5 * (1.0 + nu) * l * n,
+                (0, 2) | (2, 0) => membrane * nu * l,
+                _ => membrane * n,
             });
             let omega2 = a.self_adjoint_eigenvalues(Side::Lower).unwrap()[0];
             out.push((omega2 * e / (rho * (1.0 - nu * nu) * radius * radius)).sqrt() / (2.0 * PI));
@@ -173,25 +183,35 @@ fn donnell_panel_hz(
     out
 }
 
+/// Material `(E, ν, ρ)` and panel `(length, R, Φ, h)` of the Donnell cases.
+const DONNELL_MATERIAL: (f64, f64, f64) = (70e9, 0.3, 2700.0);
+const DONNELL_PANEL: (f64, f64, f64, f64) = (1.0, 2.0, 0.5, 0.01);
+
+/// The Donnell panel (R/h = 200), shear-diaphragm supports on every edge.
+fn donnell_panel(stiffness_fields: Vec<StiffnessField>) -> ShellModel {
+    let (e, nu, rho) = DONNELL_MATERIAL;
+    let (length, radius, angle, h) = DONNELL_PANEL;
+    ShellModel {
+        shell: Shell::cylindrical_panel(length, radius, angle, h, [4, 4], [16, 16]).unwrap(),
+        material: OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
+        springs: vec![],
+        stiffness_fields,
+        constraints: all_edges(SupportKind::ShearDiaphragm),
+    }
+}
+
 #[test]
 fn cylindrical_panel_matches_donnell() {
     // R/h = 200, n = kπ/Φ ≥ 6.3: Donnell's neglected terms are O(1/n²) of the
     // bending energy, which is itself a small part here (the curvature makes
     // the lowest modes membrane-stiffened, several times the flat-plate value).
-    let (e, nu, rho) = (70e9, 0.3, 2700.0);
-    let (length, radius, angle, h) = (1.0, 2.0, 0.5, 0.01);
-    let model = ShellModel {
-        shell: Shell::cylindrical_panel(length, radius, angle, h, [4, 4], [16, 16]).unwrap(),
-        material: OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
-        springs: vec![],
-        stiffness_fields: Vec::new(),
-        constraints: all_edges(SupportKind::ShearDiaphragm),
-    };
+    let model = donnell_panel(Vec::new());
     let modes = model.assemble().unwrap().modes().unwrap();
     let fe: Vec<f64> = (0..5).map(|i| modes.frequency_hz(i)).collect();
-    let exact = donnell_panel_hz((e, nu, rho), (length, radius, angle, h), 5);
+    let exact = donnell_panel_hz(DONNELL_MATERIAL, DONNELL_PANEL, [1.0, 1.0], 5);
     assert_close(&fe, &exact, 1e-2, "Donnell panel");
     // The flat plate of the same span is much softer: curvature matters.
+    let ((e, nu, rho), (length, radius, angle, h)) = (DONNELL_MATERIAL, DONNELL_PANEL);
     let flat = kirchhoff_navier_hz(
         &OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
         length,
@@ -200,6 +220,76 @@ fn cylindrical_panel_matches_donnell() {
         1,
     );
     assert!(exact[0] > 2.0 * flat[0]);
+}
+
+/// One single-coefficient field over the deck per section part.
+fn section_fields(scales: [StiffnessScale; 3]) -> Vec<StiffnessField> {
+    let whole = || KnotVector::uniform(0, 1, 0.0, 1.0).unwrap();
+    scales
+        .into_iter()
+        .map(|scale| {
+            StiffnessField::new(whole(), whole(), vec![1.0])
+                .unwrap()
+                .with_scale(scale)
+        })
+        .collect()
+}
+
+/// Stiffness fields that scale the bending (0.8) and transverse shear (0.6)
+/// stiffness separately match the Navier–Mindlin solution with `D_ij` and
+/// `A_44`, `A_55` so scaled (the same 5e-3 as the nominal plate: the mesh
+/// limits both), and a membrane scale (0.5) leaves a flat plate's bending
+/// modes as they are (1e-10: membrane and bending decouple exactly).
+#[test]
+fn section_scales_match_navier_mindlin() {
+    let (a, b, h) = (16.0, 9.0, 1.6);
+    let mat = sinello_material();
+    let model = ShellModel {
+        stiffness_fields: section_fields([StiffnessScale::Bending, StiffnessScale::Shear, StiffnessScale::Membrane]),
+        ..simply_supported_plate(a, b, h, &mat)
+    };
+    let assembled = model.assemble().unwrap();
+    let bending_of = |theta: [f64; 3]| {
+        let modes = assembled.modes_with_fields(&[], &theta.map(|t| vec![t])).unwrap();
+        (0..modes.len())
+            .filter(|&i| modes.kinds[i] == ModeKind::Bending)
+            .map(|i| modes.frequency_hz(i))
+            .take(10)
+            .collect::<Vec<f64>>()
+    };
+    let fe = bending_of([0.8, 0.6, 1.0]);
+    let exact = mindlin_navier_hz(&mat, (a, b, h), [0.8, 0.6], 10);
+    let nominal = mindlin_navier_hz(&mat, (a, b, h), [1.0, 1.0], 10);
+    assert!(exact[9] < 0.85 * nominal[9], "the scales must move the frequencies");
+    assert_close(&fe, &exact, 5e-3, "Mindlin Navier, bending × 0.8, shear × 0.6");
+    let unchanged = bending_of([1.0, 1.0, 0.5]);
+    assert_close(&unchanged, &bending_of([1.0; 3]), 1e-10, "flat plate, membrane × 0.5");
+}
+
+/// On a curved panel the membrane and bending scales enter Donnell's
+/// equations as separate factors of the stretching and bending terms:
+/// membrane × 0.7 with bending × 1.3 matches them to the nominal case's 1e-2
+/// (the FE coupling term shared between the two is O(h/R) here).
+#[test]
+fn section_scales_on_a_panel_match_donnell() {
+    let model = donnell_panel(section_fields([
+        StiffnessScale::Membrane,
+        StiffnessScale::Bending,
+        StiffnessScale::Shear,
+    ]));
+    let modes = model
+        .assemble()
+        .unwrap()
+        .modes_with_fields(&[], &[vec![0.7], vec![1.3], vec![1.0]])
+        .unwrap();
+    let fe: Vec<f64> = (0..5).map(|i| modes.frequency_hz(i)).collect();
+    let exact = donnell_panel_hz(DONNELL_MATERIAL, DONNELL_PANEL, [0.7, 1.3], 5);
+    let nominal = donnell_panel_hz(DONNELL_MATERIAL, DONNELL_PANEL, [1.0, 1.0], 5);
+    assert!(
+        (exact[0] / nominal[0] - 1.0).abs() > 0.05,
+        "the scales must move the frequencies"
+    );
+    assert_close(&fe, &exact, 1e-2, "Donnell panel, membrane × 0.7, bending × 1.3");
 }
 
 #[test]

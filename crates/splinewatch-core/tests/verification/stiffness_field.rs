@@ -279,3 +279,57 @@ fn a_local_stiffness_loss_is_found_in_its_region_with_the_springs_updated() {
         values[8..].iter().map(|v| format!("{v:.3}")).collect::<Vec<_>>()
     );
 }
+
+/// Which section scales the Sinello deck's bending modes below 80 Hz can
+/// identify, from the relative eigenvalue sensitivities `∂λ/∂θ / λ` of
+/// three global fields (membrane, bending, shear). On a flat deck the
+/// bending modes carry no membrane strain: the membrane column is zero (a
+/// membrane scale is not identifiable from them). Bending and shear move
+/// the modes in different proportions (shear matters more for the higher,
+/// shorter modes): the two columns are far from parallel (cosine 0.80),
+/// and each mode's shares add up to at most 1 (the deck's share of its
+/// strain energy; the springs hold the rest).
+#[test]
+fn section_scales_identifiability_on_the_deck() {
+    use splinewatch_core::stiffness_field::StiffnessScale;
+    let scaled = |scale| field([0, 0], [1, 1]).with_scale(scale);
+    let model = FrfModel::new(
+        with_fields(vec![
+            scaled(StiffnessScale::Membrane),
+            scaled(StiffnessScale::Bending),
+            scaled(StiffnessScale::Shear),
+        ])
+        .assemble()
+        .unwrap(),
+        &sinello_sensors(),
+    )
+    .unwrap();
+    let damping = DampingCurve::new(2, vec![0.01; 7], 0.0, 80.0).unwrap();
+    let state = model
+        .modal_state_with_fields(&true_kappa(), &[vec![1.0], vec![1.0], vec![1.0]], &damping)
+        .unwrap();
+    let modes = bending_modes_below_80_hz(&state);
+    let s = model.field_sensitivities(&state, &modes);
+    let column = |c: usize| -> Vec<f64> {
+        (0..modes.len())
+            .map(|r| s.eigenvalue[(r, c)] / state.modes.omega2[modes[r]])
+            .collect()
+    };
+    let (membrane, bending, shear) = (column(0), column(1), column(2));
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let cosine = bending.iter().zip(&shear).map(|(a, b)| a * b).sum::<f64>() / (norm(&bending) * norm(&shear));
+    eprintln!(
+        "{} modes: membrane share ≤ {:.1e}, bending share {:.3}–{:.3}, cos(bending, shear) = {cosine:.4}",
+        modes.len(),
+        membrane.iter().map(|x| x.abs()).fold(0.0, f64::max),
+        bending.iter().copied().fold(f64::INFINITY, f64::min),
+        bending.iter().copied().fold(0.0, f64::max),
+    );
+    assert!(membrane.iter().all(|x| x.abs() < 1e-9), "{membrane:?}");
+    // ∂λ/∂θ / λ of a part is its share of the mode's strain energy.
+    for r in 0..modes.len() {
+        let sum = membrane[r] + bending[r] + shear[r];
+        assert!(sum > 0.0 && sum <= 1.0 + 1e-9, "mode {}: {sum}", modes[r]);
+    }
+    assert!(cosine < 0.9, "bending and shear scales indistinguishable: cos {cosine}");
+}
