@@ -20,6 +20,7 @@ pub mod modal;
 pub mod modal_residual;
 pub mod modal_sensitivity;
 pub mod model;
+pub mod monitoring;
 pub mod oma;
 pub mod quadrature;
 pub mod shell;

@@ -1,0 +1,142 @@
+//! Environmental compensation and statistical novelty detection on the
+//! identified parameters (the layer real SHM systems put on top of system
+//! identification: Peeters & De Roeck 2001, Z24; Kullaa 2003; Magalhães,
+//! Cunha & Caetano 2012).
+//!
+//! Each scored update is an [`Observation`]: its features (updated
+//! parameters, identified frequencies) and the mean temperature of every
+//! channel over its span. The first observations train a [`Reference`]:
+//!
+//! - **compensation** ([`compensation`]): with temperatures, a least-squares
+//!   regression of every feature on `1, T_c, max(knee − T_c, 0)` (a hinge:
+//!   frozen bearings and asphalt stiffen below the knee) and optionally
+//!   `T_c` of earlier windows; without, a PCA model whose first `k`
+//!   principal components (the environment's hidden factors) are removed;
+//! - **residual covariance** ([`covariance`]): residuals scaled by their
+//!   median absolute deviation, then a Ledoit–Wolf (2004) shrinkage
+//!   covariance, well conditioned with few windows and robust to a few
+//!   outliers;
+//! - **control limits** ([`reference`]): Hotelling T² and the MEWMA of
+//!   Lowry et al. (1992) of held-out residuals (contiguous k-fold cross
+//!   validation over the training span: each fold scored by a reference
+//!   trained without it), their limits at the target false-alarm rate per
+//!   window from the larger of the empirical quantile and a moment-matched
+//!   scaled χ² (Box 1954), which extrapolates the tail beyond what a
+//!   hundred held-out windows show.
+//!
+//! A [`Monitor`] ([`chart`]) scores every later observation against the
+//! reference and raises an alarm after `k` of the last `m` scored windows
+//! exceed a limit; a window whose temperature lies outside the training
+//! range is flagged, not scored; a window without a temperature is scored
+//! (T² only, flagged) by a PCA model trained on the same windows.
+
+pub mod chart;
+pub mod compensation;
+pub mod covariance;
+pub mod reference;
+
+pub use chart::{Monitor, MonitorState, Status};
+pub use reference::Reference;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum MonitoringError {
+    #[error("{name} = {value}: {expected}")]
+    Setting {
+        name: &'static str,
+        value: f64,
+        expected: &'static str,
+    },
+    #[error("{usable} usable training windows (of {total}); at least {needed} are needed for {features} features")]
+    TooFewWindows {
+        usable: usize,
+        total: usize,
+        needed: usize,
+        features: usize,
+    },
+    #[error("observation {index} has {found} features, the reference has {expected}")]
+    FeatureCount {
+        index: usize,
+        found: usize,
+        expected: usize,
+    },
+    #[error("observation {index}: feature {feature} is not finite")]
+    Feature { index: usize, feature: usize },
+    #[error("the residual covariance is not positive definite")]
+    Covariance,
+}
+
+/// How the statistical layer is trained and scored.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    /// Temperature channels (0: the PCA variant).
+    pub temperature_channels: usize,
+    /// Knee of the hinge term `max(knee − T, 0)`, °C.
+    pub knee_c: f64,
+    /// Lagged temperature terms: `T` of the `lags` previous windows.
+    pub lags: usize,
+    /// Principal components removed without temperatures.
+    pub pca_components: usize,
+    /// MEWMA smoothing λ in (0, 1].
+    pub ewma_lambda: f64,
+    /// Target false-alarm probability per window of each chart.
+    pub false_alarm_rate: f64,
+    /// An alarm needs `k` exceedances among the last `m` scored windows.
+    pub persistence: [usize; 2],
+    /// Margin around the training temperature range, °C.
+    pub range_margin_c: f64,
+    /// Contiguous cross-validation folds for the control limits.
+    pub folds: usize,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            temperature_channels: 0,
+            knee_c: 0.0,
+            lags: 0,
+            pca_components: 1,
+            ewma_lambda: 0.2,
+            false_alarm_rate: 0.001,
+            persistence: [3, 5],
+            range_margin_c: 1.0,
+            folds: 5,
+        }
+    }
+}
+
+impl Settings {
+    pub fn check(&self) -> Result<(), MonitoringError> {
+        let bad = |name, value: f64, expected| Err(MonitoringError::Setting { name, value, expected });
+        if !(self.ewma_lambda > 0.0 && self.ewma_lambda <= 1.0) {
+            return bad("ewma_lambda", self.ewma_lambda, "must be in (0, 1]");
+        }
+        if !(self.false_alarm_rate > 0.0 && self.false_alarm_rate < 0.5) {
+            return bad("false_alarm_rate", self.false_alarm_rate, "must be in (0, 0.5)");
+        }
+        let [k, m] = self.persistence;
+        if k == 0 || k > m {
+            return bad("persistence", k as f64, "needs 1 ≤ k ≤ m");
+        }
+        if !self.knee_c.is_finite() {
+            return bad("knee_c", self.knee_c, "must be finite");
+        }
+        if !(self.range_margin_c.is_finite() && self.range_margin_c >= 0.0) {
+            return bad("range_margin_c", self.range_margin_c, "must be ≥ 0");
+        }
+        if self.folds < 2 {
+            return bad("folds", self.folds as f64, "must be at least 2");
+        }
+        Ok(())
+    }
+}
+
+/// One scored update: its features and the window's mean temperature per
+/// channel (`NaN`: no valid sample in the span).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Observation {
+    pub features: Vec<f64>,
+    pub temperatures: Vec<f64>,
+}

@@ -1,0 +1,287 @@
+//! The reference (training) model: compensation, residual scales and
+//! covariance, and control limits calibrated on held-out windows.
+
+use super::compensation::{regressors, Compensation};
+use super::covariance::{ledoit_wolf, robust_scale};
+use super::{MonitoringError, Observation, Settings};
+use faer::linalg::solvers::DenseSolveCore;
+use faer::Side;
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
+
+/// Compensation, scales and precision fitted on some training windows.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Fitted {
+    pub compensation: Compensation,
+    /// Robust scale of each feature's residual; 0: constant in training
+    /// (a parameter at a bound), left out of the statistics.
+    pub scales: Vec<f64>,
+    /// Features in the statistics (non-zero scale).
+    pub kept: Vec<usize>,
+    /// Inverse of the shrunk covariance of the scaled residuals (`kept × kept`, rows).
+    pub precision: Vec<Vec<f64>>,
+    pub shrinkage: f64,
+}
+
+impl Fitted {
+    /// A regression on `x` (one row per window), or PCA when `x` is empty.
+    fn fit(settings: &Settings, features: &[&[f64]], x: &[Vec<f64>]) -> Result<Self, MonitoringError> {
+        let compensation = if !x.is_empty() {
+            Compensation::regression(features, x)
+        } else {
+            Compensation::pca(features, settings.pca_components)
+        };
+        let residuals: Vec<Vec<f64>> = features
+            .iter()
+            .enumerate()
+            .map(|(i, y)| compensation.residual(y, x.get(i).map(Vec::as_slice)))
+            .collect();
+        let p = features[0].len();
+        let scales: Vec<f64> = (0..p)
+            .map(|f| robust_scale(&residuals.iter().map(|r| r[f]).collect::<Vec<_>>()))
+            .collect();
+        let kept: Vec<usize> = (0..p).filter(|&f| scales[f] > 0.0).collect();
+        let scaled: Vec<Vec<f64>> = residuals
+            .iter()
+            .map(|r| kept.iter().map(|&f| r[f] / scales[f]).collect())
+            .collect();
+        let (covariance, shrinkage) = ledoit_wolf(&scaled);
+        let llt = covariance.llt(Side::Lower).map_err(|_| MonitoringError::Covariance)?;
+        let inverse = llt.inverse();
+        let precision = (0..kept.len())
+            .map(|i| (0..kept.len()).map(|j| inverse[(i, j)]).collect())
+            .collect();
+        Ok(Self {
+            compensation,
+            scales,
+            kept,
+            precision,
+            shrinkage,
+        })
+    }
+
+    /// Every feature's residual over its scale (0 where the scale is).
+    pub fn standardised(&self, features: &[f64], x: Option<&[f64]>) -> Vec<f64> {
+        let r = self.compensation.residual(features, x);
+        r.iter()
+            .zip(&self.scales)
+            .map(|(r, s)| if *s > 0.0 { r / s } else { 0.0 })
+            .collect()
+    }
+
+    /// `eᵀ Σ⁻¹ e` over the kept features of a standardised residual.
+    pub fn quadratic(&self, e: &[f64]) -> f64 {
+        let v: Vec<f64> = self.kept.iter().map(|&f| e[f]).collect();
+        self.precision
+            .iter()
+            .zip(&v)
+            .map(|(row, vi)| vi * row.iter().zip(&v).map(|(a, b)| a * b).sum::<f64>())
+            .sum()
+    }
+}
+
+/// How the limits were calibrated, for the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Calibration {
+    /// Held-out windows scored (T²) and MEWMA values used (after burn-in).
+    pub held_out: usize,
+    pub mewma_values: usize,
+    /// Held-out exceedances of the final limits.
+    pub t2_exceedances: usize,
+    pub mewma_exceedances: usize,
+}
+
+/// A compensation model with its control limits.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Chart {
+    pub fitted: Fitted,
+    pub t2_limit: f64,
+    pub mewma_limit: f64,
+    pub calibration: Calibration,
+}
+
+impl Chart {
+    fn train(settings: &Settings, y: &[&[f64]], x: &[Vec<f64>]) -> Result<Self, MonitoringError> {
+        let fitted = Fitted::fit(settings, y, x)?;
+        let (t2, mewma) = held_out_statistics(settings, y, x)?;
+        let (p, n) = (fitted.kept.len(), y.len());
+        let (t2_limit, mewma_limit) = (
+            limit(&t2, settings.false_alarm_rate, p, n),
+            limit(&mewma, settings.false_alarm_rate, p, n),
+        );
+        Ok(Self {
+            fitted,
+            t2_limit,
+            mewma_limit,
+            calibration: Calibration {
+                held_out: t2.len(),
+                mewma_values: mewma.len(),
+                t2_exceedances: t2.iter().filter(|&&v| v > t2_limit).count(),
+                mewma_exceedances: mewma.iter().filter(|&&v| v > mewma_limit).count(),
+            },
+        })
+    }
+}
+
+/// The trained reference.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    pub settings: Settings,
+    pub features: usize,
+    /// The temperature regression (with temperature channels) or the PCA model.
+    pub primary: Chart,
+    /// With temperature channels, the PCA model on the same windows: it
+    /// scores (T² only) a window whose temperature is missing.
+    pub fallback: Option<Chart>,
+    /// Per temperature channel, the training range `[min, max]`, °C.
+    pub temperature_range: Vec<[f64; 2]>,
+    /// Training windows used (with every needed temperature).
+    pub windows: usize,
+}
+
+/// The `1 − α` limit of held-out statistic values: the larger of their
+/// empirical quantile and the quantile of `c F(p, n − p)` with `c` matched
+/// to their mean: the law of the T² of a future observation against a mean
+/// and covariance estimated from `n` windows (Tracy, Young & Mason 1992),
+/// whose tail is heavier than χ²'s and reaches beyond what a hundred
+/// held-out windows can show.
+fn limit(values: &[f64], alpha: f64, features: usize, windows: usize) -> f64 {
+    let n = values.len() as f64;
+    let mut sorted = values.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let position = (1.0 - alpha) * (n - 1.0);
+    let (lo, frac) = (position.floor() as usize, position.fract());
+    let empirical = sorted[lo] + frac * (sorted[(lo + 1).min(sorted.len() - 1)] - sorted[lo]);
+    let mean = values.iter().sum::<f64>() / n;
+    // F(d1, d2) has mean d2 / (d2 − 2); d2 ≥ 5 keeps the law's variance finite.
+    let (d1, d2) = (
+        features.max(1) as f64,
+        (windows.saturating_sub(features) as f64).max(5.0),
+    );
+    let tail = FisherSnedecor::new(d1, d2).map_or(0.0, |f| mean * (d2 - 2.0) / d2 * f.inverse_cdf(1.0 - alpha));
+    empirical.max(tail)
+}
+
+/// MEWMA statistic of `z` (the EWMA of standardised residuals) with the
+/// asymptotic covariance `λ/(2 − λ) Σ` (Lowry et al. 1992).
+pub fn mewma_statistic(fitted: &Fitted, z: &[f64], lambda: f64) -> f64 {
+    (2.0 - lambda) / lambda * fitted.quadratic(z)
+}
+
+impl Reference {
+    /// Trains on `observations` (time order): windows missing a needed
+    /// temperature are left out of the fit (they still count as history
+    /// for lags). Limits: contiguous `folds`-fold cross validation.
+    pub fn train(settings: &Settings, observations: &[Observation]) -> Result<Self, MonitoringError> {
+        settings.check()?;
+        let features = observations.first().map_or(0, |o| o.features.len());
+        for (index, o) in observations.iter().enumerate() {
+            if o.features.len() != features {
+                return Err(MonitoringError::FeatureCount {
+                    index,
+                    found: o.features.len(),
+                    expected: features,
+                });
+            }
+            if let Some(feature) = o.features.iter().position(|v| !v.is_finite()) {
+                return Err(MonitoringError::Feature { index, feature });
+            }
+        }
+        let (rows, x) = usable(settings, observations);
+        let q = x.first().map_or(1, Vec::len);
+        let needed = (2 * settings.folds).max(q + 3).max(10);
+        if rows.len() < needed || features == 0 {
+            return Err(MonitoringError::TooFewWindows {
+                usable: rows.len(),
+                total: observations.len(),
+                needed,
+                features,
+            });
+        }
+        let y: Vec<&[f64]> = rows.iter().map(|&i| observations[i].features.as_slice()).collect();
+        let primary = Chart::train(settings, &y, &x)?;
+        let fallback = if settings.temperature_channels > 0 {
+            Some(Chart::train(settings, &y, &[])?)
+        } else {
+            None
+        };
+        let temperature_range = (0..settings.temperature_channels)
+            .map(|c| {
+                let t = rows.iter().map(|&i| observations[i].temperatures[c]);
+                [
+                    t.clone().fold(f64::INFINITY, f64::min),
+                    t.fold(f64::NEG_INFINITY, f64::max),
+                ]
+            })
+            .collect();
+        Ok(Self {
+            settings: settings.clone(),
+            features,
+            primary,
+            fallback,
+            temperature_range,
+            windows: rows.len(),
+        })
+    }
+}
+
+/// The training windows with every needed temperature, and their regressors.
+fn usable(settings: &Settings, observations: &[Observation]) -> (Vec<usize>, Vec<Vec<f64>>) {
+    if settings.temperature_channels == 0 {
+        return ((0..observations.len()).collect(), Vec::new());
+    }
+    let mut rows = Vec::new();
+    let mut x = Vec::new();
+    for i in 0..observations.len() {
+        let history: Vec<&[f64]> = (0..=settings.lags.min(i))
+            .map(|l| observations[i - l].temperatures.as_slice())
+            .collect();
+        if let Some(r) = regressors(settings, &history) {
+            rows.push(i);
+            x.push(r);
+        }
+    }
+    (rows, x)
+}
+
+/// T² and MEWMA of every training window scored by a reference fitted
+/// without its fold (contiguous folds), in time order; the MEWMA's first
+/// `⌈1/λ⌉` values (at most a quarter) are burn-in from `z = 0` and left out.
+fn held_out_statistics(
+    settings: &Settings,
+    y: &[&[f64]],
+    x: &[Vec<f64>],
+) -> Result<(Vec<f64>, Vec<f64>), MonitoringError> {
+    let n = y.len();
+    let folds = settings.folds.min(n);
+    let lambda = settings.ewma_lambda;
+    let mut t2 = Vec::with_capacity(n);
+    let mut mewma = Vec::with_capacity(n);
+    let mut z = vec![0.0; y[0].len()];
+    for f in 0..folds {
+        let (start, end) = (f * n / folds, (f + 1) * n / folds);
+        let keep: Vec<usize> = (0..n).filter(|i| !(start..end).contains(i)).collect();
+        let ys: Vec<&[f64]> = keep.iter().map(|&i| y[i]).collect();
+        let xs: Vec<Vec<f64>> = if x.is_empty() {
+            Vec::new()
+        } else {
+            keep.iter().map(|&i| x[i].clone()).collect()
+        };
+        let fitted = Fitted::fit(settings, &ys, &xs)?;
+        for i in start..end {
+            let e = fitted.standardised(y[i], x.get(i).map(Vec::as_slice));
+            t2.push(fitted.quadratic(&e));
+            z.iter_mut()
+                .zip(&e)
+                .for_each(|(z, e)| *z = lambda * e + (1.0 - lambda) * *z);
+            mewma.push(mewma_statistic(&fitted, &z, lambda));
+        }
+    }
+    let burn_in = ((1.0 / lambda).ceil() as usize).min(n / 4);
+    Ok((t2, mewma.split_off(burn_in)))
+}
+
+/// The standard χ² quantile, for tests and reports.
+pub fn chi_squared_quantile(dof: f64, probability: f64) -> f64 {
+    ChiSquared::new(dof).map_or(f64::NAN, |c| c.inverse_cdf(probability))
+}
