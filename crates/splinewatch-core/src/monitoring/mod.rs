@@ -16,7 +16,7 @@
 //!   median absolute deviation, then a Ledoit–Wolf (2004) shrinkage
 //!   covariance, well conditioned with few windows and robust to a few
 //!   outliers;
-//! - **control limits** ([`reference`]): Hotelling T² and the MEWMA of
+//! - **control limits** ([`mod@reference`]): Hotelling T² and the MEWMA of
 //!   Lowry et al. (1992) of held-out residuals (contiguous k-fold cross
 //!   validation over the training span: each fold scored by a reference
 //!   trained without it), their limits at the target false-alarm rate per
