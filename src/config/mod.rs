@@ -8,6 +8,7 @@
 
 mod frf;
 mod model;
+mod monitoring;
 mod oma;
 mod output;
 mod schedule;
@@ -20,6 +21,7 @@ pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
     MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, SupportConfig, MAX_CONTROL_POINTS,
 };
+pub use monitoring::MonitoringConfig;
 pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use schedule::ScheduleConfig;
@@ -67,6 +69,9 @@ pub struct Config {
     pub zenoh: ZenohConfig,
     #[serde(default)]
     pub oma: OmaConfig,
+    /// `[monitoring]`: compensation and alarms; absent: none.
+    #[serde(default)]
+    pub monitoring: Option<MonitoringConfig>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -153,6 +158,17 @@ impl Config {
             .unwrap_or_else(|| std::path::Path::new("out").join(&self.structure.name))
     }
 
+    /// Where the monitor (`[monitoring]`) persists next to the state file
+    /// `state_file`: `[monitoring] state_file`, or `monitoring.json` beside it.
+    pub fn monitor_file(&self, state_file: &Path) -> Option<std::path::PathBuf> {
+        let m = self.monitoring.as_ref()?;
+        Some(
+            m.state_file
+                .clone()
+                .unwrap_or_else(|| state_file.with_file_name("monitoring.json")),
+        )
+    }
+
     /// Topic / key-expression prefix: `bridge/<structure.name>`.
     pub fn topic_prefix(&self) -> String {
         format!("bridge/{}", self.structure.name)
@@ -172,6 +188,7 @@ impl Config {
         if self.is_output_only() || self.oma != OmaConfig::default() {
             self.oma_settings()?;
         }
+        self.validate_monitoring()?;
         for (key, hours) in [
             ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
             ("output.results_rotate_hours", self.output.results_rotate_hours),

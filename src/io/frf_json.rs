@@ -6,7 +6,9 @@
 //!           "coherence":[…],"n_averages":N}]}
 //! ```
 //! `coherence` and `n_averages` are optional. Sensor names refer to the
-//! config's `[[sensors]]`.
+//! config's `[[sensors]]`. A recorded or published FRF message may carry
+//! `start_timestamp` and `end_timestamp` (RFC 3339): the span it was
+//! estimated over.
 
 use serde::{Deserialize, Serialize};
 use splinewatch_core::c64;
@@ -20,6 +22,10 @@ pub struct FrfFile {
     pub quantity: Quantity,
     pub frequency_hz: Vec<f64>,
     pub frfs: Vec<FrfEntry>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_timestamp: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_timestamp: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

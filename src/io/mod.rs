@@ -8,6 +8,7 @@ pub mod files;
 pub mod frf_json;
 pub mod import;
 pub mod modes_json;
+pub mod monitoring_json;
 pub mod recording;
 pub mod recover;
 pub mod wire;

@@ -19,7 +19,7 @@ pub const BLOCK_JSON_SCHEMA: &str = r#"{
   "required": ["name", "quantity", "fs", "start_timestamp", "data"],
   "properties": {
     "name": {"type": "string"},
-    "quantity": {"enum": ["acceleration", "force"]},
+    "quantity": {"enum": ["acceleration", "force", "temperature"]},
     "unit_str": {"type": "string"},
     "fs": {"type": "number", "exclusiveMinimum": 0},
     "start_timestamp": {"type": "string", "format": "date-time"},
@@ -104,6 +104,35 @@ impl<W: Write + Seek> RecordingWriter<W> {
             )
             .with_context(|| format!("cannot write to {topic}"))?;
         Ok(data.len())
+    }
+
+    /// Appends a JSON message (a pre-computed FRF) on `topic` at `time_ns`.
+    pub fn write_json(&mut self, topic: &str, time_ns: i128, payload: &[u8]) -> Result<usize> {
+        let channel_id = match self.channels.get(topic) {
+            Some(&id) => id,
+            None => {
+                let id = self
+                    .writer
+                    .add_channel(0, topic, "json", &BTreeMap::new())
+                    .with_context(|| format!("cannot add MCAP channel {topic}"))?;
+                self.channels.insert(topic.to_string(), id);
+                id
+            }
+        };
+        let log_time = u64::try_from(time_ns).context("timestamps before 1970 cannot be recorded")?;
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer
+            .write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id,
+                    sequence: self.sequence,
+                    log_time,
+                    publish_time: log_time,
+                },
+                payload,
+            )
+            .with_context(|| format!("cannot write to {topic}"))?;
+        Ok(payload.len())
     }
 
     /// Writes the summary and index; the file is complete after this.

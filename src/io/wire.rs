@@ -51,14 +51,18 @@ impl Encoding {
 pub enum ChannelQuantity {
     Acceleration,
     Force,
+    /// A slow environmental channel (°C), e.g. one sample a minute.
+    Temperature,
 }
 
 impl ChannelQuantity {
-    /// The topic segment: `<prefix>/accel/<name>` or `<prefix>/force/<name>`.
+    /// The topic segment: `<prefix>/accel/<name>`, `<prefix>/force/<name>`
+    /// or `<prefix>/temperature/<name>`.
     pub fn topic_segment(self) -> &'static str {
         match self {
             ChannelQuantity::Acceleration => "accel",
             ChannelQuantity::Force => "force",
+            ChannelQuantity::Temperature => "temperature",
         }
     }
 
@@ -67,13 +71,18 @@ impl ChannelQuantity {
         match self {
             ChannelQuantity::Acceleration => "acceleration",
             ChannelQuantity::Force => "force",
+            ChannelQuantity::Temperature => "temperature",
         }
     }
 
     /// The quantity of a wire format `quantity` value.
     pub fn from_wire(value: &str) -> Option<Self> {
-        [ChannelQuantity::Acceleration, ChannelQuantity::Force]
-            .into_iter()
+        [
+            ChannelQuantity::Acceleration,
+            ChannelQuantity::Force,
+            ChannelQuantity::Temperature,
+        ]
+        .into_iter()
             .find(|q| q.wire_name() == value)
     }
 
@@ -81,6 +90,7 @@ impl ChannelQuantity {
         match self {
             ChannelQuantity::Acceleration => "m/s^2",
             ChannelQuantity::Force => "N",
+            ChannelQuantity::Temperature => "°C",
         }
     }
 }
@@ -144,7 +154,7 @@ pub enum WireError {
         field: &'static str,
         expected: &'static str,
     },
-    #[error("block {index}: unknown quantity {value:?} (acceleration or force)")]
+    #[error("block {index}: unknown quantity {value:?} (acceleration, force or temperature)")]
     Quantity { index: usize, value: String },
     #[error("block {index}: fs = {fs} must be finite and positive")]
     SampleRate { index: usize, fs: f64 },

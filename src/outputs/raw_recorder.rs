@@ -52,26 +52,40 @@ impl RawRecorder {
     /// error the open file is dropped (its `.part` stays on disk) and the
     /// next call starts a new one.
     pub fn record(&mut self, block: &ChannelBlock) -> Result<()> {
+        let prefix = self.prefix.clone();
+        self.write(block.start_ns, |w| w.write_block(&prefix, block))
+    }
+
+    /// Appends a pre-computed FRF message received on `key` at `time_ns`.
+    pub fn record_frf(&mut self, key: &str, time_ns: i128, payload: &[u8]) -> Result<()> {
+        self.write(time_ns, |w| w.write_json(key, time_ns, payload))
+    }
+
+    fn write(
+        &mut self,
+        time_ns: i128,
+        write: impl FnOnce(&mut RecordingWriter<std::io::BufWriter<std::fs::File>>) -> Result<usize>,
+    ) -> Result<()> {
         let rotate = self
             .current
             .as_ref()
-            .is_some_and(|f| block.start_ns - f.start_ns >= self.rotate_ns || f.bytes >= self.rotate_bytes);
+            .is_some_and(|f| time_ns - f.start_ns >= self.rotate_ns || f.bytes >= self.rotate_bytes);
         if rotate {
             self.close()?;
         }
         if self.current.is_none() {
-            let stamp = format_timestamp(block.start_ns).replace(':', "-");
+            let stamp = format_timestamp(time_ns).replace(':', "-");
             let part = self.dir.join(format!("raw-{stamp}.mcap.part"));
             let writer = RecordingWriter::create(&part, Encoding::Cbor)?;
             self.current = Some(OpenFile {
                 writer,
                 part,
-                start_ns: block.start_ns,
+                start_ns: time_ns,
                 bytes: 0,
             });
         }
         let file = self.current.as_mut().expect("opened above");
-        match file.writer.write_block(&self.prefix, block) {
+        match write(&mut file.writer) {
             Ok(bytes) => {
                 file.bytes += bytes as u64;
                 Ok(())

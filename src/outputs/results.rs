@@ -3,7 +3,7 @@
 
 use crate::io::frf_json::FrfFile;
 use crate::io::wire::format_timestamp;
-use crate::pipeline::{Fit, Health, Measured, UpdateOutcome, WindowModes, WindowReport};
+use crate::pipeline::{Fit, Health, Measured, MonitoringOutcome, UpdateOutcome, WindowModes, WindowReport};
 use anyhow::{Context, Result};
 use serde_json::{json, Value};
 use std::collections::BTreeMap;
@@ -50,6 +50,32 @@ pub const TOPICS: [(&str, &str); 9] = [
         r#"{"type":"object","properties":{"index":{"type":"integer"},"start":{"type":"string"},"end":{"type":"string"},"segments_accepted":{"type":"integer"},"segments_rejected":{"type":"integer"},"mean_coherence":{"type":"array","items":{"type":"number"}},"skipped":{"type":["string","null"]}}}"#,
     ),
 ];
+
+/// Topics written only by a config with `[monitoring]`: registered in a
+/// file when first written, so other configs' files keep their bytes.
+pub const MONITORING_TOPICS: [(&str, &str); 2] = [
+    (
+        "monitoring/status",
+        r#"{"type":"object","required":["window","time","state","t2","t2_limit","mewma","mewma_limit","temperature_c","residuals"],"properties":{"window":{"type":"integer"},"time":{"type":"string","format":"date-time"},"state":{"type":"string","enum":["training","normal","outside_training_range","alarm"]},"t2":{"type":["number","null"]},"t2_limit":{"type":["number","null"]},"mewma":{"type":["number","null"]},"mewma_limit":{"type":["number","null"]},"temperature_c":{"type":["number","null"]},"residuals":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"standardised":{"type":"number"}}}},"temperatures":{"type":"object"},"features":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"}}}},"flags":{"type":"array","items":{"type":"string"}},"exceedances":{"type":"integer"},"scored_by":{"type":["string","null"]}}}"#,
+    ),
+    (
+        "monitoring/alarm",
+        r#"{"type":"object","required":["window","time","state","previous"],"properties":{"window":{"type":"integer"},"time":{"type":"string","format":"date-time"},"state":{"type":"string"},"previous":{"type":"string"},"t2":{"type":["number","null"]},"mewma":{"type":["number","null"]},"largest_residuals":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"standardised":{"type":"number"}}}}}}"#,
+    ),
+];
+
+/// The messages of a scored update: `monitoring/status`, and
+/// `monitoring/alarm` when the state entered or left alarm.
+pub fn monitoring_messages(m: &MonitoringOutcome) -> Vec<(&'static str, Value)> {
+    let mut out = vec![(
+        "monitoring/status",
+        serde_json::to_value(&m.status).expect("plain data"),
+    )];
+    if let Some(alarm) = &m.alarm {
+        out.push(("monitoring/alarm", serde_json::to_value(alarm).expect("plain data")));
+    }
+    out
+}
 
 /// The messages of a closed window, as `(topic suffix, message)`: `windows`,
 /// and `oma/modes` when the window identified modes output-only.
@@ -220,6 +246,16 @@ impl<W: Write + Seek> ResultsWriter<W> {
 
     /// Writes `message` on `<prefix>/<suffix>` at `time_ns`.
     pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) -> Result<()> {
+        if !self.channels.contains_key(suffix) {
+            if let Some((name, schema)) = MONITORING_TOPICS.iter().find(|(n, _)| *n == suffix) {
+                let topic = format!("{}/{name}", self.prefix);
+                let schema_id = self
+                    .writer
+                    .add_schema(&format!("splinewatch.{name}"), "jsonschema", schema.as_bytes())?;
+                let id = self.writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+                self.channels.insert(name, id);
+            }
+        }
         let channel_id = *self
             .channels
             .get(suffix)

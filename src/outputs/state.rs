@@ -1,7 +1,9 @@
 //! The state file: the last accepted parameters, replaced atomically, so a
-//! restarted daemon or a later replay warm-starts from them.
+//! restarted daemon or a later replay warm-starts from them; and the
+//! monitor file (`[monitoring]`), so a restart does not retrain.
 
 use crate::pipeline::AcceptedParameters;
+use splinewatch_core::monitoring::Monitor;
 use anyhow::{Context, Result};
 use std::fs::File;
 use std::io::Write;
@@ -11,6 +13,26 @@ use std::path::Path;
 /// rename over the old one, fsync of the folder. A crash leaves the old or
 /// the new complete file.
 pub fn save_state(path: &Path, state: &AcceptedParameters) -> Result<()> {
+    save_json(path, state)
+}
+
+/// Saves the monitor (reference model and chart state) atomically, like the state.
+pub fn save_monitor(path: &Path, monitor: &Monitor) -> Result<()> {
+    save_json(path, monitor)
+}
+
+/// Loads a saved monitor; `None` if the file does not exist.
+pub fn load_monitor(path: &Path) -> Result<Option<Monitor>> {
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok(Some(serde_json::from_str(&text).with_context(|| {
+            format!("monitor file {} is not valid", path.display())
+        })?)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+        Err(e) => Err(e).with_context(|| format!("cannot read monitor file {}", path.display())),
+    }
+}
+
+fn save_json(path: &Path, value: &impl serde::Serialize) -> Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -22,7 +44,7 @@ pub fn save_state(path: &Path, state: &AcceptedParameters) -> Result<()> {
     ));
     {
         let mut f = crate::io::files::create_output_file(&tmp)?;
-        serde_json::to_writer_pretty(&mut f, state)?;
+        serde_json::to_writer_pretty(&mut f, value)?;
         f.write_all(b"\n")?;
         f.sync_all()
             .with_context(|| format!("cannot fsync {}", tmp.display()))?;

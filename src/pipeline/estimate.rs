@@ -269,5 +269,7 @@ pub fn frf_file(config: &Config, est: &FrfEstimate, force: usize, accels: &[usiz
         quantity,
         frequency_hz: lines.iter().map(|&k| est.frequencies[k]).collect(),
         frfs,
+        start_timestamp: None,
+        end_timestamp: None,
     })
 }

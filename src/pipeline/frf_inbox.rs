@@ -6,10 +6,14 @@ use crate::io::frf_json::FrfFile;
 
 impl Pipeline {
     /// Takes a pre-computed FRF message (the FRF JSON object, usually with a
-    /// single entry). Once every force → acceleration pair of the config has
-    /// arrived on the same frequency axis, the set becomes an update job
-    /// (numbered after the windows, from 1 000 000) and the inbox empties. A
-    /// message on another axis starts a new set. Returns the job, if any.
+    /// single entry) received or recorded at `time_ns`. Once every force →
+    /// acceleration pair of the config has arrived on the same frequency
+    /// axis, the set becomes an update job (a window, numbered from 0 in
+    /// arrival order) and the inbox empties. A message on another axis
+    /// starts a new set. The set's span runs from the earliest
+    /// `start_timestamp` to the latest `end_timestamp` of its messages; a
+    /// message without them ends at `time_ns` and lasts
+    /// `frf.window_seconds`. Returns the job, if any.
     /// An output-only config has no force sensor to pair: its FRF messages
     /// are rejected as `frf_without_force_sensor`.
     pub fn ingest_frf(&mut self, payload: &[u8], time_ns: i128) -> Option<UpdateJob> {
@@ -36,11 +40,33 @@ impl Pipeline {
             self.health.reject("bad_frf");
             return None;
         }
+        let stamp = |t: &Option<String>| t.as_deref().map(crate::io::wire::parse_timestamp);
+        let end = match stamp(&file.end_timestamp) {
+            None => time_ns,
+            Some(Some(t)) => t,
+            Some(None) => {
+                self.health.reject("bad_frf_timestamp");
+                return None;
+            }
+        };
+        let start = match stamp(&file.start_timestamp) {
+            None => end - (self.config.frf.window_seconds * 1e9).round() as i128,
+            Some(Some(t)) if t < end => t,
+            Some(_) => {
+                self.health.reject("bad_frf_timestamp");
+                return None;
+            }
+        };
         let axis = (file.quantity, file.frequency_hz.clone());
         if self.frf_axis.as_ref() != Some(&axis) {
             self.frf_inbox.clear();
             self.frf_axis = Some(axis);
+            self.frf_span = None;
         }
+        self.frf_span = Some(match self.frf_span {
+            Some((s, e)) => (s.min(start), e.max(end)),
+            None => (start, end),
+        });
         for e in file.frfs {
             self.frf_inbox.insert((e.input.clone(), e.output.clone()), e);
         }
@@ -64,7 +90,10 @@ impl Pipeline {
             quantity,
             frequency_hz,
             frfs,
+            start_timestamp: None,
+            end_timestamp: None,
         };
-        Some(self.job(1_000_000 + self.frf_sets - 1, time_ns, super::Measured::Frf(measured)))
+        let span = self.frf_span.take().expect("set above");
+        Some(self.job(self.frf_sets - 1, span, super::Measured::Frf(measured)))
     }
 }

@@ -3,6 +3,7 @@
 //! residues against measured FRFs, modal residues against the modes a
 //! window identified output-only.
 
+use super::monitoring::Environment;
 use crate::config::FrfSetup;
 use crate::io::frf_json::{FrfEntry, FrfFile};
 use crate::io::modes_json::ModesFile;
@@ -30,6 +31,8 @@ pub struct UpdateJob {
     pub window: u64,
     pub time_ns: i128,
     pub measured: Measured,
+    /// The window's temperatures (`[monitoring]`).
+    pub environment: Environment,
     /// Pairing of identified and model modes: smallest MAC, largest
     /// relative frequency gap (modal residues only).
     pub(super) pairing: (f64, f64),
@@ -48,6 +51,7 @@ pub struct UpdateOutcome {
     pub window: u64,
     pub time_ns: i128,
     pub measured: Measured,
+    pub environment: Environment,
     pub result: Result<UpdateReport, String>,
     /// The model at the identified parameters, taken by [`Pipeline::apply`]
     /// for the next warm start (kept outcomes do not hold it: ~2 MB).
@@ -127,6 +131,7 @@ impl UpdateJob {
             window: self.window,
             time_ns: self.time_ns,
             measured: self.measured,
+            environment: self.environment,
             result,
             point,
             state,
@@ -232,6 +237,8 @@ impl UpdateJob {
                     quantity: frf.quantity,
                     frequency_hz: lines,
                     frfs: model_entries,
+                    start_timestamp: None,
+                    end_timestamp: None,
                 },
                 residue,
             },

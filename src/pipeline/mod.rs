@@ -26,11 +26,13 @@ mod align;
 pub mod estimate;
 mod frf_inbox;
 mod job;
+mod monitoring;
 pub mod oma;
 mod reports;
 mod windows;
 
 pub use job::{Fit, Measured, ModeShape, PairedMode, UpdateJob, UpdateOutcome, UpdateReport, BENDING_MODES_KEPT};
+pub use monitoring::{Environment, MonitoringOutcome};
 pub use oma::{ModelPair, WindowModes};
 pub use reports::{AcceptedParameters, Health, StateParameter, WindowReport};
 
@@ -94,12 +96,17 @@ pub struct Pipeline {
     /// all on one frequency axis; a complete set becomes an update job.
     frf_inbox: BTreeMap<(String, String), FrfEntry>,
     frf_axis: Option<(Quantity, Vec<f64>)>,
+    /// The span of the set being collected (ns).
+    frf_span: Option<(i128, i128)>,
     frf_sets: u64,
     /// Measurement time of the last update (or the first sample).
     last_update_ns: Option<i128>,
     last: Option<AcceptedParameters>,
     /// The model at `last`, when the update that produced it ran here.
     last_point: Option<Arc<ModelPoint>>,
+    /// `[monitoring]`: temperatures per window and the monitor.
+    temperatures: Option<monitoring::TemperatureStore>,
+    monitoring: Option<monitoring::Monitoring>,
     health: Health,
 }
 
@@ -151,6 +158,14 @@ impl Pipeline {
                 seen: false,
             })
             .collect();
+        let temperatures = config.monitoring.as_ref().map(monitoring::TemperatureStore::new);
+        let monitoring = match &config.monitoring {
+            Some(m) => Some(monitoring::Monitoring::new(
+                m,
+                parameters.iter().map(|p| p.name.clone()).collect(),
+            )?),
+            None => None,
+        };
         Ok(Self {
             config: config.clone(),
             schedule,
@@ -175,10 +190,13 @@ impl Pipeline {
             accepted_since_update: 0,
             frf_inbox: BTreeMap::new(),
             frf_axis: None,
+            frf_span: None,
             frf_sets: 0,
             last_update_ns: None,
             last: state,
             last_point: None,
+            temperatures,
+            monitoring,
             health: Health::default(),
         })
     }
@@ -217,6 +235,10 @@ impl Pipeline {
     pub fn ingest(&mut self, block: ChannelBlock) -> (Vec<WindowReport>, Vec<UpdateJob>) {
         let mut windows = Vec::new();
         let mut jobs = Vec::new();
+        if block.quantity == ChannelQuantity::Temperature {
+            self.ingest_temperature(&block);
+            return (windows, jobs);
+        }
         if self.channel_of(&block).is_none() {
             self.health.reject("unknown_channel");
             return (windows, jobs);
@@ -247,10 +269,12 @@ impl Pipeline {
             .position(|(n, q)| *n == block.name && *q == block.quantity)
     }
 
-    fn job(&self, window: u64, time_ns: i128, measured: Measured) -> UpdateJob {
+    /// An update job on what was measured over `span` (ns).
+    fn job(&mut self, window: u64, span: (i128, i128), measured: Measured) -> UpdateJob {
         UpdateJob {
             window,
-            time_ns,
+            time_ns: span.1,
+            environment: self.environment(span.0, span.1),
             measured,
             pairing: (self.config.updating.min_mac, self.config.updating.max_frequency_gap),
             setup: Arc::clone(&self.setup),
@@ -291,11 +315,15 @@ impl Pipeline {
     }
 
     /// Records an update's outcome: accepted parameters replace the last
-    /// good ones; a failure keeps them.
-    pub fn apply(&mut self, outcome: &mut UpdateOutcome) {
+    /// good ones; a failure keeps them. With `[monitoring]`, an accepted
+    /// update is scored: the status (and alarm) messages are returned.
+    pub fn apply(&mut self, outcome: &mut UpdateOutcome) -> Option<MonitoringOutcome> {
         self.health.update_runs += 1;
         match &outcome.result {
             Ok(report) => {
+                let values: BTreeMap<&str, f64> =
+                    report.result.parameters.iter().map(|p| (p.name.as_str(), p.value)).collect();
+                let scored = self.score(outcome.window, outcome.time_ns, &values, &outcome.environment);
                 self.last_point = outcome.point.take();
                 self.model_state = outcome
                     .state
@@ -315,9 +343,40 @@ impl Pipeline {
                         })
                         .collect(),
                 });
+                scored
             }
-            Err(_) => self.health.update_failures += 1,
+            Err(_) => {
+                self.health.update_failures += 1;
+                None
+            }
         }
+    }
+
+    /// The monitor (`[monitoring]`), to persist its reference and state.
+    pub fn monitor(&self) -> Option<&splinewatch_core::monitoring::Monitor> {
+        self.monitoring.as_ref().map(|m| &m.monitor)
+    }
+
+    /// Resumes a persisted monitor (a restart does not retrain); refused
+    /// when it does not fit this config's parameters and channels.
+    pub fn restore_monitor(&mut self, monitor: splinewatch_core::monitoring::Monitor) -> Result<()> {
+        let Some(current) = self.monitoring.as_mut() else {
+            bail!("the config has no [monitoring] section");
+        };
+        if monitor.settings().temperature_channels != current.monitor.settings().temperature_channels {
+            bail!("the saved monitor has another number of temperature channels");
+        }
+        if let Some(r) = monitor.reference() {
+            if r.features != self.parameters.len() {
+                bail!(
+                    "the saved reference scores {} features, this config updates {} parameters",
+                    r.features,
+                    self.parameters.len()
+                );
+            }
+        }
+        current.monitor = monitor;
+        Ok(())
     }
 }
 

@@ -37,6 +37,23 @@ pub struct Health {
     /// failing; the analysis goes on.
     #[serde(default)]
     pub log_writes_dropped: u64,
+    /// Temperature blocks taken (`[monitoring]`).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub temperature_blocks: u64,
+    /// Temperature samples dropped unused (more than the store holds).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub temperature_samples_dropped: u64,
+    /// Windows with a missing or stuck temperature, by flag
+    /// (`temperature_missing:<name>`, `temperature_stuck:<name>`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub temperature_flags: BTreeMap<String, u64>,
+    /// Updates the monitor could not score (training not possible yet).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub monitoring_errors: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 impl Health {

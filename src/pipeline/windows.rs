@@ -117,7 +117,7 @@ impl Pipeline {
             (None, Some(modes)) => Measured::Modes(modes.report.modes_file()),
             (None, None) => return,
         };
-        jobs.push(self.job(report.index, report.end_ns, measured));
+        jobs.push(self.job(report.index, (report.start_ns, report.end_ns), measured));
     }
 
     /// `(start, end)` of window `index` in measurement time (ns).

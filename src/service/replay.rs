@@ -5,6 +5,7 @@
 
 use super::keep_latest;
 use crate::config::Config;
+use crate::io::monitoring_json::StatusMessage;
 use crate::io::wire::{self, Encoding};
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsWriter};
@@ -28,7 +29,9 @@ pub struct ReplayOptions<'a> {
     pub initial: Option<AcceptedParameters>,
     /// Rerun output.
     pub viewer: Option<&'a mut RerunOutput>,
-    /// State file, replaced after every accepted update.
+    /// State file, replaced after every accepted update; with
+    /// `[monitoring]` the monitor file beside it too (`Config::monitor_file`),
+    /// resumed from if it exists.
     pub state_path: Option<&'a Path>,
     /// How many of the latest windows and update outcomes the summary keeps
     /// (a month of 10-minute windows would otherwise hold about 1 GB).
@@ -59,6 +62,8 @@ pub struct ReplaySummary {
     /// The latest update outcomes (at most `keep_latest`).
     pub updates: VecDeque<UpdateOutcome>,
     pub accepted: Option<AcceptedParameters>,
+    /// Every monitoring status (`[monitoring]`), in order (a few kB each).
+    pub monitoring: Vec<StatusMessage>,
 }
 
 /// Replays `recordings` (MCAP files, in order: e.g. the rotated raw-input
@@ -78,12 +83,21 @@ pub fn replay<W: Write + Seek>(
         keep_latest,
     } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+    let monitor_path = state_path.and_then(|p| config.monitor_file(p));
+    if let Some(path) = &monitor_path {
+        if let Some(monitor) = state::load_monitor(path)? {
+            pipeline
+                .restore_monitor(monitor)
+                .with_context(|| format!("monitor file {}", path.display()))?;
+        }
+    }
     let limits = crate::pipeline::block_limits(config);
     let total = recordings.iter().map(|bytes| message_count(bytes)).sum();
     let mut sink = Outputs {
         out,
         viewer,
         state_path,
+        monitor_path: monitor_path.as_deref(),
         progress,
         total,
         keep: keep_latest,
@@ -97,7 +111,15 @@ pub fn replay<W: Write + Seek>(
         let message = message.context("corrupt MCAP record")?;
         sink.summary.messages += 1;
         let topic = &message.channel.topic;
-        if !(topic.contains("/accel/") || topic.contains("/force/")) {
+        if topic.contains("/frf/") {
+            // A recorded pre-computed FRF: the log time stands for its end.
+            let time_ns = i128::from(message.log_time);
+            if let Some(job) = pipeline.ingest_frf(&message.data, time_ns) {
+                sink.handle(&mut pipeline, Vec::new(), vec![job])?;
+            }
+            continue;
+        }
+        if !(topic.contains("/accel/") || topic.contains("/force/") || topic.contains("/temperature/")) {
             continue;
         }
         let Some(encoding) = Encoding::from_name(&message.channel.message_encoding) else {
@@ -158,6 +180,7 @@ struct Outputs<'a, W: Write + Seek> {
     out: &'a mut ResultsWriter<W>,
     viewer: Option<&'a mut RerunOutput>,
     state_path: Option<&'a Path>,
+    monitor_path: Option<&'a Path>,
     progress: &'a mut dyn FnMut(Progress, Option<&str>),
     total: u64,
     keep: usize,
@@ -206,9 +229,18 @@ impl<W: Write + Seek> Outputs<'_, W> {
             // Several jobs from one block: each starts from the one before.
             pipeline.rebase(&mut job);
             let mut outcome = job.run();
-            pipeline.apply(&mut outcome);
+            let scored = pipeline.apply(&mut outcome);
             for (suffix, msg) in results::update_messages(&outcome) {
                 self.out.write(suffix, outcome.time_ns, &msg)?;
+            }
+            if let Some(m) = &scored {
+                for (suffix, msg) in results::monitoring_messages(m) {
+                    self.out.write(suffix, outcome.time_ns, &msg)?;
+                }
+                if let Some(v) = self.viewer.as_deref_mut() {
+                    v.log_monitoring(outcome.time_ns, &m.status)?;
+                }
+                self.summary.monitoring.push(m.status.clone());
             }
             let note = match &outcome.result {
                 Ok(r) => format!(
@@ -225,6 +257,9 @@ impl<W: Write + Seek> Outputs<'_, W> {
             self.out.flush()?;
             if let (Some(path), Some(state), Ok(_)) = (self.state_path, pipeline.accepted(), &outcome.result) {
                 state::save_state(path, state)?;
+            }
+            if let (Some(path), Some(monitor), Some(_)) = (self.monitor_path, pipeline.monitor(), &scored) {
+                state::save_monitor(path, monitor)?;
             }
             self.out.write(
                 "health",

@@ -116,5 +116,7 @@ pub fn synth(config: &Config, options: &SynthOptions) -> Result<FrfFile> {
         quantity: o.quantity,
         frequency_hz,
         frfs,
+        start_timestamp: None,
+        end_timestamp: None,
     })
 }

@@ -55,10 +55,12 @@ fn check_fixture_channels(path: &Path, tolerance: f64) {
         let expected = |k: usize| match quantity {
             ChannelQuantity::Force => 100.0 * (2.0 * std::f64::consts::PI * 3.0 * t(k)).sin(),
             ChannelQuantity::Acceleration => 0.5 * (2.0 * std::f64::consts::PI * 5.0 * t(k)).cos(),
+            ChannelQuantity::Temperature => unreachable!("no temperature column"),
         };
         let expected_name = match quantity {
             ChannelQuantity::Force => "P1",
             ChannelQuantity::Acceleration => "P2",
+            ChannelQuantity::Temperature => unreachable!("no temperature column"),
         };
         assert_eq!(name, expected_name);
         let worst = (0..512).map(|k| (data[k] - expected(k)).abs()).fold(0.0, f64::max);
@@ -169,6 +171,7 @@ fn bundled_columns() -> (i128, Vec<Column>) {
             ChannelQuantity::Force => (format!("{}:force", b.name), "N"),
             ChannelQuantity::Acceleration if b.name == "P1" => (format!("{}:acceleration", b.name), "m/s^2"),
             ChannelQuantity::Acceleration => (b.name.clone(), "m/s^2"),
+            ChannelQuantity::Temperature => unreachable!("the bundled recording has no temperature"),
         };
         match columns.iter_mut().find(|c| c.0 == name) {
             Some(c) => c.2.extend_from_slice(&b.data),

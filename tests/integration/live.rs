@@ -233,6 +233,8 @@ fn precomputed_frfs_on_the_frf_topic_drive_an_update() {
                 quantity: file.quantity,
                 frequency_hz: file.frequency_hz.clone(),
                 frfs: vec![e.clone()],
+                start_timestamp: None,
+                end_timestamp: None,
             };
             publisher.publish_json(&format!("frf/{}/{}", e.input, e.output), serde_json::to_vec(&one)?)?;
         }

@@ -42,7 +42,27 @@ impl RerunOutput {
                     .with_visible(!self.model.stiffness_fields.is_empty())
                     .into(),
                 TimeSeriesView::new("Relative residual").with_origin("/residual").into(),
-                TimeSeriesView::new("Health").with_origin("/health").into(),
+                if self.monitoring {
+                    Tabs::new([
+                        TimeSeriesView::new("Hotelling T² and its limit")
+                            .with_origin("/monitoring/charts/t2")
+                            .into(),
+                        TimeSeriesView::new("MEWMA and its limit")
+                            .with_origin("/monitoring/charts/mewma")
+                            .into(),
+                        TimeSeriesView::new("State (0 training, 1 normal, 2 outside range, 3 alarm), °C")
+                            .with_origin("/monitoring")
+                            .with_contents(["/monitoring/state", "/monitoring/temperature_c"])
+                            .into(),
+                        Spatial2DView::new("Temperature (°C) × parameter, blue → red over time")
+                            .with_origin("/monitoring/temperature")
+                            .into(),
+                        TimeSeriesView::new("Health").with_origin("/health").into(),
+                    ])
+                    .into()
+                } else {
+                    TimeSeriesView::new("Health").with_origin("/health").into()
+                },
             ])
             .into(),
             Vertical::new([self.deck_views(), mode_tabs.into()]).into(),
@@ -90,6 +110,14 @@ impl RerunOutput {
             .with_origin("/deck")
             .with_contents(["/deck/springs", "/deck/sensors"])
             .into()];
+        if self.monitoring {
+            views.push(
+                Spatial3DView::new("Deck: standardised residual of the field coefficients (−4 → +4)")
+                    .with_origin("/deck")
+                    .with_contents(["/deck/monitoring_residual", "/deck/sensors"])
+                    .into(),
+            );
+        }
         if !self.model.stiffness_fields.is_empty() {
             views.push(
                 Spatial3DView::new("Deck: stiffness multiplier θ (0.5 → 1.5)")

@@ -31,6 +31,7 @@
 
 mod blueprint;
 mod deck;
+mod monitoring;
 mod oma;
 mod rrd;
 mod update;
@@ -88,6 +89,12 @@ pub struct RerunOutput {
     first_fields: Option<FieldReference>,
     /// Measurement time of the open file's first message.
     file_start_ns: Option<i128>,
+    /// Names of the spring fields (their parameters are `<name>.k<j>`).
+    spring_names: Vec<String>,
+    /// `[monitoring]`: temperature and feature values of the latest windows.
+    scatter: std::collections::VecDeque<(f64, Vec<f64>)>,
+    /// Whether the config has `[monitoring]` (the blueprint shows its charts).
+    monitoring: bool,
 }
 
 impl RerunOutput {
@@ -113,6 +120,9 @@ impl RerunOutput {
             field_names: config.model.stiffness_fields.iter().map(|f| f.name.clone()).collect(),
             first_fields: None,
             file_start_ns: None,
+            spring_names: config.model.springs.iter().map(|s| s.name.clone()).collect(),
+            scatter: Default::default(),
+            monitoring: config.monitoring.is_some(),
         };
         out.attach_sinks(None)?;
         Ok(out)
@@ -153,7 +163,12 @@ impl RerunOutput {
         self.log_sensors(&self.sensors)?;
         // The mesh topology never changes: logged once per file, static;
         // updates only carry vertex positions and colours.
-        let mesh_paths = ["deck/springs", "deck/stiffness", "deck/stiffness_change"]
+        let mesh_paths = [
+            "deck/springs",
+            "deck/stiffness",
+            "deck/stiffness_change",
+            "deck/monitoring_residual",
+        ]
             .map(String::from)
             .into_iter()
             .chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));

@@ -127,7 +127,7 @@ impl RerunOutput {
     }
 
     /// The deck mesh at `path` with one colour per vertex.
-    fn log_deck_colours(&self, path: &str, colors: impl Iterator<Item = rerun::Color>) -> Result<()> {
+    pub(super) fn log_deck_colours(&self, path: &str, colors: impl Iterator<Item = rerun::Color>) -> Result<()> {
         self.rec
             .log(
                 path,

@@ -1,5 +1,6 @@
 //! The daemon's zenoh session: subscribers that push raw messages into the
-//! bounded ingest queue, the `<prefix>/updating/latest` queryable, and the
+//! bounded ingest queue, the `<prefix>/updating/latest` and
+//! `<prefix>/monitoring/latest` queryables, and the
 //! publishing of result messages.
 
 use crate::config::Config;
@@ -16,7 +17,12 @@ pub const INGEST_QUEUE: usize = 4096;
 
 /// The input key expressions under `<prefix>/`, and whether they carry
 /// pre-computed FRFs (else channel blocks).
-const INPUTS: [(&str, bool); 3] = [("accel/*", false), ("force/*", false), ("frf/**", true)];
+const INPUTS: [(&str, bool); 4] = [
+    ("accel/*", false),
+    ("force/*", false),
+    ("temperature/*", false),
+    ("frf/**", true),
+];
 
 /// A message as it arrived, not yet decoded.
 pub(super) struct RawMessage {
@@ -24,15 +30,19 @@ pub(super) struct RawMessage {
     pub(super) payload: Vec<u8>,
     /// A pre-computed FRF (`<prefix>/frf/**`) rather than a channel block.
     pub(super) frf: bool,
+    /// The key it arrived on.
+    pub(super) key: String,
 }
 
 /// The open session and what the daemon declared on it.
 pub(super) struct ZenohLink {
     session: zenoh::Session,
     subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
-    queryable: zenoh::query::Queryable<()>,
+    queryables: Vec<zenoh::query::Queryable<()>>,
     /// The body of the reply to `<prefix>/updating/latest`.
     latest: Arc<Mutex<Vec<u8>>>,
+    /// The body of the reply to `<prefix>/monitoring/latest`.
+    monitoring_latest: Arc<Mutex<Vec<u8>>>,
     prefix: String,
     /// Messages the full ingest queue refused (counted in the callbacks).
     ingest_drops: Arc<AtomicU64>,
@@ -59,6 +69,7 @@ impl ZenohLink {
                         encoding: wire_encoding(sample.encoding()),
                         payload: sample.payload().to_bytes().into_owned(),
                         frf,
+                        key: sample.key_expr().to_string(),
                     };
                     if tx.try_send(msg).is_err() {
                         drops.fetch_add(1, Ordering::Relaxed);
@@ -69,28 +80,14 @@ impl ZenohLink {
             subscribers.push(sub);
         }
         drop(tx);
-        let latest: Arc<Mutex<Vec<u8>>> = Arc::new(Mutex::new(b"{}".to_vec()));
-        let latest_key = format!("{prefix}/updating/latest");
-        let queryable = {
-            let latest = Arc::clone(&latest);
-            let key = latest_key.clone();
-            session
-                .declare_queryable(&latest_key)
-                .callback(move |query| {
-                    let body = latest.lock().map(|b| b.clone()).unwrap_or_default();
-                    let _ = query
-                        .reply(&key, body)
-                        .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
-                        .wait();
-                })
-                .await
-                .map_err(|e| anyhow!("cannot declare {latest_key}: {e}"))?
-        };
+        let (updating, latest) = declare_latest(&session, format!("{prefix}/updating/latest")).await?;
+        let (monitoring, monitoring_latest) = declare_latest(&session, format!("{prefix}/monitoring/latest")).await?;
         let link = Self {
             session,
             subscribers,
-            queryable,
+            queryables: vec![updating, monitoring],
             latest,
+            monitoring_latest,
             prefix,
             ingest_drops,
         };
@@ -124,19 +121,49 @@ impl ZenohLink {
         }
     }
 
+    /// Replaces the reply to `<prefix>/monitoring/latest`.
+    pub(super) fn set_monitoring_latest(&self, body: Vec<u8>) {
+        if let Ok(mut l) = self.monitoring_latest.lock() {
+            *l = body;
+        }
+    }
+
     /// Messages dropped by the full ingest queue so far.
     pub(super) fn ingest_drops(&self) -> u64 {
         self.ingest_drops.load(Ordering::Relaxed)
     }
 
     pub(super) async fn close(self) -> Result<()> {
-        drop(self.queryable);
+        drop(self.queryables);
         drop(self.subscribers);
         self.session
             .close()
             .await
             .map_err(|e| anyhow!("closing the zenoh session: {e}"))
     }
+}
+
+/// A queryable on `key` replying with the body behind the returned lock
+/// (`{}` until one is set).
+async fn declare_latest(
+    session: &zenoh::Session,
+    key: String,
+) -> Result<(zenoh::query::Queryable<()>, Arc<Mutex<Vec<u8>>>)> {
+    let body: Arc<Mutex<Vec<u8>>> = Arc::new(Mutex::new(b"{}".to_vec()));
+    let reply = Arc::clone(&body);
+    let reply_key = key.clone();
+    let queryable = session
+        .declare_queryable(&key)
+        .callback(move |query| {
+            let body = reply.lock().map(|b| b.clone()).unwrap_or_default();
+            let _ = query
+                .reply(&reply_key, body)
+                .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+                .wait();
+        })
+        .await
+        .map_err(|e| anyhow!("cannot declare {key}: {e}"))?;
+    Ok((queryable, body))
 }
 
 /// The wire encoding a zenoh sample declares, if it is one of ours.

@@ -11,7 +11,7 @@ use crate::outputs::raw_recorder::RawRecorder;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsSink};
 use crate::outputs::state;
-use crate::pipeline::{Pipeline, UpdateOutcome, WindowReport};
+use crate::pipeline::{MonitoringOutcome, Pipeline, UpdateOutcome, WindowReport};
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -27,6 +27,8 @@ pub(super) struct Daemon {
     viewer: Option<RerunOutput>,
     recorder: Option<RawRecorder>,
     state: Option<PathBuf>,
+    /// The monitor file (`[monitoring]`), beside the state file.
+    monitor_file: Option<PathBuf>,
     keep_updates: usize,
     limits: Limits,
     summary: RunSummary,
@@ -48,7 +50,21 @@ impl Daemon {
         if let Some(s) = &initial {
             tracing::info!(message = "warm start from the state file", window = s.window, time = %s.time);
         }
-        let pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+        let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+        let monitor_file = options.state.as_deref().and_then(|p| config.monitor_file(p));
+        if let Some(path) = &monitor_file {
+            if let Some(monitor) = state::load_monitor(path)? {
+                tracing::info!(
+                    message = "monitor resumed",
+                    file = %path.display(),
+                    state = monitor.state().name(),
+                    training_left = monitor.training_left()
+                );
+                pipeline
+                    .restore_monitor(monitor)
+                    .with_context(|| format!("monitor file {}", path.display()))?;
+            }
+        }
         let prefix = config.topic_prefix();
         let results = ResultsSink::new(&prefix, results::results_files(&options.results))?
             .rotate_every((config.output.results_rotate_hours * 3600e9) as i128);
@@ -74,6 +90,7 @@ impl Daemon {
             viewer,
             recorder,
             state: options.state.clone(),
+            monitor_file,
             keep_updates: options.keep_updates,
             limits: crate::pipeline::block_limits(config),
             summary: RunSummary::default(),
@@ -88,7 +105,16 @@ impl Daemon {
     pub(super) fn on_message(&mut self, msg: RawMessage, link: &ZenohLink) {
         self.summary.messages += 1;
         if msg.frf {
-            if let Some(job) = self.pipeline.ingest_frf(&msg.payload, wire::now_ns()) {
+            let now = wire::now_ns();
+            if let Some(r) = self.recorder.as_mut() {
+                count_output_error(
+                    r.record_frf(&msg.key, now, &msg.payload),
+                    &mut self.pipeline.health_mut().recording_errors,
+                    1000,
+                    "raw-input recording",
+                );
+            }
+            if let Some(job) = self.pipeline.ingest_frf(&msg.payload, now) {
                 tracing::info!(message = "complete FRF set received", window = job.window);
                 self.worker.submit(job);
             }
@@ -270,7 +296,7 @@ impl Daemon {
     /// Applies an outcome to the pipeline and sends it everywhere: results,
     /// zenoh (and the `latest` reply), the state file, Rerun.
     fn handle_outcome(&mut self, outcome: &mut UpdateOutcome, link: &ZenohLink) -> Result<()> {
-        self.pipeline.apply(outcome);
+        let scored = self.pipeline.apply(outcome);
         let outcome = &*outcome;
         for (suffix, msg) in results::update_messages(outcome) {
             self.results.write(suffix, outcome.time_ns, &msg);
@@ -278,6 +304,9 @@ impl Daemon {
             if suffix == "updating/parameters" {
                 link.set_latest(serde_json::to_vec(&msg)?);
             }
+        }
+        if let Some(m) = &scored {
+            self.report_monitoring(m, outcome.time_ns, link)?;
         }
         self.results.flush();
         match &outcome.result {
@@ -294,8 +323,12 @@ impl Daemon {
                         tracing::error!(message = "cannot save the state", error = %format!("{e:#}"));
                     }
                 }
+                let monitoring = scored
+                    .as_ref()
+                    .map(|m| format!(", monitoring: {}", m.status.state))
+                    .unwrap_or_default();
                 notify_systemd(&[sd_notify::NotifyState::Status(&format!(
-                    "window {}: relative residual {:.4}",
+                    "window {}: relative residual {:.4}{monitoring}",
                     outcome.window, r.result.relative_residual
                 ))]);
             }
@@ -306,6 +339,46 @@ impl Daemon {
         if let Some(v) = self.viewer.as_mut() {
             count_output_error(
                 v.log_update(outcome),
+                &mut self.pipeline.health_mut().rerun_errors,
+                100,
+                "Rerun",
+            );
+        }
+        Ok(())
+    }
+}
+
+impl Daemon {
+    /// Sends a scored update's monitoring messages (results, zenoh, the
+    /// `monitoring/latest` reply, the log, Rerun) and saves the monitor.
+    fn report_monitoring(&mut self, m: &MonitoringOutcome, time_ns: i128, link: &ZenohLink) -> Result<()> {
+        for (suffix, msg) in results::monitoring_messages(m) {
+            self.results.write(suffix, time_ns, &msg);
+            link.publish(suffix, &msg);
+            if suffix == "monitoring/status" {
+                link.set_monitoring_latest(serde_json::to_vec(&msg)?);
+            }
+        }
+        match &m.alarm {
+            Some(a) if a.state == "alarm" => tracing::error!(
+                message = "ALARM: the structure has changed",
+                window = a.window,
+                t2 = ?a.t2,
+                mewma = ?a.mewma,
+                largest = ?a.largest_residuals.iter().map(|r| &r.name).collect::<Vec<_>>()
+            ),
+            Some(a) => tracing::warn!(message = "alarm cleared", window = a.window, state = %a.state),
+            None => tracing::info!(message = "monitoring", window = m.status.window, state = %m.status.state),
+        }
+        if let (Some(path), Some(monitor)) = (&self.monitor_file, self.pipeline.monitor()) {
+            // Like the state: a failed write is logged and retried at the next update.
+            if let Err(e) = state::save_monitor(path, monitor) {
+                tracing::error!(message = "cannot save the monitor", error = %format!("{e:#}"));
+            }
+        }
+        if let Some(v) = self.viewer.as_mut() {
+            count_output_error(
+                v.log_monitoring(time_ns, &m.status),
                 &mut self.pipeline.health_mut().rerun_errors,
                 100,
                 "Rerun",

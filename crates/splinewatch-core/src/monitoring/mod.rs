@@ -137,6 +137,43 @@ impl Settings {
 /// channel (`NaN`: no valid sample in the span).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Observation {
+    #[serde(with = "nullable")]
     pub features: Vec<f64>,
+    #[serde(with = "nullable")]
     pub temperatures: Vec<f64>,
+}
+
+/// Serde for values that may be `NaN` (a missing temperature): `null` in
+/// JSON, `NaN` in memory, so a saved monitor resumes bit for bit.
+pub(crate) mod nullable {
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+    use std::collections::VecDeque;
+
+    fn wrap(v: &[f64]) -> Vec<Option<f64>> {
+        v.iter().map(|x| x.is_finite().then_some(*x)).collect()
+    }
+
+    fn unwrap(v: Vec<Option<f64>>) -> Vec<f64> {
+        v.into_iter().map(|x| x.unwrap_or(f64::NAN)).collect()
+    }
+
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        wrap(v).serialize(s)
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        Vec::<Option<f64>>::deserialize(d).map(unwrap)
+    }
+
+    pub mod rows {
+        use super::*;
+
+        pub fn serialize<S: Serializer>(v: &VecDeque<Vec<f64>>, s: S) -> Result<S::Ok, S::Error> {
+            v.iter().map(|r| wrap(r)).collect::<Vec<_>>().serialize(s)
+        }
+
+        pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<VecDeque<Vec<f64>>, D::Error> {
+            Vec::<Vec<Option<f64>>>::deserialize(d).map(|rows| rows.into_iter().map(unwrap).collect())
+        }
+    }
 }

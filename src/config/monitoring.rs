@@ -1,0 +1,136 @@
+//! `[monitoring]`: environmental compensation and alarms on the updated
+//! parameters (the core's `monitoring`).
+
+use super::{err, Config, ConfigError};
+use serde::{Deserialize, Serialize};
+use splinewatch_core::monitoring::{MonitoringError, Settings};
+
+/// `[monitoring]`; present: every accepted update is scored. Every key but
+/// the section itself is optional.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct MonitoringConfig {
+    /// Channels on `<prefix>/temperature/<name>` (°C); none: the PCA variant.
+    pub temperature_channels: Vec<String>,
+    /// Accepted updates that train the reference.
+    pub training_windows: usize,
+    /// Knee of the hinge term (°C): stiffening below it.
+    pub knee_c: f64,
+    /// Lagged temperature terms (windows).
+    pub lags: usize,
+    /// Principal components removed without temperatures.
+    pub pca_components: usize,
+    /// MEWMA smoothing λ.
+    pub ewma_lambda: f64,
+    /// Target false-alarm probability per window of each chart.
+    pub false_alarm_rate: f64,
+    /// `[k, m]`: an alarm after `k` exceedances in the last `m` scored windows.
+    pub persistence: [usize; 2],
+    /// Margin around the training temperature range (°C).
+    pub range_margin_c: f64,
+    /// Cross-validation folds of the control limits.
+    pub folds: usize,
+    /// A channel repeating one value exactly over this many windows is stuck
+    /// (treated as missing).
+    pub stuck_windows: usize,
+    /// The persisted reference (default `<output dir>/monitoring.json`).
+    pub state_file: Option<std::path::PathBuf>,
+}
+
+impl Default for MonitoringConfig {
+    fn default() -> Self {
+        let d = Settings::default();
+        Self {
+            temperature_channels: Vec::new(),
+            training_windows: 100,
+            knee_c: d.knee_c,
+            lags: d.lags,
+            pca_components: d.pca_components,
+            ewma_lambda: d.ewma_lambda,
+            false_alarm_rate: d.false_alarm_rate,
+            persistence: d.persistence,
+            range_margin_c: d.range_margin_c,
+            folds: d.folds,
+            stuck_windows: 3,
+            state_file: None,
+        }
+    }
+}
+
+impl MonitoringConfig {
+    /// The core's settings.
+    pub fn settings(&self) -> Settings {
+        Settings {
+            temperature_channels: self.temperature_channels.len(),
+            knee_c: self.knee_c,
+            lags: self.lags,
+            pca_components: self.pca_components,
+            ewma_lambda: self.ewma_lambda,
+            false_alarm_rate: self.false_alarm_rate,
+            persistence: self.persistence,
+            range_margin_c: self.range_margin_c,
+            folds: self.folds,
+        }
+    }
+}
+
+impl Config {
+    /// Checks `[monitoring]`, if present.
+    pub fn validate_monitoring(&self) -> Result<(), ConfigError> {
+        let Some(m) = &self.monitoring else {
+            return Ok(());
+        };
+        let mut seen = std::collections::BTreeSet::new();
+        for (i, name) in m.temperature_channels.iter().enumerate() {
+            if name.is_empty() || name.contains('/') || name.contains(char::is_whitespace) || !seen.insert(name) {
+                return Err(err(
+                    format!("monitoring.temperature_channels[{i}]"),
+                    format!("{name:?} must be a unique non-empty name without '/' or spaces"),
+                ));
+            }
+        }
+        if m.training_windows < 10 {
+            return Err(err("monitoring.training_windows", "must be at least 10"));
+        }
+        if m.stuck_windows < 2 {
+            return Err(err("monitoring.stuck_windows", "must be at least 2"));
+        }
+        m.settings().check().map_err(|e| match e {
+            MonitoringError::Setting { name, .. } => err(format!("monitoring.{name}"), e),
+            other => err("monitoring", other),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn with(section: &str) -> Result<(), ConfigError> {
+        let text = format!("{}\n[monitoring]\n{section}\n", include_str!("../../config/sinello.toml"));
+        Config::from_toml(&text)?.validate_monitoring()
+    }
+
+    #[test]
+    fn bad_monitoring_keys_are_named() {
+        assert!(with("temperature_channels = [\"T1\", \"T2\"]").is_ok());
+        for (section, key) in [
+            ("temperature_channels = [\"T1\", \"T1\"]", "monitoring.temperature_channels[1]"),
+            ("temperature_channels = [\"a/b\"]", "monitoring.temperature_channels[0]"),
+            ("training_windows = 3", "monitoring.training_windows"),
+            ("ewma_lambda = 0.0", "monitoring.ewma_lambda"),
+            ("persistence = [4, 3]", "monitoring.persistence"),
+            ("false_alarm_rate = 0.7", "monitoring.false_alarm_rate"),
+        ] {
+            let e = with(section).unwrap_err().to_string();
+            assert!(e.contains(key), "{section}: {e}");
+        }
+        let e = Config::from_toml(&format!(
+            "{}\n[monitoring]\nalpha = 1\n",
+            include_str!("../../config/sinello.toml")
+        ))
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("monitoring"), "{e}");
+    }
+}

@@ -1,0 +1,280 @@
+//! The statistical layer on accepted updates: each update's window gets the
+//! mean temperature of every `[monitoring] temperature_channels` channel
+//! over its span (from `<prefix>/temperature/<name>` blocks), and the
+//! core's `Monitor` scores the updated parameters against the reference.
+
+use super::Pipeline;
+use crate::config::MonitoringConfig;
+use crate::io::monitoring_json::{AlarmMessage, NamedValue, Residual, StatusMessage};
+use crate::io::wire::ChannelBlock;
+use splinewatch_core::monitoring::chart::Flag;
+use splinewatch_core::monitoring::{Monitor, MonitorState, Observation, Status};
+use std::collections::{BTreeMap, VecDeque};
+
+/// Samples kept per temperature channel at most (a week at one a minute
+/// is 10 080); older ones are dropped first, counted.
+const MAX_TEMPERATURE_SAMPLES: usize = 20_000;
+
+/// A window's environment: the mean temperature of every channel over the
+/// span (`NaN`: none, or the channel is stuck) and what was wrong.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Environment {
+    pub temperatures: Vec<f64>,
+    pub flags: Vec<String>,
+}
+
+/// Temperature samples of the configured channels, until their windows are scored.
+pub(super) struct TemperatureStore {
+    names: Vec<String>,
+    samples: Vec<VecDeque<(i128, f64)>>,
+    /// Per channel: the one value the previous span held, and how many
+    /// spans in a row held exactly it.
+    repeats: Vec<(Option<f64>, usize)>,
+    stuck_windows: usize,
+}
+
+/// A temperature in °C from a block's unit, if the unit is known.
+fn celsius(value: f64, unit: &str) -> Option<f64> {
+    match unit {
+        "°C" | "C" | "degC" | "celsius" => Some(value),
+        "K" => Some(value - 273.15),
+        "°F" | "F" | "degF" => Some((value - 32.0) / 1.8),
+        _ => None,
+    }
+}
+
+impl TemperatureStore {
+    pub(super) fn new(config: &MonitoringConfig) -> Self {
+        let n = config.temperature_channels.len();
+        Self {
+            names: config.temperature_channels.clone(),
+            samples: vec![VecDeque::new(); n],
+            repeats: vec![(None, 0); n],
+            stuck_windows: config.stuck_windows,
+        }
+    }
+
+    /// Mean of every channel over `[start, end)`; drops the samples before
+    /// `start` (later spans start later).
+    fn span(&mut self, start: i128, end: i128) -> Environment {
+        let mut environment = Environment::default();
+        for (c, samples) in self.samples.iter_mut().enumerate() {
+            while samples.front().is_some_and(|&(t, _)| t < start) {
+                samples.pop_front();
+            }
+            let values: Vec<f64> = samples
+                .iter()
+                .take_while(|&&(t, _)| t < end)
+                .map(|&(_, v)| v)
+                .collect();
+            let name = &self.names[c];
+            if values.is_empty() {
+                environment.temperatures.push(f64::NAN);
+                environment.flags.push(format!("temperature_missing:{name}"));
+                self.repeats[c] = (None, 0);
+                continue;
+            }
+            let constant = values.iter().all(|&v| v == values[0]).then_some(values[0]);
+            let repeats = &mut self.repeats[c];
+            *repeats = match (constant, repeats.0) {
+                (Some(v), Some(previous)) if v == previous => (Some(v), repeats.1 + 1),
+                (Some(v), _) => (Some(v), 1),
+                (None, _) => (None, 0),
+            };
+            if repeats.1 >= self.stuck_windows {
+                environment.temperatures.push(f64::NAN);
+                environment.flags.push(format!("temperature_stuck:{name}"));
+            } else {
+                environment.temperatures.push(values.iter().sum::<f64>() / values.len() as f64);
+            }
+        }
+        environment
+    }
+}
+
+/// The monitor and the names of what it scores.
+pub(super) struct Monitoring {
+    pub(super) monitor: Monitor,
+    features: Vec<String>,
+    channels: Vec<String>,
+}
+
+impl Monitoring {
+    pub(super) fn new(config: &MonitoringConfig, features: Vec<String>) -> anyhow::Result<Self> {
+        Ok(Self {
+            monitor: Monitor::new(config.settings(), config.training_windows)?,
+            features,
+            channels: config.temperature_channels.clone(),
+        })
+    }
+}
+
+/// What scoring an update produced: the status message, and the alarm
+/// message when the state entered or left alarm.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MonitoringOutcome {
+    pub status: StatusMessage,
+    pub alarm: Option<AlarmMessage>,
+}
+
+impl Pipeline {
+    /// Takes a temperature block: kept for the windows it falls in, in °C.
+    pub(super) fn ingest_temperature(&mut self, block: &ChannelBlock) {
+        let Some(store) = self.temperatures.as_mut() else {
+            self.health.reject("unknown_channel");
+            return;
+        };
+        let Some(c) = store.names.iter().position(|n| *n == block.name) else {
+            self.health.reject("unknown_channel");
+            return;
+        };
+        if celsius(0.0, &block.unit).is_none() {
+            self.health.reject("temperature_unit");
+            return;
+        }
+        let samples = &mut store.samples[c];
+        if samples.back().is_some_and(|&(t, _)| t >= block.start_ns) {
+            self.health.reject("time_overlap");
+            return;
+        }
+        for (k, &v) in block.data.iter().enumerate() {
+            samples.push_back((block.sample_time_ns(k), celsius(v, &block.unit).expect("unit checked")));
+        }
+        while samples.len() > MAX_TEMPERATURE_SAMPLES {
+            samples.pop_front();
+            self.health.temperature_samples_dropped += 1;
+        }
+        self.health.temperature_blocks += 1;
+    }
+
+    /// The environment of a window spanning `[start, end)` (ns).
+    pub(super) fn environment(&mut self, start: i128, end: i128) -> Environment {
+        let environment = self
+            .temperatures
+            .as_mut()
+            .map_or_else(Environment::default, |store| store.span(start, end));
+        for flag in &environment.flags {
+            *self.health.temperature_flags.entry(flag.clone()).or_default() += 1;
+        }
+        environment
+    }
+
+    /// Scores an accepted update (its parameters by name) measured at
+    /// `environment`; `None` without `[monitoring]`.
+    pub(super) fn score(
+        &mut self,
+        window: u64,
+        time_ns: i128,
+        parameters: &BTreeMap<&str, f64>,
+        environment: &Environment,
+    ) -> Option<MonitoringOutcome> {
+        let monitoring = self.monitoring.as_mut()?;
+        let features: Vec<f64> = monitoring
+            .features
+            .iter()
+            .map(|n| parameters.get(n.as_str()).copied().unwrap_or(f64::NAN))
+            .collect();
+        let observation = Observation {
+            features,
+            temperatures: environment.temperatures.clone(),
+        };
+        let before = monitoring.monitor.state();
+        let status = match monitoring.monitor.observe(&observation) {
+            Ok(s) => s,
+            Err(e) => {
+                // Training could not finish (too few usable windows): the
+                // monitor keeps training with the next windows.
+                self.health.monitoring_errors += 1;
+                tracing::warn!("monitoring: {e}");
+                return None;
+            }
+        };
+        let message = status_message(monitoring, window, time_ns, &observation, &status, environment);
+        let alarm = status.alarm_changed.then(|| alarm_message(&message, before));
+        Some(MonitoringOutcome { status: message, alarm })
+    }
+}
+
+fn status_message(
+    monitoring: &Monitoring,
+    window: u64,
+    time_ns: i128,
+    observation: &Observation,
+    status: &Status,
+    environment: &Environment,
+) -> StatusMessage {
+    let valid: Vec<f64> = observation.temperatures.iter().copied().filter(|t| t.is_finite()).collect();
+    let mut flags = environment.flags.clone();
+    for flag in &status.flags {
+        let text = match *flag {
+            Flag::TemperatureMissing(c) => format!("temperature_missing:{}", monitoring.channels[c]),
+            Flag::OutsideRange(c) => format!("outside_training_range:{}", monitoring.channels[c]),
+            Flag::FeatureMissing(f) => format!("feature_missing:{}", monitoring.features[f]),
+        };
+        if !flags.contains(&text) {
+            flags.push(text);
+        }
+    }
+    let scored_by = status.t2.map(|_| {
+        if status.fallback {
+            "pca_fallback"
+        } else if monitoring.channels.is_empty() {
+            "pca"
+        } else {
+            "temperature_regression"
+        }
+        .to_string()
+    });
+    StatusMessage {
+        window,
+        time: crate::io::wire::format_timestamp(time_ns),
+        state: status.state.name().into(),
+        t2: status.t2,
+        t2_limit: status.t2_limit,
+        mewma: status.mewma,
+        mewma_limit: status.mewma_limit,
+        temperature_c: (!valid.is_empty()).then(|| valid.iter().sum::<f64>() / valid.len() as f64),
+        residuals: monitoring
+            .features
+            .iter()
+            .zip(&status.standardised)
+            .map(|(name, &standardised)| Residual {
+                name: name.clone(),
+                standardised,
+            })
+            .collect(),
+        temperatures: monitoring
+            .channels
+            .iter()
+            .zip(&observation.temperatures)
+            .map(|(n, t)| (n.clone(), t.is_finite().then_some(*t)))
+            .collect(),
+        features: monitoring
+            .features
+            .iter()
+            .zip(&observation.features)
+            .map(|(name, &value)| NamedValue {
+                name: name.clone(),
+                value,
+            })
+            .collect(),
+        flags,
+        exceedances: status.exceedances,
+        scored_by,
+    }
+}
+
+fn alarm_message(status: &StatusMessage, before: MonitorState) -> AlarmMessage {
+    let mut largest = status.residuals.clone();
+    largest.sort_by(|a, b| b.standardised.abs().total_cmp(&a.standardised.abs()));
+    largest.truncate(5);
+    AlarmMessage {
+        window: status.window,
+        time: status.time.clone(),
+        state: status.state.clone(),
+        previous: before.name().into(),
+        t2: status.t2,
+        mewma: status.mewma,
+        largest_residuals: largest,
+    }
+}
