@@ -8,6 +8,7 @@ use crate::io::recording::{read_recording, RecordedBlock, RecordingWriter};
 use crate::io::wire::{self, Encoding};
 use crate::outputs::publisher::Publisher;
 use crate::pipeline::estimate;
+use crate::studies::environment;
 use crate::studies::simulation::{self, Excitation, SimulationOptions};
 use crate::studies::{self, import::ImportOptions};
 use anyhow::{Context, Result};
@@ -20,8 +21,20 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub config: PathBuf,
     /// Length of the recording, seconds.
-    #[arg(long)]
-    pub duration: f64,
+    #[arg(long, required_unless_present = "frf_windows")]
+    pub duration: Option<f64>,
+    /// Instead of time series: a compact recording of N windows of
+    /// pre-computed FRFs (model FRFs + --noise, at each window's
+    /// temperature and damage state from --scenario) with the temperature
+    /// blocks, for months of monitoring in seconds.
+    #[arg(long, conflicts_with = "publish")]
+    pub frf_windows: Option<usize>,
+    /// Length of one FRF window, seconds (with --frf-windows).
+    #[arg(long, default_value_t = 3600.0)]
+    pub window_seconds: f64,
+    /// Frequency step of the FRF lines over the config's band, Hz (with --frf-windows).
+    #[arg(long, default_value_t = 0.25)]
+    pub step_hz: f64,
     /// Sampling frequency of the recorded channels, Hz.
     #[arg(long, default_value_t = 256.0)]
     pub fs: f64,
@@ -185,15 +198,19 @@ pub fn simulate(a: SimulateArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let scenario = a
         .scenario
+        .as_ref()
         .map(|p| {
-            let text = std::fs::read_to_string(&p).with_context(|| format!("cannot read scenario {}", p.display()))?;
+            let text = std::fs::read_to_string(p).with_context(|| format!("cannot read scenario {}", p.display()))?;
             simulation::parse_scenario(&text).with_context(|| format!("scenario {}", p.display()))
         })
         .transpose()?;
     let start_ns = wire::parse_timestamp(&a.start)
         .with_context(|| format!("--start {:?} is not an RFC 3339 timestamp", a.start))?;
+    if let Some(windows) = a.frf_windows {
+        return simulate_frf_windows(&cfg, scenario.unwrap_or_default(), &a, windows, start_ns);
+    }
     let options = SimulationOptions {
-        duration_seconds: a.duration,
+        duration_seconds: a.duration.expect("required without --frf-windows"),
         fs: a.fs,
         seed: a.seed,
         excitation: a.excitation,
@@ -246,6 +263,46 @@ pub fn simulate(a: SimulateArgs) -> Result<()> {
             .map(|p| format!(", written to {}", p.display()))
             .unwrap_or_default(),
         if a.publish { ", published on zenoh" } else { "" }
+    );
+    Ok(())
+}
+
+/// `simulate --frf-windows`: the compact FRF recording.
+fn simulate_frf_windows(
+    cfg: &Config,
+    scenario: simulation::Scenario,
+    a: &SimulateArgs,
+    windows: usize,
+    start_ns: i128,
+) -> Result<()> {
+    let Some(out) = &a.out else {
+        anyhow::bail!("--frf-windows needs --out");
+    };
+    let prefix = cfg.topic_prefix();
+    let mut writer = RecordingWriter::create(out, a.encoding)?;
+    let options = environment::FrfWindowOptions {
+        windows,
+        window_seconds: a.window_seconds,
+        start_ns,
+        noise: a.noise,
+        step_hz: a.step_hz,
+        seed: a.seed,
+    };
+    let mut messages = 0u64;
+    environment::simulate_frf_windows(cfg, &scenario, &options, &mut |record| {
+        messages += 1;
+        match record {
+            environment::FrfRecord::Temperature(block) => writer.write_block(&prefix, &block).map(|_| ()),
+            environment::FrfRecord::Frf { key, time_ns, payload } => writer
+                .write_json(&format!("{prefix}/{key}"), time_ns, &payload)
+                .map(|_| ()),
+        }
+    })?;
+    writer.finish()?;
+    errln!(
+        "{windows} FRF windows of {} s ({messages} messages) written to {}",
+        a.window_seconds,
+        out.display()
     );
     Ok(())
 }

@@ -54,6 +54,10 @@ enum Command {
     /// Soak test: the daemon in one process with a publisher replaying a
     /// recording in a loop at --speed × real time, for many hours of data; reports RSS.
     Soak(monitor::SoakArgs),
+    /// Re-run the statistical layer ([monitoring]) offline over results MCAP
+    /// files: re-train on a chosen span, re-score every update, write a new
+    /// results file and print the alarms.
+    Monitor(monitor::MonitorArgs),
     /// Salvage an MCAP file left unfinished by a killed process (results,
     /// raw-input `.part` files): copies every message of every complete chunk
     /// into a new, finalised file.
@@ -78,6 +82,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => monitor::demo(args),
         Command::Soak(args) => monitor::soak(args),
         Command::Recover(args) => monitor::recover(args),
+        Command::Monitor(args) => monitor::monitor(args),
         Command::CheckConfig(args) => model::check_config(args),
     }
 }

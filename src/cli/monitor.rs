@@ -95,12 +95,188 @@ pub struct SoakArgs {
 }
 
 #[derive(Args)]
+pub struct MonitorArgs {
+    /// Configuration file (TOML) with [monitoring]; its settings unless overridden below.
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Results MCAP files (of `run` or `replay` with [monitoring]), in time order.
+    #[arg(required = true)]
+    pub inputs: Vec<PathBuf>,
+    /// New results file: every message copied, the monitoring messages re-made.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Train on the first N scored updates (default: [monitoring] training_windows).
+    #[arg(long, conflicts_with_all = ["train_from", "train_until"])]
+    pub training_windows: Option<usize>,
+    /// Train on the updates from this time (RFC 3339) on ...
+    #[arg(long, requires = "train_until")]
+    pub train_from: Option<String>,
+    /// ... until this time (exclusive).
+    #[arg(long, requires = "train_from")]
+    pub train_until: Option<String>,
+    /// No compensation: charts on the raw parameters (plain mean and covariance).
+    #[arg(long)]
+    pub raw: bool,
+    /// Control limits: held_out (cross-validated training windows) or
+    /// theoretical (the textbook F law). Default: [monitoring] limits.
+    #[arg(long, value_parser = parse_limits)]
+    pub limits: Option<splinewatch_core::monitoring::LimitMethod>,
+    /// Target false-alarm probability per window and chart.
+    #[arg(long)]
+    pub false_alarm_rate: Option<f64>,
+    /// MEWMA smoothing λ.
+    #[arg(long)]
+    pub ewma_lambda: Option<f64>,
+    /// Persistence rule K,M: an alarm after K exceedances among the last M scored updates.
+    #[arg(long, value_parser = parse_persistence)]
+    pub persistence: Option<[usize; 2]>,
+    /// Window where damage is known to start (a simulation): also report false
+    /// alarms before it and the detection delay.
+    #[arg(long)]
+    pub onset_window: Option<u64>,
+    /// Print every status as JSON lines instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn parse_limits(text: &str) -> Result<splinewatch_core::monitoring::LimitMethod, String> {
+    match text {
+        "held_out" => Ok(splinewatch_core::monitoring::LimitMethod::HeldOut),
+        "theoretical" => Ok(splinewatch_core::monitoring::LimitMethod::Theoretical),
+        other => Err(format!("{other:?}: expected held_out or theoretical")),
+    }
+}
+
+fn parse_persistence(text: &str) -> Result<[usize; 2], String> {
+    let (k, m) = text.split_once(',').ok_or_else(|| format!("{text:?}: expected K,M"))?;
+    let parse = |v: &str| v.trim().parse::<usize>().map_err(|e| format!("{v:?}: {e}"));
+    Ok([parse(k)?, parse(m)?])
+}
+
+#[derive(Args)]
 pub struct RecoverArgs {
     /// The damaged file.
     pub input: PathBuf,
     /// Output (default: INPUT with `.recovered.mcap`).
     #[arg(long)]
     pub out: Option<PathBuf>,
+}
+
+pub fn monitor(a: MonitorArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let mut settings = cfg
+        .monitoring
+        .clone()
+        .with_context(|| format!("{}: no [monitoring] section", a.config.display()))?;
+    if let Some(v) = a.false_alarm_rate {
+        settings.false_alarm_rate = v;
+    }
+    if let Some(v) = a.ewma_lambda {
+        settings.ewma_lambda = v;
+    }
+    if let Some(v) = a.persistence {
+        settings.persistence = v;
+    }
+    if let Some(v) = a.limits {
+        settings.limits = v;
+    }
+    settings.settings().check().context("monitor options")?;
+    let training = match (&a.train_from, &a.train_until) {
+        (Some(from), Some(until)) => {
+            let at =
+                |t: &String| wire::parse_timestamp(t).with_context(|| format!("{t:?} is not an RFC 3339 timestamp"));
+            crate::pipeline::Training::Span(at(from)?, at(until)?)
+        }
+        _ => crate::pipeline::Training::FirstWindows(a.training_windows.unwrap_or(settings.training_windows)),
+    };
+    if let Some(n) = a.training_windows {
+        settings.training_windows = n;
+    }
+    let files = a
+        .inputs
+        .iter()
+        .map(|p| std::fs::read(p).with_context(|| format!("cannot read {}", p.display())))
+        .collect::<Result<Vec<_>>>()?;
+    let inputs: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
+    let t0 = std::time::Instant::now();
+    let mut writer = a
+        .out
+        .as_ref()
+        .map(|p| ResultsWriter::create(p, &cfg.topic_prefix()))
+        .transpose()?;
+    let summary = crate::service::rescore::rescore_results(
+        &settings,
+        &cfg.topic_prefix(),
+        &inputs,
+        training,
+        a.raw,
+        writer.as_mut(),
+    )?;
+    if let Some(w) = writer {
+        w.finish()?;
+    }
+    if a.json {
+        for s in &summary.statuses {
+            outln!("{}", serde_json::to_string(s)?);
+        }
+    } else {
+        write_monitor_summary(&summary.statuses, a.onset_window);
+    }
+    errln!(
+        "re-scored {} updates in {:.2} s{}",
+        summary.statuses.len(),
+        t0.elapsed().as_secs_f64(),
+        a.out
+            .as_ref()
+            .map(|p| format!("; results in {}", p.display()))
+            .unwrap_or_default()
+    );
+    Ok(())
+}
+
+/// Windows by state, the alarms raised, and with a known damage onset the
+/// false alarms before it and the detection delay.
+fn write_monitor_summary(statuses: &[crate::io::monitoring_json::StatusMessage], onset: Option<u64>) {
+    let mut by_state = std::collections::BTreeMap::<&str, usize>::new();
+    for s in statuses {
+        *by_state.entry(s.state.as_str()).or_default() += 1;
+    }
+    outln!("windows by state: {by_state:?}");
+    // Transitions between scored windows (a window outside the training
+    // range or in training leaves the state as it was).
+    let scored: Vec<&crate::io::monitoring_json::StatusMessage> = statuses
+        .iter()
+        .filter(|s| matches!(s.state.as_str(), "normal" | "alarm"))
+        .collect();
+    let raised: Vec<u64> = scored
+        .windows(2)
+        .filter(|w| w[1].state == "alarm" && w[0].state != "alarm")
+        .map(|w| w[1].window)
+        .chain(scored.first().filter(|s| s.state == "alarm").map(|s| s.window))
+        .collect();
+    outln!("alarms raised at windows: {raised:?}");
+    let Some(onset) = onset else {
+        return;
+    };
+    let before: Vec<&crate::io::monitoring_json::StatusMessage> = statuses
+        .iter()
+        .filter(|s| s.window < onset && s.state != "training")
+        .collect();
+    let scored = before.iter().filter(|s| s.t2.is_some()).count();
+    let in_alarm = before.iter().filter(|s| s.state == "alarm").count();
+    let raised_before = raised.iter().filter(|&&w| w < onset).count();
+    outln!(
+        "before window {onset}: {scored} scored windows, {in_alarm} in alarm ({:.1} per 1000), {raised_before} alarms raised",
+        1000.0 * in_alarm as f64 / scored.max(1) as f64
+    );
+    match statuses.iter().find(|s| s.window >= onset && s.state == "alarm") {
+        Some(s) => outln!(
+            "detection: window {} ({} windows after the onset)",
+            s.window,
+            s.window - onset
+        ),
+        None => outln!("detection: none"),
+    }
 }
 
 pub fn replay(a: ReplayArgs) -> Result<()> {

@@ -19,7 +19,8 @@ mod zenoh;
 pub use frf::FrfConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
-    MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, SupportConfig, MAX_CONTROL_POINTS,
+    MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
+    MAX_CONTROL_POINTS,
 };
 pub use monitoring::MonitoringConfig;
 pub use oma::OmaConfig;

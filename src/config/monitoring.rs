@@ -3,7 +3,7 @@
 
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::monitoring::{MonitoringError, Settings};
+use splinewatch_core::monitoring::{LimitMethod, MonitoringError, Settings};
 
 /// `[monitoring]`; present: every accepted update is scored. Every key but
 /// the section itself is optional.
@@ -33,8 +33,11 @@ pub struct MonitoringConfig {
     /// A channel repeating one value exactly over this many windows is stuck
     /// (treated as missing).
     pub stuck_windows: usize,
-    /// The persisted reference (default `<output dir>/monitoring.json`).
+    /// The persisted reference (default `monitoring.json` beside the state file).
     pub state_file: Option<std::path::PathBuf>,
+    /// `"held_out"` (default): limits from cross-validated training windows;
+    /// `"theoretical"`: the textbook F law (trusts the model).
+    pub limits: LimitMethod,
 }
 
 impl Default for MonitoringConfig {
@@ -53,6 +56,7 @@ impl Default for MonitoringConfig {
             folds: d.folds,
             stuck_windows: 3,
             state_file: None,
+            limits: d.limits,
         }
     }
 }
@@ -70,6 +74,7 @@ impl MonitoringConfig {
             persistence: self.persistence,
             range_margin_c: self.range_margin_c,
             folds: self.folds,
+            limits: self.limits,
         }
     }
 }
@@ -107,7 +112,10 @@ mod tests {
     use super::*;
 
     fn with(section: &str) -> Result<(), ConfigError> {
-        let text = format!("{}\n[monitoring]\n{section}\n", include_str!("../../config/sinello.toml"));
+        let text = format!(
+            "{}\n[monitoring]\n{section}\n",
+            include_str!("../../config/sinello.toml")
+        );
         Config::from_toml(&text)?.validate_monitoring()
     }
 
@@ -115,7 +123,10 @@ mod tests {
     fn bad_monitoring_keys_are_named() {
         assert!(with("temperature_channels = [\"T1\", \"T2\"]").is_ok());
         for (section, key) in [
-            ("temperature_channels = [\"T1\", \"T1\"]", "monitoring.temperature_channels[1]"),
+            (
+                "temperature_channels = [\"T1\", \"T1\"]",
+                "monitoring.temperature_channels[1]",
+            ),
             ("temperature_channels = [\"a/b\"]", "monitoring.temperature_channels[0]"),
             ("training_windows = 3", "monitoring.training_windows"),
             ("ewma_lambda = 0.0", "monitoring.ewma_lambda"),

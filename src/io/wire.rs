@@ -83,7 +83,7 @@ impl ChannelQuantity {
             ChannelQuantity::Temperature,
         ]
         .into_iter()
-            .find(|q| q.wire_name() == value)
+        .find(|q| q.wire_name() == value)
     }
 
     pub fn unit(self) -> &'static str {

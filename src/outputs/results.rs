@@ -249,9 +249,9 @@ impl<W: Write + Seek> ResultsWriter<W> {
         if !self.channels.contains_key(suffix) {
             if let Some((name, schema)) = MONITORING_TOPICS.iter().find(|(n, _)| *n == suffix) {
                 let topic = format!("{}/{name}", self.prefix);
-                let schema_id = self
-                    .writer
-                    .add_schema(&format!("splinewatch.{name}"), "jsonschema", schema.as_bytes())?;
+                let schema_id =
+                    self.writer
+                        .add_schema(&format!("splinewatch.{name}"), "jsonschema", schema.as_bytes())?;
                 let id = self.writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
                 self.channels.insert(name, id);
             }

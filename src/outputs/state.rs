@@ -3,8 +3,8 @@
 //! monitor file (`[monitoring]`), so a restart does not retrain.
 
 use crate::pipeline::AcceptedParameters;
-use splinewatch_core::monitoring::Monitor;
 use anyhow::{Context, Result};
+use splinewatch_core::monitoring::Monitor;
 use std::fs::File;
 use std::io::Write;
 use std::path::Path;
@@ -24,9 +24,11 @@ pub fn save_monitor(path: &Path, monitor: &Monitor) -> Result<()> {
 /// Loads a saved monitor; `None` if the file does not exist.
 pub fn load_monitor(path: &Path) -> Result<Option<Monitor>> {
     match std::fs::read_to_string(path) {
-        Ok(text) => Ok(Some(serde_json::from_str(&text).with_context(|| {
-            format!("monitor file {} is not valid", path.display())
-        })?)),
+        Ok(text) => {
+            Ok(Some(serde_json::from_str(&text).with_context(|| {
+                format!("monitor file {} is not valid", path.display())
+            })?))
+        }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
         Err(e) => Err(e).with_context(|| format!("cannot read monitor file {}", path.display())),
     }

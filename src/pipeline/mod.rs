@@ -32,7 +32,7 @@ mod reports;
 mod windows;
 
 pub use job::{Fit, Measured, ModeShape, PairedMode, UpdateJob, UpdateOutcome, UpdateReport, BENDING_MODES_KEPT};
-pub use monitoring::{Environment, MonitoringOutcome};
+pub use monitoring::{rescore, Environment, MonitoringOutcome, Training};
 pub use oma::{ModelPair, WindowModes};
 pub use reports::{AcceptedParameters, Health, StateParameter, WindowReport};
 
@@ -158,14 +158,7 @@ impl Pipeline {
                 seen: false,
             })
             .collect();
-        let temperatures = config.monitoring.as_ref().map(monitoring::TemperatureStore::new);
-        let monitoring = match &config.monitoring {
-            Some(m) => Some(monitoring::Monitoring::new(
-                m,
-                parameters.iter().map(|p| p.name.clone()).collect(),
-            )?),
-            None => None,
-        };
+        let (temperatures, monitoring) = monitoring::for_config(config, &parameters)?;
         Ok(Self {
             config: config.clone(),
             schedule,
@@ -321,8 +314,12 @@ impl Pipeline {
         self.health.update_runs += 1;
         match &outcome.result {
             Ok(report) => {
-                let values: BTreeMap<&str, f64> =
-                    report.result.parameters.iter().map(|p| (p.name.as_str(), p.value)).collect();
+                let values: BTreeMap<&str, f64> = report
+                    .result
+                    .parameters
+                    .iter()
+                    .map(|p| (p.name.as_str(), p.value))
+                    .collect();
                 let scored = self.score(outcome.window, outcome.time_ns, &values, &outcome.environment);
                 self.last_point = outcome.point.take();
                 self.model_state = outcome

@@ -62,11 +62,7 @@ impl TemperatureStore {
             while samples.front().is_some_and(|&(t, _)| t < start) {
                 samples.pop_front();
             }
-            let values: Vec<f64> = samples
-                .iter()
-                .take_while(|&&(t, _)| t < end)
-                .map(|&(_, v)| v)
-                .collect();
+            let values: Vec<f64> = samples.iter().take_while(|&&(t, _)| t < end).map(|&(_, v)| v).collect();
             let name = &self.names[c];
             if values.is_empty() {
                 environment.temperatures.push(f64::NAN);
@@ -85,7 +81,9 @@ impl TemperatureStore {
                 environment.temperatures.push(f64::NAN);
                 environment.flags.push(format!("temperature_stuck:{name}"));
             } else {
-                environment.temperatures.push(values.iter().sum::<f64>() / values.len() as f64);
+                environment
+                    .temperatures
+                    .push(values.iter().sum::<f64>() / values.len() as f64);
             }
         }
         environment
@@ -107,6 +105,19 @@ impl Monitoring {
             channels: config.temperature_channels.clone(),
         })
     }
+}
+
+/// The temperature store and monitor of a config with `[monitoring]`,
+/// scoring `parameters` (every updated parameter, in order).
+pub(super) fn for_config(
+    config: &crate::config::Config,
+    parameters: &[splinewatch_core::updating::Parameter],
+) -> anyhow::Result<(Option<TemperatureStore>, Option<Monitoring>)> {
+    let Some(m) = &config.monitoring else {
+        return Ok((None, None));
+    };
+    let names = parameters.iter().map(|p| p.name.clone()).collect();
+    Ok((Some(TemperatureStore::new(m)), Some(Monitoring::new(m, names)?)))
 }
 
 /// What scoring an update produced: the status message, and the alarm
@@ -203,13 +214,19 @@ fn status_message(
     status: &Status,
     environment: &Environment,
 ) -> StatusMessage {
-    let valid: Vec<f64> = observation.temperatures.iter().copied().filter(|t| t.is_finite()).collect();
+    let valid: Vec<f64> = observation
+        .temperatures
+        .iter()
+        .copied()
+        .filter(|t| t.is_finite())
+        .collect();
     let mut flags = environment.flags.clone();
     for flag in &status.flags {
         let text = match *flag {
             Flag::TemperatureMissing(c) => format!("temperature_missing:{}", monitoring.channels[c]),
             Flag::OutsideRange(c) => format!("outside_training_range:{}", monitoring.channels[c]),
             Flag::FeatureMissing(f) => format!("feature_missing:{}", monitoring.features[f]),
+            Flag::TrainingDeferred => "training_deferred".into(),
         };
         if !flags.contains(&text) {
             flags.push(text);
@@ -276,5 +293,112 @@ fn alarm_message(status: &StatusMessage, before: MonitorState) -> AlarmMessage {
         t2: status.t2,
         mewma: status.mewma,
         largest_residuals: largest,
+    }
+}
+
+/// Which windows train the reference when re-scoring.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Training {
+    /// The first `n` windows with every feature (as the daemon does).
+    FirstWindows(usize),
+    /// The windows whose time lies in `[from, until)` (ns).
+    Span(i128, i128),
+}
+
+/// Re-runs the statistical layer over saved status messages (in window
+/// order): their features and window temperatures are what the daemon
+/// scored, so with the config's settings and `FirstWindows(training_windows)`
+/// the result is the daemon's, bit for bit. `raw`: no compensation at all
+/// (the features' plain mean and covariance), to show what temperature does
+/// to uncompensated parameters.
+pub fn rescore(
+    config: &MonitoringConfig,
+    statuses: &[StatusMessage],
+    training: Training,
+    raw: bool,
+) -> anyhow::Result<Vec<MonitoringOutcome>> {
+    let Some(first) = statuses.first() else {
+        return Ok(Vec::new());
+    };
+    let features: Vec<String> = first.features.iter().map(|f| f.name.clone()).collect();
+    let mut settings = config.clone();
+    if raw {
+        settings.temperature_channels.clear();
+        settings.pca_components = 0;
+    }
+    let mut monitoring = Monitoring::new(&settings, features.clone())?;
+    let observations: Vec<(Observation, Environment)> = statuses
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let names: Vec<&str> = s.features.iter().map(|f| f.name.as_str()).collect();
+            if names != features.iter().map(String::as_str).collect::<Vec<_>>() {
+                anyhow::bail!(
+                    "status of window {} scores other features than the first ({i} messages in)",
+                    s.window
+                );
+            }
+            let temperatures: Vec<f64> = settings
+                .temperature_channels
+                .iter()
+                .map(|c| s.temperatures.get(c).copied().flatten().unwrap_or(f64::NAN))
+                .collect();
+            let environment = Environment {
+                temperatures: temperatures.clone(),
+                flags: s
+                    .flags
+                    .iter()
+                    .filter(|f| f.starts_with("temperature_") && !raw)
+                    .cloned()
+                    .collect(),
+            };
+            let observation = Observation {
+                features: s.features.iter().map(|f| f.value).collect(),
+                temperatures,
+            };
+            Ok((observation, environment))
+        })
+        .collect::<anyhow::Result<_>>()?;
+    if let Training::Span(from, until) = training {
+        let time = |s: &StatusMessage| crate::io::wire::parse_timestamp(&s.time).unwrap_or(i128::MIN);
+        let chosen: Vec<Observation> = statuses
+            .iter()
+            .zip(&observations)
+            .filter(|(s, _)| (from..until).contains(&time(s)))
+            .map(|(_, (o, _))| o.clone())
+            .collect();
+        let reference = splinewatch_core::monitoring::Reference::train(&settings.settings(), &chosen)?;
+        monitoring.monitor = Monitor::with_reference(reference);
+    }
+    let mut out = Vec::with_capacity(statuses.len());
+    for (s, (observation, environment)) in statuses.iter().zip(&observations) {
+        let time_ns = crate::io::wire::parse_timestamp(&s.time).unwrap_or(0);
+        let in_span = matches!(training, Training::Span(from, until) if (from..until).contains(&time_ns));
+        let before = monitoring.monitor.state();
+        let status = if in_span {
+            training_status()
+        } else {
+            monitoring.monitor.observe(observation)?
+        };
+        let message = status_message(&monitoring, s.window, time_ns, observation, &status, environment);
+        let alarm = status.alarm_changed.then(|| alarm_message(&message, before));
+        out.push(MonitoringOutcome { status: message, alarm });
+    }
+    Ok(out)
+}
+
+/// The status of a window in the chosen training span (not scored).
+fn training_status() -> Status {
+    Status {
+        state: MonitorState::Training,
+        alarm_changed: false,
+        t2: None,
+        t2_limit: None,
+        mewma: None,
+        mewma_limit: None,
+        standardised: Vec::new(),
+        flags: Vec::new(),
+        fallback: false,
+        exceedances: 0,
     }
 }

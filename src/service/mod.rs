@@ -5,6 +5,7 @@
 pub mod daemon;
 pub mod demo;
 pub mod replay;
+pub mod rescore;
 pub mod soak;
 
 use std::collections::VecDeque;

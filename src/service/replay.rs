@@ -83,14 +83,7 @@ pub fn replay<W: Write + Seek>(
         keep_latest,
     } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
-    let monitor_path = state_path.and_then(|p| config.monitor_file(p));
-    if let Some(path) = &monitor_path {
-        if let Some(monitor) = state::load_monitor(path)? {
-            pipeline
-                .restore_monitor(monitor)
-                .with_context(|| format!("monitor file {}", path.display()))?;
-        }
-    }
+    let monitor_path = resume_monitor(config, state_path, &mut pipeline)?;
     let limits = crate::pipeline::block_limits(config);
     let total = recordings.iter().map(|bytes| message_count(bytes)).sum();
     let mut sink = Outputs {
@@ -163,6 +156,24 @@ pub fn replay<W: Write + Seek>(
     let mut summary = sink.summary;
     summary.accepted = pipeline.accepted().cloned();
     Ok(summary)
+}
+
+/// The monitor file beside `state_path` (`[monitoring]`), resumed from
+/// when it exists.
+pub(crate) fn resume_monitor(
+    config: &Config,
+    state_path: Option<&Path>,
+    pipeline: &mut Pipeline,
+) -> Result<Option<std::path::PathBuf>> {
+    let path = state_path.and_then(|p| config.monitor_file(p));
+    if let Some(path) = &path {
+        if let Some(monitor) = state::load_monitor(path)? {
+            pipeline
+                .restore_monitor(monitor)
+                .with_context(|| format!("monitor file {}", path.display()))?;
+        }
+    }
+    Ok(path)
 }
 
 /// The message count in a recording's summary (0 when it has none), for

@@ -5,6 +5,7 @@
 //! loggers' files.
 //! Room: below the services, beside the pipeline. May import: `config`, `io`, the core crate.
 
+pub mod environment;
 pub mod excitation;
 pub mod import;
 pub mod modes;

@@ -37,6 +37,9 @@ pub struct Scenario {
     pub update_seconds: f64,
     #[serde(default, rename = "change")]
     pub changes: Vec<Change>,
+    /// Temperature and its effects on the deck (`[environment]`).
+    #[serde(default)]
+    pub environment: Option<super::environment::Environment>,
 }
 
 /// No change: the model stays at the config's values.
@@ -45,6 +48,7 @@ impl Default for Scenario {
         Self {
             update_seconds: default_update_seconds(),
             changes: Vec::new(),
+            environment: None,
         }
     }
 }
@@ -154,14 +158,25 @@ pub fn simulate(
     let block_len = o.block_length()?;
     let total = (o.duration_seconds * o.fs).round() as usize;
     let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-    let (mut forcing, setup, accel_sensors) = Forcing::new(config, o, &mut rng)?;
-    let parameters = config.build_parameters()?;
     let scenario = o.scenario.clone().unwrap_or_default();
+    let environment = scenario.environment.clone();
+    if let Some(e) = &environment {
+        e.check()?;
+    }
+    let truth = environment.as_ref().map(|e| e.truth_config(config));
+    let (mut forcing, setup, accel_sensors) = Forcing::new(truth.as_ref().unwrap_or(config), o, &mut rng)?;
+    let parameters = config.build_parameters()?;
     scenario.check(&parameters)?;
     let state_at = |t: f64| {
-        let (k, theta) = scenario.coefficients_at(&setup, &parameters, t);
+        let (mut k, mut theta) = scenario.coefficients_at(&setup, &parameters, t);
+        if let Some(e) = &environment {
+            e.apply(e.temperature_at(t / 3600.0), &mut k, &mut theta);
+        }
         setup.model.modal_state_with_fields(&k, &theta, &setup.damping)
     };
+    // Temperature samples come from their own stream, so the forces and
+    // noise do not depend on the environment's sampling.
+    let mut temperature_rng = ChaCha8Rng::seed_from_u64(o.seed ^ 0x7e3a_0001);
     let update_blocks = ((scenario.update_seconds / o.block_seconds).round() as usize).max(1);
     let dt = 1.0 / (o.fs * o.oversample as f64);
     let sensors = setup.model.sensor_count();
@@ -175,7 +190,13 @@ pub fn simulate(
     while produced < total {
         let n = block_len.min(total - produced);
         let t0 = produced as f64 / o.fs;
-        if block_index > 0 && block_index % update_blocks == 0 && !scenario.changes.is_empty() {
+        if let Some(e) = &environment {
+            for block in e.temperature_blocks(o.start_ns, t0, t0 + n as f64 / o.fs, &mut temperature_rng) {
+                sink(block)?;
+            }
+        }
+        let changing = !scenario.changes.is_empty() || environment.is_some();
+        if block_index > 0 && block_index % update_blocks == 0 && changing {
             let (x, v) = sim.physical_state(&state);
             let last = sim.last_forces().to_vec();
             state = state_at(t0)?;
@@ -331,7 +352,12 @@ impl Scenario {
     /// Every change names an updating parameter and is well formed.
     /// Spring and stiffness-field coefficients at time `t` (s): the config's
     /// values times the changes' factors.
-    fn coefficients_at(&self, setup: &FrfSetup, parameters: &[Parameter], t: f64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    pub(super) fn coefficients_at(
+        &self,
+        setup: &FrfSetup,
+        parameters: &[Parameter],
+        t: f64,
+    ) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
         let base_theta = &setup.model.assembled().field_coefficients;
         let (mut k, mut theta) = (setup.kappa.clone(), base_theta.clone());
         for c in &self.changes {
@@ -352,7 +378,7 @@ impl Scenario {
         (k, theta)
     }
 
-    fn check(&self, parameters: &[Parameter]) -> Result<()> {
+    pub(super) fn check(&self, parameters: &[Parameter]) -> Result<()> {
         for c in &self.changes {
             let Some(p) = parameters.iter().find(|p| p.name == c.parameter) else {
                 bail!(

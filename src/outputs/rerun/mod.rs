@@ -169,9 +169,9 @@ impl RerunOutput {
             "deck/stiffness_change",
             "deck/monitoring_residual",
         ]
-            .map(String::from)
-            .into_iter()
-            .chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
+        .map(String::from)
+        .into_iter()
+        .chain((1..=MODES_SHOWN).map(|k| format!("modes/{k}")));
         for path in mesh_paths {
             self.rec
                 .log_static(

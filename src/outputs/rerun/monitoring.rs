@@ -37,7 +37,10 @@ impl RerunOutput {
                         path.as_str(),
                         &rerun::SeriesLines::new()
                             .with_names(["statistic", "limit"])
-                            .with_colors([rerun::Color::from_rgb(30, 110, 200), rerun::Color::from_rgb(220, 40, 40)]),
+                            .with_colors([
+                                rerun::Color::from_rgb(30, 110, 200),
+                                rerun::Color::from_rgb(220, 40, 40),
+                            ]),
                     )
                     .map_err(rerun_error)?;
             }
@@ -81,12 +84,15 @@ impl RerunOutput {
         let Some(t) = status.temperature_c else {
             return Ok(());
         };
-        self.scatter.push_back((t, status.features.iter().map(|f| f.value).collect()));
+        self.scatter
+            .push_back((t, status.features.iter().map(|f| f.value).collect()));
         if self.scatter.len() > SCATTER_POINTS {
             self.scatter.pop_front();
         }
         let n = self.scatter.len();
-        let colors: Vec<rerun::Color> = (0..n).map(|k| colormap(k as f64 / n.max(2).saturating_sub(1) as f64)).collect();
+        let colors: Vec<rerun::Color> = (0..n)
+            .map(|k| colormap(k as f64 / n.max(2).saturating_sub(1) as f64))
+            .collect();
         for (f, feature) in status.features.iter().enumerate() {
             let points: Vec<[f32; 2]> = self
                 .scatter

@@ -39,6 +39,9 @@ pub enum Flag {
     OutsideRange(usize),
     /// A feature is not finite: not scored.
     FeatureMissing(usize),
+    /// Enough training windows, but not enough usable ones (temperatures
+    /// missing) or a degenerate covariance: training goes on with the next.
+    TrainingDeferred,
 }
 
 /// The result of one window.
@@ -135,7 +138,8 @@ impl Monitor {
         }
     }
 
-    /// Takes the next window's observation.
+    /// Takes the next window's observation. Errors only when the feature
+    /// count differs from the reference's.
     pub fn observe(&mut self, observation: &Observation) -> Result<Status, MonitoringError> {
         let channels = self.settings.temperature_channels;
         assert_eq!(observation.temperatures.len(), channels, "one temperature per channel");
@@ -143,7 +147,9 @@ impl Monitor {
         self.history.push_front(observation.temperatures.clone());
         self.history.truncate(self.settings.lags + 1);
         let Some(reference) = &self.reference else {
-            self.train_with(observation)?;
+            if !self.train_with(observation) {
+                flags.push(Flag::TrainingDeferred);
+            }
             return Ok(self.status(MonitorState::Training, flags));
         };
         if observation.features.len() != reference.features {
@@ -216,19 +222,25 @@ impl Monitor {
     }
 
     /// Keeps a training window (one with every feature); trains the
-    /// reference once enough are kept.
-    fn train_with(&mut self, observation: &Observation) -> Result<(), MonitoringError> {
+    /// reference once enough are kept. False when training was due but
+    /// could not be done yet (it is tried again with the next window).
+    fn train_with(&mut self, observation: &Observation) -> bool {
         if observation.features.iter().all(|v| v.is_finite()) {
             self.training.push(observation.clone());
         }
-        if self.training.len() >= self.training_windows {
-            let reference = Reference::train(&self.settings, &self.training)?;
-            self.ewma = vec![0.0; reference.features];
-            self.reference = Some(reference);
-            self.training.clear();
-            self.state = MonitorState::Normal;
+        if self.training.len() < self.training_windows {
+            return true;
         }
-        Ok(())
+        match Reference::train(&self.settings, &self.training) {
+            Ok(reference) => {
+                self.ewma = vec![0.0; reference.features];
+                self.reference = Some(reference);
+                self.training.clear();
+                self.state = MonitorState::Normal;
+                true
+            }
+            Err(_) => false,
+        }
     }
 
     fn status(&self, state: MonitorState, flags: Vec<Flag>) -> Status {
@@ -353,14 +365,15 @@ mod tests {
 
     /// Spring warming (+1 °C a day after training) on an undamaged deck:
     /// without compensation (PCA with no component removed: a plain mean
-    /// and covariance of the raw features) the MEWMA follows the seasonal
-    /// drift into alarm (41 of 300 windows); with the temperature
+    /// and covariance of the raw features, textbook F limits) the charts
+    /// follow the seasonal drift into alarm; with the temperature
     /// regression, none: why the layer exists.
     #[test]
     fn raw_features_alarm_on_temperature() {
         let mut rng = Normal(5);
         let raw = Settings {
             pca_components: 0,
+            limits: crate::monitoring::LimitMethod::Theoretical,
             ..Settings::default()
         };
         let mut monitor = Monitor::new(raw, 100).unwrap();
@@ -437,5 +450,35 @@ mod tests {
             let o = observation(hour, &mut rng, 1.0);
             assert_eq!(resumed.observe(&o).unwrap(), monitor.observe(&o).unwrap());
         }
+    }
+
+    /// Training windows without temperatures cannot train the regression:
+    /// training is deferred (flagged) until enough usable windows came.
+    #[test]
+    fn training_waits_for_usable_windows() {
+        let mut rng = Normal(4);
+        let mut monitor = Monitor::new(settings(), 20).unwrap();
+        for hour in 0..20 {
+            let mut o = observation(hour, &mut rng, 0.0);
+            if hour < 15 {
+                o.temperatures[0] = f64::NAN;
+            }
+            let s = monitor.observe(&o).unwrap();
+            assert_eq!(s.state, MonitorState::Training);
+            assert_eq!(
+                s.flags.contains(&Flag::TrainingDeferred),
+                hour == 19,
+                "hour {hour}: {:?}",
+                s.flags
+            );
+        }
+        let mut hour = 20;
+        while monitor.reference().is_none() {
+            monitor.observe(&observation(hour, &mut rng, 0.0)).unwrap();
+            hour += 1;
+        }
+        // 10 usable windows (needed: 2 × 5 folds) after the 5 usable ones.
+        assert_eq!(hour, 25);
+        assert_eq!(monitor.reference().unwrap().windows, 10);
     }
 }

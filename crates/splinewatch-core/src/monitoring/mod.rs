@@ -89,6 +89,22 @@ pub struct Settings {
     pub range_margin_c: f64,
     /// Contiguous cross-validation folds for the control limits.
     pub folds: usize,
+    /// How the control limits are set.
+    #[serde(default)]
+    pub limits: LimitMethod,
+}
+
+/// How control limits are set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LimitMethod {
+    /// From held-out training windows (cross validation), with a scaled-F tail.
+    #[default]
+    HeldOut,
+    /// The textbook phase-II law: `p(n+1)(n−1)/(n(n−p)) F(p, n−p)` for T²
+    /// of a future window (Tracy, Young & Mason 1992), the same for the
+    /// MEWMA; it trusts the model, so a misfit becomes false alarms.
+    Theoretical,
 }
 
 impl Default for Settings {
@@ -103,6 +119,7 @@ impl Default for Settings {
             persistence: [3, 5],
             range_margin_c: 1.0,
             folds: 5,
+            limits: LimitMethod::HeldOut,
         }
     }
 }

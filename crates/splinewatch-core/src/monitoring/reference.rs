@@ -3,11 +3,15 @@
 
 use super::compensation::{regressors, Compensation};
 use super::covariance::{ledoit_wolf, robust_scale};
-use super::{MonitoringError, Observation, Settings};
+use super::{LimitMethod, MonitoringError, Observation, Settings};
 use faer::linalg::solvers::DenseSolveCore;
 use faer::Side;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
+
+/// Scaled residuals are clipped here before their covariance (in robust
+/// standard deviations).
+const WINSOR: f64 = 3.0;
 
 /// Compensation, scales and precision fitted on some training windows.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -41,9 +45,16 @@ impl Fitted {
             .map(|f| robust_scale(&residuals.iter().map(|r| r[f]).collect::<Vec<_>>()))
             .collect();
         let kept: Vec<usize> = (0..p).filter(|&f| scales[f] > 0.0).collect();
+        // Scaled residuals winsorised at ±WINSOR (Huber's idea): a few bad
+        // training windows cannot inflate the covariance the MAD scales
+        // were made robust against.
         let scaled: Vec<Vec<f64>> = residuals
             .iter()
-            .map(|r| kept.iter().map(|&f| r[f] / scales[f]).collect())
+            .map(|r| {
+                kept.iter()
+                    .map(|&f| (r[f] / scales[f]).clamp(-WINSOR, WINSOR))
+                    .collect()
+            })
             .collect();
         let (covariance, shrinkage) = ledoit_wolf(&scaled);
         let llt = covariance.llt(Side::Lower).map_err(|_| MonitoringError::Covariance)?;
@@ -103,6 +114,25 @@ pub struct Chart {
 impl Chart {
     fn train(settings: &Settings, y: &[&[f64]], x: &[Vec<f64>]) -> Result<Self, MonitoringError> {
         let fitted = Fitted::fit(settings, y, x)?;
+        if settings.limits == LimitMethod::Theoretical {
+            let (p, n) = (fitted.kept.len() as f64, y.len() as f64);
+            let d2 = (n - p).max(1.0);
+            let scale = p * (n + 1.0) * (n - 1.0) / (n * d2);
+            let limit = FisherSnedecor::new(p.max(1.0), d2).map_or(f64::INFINITY, |f| {
+                scale * f.inverse_cdf(1.0 - settings.false_alarm_rate)
+            });
+            return Ok(Self {
+                fitted,
+                t2_limit: limit,
+                mewma_limit: limit,
+                calibration: Calibration {
+                    held_out: 0,
+                    mewma_values: 0,
+                    t2_exceedances: 0,
+                    mewma_exceedances: 0,
+                },
+            });
+        }
         let (t2, mewma) = held_out_statistics(settings, y, x)?;
         let (p, n) = (fitted.kept.len(), y.len());
         let (t2_limit, mewma_limit) = (
