@@ -9,6 +9,7 @@ mod corpus;
 mod import;
 mod live;
 mod measurements;
+mod monitoring;
 mod oma;
 mod paper;
 mod pipes;
