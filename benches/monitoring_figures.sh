@@ -4,13 +4,15 @@
 # training on the first 100, damage from window 200) for three sizes of
 # bearing loss, scored with temperature compensation (held-out limits),
 # on raw parameters with the textbook F limits, and on raw parameters with
-# held-out limits. Usage: benches/monitoring_figures.sh [splinewatch binary]
+# held-out limits. Usage: benches/monitoring_figures.sh [splinewatch binary] [factors...]
 set -euo pipefail
 bin=${1:-target/release/splinewatch}
+shift || true
+factors=${*:-0.8 0.98 0.995}
 cfg=config/sinello-monitoring.toml
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-for factor in 0.8 0.95 0.98; do
+for factor in $factors; do
     sed "s/^factor = .*/factor = $factor/" config/scenarios/two-weeks-bearing-loss.toml > "$work/scenario.toml"
     "$bin" simulate --config "$cfg" --scenario "$work/scenario.toml" --frf-windows 336 --out "$work/frf.mcap" 2>/dev/null
     start=$(date +%s.%N)

@@ -65,12 +65,15 @@ impl Publisher {
             .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
     }
 
-    /// Publishes raw JSON bytes on `<prefix>/<suffix>` (e.g. a pre-computed FRF).
+    /// Publishes raw JSON bytes on `<prefix>/<suffix>` (e.g. a pre-computed
+    /// FRF). Blocks while the link is congested rather than dropping: an FRF
+    /// set missing one message would never become an update.
     pub fn publish_json(&mut self, suffix: &str, bytes: Vec<u8>) -> Result<()> {
         let key = format!("{}/{suffix}", self.prefix);
         self.session
             .put(&key, bytes)
             .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
+            .congestion_control(zenoh::qos::CongestionControl::Block)
             .wait()
             .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
     }

@@ -25,11 +25,12 @@ fn temp(name: &str) -> TestDir {
     fresh_dir(&format!("monitoring-{name}"))
 }
 
-/// Simulates `windows` hourly FRF windows of the bundled two-week scenario
-/// into one recording per entry of `split` (window counts), in `dir`.
-fn simulate(cfg: &Config, dir: &Path, split: &[usize]) -> Vec<PathBuf> {
+/// Simulates hourly FRF windows of the bundled two-week scenario (its text
+/// changed by `edit`) into one recording per entry of `split` (window
+/// counts), in `dir`.
+fn simulate(cfg: &Config, dir: &Path, split: &[usize], edit: impl Fn(String) -> String) -> Vec<PathBuf> {
     let text = std::fs::read_to_string(root().join("config/scenarios/two-weeks-bearing-loss.toml")).unwrap();
-    let scenario = parse_scenario(&text).unwrap();
+    let scenario = parse_scenario(&edit(text)).unwrap();
     let windows: usize = split.iter().sum();
     let options = FrfWindowOptions {
         windows,
@@ -101,7 +102,7 @@ fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
 fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     let dir = temp("two-weeks");
     let cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
-    let recordings = simulate(&cfg, &dir, &[168, 168]);
+    let recordings = simulate(&cfg, &dir, &[168, 168], |t| t);
     let state = dir.join("state.json");
     let first = replay_with_state(&cfg, &recordings[0], &state);
     let saved = splinewatch::outputs::state::load_monitor(&dir.join("monitoring.json"))
@@ -155,5 +156,144 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     assert!(
         false_alarms > 20,
         "raw parameters: {false_alarms} alarm windows before the damage"
+    );
+}
+
+/// Live over zenoh on loopback, with temperature topics: 14 hourly FRF
+/// windows of a calm day (pre-computed FRFs on `frf/**`, temperature blocks on
+/// `temperature/T1`) to a daemon training on the first 10: every status
+/// arrives on `<prefix>/monitoring/status`, `monitoring/latest` answers
+/// with the last, the Rerun file holds the control charts. A restart with
+/// 6 more windows resumes the reference (no training). `monitor` over the
+/// two runs' results files reproduces the live statuses bit for bit.
+#[test]
+fn live_monitoring_with_temperature_topics_survives_a_restart() {
+    use std::sync::{Arc, Mutex};
+    use zenoh::Wait;
+    let out = temp("live");
+    let text = std::fs::read_to_string(root().join("config/sinello-monitoring.toml"))
+        .unwrap()
+        .replace("training_windows = 100", "training_windows = 10");
+    let cfg = Config::from_toml(&text).unwrap();
+    // A calm day (±0.5 °C): ten training hours cover the range.
+    let recordings = simulate(&cfg, &out, &[14, 6], |t| {
+        t.replace("daily_amplitude_c = 8.0", "daily_amplitude_c = 0.5")
+    });
+    let run = |recording: PathBuf| {
+        let received: Arc<Mutex<Vec<StatusMessage>>> = Arc::default();
+        let latest: Arc<Mutex<Option<StatusMessage>>> = Arc::default();
+        let (sink, reply) = (Arc::clone(&received), Arc::clone(&latest));
+        let summary =
+            splinewatch::service::demo::run_with_source(cfg.clone(), &out, 0.0, usize::MAX, move |cfg, publisher| {
+                let prefix = cfg.topic_prefix();
+                let seen = Arc::clone(&sink);
+                let _subscriber = publisher
+                    .session()
+                    .declare_subscriber(format!("{prefix}/monitoring/status"))
+                    .callback(move |s| {
+                        let v = serde_json::from_slice(&s.payload().to_bytes()).expect("a status");
+                        seen.lock().unwrap().push(v);
+                    })
+                    .wait()
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                let bytes = std::fs::read(&recording)?;
+                let mut sent = 0;
+                let mut frfs = 0;
+                for message in splinewatch::io::recording::mcap_messages(&bytes, false)? {
+                    let message = message?;
+                    let suffix = message
+                        .channel
+                        .topic
+                        .strip_prefix(&format!("{prefix}/"))
+                        .unwrap()
+                        .to_string();
+                    if suffix.starts_with("frf/") {
+                        publisher.publish_json(&suffix, message.data.to_vec())?;
+                        frfs += 1;
+                        if frfs % 12 == 0 {
+                            // One update at a time: the next set waits for this one.
+                            let expected = frfs / 12;
+                            let start = std::time::Instant::now();
+                            while sink.lock().unwrap().len() < expected && start.elapsed().as_secs() < 120 {
+                                std::thread::sleep(std::time::Duration::from_millis(20));
+                            }
+                        }
+                    } else {
+                        let blocks = splinewatch::io::wire::decode(
+                            &message.data,
+                            Encoding::Cbor,
+                            &splinewatch::io::wire::Limits::default(),
+                        )?;
+                        for b in &blocks {
+                            publisher.publish(b)?;
+                        }
+                    }
+                    sent += 1;
+                }
+                let replies = publisher
+                    .session()
+                    .get(format!("{prefix}/monitoring/latest"))
+                    .wait()
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                if let Ok(r) = replies.recv() {
+                    let body = r.result().map_err(|e| anyhow::anyhow!("{e:?}"))?.payload().to_bytes();
+                    *reply.lock().unwrap() = Some(serde_json::from_slice(&body)?);
+                }
+                Ok(sent)
+            })
+            .unwrap();
+        assert!(summary.updates.iter().all(|u| u.result.is_ok()));
+        let received = received.lock().unwrap().clone();
+        let latest = latest.lock().unwrap().clone();
+        (received, latest)
+    };
+    let (first, latest) = run(recordings[0].clone());
+    assert_eq!(first.len(), 14, "statuses over zenoh");
+    assert!(first[..10].iter().all(|s| s.state == "training"));
+    assert!(
+        first[10..].iter().all(|s| s.state == "normal"),
+        "{:?}",
+        first.iter().map(|s| &s.state).collect::<Vec<_>>()
+    );
+    assert!(first.iter().all(|s| s.temperature_c.is_some()));
+    assert_eq!(latest.as_ref(), first.last(), "monitoring/latest");
+    let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(out.join("results.rrd")).unwrap()).unwrap();
+    for entity in [
+        "/monitoring/charts/t2",
+        "/monitoring/charts/mewma",
+        "/monitoring/temperature/east.k2",
+        "/deck/monitoring_residual",
+    ] {
+        assert!(
+            rrd.entities.iter().any(|e| e == entity),
+            "{entity} not in {:?}",
+            rrd.entities
+        );
+    }
+    let (second, _) = run(recordings[1].clone());
+    assert_eq!(second.len(), 6);
+    assert!(
+        second.iter().all(|s| s.state == "normal"),
+        "the restart must not retrain"
+    );
+    // The daemon never overwrites a results file: the second run wrote results-1.mcap.
+    let files: Vec<Vec<u8>> = ["results.mcap", "results-1.mcap"]
+        .iter()
+        .map(|f| std::fs::read(out.join(f)).unwrap())
+        .collect();
+    let saved = read_statuses(&[&files[0], &files[1]], &cfg.topic_prefix()).unwrap();
+    let live: Vec<StatusMessage> = first.into_iter().chain(second).collect();
+    assert_eq!(saved, live);
+    let again = rescore(
+        cfg.monitoring.as_ref().unwrap(),
+        &saved,
+        Training::FirstWindows(10),
+        false,
+    )
+    .unwrap();
+    let again: Vec<StatusMessage> = again.into_iter().map(|o| o.status).collect();
+    assert_eq!(
+        serde_json::to_string(&again).unwrap(),
+        serde_json::to_string(&live).unwrap()
     );
 }
