@@ -144,4 +144,28 @@ mod tests {
         .to_string();
         assert!(e.contains("monitoring"), "{e}");
     }
+
+    /// The bundled monitoring example is the bundled deck plus a global
+    /// modulus scale and `[monitoring]`.
+    #[test]
+    fn the_monitoring_example_is_the_bundled_deck_with_a_modulus_scale() {
+        let monitoring = Config::from_toml(include_str!("../../config/sinello-monitoring.toml")).unwrap();
+        let bundled = Config::from_toml(include_str!("../../config/sinello.toml")).unwrap();
+        monitoring.validate().unwrap();
+        let mut model = serde_json::to_value(&monitoring.model).unwrap();
+        let fields = model["stiffness_fields"].as_array().unwrap().clone();
+        assert_eq!(fields.len(), 1);
+        assert_eq!(fields[0]["name"], "deck");
+        model["stiffness_fields"] = serde_json::json!([]);
+        assert_eq!(model, serde_json::to_value(&bundled.model).unwrap());
+        assert_eq!(
+            serde_json::to_value(&monitoring.sensors).unwrap(),
+            serde_json::to_value(&bundled.sensors).unwrap()
+        );
+        let m = monitoring.monitoring.unwrap();
+        assert_eq!(
+            (m.temperature_channels, m.training_windows),
+            (vec!["T1".to_string()], 100)
+        );
+    }
 }

@@ -402,3 +402,85 @@ fn training_status() -> Status {
         exceedances: 0,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::{Config, ScheduleConfig};
+    use crate::io::wire::{parse_timestamp, ChannelQuantity};
+
+    fn pipeline() -> Pipeline {
+        let config = Config::from_toml(include_str!("../../config/sinello-monitoring.toml")).unwrap();
+        Pipeline::new(&config, ScheduleConfig::default(), None).unwrap()
+    }
+
+    const HOUR: i128 = 3_600_000_000_000;
+
+    fn t0() -> i128 {
+        parse_timestamp("2026-11-21T10:00:00Z").unwrap()
+    }
+
+    /// One hour of minute samples of `name` from hour `h`, all `value(k)`.
+    fn hour_block(name: &str, unit: &str, h: i128, value: impl Fn(usize) -> f64) -> ChannelBlock {
+        ChannelBlock {
+            name: name.into(),
+            quantity: ChannelQuantity::Temperature,
+            unit: unit.into(),
+            fs: 1.0 / 60.0,
+            start_ns: t0() + h * HOUR,
+            data: (0..60).map(value).collect(),
+        }
+    }
+
+    /// Bad temperature input is counted by reason, a missing or stuck
+    /// channel makes a flagged `NaN` window temperature, units convert, and
+    /// nothing panics.
+    #[test]
+    fn bad_temperature_input_is_counted_and_flagged() {
+        let mut p = pipeline();
+        p.ingest(hour_block("T9", "°C", 0, |_| 5.0));
+        p.ingest(hour_block("T1", "°X", 0, |_| 5.0));
+        p.ingest(hour_block("T1", "K", 0, |k| 278.15 + k as f64 * 0.01));
+        p.ingest(hour_block("T1", "°C", 0, |_| 5.0));
+        let rejected = &p.health().rejected;
+        for reason in ["unknown_channel", "temperature_unit", "time_overlap"] {
+            assert_eq!(rejected.get(reason), Some(&1), "{reason}: {rejected:?}");
+        }
+        // Kelvin converted: mean of 5.00 … 5.59 °C.
+        let e = p.environment(t0(), t0() + HOUR);
+        assert!((e.temperatures[0] - 5.295).abs() < 1e-9, "{:?}", e.temperatures);
+        assert!(e.flags.is_empty());
+        // Hour 1: nothing arrived.
+        let e = p.environment(t0() + HOUR, t0() + 2 * HOUR);
+        assert!(e.temperatures[0].is_nan());
+        assert_eq!(e.flags, vec!["temperature_missing:T1".to_string()]);
+        // Hours 2–5: one value repeated exactly: stuck from the third span on.
+        for h in 2..6 {
+            p.ingest(hour_block("T1", "°C", h, |_| 7.25));
+            let e = p.environment(t0() + h * HOUR, t0() + (h + 1) * HOUR);
+            let stuck = h >= 4;
+            assert_eq!(e.temperatures[0].is_nan(), stuck, "hour {h}");
+            assert_eq!(e.flags == vec!["temperature_stuck:T1".to_string()], stuck, "hour {h}");
+        }
+        assert_eq!(p.health().temperature_flags.get("temperature_stuck:T1"), Some(&2));
+        assert_eq!(p.health().temperature_flags.get("temperature_missing:T1"), Some(&1));
+        // A NaN sample never reaches the pipeline: the decoder rejects the block.
+        let mut nan = hour_block("T1", "°C", 6, |_| 1.0);
+        nan.data[3] = f64::NAN;
+        let bytes = crate::io::wire::encode(&nan, crate::io::wire::Encoding::Cbor);
+        let e = crate::io::wire::decode(&bytes, crate::io::wire::Encoding::Cbor, &Default::default()).unwrap_err();
+        assert_eq!(e.reason(), "non_finite");
+    }
+
+    /// A window's mean uses the samples inside its span only.
+    #[test]
+    fn a_window_gets_the_mean_over_its_span() {
+        let mut p = pipeline();
+        p.ingest(hour_block("T1", "°C", 0, |k| k as f64));
+        p.ingest(hour_block("T1", "°C", 1, |k| 100.0 + k as f64));
+        let e = p.environment(t0() + HOUR / 2, t0() + HOUR + HOUR / 2);
+        // Minutes 30–59 of hour 0 and 0–29 of hour 1.
+        let want = ((30..60).map(|k| k as f64).sum::<f64>() + (0..30).map(|k| 100.0 + k as f64).sum::<f64>()) / 60.0;
+        assert!((e.temperatures[0] - want).abs() < 1e-12);
+    }
+}
