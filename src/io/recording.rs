@@ -89,19 +89,8 @@ impl<W: Write + Seek> RecordingWriter<W> {
                 id
             }
         };
-        let log_time = u64::try_from(block.start_ns).context("block timestamps before 1970 cannot be recorded")?;
-        self.sequence = self.sequence.wrapping_add(1);
         let data = wire::encode(block, self.encoding);
-        self.writer
-            .write_to_known_channel(
-                &mcap::records::MessageHeader {
-                    channel_id,
-                    sequence: self.sequence,
-                    log_time,
-                    publish_time: log_time,
-                },
-                &data,
-            )
+        self.write_message(channel_id, block.start_ns, &data)
             .with_context(|| format!("cannot write to {topic}"))?;
         Ok(data.len())
     }
@@ -119,20 +108,25 @@ impl<W: Write + Seek> RecordingWriter<W> {
                 id
             }
         };
-        let log_time = u64::try_from(time_ns).context("timestamps before 1970 cannot be recorded")?;
-        self.sequence = self.sequence.wrapping_add(1);
-        self.writer
-            .write_to_known_channel(
-                &mcap::records::MessageHeader {
-                    channel_id,
-                    sequence: self.sequence,
-                    log_time,
-                    publish_time: log_time,
-                },
-                payload,
-            )
+        self.write_message(channel_id, time_ns, payload)
             .with_context(|| format!("cannot write to {topic}"))?;
         Ok(payload.len())
+    }
+
+    /// One message at `time_ns` (log and publish time).
+    fn write_message(&mut self, channel_id: u16, time_ns: i128, data: &[u8]) -> Result<()> {
+        let log_time = u64::try_from(time_ns).context("timestamps before 1970 cannot be recorded")?;
+        self.sequence = self.sequence.wrapping_add(1);
+        self.writer.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id,
+                sequence: self.sequence,
+                log_time,
+                publish_time: log_time,
+            },
+            data,
+        )?;
+        Ok(())
     }
 
     /// Writes the summary and index; the file is complete after this.

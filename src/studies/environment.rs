@@ -7,7 +7,7 @@
 
 use super::simulation::Scenario;
 use crate::config::{frf_setup, Config, FrfSetup, StiffnessFieldConfig};
-use crate::io::frf_json::{FrfEntry, FrfFile};
+use crate::io::frf_json::FrfFile;
 use crate::io::wire::{format_timestamp, ChannelBlock, ChannelQuantity};
 use anyhow::{bail, Result};
 use rand::{Rng, SeedableRng};
@@ -323,29 +323,7 @@ fn window_frfs(
         },
         false,
     );
-    let nf = lines.len();
-    let frfs = pairs
-        .iter()
-        .enumerate()
-        .map(|(p, &(r, s))| {
-            let values = &eval.h[p * nf..(p + 1) * nf];
-            let rms = (values.iter().map(|v| v.norm_sqr()).sum::<f64>() / nf as f64).sqrt();
-            let sigma = noise * rms / std::f64::consts::SQRT_2;
-            let mut noisy = |v: f64| {
-                let n: f64 = rng.sample(StandardNormal);
-                v + sigma * n
-            };
-            let (re, im): (Vec<f64>, Vec<f64>) = values.iter().map(|v| (noisy(v.re), noisy(v.im))).unzip();
-            FrfEntry {
-                input: setup.sensor_names[s].clone(),
-                output: setup.sensor_names[r].clone(),
-                re,
-                im,
-                coherence: None,
-                n_averages: None,
-            }
-        })
-        .collect();
+    let frfs = super::synth::noisy_entries(&setup.sensor_names, &eval.h, lines.len(), pairs, noise, rng);
     Ok(FrfFile {
         quantity,
         frequency_hz: lines.to_vec(),

@@ -51,6 +51,46 @@ impl SynthOptions {
     }
 }
 
+/// FRF entries of `pairs` (`(output, input)` sensor indices) from the
+/// pair-major values `h` (`nf` lines per pair), with complex Gaussian noise
+/// whose standard deviation is `noise` × each FRF's RMS (`E|n|² =
+/// (noise · rms)²`, each part half the variance; nothing drawn at 0).
+pub(crate) fn noisy_entries(
+    sensor_names: &[String],
+    h: &[splinewatch_core::c64],
+    nf: usize,
+    pairs: &[(usize, usize)],
+    noise: f64,
+    rng: &mut ChaCha8Rng,
+) -> Vec<FrfEntry> {
+    pairs
+        .iter()
+        .enumerate()
+        .map(|(p, &(r, s))| {
+            let values = &h[p * nf..(p + 1) * nf];
+            let rms = (values.iter().map(|v| v.norm_sqr()).sum::<f64>() / nf as f64).sqrt();
+            let sigma = noise * rms / std::f64::consts::SQRT_2;
+            let mut noisy = |v: f64| {
+                if sigma > 0.0 {
+                    let n: f64 = rng.sample(StandardNormal);
+                    v + sigma * n
+                } else {
+                    v
+                }
+            };
+            let (re, im): (Vec<f64>, Vec<f64>) = values.iter().map(|v| (noisy(v.re), noisy(v.im))).unzip();
+            FrfEntry {
+                input: sensor_names[s].clone(),
+                output: sensor_names[r].clone(),
+                re,
+                im,
+                coherence: None,
+                n_averages: None,
+            }
+        })
+        .collect()
+}
+
 /// `splinewatch synth`: model FRFs with optional complex Gaussian noise.
 pub fn synth(config: &Config, options: &SynthOptions) -> Result<FrfFile> {
     let o = options;
@@ -84,34 +124,14 @@ pub fn synth(config: &Config, options: &SynthOptions) -> Result<FrfFile> {
         false,
     );
     let mut rng = ChaCha8Rng::seed_from_u64(o.seed);
-    let nf = frequency_hz.len();
-    let frfs = pairs
-        .iter()
-        .enumerate()
-        .map(|(p, &(r, s))| {
-            let values = &eval.h[p * nf..(p + 1) * nf];
-            let rms = (values.iter().map(|v| v.norm_sqr()).sum::<f64>() / nf as f64).sqrt();
-            // E|n|² = (noise · rms)²: each part has half the variance.
-            let sigma = o.noise * rms / std::f64::consts::SQRT_2;
-            let mut noisy = |v: f64| {
-                if sigma > 0.0 {
-                    let n: f64 = rng.sample(StandardNormal);
-                    v + sigma * n
-                } else {
-                    v
-                }
-            };
-            let (re, im): (Vec<f64>, Vec<f64>) = values.iter().map(|v| (noisy(v.re), noisy(v.im))).unzip();
-            FrfEntry {
-                input: setup.sensor_names[s].clone(),
-                output: setup.sensor_names[r].clone(),
-                re,
-                im,
-                coherence: None,
-                n_averages: None,
-            }
-        })
-        .collect();
+    let frfs = noisy_entries(
+        &setup.sensor_names,
+        &eval.h,
+        frequency_hz.len(),
+        &pairs,
+        o.noise,
+        &mut rng,
+    );
     Ok(FrfFile {
         quantity: o.quantity,
         frequency_hz,
