@@ -8,7 +8,7 @@ use crate::io::recording::{read_recording, RecordedBlock, RecordingWriter};
 use crate::io::wire::{self, Encoding};
 use crate::outputs::publisher::Publisher;
 use crate::pipeline::estimate;
-use crate::studies::environment;
+use crate::studies::frf_windows;
 use crate::studies::simulation::{self, Excitation, SimulationOptions};
 use crate::studies::{self, import::ImportOptions};
 use anyhow::{Context, Result};
@@ -280,7 +280,7 @@ fn simulate_frf_windows(
     };
     let prefix = cfg.topic_prefix();
     let mut writer = RecordingWriter::create(out, a.encoding)?;
-    let options = environment::FrfWindowOptions {
+    let options = frf_windows::FrfWindowOptions {
         windows,
         window_seconds: a.window_seconds,
         start_ns,
@@ -289,11 +289,11 @@ fn simulate_frf_windows(
         seed: a.seed,
     };
     let mut messages = 0u64;
-    environment::simulate_frf_windows(cfg, &scenario, &options, &mut |record| {
+    frf_windows::simulate_frf_windows(cfg, &scenario, &options, &mut |record| {
         messages += 1;
         match record {
-            environment::FrfRecord::Temperature(block) => writer.write_block(&prefix, &block).map(|_| ()),
-            environment::FrfRecord::Frf { key, time_ns, payload } => writer
+            frf_windows::FrfRecord::Temperature(block) => writer.write_block(&prefix, &block).map(|_| ()),
+            frf_windows::FrfRecord::Frf { key, time_ns, payload } => writer
                 .write_json(&format!("{prefix}/{key}"), time_ns, &payload)
                 .map(|_| ()),
         }

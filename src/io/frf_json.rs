@@ -58,6 +58,17 @@ pub enum FrfFileError {
     Data(#[from] UpdateError),
 }
 
+/// The `end_timestamp` of an FRF message (ns), if it has a valid one: the
+/// measurement time a recorder files it under.
+pub fn message_end_ns(payload: &[u8]) -> Option<i128> {
+    #[derive(Deserialize)]
+    struct End {
+        end_timestamp: Option<String>,
+    }
+    let end: End = serde_json::from_slice(payload).ok()?;
+    crate::io::wire::parse_timestamp(&end.end_timestamp?)
+}
+
 impl FrfFile {
     pub fn parse(text: &str) -> Result<Self, FrfFileError> {
         Ok(serde_json::from_str(text)?)

@@ -7,6 +7,7 @@
 
 pub mod environment;
 pub mod excitation;
+pub mod frf_windows;
 pub mod import;
 pub mod modes;
 pub mod paper;

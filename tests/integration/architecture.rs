@@ -31,7 +31,7 @@ const ROOMS: [(&str, u32); 7] = [
 ];
 
 /// The core crate's only dependencies.
-const CORE_DEPENDENCIES: [&str; 4] = ["faer", "realfft", "serde", "thiserror"];
+const CORE_DEPENDENCIES: [&str; 5] = ["faer", "realfft", "serde", "statrs", "thiserror"];
 
 /// Names the core crate must not use: I/O, network, processes, the clock,
 /// and the application's crates.

@@ -107,8 +107,10 @@ impl Daemon {
         if msg.frf {
             let now = wire::now_ns();
             if let Some(r) = self.recorder.as_mut() {
+                // Filed under its measurement time (the span's end) when it says.
+                let time = crate::io::frf_json::message_end_ns(&msg.payload).unwrap_or(now);
                 count_output_error(
-                    r.record_frf(&msg.key, now, &msg.payload),
+                    r.record_frf(&msg.key, time, &msg.payload),
                     &mut self.pipeline.health_mut().recording_errors,
                     1000,
                     "raw-input recording",
