@@ -187,7 +187,11 @@ pub fn monitor(a: MonitorArgs) -> Result<()> {
                 |t: &String| wire::parse_timestamp(t).with_context(|| format!("{t:?} is not an RFC 3339 timestamp"));
             crate::pipeline::Training::Span(at(from)?, at(until)?)
         }
-        _ => crate::pipeline::Training::FirstWindows(a.training_windows.unwrap_or(settings.training_windows)),
+        _ => match (a.training_windows, settings.training_span()?) {
+            // The config's span, unless a window count is asked for: as the daemon trained.
+            (None, Some((from, until))) => crate::pipeline::Training::Span(from, until),
+            (n, _) => crate::pipeline::Training::FirstWindows(n.unwrap_or(settings.training_windows)),
+        },
     };
     if let Some(n) = a.training_windows {
         settings.training_windows = n;

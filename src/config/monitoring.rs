@@ -14,6 +14,10 @@ pub struct MonitoringConfig {
     pub temperature_channels: Vec<String>,
     /// Accepted updates that train the reference.
     pub training_windows: usize,
+    /// Train instead on the updates from this time (RFC 3339) …
+    pub training_from: Option<String>,
+    /// … until this one (exclusive); both or neither.
+    pub training_until: Option<String>,
     /// Knee of the hinge term (°C): stiffening below it.
     pub knee_c: f64,
     /// Lagged temperature terms (windows).
@@ -46,6 +50,8 @@ impl Default for MonitoringConfig {
         Self {
             temperature_channels: Vec::new(),
             training_windows: 100,
+            training_from: None,
+            training_until: None,
             knee_c: d.knee_c,
             lags: d.lags,
             pca_components: d.pca_components,
@@ -62,6 +68,32 @@ impl Default for MonitoringConfig {
 }
 
 impl MonitoringConfig {
+    /// `(from, until)` in ns when training on a time span.
+    pub fn training_span(&self) -> Result<Option<(i128, i128)>, ConfigError> {
+        let at = |key: &str, t: &String| {
+            time::OffsetDateTime::parse(t, &time::format_description::well_known::Rfc3339)
+                .map(|t| t.unix_timestamp_nanos())
+                .map_err(|e| {
+                    err(
+                        format!("monitoring.{key}"),
+                        format!("{t:?} is not an RFC 3339 timestamp: {e}"),
+                    )
+                })
+        };
+        match (&self.training_from, &self.training_until) {
+            (None, None) => Ok(None),
+            (Some(from), Some(until)) => {
+                let (from, until) = (at("training_from", from)?, at("training_until", until)?);
+                if from >= until {
+                    return Err(err("monitoring.training_until", "must be after training_from"));
+                }
+                Ok(Some((from, until)))
+            }
+            (Some(_), None) => Err(err("monitoring.training_until", "needed with training_from")),
+            (None, Some(_)) => Err(err("monitoring.training_from", "needed with training_until")),
+        }
+    }
+
     /// The core's settings.
     pub fn settings(&self) -> Settings {
         Settings {
@@ -97,6 +129,7 @@ impl Config {
         if m.training_windows < 10 {
             return Err(err("monitoring.training_windows", "must be at least 10"));
         }
+        m.training_span()?;
         if m.stuck_windows < 2 {
             return Err(err("monitoring.stuck_windows", "must be at least 2"));
         }
@@ -132,6 +165,15 @@ mod tests {
             ("ewma_lambda = 0.0", "monitoring.ewma_lambda"),
             ("persistence = [4, 3]", "monitoring.persistence"),
             ("false_alarm_rate = 0.7", "monitoring.false_alarm_rate"),
+            ("training_from = \"2026-11-21T10:00:00Z\"", "monitoring.training_until"),
+            (
+                "training_from = \"2026-11-22T10:00:00Z\"\ntraining_until = \"2026-11-21T10:00:00Z\"",
+                "monitoring.training_until",
+            ),
+            (
+                "training_from = \"noon\"\ntraining_until = \"2026-11-21T10:00:00Z\"",
+                "monitoring.training_from",
+            ),
         ] {
             let e = with(section).unwrap_err().to_string();
             assert!(e.contains(key), "{section}: {e}");

@@ -99,8 +99,12 @@ pub(super) struct Monitoring {
 
 impl Monitoring {
     pub(super) fn new(config: &MonitoringConfig, features: Vec<String>) -> anyhow::Result<Self> {
+        let monitor = match config.training_span()? {
+            Some((from, until)) => Monitor::with_training_span(config.settings(), from, until)?,
+            None => Monitor::new(config.settings(), config.training_windows)?,
+        };
         Ok(Self {
-            monitor: Monitor::new(config.settings(), config.training_windows)?,
+            monitor,
             features,
             channels: config.temperature_channels.clone(),
         })
@@ -188,6 +192,7 @@ impl Pipeline {
         let observation = Observation {
             features,
             temperatures: environment.temperatures.clone(),
+            time_ns,
         };
         let before = monitoring.monitor.state();
         let status = match monitoring.monitor.observe(&observation) {
@@ -355,52 +360,35 @@ pub fn rescore(
             let observation = Observation {
                 features: s.features.iter().map(|f| f.value).collect(),
                 temperatures,
+                time_ns: crate::io::wire::parse_timestamp(&s.time).unwrap_or(0),
             };
             Ok((observation, environment))
         })
         .collect::<anyhow::Result<_>>()?;
-    if let Training::Span(from, until) = training {
-        let time = |s: &StatusMessage| crate::io::wire::parse_timestamp(&s.time).unwrap_or(i128::MIN);
-        let chosen: Vec<Observation> = statuses
-            .iter()
-            .zip(&observations)
-            .filter(|(s, _)| (from..until).contains(&time(s)))
-            .map(|(_, (o, _))| o.clone())
-            .collect();
-        let reference = splinewatch_core::monitoring::Reference::train(&settings.settings(), &chosen)?;
-        monitoring.monitor = Monitor::with_reference(reference);
+    match training {
+        Training::Span(from, until) => {
+            monitoring.monitor = Monitor::with_training_span(settings.settings(), from, until)?;
+        }
+        Training::FirstWindows(n) => {
+            monitoring.monitor = Monitor::new(settings.settings(), n)?;
+        }
     }
     let mut out = Vec::with_capacity(statuses.len());
     for (s, (observation, environment)) in statuses.iter().zip(&observations) {
-        let time_ns = crate::io::wire::parse_timestamp(&s.time).unwrap_or(0);
-        let in_span = matches!(training, Training::Span(from, until) if (from..until).contains(&time_ns));
         let before = monitoring.monitor.state();
-        let status = if in_span {
-            training_status()
-        } else {
-            monitoring.monitor.observe(observation)?
-        };
-        let message = status_message(&monitoring, s.window, time_ns, observation, &status, environment);
+        let status = monitoring.monitor.observe(observation)?;
+        let message = status_message(
+            &monitoring,
+            s.window,
+            observation.time_ns,
+            observation,
+            &status,
+            environment,
+        );
         let alarm = status.alarm_changed.then(|| alarm_message(&message, before));
         out.push(MonitoringOutcome { status: message, alarm });
     }
     Ok(out)
-}
-
-/// The status of a window in the chosen training span (not scored).
-fn training_status() -> Status {
-    Status {
-        state: MonitorState::Training,
-        alarm_changed: false,
-        t2: None,
-        t2_limit: None,
-        mewma: None,
-        mewma_limit: None,
-        standardised: Vec::new(),
-        flags: Vec::new(),
-        fallback: false,
-        exceedances: 0,
-    }
 }
 
 #[cfg(test)]

@@ -79,6 +79,10 @@ fn input_flags(observation: &Observation) -> Vec<Flag> {
 pub struct Monitor {
     settings: Settings,
     training_windows: usize,
+    /// Train on the windows whose time lies in `[from, until)` instead of
+    /// the first `training_windows`.
+    #[serde(default)]
+    training_span: Option<[i128; 2]>,
     training: Vec<Observation>,
     reference: Option<Reference>,
     /// Temperatures of recent windows, newest first (for lags).
@@ -95,6 +99,7 @@ impl Monitor {
         Ok(Self {
             settings,
             training_windows,
+            training_span: None,
             training: Vec::new(),
             reference: None,
             history: VecDeque::new(),
@@ -104,11 +109,28 @@ impl Monitor {
         })
     }
 
+    /// A monitor trained on the windows whose time lies in `[from, until)`
+    /// (ns): earlier windows are not scored, the first window at or after
+    /// `until` trains the reference and is the first scored.
+    pub fn with_training_span(settings: Settings, from: i128, until: i128) -> Result<Self, MonitoringError> {
+        if from >= until {
+            return Err(MonitoringError::Setting {
+                name: "training_until",
+                value: until as f64,
+                expected: "must be after training_from",
+            });
+        }
+        let mut monitor = Self::new(settings, usize::MAX)?;
+        monitor.training_span = Some([from, until]);
+        Ok(monitor)
+    }
+
     /// A monitor that scores from the start against `reference`.
     pub fn with_reference(reference: Reference) -> Self {
         Self {
             settings: reference.settings.clone(),
             training_windows: 0,
+            training_span: None,
             training: Vec::new(),
             ewma: vec![0.0; reference.features],
             reference: Some(reference),
@@ -130,11 +152,43 @@ impl Monitor {
         &self.settings
     }
 
-    /// Training windows still to come before scoring starts.
+    /// Training windows still to come before scoring starts (with a
+    /// training span: `usize::MAX` until it ends).
     pub fn training_left(&self) -> usize {
         match self.reference {
             Some(_) => 0,
             None => self.training_windows.saturating_sub(self.training.len()),
+        }
+    }
+
+    /// Trains on the span's windows once one at or after its end arrives;
+    /// true when the monitor still trains (this window is not scored).
+    fn span_training(&mut self, observation: &Observation, flags: &mut Vec<Flag>) -> bool {
+        let Some([from, until]) = self.training_span else {
+            return false;
+        };
+        if self.reference.is_some() {
+            return false;
+        }
+        if observation.time_ns < until {
+            let complete = observation.features.iter().all(|v| v.is_finite());
+            if observation.time_ns >= from && complete {
+                self.training.push(observation.clone());
+            }
+            return true;
+        }
+        match Reference::train(&self.settings, &self.training) {
+            Ok(reference) => {
+                self.ewma = vec![0.0; reference.features];
+                self.reference = Some(reference);
+                self.training.clear();
+                self.state = MonitorState::Normal;
+                false
+            }
+            Err(_) => {
+                flags.push(Flag::TrainingDeferred);
+                true
+            }
         }
     }
 
@@ -146,6 +200,9 @@ impl Monitor {
         let mut flags = input_flags(observation);
         self.history.push_front(observation.temperatures.clone());
         self.history.truncate(self.settings.lags + 1);
+        if self.span_training(observation, &mut flags) {
+            return Ok(self.status(MonitorState::Training, flags));
+        }
         let Some(reference) = &self.reference else {
             if !self.train_with(observation) {
                 flags.push(Flag::TrainingDeferred);
@@ -305,6 +362,7 @@ mod tests {
         Observation {
             features,
             temperatures: vec![t + 0.2 * rng.next()],
+            time_ns: 0,
         }
     }
 
@@ -478,5 +536,29 @@ mod tests {
         // 10 usable windows (needed: 2 × 5 folds) after the 5 usable ones.
         assert_eq!(hour, 25);
         assert_eq!(monitor.reference().unwrap().windows, 10);
+    }
+
+    /// Training on a time span: earlier windows are not scored, the span's
+    /// windows train, the first window after it is scored against a
+    /// reference equal to one trained on exactly those windows.
+    #[test]
+    fn a_training_span_trains_on_its_windows() {
+        let hour = 3_600_000_000_000i128;
+        let mut rng = Normal(21);
+        let stream: Vec<Observation> = (0..160)
+            .map(|h| Observation {
+                time_ns: h as i128 * hour,
+                ..observation(h, &mut rng, 0.0)
+            })
+            .collect();
+        let mut monitor = Monitor::with_training_span(settings(), 20 * hour, 120 * hour).unwrap();
+        for o in &stream[..120] {
+            assert_eq!(monitor.observe(o).unwrap().state, MonitorState::Training);
+        }
+        let first = monitor.observe(&stream[120]).unwrap();
+        assert_ne!(first.state, MonitorState::Training);
+        let direct = Reference::train(&settings(), &stream[20..120]).unwrap();
+        assert_eq!(monitor.reference(), Some(&direct));
+        assert!(Monitor::with_training_span(settings(), 5, 5).is_err());
     }
 }

@@ -158,6 +158,9 @@ pub struct Observation {
     pub features: Vec<f64>,
     #[serde(with = "nullable")]
     pub temperatures: Vec<f64>,
+    /// The window's time (ns since the epoch), for training on a time span.
+    #[serde(default)]
+    pub time_ns: i128,
 }
 
 /// Serde for values that may be `NaN` (a missing temperature): `null` in
