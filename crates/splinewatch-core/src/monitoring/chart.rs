@@ -177,19 +177,11 @@ impl Monitor {
             }
             return true;
         }
-        match Reference::train(&self.settings, &self.training) {
-            Ok(reference) => {
-                self.ewma = vec![0.0; reference.features];
-                self.reference = Some(reference);
-                self.training.clear();
-                self.state = MonitorState::Normal;
-                false
-            }
-            Err(_) => {
-                flags.push(Flag::TrainingDeferred);
-                true
-            }
+        if self.finish_training() {
+            return false;
         }
+        flags.push(Flag::TrainingDeferred);
+        true
     }
 
     /// Takes the next window's observation. Errors only when the feature
@@ -288,6 +280,12 @@ impl Monitor {
         if self.training.len() < self.training_windows {
             return true;
         }
+        self.finish_training()
+    }
+
+    /// Trains the reference on the kept windows; false when it cannot be
+    /// done (too few usable windows, a degenerate covariance).
+    fn finish_training(&mut self) -> bool {
         match Reference::train(&self.settings, &self.training) {
             Ok(reference) => {
                 self.ewma = vec![0.0; reference.features];
