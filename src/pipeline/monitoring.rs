@@ -109,6 +109,22 @@ impl Monitoring {
             channels: config.temperature_channels.clone(),
         })
     }
+
+    /// Scores one window: the status message, and the alarm message when
+    /// the state entered or left alarm. Errors only when the feature count
+    /// differs from the reference's.
+    fn observe(
+        &mut self,
+        window: u64,
+        observation: &Observation,
+        environment: &Environment,
+    ) -> Result<MonitoringOutcome, splinewatch_core::monitoring::MonitoringError> {
+        let before = self.monitor.state();
+        let status = self.monitor.observe(observation)?;
+        let message = status_message(self, window, observation.time_ns, observation, &status, environment);
+        let alarm = status.alarm_changed.then(|| alarm_message(&message, before));
+        Ok(MonitoringOutcome { status: message, alarm })
+    }
 }
 
 /// The temperature store and monitor of a config with `[monitoring]`,
@@ -194,20 +210,16 @@ impl Pipeline {
             temperatures: environment.temperatures.clone(),
             time_ns,
         };
-        let before = monitoring.monitor.state();
-        let status = match monitoring.monitor.observe(&observation) {
-            Ok(s) => s,
+        match monitoring.observe(window, &observation, environment) {
+            Ok(outcome) => Some(outcome),
             Err(e) => {
-                // Training could not finish (too few usable windows): the
-                // monitor keeps training with the next windows.
+                // Another feature count than the reference (a resumed
+                // monitor of another config is refused earlier): counted.
                 self.health.monitoring_errors += 1;
                 tracing::warn!("monitoring: {e}");
-                return None;
+                None
             }
-        };
-        let message = status_message(monitoring, window, time_ns, &observation, &status, environment);
-        let alarm = status.alarm_changed.then(|| alarm_message(&message, before));
-        Some(MonitoringOutcome { status: message, alarm })
+        }
     }
 }
 
@@ -331,7 +343,6 @@ pub fn rescore(
         settings.temperature_channels.clear();
         settings.pca_components = 0;
     }
-    let mut monitoring = Monitoring::new(&settings, features.clone())?;
     let observations: Vec<(Observation, Environment)> = statuses
         .iter()
         .enumerate()
@@ -365,28 +376,18 @@ pub fn rescore(
             Ok((observation, environment))
         })
         .collect::<anyhow::Result<_>>()?;
-    match training {
-        Training::Span(from, until) => {
-            monitoring.monitor = Monitor::with_training_span(settings.settings(), from, until)?;
-        }
-        Training::FirstWindows(n) => {
-            monitoring.monitor = Monitor::new(settings.settings(), n)?;
-        }
-    }
+    let monitor = match training {
+        Training::Span(from, until) => Monitor::with_training_span(settings.settings(), from, until)?,
+        Training::FirstWindows(n) => Monitor::new(settings.settings(), n)?,
+    };
+    let mut monitoring = Monitoring {
+        monitor,
+        features,
+        channels: settings.temperature_channels.clone(),
+    };
     let mut out = Vec::with_capacity(statuses.len());
     for (s, (observation, environment)) in statuses.iter().zip(&observations) {
-        let before = monitoring.monitor.state();
-        let status = monitoring.monitor.observe(observation)?;
-        let message = status_message(
-            &monitoring,
-            s.window,
-            observation.time_ns,
-            observation,
-            &status,
-            environment,
-        );
-        let alarm = status.alarm_changed.then(|| alarm_message(&message, before));
-        out.push(MonitoringOutcome { status: message, alarm });
+        out.push(monitoring.observe(s.window, observation, environment)?);
     }
     Ok(out)
 }

@@ -3,7 +3,7 @@
 //! order, single-threaded).
 //! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
-use super::keep_latest;
+use super::{keep_latest, resume_monitor};
 use crate::config::Config;
 use crate::io::monitoring_json::StatusMessage;
 use crate::io::wire::{self, Encoding};
@@ -156,24 +156,6 @@ pub fn replay<W: Write + Seek>(
     let mut summary = sink.summary;
     summary.accepted = pipeline.accepted().cloned();
     Ok(summary)
-}
-
-/// The monitor file beside `state_path` (`[monitoring]`), resumed from
-/// when it exists.
-pub(crate) fn resume_monitor(
-    config: &Config,
-    state_path: Option<&Path>,
-    pipeline: &mut Pipeline,
-) -> Result<Option<std::path::PathBuf>> {
-    let path = state_path.and_then(|p| config.monitor_file(p));
-    if let Some(path) = &path {
-        if let Some(monitor) = state::load_monitor(path)? {
-            pipeline
-                .restore_monitor(monitor)
-                .with_context(|| format!("monitor file {}", path.display()))?;
-        }
-    }
-    Ok(path)
 }
 
 /// The message count in a recording's summary (0 when it has none), for

@@ -71,6 +71,35 @@ fn simulate(cfg: &Config, dir: &Path, split: &[usize], edit: impl Fn(String) -> 
     paths
 }
 
+/// Publishes an FRF-window recording live in file order: temperature
+/// blocks, and the FRF messages, calling `after_set(n)` once the n-th
+/// complete set (12 messages) is out. Returns the messages published.
+fn publish_recording(
+    publisher: &mut splinewatch::outputs::publisher::Publisher,
+    prefix: &str,
+    bytes: &[u8],
+    mut after_set: impl FnMut(usize),
+) -> anyhow::Result<u64> {
+    let (mut sent, mut frfs) = (0, 0);
+    for message in splinewatch::io::recording::mcap_messages(bytes, false)? {
+        let message = message?;
+        let suffix = message.channel.topic.strip_prefix(&format!("{prefix}/")).unwrap();
+        if suffix.starts_with("frf/") {
+            publisher.publish_json(suffix, message.data.to_vec())?;
+            frfs += 1;
+            if frfs % 12 == 0 {
+                after_set(frfs / 12);
+            }
+        } else {
+            for b in splinewatch::io::wire::decode(&message.data, Encoding::Cbor, &Default::default())? {
+                publisher.publish(&b)?;
+            }
+        }
+        sent += 1;
+    }
+    Ok(sent)
+}
+
 /// Replays `recording` into a results file in memory, resuming from and
 /// keeping `state` (and the monitor file beside it).
 fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
@@ -197,39 +226,13 @@ fn live_monitoring_with_temperature_topics_survives_a_restart() {
                     .wait()
                     .map_err(|e| anyhow::anyhow!("{e}"))?;
                 let bytes = std::fs::read(&recording)?;
-                let mut sent = 0;
-                let mut frfs = 0;
-                for message in splinewatch::io::recording::mcap_messages(&bytes, false)? {
-                    let message = message?;
-                    let suffix = message
-                        .channel
-                        .topic
-                        .strip_prefix(&format!("{prefix}/"))
-                        .unwrap()
-                        .to_string();
-                    if suffix.starts_with("frf/") {
-                        publisher.publish_json(&suffix, message.data.to_vec())?;
-                        frfs += 1;
-                        if frfs % 12 == 0 {
-                            // One update at a time: the next set waits for this one.
-                            let expected = frfs / 12;
-                            let start = std::time::Instant::now();
-                            while sink.lock().unwrap().len() < expected && start.elapsed().as_secs() < 120 {
-                                std::thread::sleep(std::time::Duration::from_millis(20));
-                            }
-                        }
-                    } else {
-                        let blocks = splinewatch::io::wire::decode(
-                            &message.data,
-                            Encoding::Cbor,
-                            &splinewatch::io::wire::Limits::default(),
-                        )?;
-                        for b in &blocks {
-                            publisher.publish(b)?;
-                        }
+                let sent = publish_recording(publisher, &prefix, &bytes, |sets| {
+                    // One update at a time: the next set waits for this one's status.
+                    let start = std::time::Instant::now();
+                    while sink.lock().unwrap().len() < sets && start.elapsed().as_secs() < 120 {
+                        std::thread::sleep(std::time::Duration::from_millis(20));
                     }
-                    sent += 1;
-                }
+                })?;
                 let replies = publisher
                     .session()
                     .get(format!("{prefix}/monitoring/latest"))
@@ -363,30 +366,10 @@ fn the_raw_recording_of_frf_windows_replays_to_the_live_statuses() {
     let bytes = std::fs::read(&recording).unwrap();
     let live =
         splinewatch::service::demo::run_with_source(cfg.clone(), &out, 0.0, usize::MAX, move |cfg, publisher| {
-            let prefix = cfg.topic_prefix();
-            let mut sent = 0;
-            for message in splinewatch::io::recording::mcap_messages(&bytes, false)? {
-                let message = message?;
-                let suffix = message
-                    .channel
-                    .topic
-                    .strip_prefix(&format!("{prefix}/"))
-                    .unwrap()
-                    .to_string();
-                if suffix.starts_with("frf/") {
-                    publisher.publish_json(&suffix, message.data.to_vec())?;
-                    sent += 1;
-                    if sent % 12 == 0 {
-                        // Let the update run before the next set (one waiting job at most).
-                        std::thread::sleep(std::time::Duration::from_millis(1500));
-                    }
-                } else {
-                    for b in splinewatch::io::wire::decode(&message.data, Encoding::Cbor, &Default::default())? {
-                        publisher.publish(&b)?;
-                    }
-                }
-            }
-            Ok(sent)
+            publish_recording(publisher, &cfg.topic_prefix(), &bytes, |_| {
+                // Let the update run before the next set (one waiting job at most).
+                std::thread::sleep(std::time::Duration::from_millis(1500));
+            })
         })
         .unwrap();
     assert_eq!(live.updates.len(), 12);

@@ -51,20 +51,7 @@ impl Daemon {
             tracing::info!(message = "warm start from the state file", window = s.window, time = %s.time);
         }
         let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
-        let monitor_file = options.state.as_deref().and_then(|p| config.monitor_file(p));
-        if let Some(path) = &monitor_file {
-            if let Some(monitor) = state::load_monitor(path)? {
-                tracing::info!(
-                    message = "monitor resumed",
-                    file = %path.display(),
-                    state = monitor.state().name(),
-                    training_left = monitor.training_left()
-                );
-                pipeline
-                    .restore_monitor(monitor)
-                    .with_context(|| format!("monitor file {}", path.display()))?;
-            }
-        }
+        let monitor_file = crate::service::resume_monitor(config, options.state.as_deref(), &mut pipeline)?;
         let prefix = config.topic_prefix();
         let results = ResultsSink::new(&prefix, results::results_files(&options.results))?
             .rotate_every((config.output.results_rotate_hours * 3600e9) as i128);
