@@ -42,6 +42,9 @@ pub struct MonitoringConfig {
     /// `"held_out"` (default): limits from cross-validated training windows;
     /// `"theoretical"`: the textbook F law (trusts the model).
     pub limits: LimitMethod,
+    /// Output-only: an identified frequency is monitored when its mode was
+    /// identified in at least this share of the training windows.
+    pub feature_presence: f64,
 }
 
 impl Default for MonitoringConfig {
@@ -63,6 +66,7 @@ impl Default for MonitoringConfig {
             stuck_windows: 3,
             state_file: None,
             limits: d.limits,
+            feature_presence: d.feature_presence,
         }
     }
 }
@@ -107,6 +111,7 @@ impl MonitoringConfig {
             range_margin_c: self.range_margin_c,
             folds: self.folds,
             limits: self.limits,
+            feature_presence: self.feature_presence,
         }
     }
 }
@@ -165,6 +170,7 @@ mod tests {
             ("ewma_lambda = 0.0", "monitoring.ewma_lambda"),
             ("persistence = [4, 3]", "monitoring.persistence"),
             ("false_alarm_rate = 0.7", "monitoring.false_alarm_rate"),
+            ("feature_presence = 0.0", "monitoring.feature_presence"),
             ("training_from = \"2026-11-21T10:00:00Z\"", "monitoring.training_until"),
             (
                 "training_from = \"2026-11-22T10:00:00Z\"\ntraining_until = \"2026-11-21T10:00:00Z\"",

@@ -8,7 +8,7 @@
 //! `temperature_c` is the mean of the channels with a valid temperature.
 //! Extra keys: `temperatures` (per channel, `null` when missing),
 //! `features` (the scored values, so `splinewatch monitor` can re-score a
-//! results file), `flags`, `exceedances` (among the last `m` scored
+//! results file; `null` for a frequency not identified), `flags`, `exceedances` (among the last `m` scored
 //! windows), `scored_by` (`"temperature_regression"`, `"pca"`, or
 //! `"pca_fallback"` when a temperature was missing). Readers ignore keys
 //! they do not know.
@@ -16,10 +16,17 @@
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
+/// A feature's value; `null` (NaN in memory) when the window lacks it (an
+/// identified frequency whose mode was not found).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct NamedValue {
     pub name: String,
+    #[serde(deserialize_with = "nan_for_null")]
     pub value: f64,
+}
+
+fn nan_for_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Option::<f64>::deserialize(d).map(|v| v.unwrap_or(f64::NAN))
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

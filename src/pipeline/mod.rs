@@ -158,7 +158,7 @@ impl Pipeline {
                 seen: false,
             })
             .collect();
-        let (temperatures, monitoring) = monitoring::for_config(config, &parameters)?;
+        let (temperatures, monitoring) = monitoring::for_config(config, &parameters, &setup)?;
         Ok(Self {
             config: config.clone(),
             schedule,
@@ -314,12 +314,19 @@ impl Pipeline {
         self.health.update_runs += 1;
         match &outcome.result {
             Ok(report) => {
-                let values: BTreeMap<&str, f64> = report
+                let mut values: BTreeMap<String, f64> = report
                     .result
                     .parameters
                     .iter()
-                    .map(|p| (p.name.as_str(), p.value))
+                    .map(|p| (p.name.clone(), p.value))
                     .collect();
+                if let (Fit::Modes(pairs), Some(state)) = (&report.fit, &outcome.state) {
+                    let pairs: Vec<(usize, f64)> = pairs
+                        .iter()
+                        .map(|p| (p.model_mode, p.identified_frequency_hz))
+                        .collect();
+                    values.extend(monitoring::identified_frequencies(&pairs, state));
+                }
                 let scored = self.score(outcome.window, outcome.time_ns, &values, &outcome.environment);
                 self.last_point = outcome.point.take();
                 self.model_state = outcome

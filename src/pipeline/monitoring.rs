@@ -4,11 +4,14 @@
 //! core's `Monitor` scores the updated parameters against the reference.
 
 use super::Pipeline;
-use crate::config::MonitoringConfig;
+use crate::config::{FrfSetup, MonitoringConfig};
 use crate::io::monitoring_json::{AlarmMessage, NamedValue, Residual, StatusMessage};
 use crate::io::wire::ChannelBlock;
+use splinewatch_core::frf::ModalState;
+use splinewatch_core::modal::ModeKind;
 use splinewatch_core::monitoring::chart::Flag;
 use splinewatch_core::monitoring::{Monitor, MonitorState, Observation, Status};
+use splinewatch_core::updating::Parameter;
 use std::collections::{BTreeMap, VecDeque};
 
 /// Samples kept per temperature channel at most (a week at one a minute
@@ -128,16 +131,70 @@ impl Monitoring {
 }
 
 /// The temperature store and monitor of a config with `[monitoring]`,
-/// scoring `parameters` (every updated parameter, in order).
+/// scoring `parameters` (every updated parameter, in order) and, output-only,
+/// the identified frequencies ([`frequency_features`]).
 pub(super) fn for_config(
     config: &crate::config::Config,
-    parameters: &[splinewatch_core::updating::Parameter],
+    parameters: &[Parameter],
+    setup: &FrfSetup,
 ) -> anyhow::Result<(Option<TemperatureStore>, Option<Monitoring>)> {
     let Some(m) = &config.monitoring else {
         return Ok((None, None));
     };
-    let names = parameters.iter().map(|p| p.name.clone()).collect();
+    let mut names: Vec<String> = parameters.iter().map(|p| p.name.clone()).collect();
+    if config.is_output_only() {
+        names.extend(frequency_features(config, parameters, setup)?);
+    }
     Ok((Some(TemperatureStore::new(m)), Some(Monitoring::new(m, names)?)))
+}
+
+/// The name of the feature holding the identified frequency of the model's
+/// `n`-th bending mode (from 1).
+fn frequency_feature(n: usize) -> String {
+    format!("mode_{n}_frequency_hz")
+}
+
+/// Output-only: one feature per bending mode of the config's model (its
+/// nominal parameters) in the `[oma]` band, the identified frequency of the
+/// mode paired with it (by the bending order of the paired model mode at the
+/// updated parameters); `null` in a window that did not identify it. Which
+/// of them the reference keeps is decided in training (`feature_presence`).
+fn frequency_features(
+    config: &crate::config::Config,
+    parameters: &[Parameter],
+    setup: &FrfSetup,
+) -> anyhow::Result<Vec<String>> {
+    let field_coefficients = &setup.model.assembled().field_coefficients;
+    let nominal = splinewatch_core::updating::base_values(parameters, &setup.kappa, field_coefficients, &setup.damping);
+    let (state, _) =
+        splinewatch_core::updating::modal_state_at(&setup.model, parameters, &setup.kappa, &setup.damping, &nominal)?;
+    let [lo, hi] = config.oma_settings()?.0.band;
+    Ok(bending_orders(&state)
+        .into_iter()
+        .filter(|&(i, _)| (lo..=hi).contains(&state.modes.frequency_hz(i)))
+        .map(|(_, n)| frequency_feature(n))
+        .collect())
+}
+
+/// `(model mode, bending order from 1)` of every bending mode.
+fn bending_orders(state: &ModalState) -> Vec<(usize, usize)> {
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
+        .zip(1..)
+        .collect()
+}
+
+/// The identified frequency of every paired mode (`(model mode, identified
+/// frequency)`), by its feature name.
+pub(super) fn identified_frequencies(pairs: &[(usize, f64)], state: &ModalState) -> Vec<(String, f64)> {
+    let orders = bending_orders(state);
+    pairs
+        .iter()
+        .filter_map(|&(model_mode, frequency_hz)| {
+            let &(_, n) = orders.iter().find(|(i, _)| *i == model_mode)?;
+            Some((frequency_feature(n), frequency_hz))
+        })
+        .collect()
 }
 
 /// What scoring an update produced: the status message, and the alarm
@@ -190,20 +247,21 @@ impl Pipeline {
         environment
     }
 
-    /// Scores an accepted update (its parameters by name) measured at
-    /// `environment`; `None` without `[monitoring]`.
+    /// Scores an accepted update (its features by name: parameters, and
+    /// output-only the identified frequencies; an absent one is missing)
+    /// measured at `environment`; `None` without `[monitoring]`.
     pub(super) fn score(
         &mut self,
         window: u64,
         time_ns: i128,
-        parameters: &BTreeMap<&str, f64>,
+        values: &BTreeMap<String, f64>,
         environment: &Environment,
     ) -> Option<MonitoringOutcome> {
         let monitoring = self.monitoring.as_mut()?;
         let features: Vec<f64> = monitoring
             .features
             .iter()
-            .map(|n| parameters.get(n.as_str()).copied().unwrap_or(f64::NAN))
+            .map(|n| values.get(n).copied().unwrap_or(f64::NAN))
             .collect();
         let observation = Observation {
             features,
@@ -268,10 +326,12 @@ fn status_message(
         mewma: status.mewma,
         mewma_limit: status.mewma_limit,
         temperature_c: (!valid.is_empty()).then(|| valid.iter().sum::<f64>() / valid.len() as f64),
+        // The features scored and present (a missing one is in `flags`).
         residuals: monitoring
             .features
             .iter()
             .zip(&status.standardised)
+            .filter(|(_, s)| s.is_finite())
             .map(|(name, &standardised)| Residual {
                 name: name.clone(),
                 standardised,

@@ -93,8 +93,14 @@ const DAMAGED_KAPPA: [(&str, f64); 8] = [
 ];
 
 /// `splinewatch replay` of `rec` with the bundled output-only config in
-/// `window_seconds` windows, results and state in `dir`; asserts success.
-fn replay_output_only(dir: &Path, rec: &Path, window_seconds: f64) -> (std::path::PathBuf, std::path::PathBuf) {
+/// `window_seconds` windows (plus `extra` sections), results and state in
+/// `dir`; asserts success.
+fn replay_output_only(
+    dir: &Path,
+    rec: &Path,
+    window_seconds: f64,
+    extra: &str,
+) -> (std::path::PathBuf, std::path::PathBuf) {
     let config = dir.join("output-only.toml");
     let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-ambient.toml"))
         .unwrap()
@@ -102,7 +108,7 @@ fn replay_output_only(dir: &Path, rec: &Path, window_seconds: f64) -> (std::path
             "window_seconds = 1200.0",
             &format!("window_seconds = {window_seconds:.1}"),
         );
-    std::fs::write(&config, text).unwrap();
+    std::fs::write(&config, text + extra).unwrap();
     let (results, state) = (dir.join("results.mcap"), dir.join("state.json"));
     let o = splinewatch(&[
         "replay",
@@ -397,7 +403,7 @@ fn output_only_replay_follows_the_bearing_damage() {
         "7",
         &["--scenario", scenario.to_str().unwrap()],
     );
-    let (results, _) = replay_output_only(&dir, &rec, 600.0);
+    let (results, _) = replay_output_only(&dir, &rec, 600.0, "");
     let bytes = std::fs::read(&results).unwrap();
     let mut by_topic: std::collections::BTreeMap<String, Vec<serde_json::Value>> = Default::default();
     for m in mcap::MessageStream::new(&bytes).unwrap() {
@@ -490,11 +496,90 @@ fn output_only_replay_of_traffic_in_an_hour_window_finds_the_loss() {
         "8",
         &["--scenario", scenario.to_str().unwrap()],
     );
-    let (_, state) = replay_output_only(&dir, &rec, 3600.0);
+    let (_, state) = replay_output_only(&dir, &rec, 3600.0, "");
     let accepted: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&state).unwrap()).unwrap();
     for (name, value) in DAMAGED_KAPPA {
         let error = relative_error(&accepted["parameters"], name, value);
         let allowed = if name == "east.k2" { 0.10 } else { 0.15 };
         assert!(error.abs() < allowed, "{name}: {:+.1} %", 100.0 * error);
     }
+}
+
+/// Output-only monitoring: 16 ambient windows of 150 s on the undamaged
+/// deck, the first 10 train. Every window's features are the 15 updated
+/// parameters and one identified frequency per model bending mode in the
+/// band (`mode_<n>_frequency_hz`, `null` where that mode was not identified:
+/// short windows miss some); the reference keeps those identified in ≥ 80 %
+/// of the training windows, a later window missing one is scored on the
+/// others (flagged), no alarm; `splinewatch monitor` re-makes the statuses
+/// bit for bit, nulls included.
+#[test]
+fn output_only_monitoring_scores_the_identified_frequencies() {
+    let dir = fresh_dir("oma-monitoring");
+    let rec = dir.join("ambient.mcap");
+    simulate(&rec, "ambient", "2400", "7", &[]);
+    let (results, _) = replay_output_only(&dir, &rec, 150.0, "\n[monitoring]\ntraining_windows = 10\n");
+    let statuses = |path: &Path| -> Vec<Vec<u8>> {
+        let bytes = std::fs::read(path).unwrap();
+        mcap::MessageStream::new(&bytes)
+            .unwrap()
+            .map(Result::unwrap)
+            .filter(|m| m.channel.topic.ends_with("monitoring/status"))
+            .map(|m| m.data.into_owned())
+            .collect()
+    };
+    let raw = statuses(&results);
+    assert_eq!(raw.len(), 16);
+    let parsed: Vec<serde_json::Value> = raw.iter().map(|m| serde_json::from_slice(m).unwrap()).collect();
+    let names: Vec<&str> = parsed[0]["features"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f["name"].as_str().unwrap())
+        .collect();
+    let frequencies: Vec<String> = (1..=18).map(|n| format!("mode_{n}_frequency_hz")).collect();
+    assert_eq!(names.len(), 15 + 18);
+    assert_eq!(&names[15..], frequencies.iter().map(String::as_str).collect::<Vec<_>>());
+    let gaps = parsed
+        .iter()
+        .flat_map(|s| s["features"].as_array().unwrap().iter())
+        .filter(|f| f["value"].is_null())
+        .count();
+    assert!(
+        gaps > 0,
+        "every mode identified in every window: nothing missing to test"
+    );
+    let (mut flagged, mut scored_frequencies) = (0, 0);
+    for s in &parsed[10..] {
+        assert_eq!(s["state"], "normal", "{s}");
+        assert!(s["t2"].as_f64().unwrap().is_finite() && s["mewma"].as_f64().unwrap().is_finite());
+        let residuals = s["residuals"].as_array().unwrap();
+        scored_frequencies += residuals
+            .iter()
+            .filter(|r| r["name"].as_str().unwrap().starts_with("mode_"))
+            .count();
+        flagged += usize::from(
+            s["flags"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|f| f.as_str().unwrap().starts_with("feature_missing:mode_")),
+        );
+    }
+    assert!(
+        scored_frequencies >= 6 * 12,
+        "{scored_frequencies} frequency residuals in 6 windows"
+    );
+    assert!(flagged >= 1, "no scored window missed a kept frequency");
+    let rescored = dir.join("rescored.mcap");
+    let o = splinewatch(&[
+        "monitor",
+        "--config",
+        dir.join("output-only.toml").to_str().unwrap(),
+        results.to_str().unwrap(),
+        "--out",
+        rescored.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(statuses(&rescored), raw);
 }

@@ -90,20 +90,23 @@ impl RerunOutput {
             self.scatter.pop_front();
         }
         let n = self.scatter.len();
-        let colors: Vec<rerun::Color> = (0..n)
-            .map(|k| colormap(k as f64 / n.max(2).saturating_sub(1) as f64))
-            .collect();
+        let color = |k: usize| colormap(k as f64 / n.max(2).saturating_sub(1) as f64);
         for (f, feature) in status.features.iter().enumerate() {
-            let points: Vec<[f32; 2]> = self
+            // A feature missing in a window (a frequency not identified) has no point.
+            let (points, colors): (Vec<[f32; 2]>, Vec<rerun::Color>) = self
                 .scatter
                 .iter()
-                .filter_map(|(t, v)| v.get(f).map(|v| [*t as f32, *v as f32]))
-                .collect();
+                .enumerate()
+                .filter_map(|(k, (t, v))| {
+                    let v = v.get(f).filter(|v| v.is_finite())?;
+                    Some(([*t as f32, *v as f32], color(k)))
+                })
+                .unzip();
             self.rec
                 .log(
                     format!("monitoring/temperature/{}", feature.name).as_str(),
                     &rerun::Points2D::new(points)
-                        .with_colors(colors.clone())
+                        .with_colors(colors)
                         .with_radii([rerun::Radius::new_ui_points(3.0)]),
                 )
                 .map_err(rerun_error)?;

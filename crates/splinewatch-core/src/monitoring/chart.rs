@@ -2,7 +2,7 @@
 //! charts with a k-of-m persistence rule.
 
 use super::compensation::regressors;
-use super::reference::{mewma_statistic, Reference};
+use super::reference::{mewma_statistic, Chart, Reference};
 use super::{MonitoringError, Observation, Settings};
 use serde::{Deserialize, Serialize};
 use std::collections::VecDeque;
@@ -37,7 +37,8 @@ pub enum Flag {
     TemperatureMissing(usize),
     /// Outside the training range (with its margin): not scored.
     OutsideRange(usize),
-    /// A feature is not finite: not scored.
+    /// A feature of the reference is not finite: the window is scored on
+    /// the others (all missing: not scored).
     FeatureMissing(usize),
     /// Enough training windows, but not enough usable ones (temperatures
     /// missing) or a degenerate covariance: training goes on with the next.
@@ -54,7 +55,8 @@ pub struct Status {
     pub t2_limit: Option<f64>,
     pub mewma: Option<f64>,
     pub mewma_limit: Option<f64>,
-    /// Per feature, the standardised residual (empty when not scored).
+    /// Per feature, the standardised residual (empty when not scored; NaN
+    /// for a feature missing or not in the reference).
     pub standardised: Vec<f64>,
     pub flags: Vec<Flag>,
     /// Whether the PCA fallback scored the window (a temperature missing).
@@ -63,15 +65,54 @@ pub struct Status {
     pub exceedances: usize,
 }
 
-/// Missing temperatures and features of an observation.
-fn input_flags(observation: &Observation) -> Vec<Flag> {
-    let missing = |values: &[f64]| -> Vec<usize> { (0..values.len()).filter(|&i| !values[i].is_finite()).collect() };
-    let mut flags: Vec<Flag> = missing(&observation.temperatures)
-        .into_iter()
+/// Missing temperatures of an observation.
+fn temperature_flags(observation: &Observation) -> Vec<Flag> {
+    let t = &observation.temperatures;
+    (0..t.len())
+        .filter(|&c| !t[c].is_finite())
         .map(Flag::TemperatureMissing)
-        .collect();
-    flags.extend(missing(&observation.features).into_iter().map(Flag::FeatureMissing));
-    flags
+        .collect()
+}
+
+/// Whether a training window is kept: it has at least one feature (which
+/// features enter the reference is decided when it is trained).
+fn trainable(observation: &Observation) -> bool {
+    observation.features.iter().any(|v| v.is_finite())
+}
+
+/// The standardised residual (missing features filled in) and T² of
+/// `features` on `chart`; `None` when nothing can be scored (every feature
+/// missing) or a value is not finite, so no NaN reaches the charts' state.
+fn score(chart: &Chart, features: &[f64], x: Option<&[f64]>, missing: &[bool]) -> Option<(Vec<f64>, f64)> {
+    let e = chart.fitted.standardised_with_gaps(features, x, missing)?;
+    let t2 = chart.fitted.quadratic(&e);
+    (t2.is_finite() && e.iter().all(|v| v.is_finite())).then_some((e, t2))
+}
+
+/// The reference's features of an observation (`selected`, their values,
+/// which are missing), flagging temperatures outside the training range and
+/// missing features.
+fn reference_inputs(
+    reference: &Reference,
+    observation: &Observation,
+    flags: &mut Vec<Flag>,
+) -> (Vec<usize>, Vec<f64>, Vec<bool>) {
+    let margin = reference.settings.range_margin_c;
+    let temperatures = observation.temperatures.iter().zip(&reference.temperature_range);
+    for (c, (&t, [lo, hi])) in temperatures.enumerate() {
+        if t < lo - margin || t > hi + margin {
+            flags.push(Flag::OutsideRange(c));
+        }
+    }
+    let selected = reference.selected();
+    let features: Vec<f64> = selected.iter().map(|&f| observation.features[f]).collect();
+    let missing: Vec<bool> = features.iter().map(|v| !v.is_finite()).collect();
+    flags.extend(
+        (0..features.len())
+            .filter(|&i| missing[i])
+            .map(|i| Flag::FeatureMissing(selected[i])),
+    );
+    (selected, features, missing)
 }
 
 /// Training, then scoring, of a stream of observations.
@@ -132,7 +173,7 @@ impl Monitor {
             training_windows: 0,
             training_span: None,
             training: Vec::new(),
-            ewma: vec![0.0; reference.features],
+            ewma: vec![0.0; reference.selected().len()],
             reference: Some(reference),
             history: VecDeque::new(),
             exceedances: VecDeque::new(),
@@ -171,8 +212,7 @@ impl Monitor {
             return false;
         }
         if observation.time_ns < until {
-            let complete = observation.features.iter().all(|v| v.is_finite());
-            if observation.time_ns >= from && complete {
+            if observation.time_ns >= from && trainable(observation) {
                 self.training.push(observation.clone());
             }
             return true;
@@ -189,7 +229,7 @@ impl Monitor {
     pub fn observe(&mut self, observation: &Observation) -> Result<Status, MonitoringError> {
         let channels = self.settings.temperature_channels;
         assert_eq!(observation.temperatures.len(), channels, "one temperature per channel");
-        let mut flags = input_flags(observation);
+        let mut flags = temperature_flags(observation);
         self.history.push_front(observation.temperatures.clone());
         self.history.truncate(self.settings.lags + 1);
         if self.span_training(observation, &mut flags) {
@@ -208,17 +248,8 @@ impl Monitor {
                 expected: reference.features,
             });
         }
-        let margin = self.settings.range_margin_c;
-        let temperatures = observation.temperatures.iter().zip(&reference.temperature_range);
-        for (c, (&t, [lo, hi])) in temperatures.enumerate() {
-            if t < lo - margin || t > hi + margin {
-                flags.push(Flag::OutsideRange(c));
-            }
-        }
-        if flags
-            .iter()
-            .any(|f| matches!(f, Flag::OutsideRange(_) | Flag::FeatureMissing(_)))
-        {
+        let (selected, features, missing) = reference_inputs(reference, observation, &mut flags);
+        if flags.iter().any(|f| matches!(f, Flag::OutsideRange(_))) || missing.iter().all(|&m| m) {
             // Not scored: the charts and the persistence window stay as they are.
             return Ok(self.status(MonitorState::OutsideTrainingRange, flags));
         }
@@ -229,26 +260,47 @@ impl Monitor {
             None
         };
         let lambda = self.settings.ewma_lambda;
-        let (e, t2, t2_limit, mewma) = match (&x, &reference.fallback) {
+        let scored = match (&x, &reference.fallback) {
+            // A temperature (or a lag's) missing: the PCA model scores T².
             (None, Some(fallback)) => {
-                // A temperature (or a lag's) missing: the PCA model scores T².
-                let e = fallback.fitted.standardised(&observation.features, None);
-                let t2 = fallback.fitted.quadratic(&e);
-                (e, t2, fallback.t2_limit, None)
+                score(fallback, &features, None, &missing).map(|(e, t2)| (e, t2, fallback, false))
             }
-            _ => {
-                let chart = &reference.primary;
-                let e = chart.fitted.standardised(&observation.features, x.as_deref());
-                let t2 = chart.fitted.quadratic(&e);
-                self.ewma
-                    .iter_mut()
-                    .zip(&e)
-                    .for_each(|(z, e)| *z = lambda * e + (1.0 - lambda) * *z);
-                let mewma = mewma_statistic(&chart.fitted, &self.ewma, lambda);
-                (e, t2, chart.t2_limit, Some(mewma))
-            }
+            _ => score(&reference.primary, &features, x.as_deref(), &missing)
+                .map(|(e, t2)| (e, t2, &reference.primary, true)),
         };
+        let Some((e, t2, chart, primary)) = scored else {
+            // Nothing to score on: the charts and the persistence window stay as they are.
+            return Ok(self.status(MonitorState::OutsideTrainingRange, flags));
+        };
+        let t2_limit = chart.t2_limit;
+        let mewma = primary.then(|| {
+            self.ewma
+                .iter_mut()
+                .zip(&e)
+                .for_each(|(z, e)| *z = lambda * e + (1.0 - lambda) * *z);
+            mewma_statistic(&chart.fitted, &self.ewma, lambda)
+        });
         let over = t2 > t2_limit || mewma.is_some_and(|m| m > reference.primary.mewma_limit);
+        let (state, changed) = self.persist(over);
+        let mut status = self.status(state, flags);
+        status.alarm_changed = changed;
+        status.t2 = Some(t2);
+        status.t2_limit = Some(t2_limit);
+        status.mewma = mewma;
+        status.fallback = mewma.is_none();
+        // Per observation feature; NaN where missing or not in the reference.
+        status.standardised = vec![f64::NAN; observation.features.len()];
+        for (i, &f) in selected.iter().enumerate() {
+            if !missing[i] {
+                status.standardised[f] = e[i];
+            }
+        }
+        Ok(status)
+    }
+
+    /// The k-of-m rule on the latest exceedance: the state, and whether it
+    /// entered or left alarm.
+    fn persist(&mut self, over: bool) -> (MonitorState, bool) {
         let [k, m] = self.settings.persistence;
         self.exceedances.push_front(over);
         self.exceedances.truncate(m);
@@ -260,21 +312,14 @@ impl Monitor {
         };
         let changed = (state == MonitorState::Alarm) != (self.state == MonitorState::Alarm);
         self.state = state;
-        let mut status = self.status(state, flags);
-        status.alarm_changed = changed;
-        status.t2 = Some(t2);
-        status.t2_limit = Some(t2_limit);
-        status.mewma = mewma;
-        status.fallback = mewma.is_none();
-        status.standardised = e;
-        Ok(status)
+        (state, changed)
     }
 
-    /// Keeps a training window (one with every feature); trains the
+    /// Keeps a training window (one with any feature); trains the
     /// reference once enough are kept. False when training was due but
     /// could not be done yet (it is tried again with the next window).
     fn train_with(&mut self, observation: &Observation) -> bool {
-        if observation.features.iter().all(|v| v.is_finite()) {
+        if trainable(observation) {
             self.training.push(observation.clone());
         }
         if self.training.len() < self.training_windows {
@@ -288,7 +333,7 @@ impl Monitor {
     fn finish_training(&mut self) -> bool {
         match Reference::train(&self.settings, &self.training) {
             Ok(reference) => {
-                self.ewma = vec![0.0; reference.features];
+                self.ewma = vec![0.0; reference.selected().len()];
                 self.reference = Some(reference);
                 self.training.clear();
                 self.state = MonitorState::Normal;
@@ -318,6 +363,7 @@ impl Monitor {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use faer::linalg::solvers::DenseSolveCore;
 
     /// A small seeded generator of standard normal values (xorshift + Box–Muller).
     struct Normal(u64);
@@ -476,11 +522,93 @@ mod tests {
             assert_eq!(s.state, MonitorState::OutsideTrainingRange);
             assert_eq!(s.flags, vec![Flag::OutsideRange(0)]);
         }
-        let mut nan_feature = observation(10, &mut rng, 0.0);
-        nan_feature.features[1] = f64::NAN;
-        let s = monitor.observe(&nan_feature).unwrap();
+        let mut nan_features = observation(10, &mut rng, 0.0);
+        nan_features.features.iter_mut().for_each(|v| *v = f64::NAN);
+        let s = monitor.observe(&nan_features).unwrap();
         assert_eq!(s.state, MonitorState::OutsideTrainingRange);
-        assert_eq!(s.flags, vec![Flag::FeatureMissing(1)]);
+        assert_eq!(s.flags.len(), 5);
+        assert!(s.t2.is_none());
+    }
+
+    /// A feature missing in half the training windows is left out of the
+    /// reference, one missing in a tenth is kept; a later window missing a
+    /// kept feature is scored on the others: its T² equals the observed
+    /// features' own `e_oᵀ Σ_oo⁻¹ e_o` (Σ from the stored precision,
+    /// inverted independently; 1e-9), and 500 undamaged windows with gaps
+    /// raise no alarm; a shift of an observed feature is still alarmed.
+    #[test]
+    fn features_missing_in_some_windows_are_selected_and_imputed() {
+        let mut rng = Normal(21);
+        let mut monitor = Monitor::new(settings(), 100).unwrap();
+        for hour in 0..100 {
+            let mut o = observation(hour, &mut rng, 0.0);
+            if hour % 2 == 0 {
+                o.features[4] = f64::NAN;
+            }
+            if hour % 10 == 3 {
+                o.features[1] = f64::NAN;
+            }
+            monitor.observe(&o).unwrap();
+        }
+        let reference = monitor.reference().unwrap().clone();
+        assert_eq!(reference.selected(), vec![0, 1, 2, 3]);
+        assert_eq!(reference.windows, 90);
+        let fitted = &reference.primary.fitted;
+        let n = fitted.kept.len();
+        let precision = faer::Mat::from_fn(n, n, |i, j| fitted.precision[i][j]);
+        let covariance = precision.llt(faer::Side::Lower).unwrap().inverse();
+        let mut alarms = 0;
+        for hour in 0..500 {
+            let mut o = observation(hour % 96 + 4, &mut rng, 0.0);
+            let gap = hour % 4;
+            o.features[gap] = f64::NAN;
+            let s = monitor.observe(&o).unwrap();
+            if s.state == MonitorState::OutsideTrainingRange {
+                continue;
+            }
+            assert!(s.flags.contains(&Flag::FeatureMissing(gap)));
+            assert!(s.standardised[gap].is_nan() && s.standardised[4].is_nan());
+            let observed: Vec<usize> = (0..n).filter(|&i| fitted.kept[i] != gap).collect();
+            let sub = faer::Mat::from_fn(observed.len(), observed.len(), |i, j| {
+                covariance[(observed[i], observed[j])]
+            });
+            let inverse = sub.llt(faer::Side::Lower).unwrap().inverse();
+            let e: Vec<f64> = observed.iter().map(|&i| s.standardised[fitted.kept[i]]).collect();
+            let marginal: f64 = (0..e.len())
+                .map(|i| (0..e.len()).map(|j| e[i] * inverse[(i, j)] * e[j]).sum::<f64>())
+                .sum();
+            let t2 = s.t2.unwrap();
+            assert!((t2 - marginal).abs() <= 1e-9 * marginal.max(1.0), "{t2} vs {marginal}");
+            alarms += usize::from(s.state == MonitorState::Alarm);
+        }
+        assert_eq!(alarms, 0);
+        let mut alarmed = false;
+        for k in 0..20 {
+            let mut o = observation(50 + k, &mut rng, 4.0);
+            o.features[0] = f64::NAN;
+            alarmed |= monitor.observe(&o).unwrap().state == MonitorState::Alarm;
+        }
+        assert!(alarmed);
+    }
+
+    /// The PCA variant (no temperatures) with a feature missing in every
+    /// third window: scored, the MEWMA stays finite, no alarm.
+    #[test]
+    fn the_pca_variant_scores_windows_with_a_missing_feature() {
+        let mut rng = Normal(34);
+        let mut monitor = Monitor::new(Settings::default(), 100).unwrap();
+        for hour in 0..400 {
+            let mut o = observation(hour % 96 + 4, &mut rng, 0.0);
+            o.temperatures.clear();
+            if hour >= 100 && hour % 3 == 0 {
+                o.features[3] = f64::NAN;
+            }
+            let s = monitor.observe(&o).unwrap();
+            if hour >= 100 {
+                assert!(s.t2.is_some_and(f64::is_finite) && s.mewma.is_some_and(f64::is_finite));
+                assert_ne!(s.state, MonitorState::Alarm, "hour {hour}");
+            }
+        }
     }
 
     /// The whole monitor (with missing temperatures in its history)

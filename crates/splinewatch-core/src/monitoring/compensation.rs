@@ -38,6 +38,10 @@ pub enum Compensation {
         scale: Vec<f64>,
         /// The removed principal directions (unit vectors, one per component).
         loadings: Vec<Vec<f64>>,
+        /// The training correlation of `z` (rows), to fill in a missing
+        /// feature; empty in a reference saved before it was kept.
+        #[serde(default)]
+        correlation: Vec<Vec<f64>>,
     },
 }
 
@@ -72,6 +76,31 @@ fn least_squares(x: &Mat<f64>, y: &Mat<f64>) -> Mat<f64> {
             .sum();
         sum / norms[row]
     })
+}
+
+/// Replaces the missing (not finite) entries of standardised features `z`
+/// by their conditional mean given the observed ones under the training
+/// correlation `C`: `z_m = C_mo C_oo⁻¹ z_o` ("conditional mean
+/// replacement", Nelson, Taylor & MacGregor 1996, which keeps the PCA
+/// residual's structure; a 1e-8 ridge for a correlation of rank < p).
+fn fill_conditional_mean(z: &mut [f64], correlation: &[Vec<f64>]) {
+    use faer::linalg::solvers::Solve;
+    let (m, o): (Vec<usize>, Vec<usize>) = (0..z.len()).partition(|&f| !z[f].is_finite());
+    if correlation.len() != z.len() {
+        // A reference saved without the correlation: the training mean.
+        return m.iter().for_each(|&f| z[f] = 0.0);
+    }
+    let c_oo = Mat::from_fn(o.len(), o.len(), |i, j| {
+        correlation[o[i]][o[j]] + if i == j { 1e-8 } else { 0.0 }
+    });
+    let z_o = Mat::from_fn(o.len(), 1, |i, _| z[o[i]]);
+    let Ok(llt) = c_oo.llt(faer::Side::Lower) else {
+        return m.iter().for_each(|&f| z[f] = 0.0);
+    };
+    let w = llt.solve(&z_o);
+    for &f in &m {
+        z[f] = (0..o.len()).map(|i| correlation[f][o[i]] * w[(i, 0)]).sum();
+    }
 }
 
 impl Compensation {
@@ -109,7 +138,19 @@ impl Compensation {
             Ok(svd) => (0..k).map(|i| (0..p).map(|f| svd.V()[(f, i)]).collect()).collect(),
             Err(_) => Vec::new(),
         };
-        Self::Pca { mean, scale, loadings }
+        let correlation = (0..p)
+            .map(|a| {
+                (0..p)
+                    .map(|b| (0..n).map(|r| z[(r, a)] * z[(r, b)]).sum::<f64>() / (n.max(2) - 1) as f64)
+                    .collect()
+            })
+            .collect();
+        Self::Pca {
+            mean,
+            scale,
+            loadings,
+            correlation,
+        }
     }
 
     /// The residual of one window (`regressors` for the regression model).
@@ -124,13 +165,21 @@ impl Compensation {
                     .map(|(y, b)| y - b.iter().zip(x).map(|(b, x)| b * x).sum::<f64>())
                     .collect()
             }
-            Self::Pca { mean, scale, loadings } => {
+            Self::Pca {
+                mean,
+                scale,
+                loadings,
+                correlation,
+            } => {
                 let mut z: Vec<f64> = features
                     .iter()
                     .zip(mean)
                     .zip(scale)
                     .map(|((y, m), s)| (y - m) / s)
                     .collect();
+                if !z.iter().all(|v| v.is_finite()) {
+                    fill_conditional_mean(&mut z, correlation);
+                }
                 for v in loadings {
                     let proj: f64 = z.iter().zip(v).map(|(a, b)| a * b).sum();
                     z.iter_mut().zip(v).for_each(|(a, b)| *a -= proj * b);
@@ -230,5 +279,9 @@ mod tests {
         let r = model.residual(&[1.0 + f, 2.0 - 2.0 * f, 3.0 + f], None);
         let norm = r.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(norm < 0.05, "{r:?}");
+        // A feature missing: filled in from the other two by the training
+        // correlation, the residual stays as small.
+        let r = model.residual(&[1.0 + f, f64::NAN, 3.0 + f], None);
+        assert!(r.iter().all(|v| v.abs() < 0.05), "{r:?}");
     }
 }

@@ -28,7 +28,11 @@
 //! reference and raises an alarm after `k` of the last `m` scored windows
 //! exceed a limit; a window whose temperature lies outside the training
 //! range is flagged, not scored; a window without a temperature is scored
-//! (T² only, flagged) by a PCA model trained on the same windows.
+//! (T² only, flagged) by a PCA model trained on the same windows. Features
+//! missing in more than `1 − feature_presence` of the training windows are
+//! left out; a later window missing a feature is scored on the others, the
+//! missing residual replaced by its conditional mean given them, so its T²
+//! is exactly the observed features' own (flagged).
 
 pub mod chart;
 pub mod compensation;
@@ -62,8 +66,6 @@ pub enum MonitoringError {
         found: usize,
         expected: usize,
     },
-    #[error("observation {index}: feature {feature} is not finite")]
-    Feature { index: usize, feature: usize },
     #[error("the residual covariance is not positive definite")]
     Covariance,
 }
@@ -92,6 +94,16 @@ pub struct Settings {
     /// How the control limits are set.
     #[serde(default)]
     pub limits: LimitMethod,
+    /// A feature enters the reference when finite in at least this share
+    /// of the training windows (identified frequencies of modes the
+    /// identification sometimes misses); later windows missing one are
+    /// scored on the others (its conditional mean given them imputed).
+    #[serde(default = "default_feature_presence")]
+    pub feature_presence: f64,
+}
+
+fn default_feature_presence() -> f64 {
+    0.8
 }
 
 /// How control limits are set.
@@ -120,6 +132,7 @@ impl Default for Settings {
             range_margin_c: 1.0,
             folds: 5,
             limits: LimitMethod::HeldOut,
+            feature_presence: default_feature_presence(),
         }
     }
 }
@@ -142,6 +155,9 @@ impl Settings {
         }
         if !(self.range_margin_c.is_finite() && self.range_margin_c >= 0.0) {
             return bad("range_margin_c", self.range_margin_c, "must be ≥ 0");
+        }
+        if !(self.feature_presence > 0.0 && self.feature_presence <= 1.0) {
+            return bad("feature_presence", self.feature_presence, "must be in (0, 1]");
         }
         if self.folds < 2 {
             return bad("folds", self.folds as f64, "must be at least 2");

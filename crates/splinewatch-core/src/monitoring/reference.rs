@@ -4,7 +4,7 @@
 use super::compensation::{regressors, Compensation};
 use super::covariance::{ledoit_wolf, robust_scale};
 use super::{LimitMethod, MonitoringError, Observation, Settings};
-use faer::linalg::solvers::DenseSolveCore;
+use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::Side;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
@@ -78,6 +78,56 @@ impl Fitted {
             .zip(&self.scales)
             .map(|(r, s)| if *s > 0.0 { r / s } else { 0.0 })
             .collect()
+    }
+
+    /// The standardised residual of `features` some of which may be
+    /// missing, or `None` when every kept one is: with the regression, each
+    /// residual is its feature's alone, and the missing ones are replaced by
+    /// their conditional mean given the others' ([`Self::impute`]); with
+    /// PCA, the missing features are filled in before the projection (their
+    /// conditional mean under the training correlation), since every
+    /// residual depends on every feature.
+    pub fn standardised_with_gaps(&self, features: &[f64], x: Option<&[f64]>, missing: &[bool]) -> Option<Vec<f64>> {
+        if self.kept.iter().all(|&f| missing[f]) {
+            return None;
+        }
+        let mut e = self.standardised(features, x);
+        match self.compensation {
+            Compensation::Regression { .. } => self.impute(&mut e, missing).then_some(e),
+            Compensation::Pca { .. } => Some(e),
+        }
+    }
+
+    /// Replaces the standardised residuals of the `missing` features by
+    /// their conditional mean given the others', `e_m = −P_mm⁻¹ P_mo e_o`
+    /// with `P = Σ⁻¹`: then `eᵀPe = e_oᵀ Σ_oo⁻¹ e_o` (Schur complement), the
+    /// T² of the observed features alone. False when every kept feature is
+    /// missing.
+    pub fn impute(&self, e: &mut [f64], missing: &[bool]) -> bool {
+        let (m, o): (Vec<usize>, Vec<usize>) = (0..self.kept.len()).partition(|&i| missing[self.kept[i]]);
+        if o.is_empty() {
+            return false;
+        }
+        for (f, _) in missing.iter().enumerate().filter(|(_, &x)| x) {
+            e[f] = 0.0;
+        }
+        if m.is_empty() {
+            return true;
+        }
+        let p_mm = faer::Mat::from_fn(m.len(), m.len(), |i, j| self.precision[m[i]][m[j]]);
+        let rhs = faer::Mat::from_fn(m.len(), 1, |i, _| {
+            -o.iter()
+                .map(|&j| self.precision[m[i]][j] * e[self.kept[j]])
+                .sum::<f64>()
+        });
+        let Ok(llt) = p_mm.llt(Side::Lower) else {
+            return false;
+        };
+        let solution = llt.solve(&rhs);
+        for (i, &k) in m.iter().enumerate() {
+            e[self.kept[k]] = solution[(i, 0)];
+        }
+        true
     }
 
     /// `eᵀ Σ⁻¹ e` over the kept features of a standardised residual.
@@ -165,8 +215,15 @@ pub struct Reference {
     pub fallback: Option<Chart>,
     /// Per temperature channel, the training range `[min, max]`, °C.
     pub temperature_range: Vec<[f64; 2]>,
-    /// Training windows used (with every needed temperature).
+    /// Training windows used (with every needed temperature and every
+    /// selected feature).
     pub windows: usize,
+    /// The features in the statistics (indices into an observation's):
+    /// those present in at least `feature_presence` of the training windows
+    /// (an identified frequency the identification often misses is left
+    /// out); `None`: every feature (a reference saved before selection).
+    #[serde(default)]
+    pub selected: Option<Vec<usize>>,
 }
 
 /// The `1 − α` limit of held-out statistic values: the larger of their
@@ -205,30 +262,34 @@ impl Reference {
     pub fn train(settings: &Settings, observations: &[Observation]) -> Result<Self, MonitoringError> {
         settings.check()?;
         let features = observations.first().map_or(0, |o| o.features.len());
-        for (index, o) in observations.iter().enumerate() {
-            if o.features.len() != features {
-                return Err(MonitoringError::FeatureCount {
-                    index,
-                    found: o.features.len(),
-                    expected: features,
-                });
-            }
-            if let Some(feature) = o.features.iter().position(|v| !v.is_finite()) {
-                return Err(MonitoringError::Feature { index, feature });
-            }
+        if let Some(index) = observations.iter().position(|o| o.features.len() != features) {
+            return Err(MonitoringError::FeatureCount {
+                index,
+                found: observations[index].features.len(),
+                expected: features,
+            });
         }
-        let (rows, x) = usable(settings, observations);
+        let selected = select_features(settings, observations, features);
+        let projected: Vec<Observation> = observations
+            .iter()
+            .map(|o| Observation {
+                features: selected.iter().map(|&f| o.features[f]).collect(),
+                temperatures: o.temperatures.clone(),
+                time_ns: o.time_ns,
+            })
+            .collect();
+        let (rows, x) = usable(settings, &projected);
         let q = x.first().map_or(1, Vec::len);
         let needed = (2 * settings.folds).max(q + 3).max(10);
-        if rows.len() < needed || features == 0 {
+        if rows.len() < needed || selected.is_empty() {
             return Err(MonitoringError::TooFewWindows {
                 usable: rows.len(),
                 total: observations.len(),
                 needed,
-                features,
+                features: selected.len(),
             });
         }
-        let y: Vec<&[f64]> = rows.iter().map(|&i| observations[i].features.as_slice()).collect();
+        let y: Vec<&[f64]> = rows.iter().map(|&i| projected[i].features.as_slice()).collect();
         let primary = Chart::train(settings, &y, &x)?;
         let fallback = if settings.temperature_channels > 0 {
             Some(Chart::train(settings, &y, &[])?)
@@ -251,18 +312,34 @@ impl Reference {
             fallback,
             temperature_range,
             windows: rows.len(),
+            selected: Some(selected),
         })
+    }
+
+    /// The features in the statistics (indices into an observation's).
+    pub fn selected(&self) -> Vec<usize> {
+        self.selected.clone().unwrap_or_else(|| (0..self.features).collect())
     }
 }
 
-/// The training windows with every needed temperature, and their regressors.
+/// The features finite in at least `feature_presence` of the observations.
+fn select_features(settings: &Settings, observations: &[Observation], features: usize) -> Vec<usize> {
+    let needed = settings.feature_presence * observations.len() as f64;
+    (0..features)
+        .filter(|&f| observations.iter().filter(|o| o.features[f].is_finite()).count() as f64 >= needed)
+        .collect()
+}
+
+/// The training windows with every feature and every needed temperature,
+/// and their regressors.
 fn usable(settings: &Settings, observations: &[Observation]) -> (Vec<usize>, Vec<Vec<f64>>) {
+    let complete = |i: &usize| observations[*i].features.iter().all(|v| v.is_finite());
     if settings.temperature_channels == 0 {
-        return ((0..observations.len()).collect(), Vec::new());
+        return ((0..observations.len()).filter(complete).collect(), Vec::new());
     }
     let mut rows = Vec::new();
     let mut x = Vec::new();
-    for i in 0..observations.len() {
+    for i in (0..observations.len()).filter(complete) {
         let history: Vec<&[f64]> = (0..=settings.lags.min(i))
             .map(|l| observations[i - l].temperatures.as_slice())
             .collect();
