@@ -407,3 +407,107 @@ fn the_raw_recording_of_frf_windows_replays_to_the_live_statuses() {
         }
     }
 }
+
+/// The daemon as a systemd `Type=notify` service, on a real notification
+/// socket: READY=1 at start, a STATUS per accepted update ending with the
+/// monitoring state (`training` for the first 10, then `normal`), and
+/// STOPPING=1 on SIGTERM. Twelve FRF windows are published live over zenoh,
+/// one set at a time.
+#[cfg(unix)]
+#[test]
+fn systemd_status_ends_with_the_monitoring_state() {
+    use std::os::unix::net::UnixDatagram;
+    use std::sync::{Arc, Mutex};
+    let dir = temp("systemd");
+    let endpoint = crate::common::free_endpoint();
+    let text = std::fs::read_to_string(root().join("config/sinello-monitoring.toml"))
+        .unwrap()
+        .replace("training_windows = 100", "training_windows = 10")
+        + &format!("\n[zenoh]\nlisten = [\"{endpoint}\"]\nmulticast_scouting = false\n");
+    let config = dir.join("config.toml");
+    std::fs::write(&config, &text).unwrap();
+    let cfg = Config::from_toml(&text).unwrap();
+    let recording = simulate(&cfg, &dir, &[12], |t| {
+        t.replace("daily_amplitude_c = 8.0", "daily_amplitude_c = 0.5")
+    })
+    .remove(0);
+    let socket_path = dir.join("notify.sock");
+    let socket = UnixDatagram::bind(&socket_path).unwrap();
+    socket
+        .set_read_timeout(Some(std::time::Duration::from_millis(200)))
+        .unwrap();
+    let notes: Arc<Mutex<Vec<String>>> = Arc::default();
+    let stop = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let reader = {
+        let (notes, stop) = (Arc::clone(&notes), Arc::clone(&stop));
+        std::thread::spawn(move || {
+            let mut buffer = [0u8; 4096];
+            while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                if let Ok(n) = socket.recv(&mut buffer) {
+                    notes
+                        .lock()
+                        .unwrap()
+                        .push(String::from_utf8_lossy(&buffer[..n]).into_owned());
+                }
+            }
+        })
+    };
+    let daemon = crate::common::KillOnDrop(Some(
+        std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args(["run", "--config", config.to_str().unwrap(), "--state"])
+            .arg(dir.join("state.json"))
+            .arg("--out")
+            .arg(dir.join("results.mcap"))
+            .env("NOTIFY_SOCKET", &socket_path)
+            .env("RUST_LOG", "warn")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap(),
+    ));
+    let statuses = || -> Vec<String> {
+        let notes = notes.lock().unwrap();
+        notes
+            .iter()
+            .flat_map(|n| n.lines())
+            .filter_map(|l| l.strip_prefix("STATUS="))
+            .map(str::to_string)
+            .collect()
+    };
+    let wait = |what: &dyn Fn() -> bool| {
+        let start = std::time::Instant::now();
+        while !what() && start.elapsed().as_secs() < 120 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+    };
+    wait(&|| notes.lock().unwrap().iter().any(|n| n.contains("READY=1")));
+    let mut z = cfg.zenoh.clone();
+    z.connect = std::mem::take(&mut z.listen);
+    z.mode = "client".into();
+    let mut publisher =
+        splinewatch::outputs::publisher::Publisher::open(&z, cfg.topic_prefix(), Encoding::Cbor, 0.0).unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    let bytes = std::fs::read(&recording).unwrap();
+    publish_recording(&mut publisher, &cfg.topic_prefix(), &bytes, |sets| {
+        wait(&|| statuses().len() >= sets);
+    })
+    .unwrap();
+    publisher.close().unwrap();
+    let (status, log) = crate::common::terminate(daemon.take());
+    assert!(status.success(), "{log}");
+    wait(&|| notes.lock().unwrap().iter().any(|n| n.contains("STOPPING=1")));
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    reader.join().unwrap();
+    let statuses = statuses();
+    assert_eq!(statuses.len(), 12, "{statuses:?}\n{log}");
+    for (k, s) in statuses.iter().enumerate() {
+        let state = if k < 10 { "training" } else { "normal" };
+        assert!(
+            s.starts_with(&format!("window {k}: relative residual ")) && s.ends_with(&format!("monitoring: {state}")),
+            "{s}"
+        );
+    }
+    let notes = notes.lock().unwrap();
+    assert!(notes[0].contains("READY=1"), "{notes:?}");
+    assert!(notes.last().unwrap().contains("STOPPING=1"), "{notes:?}");
+}
