@@ -21,10 +21,12 @@
 use crate::knots::{KnotError, KnotVector, MAX_DEGREE};
 use crate::material::OrthotropicMaterial;
 use crate::quadrature::GaussLegendre;
+use crate::sparse::{Pattern, SparseError, SparseSymmetric};
 use crate::surface::{BSplineSurface, Direction, SurfaceError};
 use crate::vec3::{axpy, cross, det_inverse, dot, mat_vec, normalize, scale, Vec3};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Generalised dofs per control point: `u, v, w, α, β`.
@@ -60,6 +62,8 @@ pub enum ShellError {
     DegenerateNormal { index: usize },
     #[error("the shell Jacobian is not positive at (ξ, η, τ) = ({xi}, {eta}, {tau}): the geometry folds over itself or the thickness is too large for its curvature")]
     InvertedJacobian { xi: f64, eta: f64, tau: f64 },
+    #[error("sparse assembly: {0}")]
+    Sparse(SparseError),
 }
 
 /// Orthonormal director triad at a control point.
@@ -509,11 +513,55 @@ pub(crate) fn scatter(target: &mut Mat<f64>, local: &Mat<f64>, dofs: &[usize]) {
     }
 }
 
+/// Where assembled element matrices go: a dense matrix, or a sparse one on
+/// the control net's pattern ([`crate::sparse`]).
+pub trait Assembly {
+    /// `self[dofs, dofs] += local`.
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError>;
+}
+
+impl Assembly for Mat<f64> {
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        scatter(self, local, dofs);
+        Ok(())
+    }
+}
+
+impl Assembly for SparseSymmetric {
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        SparseSymmetric::add_local(self, local, dofs)
+    }
+}
+
 /// Assembles eq. (16) and eq. (17) over every knot span.
 pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMatrices, ShellError> {
     let ndof = shell.dof_count();
     let mut stiffness = Mat::<f64>::zeros(ndof, ndof);
     let mut mass = Mat::<f64>::zeros(ndof, ndof);
+    assemble_into(shell, material, &mut stiffness, &mut mass)?;
+    Ok(ShellMatrices { stiffness, mass })
+}
+
+/// Eq. (16) and (17) on the shell's sparse pattern: memory and time linear
+/// in the number of control points.
+pub fn assemble_sparse(
+    shell: &Shell,
+    material: &OrthotropicMaterial,
+    pattern: &Arc<Pattern>,
+) -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
+    let mut stiffness = SparseSymmetric::zeros(Arc::clone(pattern));
+    let mut mass = SparseSymmetric::zeros(Arc::clone(pattern));
+    assemble_into(shell, material, &mut stiffness, &mut mass)?;
+    Ok((stiffness, mass))
+}
+
+/// Eq. (16) into `stiffness` and eq. (17) into `mass`, span by span.
+pub fn assemble_into<A: Assembly>(
+    shell: &Shell,
+    material: &OrthotropicMaterial,
+    stiffness: &mut A,
+    mass: &mut A,
+) -> Result<(), ShellError> {
     let (p, q) = (shell.surface.xi().degree(), shell.surface.eta().degree());
     let nloc = DOFS_PER_CONTROL_POINT * (p + 1) * (q + 1);
     let rho = material.density();
@@ -523,6 +571,7 @@ pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMa
         extra: (0, 0),
         cuts: (Vec::new(), Vec::new()),
     };
+    let mut outcome = Ok(());
     integrate(shell, material, &exact, |step| match step {
         QuadratureStep::Point { w, rows, .. } => {
             matmul(
@@ -543,13 +592,16 @@ pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMa
             );
         }
         QuadratureStep::SpanEnd { dofs } => {
-            scatter(&mut stiffness, &k_loc, dofs);
-            scatter(&mut mass, &m_loc, dofs);
+            if outcome.is_ok() {
+                outcome = stiffness
+                    .add_local(&k_loc, dofs)
+                    .and_then(|()| mass.add_local(&m_loc, dofs));
+            }
             k_loc.fill(0.0);
             m_loc.fill(0.0);
         }
     })?;
-    Ok(ShellMatrices { stiffness, mass })
+    outcome.map_err(ShellError::Sparse)
 }
 
 #[cfg(test)]

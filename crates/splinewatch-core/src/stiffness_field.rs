@@ -31,7 +31,7 @@
 
 use crate::knots::KnotVector;
 use crate::material::OrthotropicMaterial;
-use crate::shell::{self, OutsideDomain, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
+use crate::shell::{self, Assembly, OutsideDomain, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
 use faer::linalg::matmul::matmul;
 use faer::{unzip, zip, Accum, Mat, Par};
 use thiserror::Error;
@@ -166,12 +166,25 @@ impl StiffnessField {
         shell: &Shell,
         material: &OrthotropicMaterial,
     ) -> Result<Vec<Mat<f64>>, StiffnessFieldError> {
+        let ndof = shell.dof_count();
+        let zeros = vec![Mat::<f64>::zeros(ndof, ndof); self.coefficient_count()];
+        self.coefficient_matrices_into(shell, material, zeros)
+    }
+
+    /// `∂K/∂θ_ij` for every coefficient added into `out` (one zeroed
+    /// target per coefficient: dense, or sparse on the shell's pattern).
+    pub fn coefficient_matrices_into<A: Assembly>(
+        &self,
+        shell: &Shell,
+        material: &OrthotropicMaterial,
+        mut out: Vec<A>,
+    ) -> Result<Vec<A>, StiffnessFieldError> {
         self.check_inside(shell)?;
         let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-        let ndof = shell.dof_count();
         let count = self.coefficient_count();
+        assert_eq!(out.len(), count, "one target per coefficient");
         let nloc = DOFS_PER_CONTROL_POINT * (kx.degree() + 1) * (ke.degree() + 1);
-        let mut out = vec![Mat::<f64>::zeros(ndof, ndof); count];
+        let mut outcome = Ok(());
         let mut local = vec![Mat::<f64>::zeros(nloc, nloc); count];
         let mut used = vec![false; count];
         let mut basis = Vec::new();
@@ -205,12 +218,15 @@ impl StiffnessField {
             QuadratureStep::SpanEnd { dofs } => {
                 for k in 0..count {
                     if std::mem::replace(&mut used[k], false) {
-                        shell::scatter(&mut out[k], &local[k], dofs);
+                        if outcome.is_ok() {
+                            outcome = out[k].add_local(&local[k], dofs);
+                        }
                         local[k].fill(0.0);
                     }
                 }
             }
         })?;
+        outcome.map_err(|e| StiffnessFieldError::Shell(ShellError::Sparse(e)))?;
         Ok(out)
     }
 }

@@ -1,0 +1,260 @@
+//! Symmetric sparse matrices on the control net's pattern: what `K_f`, `M`,
+//! every `∂K/∂κ_j` and `∂K/∂θ_k` (eq. 16–17, 22) become at 10⁴–10⁵ dofs.
+//!
+//! Two control points interact only when the supports of their basis
+//! functions overlap, `|i − i'| ≤ p` and `|j − j'| ≤ q` (eq. 1), so every
+//! matrix of a model lives on one pattern: the control-point adjacency with
+//! a dense block of dofs per pair, stored in both triangles, rows sorted per
+//! column (faer's compressed sparse column format). Sharing it makes
+//! `K(κ, θ) = K_f + Σ …` and the shifted `K − σM` elementwise sums of value
+//! arrays, and lets one symbolic Cholesky factorisation serve every shift
+//! and every parameter change ([`crate::partial_eigen`]).
+
+use crate::constraints::DofReduction;
+use crate::shell::{Shell, DOFS_PER_CONTROL_POINT};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::Mat;
+use std::sync::Arc;
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SparseError {
+    #[error("entry ({row}, {col}) lies outside the control net's pattern")]
+    OutsidePattern { row: usize, col: usize },
+    #[error("matrix of {found} dofs on a pattern of {expected}")]
+    Dimension { found: usize, expected: usize },
+}
+
+/// A symmetric sparsity pattern in compressed sparse column form (both
+/// triangles), rows sorted within each column.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Pattern {
+    n: usize,
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+}
+
+impl Pattern {
+    /// The pattern of a control net of `m × n` points (η fastest) with
+    /// basis degrees `(p, q)`, where control point `cp` carries
+    /// `dofs[cp]` consecutive dofs (numbered in control-point order).
+    pub fn control_net(net: (usize, usize), degrees: (usize, usize), dofs: &[usize]) -> Self {
+        let (m, n) = net;
+        let (p, q) = degrees;
+        assert_eq!(dofs.len(), m * n, "one dof count per control point");
+        let mut first = Vec::with_capacity(dofs.len() + 1);
+        first.push(0);
+        for &d in dofs {
+            first.push(first.last().copied().unwrap_or(0) + d);
+        }
+        let total = first[dofs.len()];
+        let mut col_ptr = Vec::with_capacity(total + 1);
+        col_ptr.push(0);
+        let mut row_idx = Vec::new();
+        for i in 0..m {
+            for j in 0..n {
+                let cp = i * n + j;
+                let mut rows = Vec::new();
+                for i2 in i.saturating_sub(p)..=(i + p).min(m - 1) {
+                    for j2 in j.saturating_sub(q)..=(j + q).min(n - 1) {
+                        let other = i2 * n + j2;
+                        rows.extend(first[other]..first[other + 1]);
+                    }
+                }
+                for _ in 0..dofs[cp] {
+                    row_idx.extend_from_slice(&rows);
+                    col_ptr.push(row_idx.len());
+                }
+            }
+        }
+        Self {
+            n: total,
+            col_ptr,
+            row_idx,
+        }
+    }
+
+    /// The pattern of a shell's generalised dofs (five per control point).
+    pub fn of_shell(shell: &Shell) -> Self {
+        let s = shell.surface();
+        let cps = shell.control_point_count();
+        Self::control_net(
+            s.net_size(),
+            (s.xi().degree(), s.eta().degree()),
+            &vec![DOFS_PER_CONTROL_POINT; cps],
+        )
+    }
+
+    pub fn dim(&self) -> usize {
+        self.n
+    }
+
+    /// Stored entries (both triangles).
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    pub fn col_ptr(&self) -> &[usize] {
+        &self.col_ptr
+    }
+
+    pub fn row_idx(&self) -> &[usize] {
+        &self.row_idx
+    }
+
+    /// The position of entry `(row, col)` in the value array.
+    pub fn position(&self, row: usize, col: usize) -> Option<usize> {
+        let (a, b) = (self.col_ptr[col], self.col_ptr[col + 1]);
+        self.row_idx[a..b].binary_search(&row).ok().map(|k| a + k)
+    }
+
+    /// faer's view of this pattern.
+    pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
+        SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
+    }
+}
+
+/// A symmetric matrix on a shared [`Pattern`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct SparseSymmetric {
+    pattern: Arc<Pattern>,
+    values: Vec<f64>,
+}
+
+impl SparseSymmetric {
+    pub fn zeros(pattern: Arc<Pattern>) -> Self {
+        let values = vec![0.0; pattern.nnz()];
+        Self { pattern, values }
+    }
+
+    pub fn pattern(&self) -> &Arc<Pattern> {
+        &self.pattern
+    }
+
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+
+    pub fn dim(&self) -> usize {
+        self.pattern.n
+    }
+
+    /// faer's view of this matrix.
+    pub fn as_faer(&self) -> SparseColMatRef<'_, usize, f64> {
+        SparseColMatRef::new(self.pattern.symbolic(), &self.values)
+    }
+
+    /// `self[dofs, dofs] += local`.
+    pub fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        for (c, &dc) in dofs.iter().enumerate() {
+            for (r, &dr) in dofs.iter().enumerate() {
+                let v = local[(r, c)];
+                if v != 0.0 {
+                    let k = self
+                        .pattern
+                        .position(dr, dc)
+                        .ok_or(SparseError::OutsidePattern { row: dr, col: dc })?;
+                    self.values[k] += v;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// `self += scale · other` (same pattern).
+    #[track_caller]
+    pub fn add_scaled(&mut self, other: &Self, scale: f64) {
+        assert!(Arc::ptr_eq(&self.pattern, &other.pattern) || self.pattern == other.pattern);
+        self.values
+            .iter_mut()
+            .zip(&other.values)
+            .for_each(|(a, b)| *a += scale * b);
+    }
+
+    /// The largest absolute diagonal entry.
+    pub fn max_diagonal(&self) -> f64 {
+        (0..self.dim()).map(|i| self.get(i, i).abs()).fold(0.0, f64::max)
+    }
+
+    /// The entry at `(row, col)` (0 outside the pattern).
+    pub fn get(&self, row: usize, col: usize) -> f64 {
+        self.pattern.position(row, col).map_or(0.0, |k| self.values[k])
+    }
+
+    /// `y = A x` for column vectors stored as the columns of `x`.
+    pub fn mul(&self, x: &Mat<f64>) -> Mat<f64> {
+        let mut y = Mat::<f64>::zeros(self.dim(), x.ncols());
+        let p = &self.pattern;
+        for k in 0..x.ncols() {
+            for c in 0..p.n {
+                let xc = x[(c, k)];
+                if xc == 0.0 {
+                    continue;
+                }
+                for e in p.col_ptr[c]..p.col_ptr[c + 1] {
+                    y[(p.row_idx[e], k)] += self.values[e] * xc;
+                }
+            }
+        }
+        y
+    }
+
+    /// The dense matrix (tests and small models).
+    pub fn to_dense(&self) -> Mat<f64> {
+        let p = &self.pattern;
+        let mut out = Mat::<f64>::zeros(p.n, p.n);
+        for c in 0..p.n {
+            for e in p.col_ptr[c]..p.col_ptr[c + 1] {
+                out[(p.row_idx[e], c)] = self.values[e];
+            }
+        }
+        out
+    }
+
+    /// `Tᵀ A T` on `reduced` (the pattern of the free coordinates: each
+    /// column of `T` lies on one control point, so the reduced pattern is
+    /// the control-net pattern with fewer dofs per point).
+    pub fn reduce(&self, reduction: &DofReduction, reduced: &Arc<Pattern>) -> Result<Self, SparseError> {
+        if reduction.full_count() != self.dim() {
+            return Err(SparseError::Dimension {
+                found: self.dim(),
+                expected: reduction.full_count(),
+            });
+        }
+        // Per full dof, the reduced coordinates it enters and their weights.
+        let mut owners: Vec<Vec<(usize, f64)>> = vec![Vec::new(); self.dim()];
+        for (i, column) in reduction.columns().iter().enumerate() {
+            for &(d, t) in column {
+                owners[d].push((i, t));
+            }
+        }
+        let mut out = Self::zeros(Arc::clone(reduced));
+        let p = &self.pattern;
+        for (j, column) in reduction.columns().iter().enumerate() {
+            for &(c, tc) in column {
+                for e in p.col_ptr[c]..p.col_ptr[c + 1] {
+                    let v = self.values[e] * tc;
+                    for &(i, tr) in &owners[p.row_idx[e]] {
+                        let k = reduced
+                            .position(i, j)
+                            .ok_or(SparseError::OutsidePattern { row: i, col: j })?;
+                        out.values[k] += tr * v;
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// The pattern of the free coordinates of `reduction` on `shell`'s net.
+pub fn reduced_pattern(shell: &Shell, reduction: &DofReduction) -> Pattern {
+    let cps = shell.control_point_count();
+    let mut dofs = vec![0usize; cps];
+    for column in reduction.columns() {
+        let cp = column[0].0 / DOFS_PER_CONTROL_POINT;
+        dofs[cp] += 1;
+    }
+    let s = shell.surface();
+    Pattern::control_net(s.net_size(), (s.xi().degree(), s.eta().degree()), &dofs)
+}
