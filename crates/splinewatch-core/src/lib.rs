@@ -26,6 +26,7 @@ pub mod partial_eigen;
 pub mod quadrature;
 pub mod shell;
 pub mod sparse;
+pub mod sparse_model;
 pub mod springs;
 pub mod stiffness_field;
 pub mod surface;

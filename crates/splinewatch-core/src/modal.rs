@@ -508,7 +508,6 @@ pub fn symmetric_eigen(a: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>), ModalError>
 }
 
 fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, shell: &Shell) -> Vec<ModeKind> {
-    let max = omega2.iter().copied().fold(0.0f64, f64::max);
     let cps = shell.control_point_count();
     // Row-sum lumped translational mass per control point (x rows).
     let lumped: Vec<f64> = (0..cps)
@@ -517,6 +516,15 @@ fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, shell: &Shell) -
             (0..cps).map(|c| mass[(r, DOFS_PER_CONTROL_POINT * c)]).sum()
         })
         .collect();
+    classify_lumped(omega2, shapes, &lumped, shell)
+}
+
+/// Rigid (`ω² < 1e-12 ω²_max`), bending (the lumped-mass-weighted normal
+/// motion dominates) or membrane, with `lumped` the row-sum translational
+/// mass of every control point.
+pub(crate) fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64], shell: &Shell) -> Vec<ModeKind> {
+    let max = omega2.iter().copied().fold(0.0f64, f64::max);
+    let cps = shell.control_point_count();
     (0..omega2.len())
         .map(|k| {
             if omega2[k] < 1e-12 * max {

@@ -26,6 +26,8 @@ pub enum ModelError {
     StiffnessField { index: usize, source: StiffnessFieldError },
     #[error("modes: {0}")]
     Modal(#[from] ModalError),
+    #[error("partial modes: {0}")]
+    PartialEigen(crate::partial_eigen::PartialEigenError),
     #[error("spring field {field}: {found} coefficients given, {expected} expected")]
     CoefficientCount {
         field: usize,

@@ -135,6 +135,10 @@ impl SparseSymmetric {
         &self.values
     }
 
+    pub fn values_mut(&mut self) -> &mut [f64] {
+        &mut self.values
+    }
+
     pub fn dim(&self) -> usize {
         self.pattern.n
     }
