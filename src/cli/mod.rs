@@ -27,6 +27,9 @@ pub struct Cli {
 enum Command {
     /// Natural frequencies and mode kinds of the configured model.
     Modes(model::ModesArgs),
+    /// The model's matrices for other tools: K, K_f, M and every ∂K/∂parameter in
+    /// Matrix Market (free coordinates) with a JSON index of the dofs.
+    Matrices(model::MatricesArgs),
     /// Model FRFs at sensors, optionally with the paper's noise model, as FRF JSON.
     Synth(model::SynthArgs),
     /// FRF-based model updating of the configured model against measured FRFs.
@@ -70,6 +73,7 @@ enum Command {
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Modes(args) => model::modes(args),
+        Command::Matrices(args) => model::matrices(args),
         Command::Synth(args) => model::synth(args),
         Command::Update(args) => model::update(args),
         Command::Paper(args) => model::paper(args),

@@ -20,7 +20,7 @@ pub use frf::FrfConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
     MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
-    MAX_CONTROL_POINTS,
+    MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
 };
 pub use monitoring::MonitoringConfig;
 pub use oma::OmaConfig;
@@ -302,6 +302,15 @@ mod tests {
         let e = error_of(|t| t.replace("control_points = [13, 5]", "control_points = [13, 99999]"));
         assert!(
             e.contains("model.discretization.control_points") && e.contains("exceed"),
+            "{e}"
+        );
+        // 4 000 control points: the sparse path takes them, the dense one refuses.
+        let big =
+            Config::from_toml(&SINELLO.replace("control_points = [13, 5]", "control_points = [100, 40]")).unwrap();
+        assert_eq!(big.build_model().unwrap().shell.control_point_count(), 4000);
+        let e = big.build_dense_model().unwrap_err().to_string();
+        assert!(
+            e.contains("model.discretization.control_points") && e.contains("--cutoff"),
             "{e}"
         );
         let e = error_of(|t| t.replace("name = \"east\"", "name = \"west\""));

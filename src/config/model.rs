@@ -14,9 +14,14 @@ use splinewatch_core::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::stiffness_field::{StiffnessField, StiffnessScale};
 use splinewatch_core::surface::Direction;
 
-/// Largest control net accepted (5 dofs each; the dense eigen-solve of
-/// 10 000 dofs already takes minutes).
-pub const MAX_CONTROL_POINTS: usize = 2000;
+/// Largest control net accepted (5 dofs each): the sparse path
+/// (`modes --cutoff`, `matrices`) holds 200 000 dofs in a few GB.
+pub const MAX_CONTROL_POINTS: usize = 40_000;
+
+/// Largest control net of the dense path (FRFs, updating, `modes` without
+/// `--cutoff`): it stores n_dof² matrices, and the dense eigen-solve of
+/// 10 000 dofs already takes minutes.
+pub const MAX_DENSE_CONTROL_POINTS: usize = 2000;
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -247,6 +252,22 @@ pub struct ConstraintConfig {
 
 impl Config {
     /// Validates the model section into a [`ShellModel`].
+    /// The model for the dense path: refuses a net above
+    /// [`MAX_DENSE_CONTROL_POINTS`] with the way out.
+    pub fn build_dense_model(&self) -> Result<ShellModel, ConfigError> {
+        let model = self.build_model()?;
+        let total = model.shell.control_point_count();
+        if total > MAX_DENSE_CONTROL_POINTS {
+            return Err(err(
+                "model.discretization.control_points",
+                format!(
+                    "{total} control points: the dense path (FRFs, updating, modes without --cutoff) holds at most {MAX_DENSE_CONTROL_POINTS}; `modes --cutoff` and `matrices` take up to {MAX_CONTROL_POINTS}"
+                ),
+            ));
+        }
+        Ok(model)
+    }
+
     pub fn build_model(&self) -> Result<ShellModel, ConfigError> {
         let shell = self.build_shell()?;
         let material = self.build_material()?;
@@ -309,8 +330,7 @@ impl Config {
     fn build_shell(&self) -> Result<Shell, ConfigError> {
         let m = &self.model;
         let d = &m.discretization;
-        // The dense model path stores n_dof² matrices: refuse nets it cannot hold
-        // rather than exhausting memory.
+        // Refuse nets no path can hold rather than exhausting memory.
         let [cm, cn] = d.control_points;
         let total = cm
             .saturating_add(d.insert_knots_xi.len())

@@ -21,7 +21,7 @@ pub fn frf_setup(config: &Config) -> Result<FrfSetup> {
 /// As [`frf_setup`], with `extra` points appended to the model's sensor list
 /// (after the configured sensors; the simulator's unmeasured force points).
 pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<FrfSetup> {
-    let model = config.build_model()?;
+    let model = config.build_dense_model()?;
     let sensors = config.build_sensors(&model.shell)?;
     if sensors.is_empty() {
         anyhow::bail!("config: sensors: at least one [[sensors]] table is required for FRFs");

@@ -7,6 +7,7 @@ pub mod console;
 pub mod files;
 pub mod frf_json;
 pub mod import;
+pub mod matrix_market;
 pub mod modes_json;
 pub mod monitoring_json;
 pub mod recording;

@@ -9,6 +9,7 @@ pub mod environment;
 pub mod excitation;
 pub mod frf_windows;
 pub mod import;
+pub mod matrices;
 pub mod modes;
 pub mod paper;
 pub mod simulation;

@@ -16,15 +16,16 @@
 //! made once per model ([`ShiftInvert::new`]); every solve re-factorises
 //! the values.
 
-use crate::sparse::{Pattern, SparseSymmetric};
+use crate::sparse::{NonZeros, Pattern, SparseSymmetric};
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::matrix_free::eigen::{partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams};
 use faer::matrix_free::LinOp;
+use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::sparse::linalg::cholesky::supernodal::SupernodalLltRef;
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef};
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
@@ -48,6 +49,8 @@ pub enum PartialEigenError {
         residual: f64,
         tolerance: f64,
     },
+    #[error("{found} modes found below the cut-off, the inertia of K − ω²M counts {expected}")]
+    Missed { found: usize, expected: usize },
     #[error("the matrices are of {found} dofs, the factorisation of {expected}")]
     Dimension { found: usize, expected: usize },
 }
@@ -90,7 +93,7 @@ struct ShiftedOperator<'a> {
     llt: SupernodalLltRef<'a, usize, f64>,
     forward: &'a [usize],
     inverse: &'a [usize],
-    mass: &'a SparseSymmetric,
+    mass: &'a NonZeros,
 }
 
 impl ShiftedOperator<'_> {
@@ -108,11 +111,11 @@ impl LinOp<f64> for ShiftedOperator<'_> {
     }
 
     fn nrows(&self) -> usize {
-        self.mass.dim()
+        self.forward.len()
     }
 
     fn ncols(&self) -> usize {
-        self.mass.dim()
+        self.forward.len()
     }
 
     fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, stack: &mut MemStack) {
@@ -138,12 +141,82 @@ impl ShiftInvert {
             supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
             ..Default::default()
         };
-        let symbolic = factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, Default::default(), params)
+        let forward = pattern.nested_dissection();
+        let mut inverse = vec![0; forward.len()];
+        for (new, &old) in forward.iter().enumerate() {
+            inverse[old] = new;
+        }
+        let ordering = SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, forward.len()));
+        let symbolic = factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
             .map_err(|e| PartialEigenError::Symbolic(format!("{e:?}")))?;
         Ok(Self {
             pattern: Arc::clone(pattern),
             symbolic: Arc::new(symbolic),
         })
+    }
+
+    /// The values of the Cholesky factor of `K − σM` (the symbolic part
+    /// reused).
+    fn factorize(&self, k: &SparseSymmetric, m: &SparseSymmetric, sigma: f64) -> Result<Vec<f64>, PartialEigenError> {
+        let mut shifted = k.clone();
+        shifted.add_scaled(m, -sigma);
+        let mut l_values = vec![0.0; self.symbolic.len_val()];
+        let req = self
+            .symbolic
+            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+        let mut buffer = MemBuffer::new(req);
+        self.symbolic
+            .factorize_numeric_llt(
+                &mut l_values,
+                shifted.as_faer(),
+                Side::Lower,
+                LltRegularization::default(),
+                Par::Seq,
+                MemStack::new(&mut buffer),
+                Default::default(),
+            )
+            .map_err(|_| PartialEigenError::NotDefinite { shift: sigma })?;
+        Ok(l_values)
+    }
+
+    /// The number of eigenvalues of `(k, m)` below `omega2`: the negative
+    /// pivots of the `LDLᵀ` factorisation of `K − ω² M` (same symbolic
+    /// factorisation); `None` when it breaks down (a zero pivot).
+    pub fn count_below(&self, k: &SparseSymmetric, m: &SparseSymmetric, omega2: f64) -> Option<usize> {
+        let mut shifted = k.clone();
+        shifted.add_scaled(m, -omega2);
+        let mut values = vec![0.0; self.symbolic.len_val()];
+        let req = self
+            .symbolic
+            .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default());
+        let mut buffer = MemBuffer::new(req);
+        self.symbolic
+            .factorize_numeric_ldlt(
+                &mut values,
+                shifted.as_faer(),
+                Side::Lower,
+                Default::default(),
+                Par::Seq,
+                MemStack::new(&mut buffer),
+                Default::default(),
+            )
+            .ok()?;
+        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
+            unreachable!("the factorisation is forced supernodal");
+        };
+        let ldlt = SupernodalLdltRef::new(supernodal, &values);
+        let mut negative = 0;
+        for s in 0..supernodal.n_supernodes() {
+            let block = ldlt.supernode(s).val();
+            for i in 0..block.ncols() {
+                let d = block[(i, i)];
+                if !d.is_finite() || d == 0.0 {
+                    return None;
+                }
+                negative += usize::from(d < 0.0);
+            }
+        }
+        Some(negative)
     }
 
     /// The modes of `(k, m)` up to `settings.cutoff_omega2`; `guess`: how
@@ -166,24 +239,7 @@ impl ShiftInvert {
                 return Err(PartialEigenError::Dimension { found, expected: n });
             }
         }
-        let mut shifted = k.clone();
-        shifted.add_scaled(m, -sigma);
-        let mut l_values = vec![0.0; self.symbolic.len_val()];
-        let req = self
-            .symbolic
-            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
-        let mut buffer = MemBuffer::new(req);
-        self.symbolic
-            .factorize_numeric_llt(
-                &mut l_values,
-                shifted.as_faer(),
-                Side::Lower,
-                LltRegularization::default(),
-                Par::Seq,
-                MemStack::new(&mut buffer),
-                Default::default(),
-            )
-            .map_err(|_| PartialEigenError::NotDefinite { shift: sigma })?;
+        let l_values = self.factorize(k, m, sigma)?;
         let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
             unreachable!("the factorisation is forced supernodal");
         };
@@ -195,51 +251,87 @@ impl ShiftInvert {
             }
             None => (identity.clone(), identity),
         };
+        let mass = m.nonzeros();
         let op = ShiftedOperator {
             llt: SupernodalLltRef::new(supernodal, &l_values),
             forward: &forward,
             inverse: &inverse,
-            mass: m,
+            mass: &mass,
         };
-        let mut wanted = guess.clamp(1, n);
+        // Sylvester's law of inertia: the negative pivots of K − ω²_cut M
+        // count the modes below the cut-off (the "Sturm check" of FE codes),
+        // so one Lanczos run asks for the right number; without it (a zero
+        // pivot), the count doubles from `guess` until the cut-off is passed.
+        let count = self.count_below(k, m, settings.cutoff_omega2);
+        let mut wanted = count.map_or(guess, |c| c + LANCZOS_MARGIN).clamp(1, n);
         let (mut mu, mut y) = loop {
             let (mu, y) = lanczos(&op, wanted);
             let passed = mu.iter().any(|&mu| sigma + 1.0 / mu > settings.cutoff_omega2);
-            if passed || wanted == n || mu.len() < wanted {
+            if count.is_some() || passed || wanted == n || mu.len() < wanted {
                 break (mu, y);
             }
             wanted = (2 * wanted).min(n);
         };
-        // One start vector finds one vector per distinct eigenvalue: a
-        // multiple one (rigid modes, symmetric decks) keeps the rest hidden.
-        // Lanczos again on C with the found vectors deflated, until it finds
-        // nothing more below the cut-off.
-        while y.ncols() < n {
-            let deflated = Deflated {
-                op: &op,
-                basis: y.as_ref(),
-            };
-            let (more_mu, more_y) = lanczos(&deflated, DEFLATION_BLOCK.min(n - y.ncols()));
-            let new: Vec<usize> = (0..more_mu.len())
-                .filter(|&i| more_mu[i] > 0.0 && sigma + 1.0 / more_mu[i] <= settings.cutoff_omega2)
-                .collect();
-            if new.is_empty() {
-                break;
+        let below = |mu: &[f64]| {
+            mu.iter()
+                .filter(|&&mu| mu > 0.0 && sigma + 1.0 / mu <= settings.cutoff_omega2)
+                .count()
+        };
+        deflate(&op, settings, count, &mut mu, &mut y);
+        if let Some(expected) = count {
+            let found = below(&mu);
+            if found != expected {
+                return Err(PartialEigenError::Missed { found, expected });
             }
-            let mut joined = Mat::<f64>::zeros(n, y.ncols() + new.len());
-            joined.subcols_mut(0, y.ncols()).copy_from(&y);
-            for (c, &i) in new.iter().enumerate() {
-                joined.col_mut(y.ncols() + c).copy_from(more_y.col(i));
-                mu.push(more_mu[i]);
-            }
-            y = joined;
         }
         finish(&op, k, m, settings, mu, y, wanted)
     }
 }
 
-/// Modes sought per deflation pass.
+/// One start vector finds one vector per distinct eigenvalue: a multiple
+/// one (rigid modes, symmetric decks) keeps the rest hidden. Lanczos again
+/// on `C` with the found vectors deflated, until `count` modes lie below the
+/// cut-off (or, without a count, nothing more is found).
+fn deflate(
+    op: &ShiftedOperator<'_>,
+    settings: &PartialSettings,
+    count: Option<usize>,
+    mu: &mut Vec<f64>,
+    y: &mut Mat<f64>,
+) {
+    let n = op.nrows();
+    let sigma = settings.shift;
+    let below = |mu: &[f64]| {
+        mu.iter()
+            .filter(|&&mu| mu > 0.0 && sigma + 1.0 / mu <= settings.cutoff_omega2)
+            .count()
+    };
+    while y.ncols() < n && count.is_none_or(|c| below(mu) < c) {
+        let deflated = Deflated { op, basis: y.as_ref() };
+        let missing = count.map_or(DEFLATION_BLOCK, |c| c - below(mu) + LANCZOS_MARGIN);
+        let (more_mu, more_y) = lanczos(&deflated, missing.min(n - y.ncols()));
+        let new: Vec<usize> = (0..more_mu.len())
+            .filter(|&i| more_mu[i] > 0.0 && sigma + 1.0 / more_mu[i] <= settings.cutoff_omega2)
+            .collect();
+        if new.is_empty() {
+            return;
+        }
+        let mut joined = Mat::<f64>::zeros(n, y.ncols() + new.len());
+        joined.subcols_mut(0, y.ncols()).copy_from(&*y);
+        for (c, &i) in new.iter().enumerate() {
+            joined.col_mut(y.ncols() + c).copy_from(more_y.col(i));
+            mu.push(more_mu[i]);
+        }
+        *y = joined;
+    }
+}
+
+/// Modes sought per deflation pass without a count.
 const DEFLATION_BLOCK: usize = 6;
+
+/// Eigenpairs asked of Lanczos beyond those wanted: the last wanted ones
+/// converge with the help of a few above them.
+const LANCZOS_MARGIN: usize = 4;
 
 /// `(I − Y Yᵀ) C (I − Y Yᵀ)` for orthonormal found vectors `Y`: their
 /// eigenvalues become 0, every other eigenpair of `C` stays.
@@ -336,7 +428,7 @@ fn finish(
     // entry): a rigid mode has `K x ≈ 0`, so `‖K x‖` cannot be the scale.
     let (k_scale, m_scale) = (k.max_diagonal(), m.max_diagonal());
     let kx = k.mul(&shapes);
-    let mx = m.mul(&shapes);
+    let mx = op.mass.mul(&shapes);
     let mut omega2 = Vec::with_capacity(order.len());
     let mut residuals = Vec::with_capacity(order.len());
     for (c, &i) in order.iter().enumerate() {
