@@ -8,6 +8,7 @@ mod common;
 mod corpus;
 mod import;
 mod live;
+mod matrices;
 mod measurements;
 mod monitoring;
 mod oma;
