@@ -22,6 +22,7 @@ use crate::damping::DampingCurve;
 use crate::linalg::{complex_solve, dense_rows};
 use crate::modal::{ModalError, ModeKind, Modes};
 use crate::model::{AssembledModel, ModelError};
+use crate::shell::Shell;
 use crate::springs::LowRankBlock;
 use crate::vec3::{dot, normalize, Vec3};
 use faer::linalg::matmul::matmul;
@@ -124,6 +125,31 @@ impl ModalState {
     }
 }
 
+/// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
+pub fn sensor_rows(shell: &Shell, sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
+    let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+    let mut rows = Vec::with_capacity(sensors.len());
+    for (index, s) in sensors.iter().enumerate() {
+        if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
+            return Err(FrfError::SensorOutside {
+                index,
+                xi: s.xi,
+                eta: s.eta,
+                tau: s.tau,
+            });
+        }
+        let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
+        let row = shell
+            .shape_functions(s.xi, s.eta, s.tau)
+            .into_iter()
+            .map(|(dof, col)| (dof, dot(dir, col)))
+            .filter(|(_, v)| *v != 0.0)
+            .collect();
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
 /// An assembled model with sensors: evaluates FRFs and sensitivities.
 #[derive(Debug, Clone)]
 pub struct FrfModel {
@@ -143,27 +169,7 @@ static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(0);
 
 impl FrfModel {
     pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
-        let shell = &assembled.shell;
-        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-        let mut sensor_rows = Vec::with_capacity(sensors.len());
-        for (index, s) in sensors.iter().enumerate() {
-            if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
-                return Err(FrfError::SensorOutside {
-                    index,
-                    xi: s.xi,
-                    eta: s.eta,
-                    tau: s.tau,
-                });
-            }
-            let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
-            let row = shell
-                .shape_functions(s.xi, s.eta, s.tau)
-                .into_iter()
-                .map(|(dof, col)| (dof, dot(dir, col)))
-                .filter(|(_, v)| *v != 0.0)
-                .collect();
-            sensor_rows.push(row);
-        }
+        let sensor_rows = sensor_rows(&assembled.shell, sensors)?;
         let mut spring_dofs: Vec<usize> = assembled
             .spring_blocks
             .iter()

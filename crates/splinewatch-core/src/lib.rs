@@ -30,6 +30,7 @@ pub mod sparse_model;
 pub mod springs;
 pub mod stiffness_field;
 pub mod surface;
+pub mod truncation;
 pub mod updating;
 pub mod vec3;
 

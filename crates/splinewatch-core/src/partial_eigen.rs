@@ -25,7 +25,8 @@ use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef};
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
 use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
@@ -177,6 +178,23 @@ impl ShiftInvert {
             )
             .map_err(|_| PartialEigenError::NotDefinite { shift: sigma })?;
         Ok(l_values)
+    }
+
+    /// `(K − σM)⁻¹ B` for the columns of `rhs` (the static solves of the
+    /// residual flexibility, [`crate::truncation`]).
+    pub fn shifted_solve(
+        &self,
+        k: &SparseSymmetric,
+        m: &SparseSymmetric,
+        sigma: f64,
+        rhs: &Mat<f64>,
+    ) -> Result<Mat<f64>, PartialEigenError> {
+        let values = self.factorize(k, m, sigma)?;
+        let llt = LltRef::new(&self.symbolic, &values);
+        let mut x = rhs.clone();
+        let mut buffer = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(x.ncols(), Par::Seq));
+        llt.solve_in_place_with_conj(Conj::No, x.as_mut(), Par::Seq, MemStack::new(&mut buffer));
+        Ok(x)
     }
 
     /// The number of eigenvalues of `(k, m)` below `omega2`: the negative

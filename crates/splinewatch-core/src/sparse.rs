@@ -232,18 +232,26 @@ impl SparseSymmetric {
         SparseColMatRef::new(self.pattern.symbolic(), &self.values)
     }
 
-    /// `self[dofs, dofs] += local`.
+    /// `self[dofs, dofs] += local`. A control point's dofs are consecutive
+    /// in `dofs` and in every column of the pattern, so one search finds a
+    /// run of them.
     pub fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        let p = &self.pattern;
         for (c, &dc) in dofs.iter().enumerate() {
-            for (r, &dr) in dofs.iter().enumerate() {
-                let v = local[(r, c)];
-                if v != 0.0 {
-                    let k = self
-                        .pattern
-                        .position(dr, dc)
-                        .ok_or(SparseError::OutsidePattern { row: dr, col: dc })?;
-                    self.values[k] += v;
+            let column = p.col_ptr[dc]..p.col_ptr[dc + 1];
+            let mut r = 0;
+            while r < dofs.len() {
+                let at = p.row_idx[column.clone()]
+                    .binary_search(&dofs[r])
+                    .map_err(|_| SparseError::OutsidePattern { row: dofs[r], col: dc })?
+                    + column.start;
+                // The run: rows that follow each other in `dofs` and in the column.
+                let mut k = 0;
+                while r + k < dofs.len() && at + k < column.end && p.row_idx[at + k] == dofs[r + k] {
+                    self.values[at + k] += local[(r + k, c)];
+                    k += 1;
                 }
+                r += k;
             }
         }
         Ok(())

@@ -196,7 +196,7 @@ impl SparseModel {
         let cutoff_omega2 = (2.0 * PI * cutoff_hz).powi(2);
         let settings = PartialSettings {
             cutoff_omega2,
-            shift: -cutoff_omega2 / SHIFT_RATIO,
+            shift: Self::shift_for(cutoff_hz),
             tolerance: RESIDUAL_TOLERANCE,
         };
         let found = self
@@ -210,6 +210,44 @@ impl SparseModel {
             shapes,
             kinds,
         })
+    }
+}
+
+impl SparseModel {
+    /// The shift the eigen-solve below `cutoff_hz` uses.
+    pub fn shift_for(cutoff_hz: f64) -> f64 {
+        -(2.0 * PI * cutoff_hz).powi(2) / SHIFT_RATIO
+    }
+
+    /// The static flexibility between every pair of sensors, `N X Nᵀ` with
+    /// `X = (K − σM)⁻¹` at `(κ, θ)` (sensor rows `N` on the generalised
+    /// dofs), and its first dynamic correction `N X M X Nᵀ`: one sparse
+    /// solve per sensor ([`crate::truncation`]).
+    pub fn flexibility(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        sensor_rows: &[Vec<(usize, f64)>],
+        shift: f64,
+    ) -> Result<(faer::Mat<f64>, faer::Mat<f64>), ModelError> {
+        let k = self.stiffness_with_fields(kappa, theta)?;
+        let ns = sensor_rows.len();
+        let mut full = faer::Mat::<f64>::zeros(self.dof_count(), ns);
+        for (s, row) in sensor_rows.iter().enumerate() {
+            for &(d, v) in row {
+                full[(d, s)] += v;
+            }
+        }
+        let rhs = self.reduction.reduce_vector(&full);
+        let x = self
+            .eigen
+            .shifted_solve(&k, &self.mass, shift, &rhs)
+            .map_err(ModelError::PartialEigen)?;
+        let mx = self.mass.mul(&x);
+        let static_part = rhs.transpose() * &x;
+        let dynamic_part = x.transpose() * &mx;
+        let symmetric = |a: faer::Mat<f64>| faer::Mat::from_fn(ns, ns, |r, c| 0.5 * (a[(r, c)] + a[(c, r)]));
+        Ok((symmetric(static_part), symmetric(dynamic_part)))
     }
 }
 
