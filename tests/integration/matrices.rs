@@ -66,8 +66,8 @@ fn exported_matrices_read_back_to_equation_23() {
     assert!(m.iter().filter(|((r, c), _)| r == c).all(|(_, &v)| v > 0.0));
 }
 
-/// The sparse path (nested dissection, supernodal Cholesky, Sturm count,
-/// faer's Lanczos) finds the modes below 100 Hz that scipy's `eigsh` finds
+/// The sparse path (decoupled blocks, nested dissection, supernodal
+/// Cholesky, Sturm count, faer's Lanczos) finds the modes below 100 Hz that scipy's `eigsh` finds
 /// on the exported matrices: the same count, elastic ω² within 1e-9
 /// relative (ARPACK's and our residual tolerances are both far below),
 /// the three in-plane rigid modes at zero to 1e-6 rad²/s².
@@ -90,6 +90,11 @@ fn sparse_modes_agree_with_scipy_eigsh() {
     )
     .unwrap();
     let model = SparseModel::assemble(&config.build_model().unwrap()).unwrap();
+    // A flat deck on vertical springs: in-plane and out-of-plane blocks, as
+    // the dense ModalSolver finds them.
+    let mut blocks = model.block_sizes();
+    blocks.sort_unstable();
+    assert_eq!(blocks, [130, 195]);
     let cutoff_hz = 100.0;
     let modes = model
         .modes_below(&model.spring_stiffness, &model.field_coefficients, cutoff_hz, 10)

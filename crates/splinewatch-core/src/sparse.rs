@@ -160,6 +160,28 @@ impl Pattern {
         self.row_idx[a..b].binary_search(&row).ok().map(|k| a + k)
     }
 
+    /// The pattern of the dofs `dofs` (ascending) alone, as a control net
+    /// with their counts per point, and for each of its entries the position
+    /// of the same entry in `self`.
+    pub fn restricted(&self, dofs: &[usize]) -> Result<(Pattern, Vec<usize>), SparseError> {
+        let mut counts = vec![0usize; self.first.len() - 1];
+        for &d in dofs {
+            counts[self.first.partition_point(|&f| f <= d) - 1] += 1;
+        }
+        let sub = Pattern::control_net(self.net, self.degrees, &counts);
+        let mut positions = Vec::with_capacity(sub.nnz());
+        for (local, &j) in dofs.iter().enumerate() {
+            for e in sub.col_ptr[local]..sub.col_ptr[local + 1] {
+                let i = dofs[sub.row_idx[e]];
+                positions.push(
+                    self.position(i, j)
+                        .ok_or(SparseError::OutsidePattern { row: i, col: j })?,
+                );
+            }
+        }
+        Ok((sub, positions))
+    }
+
     /// faer's view of this pattern.
     pub fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
         SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
@@ -209,6 +231,15 @@ impl SparseSymmetric {
     pub fn zeros(pattern: Arc<Pattern>) -> Self {
         let values = vec![0.0; pattern.nnz()];
         Self { pattern, values }
+    }
+
+    /// The matrix on a restricted pattern: `positions` (from
+    /// [`Pattern::restricted`]) pick each entry's value from `self`.
+    pub fn restrict(&self, pattern: &Arc<Pattern>, positions: &[usize]) -> Self {
+        Self {
+            pattern: Arc::clone(pattern),
+            values: positions.iter().map(|&p| self.values[p]).collect(),
+        }
     }
 
     pub fn pattern(&self) -> &Arc<Pattern> {

@@ -76,7 +76,67 @@ pub struct SparseModel {
     pub field_coefficients: Vec<Vec<f64>>,
     /// Row-sum translational mass per control point (mode classification).
     lumped: Vec<f64>,
+    /// The pencil's decoupled blocks, each with its own factorisation.
+    blocks: Vec<Block>,
+}
+
+/// A set of free coordinates no matrix of the model couples to the others
+/// (a flat deck on normal springs: its in-plane and its out-of-plane dofs):
+/// its eigenpairs are the pencil's, found on a factor of its own size (the
+/// sparse counterpart of the dense `ModalSolver`'s blocks).
+#[derive(Debug, Clone)]
+struct Block {
+    /// Free coordinates, ascending.
+    dofs: Vec<usize>,
+    pattern: Arc<Pattern>,
+    /// Per entry of `pattern`, the position of the same entry in the model's.
+    positions: Vec<usize>,
     eigen: ShiftInvert,
+}
+
+impl Block {
+    fn restrict(&self, m: &SparseSymmetric) -> SparseSymmetric {
+        m.restrict(&self.pattern, &self.positions)
+    }
+}
+
+/// The connected components of the coupling graph of the free coordinates
+/// (an entry couples when any of the model's matrices is non-zero there).
+fn decoupled_blocks(pattern: &Arc<Pattern>, coupled: &[bool]) -> Result<Vec<Block>, ModelError> {
+    let n = pattern.dim();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    for c in 0..n {
+        for e in pattern.col_ptr()[c]..pattern.col_ptr()[c + 1] {
+            if coupled[e] {
+                let (a, b) = (root(&mut parent, c), root(&mut parent, pattern.row_idx()[e]));
+                parent[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let mut components: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for d in 0..n {
+        components.entry(root(&mut parent, d)).or_default().push(d);
+    }
+    components
+        .into_values()
+        .map(|dofs| {
+            let (sub, positions) = pattern.restricted(&dofs).map_err(sparse_error)?;
+            let sub = Arc::new(sub);
+            Ok(Block {
+                eigen: ShiftInvert::new(&sub).map_err(ModelError::PartialEigen)?,
+                dofs,
+                pattern: sub,
+                positions,
+            })
+        })
+        .collect()
 }
 
 fn sparse_error(e: SparseError) -> ModelError {
@@ -132,11 +192,22 @@ impl SparseModel {
                     .map_err(sparse_error)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let eigen = ShiftInvert::new(&pattern).map_err(ModelError::PartialEigen)?;
+        let free_stiffness = k.reduce(&reduction, &pattern).map_err(sparse_error)?;
+        let mass = m.reduce(&reduction, &pattern).map_err(sparse_error)?;
+        let mut coupled: Vec<bool> = free_stiffness
+            .values()
+            .iter()
+            .zip(mass.values())
+            .map(|(k, m)| *k != 0.0 || *m != 0.0)
+            .collect();
+        for term in spring_terms.iter().chain(&field_terms).flatten() {
+            term.positions.iter().for_each(|&p| coupled[p] = true);
+        }
+        let blocks = decoupled_blocks(&pattern, &coupled)?;
         Ok(Self {
             shell: shell.clone(),
-            free_stiffness: k.reduce(&reduction, &pattern).map_err(sparse_error)?,
-            mass: m.reduce(&reduction, &pattern).map_err(sparse_error)?,
+            free_stiffness,
+            mass,
             reduction,
             pattern,
             spring_terms,
@@ -148,13 +219,18 @@ impl SparseModel {
                 .map(|f| f.coefficients().to_vec())
                 .collect(),
             lumped,
-            eigen,
+            blocks,
         })
     }
 
     /// Generalised dofs (before the constraints).
     pub fn dof_count(&self) -> usize {
         self.reduction.full_count()
+    }
+
+    /// Sizes of the decoupled blocks the eigenproblem splits into.
+    pub fn block_sizes(&self) -> Vec<usize> {
+        self.blocks.iter().map(|b| b.dofs.len()).collect()
     }
 
     /// Free coordinates (the size of the eigenproblem).
@@ -199,17 +275,29 @@ impl SparseModel {
             shift: Self::shift_for(cutoff_hz),
             tolerance: RESIDUAL_TOLERANCE,
         };
-        let found = self
-            .eigen
-            .solve(&k, &self.mass, &settings, guess)
-            .map_err(ModelError::PartialEigen)?;
-        let shapes = self.reduction.expand(&found.shapes);
-        let kinds = classify_lumped(&found.omega2, &shapes, &self.lumped, &self.shell);
-        Ok(Modes {
-            omega2: found.omega2,
-            shapes,
-            kinds,
-        })
+        // Each block's modes, merged in ascending order.
+        let mut found = Vec::new();
+        for block in &self.blocks {
+            let modes = block
+                .eigen
+                .solve(&block.restrict(&k), &block.restrict(&self.mass), &settings, guess)
+                .map_err(ModelError::PartialEigen)?;
+            found.push(modes);
+        }
+        let mut order: Vec<(usize, usize)> = (0..found.len())
+            .flat_map(|b| (0..found[b].omega2.len()).map(move |i| (b, i)))
+            .collect();
+        order.sort_by(|&(a, i), &(b, j)| found[a].omega2[i].total_cmp(&found[b].omega2[j]));
+        let mut reduced = faer::Mat::<f64>::zeros(self.free_count(), order.len());
+        for (c, &(b, i)) in order.iter().enumerate() {
+            for (r, &d) in self.blocks[b].dofs.iter().enumerate() {
+                reduced[(d, c)] = found[b].shapes[(r, i)];
+            }
+        }
+        let omega2: Vec<f64> = order.iter().map(|&(b, i)| found[b].omega2[i]).collect();
+        let shapes = self.reduction.expand(&reduced);
+        let kinds = classify_lumped(&omega2, &shapes, &self.lumped, &self.shell);
+        Ok(Modes { omega2, shapes, kinds })
     }
 }
 
@@ -239,10 +327,19 @@ impl SparseModel {
             }
         }
         let rhs = self.reduction.reduce_vector(&full);
-        let x = self
-            .eigen
-            .shifted_solve(&k, &self.mass, shift, &rhs)
-            .map_err(ModelError::PartialEigen)?;
+        let mut x = faer::Mat::<f64>::zeros(rhs.nrows(), ns);
+        for block in &self.blocks {
+            let part = faer::Mat::from_fn(block.dofs.len(), ns, |r, s| rhs[(block.dofs[r], s)]);
+            let solved = block
+                .eigen
+                .shifted_solve(&block.restrict(&k), &block.restrict(&self.mass), shift, &part)
+                .map_err(ModelError::PartialEigen)?;
+            for (r, &d) in block.dofs.iter().enumerate() {
+                for s in 0..ns {
+                    x[(d, s)] = solved[(r, s)];
+                }
+            }
+        }
         let mx = self.mass.mul(&x);
         let static_part = rhs.transpose() * &x;
         let dynamic_part = x.transpose() * &mx;
