@@ -1,8 +1,12 @@
 //! Assembly and eigen-solve of the bundled Sinello model (13 × 5 net, 325
-//! dofs) and of a refined 40 × 16 net (3 200 dofs). Run: `cargo bench --bench model`.
+//! dofs) and of a refined 40 × 16 net (3 200 dofs), dense; and the sparse
+//! path (sparse assembly, modes below 160 Hz) up to 100 × 40 (20 000 dofs).
+//! Run: `cargo bench --bench model`. The side-by-side with scipy and peak
+//! memory: `benches/sparse_scaling.sh`.
 
 use splinewatch::config::Config;
 use splinewatch_core::model::ShellModel;
+use splinewatch_core::sparse_model::SparseModel;
 
 const SINELLO: &str = include_str!("../config/sinello.toml");
 
@@ -24,6 +28,22 @@ fn assemble(bencher: divan::Bencher, net: [usize; 2]) {
 fn eigen_solve(bencher: divan::Bencher, net: [usize; 2]) {
     let assembled = model(net).assemble().unwrap();
     bencher.bench(|| assembled.modes().unwrap());
+}
+
+#[divan::bench(args = [[13, 5], [40, 16], [100, 40]], sample_count = 3, sample_size = 1)]
+fn sparse_assemble(bencher: divan::Bencher, net: [usize; 2]) {
+    let m = model(net);
+    bencher.bench(|| SparseModel::assemble(&m).unwrap());
+}
+
+#[divan::bench(args = [[13, 5], [40, 16], [100, 40]], sample_count = 3, sample_size = 1)]
+fn modes_below_160_hz(bencher: divan::Bencher, net: [usize; 2]) {
+    let sparse = SparseModel::assemble(&model(net)).unwrap();
+    bencher.bench(|| {
+        sparse
+            .modes_below(&sparse.spring_stiffness, &sparse.field_coefficients, 160.0, 90)
+            .unwrap()
+    });
 }
 
 fn main() {
