@@ -397,6 +397,8 @@ pub(crate) struct Quadrature {
     pub(crate) extra: (usize, usize),
     /// Cuts of the ξ and η domains besides the shell's own breakpoints.
     pub(crate) cuts: (Vec<f64>, Vec<f64>),
+    /// Only the ξ spans `[a, b)` (indices among the cut spans); `None`: all.
+    pub(crate) xi_spans: Option<(usize, usize)>,
 }
 
 /// A step of the quadrature loop ([`integrate`]).
@@ -451,7 +453,10 @@ pub(crate) fn integrate(
     };
     let bx = cut(shell.surface.xi().breakpoints(), &quadrature.cuts.0);
     let be = cut(shell.surface.eta().breakpoints(), &quadrature.cuts.1);
-    for wx in bx.windows(2) {
+    for (ix, wx) in bx.windows(2).enumerate() {
+        if quadrature.xi_spans.is_some_and(|(a, b)| ix < a || ix >= b) {
+            continue;
+        }
         for we in be.windows(2) {
             for (xi, wxi) in gx.mapped(wx[0], wx[1]) {
                 for (eta, weta) in ge.mapped(we[0], we[1]) {
@@ -549,9 +554,25 @@ pub fn assemble_sparse(
     material: &OrthotropicMaterial,
     pattern: &Arc<Pattern>,
 ) -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
-    let mut stiffness = SparseSymmetric::zeros(Arc::clone(pattern));
-    let mut mass = SparseSymmetric::zeros(Arc::clone(pattern));
-    assemble_into(shell, material, &mut stiffness, &mut mass)?;
+    // Two threads, each on half of the ξ spans into matrices of its own,
+    // added at the end: a fixed split, so the sums do not depend on the
+    // machine.
+    let spans = shell.surface.xi().breakpoints().len() - 1;
+    let half = spans / 2;
+    let part = |range: (usize, usize)| -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
+        let mut stiffness = SparseSymmetric::zeros(Arc::clone(pattern));
+        let mut mass = SparseSymmetric::zeros(Arc::clone(pattern));
+        assemble_spans(shell, material, &mut stiffness, &mut mass, Some(range))?;
+        Ok((stiffness, mass))
+    };
+    let (first, second) = std::thread::scope(|scope| {
+        let other = scope.spawn(|| part((half, spans)));
+        let first = part((0, half));
+        (first, other.join().expect("assembly thread"))
+    });
+    let ((mut stiffness, mut mass), (k2, m2)) = (first?, second?);
+    stiffness.add_scaled(&k2, 1.0);
+    mass.add_scaled(&m2, 1.0);
     Ok((stiffness, mass))
 }
 
@@ -562,6 +583,17 @@ pub fn assemble_into<A: Assembly>(
     stiffness: &mut A,
     mass: &mut A,
 ) -> Result<(), ShellError> {
+    assemble_spans(shell, material, stiffness, mass, None)
+}
+
+/// [`assemble_into`] over the ξ spans `[a, b)` only (`None`: all).
+fn assemble_spans<A: Assembly>(
+    shell: &Shell,
+    material: &OrthotropicMaterial,
+    stiffness: &mut A,
+    mass: &mut A,
+    xi_spans: Option<(usize, usize)>,
+) -> Result<(), ShellError> {
     let (p, q) = (shell.surface.xi().degree(), shell.surface.eta().degree());
     let nloc = DOFS_PER_CONTROL_POINT * (p + 1) * (q + 1);
     let rho = material.density();
@@ -570,6 +602,7 @@ pub fn assemble_into<A: Assembly>(
     let exact = Quadrature {
         extra: (0, 0),
         cuts: (Vec::new(), Vec::new()),
+        xi_spans,
     };
     let mut outcome = Ok(());
     integrate(shell, material, &exact, |step| match step {

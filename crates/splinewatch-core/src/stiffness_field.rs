@@ -192,6 +192,7 @@ impl StiffnessField {
         let quadrature = shell::Quadrature {
             extra: (self.xi.degree().div_ceil(2), self.eta.degree().div_ceil(2)),
             cuts: (self.xi.breakpoints(), self.eta.breakpoints()),
+            xi_spans: None,
         };
         shell::integrate(shell, material, &quadrature, |step| match step {
             QuadratureStep::Point {
@@ -385,6 +386,7 @@ mod tests {
         let quadrature = shell::Quadrature {
             extra: (0, 0),
             cuts: (vec![0.5], Vec::new()),
+            xi_spans: None,
         };
         shell::integrate(&shell, &material, &quadrature, |step| match step {
             QuadratureStep::Point { xi, w, rows, .. } => {
