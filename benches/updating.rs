@@ -67,7 +67,7 @@ fn one_evaluation_with_a_stiffness_field(bencher: divan::Bencher) {
         .unwrap(),
     );
     let setup = splinewatch::config::frf_setup(&model).unwrap();
-    let theta = setup.model.assembled().field_coefficients.clone();
+    let theta = setup.model.field_coefficients().to_vec();
     let freqs: Vec<f64> = (0..796).map(|k| 0.5 + 0.1 * k as f64).collect();
     let pairs: Vec<(usize, usize)> = (0..12).map(|r| (r, 0)).collect();
     bencher.bench(|| {

@@ -184,8 +184,18 @@ pub fn update(a: UpdateArgs) -> Result<()> {
         (Some(frf), _) => {
             let frf_text =
                 std::fs::read_to_string(frf).with_context(|| format!("cannot read FRF file {}", frf.display()))?;
-            let result = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
+            let (result, truncation) = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
                 .with_context(|| format!("updating against {}", frf.display()))?;
+            if let Some(t) = truncation {
+                let error = t.frf_error.map_or("not evaluated (a large model)".to_string(), |e| {
+                    format!("{e:.2e} of each FRF's peak")
+                });
+                errln!(
+                    "modal truncation: {} modes below {} Hz, the rest as residual flexibility; FRF error against every mode: {error}",
+                    t.modes_kept,
+                    t.cutoff_hz
+                );
+            }
             (result, None)
         }
         (None, Some(modes)) => {

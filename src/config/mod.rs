@@ -19,8 +19,8 @@ mod zenoh;
 pub use frf::FrfConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
-    MaterialConfig, ModelConfig, QuantityList, SensorConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
-    MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
+    MaterialConfig, ModelConfig, ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig,
+    StiffnessFieldConfig, SupportConfig, AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
 };
 pub use monitoring::MonitoringConfig;
 pub use oma::OmaConfig;
@@ -179,6 +179,7 @@ impl Config {
     pub fn validate(&self) -> Result<(), ConfigError> {
         let model = self.build_model()?;
         self.build_sensors(&model.shell)?;
+        self.modal_cutoff_hz()?;
         if self.model.damping.is_some() {
             self.build_damping()?;
         }

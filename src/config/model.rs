@@ -36,6 +36,40 @@ pub struct ModelConfig {
     #[serde(default)]
     pub constraints: Vec<ConstraintConfig>,
     pub damping: Option<DampingConfig>,
+    /// `[model.solver]`: every mode (dense) or the modes below a cut-off
+    /// (sparse, with the residual of the rest).
+    #[serde(default)]
+    pub solver: SolverConfig,
+}
+
+/// `[model.solver] modes`: which eigen-solution the FRFs and updates use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModesChoice {
+    /// Every mode of the dense model (exact modal sums; small models).
+    All,
+    /// The modes below `cutoff_hz` by shift-invert Lanczos on the sparse
+    /// model, the rest as residual flexibility.
+    Truncated,
+    /// `truncated` above [`AUTO_TRUNCATED_CONTROL_POINTS`], else `all`.
+    #[default]
+    Auto,
+}
+
+/// Above this many control points (3 200 dofs, where one dense eigen-solve
+/// takes seconds) `modes = "auto"` truncates.
+pub const AUTO_TRUNCATED_CONTROL_POINTS: usize = 640;
+
+/// `[model.solver]`.
+#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolverConfig {
+    #[serde(default)]
+    pub modes: ModesChoice,
+    /// Modes up to this frequency are solved when truncating; default:
+    /// twice the top of the widest analysis band (`updating.band`,
+    /// `oma.band`, `frf.band`).
+    pub cutoff_hz: Option<f64>,
 }
 
 /// `[model.damping]`: the B-spline ζ(f) of eq. (29).
@@ -251,6 +285,38 @@ pub struct ConstraintConfig {
 }
 
 impl Config {
+    /// The cut-off when the model is truncated (`[model.solver]`), `None`
+    /// for every mode.
+    pub fn modal_cutoff_hz(&self) -> Result<Option<f64>, ConfigError> {
+        let solver = &self.model.solver;
+        let truncated = match solver.modes {
+            ModesChoice::All => false,
+            ModesChoice::Truncated => true,
+            ModesChoice::Auto => self.build_shell()?.control_point_count() > AUTO_TRUNCATED_CONTROL_POINTS,
+        };
+        if !truncated {
+            return Ok(None);
+        }
+        match solver.cutoff_hz {
+            Some(f) if !(f.is_finite() && f > 0.0) => Err(err(
+                "model.solver.cutoff_hz",
+                format!("{f} must be a positive frequency in Hz"),
+            )),
+            Some(f) => Ok(Some(f)),
+            None => {
+                let top = [
+                    self.updating.band.map(|b| b[1]),
+                    self.oma.band.map(|b| b[1]),
+                    Some(self.frf.band[1]),
+                ]
+                .into_iter()
+                .flatten()
+                .fold(0.0, f64::max);
+                Ok(Some(2.0 * top))
+            }
+        }
+    }
+
     /// Validates the model section into a [`ShellModel`].
     /// The model for the dense path: refuses a net above
     /// [`MAX_DENSE_CONTROL_POINTS`] with the way out.

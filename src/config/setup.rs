@@ -3,14 +3,51 @@
 use super::Config;
 use anyhow::{Context, Result};
 use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, SensorPoint};
+use splinewatch_core::frf::{FrfModel, FrfRequest, SensorPoint};
+use splinewatch_core::truncation::TruncationReport;
 
 /// The model, its sensors and damping, ready for FRF work.
 pub struct FrfSetup {
     pub model: FrfModel,
+    /// A truncated model's every-mode twin, when the model is small enough
+    /// for the dense path to be cheap (at most
+    /// [`super::model::AUTO_TRUNCATED_CONTROL_POINTS`] control points): the
+    /// update report states the truncation error against it.
+    pub reference: Option<FrfModel>,
     pub sensor_names: Vec<String>,
     pub kappa: Vec<Vec<f64>>,
     pub damping: DampingCurve,
+}
+
+impl FrfSetup {
+    /// A truncated model's report at `(κ, θ)` and `damping` with
+    /// `modes_kept` modes: with `request` (an FRF fit) and a reference model,
+    /// the truncation error of those FRFs; `None` for every mode.
+    pub fn truncation_report(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        damping: &DampingCurve,
+        modes_kept: usize,
+        request: Option<FrfRequest<'_>>,
+    ) -> Result<Option<TruncationReport>> {
+        let Some(cutoff_hz) = self.model.cutoff_hz() else {
+            return Ok(None);
+        };
+        let frf_error = match (&self.reference, request) {
+            (Some(reference), Some(request)) => Some(
+                self.model
+                    .truncation_error(reference, kappa, theta, damping, request)
+                    .context("the truncation error against every mode")?,
+            ),
+            _ => None,
+        };
+        Ok(Some(TruncationReport {
+            cutoff_hz,
+            modes_kept,
+            frf_error,
+        }))
+    }
 }
 
 /// Assembles the configured model with its sensors and damping curve.
@@ -21,7 +58,11 @@ pub fn frf_setup(config: &Config) -> Result<FrfSetup> {
 /// As [`frf_setup`], with `extra` points appended to the model's sensor list
 /// (after the configured sensors; the simulator's unmeasured force points).
 pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<FrfSetup> {
-    let model = config.build_dense_model()?;
+    let cutoff_hz = config.modal_cutoff_hz()?;
+    let model = match cutoff_hz {
+        Some(_) => config.build_model()?,
+        None => config.build_dense_model()?,
+    };
     let sensors = config.build_sensors(&model.shell)?;
     if sensors.is_empty() {
         anyhow::bail!("config: sensors: at least one [[sensors]] table is required for FRFs");
@@ -29,9 +70,23 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
     let damping = config.build_damping()?;
     let kappa = model.springs.iter().map(|s| s.stiffness().to_vec()).collect();
     let points: Vec<_> = sensors.iter().map(|(_, p)| *p).chain(extra.iter().copied()).collect();
-    let frf_model = FrfModel::new(model.assemble().context("assembling the model")?, &points)?;
+    let dense = |model: &splinewatch_core::model::ShellModel| -> Result<FrfModel> {
+        Ok(FrfModel::new(
+            model.assemble().context("assembling the model")?,
+            &points,
+        )?)
+    };
+    let (frf_model, reference) = match cutoff_hz {
+        Some(cutoff_hz) => {
+            let truncated = FrfModel::truncated(&model, &points, cutoff_hz).context("assembling the sparse model")?;
+            let small = model.shell.control_point_count() <= super::model::AUTO_TRUNCATED_CONTROL_POINTS;
+            (truncated, if small { Some(dense(&model)?) } else { None })
+        }
+        None => (dense(&model)?, None),
+    };
     Ok(FrfSetup {
         model: frf_model,
+        reference,
         sensor_names: sensors.into_iter().map(|(n, _)| n).collect(),
         kappa,
         damping,

@@ -15,7 +15,7 @@ use std::path::Path;
 pub const TOPICS: [(&str, &str); 9] = [
     (
         "updating/parameters",
-        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}}}}"#,
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}},"truncation":{"type":"object","properties":{"cutoff_hz":{"type":"number"},"modes_kept":{"type":"integer"},"frf_error":{"type":["number","null"]}}}}}"#,
     ),
     (
         "updating/residue",
@@ -147,6 +147,9 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
                     "correlations": r.result.correlations,
                 }),
             ));
+            if let (Some(truncation), Some((_, message))) = (&r.truncation, out.last_mut()) {
+                message["truncation"] = json!(truncation);
+            }
             match &r.fit {
                 Fit::Frf { model, residue } => {
                     out.push((

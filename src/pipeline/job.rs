@@ -9,7 +9,7 @@ use crate::io::frf_json::{FrfEntry, FrfFile};
 use crate::io::modes_json::ModesFile;
 use anyhow::{bail, Result};
 use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::ModalState;
+use splinewatch_core::frf::{FrfRequest, ModalState};
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::updating::{
     ModalUpdateProblem, ModelPoint, Parameter, UpdateProblem, UpdateResult, UpdateSettings,
@@ -115,6 +115,8 @@ pub struct UpdateReport {
     /// without stiffness fields).
     pub theta: Vec<Vec<f64>>,
     pub damping: DampingCurve,
+    /// How the modes were truncated, for a `[model.solver]` truncated model.
+    pub truncation: Option<splinewatch_core::truncation::TruncationReport>,
 }
 
 impl UpdateJob {
@@ -176,6 +178,9 @@ impl UpdateJob {
         // The model's modes up to the highest identified one, and a little above.
         let top = observed.iter().map(|m| m.frequency_hz).fold(0.0, f64::max) * (1.0 + self.pairing.1);
         let (modes, bending_modes) = model_modes(&state, top);
+        let truncation = self
+            .setup
+            .truncation_report(&kappa, &theta, &damping, state.modes.len(), None)?;
         let report = UpdateReport {
             result,
             fit: Fit::Modes(pairs),
@@ -184,6 +189,7 @@ impl UpdateJob {
             kappa,
             theta,
             damping,
+            truncation,
         };
         Ok((report, state))
     }
@@ -230,6 +236,15 @@ impl UpdateJob {
         let theta = point.theta().to_vec();
         let top = lines.last().copied().unwrap_or(0.0);
         let (modes, bending_modes) = model_modes(state, top);
+        let pairs: Vec<(usize, usize)> = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
+        let request = FrfRequest {
+            frequencies_hz: &lines,
+            pairs: &pairs,
+            quantity: measured.quantity(),
+        };
+        let truncation = self
+            .setup
+            .truncation_report(&kappa, &theta, &damping, state.modes.len(), Some(request))?;
         let report = UpdateReport {
             result,
             fit: Fit::Frf {
@@ -247,6 +262,7 @@ impl UpdateJob {
             kappa,
             theta,
             damping,
+            truncation,
         };
         Ok((report, point))
     }

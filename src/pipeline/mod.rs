@@ -284,7 +284,7 @@ impl Pipeline {
         let base = splinewatch_core::updating::base_values(
             &self.parameters,
             &self.setup.kappa,
-            &self.setup.model.assembled().field_coefficients,
+            self.setup.model.field_coefficients(),
             &self.setup.damping,
         );
         match &self.last {

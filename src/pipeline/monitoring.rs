@@ -164,7 +164,7 @@ fn frequency_features(
     parameters: &[Parameter],
     setup: &FrfSetup,
 ) -> anyhow::Result<Vec<String>> {
-    let field_coefficients = &setup.model.assembled().field_coefficients;
+    let field_coefficients = setup.model.field_coefficients();
     let nominal = splinewatch_core::updating::base_values(parameters, &setup.kappa, field_coefficients, &setup.damping);
     let (state, _) =
         splinewatch_core::updating::modal_state_at(&setup.model, parameters, &setup.kappa, &setup.damping, &nominal)?;

@@ -201,7 +201,11 @@ pub fn simulate(
             let last = sim.last_forces().to_vec();
             state = state_at(t0)?;
             sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
-            sim.set_physical_state(&state, &setup.model.assembled().mass, &x, &v);
+            let dense = setup
+                .model
+                .dense()
+                .context("a scenario that changes the model needs every mode: set [model.solver] modes = \"all\"")?;
+            sim.set_physical_state(&state, &dense.mass, &x, &v);
             sim.set_last_forces(&last);
             summary.model_updates += 1;
         }
@@ -358,8 +362,8 @@ impl Scenario {
         parameters: &[Parameter],
         t: f64,
     ) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-        let base_theta = &setup.model.assembled().field_coefficients;
-        let (mut k, mut theta) = (setup.kappa.clone(), base_theta.clone());
+        let base_theta = setup.model.field_coefficients();
+        let (mut k, mut theta) = (setup.kappa.clone(), base_theta.to_vec());
         for c in &self.changes {
             let p = parameters
                 .iter()

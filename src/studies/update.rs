@@ -7,6 +7,8 @@ use crate::io::frf_json::FrfFile;
 use crate::io::modes_json::ModesFile;
 use anyhow::{Context, Result};
 use serde::Deserialize;
+use splinewatch_core::frf::FrfRequest;
+use splinewatch_core::truncation::TruncationReport;
 use splinewatch_core::updating::{
     IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateProblem, UpdateResult,
 };
@@ -43,13 +45,14 @@ pub fn start_values(text: &str, parameters: &[Parameter], base: &[f64]) -> Resul
     Ok(values)
 }
 
-/// `splinewatch update`: runs the updating and returns its result.
+/// `splinewatch update`: runs the updating and returns its result, with
+/// the truncation of the modal basis when the model is truncated.
 pub fn update(
     config: &Config,
     frf_text: &str,
     start: Option<&str>,
     progress: &mut dyn FnMut(&IterationRecord),
-) -> Result<UpdateResult> {
+) -> Result<(UpdateResult, Option<TruncationReport>)> {
     let setup = frf_setup(config)?;
     let frf = FrfFile::parse(frf_text)?;
     let measured = frf.to_measured(&setup.sensor_names)?;
@@ -68,7 +71,23 @@ pub fn update(
         Some(text) => start_values(text, problem.parameters(), &base)?,
         None => base,
     };
-    Ok(problem.solve_observed(&start, progress)?)
+    let result = problem.solve_observed(&start, progress)?;
+    let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
+    let truncation = if setup.model.cutoff_hz().is_some() {
+        let (kappa, damping) = problem.model_at(&values)?;
+        let theta = problem.fields_at(&values);
+        let pairs: Vec<(usize, usize)> = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
+        let request = FrfRequest {
+            frequencies_hz: problem.line_frequencies(),
+            pairs: &pairs,
+            quantity: measured.quantity(),
+        };
+        let kept = problem.state_at(&values)?.modes.len();
+        setup.truncation_report(&kappa, &theta, &damping, kept, Some(request))?
+    } else {
+        None
+    };
+    Ok((result, truncation))
 }
 
 /// `splinewatch update --modes`: modal-residue updating against identified modes.
@@ -85,7 +104,7 @@ pub fn update_from_modes(
     let base = splinewatch_core::updating::base_values(
         &parameters,
         &setup.kappa,
-        &setup.model.assembled().field_coefficients,
+        setup.model.field_coefficients(),
         &setup.damping,
     );
     let problem = ModalUpdateProblem::new(

@@ -131,25 +131,30 @@ fn matrices_into_an_impossible_folder_is_a_clear_error() {
     assert!(err.contains("sub") && err.lines().count() <= 3, "{err}");
 }
 
-/// Modal truncation with residual compensation on the bundled deck: the
-/// modes below 160 Hz (2× the 80 Hz band) from the sparse path plus the
-/// residual flexibility of the discarded ones give the 12 accelerances of
-/// the paper's case (input at the first sensor) over the band within 1e-3
-/// of the full modal sum over all 325 modes (the dense path), relative to
-/// each FRF's peak; without the residual the error is larger: the
-/// compensation is what makes truncation safe.
+/// The bundled deck with `[model.solver] modes = "truncated"` (the
+/// modes below 160 Hz, 2× the 80 Hz band, from the sparse path plus the
+/// residual of the others) gives the 12 accelerances of the paper's case
+/// (input at the first sensor) over the band within 1e-3 of the full modal
+/// sum over all 325 modes (the dense path), relative to each FRF's peak;
+/// without the residual the error is larger: the compensation is what makes
+/// truncation safe.
 #[test]
 fn truncated_frfs_with_residual_compensation_match_the_full_modal_sum() {
-    use splinewatch_core::frf::{sensor_rows, FrfRequest, Quantity};
-    use splinewatch_core::truncation::TruncatedFrf;
-    let config = load_config(
+    use splinewatch::config::ModesChoice;
+    use splinewatch_core::frf::{FrfRequest, Quantity};
+    let mut config = load_config(
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("config/sinello.toml")
             .as_path(),
     )
     .unwrap();
+    config.model.solver.modes = ModesChoice::Truncated;
     let setup = splinewatch::config::frf_setup(&config).unwrap();
-    let full = setup.model.modal_state(&setup.kappa, &setup.damping).unwrap();
+    assert_eq!(setup.model.cutoff_hz(), Some(160.0));
+    let reference = setup
+        .reference
+        .as_ref()
+        .expect("the small deck keeps its every-mode twin");
     let lines: Vec<f64> = (2..=320).map(|k| 0.25 * k as f64).collect();
     let pairs: Vec<(usize, usize)> = (0..12).map(|s| (s, 0)).collect();
     let request = FrfRequest {
@@ -157,50 +162,131 @@ fn truncated_frfs_with_residual_compensation_match_the_full_modal_sum() {
         pairs: &pairs,
         quantity: Quantity::Accelerance,
     };
-    let reference = setup.model.evaluate(&full, request, false).h;
-    let model = config.build_model().unwrap();
-    let sparse = SparseModel::assemble(&model).unwrap();
-    let cutoff_hz = 160.0;
-    let modes = sparse
-        .modes_below(&setup.kappa, &sparse.field_coefficients, cutoff_hz, 10)
-        .unwrap();
-    for i in 0..modes.len() {
-        let (a, b) = (modes.frequency_hz(i), full.modes.frequency_hz(i));
+    let full = reference.modal_state(&setup.kappa, &setup.damping).unwrap();
+    let expected = reference.evaluate(&full, request, false).h;
+    let kept = setup.model.modal_state(&setup.kappa, &setup.damping).unwrap();
+    for i in 0..kept.modes.len() {
+        let (a, b) = (kept.modes.frequency_hz(i), full.modes.frequency_hz(i));
         // Rigid modes (zero to round-off) compare absolutely.
         assert!((a - b).abs() <= 1e-6 * b.max(100.0), "mode {i}: {a} vs {b} Hz");
     }
-    let zeta = full.zeta[..modes.len()].to_vec();
-    let points: Vec<_> = config
-        .build_sensors(&model.shell)
-        .unwrap()
-        .into_iter()
-        .map(|(_, p)| p)
-        .collect();
-    let rows = sensor_rows(&model.shell, &points).unwrap();
-    let shift = SparseModel::shift_for(cutoff_hz);
-    let flexibility = sparse
-        .flexibility(&setup.kappa, &sparse.field_coefficients, &rows, shift)
-        .unwrap();
-    let truncated = TruncatedFrf::new(&modes, zeta, &rows, &flexibility, shift);
+    let found = setup.model.evaluate(&kept, request, false).h;
+    let residual = kept.residual().expect("a truncated state");
     let (mut worst, mut worst_plain) = (0.0f64, 0.0f64);
     for (p, &(r, s)) in pairs.iter().enumerate() {
-        let h = &reference[p * lines.len()..(p + 1) * lines.len()];
+        let h = &expected[p * lines.len()..(p + 1) * lines.len()];
         let peak = h.iter().map(|v| v.norm()).fold(0.0, f64::max);
         for (line, f) in lines.iter().enumerate() {
             let omega = 2.0 * std::f64::consts::PI * f;
-            let compensated = truncated.frf(r, s, omega, Quantity::Accelerance, true);
-            let plain = truncated.frf(r, s, omega, Quantity::Accelerance, false);
+            let compensated = found[p * lines.len() + line];
+            let plain = compensated - Quantity::Accelerance.factor(omega) * residual.at_sensors(r, s, omega);
             worst = worst.max((compensated - h[line]).norm() / peak);
             worst_plain = worst_plain.max((plain - h[line]).norm() / peak);
         }
     }
+    let reported = setup
+        .model
+        .truncation_error(
+            reference,
+            &setup.kappa,
+            setup.model.field_coefficients(),
+            &setup.damping,
+            request,
+        )
+        .unwrap();
+    assert_eq!(reported, worst, "the update report's figure is this one");
     assert!(worst <= 1e-3, "compensated: {worst:.2e} of the peak");
     assert!(
-        worst_plain > 2.0 * worst,
+        worst_plain > 10.0 * worst,
         "truncated without the residual: {worst_plain:.2e}, with: {worst:.2e}"
     );
     eprintln!(
-        "truncation at {cutoff_hz} Hz ({} of 325 modes): {worst:.2e} with the residual, {worst_plain:.2e} without",
-        modes.len()
+        "truncation at 160 Hz ({} of 325 modes): {worst:.2e} with the residual, {worst_plain:.2e} without",
+        kept.modes.len()
+    );
+}
+
+/// `splinewatch update` on a truncated deck (`[model.solver] modes =
+/// "truncated"` in the config file) against synthetic FRFs of the true
+/// deck: the same spring coefficients as the every-mode update within
+/// 1e-3, and the report names the cut-off, the modes kept and the
+/// truncation error; bad solver keys are refused with their path.
+#[test]
+fn a_truncated_update_from_the_cli_matches_the_every_mode_one() {
+    let dir = fresh_dir("truncated-update");
+    let frf = dir.join("frf.json");
+    let out = splinewatch(&[
+        "synth",
+        "--config",
+        "config/sinello-truth.toml",
+        "--inputs",
+        "P1",
+        "--outputs",
+        "P1,P2,P3,P4,P5,P6",
+        "--from",
+        "1",
+        "--to",
+        "80",
+        "--step",
+        "0.25",
+        "--out",
+        frf.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let bundled = std::fs::read_to_string("config/sinello.toml").unwrap();
+    let truncated = dir.join("truncated.toml");
+    std::fs::write(
+        &truncated,
+        format!("{bundled}\n[model.solver]\nmodes = \"truncated\"\n"),
+    )
+    .unwrap();
+    let update = |config: &Path| {
+        let out = splinewatch(&[
+            "update",
+            "--config",
+            config.to_str().unwrap(),
+            "--frf",
+            frf.to_str().unwrap(),
+            "--json",
+        ]);
+        let stderr = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{stderr}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(v["converged"], true, "{stderr}");
+        let values: Vec<(String, f64)> = v["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| (p["name"].as_str().unwrap().to_string(), p["value"].as_f64().unwrap()))
+            .collect();
+        (values, stderr)
+    };
+    let (every, _) = update(Path::new("config/sinello.toml"));
+    let (kept, stderr) = update(&truncated);
+    assert!(
+        stderr.contains("modal truncation: 73 modes below 160 Hz") && stderr.contains("FRF error against every mode: "),
+        "{stderr}"
+    );
+    let mut worst = 0.0f64;
+    for ((name, a), (other, b)) in kept.iter().zip(&every) {
+        assert_eq!(name, other);
+        if name.contains(".k") {
+            worst = worst.max((a - b).abs() / b.abs());
+        }
+    }
+    eprintln!("truncated vs every-mode update: springs within {worst:.2e}");
+    assert!(worst <= 1e-3, "springs differ by {worst:.2e}");
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        format!("{bundled}\n[model.solver]\nmodes = \"truncated\"\ncutoff_hz = -5.0\n"),
+    )
+    .unwrap();
+    let out = splinewatch(&["check-config", bad.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && stderr.contains("model.solver.cutoff_hz"),
+        "{stderr}"
     );
 }

@@ -92,7 +92,7 @@ fn simulate_estimate_and_update_recover_the_springs() {
     let start = serde_json::json!({"parameters": (1..=4).flat_map(|j| [format!("west.k{j}"), format!("east.k{j}")])
         .map(|n| serde_json::json!({"name": n, "value": 1e9})).collect::<Vec<_>>()})
     .to_string();
-    let result = studies::update(
+    let (result, _) = studies::update(
         &cfg,
         &serde_json::to_string(&report.frf).unwrap(),
         Some(&start),
@@ -129,7 +129,8 @@ fn a_bearing_damage_scenario_shows_in_the_identified_springs() {
     let minutes = |m: f64| Some(t0 + (m * 60e9) as i128);
     let identify = |from: f64, to: f64| {
         let report = estimate(&cfg, &blocks, minutes(from), minutes(to)).unwrap();
-        let result = studies::update(&cfg, &serde_json::to_string(&report.frf).unwrap(), None, &mut |_| {}).unwrap();
+        let (result, _) =
+            studies::update(&cfg, &serde_json::to_string(&report.frf).unwrap(), None, &mut |_| {}).unwrap();
         result.parameters.iter().find(|p| p.name == "east.k2").unwrap().value
     };
     let before = identify(0.0, 1.0);

@@ -21,9 +21,11 @@
 use crate::damping::DampingCurve;
 use crate::linalg::{complex_solve, dense_rows};
 use crate::modal::{ModalError, ModeKind, Modes};
-use crate::model::{AssembledModel, ModelError};
+use crate::model::{AssembledModel, ModelError, ShellModel};
 use crate::shell::Shell;
+use crate::sparse_model::SparseModel;
 use crate::springs::LowRankBlock;
+use crate::truncation::Residual;
 use crate::vec3::{dot, normalize, Vec3};
 use faer::linalg::matmul::matmul;
 use faer::{c64, Accum, Mat, Par};
@@ -45,6 +47,10 @@ pub enum FrfError {
     DampingCount { found: usize, expected: usize },
     #[error("the direct FRF solve failed at {frequency_hz} Hz: Z(ω) is singular")]
     SingularImpedance { frequency_hz: f64 },
+    #[error("the modal cut-off must be a positive frequency, got {0} Hz")]
+    Cutoff(f64),
+    #[error("{0} needs every mode (the dense model); this model is truncated")]
+    DenseOnly(&'static str),
 }
 
 /// Which FRF is measured: displacement, velocity or acceleration per force.
@@ -111,6 +117,9 @@ pub struct ModalState {
     /// Mode shapes on the spring dofs `U`: `|U| × n_modes`.
     phi_springs: Mat<f64>,
     omega: Vec<f64>,
+    /// The discarded modes' contribution when only the modes below a
+    /// cut-off were solved ([`crate::truncation`]).
+    residual: Option<Residual>,
 }
 
 impl ModalState {
@@ -122,6 +131,11 @@ impl ModalState {
     /// Modal amplitude of mode `i` at sensor `s` along its direction.
     pub fn amplitude(&self, sensor: usize, mode: usize) -> f64 {
         self.amplitudes[(sensor, mode)]
+    }
+
+    /// The residual of the discarded modes (a truncated model's state).
+    pub fn residual(&self) -> Option<&Residual> {
+        self.residual.as_ref()
     }
 }
 
@@ -150,10 +164,24 @@ pub fn sensor_rows(shell: &Shell, sensors: &[SensorPoint]) -> Result<Vec<Vec<(us
     Ok(rows)
 }
 
+/// Where a model's modes come from.
+#[derive(Debug, Clone)]
+enum Source {
+    /// Every mode of the dense model (the reference; eq. 31 exact).
+    Dense(Box<AssembledModel>),
+    /// The modes below `cutoff_hz` of the sparse model, the rest as a
+    /// residual ([`crate::truncation`]).
+    Truncated {
+        model: Box<SparseModel>,
+        spring_blocks: Vec<Vec<LowRankBlock>>,
+        cutoff_hz: f64,
+    },
+}
+
 /// An assembled model with sensors: evaluates FRFs and sensitivities.
 #[derive(Debug, Clone)]
 pub struct FrfModel {
-    assembled: AssembledModel,
+    source: Source,
     /// Sparse rows `N_ψ(P_s)`.
     sensor_rows: Vec<Vec<(usize, f64)>>,
     /// Union `U` of the dofs of all `∂K/∂κ_j`.
@@ -168,18 +196,46 @@ pub struct FrfModel {
 static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(0);
 
 impl FrfModel {
+    /// Every mode of the dense model.
     pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
         let sensor_rows = sensor_rows(&assembled.shell, sensors)?;
-        let mut spring_dofs: Vec<usize> = assembled
-            .spring_blocks
+        Ok(Self::with_source(Source::Dense(Box::new(assembled)), sensor_rows))
+    }
+
+    /// The modes below `cutoff_hz` of the sparse model of `model`, the
+    /// others by their residual ([`crate::truncation`]): for models too
+    /// large for the dense path.
+    pub fn truncated(model: &ShellModel, sensors: &[SensorPoint], cutoff_hz: f64) -> Result<Self, FrfError> {
+        if !(cutoff_hz.is_finite() && cutoff_hz > 0.0) {
+            return Err(FrfError::Cutoff(cutoff_hz));
+        }
+        let sensor_rows = sensor_rows(&model.shell, sensors)?;
+        let spring_blocks = model
+            .springs
             .iter()
-            .flatten()
-            .flat_map(|b| b.dofs.iter().copied())
-            .collect();
+            .enumerate()
+            .map(|(index, s)| {
+                s.coefficient_matrices(&model.shell)
+                    .map_err(|source| ModelError::Spring { index, source })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let source = Source::Truncated {
+            model: Box::new(SparseModel::assemble(model)?),
+            spring_blocks,
+            cutoff_hz,
+        };
+        Ok(Self::with_source(source, sensor_rows))
+    }
+
+    fn with_source(source: Source, sensor_rows: Vec<Vec<(usize, f64)>>) -> Self {
+        let blocks = match &source {
+            Source::Dense(assembled) => &assembled.spring_blocks,
+            Source::Truncated { spring_blocks, .. } => spring_blocks,
+        };
+        let mut spring_dofs: Vec<usize> = blocks.iter().flatten().flat_map(|b| b.dofs.iter().copied()).collect();
         spring_dofs.sort_unstable();
         spring_dofs.dedup();
-        let block_positions = assembled
-            .spring_blocks
+        let block_positions = blocks
             .iter()
             .flatten()
             .map(|b| {
@@ -189,13 +245,13 @@ impl FrfModel {
                     .collect()
             })
             .collect();
-        Ok(Self {
-            assembled,
+        Self {
+            source,
             sensor_rows,
             spring_dofs,
             block_positions,
             id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
-        })
+        }
     }
 
     /// This model's identity (see the field).
@@ -203,8 +259,52 @@ impl FrfModel {
         self.id
     }
 
-    pub fn assembled(&self) -> &AssembledModel {
-        &self.assembled
+    /// The dense model, when every mode is solved (`None` for a
+    /// [`FrfModel::truncated`] one).
+    pub fn dense(&self) -> Option<&AssembledModel> {
+        match &self.source {
+            Source::Dense(assembled) => Some(assembled),
+            Source::Truncated { .. } => None,
+        }
+    }
+
+    /// The cut-off of a truncated model.
+    pub fn cutoff_hz(&self) -> Option<f64> {
+        match &self.source {
+            Source::Dense(_) => None,
+            Source::Truncated { cutoff_hz, .. } => Some(*cutoff_hz),
+        }
+    }
+
+    pub fn shell(&self) -> &Shell {
+        match &self.source {
+            Source::Dense(assembled) => &assembled.shell,
+            Source::Truncated { model, .. } => &model.shell,
+        }
+    }
+
+    /// Generalised dofs (the rows of the mode shapes).
+    pub fn dof_count(&self) -> usize {
+        match &self.source {
+            Source::Dense(assembled) => assembled.dof_count(),
+            Source::Truncated { model, .. } => model.dof_count(),
+        }
+    }
+
+    /// `∂K/∂κ_j` per spring field and coefficient, on the generalised dofs.
+    pub fn spring_blocks(&self) -> &[Vec<LowRankBlock>] {
+        match &self.source {
+            Source::Dense(assembled) => &assembled.spring_blocks,
+            Source::Truncated { spring_blocks, .. } => spring_blocks,
+        }
+    }
+
+    /// The model's own stiffness-field coefficients, one vector per field.
+    pub fn field_coefficients(&self) -> &[Vec<f64>] {
+        match &self.source {
+            Source::Dense(assembled) => &assembled.field_coefficients,
+            Source::Truncated { model, .. } => &model.field_coefficients,
+        }
     }
 
     pub fn sensor_count(&self) -> usize {
@@ -222,7 +322,7 @@ impl FrfModel {
     /// `FrfEvaluation::dh_dkappa` and of the modal sensitivities).
     #[track_caller]
     pub fn flat_spring_index(&self, field: usize, coefficient: usize) -> usize {
-        let blocks = &self.assembled.spring_blocks;
+        let blocks = self.spring_blocks();
         assert!(coefficient < blocks[field].len(), "spring coefficient out of range");
         blocks[..field].iter().map(Vec::len).sum::<usize>() + coefficient
     }
@@ -232,7 +332,7 @@ impl FrfModel {
     /// [`FrfModel::field_sensitivities`]).
     #[track_caller]
     pub fn flat_field_index(&self, field: usize, coefficient: usize) -> usize {
-        let fields = &self.assembled.field_matrices;
+        let fields = self.field_coefficients();
         assert!(coefficient < fields[field].len(), "no such stiffness-field coefficient");
         fields[..field].iter().map(Vec::len).sum::<usize>() + coefficient
     }
@@ -245,8 +345,7 @@ impl FrfModel {
     /// Solves the modes for spring coefficients `kappa` (one vector per
     /// field) and evaluates ζ_i on `damping`.
     pub fn modal_state(&self, kappa: &[Vec<f64>], damping: &DampingCurve) -> Result<ModalState, FrfError> {
-        let modes = self.assembled.modes_with(kappa)?;
-        Ok(self.modal_state_from(modes, damping))
+        self.modal_state_with_fields(kappa, self.field_coefficients(), damping)
     }
 
     /// [`Self::modal_state`] with stiffness-field coefficients `theta` (one
@@ -257,8 +356,21 @@ impl FrfModel {
         theta: &[Vec<f64>],
         damping: &DampingCurve,
     ) -> Result<ModalState, FrfError> {
-        let modes = self.assembled.modes_with_fields(kappa, theta)?;
-        Ok(self.modal_state_from(modes, damping))
+        match &self.source {
+            Source::Dense(assembled) => {
+                let modes = assembled.modes_with_fields(kappa, theta)?;
+                Ok(self.modal_state_from(modes, damping))
+            }
+            Source::Truncated { model, cutoff_hz, .. } => {
+                let modes = model.modes_below(kappa, theta, *cutoff_hz, 0)?;
+                let shift = SparseModel::shift_for(*cutoff_hz);
+                let responses = model.shifted_responses(kappa, theta, &self.sensor_rows, shift)?;
+                let residual = Residual::new(&modes, &self.sensor_rows, &self.spring_dofs, &responses, shift, damping);
+                let mut state = self.modal_state_from(modes, damping);
+                state.residual = Some(residual);
+                Ok(state)
+            }
+        }
     }
 
     /// Builds the modal state from already computed modes.
@@ -290,6 +402,7 @@ impl FrfModel {
             amplitudes,
             phi_springs,
             omega,
+            residual: None,
         }
     }
 
@@ -308,8 +421,28 @@ impl FrfModel {
     /// contiguous run of whole frequency blocks. Every block is computed
     /// exactly as in the sequential call, so the result is the same bit for
     /// bit whatever the thread count.
+    ///
+    /// A truncated model's state adds the discarded modes' residual to the
+    /// FRFs, and its spring sensitivities come from the spring dofs'
+    /// complete responses ([`crate::truncation`]).
     #[track_caller]
     pub fn evaluate_on_threads(
+        &self,
+        state: &ModalState,
+        request: FrfRequest<'_>,
+        sensitivities: bool,
+        threads: usize,
+    ) -> FrfEvaluation {
+        let mut evaluation = self.modal_sum(state, request, sensitivities, threads);
+        if let Some(residual) = &state.residual {
+            self.add_residual(state, residual, request, sensitivities, &mut evaluation);
+        }
+        evaluation
+    }
+
+    /// The modal superposition over the state's modes (eq. 31–33).
+    #[track_caller]
+    fn modal_sum(
         &self,
         state: &ModalState,
         request: FrfRequest<'_>,
@@ -435,7 +568,7 @@ impl FrfModel {
         // inputs (not for every sensor), then per block one small GEMM for
         // c_j and one against the output amplitudes.
         let blocks: Vec<&LowRankBlock> = if sensitivities {
-            self.assembled.spring_blocks.iter().flatten().collect()
+            self.spring_blocks().iter().flatten().collect()
         } else {
             Vec::new()
         };
@@ -616,6 +749,107 @@ impl FrfModel {
         }
     }
 
+    /// Adds the residual of the discarded modes to `evaluation.h` and, with
+    /// `sensitivities`, replaces `∂H_rs/∂κ_j` by `−g_rᵀ (∂K/∂κ_j) g_s` with
+    /// the spring dofs' complete responses `g_s = Σ_i φ_i a_{s,i} q_i + ρ_s`
+    /// ([`crate::truncation`]); the residual's damping term adds to `∂H/∂γ_z`.
+    fn add_residual(
+        &self,
+        state: &ModalState,
+        residual: &Residual,
+        request: FrfRequest<'_>,
+        sensitivities: bool,
+        evaluation: &mut FrfEvaluation,
+    ) {
+        let nf = request.frequencies_hz.len();
+        for (p, &(r, s)) in request.pairs.iter().enumerate() {
+            for (f, &hz) in request.frequencies_hz.iter().enumerate() {
+                let w = 2.0 * PI * hz;
+                evaluation.h[p * nf + f] += request.quantity.factor(w) * residual.at_sensors(r, s, w);
+            }
+        }
+        if !sensitivities {
+            return;
+        }
+        for (z, dz) in evaluation.dh_dgamma.iter_mut().enumerate() {
+            for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                for (f, &hz) in request.frequencies_hz.iter().enumerate() {
+                    let w = 2.0 * PI * hz;
+                    dz[p * nf + f] += request.quantity.factor(w) * residual.damping_sensitivity(r, s, w, z);
+                }
+            }
+        }
+        let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
+        sensors.sort_unstable();
+        sensors.dedup();
+        let slot = |sensor: usize| sensors.binary_search(&sensor).expect("an involved sensor");
+        let (nu, nm) = (state.phi_springs.nrows(), state.modes.len());
+        let blocks: Vec<&LowRankBlock> = self.spring_blocks().iter().flatten().collect();
+        let mut q = vec![c64::new(0.0, 0.0); nm];
+        let mut g = vec![vec![c64::new(0.0, 0.0); nu]; sensors.len()];
+        for (f, &hz) in request.frequencies_hz.iter().enumerate() {
+            let w = 2.0 * PI * hz;
+            for i in 0..nm {
+                q[i] = c64::new(
+                    state.omega[i] * state.omega[i] - w * w,
+                    2.0 * state.zeta[i] * state.omega[i] * w,
+                )
+                .inv();
+            }
+            for (gs, &s) in g.iter_mut().zip(&sensors) {
+                for (u, gu) in gs.iter_mut().enumerate() {
+                    let modal: c64 = (0..nm)
+                        .map(|i| q[i] * (state.phi_springs[(u, i)] * state.amplitudes[(s, i)]))
+                        .sum();
+                    *gu = modal + residual.on_springs(u, s, w);
+                }
+            }
+            let factor = request.quantity.factor(w);
+            for ((block, positions), dh) in blocks.iter().zip(&self.block_positions).zip(&mut evaluation.dh_dkappa) {
+                for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                    let (gr, gs) = (&g[slot(r)], &g[slot(s)]);
+                    let mut sum = c64::new(0.0, 0.0);
+                    for (a, &pa) in positions.iter().enumerate() {
+                        let bg: c64 = positions
+                            .iter()
+                            .enumerate()
+                            .map(|(b, &pb)| gs[pb] * block.values[(a, b)])
+                            .sum();
+                        sum += gr[pa] * bg;
+                    }
+                    dh[p * nf + f] = -sum * factor;
+                }
+            }
+        }
+    }
+
+    /// The truncation error of this (truncated) model against `reference`
+    /// (the same model with every mode) at `(κ, θ)` and `damping`: the
+    /// largest `|H − H_ref|` over the lines of `request`, relative to each
+    /// FRF's peak (what the update report states for small models).
+    pub fn truncation_error(
+        &self,
+        reference: &FrfModel,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        damping: &DampingCurve,
+        request: FrfRequest<'_>,
+    ) -> Result<f64, FrfError> {
+        let found = self.evaluate(&self.modal_state_with_fields(kappa, theta, damping)?, request, false);
+        let full = reference.modal_state_with_fields(kappa, theta, damping)?;
+        let expected = reference.evaluate(&full, request, false);
+        let n = request.frequencies_hz.len().max(1);
+        Ok(found
+            .h
+            .chunks(n)
+            .zip(expected.h.chunks(n))
+            .map(|(a, b)| {
+                let peak = b.iter().map(|v| v.norm()).fold(0.0, f64::max);
+                a.iter().zip(b).map(|(x, y)| (x - y).norm() / peak).fold(0.0, f64::max)
+            })
+            .fold(0.0, f64::max))
+    }
+
     /// The direct path of eq. (31)–(32): solves `Z(ω) x = N_sᵀ` with
     /// `Z = K - ω²M + jωC`, `C = M Φ diag(2ζω) Φᵀ M` (eq. 25 with
     /// `Φ⁻¹ = Φᵀ M`), and returns `N_r x` in the requested quantity.
@@ -629,8 +863,9 @@ impl FrfModel {
         pair: (usize, usize),
         quantity: Quantity,
     ) -> Result<c64, FrfError> {
-        let k = self.assembled.stiffness_with(kappa)?;
-        let m = &self.assembled.mass;
+        let dense = self.dense().ok_or(FrfError::DenseOnly("the direct FRF solve"))?;
+        let k = dense.stiffness_with(kappa)?;
+        let m = &dense.mass;
         let n = m.nrows();
         let phi = &state.modes.shapes;
         let d = Mat::from_fn(phi.ncols(), phi.ncols(), |i, j| {
@@ -643,7 +878,7 @@ impl FrfModel {
         let mphi = m * phi;
         let c = &mphi * &d * mphi.transpose();
         let w = 2.0 * PI * frequency_hz;
-        let red = &self.assembled.reduction;
+        let red = &dense.reduction;
         let z_re = red.reduce(&Mat::from_fn(n, n, |i, j| k[(i, j)] - w * w * m[(i, j)]));
         let z_im = red.reduce(&Mat::from_fn(n, n, |i, j| w * c[(i, j)]));
         let full_rhs = |s: usize| {

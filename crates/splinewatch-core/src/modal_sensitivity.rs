@@ -38,7 +38,7 @@ pub struct ModalSensitivities {
 impl FrfModel {
     /// Eigenvalue and sensor-amplitude derivatives of `modes` at `state`.
     pub fn modal_sensitivities(&self, state: &ModalState, modes: &[usize]) -> ModalSensitivities {
-        let blocks: Vec<_> = self.assembled().spring_blocks.iter().flatten().collect();
+        let blocks: Vec<_> = self.spring_blocks().iter().flatten().collect();
         let positions = self.spring_block_positions();
         let phi_u = state.spring_shapes();
         let sensors = self.sensor_count();
@@ -53,6 +53,16 @@ impl FrfModel {
                     .collect();
                 let coupling = |k: usize| -> f64 { (0..pos.len()).map(|a| phi_u[(pos[a], k)] * w[a]).sum() };
                 expand(state, i, coupling, &mut da, j);
+                if let Some(residual) = state.residual() {
+                    // The discarded modes' part (crate::truncation, Wang 1991).
+                    let lambda = state.modes.omega2[i];
+                    for s in 0..sensors {
+                        let rho: f64 = (0..pos.len())
+                            .map(|a| residual.expansion_on_springs(pos[a], s, lambda) * w[a])
+                            .sum();
+                        da[(s, j)] -= rho;
+                    }
+                }
                 eigenvalue[(row, j)] = coupling(i);
             }
             amplitude.push(da);
@@ -67,9 +77,15 @@ impl FrfModel {
     /// Eigenvalue and sensor-amplitude derivatives of `modes` at `state`
     /// with respect to every stiffness-field coefficient θ (fields flattened
     /// in order); `state` must come from the same coefficients
-    /// ([`FrfModel::modal_state_with_fields`]).
+    /// ([`FrfModel::modal_state_with_fields`]). The expansion needs every
+    /// mode: a model of the dense path only (the updating refuses field
+    /// parameters on a truncated model, `UpdateError::TruncatedFields`).
+    #[track_caller]
     pub fn field_sensitivities(&self, state: &ModalState, modes: &[usize]) -> ModalSensitivities {
-        let matrices: Vec<_> = self.assembled().field_matrices.iter().flatten().collect();
+        let dense = self
+            .dense()
+            .expect("stiffness-field sensitivities need the dense model");
+        let matrices: Vec<_> = dense.field_matrices.iter().flatten().collect();
         let phi = &state.modes.shapes;
         let sensors = self.sensor_count();
         let mut eigenvalue = Mat::zeros(modes.len(), matrices.len());

@@ -180,21 +180,24 @@ impl ShiftInvert {
         Ok(l_values)
     }
 
-    /// `(K − σM)⁻¹ B` for the columns of `rhs` (the static solves of the
-    /// residual flexibility, [`crate::truncation`]).
+    /// `X B` and `X M X B`, `X = (K − σM)⁻¹`, for the columns of `rhs` (the
+    /// residual flexibility and its first dynamic correction,
+    /// [`crate::truncation`]): one numeric factorisation, two solves.
     pub fn shifted_solve(
         &self,
         k: &SparseSymmetric,
         m: &SparseSymmetric,
         sigma: f64,
         rhs: &Mat<f64>,
-    ) -> Result<Mat<f64>, PartialEigenError> {
+    ) -> Result<(Mat<f64>, Mat<f64>), PartialEigenError> {
         let values = self.factorize(k, m, sigma)?;
         let llt = LltRef::new(&self.symbolic, &values);
+        let mut buffer = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq));
         let mut x = rhs.clone();
-        let mut buffer = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(x.ncols(), Par::Seq));
         llt.solve_in_place_with_conj(Conj::No, x.as_mut(), Par::Seq, MemStack::new(&mut buffer));
-        Ok(x)
+        let mut xmx = m.mul(&x);
+        llt.solve_in_place_with_conj(Conj::No, xmx.as_mut(), Par::Seq, MemStack::new(&mut buffer));
+        Ok((x, xmx))
     }
 
     /// The number of eigenvalues of `(k, m)` below `omega2`: the negative

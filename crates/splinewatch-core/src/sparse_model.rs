@@ -307,44 +307,46 @@ impl SparseModel {
         -(2.0 * PI * cutoff_hz).powi(2) / SHIFT_RATIO
     }
 
-    /// The static flexibility between every pair of sensors, `N X Nᵀ` with
-    /// `X = (K − σM)⁻¹` at `(κ, θ)` (sensor rows `N` on the generalised
-    /// dofs), and its first dynamic correction `N X M X Nᵀ`: one sparse
-    /// solve per sensor ([`crate::truncation`]).
-    pub fn flexibility(
+    /// The static responses `X Fᵀ` to the unit loads `F` (sparse rows on the
+    /// generalised dofs: the sensor rows `N` of eq. 32), `X = (K − σM)⁻¹` at
+    /// `(κ, θ)`, and their first dynamic correction `X M X Fᵀ`, both on the
+    /// generalised dofs (one column per load): one numeric factorisation per
+    /// block at the shift of the eigen-solve ([`crate::truncation`]).
+    pub fn shifted_responses(
         &self,
         kappa: &[Vec<f64>],
         theta: &[Vec<f64>],
-        sensor_rows: &[Vec<(usize, f64)>],
+        loads: &[Vec<(usize, f64)>],
         shift: f64,
     ) -> Result<(faer::Mat<f64>, faer::Mat<f64>), ModelError> {
         let k = self.stiffness_with_fields(kappa, theta)?;
-        let ns = sensor_rows.len();
-        let mut full = faer::Mat::<f64>::zeros(self.dof_count(), ns);
-        for (s, row) in sensor_rows.iter().enumerate() {
+        let nl = loads.len();
+        let mut full = faer::Mat::<f64>::zeros(self.dof_count(), nl);
+        for (s, row) in loads.iter().enumerate() {
             for &(d, v) in row {
                 full[(d, s)] += v;
             }
         }
         let rhs = self.reduction.reduce_vector(&full);
-        let mut x = faer::Mat::<f64>::zeros(rhs.nrows(), ns);
+        let mut x = faer::Mat::<f64>::zeros(rhs.nrows(), nl);
+        let mut xmx = faer::Mat::<f64>::zeros(rhs.nrows(), nl);
         for block in &self.blocks {
-            let part = faer::Mat::from_fn(block.dofs.len(), ns, |r, s| rhs[(block.dofs[r], s)]);
-            let solved = block
+            let part = faer::Mat::from_fn(block.dofs.len(), nl, |r, s| rhs[(block.dofs[r], s)]);
+            if part.norm_max() == 0.0 {
+                continue;
+            }
+            let (solved, dynamic) = block
                 .eigen
                 .shifted_solve(&block.restrict(&k), &block.restrict(&self.mass), shift, &part)
                 .map_err(ModelError::PartialEigen)?;
             for (r, &d) in block.dofs.iter().enumerate() {
-                for s in 0..ns {
+                for s in 0..nl {
                     x[(d, s)] = solved[(r, s)];
+                    xmx[(d, s)] = dynamic[(r, s)];
                 }
             }
         }
-        let mx = self.mass.mul(&x);
-        let static_part = rhs.transpose() * &x;
-        let dynamic_part = x.transpose() * &mx;
-        let symmetric = |a: faer::Mat<f64>| faer::Mat::from_fn(ns, ns, |r, c| 0.5 * (a[(r, c)] + a[(c, r)]));
-        Ok((symmetric(static_part), symmetric(dynamic_part)))
+        Ok((self.reduction.expand(&x), self.reduction.expand(&xmx)))
     }
 }
 

@@ -52,6 +52,8 @@ pub enum UpdateError {
     Damping(#[from] DampingError),
     #[error("the model produced non-finite FRFs at the parameters {0:?}")]
     NonFinite(Vec<f64>),
+    #[error("parameter {0}: stiffness-field sensitivities need every mode; update stiffness fields with `[model.solver] modes = \"all\"`")]
+    TruncatedFields(String),
 }
 
 /// What a parameter is.
@@ -75,16 +77,26 @@ pub struct Parameter {
     pub upper: f64,
 }
 
-/// Every parameter names an existing coefficient and has finite,
-/// ordered, non-negative bounds; at least one is updated.
+/// Every parameter names an existing coefficient of `model` and has
+/// finite, ordered, non-negative bounds; at least one is updated; a
+/// truncated model updates no stiffness field.
 pub(crate) fn check_parameters(
     parameters: &[Parameter],
     kappa: &[Vec<f64>],
-    theta: &[Vec<f64>],
+    model: &FrfModel,
     damping: &DampingCurve,
 ) -> Result<(), UpdateError> {
     if parameters.is_empty() {
         return Err(UpdateError::NoParameters);
+    }
+    let theta = model.field_coefficients();
+    if let Some(p) = parameters
+        .iter()
+        .find(|p| matches!(p.kind, ParameterKind::Stiffness { .. }))
+    {
+        if model.dense().is_none() {
+            return Err(UpdateError::TruncatedFields(p.name.clone()));
+        }
     }
     for p in parameters {
         let bad = |reason: String| {
@@ -173,7 +185,7 @@ pub fn modal_state_at(
     p: &[f64],
 ) -> Result<(ModalState, DampingCurve), UpdateError> {
     let (kappa, damping) = model_at(parameters, kappa, damping, p)?;
-    let theta = fields_at(parameters, &model.assembled().field_coefficients, p);
+    let theta = fields_at(parameters, model.field_coefficients(), p);
     Ok((model.modal_state_with_fields(&kappa, &theta, &damping)?, damping))
 }
 
@@ -561,7 +573,7 @@ impl<'a> UpdateProblem<'a> {
         measured: &'a MeasuredSet,
         settings: UpdateSettings,
     ) -> Result<Self, UpdateError> {
-        check_parameters(&parameters, &kappa, &model.assembled().field_coefficients, &damping)?;
+        check_parameters(&parameters, &kappa, model, &damping)?;
         for frf in measured.frfs() {
             if frf.output >= model.sensor_count() || frf.input >= model.sensor_count() {
                 return Err(UpdateError::Data(
@@ -627,14 +639,14 @@ impl<'a> UpdateProblem<'a> {
         base_values(
             &self.parameters,
             &self.kappa,
-            &self.model.assembled().field_coefficients,
+            self.model.field_coefficients(),
             &self.damping,
         )
     }
 
     /// Stiffness-field coefficients for parameter values `p`.
     pub fn fields_at(&self, p: &[f64]) -> Vec<Vec<f64>> {
-        fields_at(&self.parameters, &self.model.assembled().field_coefficients, p)
+        fields_at(&self.parameters, self.model.field_coefficients(), p)
     }
 
     /// Spring coefficients and damping curve for parameter values `p`.

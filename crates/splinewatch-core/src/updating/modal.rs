@@ -46,7 +46,7 @@ impl<'a> ModalUpdateProblem<'a> {
         settings: UpdateSettings,
         (min_mac, max_gap): (f64, f64),
     ) -> Result<Self, UpdateError> {
-        check_parameters(&parameters, &kappa, &model.assembled().field_coefficients, &damping)?;
+        check_parameters(&parameters, &kappa, model, &damping)?;
         for (k, m) in observed.iter().enumerate() {
             let positive = |v: f64| v.is_finite() && v > 0.0;
             if !(positive(m.frequency_hz)
@@ -93,7 +93,7 @@ impl<'a> ModalUpdateProblem<'a> {
 
     /// Stiffness-field coefficients at parameter values `p`.
     pub fn fields_at(&self, p: &[f64]) -> Vec<Vec<f64>> {
-        super::fields_at(&self.parameters, &self.model.assembled().field_coefficients, p)
+        super::fields_at(&self.parameters, self.model.field_coefficients(), p)
     }
 
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {

@@ -9,5 +9,6 @@ mod oma;
 mod shell;
 mod simulate;
 mod stiffness_field;
+mod truncation;
 mod updating;
 mod welch;

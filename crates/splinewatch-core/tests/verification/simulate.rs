@@ -122,7 +122,7 @@ fn impact_response_energy_and_peak() {
     // total mechanical energy with the impulse estimate for modes much
     // slower than the pulse (ω·width ≪ 1 for modes below ~50 Hz).
     let (x, v) = sim.physical_state(&state);
-    let asm = model.assembled();
+    let asm = model.dense().expect("a dense model");
     let k = asm.stiffness_with(&true_kappa()).unwrap();
     let n_dof = x.len();
     let quad = |m: &splinewatch_core::Mat<f64>, a: &[f64]| -> f64 {
