@@ -56,9 +56,10 @@ pub enum ModesChoice {
     Auto,
 }
 
-/// Above this many control points (3 200 dofs, where one dense eigen-solve
-/// takes seconds) `modes = "auto"` truncates.
-pub const AUTO_TRUNCATED_CONTROL_POINTS: usize = 640;
+/// Above this many control points (2 000 dofs: a dense eigen-solve takes
+/// about a second there and grows as n³, the sparse one about linearly)
+/// `modes = "auto"` truncates.
+pub const AUTO_TRUNCATED_CONTROL_POINTS: usize = 400;
 
 /// `[model.solver]`.
 #[derive(Debug, Clone, Default, Deserialize, Serialize)]

@@ -783,41 +783,82 @@ impl FrfModel {
         sensors.sort_unstable();
         sensors.dedup();
         let slot = |sensor: usize| sensors.binary_search(&sensor).expect("an involved sensor");
-        let (nu, nm) = (state.phi_springs.nrows(), state.modes.len());
-        let blocks: Vec<&LowRankBlock> = self.spring_blocks().iter().flatten().collect();
-        let mut q = vec![c64::new(0.0, 0.0); nm];
-        let mut g = vec![vec![c64::new(0.0, 0.0); nu]; sensors.len()];
+        let nm = state.modes.len();
+        // Per block j (B = ∂K/∂κ_j on its dofs), with g_t = Φ_B x_t + ρ_0,t +
+        // γ ρ_1,t, x_t = a_t ∘ q and γ(ω) the residual's frequency factor:
+        // g_rᵀ B g_s = x_rᵀ P x_s + x_rᵀ (u_0,s + γ u_1,s) + (u_0,r + γ u_1,r)ᵀ x_s
+        //            + c_00 + γ (c_01 + c_10) + γ² c_11,
+        // P = Φ_Bᵀ B Φ_B, u_p,t = Φ_Bᵀ B ρ_p,t, c_pq = ρ_p,rᵀ B ρ_q,s: every
+        // factor frequency-independent, so a line costs O(modes²) per block.
+        let (rho0, rho1) = residual.spring_terms();
+        let prepared: Vec<BlockResidual> = self
+            .spring_blocks()
+            .iter()
+            .flatten()
+            .zip(&self.block_positions)
+            .map(|(block, positions)| {
+                let phi_b = Mat::from_fn(positions.len(), nm, |a, i| state.phi_springs[(positions[a], i)]);
+                let b_phi = &block.values * &phi_b;
+                let rho = |terms: &Mat<f64>| {
+                    Mat::from_fn(positions.len(), sensors.len(), |a, t| terms[(positions[a], sensors[t])])
+                };
+                let (r0, r1) = (rho(rho0), rho(rho1));
+                let (b_r0, b_r1) = (&block.values * &r0, &block.values * &r1);
+                BlockResidual {
+                    coupling: phi_b.transpose() * &b_phi,
+                    u0: phi_b.transpose() * &b_r0,
+                    u1: phi_b.transpose() * &b_r1,
+                    c: [
+                        r0.transpose() * &b_r0,
+                        r0.transpose() * &b_r1,
+                        r1.transpose() * &b_r0,
+                        r1.transpose() * &b_r1,
+                    ],
+                }
+            })
+            .collect();
+        let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| slot(s)).collect();
+        inputs.sort_unstable();
+        inputs.dedup();
+        let zero = c64::new(0.0, 0.0);
+        let mut x = vec![vec![zero; nm]; sensors.len()];
+        let mut y = vec![vec![zero; nm]; sensors.len()];
+        let mut u = vec![vec![zero; nm]; sensors.len()];
+        let dot = |a: &[c64], b: &[c64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<c64>();
         for (f, &hz) in request.frequencies_hz.iter().enumerate() {
             let w = 2.0 * PI * hz;
-            for i in 0..nm {
-                q[i] = c64::new(
-                    state.omega[i] * state.omega[i] - w * w,
-                    2.0 * state.zeta[i] * state.omega[i] * w,
-                )
-                .inv();
-            }
-            for (gs, &s) in g.iter_mut().zip(&sensors) {
-                for (u, gu) in gs.iter_mut().enumerate() {
-                    let modal: c64 = (0..nm)
-                        .map(|i| q[i] * (state.phi_springs[(u, i)] * state.amplitudes[(s, i)]))
-                        .sum();
-                    *gu = modal + residual.on_springs(u, s, w);
+            let gamma = residual.expansion_factor(w);
+            for (t, xt) in x.iter_mut().enumerate() {
+                for (i, xi) in xt.iter_mut().enumerate() {
+                    let d = c64::new(
+                        state.omega[i] * state.omega[i] - w * w,
+                        2.0 * state.zeta[i] * state.omega[i] * w,
+                    );
+                    *xi = state.amplitudes[(sensors[t], i)] / d;
                 }
             }
             let factor = request.quantity.factor(w);
-            for ((block, positions), dh) in blocks.iter().zip(&self.block_positions).zip(&mut evaluation.dh_dkappa) {
-                for (p, &(r, s)) in request.pairs.iter().enumerate() {
-                    let (gr, gs) = (&g[slot(r)], &g[slot(s)]);
-                    let mut sum = c64::new(0.0, 0.0);
-                    for (a, &pa) in positions.iter().enumerate() {
-                        let bg: c64 = positions
-                            .iter()
-                            .enumerate()
-                            .map(|(b, &pb)| gs[pb] * block.values[(a, b)])
-                            .sum();
-                        sum += gr[pa] * bg;
+            for (b, dh) in prepared.iter().zip(&mut evaluation.dh_dkappa) {
+                for &t in &inputs {
+                    for (i, yi) in y[t].iter_mut().enumerate() {
+                        *yi = (0..nm).map(|k| x[t][k] * b.coupling[(i, k)]).sum();
                     }
-                    dh[p * nf + f] = -sum * factor;
+                }
+                for (t, ut) in u.iter_mut().enumerate() {
+                    for (i, ui) in ut.iter_mut().enumerate() {
+                        *ui = gamma * b.u1[(i, t)] + b.u0[(i, t)];
+                    }
+                }
+                for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                    let (r, s) = (slot(r), slot(s));
+                    let c = |k: usize| b.c[k][(r, s)];
+                    let value = dot(&x[r], &y[s])
+                        + dot(&x[r], &u[s])
+                        + dot(&u[r], &x[s])
+                        + c(0)
+                        + gamma * (c(1) + c(2))
+                        + gamma * gamma * c(3);
+                    dh[p * nf + f] = -value * factor;
                 }
             }
         }
@@ -904,6 +945,19 @@ impl FrfModel {
 /// (at most the active modes × 32 lines, re and im: 67 kB for Sinello) stays
 /// in L2, and a typical 300-line band splits evenly over two threads.
 pub const FREQUENCY_BLOCK: usize = 32;
+
+/// The frequency-independent factors of one spring block's sensitivity
+/// on a truncated model ([`FrfModel::add_residual`]).
+struct BlockResidual {
+    /// `Φ_Bᵀ B Φ_B`: modes × modes.
+    coupling: Mat<f64>,
+    /// `Φ_Bᵀ B ρ_0,t`, `Φ_Bᵀ B ρ_1,t`: modes × involved sensors.
+    u0: Mat<f64>,
+    u1: Mat<f64>,
+    /// `ρ_pᵀ B ρ_q` for (p, q) = (0, 0), (0, 1), (1, 0), (1, 1): involved
+    /// sensors × involved sensors.
+    c: [Mat<f64>; 4],
+}
 
 /// See [`FrfModel::prepare`]: the active modes' data and the products
 /// that do not depend on frequency.

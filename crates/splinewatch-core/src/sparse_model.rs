@@ -11,12 +11,12 @@
 use crate::constraints::DofReduction;
 use crate::modal::{classify_lumped, Modes};
 use crate::model::{ModelError, ShellModel};
-use crate::partial_eigen::{PartialSettings, ShiftInvert};
+use crate::partial_eigen::{PartialModes, PartialSettings, ShiftInvert};
 use crate::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
 use crate::sparse::{reduced_pattern, Pattern, SparseError, SparseSymmetric};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// A derivative matrix `∂K/∂p` on the reduced pattern: its non-zero entries
 /// only (a spring coefficient reaches a strip of the deck).
@@ -92,6 +92,48 @@ struct Block {
     /// Per entry of `pattern`, the position of the same entry in the model's.
     positions: Vec<usize>,
     eigen: ShiftInvert,
+    /// The last solve's stiffness values, settings and modes.
+    last: LastSolve,
+}
+
+/// A block's last partial solve: a block no changed parameter reaches (a
+/// flat deck's in-plane dofs under vertical springs) has the same
+/// stiffness at every evaluation of an update, so its modes are taken
+/// from here instead of solved again. Exact: the inputs are compared bit
+/// for bit, and the same inputs give the same modes.
+#[derive(Debug, Default)]
+struct LastSolve(Mutex<Option<(Vec<f64>, PartialSettings, PartialModes)>>);
+
+impl Clone for LastSolve {
+    fn clone(&self) -> Self {
+        Self::default()
+    }
+}
+
+impl Block {
+    /// The block's modes for the restricted `k`, `m` (the model's mass).
+    fn modes(
+        &self,
+        k: &SparseSymmetric,
+        m: &SparseSymmetric,
+        settings: &PartialSettings,
+        guess: usize,
+    ) -> Result<PartialModes, ModelError> {
+        let same =
+            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let mut last = self.last.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Some((values, s, modes)) = last.as_ref() {
+            if s == settings && same(values, k.values()) {
+                return Ok(modes.clone());
+            }
+        }
+        let modes = self
+            .eigen
+            .solve(k, m, settings, guess)
+            .map_err(ModelError::PartialEigen)?;
+        *last = Some((k.values().to_vec(), *settings, modes.clone()));
+        Ok(modes)
+    }
 }
 
 impl Block {
@@ -131,6 +173,7 @@ fn decoupled_blocks(pattern: &Arc<Pattern>, coupled: &[bool]) -> Result<Vec<Bloc
             let sub = Arc::new(sub);
             Ok(Block {
                 eigen: ShiftInvert::new(&sub).map_err(ModelError::PartialEigen)?,
+                last: LastSolve::default(),
                 dofs,
                 pattern: sub,
                 positions,
@@ -278,11 +321,7 @@ impl SparseModel {
         // Each block's modes, merged in ascending order.
         let mut found = Vec::new();
         for block in &self.blocks {
-            let modes = block
-                .eigen
-                .solve(&block.restrict(&k), &block.restrict(&self.mass), &settings, guess)
-                .map_err(ModelError::PartialEigen)?;
-            found.push(modes);
+            found.push(block.modes(&block.restrict(&k), &block.restrict(&self.mass), &settings, guess)?);
         }
         let mut order: Vec<(usize, usize)> = (0..found.len())
             .flat_map(|b| (0..found[b].omega2.len()).map(move |i| (b, i)))

@@ -148,11 +148,17 @@ impl Residual {
     }
 
     fn combine(&self, terms: &[Mat<f64>; 2], row: usize, s: usize, omega: f64) -> c64 {
-        let (r0, r1) = (terms[0][(row, s)], terms[1][(row, s)]);
-        c64::new(
-            r0 + (omega * omega - self.shift) * r1,
-            -2.0 * omega * self.damping_rate * r1,
-        )
+        self.expansion_factor(omega) * terms[1][(row, s)] + terms[0][(row, s)]
+    }
+
+    /// `γ(ω) = ω² − σ − 2j ζ_e ω_e ω`: a residual at `ω` is `ρ_0 + γ ρ_1`.
+    pub fn expansion_factor(&self, omega: f64) -> c64 {
+        c64::new(omega * omega - self.shift, -2.0 * omega * self.damping_rate)
+    }
+
+    /// `ρ_0`, `ρ_1` on the spring dofs `U` (`|U|` × sensors).
+    pub fn spring_terms(&self) -> (&Mat<f64>, &Mat<f64>) {
+        (&self.springs[0], &self.springs[1])
     }
 
     /// `ρ_0,s + (λ − σ) ρ_1,s` at spring dof `u`: the discarded modes'
