@@ -790,33 +790,7 @@ impl FrfModel {
         //            + c_00 + γ (c_01 + c_10) + γ² c_11,
         // P = Φ_Bᵀ B Φ_B, u_p,t = Φ_Bᵀ B ρ_p,t, c_pq = ρ_p,rᵀ B ρ_q,s: every
         // factor frequency-independent, so a line costs O(modes²) per block.
-        let (rho0, rho1) = residual.spring_terms();
-        let prepared: Vec<BlockResidual> = self
-            .spring_blocks()
-            .iter()
-            .flatten()
-            .zip(&self.block_positions)
-            .map(|(block, positions)| {
-                let phi_b = Mat::from_fn(positions.len(), nm, |a, i| state.phi_springs[(positions[a], i)]);
-                let b_phi = &block.values * &phi_b;
-                let rho = |terms: &Mat<f64>| {
-                    Mat::from_fn(positions.len(), sensors.len(), |a, t| terms[(positions[a], sensors[t])])
-                };
-                let (r0, r1) = (rho(rho0), rho(rho1));
-                let (b_r0, b_r1) = (&block.values * &r0, &block.values * &r1);
-                BlockResidual {
-                    coupling: phi_b.transpose() * &b_phi,
-                    u0: phi_b.transpose() * &b_r0,
-                    u1: phi_b.transpose() * &b_r1,
-                    c: [
-                        r0.transpose() * &b_r0,
-                        r0.transpose() * &b_r1,
-                        r1.transpose() * &b_r0,
-                        r1.transpose() * &b_r1,
-                    ],
-                }
-            })
-            .collect();
+        let prepared = self.block_residuals(state, residual, &sensors);
         let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| slot(s)).collect();
         inputs.sort_unstable();
         inputs.dedup();
@@ -862,6 +836,38 @@ impl FrfModel {
                 }
             }
         }
+    }
+
+    /// The [`BlockResidual`] factors of every spring block for the
+    /// involved `sensors` (ascending).
+    fn block_residuals(&self, state: &ModalState, residual: &Residual, sensors: &[usize]) -> Vec<BlockResidual> {
+        let nm = state.modes.len();
+        let (rho0, rho1) = residual.spring_terms();
+        self.spring_blocks()
+            .iter()
+            .flatten()
+            .zip(&self.block_positions)
+            .map(|(block, positions)| {
+                let phi_b = Mat::from_fn(positions.len(), nm, |a, i| state.phi_springs[(positions[a], i)]);
+                let b_phi = &block.values * &phi_b;
+                let rho = |terms: &Mat<f64>| {
+                    Mat::from_fn(positions.len(), sensors.len(), |a, t| terms[(positions[a], sensors[t])])
+                };
+                let (r0, r1) = (rho(rho0), rho(rho1));
+                let (b_r0, b_r1) = (&block.values * &r0, &block.values * &r1);
+                BlockResidual {
+                    coupling: phi_b.transpose() * &b_phi,
+                    u0: phi_b.transpose() * &b_r0,
+                    u1: phi_b.transpose() * &b_r1,
+                    c: [
+                        r0.transpose() * &b_r0,
+                        r0.transpose() * &b_r1,
+                        r1.transpose() * &b_r0,
+                        r1.transpose() * &b_r1,
+                    ],
+                }
+            })
+            .collect()
     }
 
     /// The truncation error of this (truncated) model against `reference`
