@@ -51,7 +51,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
             let t1 = Instant::now();
             let theta = sparse.field_coefficients.clone();
             let modes = sparse
-                .modes_below(&sparse.spring_stiffness, &theta, cutoff, count.min(64))
+                .modes_below(&sparse.spring_stiffness, &theta, cutoff)
                 .context("solving the partial eigenproblem")?;
             (modes, sparse.dof_count(), sparse.free_count(), t1)
         }

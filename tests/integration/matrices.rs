@@ -97,7 +97,7 @@ fn sparse_modes_agree_with_scipy_eigsh() {
     assert_eq!(blocks, [130, 195]);
     let cutoff_hz = 100.0;
     let modes = model
-        .modes_below(&model.spring_stiffness, &model.field_coefficients, cutoff_hz, 10)
+        .modes_below(&model.spring_stiffness, &model.field_coefficients, cutoff_hz)
         .unwrap();
     let cutoff = (2.0 * std::f64::consts::PI * cutoff_hz).powi(2);
     let expected: Vec<f64> = reference.into_iter().filter(|&w| w <= cutoff).collect();

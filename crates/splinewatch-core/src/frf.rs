@@ -362,9 +362,8 @@ impl FrfModel {
                 Ok(self.modal_state_from(modes, damping))
             }
             Source::Truncated { model, cutoff_hz, .. } => {
-                let modes = model.modes_below(kappa, theta, *cutoff_hz, 0)?;
+                let (modes, responses) = model.modes_and_responses(kappa, theta, *cutoff_hz, &self.sensor_rows)?;
                 let shift = SparseModel::shift_for(*cutoff_hz);
-                let responses = model.shifted_responses(kappa, theta, &self.sensor_rows, shift)?;
                 let residual = Residual::new(&modes, &self.sensor_rows, &self.spring_dofs, &responses, shift, damping);
                 let mut state = self.modal_state_from(modes, damping);
                 state.residual = Some(residual);

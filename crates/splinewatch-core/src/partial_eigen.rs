@@ -56,6 +56,9 @@ pub enum PartialEigenError {
     Dimension { found: usize, expected: usize },
 }
 
+/// `(X B, X M X B)` of [`ShiftInvert::solve_with_responses`].
+pub type Responses = (Mat<f64>, Mat<f64>);
+
 /// What a partial solve looks for.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PartialSettings {
@@ -180,24 +183,17 @@ impl ShiftInvert {
         Ok(l_values)
     }
 
-    /// `X B` and `X M X B`, `X = (K − σM)⁻¹`, for the columns of `rhs` (the
-    /// residual flexibility and its first dynamic correction,
-    /// [`crate::truncation`]): one numeric factorisation, two solves.
-    pub fn shifted_solve(
-        &self,
-        k: &SparseSymmetric,
-        m: &SparseSymmetric,
-        sigma: f64,
-        rhs: &Mat<f64>,
-    ) -> Result<(Mat<f64>, Mat<f64>), PartialEigenError> {
-        let values = self.factorize(k, m, sigma)?;
-        let llt = LltRef::new(&self.symbolic, &values);
+    /// `X B` and `X M X B` for the columns of `rhs`, `X = (K − σM)⁻¹` given
+    /// by its Cholesky factor's values (the residual flexibility and its
+    /// first dynamic correction, [`crate::truncation`]).
+    fn responses(&self, l_values: &[f64], m: &SparseSymmetric, rhs: &Mat<f64>) -> Responses {
+        let llt = LltRef::new(&self.symbolic, l_values);
         let mut buffer = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq));
         let mut x = rhs.clone();
         llt.solve_in_place_with_conj(Conj::No, x.as_mut(), Par::Seq, MemStack::new(&mut buffer));
         let mut xmx = m.mul(&x);
         llt.solve_in_place_with_conj(Conj::No, xmx.as_mut(), Par::Seq, MemStack::new(&mut buffer));
-        Ok((x, xmx))
+        (x, xmx)
     }
 
     /// The number of eigenvalues of `(k, m)` below `omega2`: the negative
@@ -250,6 +246,21 @@ impl ShiftInvert {
         settings: &PartialSettings,
         guess: usize,
     ) -> Result<PartialModes, PartialEigenError> {
+        Ok(self.solve_with_responses(k, m, settings, guess, None)?.0)
+    }
+
+    /// [`Self::solve`], and with `rhs` also `X B` and `X M X B`,
+    /// `X = (K − σM)⁻¹` at the solve's shift, from the same factorisation. The Sturm count runs on a second thread
+    /// beside the factorisation (independent computations: the result does
+    /// not depend on it).
+    pub fn solve_with_responses(
+        &self,
+        k: &SparseSymmetric,
+        m: &SparseSymmetric,
+        settings: &PartialSettings,
+        guess: usize,
+        rhs: Option<&Mat<f64>>,
+    ) -> Result<(PartialModes, Option<Responses>), PartialEigenError> {
         let sigma = settings.shift;
         if !(sigma.is_finite() && sigma < 0.0) {
             return Err(PartialEigenError::Shift(sigma));
@@ -260,7 +271,17 @@ impl ShiftInvert {
                 return Err(PartialEigenError::Dimension { found, expected: n });
             }
         }
-        let l_values = self.factorize(k, m, sigma)?;
+        // Sylvester's law of inertia: the negative pivots of K − ω²_cut M
+        // count the modes below the cut-off (the "Sturm check" of FE codes),
+        // so one Lanczos run asks for the right number; without it (a zero
+        // pivot), the count doubles from `guess` until the cut-off is passed.
+        let (l_values, count) = std::thread::scope(|scope| {
+            let count = scope.spawn(|| self.count_below(k, m, settings.cutoff_omega2));
+            let l_values = self.factorize(k, m, sigma);
+            (l_values, count.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+        });
+        let l_values = l_values?;
+        let responses = rhs.map(|rhs| self.responses(&l_values, m, rhs));
         let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
             unreachable!("the factorisation is forced supernodal");
         };
@@ -279,11 +300,6 @@ impl ShiftInvert {
             inverse: &inverse,
             mass: &mass,
         };
-        // Sylvester's law of inertia: the negative pivots of K − ω²_cut M
-        // count the modes below the cut-off (the "Sturm check" of FE codes),
-        // so one Lanczos run asks for the right number; without it (a zero
-        // pivot), the count doubles from `guess` until the cut-off is passed.
-        let count = self.count_below(k, m, settings.cutoff_omega2);
         let mut wanted = count.map_or(guess, |c| c + LANCZOS_MARGIN).clamp(1, n);
         let (mut mu, mut y) = loop {
             let (mu, y) = lanczos(&op, wanted);
@@ -305,7 +321,7 @@ impl ShiftInvert {
                 return Err(PartialEigenError::Missed { found, expected });
             }
         }
-        finish(&op, k, m, settings, mu, y, wanted)
+        Ok((finish(&op, k, m, settings, mu, y, wanted)?, responses))
     }
 }
 
@@ -448,8 +464,11 @@ fn finish(
     // Residuals relative to the matrices' scale (their largest diagonal
     // entry): a rigid mode has `K x ≈ 0`, so `‖K x‖` cannot be the scale.
     let (k_scale, m_scale) = (k.max_diagonal(), m.max_diagonal());
-    let kx = k.mul(&shapes);
-    let mx = op.mass.mul(&shapes);
+    let (kx, mx) = std::thread::scope(|scope| {
+        let kx = scope.spawn(|| k.mul(&shapes));
+        let mx = op.mass.mul(&shapes);
+        (kx.join().unwrap_or_else(|e| std::panic::resume_unwind(e)), mx)
+    });
     let mut omega2 = Vec::with_capacity(order.len());
     let mut residuals = Vec::with_capacity(order.len());
     for (c, &i) in order.iter().enumerate() {

@@ -11,7 +11,7 @@
 use crate::constraints::DofReduction;
 use crate::modal::{classify_lumped, Modes};
 use crate::model::{ModelError, ShellModel};
-use crate::partial_eigen::{PartialModes, PartialSettings, ShiftInvert};
+use crate::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
 use crate::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
 use crate::sparse::{reduced_pattern, Pattern, SparseError, SparseSymmetric};
 use std::collections::BTreeMap;
@@ -102,7 +102,19 @@ struct Block {
 /// from here instead of solved again. Exact: the inputs are compared bit
 /// for bit, and the same inputs give the same modes.
 #[derive(Debug, Default)]
-struct LastSolve(Mutex<Option<(Vec<f64>, PartialSettings, PartialModes)>>);
+struct LastSolve(Mutex<Option<Solved>>);
+
+/// A block's solve: its inputs (stiffness values, settings, load columns)
+/// and outputs (modes, static responses).
+#[derive(Debug)]
+struct Solved {
+    stiffness: Vec<f64>,
+    settings: PartialSettings,
+    loads: Option<faer::Mat<f64>>,
+    modes: PartialModes,
+    responses: Option<Responses>,
+}
+
 
 impl Clone for LastSolve {
     fn clone(&self) -> Self {
@@ -111,34 +123,49 @@ impl Clone for LastSolve {
 }
 
 impl Block {
-    /// The block's modes for the restricted `k`, `m` (the model's mass).
-    fn modes(
+    fn restrict(&self, m: &SparseSymmetric) -> SparseSymmetric {
+        m.restrict(&self.pattern, &self.positions)
+    }
+
+    /// The block's modes for the restricted `k`, `m` (the model's mass)
+    /// and, for `loads`, the static responses at the solve's shift.
+    fn solve(
         &self,
         k: &SparseSymmetric,
         m: &SparseSymmetric,
         settings: &PartialSettings,
-        guess: usize,
-    ) -> Result<PartialModes, ModelError> {
+        loads: Option<&faer::Mat<f64>>,
+    ) -> Result<(PartialModes, Option<Responses>), ModelError> {
         let same =
             |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        let same_loads = |a: Option<&faer::Mat<f64>>, b: Option<&faer::Mat<f64>>| match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                a.ncols() == b.ncols() && (0..a.ncols()).all(|c| same(a.col_as_slice(c), b.col_as_slice(c)))
+            }
+            _ => false,
+        };
         let mut last = self.last.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        if let Some((values, s, modes)) = last.as_ref() {
-            if s == settings && same(values, k.values()) {
-                return Ok(modes.clone());
+        if let Some(solved) = last.as_ref() {
+            if solved.settings == *settings
+                && same(&solved.stiffness, k.values())
+                && same_loads(solved.loads.as_ref(), loads)
+            {
+                return Ok((solved.modes.clone(), solved.responses.clone()));
             }
         }
-        let modes = self
+        let (modes, responses) = self
             .eigen
-            .solve(k, m, settings, guess)
+            .solve_with_responses(k, m, settings, 0, loads)
             .map_err(ModelError::PartialEigen)?;
-        *last = Some((k.values().to_vec(), *settings, modes.clone()));
-        Ok(modes)
-    }
-}
-
-impl Block {
-    fn restrict(&self, m: &SparseSymmetric) -> SparseSymmetric {
-        m.restrict(&self.pattern, &self.positions)
+        *last = Some(Solved {
+            stiffness: k.values().to_vec(),
+            settings: *settings,
+            loads: loads.cloned(),
+            modes: modes.clone(),
+            responses: responses.clone(),
+        });
+        Ok((modes, responses))
     }
 }
 
@@ -302,15 +329,35 @@ impl SparseModel {
     }
 
     /// The modes with `f ≤ cutoff_hz` at `(κ, θ)`, mass-normalised on the
-    /// full dofs and classified; `guess`: the expected count (the last
-    /// solve's), which only sets where the search starts.
-    pub fn modes_below(
+    /// full dofs and classified.
+    pub fn modes_below(&self, kappa: &[Vec<f64>], theta: &[Vec<f64>], cutoff_hz: f64) -> Result<Modes, ModelError> {
+        Ok(self.solve(kappa, theta, cutoff_hz, None)?.0)
+    }
+
+    /// [`Self::modes_below`] and the static responses `X Fᵀ` to the unit
+    /// loads `F` (sparse rows on the generalised dofs: the sensor rows `N`
+    /// of eq. 32), `X = (K − σM)⁻¹` at the eigen-solve's shift
+    /// ([`Self::shift_for`]), with their first dynamic correction
+    /// `X M X Fᵀ`, both on the generalised dofs (one column per load), from
+    /// the eigen-solve's factorisation ([`crate::truncation`]).
+    pub fn modes_and_responses(
         &self,
         kappa: &[Vec<f64>],
         theta: &[Vec<f64>],
         cutoff_hz: f64,
-        guess: usize,
-    ) -> Result<Modes, ModelError> {
+        loads: &[Vec<(usize, f64)>],
+    ) -> Result<(Modes, Responses), ModelError> {
+        let (modes, responses) = self.solve(kappa, theta, cutoff_hz, Some(loads))?;
+        Ok((modes, responses.expect("loads given")))
+    }
+
+    fn solve(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        cutoff_hz: f64,
+        loads: Option<&[Vec<(usize, f64)>]>,
+    ) -> Result<(Modes, Option<Responses>), ModelError> {
         let k = self.stiffness_with_fields(kappa, theta)?;
         let cutoff_omega2 = (2.0 * PI * cutoff_hz).powi(2);
         let settings = PartialSettings {
@@ -318,10 +365,41 @@ impl SparseModel {
             shift: Self::shift_for(cutoff_hz),
             tolerance: RESIDUAL_TOLERANCE,
         };
-        // Each block's modes, merged in ascending order.
+        let rhs = loads.map(|loads| {
+            let mut full = faer::Mat::<f64>::zeros(self.dof_count(), loads.len());
+            for (s, row) in loads.iter().enumerate() {
+                for &(d, v) in row {
+                    full[(d, s)] += v;
+                }
+            }
+            self.reduction.reduce_vector(&full)
+        });
+        let nl = loads.map_or(0, <[_]>::len);
+        let mut x = faer::Mat::<f64>::zeros(self.free_count(), nl);
+        let mut xmx = faer::Mat::<f64>::zeros(self.free_count(), nl);
+        // Each block's modes (merged in ascending order below) and the
+        // responses of the blocks a load reaches.
         let mut found = Vec::new();
         for block in &self.blocks {
-            found.push(block.modes(&block.restrict(&k), &block.restrict(&self.mass), &settings, guess)?);
+            let part = rhs
+                .as_ref()
+                .map(|rhs| faer::Mat::from_fn(block.dofs.len(), nl, |r, s| rhs[(block.dofs[r], s)]))
+                .filter(|part| part.norm_max() > 0.0);
+            let (modes, responses) = block.solve(
+                &block.restrict(&k),
+                &block.restrict(&self.mass),
+                &settings,
+                part.as_ref(),
+            )?;
+            if let Some((solved, dynamic)) = responses {
+                for (r, &d) in block.dofs.iter().enumerate() {
+                    for s in 0..nl {
+                        x[(d, s)] = solved[(r, s)];
+                        xmx[(d, s)] = dynamic[(r, s)];
+                    }
+                }
+            }
+            found.push(modes);
         }
         let mut order: Vec<(usize, usize)> = (0..found.len())
             .flat_map(|b| (0..found[b].omega2.len()).map(move |i| (b, i)))
@@ -336,7 +414,8 @@ impl SparseModel {
         let omega2: Vec<f64> = order.iter().map(|&(b, i)| found[b].omega2[i]).collect();
         let shapes = self.reduction.expand(&reduced);
         let kinds = classify_lumped(&omega2, &shapes, &self.lumped, &self.shell);
-        Ok(Modes { omega2, shapes, kinds })
+        let responses = loads.map(|_| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
+        Ok((Modes { omega2, shapes, kinds }, responses))
     }
 }
 
@@ -344,48 +423,6 @@ impl SparseModel {
     /// The shift the eigen-solve below `cutoff_hz` uses.
     pub fn shift_for(cutoff_hz: f64) -> f64 {
         -(2.0 * PI * cutoff_hz).powi(2) / SHIFT_RATIO
-    }
-
-    /// The static responses `X Fᵀ` to the unit loads `F` (sparse rows on the
-    /// generalised dofs: the sensor rows `N` of eq. 32), `X = (K − σM)⁻¹` at
-    /// `(κ, θ)`, and their first dynamic correction `X M X Fᵀ`, both on the
-    /// generalised dofs (one column per load): one numeric factorisation per
-    /// block at the shift of the eigen-solve ([`crate::truncation`]).
-    pub fn shifted_responses(
-        &self,
-        kappa: &[Vec<f64>],
-        theta: &[Vec<f64>],
-        loads: &[Vec<(usize, f64)>],
-        shift: f64,
-    ) -> Result<(faer::Mat<f64>, faer::Mat<f64>), ModelError> {
-        let k = self.stiffness_with_fields(kappa, theta)?;
-        let nl = loads.len();
-        let mut full = faer::Mat::<f64>::zeros(self.dof_count(), nl);
-        for (s, row) in loads.iter().enumerate() {
-            for &(d, v) in row {
-                full[(d, s)] += v;
-            }
-        }
-        let rhs = self.reduction.reduce_vector(&full);
-        let mut x = faer::Mat::<f64>::zeros(rhs.nrows(), nl);
-        let mut xmx = faer::Mat::<f64>::zeros(rhs.nrows(), nl);
-        for block in &self.blocks {
-            let part = faer::Mat::from_fn(block.dofs.len(), nl, |r, s| rhs[(block.dofs[r], s)]);
-            if part.norm_max() == 0.0 {
-                continue;
-            }
-            let (solved, dynamic) = block
-                .eigen
-                .shifted_solve(&block.restrict(&k), &block.restrict(&self.mass), shift, &part)
-                .map_err(ModelError::PartialEigen)?;
-            for (r, &d) in block.dofs.iter().enumerate() {
-                for s in 0..nl {
-                    x[(d, s)] = solved[(r, s)];
-                    xmx[(d, s)] = dynamic[(r, s)];
-                }
-            }
-        }
-        Ok((self.reduction.expand(&x), self.reduction.expand(&xmx)))
     }
 }
 
@@ -499,7 +536,7 @@ mod tests {
             }
         }
         let reference = dense.modes_with(&kappa).unwrap();
-        let found = sparse.modes_below(&kappa, &[], 60.0, 4).unwrap();
+        let found = sparse.modes_below(&kappa, &[], 60.0).unwrap();
         let expected = reference.frequencies_hz().iter().filter(|&&f| f <= 60.0).count();
         assert_eq!(found.len(), expected);
         for i in 0..expected {
