@@ -171,11 +171,7 @@ enum Source {
     Dense(Box<AssembledModel>),
     /// The modes below `cutoff_hz` of the sparse model, the rest as a
     /// residual ([`crate::truncation`]).
-    Truncated {
-        model: Box<SparseModel>,
-        spring_blocks: Vec<Vec<LowRankBlock>>,
-        cutoff_hz: f64,
-    },
+    Truncated { model: Box<SparseModel>, cutoff_hz: f64 },
 }
 
 /// An assembled model with sensors: evaluates FRFs and sensitivities.
@@ -210,18 +206,8 @@ impl FrfModel {
             return Err(FrfError::Cutoff(cutoff_hz));
         }
         let sensor_rows = sensor_rows(&model.shell, sensors)?;
-        let spring_blocks = model
-            .springs
-            .iter()
-            .enumerate()
-            .map(|(index, s)| {
-                s.coefficient_matrices(&model.shell)
-                    .map_err(|source| ModelError::Spring { index, source })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
         let source = Source::Truncated {
             model: Box::new(SparseModel::assemble(model)?),
-            spring_blocks,
             cutoff_hz,
         };
         Ok(Self::with_source(source, sensor_rows))
@@ -230,7 +216,7 @@ impl FrfModel {
     fn with_source(source: Source, sensor_rows: Vec<Vec<(usize, f64)>>) -> Self {
         let blocks = match &source {
             Source::Dense(assembled) => &assembled.spring_blocks,
-            Source::Truncated { spring_blocks, .. } => spring_blocks,
+            Source::Truncated { model, .. } => &model.spring_blocks,
         };
         let mut spring_dofs: Vec<usize> = blocks.iter().flatten().flat_map(|b| b.dofs.iter().copied()).collect();
         spring_dofs.sort_unstable();
@@ -295,7 +281,7 @@ impl FrfModel {
     pub fn spring_blocks(&self) -> &[Vec<LowRankBlock>] {
         match &self.source {
             Source::Dense(assembled) => &assembled.spring_blocks,
-            Source::Truncated { spring_blocks, .. } => spring_blocks,
+            Source::Truncated { model, .. } => &model.spring_blocks,
         }
     }
 

@@ -14,6 +14,7 @@ use crate::model::{ModelError, ShellModel};
 use crate::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
 use crate::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
 use crate::sparse::{reduced_pattern, Pattern, SparseError, SparseSymmetric};
+use crate::springs::LowRankBlock;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::sync::{Arc, Mutex};
@@ -68,6 +69,9 @@ pub struct SparseModel {
     pub free_stiffness: SparseSymmetric,
     /// `Tᵀ M T`.
     pub mass: SparseSymmetric,
+    /// `∂K/∂κ_j` per spring field and coefficient on the generalised dofs
+    /// (eq. 22, low rank).
+    pub spring_blocks: Vec<Vec<LowRankBlock>>,
     /// `Tᵀ ∂K/∂κ_j T` per spring field and coefficient.
     pub spring_terms: Vec<Vec<SparseTerm>>,
     pub spring_stiffness: Vec<Vec<f64>>,
@@ -114,7 +118,6 @@ struct Solved {
     modes: PartialModes,
     responses: Option<Responses>,
 }
-
 
 impl Clone for LastSolve {
     fn clone(&self) -> Self {
@@ -220,25 +223,20 @@ impl SparseModel {
         let reduction = DofReduction::new(shell, &model.constraints);
         let pattern = Arc::new(reduced_pattern(shell, &reduction));
         let (k, m) = shell::assemble_sparse(shell, &model.material, &full)?;
-        let lumped = (0..shell.control_point_count())
-            .map(|cp| {
-                let r = DOFS_PER_CONTROL_POINT * cp;
-                let p = &full;
-                (p.col_ptr()[r]..p.col_ptr()[r + 1])
-                    .filter(|&e| p.row_idx()[e] % DOFS_PER_CONTROL_POINT == 0)
-                    .map(|e| m.values()[e])
-                    .sum()
-            })
-            .collect();
+        let lumped = lumped_translational_mass(&full, &m, shell.control_point_count());
         let owners = owners(&reduction);
-        let spring_terms = model
+        let spring_blocks = model
             .springs
             .iter()
             .enumerate()
             .map(|(index, s)| {
-                let blocks = s
-                    .coefficient_matrices(shell)
-                    .map_err(|source| ModelError::Spring { index, source })?;
+                s.coefficient_matrices(shell)
+                    .map_err(|source| ModelError::Spring { index, source })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let spring_terms = spring_blocks
+            .iter()
+            .map(|blocks| {
                 blocks
                     .iter()
                     .map(|b| reduce_block(&b.dofs, &b.values, &owners, &pattern))
@@ -280,6 +278,7 @@ impl SparseModel {
             mass,
             reduction,
             pattern,
+            spring_blocks,
             spring_terms,
             spring_stiffness: model.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
             field_terms,
@@ -432,6 +431,19 @@ const SHIFT_RATIO: f64 = 2500.0;
 
 /// Largest relative residual of an accepted mode.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
+
+/// Row-sum translational mass per control point (the `u` rows of `M`).
+fn lumped_translational_mass(pattern: &Pattern, m: &SparseSymmetric, control_points: usize) -> Vec<f64> {
+    (0..control_points)
+        .map(|cp| {
+            let r = DOFS_PER_CONTROL_POINT * cp;
+            (pattern.col_ptr()[r]..pattern.col_ptr()[r + 1])
+                .filter(|&e| pattern.row_idx()[e] % DOFS_PER_CONTROL_POINT == 0)
+                .map(|e| m.values()[e])
+                .sum()
+        })
+        .collect()
+}
 
 /// Per full dof, the free coordinates it enters and their weights in `T`.
 fn owners(reduction: &DofReduction) -> Vec<Vec<(usize, f64)>> {
