@@ -314,6 +314,24 @@ mod tests {
             e.contains("model.discretization.control_points") && e.contains("--cutoff"),
             "{e}"
         );
+        // `[model.solver]`: `auto` keeps the bundled deck dense and truncates
+        // the big net at twice the 80 Hz band; `all` and a bad cut-off.
+        assert_eq!(Config::from_toml(SINELLO).unwrap().modal_cutoff_hz().unwrap(), None);
+        assert_eq!(big.modal_cutoff_hz().unwrap(), Some(160.0));
+        let all = format!(
+            "{}\n[model.solver]\nmodes = \"all\"\n",
+            SINELLO.replace("control_points = [13, 5]", "control_points = [100, 40]")
+        );
+        assert_eq!(Config::from_toml(&all).unwrap().modal_cutoff_hz().unwrap(), None);
+        let zero = format!("{SINELLO}\n[model.solver]\nmodes = \"truncated\"\ncutoff_hz = 0.0\n");
+        let e = Config::from_toml(&zero)
+            .unwrap()
+            .modal_cutoff_hz()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("model.solver.cutoff_hz"), "{e}");
+        let e = error_of(|t| format!("{t}\n[model.solver]\nmodes = \"some\"\n"));
+        assert!(e.contains("modes") && e.contains("some"), "{e}");
         let e = error_of(|t| t.replace("name = \"east\"", "name = \"west\""));
         assert!(e.contains("model.springs[1].name") && e.contains("used twice"), "{e}");
         let e = error_of(|t| t.replacen("bounds = [1.0e7, 5.0e9]", "bounds = [1.0e7, 1.0e9]", 1));

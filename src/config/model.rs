@@ -328,7 +328,7 @@ impl Config {
             return Err(err(
                 "model.discretization.control_points",
                 format!(
-                    "{total} control points: the dense path (FRFs, updating, modes without --cutoff) holds at most {MAX_DENSE_CONTROL_POINTS}; `modes --cutoff` and `matrices` take up to {MAX_CONTROL_POINTS}"
+                    "{total} control points: every mode (`[model.solver] modes = \"all\"`, `modes` without --cutoff) is solved densely for at most {MAX_DENSE_CONTROL_POINTS}; `modes = \"truncated\"` or `\"auto\"`, `modes --cutoff` and `matrices` take up to {MAX_CONTROL_POINTS}"
                 ),
             ));
         }
