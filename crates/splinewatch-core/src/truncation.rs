@@ -69,7 +69,7 @@ pub struct Residual {
 impl Residual {
     /// From the kept `modes` (full generalised dofs), the sensor rows, the
     /// spring dofs `U`, the responses `(X Nᵀ, X M X Nᵀ)` on the generalised
-    /// dofs ([`crate::sparse_model::SparseModel::shifted_responses`]) and the
+    /// dofs ([`crate::sparse_model::SparseModel::modes_and_responses`]) and the
     /// shift `σ` they were solved at; `damping` gives the discarded modes'
     /// damping ratio.
     #[track_caller]
