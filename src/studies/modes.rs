@@ -30,10 +30,15 @@ pub struct ModalRunInfo {
 }
 
 /// Assembles the configured model and returns its first `count` modes:
-/// every mode by the dense solver, or with `cutoff_hz` those below it by
-/// the sparse assembly and shift-invert Lanczos (models of 10⁴–10⁵ dofs).
+/// every mode by the dense solver, or with `cutoff_hz` (else the cut-off
+/// of a truncated `[model.solver]`) those below it by the sparse assembly
+/// and shift-invert Lanczos (models of 10⁴–10⁵ dofs).
 pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> Result<(ModesReport, ModalRunInfo)> {
     let t0 = Instant::now();
+    let cutoff_hz = match cutoff_hz {
+        Some(cutoff) => Some(cutoff),
+        None => config.modal_cutoff_hz()?,
+    };
     let (modes, dofs, free_dofs, t1) = match cutoff_hz {
         None => {
             let model = config.build_dense_model()?;
