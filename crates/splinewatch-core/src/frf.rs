@@ -262,21 +262,6 @@ impl FrfModel {
         }
     }
 
-    pub fn shell(&self) -> &Shell {
-        match &self.source {
-            Source::Dense(assembled) => &assembled.shell,
-            Source::Truncated { model, .. } => &model.shell,
-        }
-    }
-
-    /// Generalised dofs (the rows of the mode shapes).
-    pub fn dof_count(&self) -> usize {
-        match &self.source {
-            Source::Dense(assembled) => assembled.dof_count(),
-            Source::Truncated { model, .. } => model.dof_count(),
-        }
-    }
-
     /// `∂K/∂κ_j` per spring field and coefficient, on the generalised dofs.
     pub fn spring_blocks(&self) -> &[Vec<LowRankBlock>] {
         match &self.source {

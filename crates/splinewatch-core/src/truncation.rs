@@ -131,24 +131,9 @@ impl Residual {
         }
     }
 
-    /// The shift `σ` of the expansion.
-    pub fn shift(&self) -> f64 {
-        self.shift
-    }
-
     /// The receptance `R_0,rs + (ω² − σ − 2j ζ_e ω_e ω) R_1,rs` at `omega` rad/s.
     pub fn at_sensors(&self, r: usize, s: usize, omega: f64) -> c64 {
-        self.combine(&self.sensors, r, s, omega)
-    }
-
-    /// The same for the response of spring dof `u` (its position in `U`)
-    /// to a unit load at sensor `s`.
-    pub fn on_springs(&self, u: usize, s: usize, omega: f64) -> c64 {
-        self.combine(&self.springs, u, s, omega)
-    }
-
-    fn combine(&self, terms: &[Mat<f64>; 2], row: usize, s: usize, omega: f64) -> c64 {
-        self.expansion_factor(omega) * terms[1][(row, s)] + terms[0][(row, s)]
+        self.expansion_factor(omega) * self.sensors[1][(r, s)] + self.sensors[0][(r, s)]
     }
 
     /// `γ(ω) = ω² − σ − 2j ζ_e ω_e ω`: a residual at `ω` is `ρ_0 + γ ρ_1`.
@@ -171,10 +156,5 @@ impl Residual {
     /// `∂/∂γ_z` of [`Self::at_sensors`]: `−2j ω B_z(f_e) ω_e R_1,rs`.
     pub fn damping_sensitivity(&self, r: usize, s: usize, omega: f64, z: usize) -> c64 {
         c64::new(0.0, -2.0 * omega * self.damping_gradient[z] * self.sensors[1][(r, s)])
-    }
-
-    /// The residual flexibility `R_0` and inertia `R_1` at the sensors.
-    pub fn sensor_terms(&self) -> (&Mat<f64>, &Mat<f64>) {
-        (&self.sensors[0], &self.sensors[1])
     }
 }
