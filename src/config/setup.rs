@@ -2,6 +2,7 @@
 
 use super::Config;
 use anyhow::{Context, Result};
+use splinewatch_core::c64;
 use splinewatch_core::damping::DampingCurve;
 use splinewatch_core::frf::{FrfModel, FrfRequest, SensorPoint};
 use splinewatch_core::truncation::TruncationReport;
@@ -21,23 +22,24 @@ pub struct FrfSetup {
 
 impl FrfSetup {
     /// A truncated model's report at `(κ, θ)` and `damping` with
-    /// `modes_kept` modes: with `request` (an FRF fit) and a reference model,
-    /// the truncation error of those FRFs; `None` for every mode.
+    /// `modes_kept` modes: with `fitted` (an FRF fit: the model's FRFs and
+    /// the request they answer) and a reference model, the truncation error
+    /// of those FRFs; `None` for every mode.
     pub fn truncation_report(
         &self,
         kappa: &[Vec<f64>],
         theta: &[Vec<f64>],
         damping: &DampingCurve,
         modes_kept: usize,
-        request: Option<FrfRequest<'_>>,
+        fitted: Option<(&[c64], FrfRequest<'_>)>,
     ) -> Result<Option<TruncationReport>> {
         let Some(cutoff_hz) = self.model.cutoff_hz() else {
             return Ok(None);
         };
-        let frf_error = match (&self.reference, request) {
-            (Some(reference), Some(request)) => Some(
-                self.model
-                    .truncation_error(reference, kappa, theta, damping, request)
+        let frf_error = match (&self.reference, fitted) {
+            (Some(reference), Some((h, request))) => Some(
+                reference
+                    .truncation_error(h, kappa, theta, damping, request)
                     .context("the truncation error against every mode")?,
             ),
             _ => None,

@@ -242,9 +242,9 @@ impl UpdateJob {
             pairs: &pairs,
             quantity: measured.quantity(),
         };
-        let truncation = self
-            .setup
-            .truncation_report(&kappa, &theta, &damping, state.modes.len(), Some(request))?;
+        let truncation =
+            self.setup
+                .truncation_report(&kappa, &theta, &damping, state.modes.len(), Some((h, request)))?;
         let report = UpdateReport {
             result,
             fit: Fit::Frf {

@@ -71,22 +71,23 @@ pub fn update(
         Some(text) => start_values(text, problem.parameters(), &base)?,
         None => base,
     };
-    let result = problem.solve_observed(&start, progress)?;
-    let values: Vec<f64> = result.parameters.iter().map(|p| p.value).collect();
-    let truncation = if setup.model.cutoff_hz().is_some() {
-        let (kappa, damping) = problem.model_at(&values)?;
-        let theta = problem.fields_at(&values);
-        let pairs: Vec<(usize, usize)> = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
-        let request = FrfRequest {
-            frequencies_hz: problem.line_frequencies(),
-            pairs: &pairs,
-            quantity: measured.quantity(),
-        };
-        let kept = problem.state_at(&values)?.modes.len();
-        setup.truncation_report(&kappa, &theta, &damping, kept, Some(request))?
-    } else {
-        None
+    // The solution's model point: its state and FRFs are the fitted ones.
+    let solution = problem.solve_from(&start, None, progress)?;
+    let point = &solution.point;
+    let pairs: Vec<(usize, usize)> = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
+    let request = FrfRequest {
+        frequencies_hz: problem.line_frequencies(),
+        pairs: &pairs,
+        quantity: measured.quantity(),
     };
+    let truncation = setup.truncation_report(
+        point.kappa(),
+        point.theta(),
+        point.damping(),
+        point.state().modes.len(),
+        Some((point.frfs(), request)),
+    )?;
+    let result = solution.result;
     Ok((result, truncation))
 }
 

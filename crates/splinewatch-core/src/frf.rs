@@ -335,9 +335,16 @@ impl FrfModel {
             Source::Truncated { model, cutoff_hz, .. } => {
                 let (modes, responses) = model.modes_and_responses(kappa, theta, *cutoff_hz, &self.sensor_rows)?;
                 let shift = SparseModel::shift_for(*cutoff_hz);
-                let residual = Residual::new(&modes, &self.sensor_rows, &self.spring_dofs, &responses, shift, damping);
                 let mut state = self.modal_state_from(modes, damping);
-                state.residual = Some(residual);
+                state.residual = Some(Residual::new(
+                    &state.modes,
+                    &state.amplitudes,
+                    &self.sensor_rows,
+                    &self.spring_dofs,
+                    &responses,
+                    shift,
+                    damping,
+                ));
                 Ok(state)
             }
         }
@@ -840,24 +847,25 @@ impl FrfModel {
             .collect()
     }
 
-    /// The truncation error of this (truncated) model against `reference`
-    /// (the same model with every mode) at `(κ, θ)` and `damping`: the
-    /// largest `|H − H_ref|` over the lines of `request`, relative to each
-    /// FRF's peak (what the update report states for small models).
+    /// The truncation error of FRFs `found` (a truncated model's, on the
+    /// lines and pairs of `request`) against this model's, which solves
+    /// every mode, at `(κ, θ)` and `damping`: the largest `|H − H_ref|`,
+    /// relative to each FRF's peak (what the update report states for small
+    /// models).
+    #[track_caller]
     pub fn truncation_error(
         &self,
-        reference: &FrfModel,
+        found: &[c64],
         kappa: &[Vec<f64>],
         theta: &[Vec<f64>],
         damping: &DampingCurve,
         request: FrfRequest<'_>,
     ) -> Result<f64, FrfError> {
-        let found = self.evaluate(&self.modal_state_with_fields(kappa, theta, damping)?, request, false);
-        let full = reference.modal_state_with_fields(kappa, theta, damping)?;
-        let expected = reference.evaluate(&full, request, false);
+        let full = self.modal_state_with_fields(kappa, theta, damping)?;
+        let expected = self.evaluate(&full, request, false);
+        assert_eq!(found.len(), expected.h.len(), "FRFs on the request's lines and pairs");
         let n = request.frequencies_hz.len().max(1);
         Ok(found
-            .h
             .chunks(n)
             .zip(expected.h.chunks(n))
             .map(|(a, b)| {

@@ -67,7 +67,8 @@ pub struct Residual {
 }
 
 impl Residual {
-    /// From the kept `modes` (full generalised dofs), the sensor rows, the
+    /// From the kept `modes` (full generalised dofs), their sensor
+    /// amplitudes `a_{s,i}` (sensors × modes), the sensor rows, the
     /// spring dofs `U`, the responses `(X Nᵀ, X M X Nᵀ)` on the generalised
     /// dofs ([`crate::sparse_model::SparseModel::modes_and_responses`]) and the
     /// shift `σ` they were solved at; `damping` gives the discarded modes'
@@ -75,6 +76,7 @@ impl Residual {
     #[track_caller]
     pub fn new(
         modes: &Modes,
+        amplitudes: &Mat<f64>,
         sensor_rows: &[Vec<(usize, f64)>],
         spring_dofs: &[usize],
         responses: &(Mat<f64>, Mat<f64>),
@@ -86,9 +88,11 @@ impl Residual {
         let phi = &modes.shapes;
         assert_eq!(responses.0.ncols(), ns, "a response per sensor");
         assert_eq!(responses.0.nrows(), phi.nrows(), "responses on the generalised dofs");
-        let amplitudes = Mat::from_fn(ns, nm, |s, i| {
-            sensor_rows[s].iter().map(|&(d, v)| v * phi[(d, i)]).sum::<f64>()
-        });
+        assert_eq!(
+            (amplitudes.nrows(), amplitudes.ncols()),
+            (ns, nm),
+            "an amplitude per sensor and mode"
+        );
         let at = |response: &Mat<f64>, power: i32, d: usize, s: usize| {
             response[(d, s)]
                 - (0..nm)
