@@ -3,6 +3,12 @@
 use faer::prelude::Solve;
 use faer::{c64, Mat};
 
+/// Whether `a` and `b` hold the same values bit for bit (a cached result
+/// is reused only for exactly the inputs it was computed from).
+pub fn bitwise_equal(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
 /// The rows `rows` of `a`, in order.
 pub fn dense_rows(a: &Mat<f64>, rows: &[usize]) -> Mat<f64> {
     Mat::from_fn(rows.len(), a.ncols(), |r, c| a[(rows[r], c)])

@@ -250,9 +250,9 @@ impl ShiftInvert {
     }
 
     /// [`Self::solve`], and with `rhs` also `X B` and `X M X B`,
-    /// `X = (K − σM)⁻¹` at the solve's shift, from the same factorisation. The Sturm count runs on a second thread
-    /// beside the factorisation (independent computations: the result does
-    /// not depend on it).
+    /// `X = (K − σM)⁻¹` at the solve's shift, from the same factorisation.
+    /// The Sturm count runs on a second thread beside the factorisation
+    /// (independent computations: the result does not depend on it).
     pub fn solve_with_responses(
         &self,
         k: &SparseSymmetric,

@@ -9,6 +9,7 @@
 //! models and the tests.
 
 use crate::constraints::DofReduction;
+use crate::linalg::bitwise_equal;
 use crate::modal::{classify_lumped, Modes};
 use crate::model::{ModelError, ShellModel};
 use crate::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
@@ -139,19 +140,17 @@ impl Block {
         settings: &PartialSettings,
         loads: Option<&faer::Mat<f64>>,
     ) -> Result<(PartialModes, Option<Responses>), ModelError> {
-        let same =
-            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
         let same_loads = |a: Option<&faer::Mat<f64>>, b: Option<&faer::Mat<f64>>| match (a, b) {
             (None, None) => true,
             (Some(a), Some(b)) => {
-                a.ncols() == b.ncols() && (0..a.ncols()).all(|c| same(a.col_as_slice(c), b.col_as_slice(c)))
+                a.ncols() == b.ncols() && (0..a.ncols()).all(|c| bitwise_equal(a.col_as_slice(c), b.col_as_slice(c)))
             }
             _ => false,
         };
         let mut last = self.last.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         if let Some(solved) = last.as_ref() {
             if solved.settings == *settings
-                && same(&solved.stiffness, k.values())
+                && bitwise_equal(&solved.stiffness, k.values())
                 && same_loads(solved.loads.as_ref(), loads)
             {
                 return Ok((solved.modes.clone(), solved.responses.clone()));

@@ -22,6 +22,7 @@
 
 use crate::damping::{DampingCurve, DampingError};
 use crate::frf::{FrfError, FrfEvaluation, FrfModel, FrfRequest, ModalState, Quantity};
+use crate::linalg::bitwise_equal;
 use faer::{c64, Mat};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -754,15 +755,13 @@ impl<'a> UpdateProblem<'a> {
         };
         let (kappa, damping) = self.model_at(p)?;
         let theta = self.fields_at(p);
-        let same =
-            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
         let matches = point.model_id == self.model.id()
             && point.kappa.len() == kappa.len()
-            && point.kappa.iter().zip(&kappa).all(|(a, b)| same(a, b))
+            && point.kappa.iter().zip(&kappa).all(|(a, b)| bitwise_equal(a, b))
             && point.theta.len() == theta.len()
-            && point.theta.iter().zip(&theta).all(|(a, b)| same(a, b))
-            && same(point.damping.coefficients(), damping.coefficients())
-            && same(&point.frequencies, &self.frequencies)
+            && point.theta.iter().zip(&theta).all(|(a, b)| bitwise_equal(a, b))
+            && bitwise_equal(point.damping.coefficients(), damping.coefficients())
+            && bitwise_equal(&point.frequencies, &self.frequencies)
             && point.pairs == self.pairs
             && point.quantity == self.measured.quantity();
         Ok(matches.then_some(point))
