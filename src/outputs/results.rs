@@ -132,24 +132,22 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
     }
     match &o.result {
         Ok(r) => {
-            out.push((
-                "updating/parameters",
-                json!({
-                    "time": time,
-                    "window": o.window,
-                    "converged": r.result.converged,
-                    "relative_residual": r.result.relative_residual,
-                    "iterations": r.result.iterations.len() - 1,
-                    "stop_reason": r.result.stop_reason,
-                    "condition_number": if r.result.condition_number.is_finite() { json!(r.result.condition_number) } else { Value::Null },
-                    "relative_offset": r.result.relative_offset,
-                    "parameters": r.result.parameters,
-                    "correlations": r.result.correlations,
-                }),
-            ));
-            if let (Some(truncation), Some((_, message))) = (&r.truncation, out.last_mut()) {
-                message["truncation"] = json!(truncation);
+            let mut parameters = json!({
+                "time": time,
+                "window": o.window,
+                "converged": r.result.converged,
+                "relative_residual": r.result.relative_residual,
+                "iterations": r.result.iterations.len() - 1,
+                "stop_reason": r.result.stop_reason,
+                "condition_number": if r.result.condition_number.is_finite() { json!(r.result.condition_number) } else { Value::Null },
+                "relative_offset": r.result.relative_offset,
+                "parameters": r.result.parameters,
+                "correlations": r.result.correlations,
+            });
+            if let Some(truncation) = &r.truncation {
+                parameters["truncation"] = json!(truncation);
             }
+            out.push(("updating/parameters", parameters));
             match &r.fit {
                 Fit::Frf { model, residue } => {
                     out.push((

@@ -9,7 +9,7 @@ use crate::io::frf_json::{FrfEntry, FrfFile};
 use crate::io::modes_json::ModesFile;
 use anyhow::{bail, Result};
 use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfRequest, ModalState};
+use splinewatch_core::frf::ModalState;
 use splinewatch_core::modal::ModeKind;
 use splinewatch_core::updating::{
     ModalUpdateProblem, ModelPoint, Parameter, UpdateProblem, UpdateResult, UpdateSettings,
@@ -236,15 +236,10 @@ impl UpdateJob {
         let theta = point.theta().to_vec();
         let top = lines.last().copied().unwrap_or(0.0);
         let (modes, bending_modes) = model_modes(state, top);
-        let pairs: Vec<(usize, usize)> = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
-        let request = FrfRequest {
-            frequencies_hz: &lines,
-            pairs: &pairs,
-            quantity: measured.quantity(),
-        };
-        let truncation =
-            self.setup
-                .truncation_report(&kappa, &theta, &damping, state.modes.len(), Some((h, request)))?;
+        let fitted = Some((h, problem.request()));
+        let truncation = self
+            .setup
+            .truncation_report(&kappa, &theta, &damping, state.modes.len(), fitted)?;
         let report = UpdateReport {
             result,
             fit: Fit::Frf {

@@ -7,7 +7,6 @@ use crate::io::frf_json::FrfFile;
 use crate::io::modes_json::ModesFile;
 use anyhow::{Context, Result};
 use serde::Deserialize;
-use splinewatch_core::frf::FrfRequest;
 use splinewatch_core::truncation::TruncationReport;
 use splinewatch_core::updating::{
     IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateProblem, UpdateResult,
@@ -74,18 +73,12 @@ pub fn update(
     // The solution's model point: its state and FRFs are the fitted ones.
     let solution = problem.solve_from(&start, None, progress)?;
     let point = &solution.point;
-    let pairs: Vec<(usize, usize)> = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
-    let request = FrfRequest {
-        frequencies_hz: problem.line_frequencies(),
-        pairs: &pairs,
-        quantity: measured.quantity(),
-    };
     let truncation = setup.truncation_report(
         point.kappa(),
         point.theta(),
         point.damping(),
         point.state().modes.len(),
-        Some((point.frfs(), request)),
+        Some((point.frfs(), problem.request())),
     )?;
     let result = solution.result;
     Ok((result, truncation))

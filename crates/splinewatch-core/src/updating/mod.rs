@@ -674,7 +674,9 @@ impl<'a> UpdateProblem<'a> {
         Ok(modal_state_at(self.model, &self.parameters, &self.kappa, &self.damping, p)?.0)
     }
 
-    fn request(&self) -> FrfRequest<'_> {
+    /// The FRFs this problem fits: its selected lines, the measured
+    /// `(output, input)` pairs and the quantity.
+    pub fn request(&self) -> FrfRequest<'_> {
         FrfRequest {
             frequencies_hz: &self.frequencies,
             pairs: &self.pairs,
