@@ -97,12 +97,51 @@ pub struct FrfArgs {
     /// End of the analysed span: seconds from the recording's start, or RFC 3339.
     #[arg(long)]
     pub to: Option<String>,
-    /// Write the FRF JSON here instead of stdout.
+    /// Write the FRFs here instead of stdout.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Print the FRF JSON on stdout (the default without --out).
     #[arg(long)]
     pub json: bool,
+    /// FRF JSON, or a universal file (datasets 164, 15, 82 and 58: FRFs
+    /// and coherences on the sensors' nodes, `[[sensors]] uff_node`).
+    #[arg(long, value_enum, default_value = "json")]
+    pub format: FrfFormat,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+pub enum FrfFormat {
+    Json,
+    Uff,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+pub enum ExportFrfs {
+    Measured,
+    Model,
+    None,
+}
+
+#[derive(Args)]
+pub struct ExportArgs {
+    /// Configuration file (TOML) the results were made with.
+    #[arg(long)]
+    pub config: PathBuf,
+    /// Results MCAP file (daemon or replay).
+    pub results: PathBuf,
+    /// The window to export (default: the last updated one).
+    #[arg(long)]
+    pub window: Option<u64>,
+    /// Which FRFs of the window go into the file.
+    #[arg(long, value_enum, default_value = "measured")]
+    pub frf: ExportFrfs,
+    /// The model's modes (at the window's updated parameters) below this
+    /// frequency; default: the top of the FRFs' band or of the identified modes.
+    #[arg(long)]
+    pub modes_below: Option<f64>,
+    /// Output universal file (.unv or .uff).
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
@@ -334,7 +373,16 @@ pub fn frf(a: FrfArgs) -> Result<()> {
         report.frf.frfs.len(),
         report.frf.frequency_hz.len()
     );
-    let text = serde_json::to_string(&report.frf)?;
+    let text = match a.format {
+        FrfFormat::Json => serde_json::to_string(&report.frf)?,
+        FrfFormat::Uff => studies::exchange::uff_file(
+            &cfg,
+            &studies::exchange::UffContent {
+                frfs: Some((&report.frf, "measured")),
+                ..Default::default()
+            },
+        )?,
+    };
     match a.out {
         Some(path) => std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))?,
         None => outln!("{text}"),
@@ -478,4 +526,53 @@ fn parse_xy(s: &str) -> Result<(f64, f64), String> {
             .map_err(|_| format!("{v:?} in {s:?} is not a number"))
     };
     Ok((number(x)?, number(y)?))
+}
+
+pub fn export(a: ExportArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let bytes = std::fs::read(&a.results).with_context(|| format!("cannot read {}", a.results.display()))?;
+    let w = crate::service::export::window_results(&bytes, &cfg.topic_prefix(), a.window)
+        .with_context(|| format!("results file {}", a.results.display()))?;
+    let frfs = match a.frf {
+        ExportFrfs::Measured => Some(w.measured.as_ref().map(|f| (f, "measured"))),
+        ExportFrfs::Model => Some(w.model.as_ref().map(|f| (f, "model"))),
+        ExportFrfs::None => None,
+    };
+    if frfs == Some(None) {
+        anyhow::bail!(
+            "window {}: no {:?} FRFs in the results (an output-only window has none: --frf none)",
+            w.window,
+            a.frf
+        );
+    }
+    let frfs = frfs.flatten();
+    let top = frfs
+        .and_then(|(f, _)| f.frequency_hz.last().copied())
+        .or_else(|| w.identified.iter().map(|m| m.frequency_hz).reduce(f64::max));
+    let modes_below = match (a.modes_below, top) {
+        (Some(f), _) if f.is_finite() && f > 0.0 => f,
+        (Some(f), _) => anyhow::bail!("--modes-below {f}: must be a positive frequency in Hz"),
+        (None, Some(top)) => top,
+        (None, None) => anyhow::bail!("--modes-below is needed: the window has no FRFs and no identified modes"),
+    };
+    let text = studies::exchange::uff_file(
+        &cfg,
+        &studies::exchange::UffContent {
+            frfs,
+            model_modes_below_hz: Some(modes_below),
+            parameters: &w.parameters,
+            identified: &w.identified,
+        },
+    )?;
+    let mut file = crate::io::files::create_output_file(&a.out)?;
+    std::io::Write::write_all(&mut file, text.as_bytes())
+        .with_context(|| format!("cannot write {}", a.out.display()))?;
+    errln!(
+        "window {}: {} FRFs, model modes below {modes_below} Hz, {} identified modes → {}",
+        w.window,
+        frfs.map_or(0, |(f, _)| f.frfs.len()),
+        w.identified.len(),
+        a.out.display()
+    );
+    Ok(())
 }

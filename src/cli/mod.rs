@@ -42,6 +42,11 @@ enum Command {
     /// Convert a logger's time series (CSV/TSV or UFF 58) into a raw-input
     /// MCAP recording, one channel per column, named after the config's sensors.
     Import(measure::ImportArgs),
+    /// One update of a results file as a universal file for modal-testing
+    /// software: the sensors' geometry (datasets 15, 82), the window's
+    /// measured or model FRFs (58), the model's modes at its updated
+    /// parameters and the identified modes (55), SI units (164).
+    Export(measure::ExportArgs),
     /// Estimate FRFs (Welch, [frf] settings) from a raw-input MCAP recording.
     Frf(measure::FrfArgs),
     /// Output-only modal identification (SSI-cov, [oma] settings) of raw-input
@@ -61,6 +66,10 @@ enum Command {
     /// files: re-train on a chosen span, re-score every update, write a new
     /// results file and print the alarms.
     Monitor(monitor::MonitorArgs),
+    /// The status of every span behind a zenoh router: one line per span
+    /// (name, last update, parameters, monitoring state, health) from the
+    /// daemons' `bridge/*/{updating,monitoring,health}/latest` queryables.
+    Fleet(monitor::FleetArgs),
     /// Salvage an MCAP file left unfinished by a killed process (results,
     /// raw-input `.part` files): copies every message of every complete chunk
     /// into a new, finalised file.
@@ -81,12 +90,14 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Frf(args) => measure::frf(args),
         Command::Oma(args) => measure::oma(args),
         Command::Import(args) => measure::import(args),
+        Command::Export(args) => measure::export(args),
         Command::Replay(args) => monitor::replay(args),
         Command::Run(args) => monitor::run(args),
         Command::Demo(args) => monitor::demo(args),
         Command::Soak(args) => monitor::soak(args),
         Command::Recover(args) => monitor::recover(args),
         Command::Monitor(args) => monitor::monitor(args),
+        Command::Fleet(args) => monitor::fleet(args),
         Command::CheckConfig(args) => model::check_config(args),
     }
 }

@@ -182,9 +182,8 @@ pub fn update(a: UpdateArgs) -> Result<()> {
     let mut out = crate::io::console::Stdout;
     let (result, pairs) = match (&a.frf, &a.modes) {
         (Some(frf), _) => {
-            let frf_text =
-                std::fs::read_to_string(frf).with_context(|| format!("cannot read FRF file {}", frf.display()))?;
-            let (result, truncation) = studies::update(&cfg, &frf_text, start_text.as_deref(), &mut progress)
+            let frf_bytes = std::fs::read(frf).with_context(|| format!("cannot read FRF file {}", frf.display()))?;
+            let (result, truncation) = studies::update(&cfg, &frf_bytes, start_text.as_deref(), &mut progress)
                 .with_context(|| format!("updating against {}", frf.display()))?;
             if let Some(t) = truncation {
                 let error = t.frf_error.map_or("not evaluated (a large model)".to_string(), |e| {
@@ -248,8 +247,24 @@ pub fn paper(a: PaperArgs) -> Result<()> {
 
 pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    // The zenoh session settings too: the JSON5 file and our keys on top.
+    // The zenoh session settings too: the JSON5 file and our keys on top,
+    // with every TLS file read and its certificates' validity checked.
     cfg.zenoh.to_zenoh()?;
+    let tls = cfg.zenoh.tls_report()?;
     outln!("{}: configuration is valid", cfg.structure.name);
+    if tls.endpoints {
+        let kind = if tls.mutual { "mutual TLS" } else { "TLS" };
+        outln!("zenoh transport: {kind}");
+    }
+    for file in &tls.files {
+        outln!("  {file}");
+    }
+    for file in tls.expiring() {
+        errln!(
+            "warning: {} expires within {} days: renew it (README, \"Transport security\")",
+            file.path.display(),
+            crate::config::EXPIRY_WARNING_DAYS
+        );
+    }
     Ok(())
 }

@@ -8,7 +8,7 @@ use crate::io::wire;
 use crate::outputs::rerun::{self, RerunOutput};
 use crate::outputs::results::ResultsWriter;
 use crate::outputs::state;
-use crate::service::{daemon, demo, replay, soak};
+use crate::service::{daemon, demo, fleet, replay, soak};
 use crate::studies;
 use anyhow::{Context, Result};
 use clap::Args;
@@ -520,5 +520,63 @@ pub fn recover(a: RecoverArgs) -> Result<()> {
             .map(|e| format!("; stopped at a damaged record: {e}"))
             .unwrap_or_default()
     );
+    Ok(())
+}
+
+#[derive(Args)]
+pub struct FleetArgs {
+    /// zenoh endpoint of the site router (or of a daemon), e.g.
+    /// tcp/192.0.2.10:7447 or tls/192.0.2.10:7447; repeat for several.
+    #[arg(long, required = true)]
+    pub connect: Vec<String>,
+    /// A zenoh JSON5 file for the session: credentials or certificates,
+    /// e.g. config/zenoh/dashboard-client-tls.json5.
+    #[arg(long)]
+    pub zenoh_config: Option<PathBuf>,
+    /// One JSON object per span and line (the summary and the daemon's
+    /// latest messages) instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Seconds to wait for the replies of each kind.
+    #[arg(long, default_value_t = 3.0)]
+    pub timeout: f64,
+    /// Parameters shown per line (text output).
+    #[arg(long, default_value_t = 4)]
+    pub parameters: usize,
+}
+
+pub fn fleet(a: FleetArgs) -> Result<()> {
+    use zenoh::Wait;
+    if !(a.timeout.is_finite() && a.timeout > 0.0) {
+        anyhow::bail!("--timeout {}: must be a positive number of seconds", a.timeout);
+    }
+    let zenoh = crate::config::ZenohConfig {
+        mode: "client".into(),
+        listen: Vec::new(),
+        connect: a.connect.clone(),
+        config_file: a.zenoh_config,
+        ..Default::default()
+    };
+    let session = zenoh::open(zenoh.to_zenoh()?)
+        .wait()
+        .map_err(|e| anyhow::anyhow!("cannot connect to {}: {e}", a.connect.join(", ")))?;
+    let spans = fleet::gather(&session, std::time::Duration::from_secs_f64(a.timeout));
+    let _ = session.close().wait();
+    let spans = spans?;
+    if spans.is_empty() {
+        anyhow::bail!(
+            "no span answered on bridge/*/{{updating,monitoring,health}}/latest within {} s",
+            a.timeout
+        );
+    }
+    for span in &spans {
+        let summary = span.summary();
+        if a.json {
+            let line = serde_json::json!({"summary": summary, "latest": span});
+            outln!("{line}");
+        } else {
+            outln!("{}", summary.line(a.parameters));
+        }
+    }
     Ok(())
 }

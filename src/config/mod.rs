@@ -13,6 +13,7 @@ mod oma;
 mod output;
 mod schedule;
 mod setup;
+mod tls;
 mod updating;
 mod zenoh;
 
@@ -27,6 +28,7 @@ pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use schedule::ScheduleConfig;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
+pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
 pub use updating::{parameter_family, ParameterFamily, UpdatingConfig};
 pub use zenoh::ZenohConfig;
 
@@ -216,12 +218,16 @@ impl Config {
             ("zenoh.listen", &self.zenoh.listen),
             ("zenoh.connect", &self.zenoh.connect),
         ] {
-            if let Some((i, e)) = endpoints.iter().enumerate().find(|(_, e)| !e.starts_with("tcp/")) {
+            if let Some((i, e)) = endpoints
+                .iter()
+                .enumerate()
+                .find(|(_, e)| !(e.starts_with("tcp/") || e.starts_with("tls/")))
+            {
                 return Err(err(
                     format!("{key}[{i}]"),
                     format!(
-                        "{e:?}: this build speaks zenoh over TCP only (\"tcp/<host>:<port>\"); \
-                         for encryption see README, \"Transport security\""
+                        "{e:?}: this build speaks zenoh over TCP and TLS only (\"tcp/<host>:<port>\", \
+                         \"tls/<host>:<port>\"; README, \"Transport security\")"
                     ),
                 ));
             }

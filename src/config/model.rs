@@ -106,6 +106,10 @@ pub struct SensorConfig {
     /// Face the sensor sits on (default: the mid-surface).
     #[serde(default = "default_face")]
     pub surface: FaceConfig,
+    /// The node number of this measurement point in universal files
+    /// (dataset 58 response/reference nodes; `update --frf FILE.uff`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uff_node: Option<i64>,
 }
 
 fn default_quantity() -> QuantityList {

@@ -5,6 +5,9 @@ use anyhow::{anyhow, Result};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
+use super::err;
+use super::tls::TlsReport;
+
 /// `[zenoh]`.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -33,8 +36,32 @@ impl Default for ZenohConfig {
 }
 
 impl ZenohConfig {
-    /// The zenoh session configuration: the JSON5 file first, then our keys.
+    /// The zenoh session configuration: the JSON5 file first, then our keys;
+    /// its TLS files read and checked (see [`TlsReport`]).
     pub fn to_zenoh(&self) -> Result<zenoh::Config> {
+        let cfg = self.session_config()?;
+        self.inspect_tls(&cfg)?;
+        Ok(cfg)
+    }
+
+    /// The session's TLS settings and files, for `check-config` and the
+    /// daemon's start-up log.
+    pub fn tls_report(&self) -> Result<TlsReport> {
+        self.inspect_tls(&self.session_config()?)
+    }
+
+    fn inspect_tls(&self, cfg: &zenoh::Config) -> Result<TlsReport> {
+        super::tls::inspect(cfg).map_err(|e| match &self.config_file {
+            // The TLS keys live in the JSON5 file: name it with the key path.
+            Some(file) => anyhow!(err(
+                format!("zenoh.config_file {}: {}", file.display(), e.path),
+                e.message
+            )),
+            None => anyhow!(e),
+        })
+    }
+
+    fn session_config(&self) -> Result<zenoh::Config> {
         let mut cfg = match &self.config_file {
             Some(path) => zenoh::Config::from_file(path)
                 .map_err(|e| anyhow!("config: zenoh.config_file {}: {e}", path.display()))?,

@@ -12,4 +12,5 @@ pub mod modes_json;
 pub mod monitoring_json;
 pub mod recording;
 pub mod recover;
+pub mod uff;
 pub mod wire;

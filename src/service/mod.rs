@@ -1,9 +1,12 @@
 //! The shells that wire sources to the pipeline and the outputs: the live
-//! daemon (zenoh), the offline replay (MCAP), the demo and the soak test.
+//! daemon (zenoh), the offline replay (MCAP), the demo and the soak test,
+//! and the fleet query of many daemons.
 //! Room: above the pipeline and outputs. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
 pub mod daemon;
 pub mod demo;
+pub mod export;
+pub mod fleet;
 pub mod replay;
 pub mod rescore;
 pub mod soak;

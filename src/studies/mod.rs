@@ -1,11 +1,12 @@
 //! Offline studies of the configured model, each returning its output as a
 //! value or writing to a given writer, so tests run them without a process:
 //! modes, synthetic FRFs, updating against an FRF file, the paper's §4
-//! experiments, the time-domain simulation of the deck and the import of
-//! loggers' files.
+//! experiments, the time-domain simulation of the deck, the import of
+//! loggers' files and universal files for modal-testing software.
 //! Room: below the services, beside the pipeline. May import: `config`, `io`, the core crate.
 
 pub mod environment;
+pub mod exchange;
 pub mod excitation;
 pub mod frf_windows;
 pub mod import;

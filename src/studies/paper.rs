@@ -124,7 +124,7 @@ pub fn run(truth: &Config, model: &Config, experiment: &Experiment) -> Result<Ou
     })
     .to_string();
     let t0 = Instant::now();
-    let (result, _) = update(model, &frf_text, Some(&start), &mut |_| {})?;
+    let (result, _) = update(model, frf_text.as_bytes(), Some(&start), &mut |_| {})?;
     let seconds = t0.elapsed().as_secs_f64();
     let kappa_true: Vec<f64> = truth
         .model

@@ -5,6 +5,7 @@
 use crate::config::{frf_setup, Config};
 use crate::io::frf_json::FrfFile;
 use crate::io::modes_json::ModesFile;
+use crate::io::uff;
 use anyhow::{Context, Result};
 use serde::Deserialize;
 use splinewatch_core::truncation::TruncationReport;
@@ -44,16 +45,27 @@ pub fn start_values(text: &str, parameters: &[Parameter], base: &[f64]) -> Resul
     Ok(values)
 }
 
+/// The FRFs of an FRF file's `bytes`: a universal file (dataset 58/58b,
+/// recognised by content; nodes mapped by `[[sensors]] uff_node`) or FRF JSON.
+pub fn read_frf_file(config: &Config, bytes: &[u8]) -> Result<FrfFile> {
+    if uff::looks_like_uff(bytes) {
+        return Ok(uff::read_frfs(bytes, &super::exchange::uff_points(config)?)?);
+    }
+    let text = std::str::from_utf8(bytes)
+        .context("not FRF JSON (not UTF-8 text) nor a universal file (no -1 delimiter on its first line)")?;
+    Ok(FrfFile::parse(text)?)
+}
+
 /// `splinewatch update`: runs the updating and returns its result, with
 /// the truncation of the modal basis when the model is truncated.
 pub fn update(
     config: &Config,
-    frf_text: &str,
+    frf_bytes: &[u8],
     start: Option<&str>,
     progress: &mut dyn FnMut(&IterationRecord),
 ) -> Result<(UpdateResult, Option<TruncationReport>)> {
     let setup = frf_setup(config)?;
-    let frf = FrfFile::parse(frf_text)?;
+    let frf = read_frf_file(config, frf_bytes)?;
     let measured = frf.to_measured(&setup.sensor_names)?;
     let parameters = config.build_parameters()?;
     let settings = config.update_settings()?;

@@ -71,9 +71,9 @@ fn bad_config_is_a_clear_error_not_a_panic() {
             "frf.window_hop_seconds: must be between one sample and frf.window_seconds (20 s), got 30",
         ),
         (
-            "tls-endpoint.toml",
-            good.clone() + "\n[zenoh]\nlisten = [\"tls/127.0.0.1:7447\"]\n",
-            "zenoh.listen[0]: \"tls/127.0.0.1:7447\": this build speaks zenoh over TCP only",
+            "quic-endpoint.toml",
+            good.clone() + "\n[zenoh]\nlisten = [\"quic/127.0.0.1:7447\"]\n",
+            "zenoh.listen[0]: \"quic/127.0.0.1:7447\": this build speaks zenoh over TCP and TLS only",
         ),
     ];
     for (name, text, expected) in cases {

@@ -6,6 +6,7 @@ mod architecture;
 mod cli;
 mod common;
 mod corpus;
+mod fleet;
 mod import;
 mod live;
 mod matrices;
@@ -19,3 +20,4 @@ mod reliability;
 mod replay;
 #[cfg(unix)]
 mod security;
+mod uff;

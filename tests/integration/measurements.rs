@@ -94,7 +94,7 @@ fn simulate_estimate_and_update_recover_the_springs() {
     .to_string();
     let (result, _) = studies::update(
         &cfg,
-        &serde_json::to_string(&report.frf).unwrap(),
+        &serde_json::to_vec(&report.frf).unwrap(),
         Some(&start),
         &mut |_| {},
     )
@@ -129,8 +129,7 @@ fn a_bearing_damage_scenario_shows_in_the_identified_springs() {
     let minutes = |m: f64| Some(t0 + (m * 60e9) as i128);
     let identify = |from: f64, to: f64| {
         let report = estimate(&cfg, &blocks, minutes(from), minutes(to)).unwrap();
-        let (result, _) =
-            studies::update(&cfg, &serde_json::to_string(&report.frf).unwrap(), None, &mut |_| {}).unwrap();
+        let (result, _) = studies::update(&cfg, &serde_json::to_vec(&report.frf).unwrap(), None, &mut |_| {}).unwrap();
         result.parameters.iter().find(|p| p.name == "east.k2").unwrap().value
     };
     let before = identify(0.0, 1.0);

@@ -34,18 +34,51 @@ pub(super) struct RawMessage {
     pub(super) key: String,
 }
 
+/// The queryables `<prefix>/<segment>/latest`, each replying with the last
+/// message of its kind (`{}` before the first): what a dashboard or
+/// `splinewatch fleet` asks for.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Latest {
+    /// The last `updating/parameters` message.
+    Updating = 0,
+    /// The last `monitoring/status` message.
+    Monitoring = 1,
+    /// The last `health` message.
+    Health = 2,
+}
+
+impl Latest {
+    const ALL: [Latest; 3] = [Latest::Updating, Latest::Monitoring, Latest::Health];
+
+    fn segment(self) -> &'static str {
+        match self {
+            Latest::Updating => "updating",
+            Latest::Monitoring => "monitoring",
+            Latest::Health => "health",
+        }
+    }
+}
+
 /// The open session and what the daemon declared on it.
 pub(super) struct ZenohLink {
     session: zenoh::Session,
     subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
     queryables: Vec<zenoh::query::Queryable<()>>,
-    /// The body of the reply to `<prefix>/updating/latest`.
-    latest: Arc<Mutex<Vec<u8>>>,
-    /// The body of the reply to `<prefix>/monitoring/latest`.
-    monitoring_latest: Arc<Mutex<Vec<u8>>>,
+    /// The bodies of the replies to `<prefix>/<Latest::segment>/latest`.
+    latest: [Arc<Mutex<Vec<u8>>>; 3],
     prefix: String,
     /// Messages the full ingest queue refused (counted in the callbacks).
     ingest_drops: Arc<AtomicU64>,
+}
+
+/// The TLS files in use, once at start; certificates near expiry as warnings.
+fn log_tls(report: &crate::config::TlsReport) {
+    for file in &report.files {
+        tracing::info!(mutual = report.mutual, "zenoh TLS: {file}");
+    }
+    for file in report.expiring() {
+        tracing::warn!("zenoh TLS certificate expires soon, renew it: {file}");
+    }
 }
 
 impl ZenohLink {
@@ -53,6 +86,7 @@ impl ZenohLink {
     /// `frf/**`, and declares the queryable; returns the ingest queue.
     pub(super) async fn open(config: &Config) -> Result<(Self, mpsc::Receiver<RawMessage>)> {
         let prefix = config.topic_prefix();
+        log_tls(&config.zenoh.tls_report()?);
         let session = zenoh::open(config.zenoh.to_zenoh()?)
             .await
             .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
@@ -80,14 +114,19 @@ impl ZenohLink {
             subscribers.push(sub);
         }
         drop(tx);
-        let (updating, latest) = declare_latest(&session, format!("{prefix}/updating/latest")).await?;
-        let (monitoring, monitoring_latest) = declare_latest(&session, format!("{prefix}/monitoring/latest")).await?;
+        let mut queryables = Vec::new();
+        let mut latest = Vec::new();
+        for which in Latest::ALL {
+            let key = format!("{prefix}/{}/latest", which.segment());
+            let (queryable, body) = declare_latest(&session, key).await?;
+            queryables.push(queryable);
+            latest.push(body);
+        }
         let link = Self {
             session,
             subscribers,
-            queryables: vec![updating, monitoring],
-            latest,
-            monitoring_latest,
+            queryables,
+            latest: latest.try_into().expect("one body per Latest"),
             prefix,
             ingest_drops,
         };
@@ -114,16 +153,9 @@ impl ZenohLink {
             .join(", ")
     }
 
-    /// Replaces the reply to `<prefix>/updating/latest`.
-    pub(super) fn set_latest(&self, body: Vec<u8>) {
-        if let Ok(mut l) = self.latest.lock() {
-            *l = body;
-        }
-    }
-
-    /// Replaces the reply to `<prefix>/monitoring/latest`.
-    pub(super) fn set_monitoring_latest(&self, body: Vec<u8>) {
-        if let Ok(mut l) = self.monitoring_latest.lock() {
+    /// Replaces the reply to `<prefix>/<which>/latest`.
+    pub(super) fn set_latest(&self, which: Latest, body: Vec<u8>) {
+        if let Ok(mut l) = self.latest[which as usize].lock() {
             *l = body;
         }
     }

@@ -1,7 +1,7 @@
 //! The daemon's stages: what happens on a message, a finished update, the
 //! health tick and shutdown. Everything here runs on the main task.
 
-use super::link::{RawMessage, ZenohLink};
+use super::link::{Latest, RawMessage, ZenohLink};
 use super::worker::UpdateWorker;
 use super::{notify_systemd, RunOptions, RunSummary};
 use crate::config::Config;
@@ -177,6 +177,7 @@ impl Daemon {
         };
         let h = self.record_health(time);
         link.publish("health", &h);
+        link.set_latest(Latest::Health, serde_json::to_vec(&h).unwrap_or_default());
         let health = self.pipeline.health();
         tracing::info!(
             message = "health",
@@ -291,7 +292,7 @@ impl Daemon {
             self.results.write(suffix, outcome.time_ns, &msg);
             link.publish(suffix, &msg);
             if suffix == "updating/parameters" {
-                link.set_latest(serde_json::to_vec(&msg)?);
+                link.set_latest(Latest::Updating, serde_json::to_vec(&msg)?);
             }
         }
         if let Some(m) = &scored {
@@ -345,7 +346,7 @@ impl Daemon {
             self.results.write(suffix, time_ns, &msg);
             link.publish(suffix, &msg);
             if suffix == "monitoring/status" {
-                link.set_monitoring_latest(serde_json::to_vec(&msg)?);
+                link.set_latest(Latest::Monitoring, serde_json::to_vec(&msg)?);
             }
         }
         match &m.alarm {
