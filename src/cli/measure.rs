@@ -568,7 +568,7 @@ pub fn export(a: ExportArgs) -> Result<()> {
     std::io::Write::write_all(&mut file, text.as_bytes())
         .with_context(|| format!("cannot write {}", a.out.display()))?;
     errln!(
-        "window {}: {} FRFs, model modes below {modes_below} Hz, {} identified modes → {}",
+        "window {}: {} FRFs, model modes up to {modes_below:.2} Hz, {} identified modes → {}",
         w.window,
         frfs.map_or(0, |(f, _)| f.frfs.len()),
         w.identified.len(),

@@ -95,7 +95,7 @@ pub fn uff_file(config: &Config, content: &UffContent<'_>) -> Result<String> {
     Ok(w.finish())
 }
 
-/// The model's elastic modes below `below_hz` with `parameters` set, their
+/// The model's elastic modes up to `below_hz` with `parameters` set, their
 /// mass-normalised shapes at the sensors and ζ(f).
 fn model_modes(config: &Config, parameters: &[(String, f64)], below_hz: f64) -> Result<Vec<UffMode>> {
     let setup = crate::config::frf_setup(config)?;
@@ -118,7 +118,7 @@ fn model_modes(config: &Config, parameters: &[(String, f64)], below_hz: f64) -> 
     let sensors = setup.sensor_names.len();
     Ok((0..state.modes.len())
         .filter(|&i| {
-            state.modes.frequency_hz(i) < below_hz
+            state.modes.frequency_hz(i) <= below_hz
                 && state.modes.frequency_hz(i) > 0.0
                 && state.modes.kinds[i] != ModeKind::Rigid
         })

@@ -359,6 +359,18 @@ fn secured_site(dir: &Path, transport: Transport) {
         .unwrap()
         .into_iter()
         .collect();
+    // So may `splinewatch fleet` with the dashboard's credentials: its
+    // wildcard queries (bridge/*/…/latest) pass the access control.
+    let fleet = std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args(["fleet", "--json", "--connect", &endpoint, "--zenoh-config"])
+        .arg(transport.client_file(dir, "dashboard"))
+        .output()
+        .unwrap();
+    let fleet_out = String::from_utf8_lossy(&fleet.stdout).into_owned();
+    assert!(fleet.status.success(), "{}", String::from_utf8_lossy(&fleet.stderr));
+    let span: serde_json::Value = serde_json::from_str(fleet_out.trim()).unwrap();
+    assert_eq!(span["summary"]["name"], "sinello-span2", "{span}");
+    assert_eq!(span["summary"]["parameters"].as_array().unwrap().len(), 15, "{span}");
 
     let (status, _) = terminate(daemon.take());
     let log = std::fs::read_to_string(dir.join("daemon.log")).unwrap();

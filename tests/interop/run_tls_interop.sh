@@ -15,7 +15,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 python=${1:-python3}
 splinewatch=${2:-${CARGO_TARGET_DIR:-$root/target}/debug/splinewatch}
 work=$(mktemp -d)
-trap 'kill $(jobs -p) 2>/dev/null || true; rm -rf "$work"' EXIT
+trap 'status=$?; kill $(jobs -p) 2>/dev/null || true; if [ $status -ne 0 ]; then tail -n 5 "$work"/*.log; fi; rm -rf "$work"' EXIT
 cd "$work"
 port=$(( 20000 + RANDOM % 20000 ))
 endpoint="tls/127.0.0.1:$port"
