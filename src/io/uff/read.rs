@@ -138,7 +138,7 @@ fn binary_block<'a>(bytes: &'a [u8], pos: usize, d: &Dataset<'_>) -> Result<(&'a
             6 => (8, 2),
             _ => return None,
         };
-        Some(points * width * (per_point + usize::from(!even)))
+        points.checked_mul(width * (per_point + usize::from(!even)))
     });
     for size in [announced, from_records].into_iter().flatten() {
         let end = pos.checked_add(size).filter(|&e| e <= bytes.len());
@@ -257,14 +257,13 @@ fn data58(d: &Dataset<'_>, h: &Header58) -> Result<(Vec<f64>, Ordinates), UffErr
         }
     };
     let per_point = 1 + usize::from(complex) + usize::from(!h.even);
-    if values.len() != h.points * per_point {
+    if h.points.checked_mul(per_point) != Some(values.len()) {
         return Err(d.err(
             7,
             format!(
-                "{} points announced, {} values found (expected {})",
+                "{} points announced, {} values found ({per_point} per point)",
                 h.points,
-                values.len(),
-                h.points * per_point
+                values.len()
             ),
         ));
     }
@@ -481,4 +480,71 @@ fn attach_coherences(file: &mut FrfFile, coherences: Vec<Coherence>) -> Result<(
         entry.coherence = Some(values);
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    const CAMPAIGN: &[u8] = include_bytes!("../../../tests/fixtures/uff/campaign_binary.uff");
+
+    fn points() -> Vec<UffPoint> {
+        (1..=13)
+            .map(|k| UffPoint {
+                name: format!("P{k}"),
+                node: 100 + k,
+                position: [0.0; 3],
+                axis: Some((2, 1.0)),
+            })
+            .collect()
+    }
+
+    /// A one-FRF file: big-endian single-precision 58b after a dataset 164
+    /// in millimetres (length factor 1e-3).
+    #[test]
+    fn big_endian_single_precision_and_millimetre_units_are_converted() {
+        let mut file = b"    -1\n   164\n         2                  mm         2\n  1.0D-03  1.0D+00  1.0D+00\n  2.7315D+02\n    -1\n".to_vec();
+        file.extend_from_slice(
+            b"    -1\n    58b     2     2          11          16     0     0           0           0\n",
+        );
+        for _ in 0..5 {
+            file.extend_from_slice(b"id\n");
+        }
+        file.extend_from_slice(b"    4         0    0         0 deck             101   3 deck             101   3\n");
+        file.extend_from_slice(b"         5         2         1  1.00000e+00  5.00000e-01  0.00000e+00\n");
+        file.extend_from_slice(b"        18    0    0    0 NONE                 Hz\n");
+        file.extend_from_slice(b"        12    1    0    0 NONE                 mm/s^2\n");
+        file.extend_from_slice(b"        13    0    1    0 NONE                 N\n");
+        file.extend_from_slice(b"         0    0    0    0 NONE                 NONE\n");
+        for v in [1000.0f32, -2000.0, 500.0, 250.0] {
+            file.extend_from_slice(&v.to_be_bytes());
+        }
+        file.extend_from_slice(b"    -1\n");
+        let frf = read_frfs(&file, &points()).unwrap();
+        assert_eq!(frf.frequency_hz, vec![1.0, 1.5]);
+        assert_eq!(frf.quantity, Quantity::Accelerance);
+        assert_eq!(frf.frfs[0].re, vec![1.0, 0.5]);
+        assert_eq!(frf.frfs[0].im, vec![-2.0, 0.25]);
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(200))]
+
+        /// Truncated or corrupted files give an error, never a panic.
+        #[test]
+        fn damaged_files_never_panic(
+            cut in 0usize..CAMPAIGN.len(),
+            flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
+        ) {
+            let mut bytes = CAMPAIGN[..cut].to_vec();
+            for (i, b) in &flips {
+                if !bytes.is_empty() {
+                    let k = i.index(bytes.len());
+                    bytes[k] = *b;
+                }
+            }
+            let _ = read_frfs(&bytes, &points());
+        }
+    }
 }
