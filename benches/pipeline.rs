@@ -97,6 +97,32 @@ fn ingest_without_updates(bencher: divan::Bencher) {
     });
 }
 
+/// Decoding alone, the 13 × 30 720 samples of the recording (1560 CBOR
+/// messages, float64 typed arrays): the typed decoder `decode` uses, and
+/// the generic value-tree decoder it falls back to, side by side.
+#[divan::bench(args = ["typed", "generic"], sample_count = 20, sample_size = 1)]
+fn decode_bundled_recording(bencher: divan::Bencher, decoder: &str) {
+    let bytes = std::fs::read(root().join("recordings/sinello-demo.mcap")).unwrap();
+    let payloads: Vec<Vec<u8>> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(|m| m.unwrap().data.into_owned())
+        .collect();
+    let decode = match decoder {
+        "typed" => wire::decode,
+        _ => wire::decode_generic,
+    };
+    bencher.bench(|| {
+        let mut samples = 0;
+        for payload in &payloads {
+            for block in decode(payload, Encoding::Cbor, &Limits::default()).unwrap() {
+                samples += block.data.len();
+            }
+        }
+        assert_eq!(samples, 13 * 30_720);
+        samples
+    });
+}
+
 fn main() {
     divan::main();
 }

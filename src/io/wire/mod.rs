@@ -5,6 +5,8 @@
 //! plain array or an RFC 8746 typed float array (tags 81, 82, 85, 86).
 //! Zenoh payloads and MCAP messages use the same bytes.
 
+mod typed;
+
 use ciborium::value::Value;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
@@ -270,6 +272,19 @@ pub fn decode(bytes: &[u8], encoding: Encoding, limits: &Limits) -> Result<Vec<C
             limit: limits.max_bytes,
         });
     }
+    if encoding == Encoding::Cbor {
+        if let Some(blocks) = typed::decode(bytes, limits) {
+            return blocks;
+        }
+    }
+    decode_generic(bytes, encoding, limits)
+}
+
+/// [`decode`] through a generic value tree (ciborium, serde_json): every
+/// shape of message, and the reason of every rejection. `decode` takes it
+/// for what the typed CBOR decoder leaves; public for the benchmark that
+/// compares the two.
+pub fn decode_generic(bytes: &[u8], encoding: Encoding, limits: &Limits) -> Result<Vec<ChannelBlock>, WireError> {
     let value: Value = match encoding {
         Encoding::Json => {
             let v: serde_json::Value = serde_json::from_slice(bytes).map_err(|e| WireError::Malformed {
@@ -349,11 +364,8 @@ fn block_from_value(index: usize, item: Value, limits: &Limits) -> Result<Channe
         }
     };
     let name = text("name")?;
-    if name.is_empty() || name.contains('/') || name.contains(char::is_whitespace) {
-        return Err(WireError::Name { index, name });
-    }
-    let value = text("quantity")?;
-    let quantity = ChannelQuantity::from_wire(&value).ok_or(WireError::Quantity { index, value })?;
+    check_name(index, &name)?;
+    let quantity = parse_quantity(index, &text("quantity")?)?;
     let unit = match get("unit_str") {
         Some(Value::Text(t)) => t.clone(),
         None => quantity.unit().to_string(),
@@ -374,16 +386,61 @@ fn block_from_value(index: usize, item: Value, limits: &Limits) -> Result<Channe
             })
         })
         .ok_or(WireError::Missing { index, field: "fs" })??;
-    if !(fs.is_finite() && fs > 0.0) {
-        return Err(WireError::SampleRate { index, fs });
-    }
-    let ts = text("start_timestamp")?;
-    let start_ns = parse_timestamp(&ts).ok_or(WireError::Timestamp { index, value: ts })?;
+    check_fs(index, fs)?;
+    let start_ns = parse_start(index, &text("start_timestamp")?)?;
     let data = samples(
         index,
         get("data").ok_or(WireError::Missing { index, field: "data" })?,
         limits,
     )?;
+    block(index, name, quantity, unit, fs, start_ns, data)
+}
+
+// The checks of a block's values, in the order both decoders apply them
+// (name, quantity, fs, start, data, emptiness, finiteness), so a message gets
+// the same rejection whichever decoder reads it.
+
+fn check_name(index: usize, name: &str) -> Result<(), WireError> {
+    if name.is_empty() || name.contains('/') || name.contains(char::is_whitespace) {
+        return Err(WireError::Name {
+            index,
+            name: name.to_string(),
+        });
+    }
+    Ok(())
+}
+
+fn parse_quantity(index: usize, value: &str) -> Result<ChannelQuantity, WireError> {
+    ChannelQuantity::from_wire(value).ok_or_else(|| WireError::Quantity {
+        index,
+        value: value.to_string(),
+    })
+}
+
+fn check_fs(index: usize, fs: f64) -> Result<(), WireError> {
+    if !(fs.is_finite() && fs > 0.0) {
+        return Err(WireError::SampleRate { index, fs });
+    }
+    Ok(())
+}
+
+fn parse_start(index: usize, value: &str) -> Result<i128, WireError> {
+    parse_timestamp(value).ok_or_else(|| WireError::Timestamp {
+        index,
+        value: value.to_string(),
+    })
+}
+
+/// The block, once its samples are known to be there and finite.
+fn block(
+    index: usize,
+    name: String,
+    quantity: ChannelQuantity,
+    unit: String,
+    fs: f64,
+    start_ns: i128,
+    data: Vec<f64>,
+) -> Result<ChannelBlock, WireError> {
     if data.is_empty() {
         return Err(WireError::Empty { index });
     }
@@ -440,6 +497,11 @@ fn typed_array(index: usize, tag: u64, inner: &Value, limits: &Limits) -> Result
             expected: "typed array over a byte string",
         });
     };
+    typed_samples(index, tag, bytes, limits)
+}
+
+/// The samples of an RFC 8746 float array `tag` over `bytes`.
+fn typed_samples(index: usize, tag: u64, bytes: &[u8], limits: &Limits) -> Result<Vec<f64>, WireError> {
     let width = match tag {
         81 | 85 => 4,
         82 | 86 => 8,
@@ -608,7 +670,58 @@ mod tests {
         );
     }
 
+    /// A two-block message with plain float arrays, as Python's cbor2 writes a list.
+    fn plain_array_message() -> Vec<u8> {
+        let item = |name: &str| {
+            Value::Map(vec![
+                (Value::Text("name".into()), Value::Text(name.into())),
+                (Value::Text("quantity".into()), Value::Text("acceleration".into())),
+                (Value::Text("fs".into()), Value::Float(256.0)),
+                (
+                    Value::Text("start_timestamp".into()),
+                    Value::Text("2026-11-20T10:00:00Z".into()),
+                ),
+                (
+                    Value::Text("data".into()),
+                    Value::Array((0..6).map(|k| Value::Float(0.25 * k as f64)).collect()),
+                ),
+            ])
+        };
+        let mut bytes = Vec::new();
+        ciborium::into_writer(&Value::Array(vec![item("P1"), item("P2")]), &mut bytes).unwrap();
+        bytes
+    }
+
+    #[test]
+    fn the_typed_decoder_reads_the_usual_messages() {
+        let limits = Limits::default();
+        let single = encode(&block(), Encoding::Cbor);
+        assert_eq!(typed::decode(&single, &limits), Some(Ok(vec![block()])));
+        let list = plain_array_message();
+        let blocks = typed::decode(&list, &limits).expect("the usual shape").unwrap();
+        assert_eq!(blocks.len(), 2);
+        assert_eq!(Ok(blocks), decode_generic(&list, Encoding::Cbor, &limits));
+    }
+
     proptest! {
+        /// Wherever the typed decoder answers, it answers as the generic one:
+        /// the same blocks, or the same rejection.
+        #[test]
+        fn both_decoders_agree(
+            flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..6),
+            plain in any::<bool>(),
+        ) {
+            let mut bytes = if plain { plain_array_message() } else { encode(&block(), Encoding::Cbor) };
+            for (i, b) in &flips {
+                let k = i.index(bytes.len());
+                bytes[k] = *b;
+            }
+            let limits = Limits { max_samples: 8, ..Limits::default() };
+            if let Some(fast) = typed::decode(&bytes, &limits) {
+                prop_assert_eq!(fast, decode_generic(&bytes, Encoding::Cbor, &limits));
+            }
+        }
+
         #[test]
         fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..512)) {
             let _ = decode(&bytes, Encoding::Cbor, &Limits::default());
