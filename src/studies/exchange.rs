@@ -106,7 +106,7 @@ fn model_modes(config: &Config, parameters: &[(String, f64)], below_hz: f64) -> 
         setup.model.field_coefficients(),
         &setup.damping,
     );
-    let values = super::update::values_by_name(&defined, &base, parameters, "parameter")?;
+    let values = super::parameters::values_by_name(&defined, &base, parameters, "parameter")?;
     let (state, _) = modal_state_at(&setup.model, &defined, &setup.kappa, &setup.damping, &values)?;
     let sensors = setup.sensor_names.len();
     Ok((0..state.modes.len())

@@ -13,6 +13,7 @@ pub mod import;
 pub mod matrices;
 pub mod modes;
 pub mod paper;
+pub mod parameters;
 pub mod simulation;
 pub mod synth;
 pub mod update;

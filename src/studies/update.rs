@@ -30,24 +30,7 @@ struct StartParameter {
 pub fn start_values(text: &str, parameters: &[Parameter], base: &[f64]) -> Result<Vec<f64>> {
     let start: StartFile = serde_json::from_str(text).context("not a result JSON with a \"parameters\" list")?;
     let named: Vec<(String, f64)> = start.parameters.into_iter().map(|p| (p.name, p.value)).collect();
-    values_by_name(parameters, base, &named, "start parameter")
-}
-
-/// `base` with the `named` parameters set; `what` names them in errors (an
-/// unknown name, a value that is not finite).
-pub fn values_by_name(parameters: &[Parameter], base: &[f64], named: &[(String, f64)], what: &str) -> Result<Vec<f64>> {
-    let mut values = base.to_vec();
-    for (name, value) in named {
-        let k = parameters
-            .iter()
-            .position(|p| &p.name == name)
-            .with_context(|| format!("{what} {name:?} is not an updating parameter of this config"))?;
-        if !value.is_finite() {
-            anyhow::bail!("{what} {name:?} is not finite");
-        }
-        values[k] = *value;
-    }
-    Ok(values)
+    super::parameters::values_by_name(parameters, base, &named, "start parameter")
 }
 
 /// The FRFs of an FRF file's `bytes`: a universal file (dataset 58/58b,
