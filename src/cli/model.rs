@@ -249,8 +249,7 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     // The zenoh session settings too: the JSON5 file and our keys on top,
     // with every TLS file read and its certificates' validity checked.
-    cfg.zenoh.to_zenoh()?;
-    let tls = cfg.zenoh.tls_report()?;
+    let (_, tls) = cfg.zenoh.to_zenoh_with_tls()?;
     outln!("{}: configuration is valid", cfg.structure.name);
     if tls.endpoints {
         let kind = if tls.mutual { "mutual TLS" } else { "TLS" };

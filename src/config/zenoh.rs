@@ -39,15 +39,15 @@ impl ZenohConfig {
     /// The zenoh session configuration: the JSON5 file first, then our keys;
     /// its TLS files read and checked (see [`TlsReport`]).
     pub fn to_zenoh(&self) -> Result<zenoh::Config> {
-        let cfg = self.session_config()?;
-        self.inspect_tls(&cfg)?;
-        Ok(cfg)
+        Ok(self.to_zenoh_with_tls()?.0)
     }
 
-    /// The session's TLS settings and files, for `check-config` and the
-    /// daemon's start-up log.
-    pub fn tls_report(&self) -> Result<TlsReport> {
-        self.inspect_tls(&self.session_config()?)
+    /// [`Self::to_zenoh`] and what its TLS settings and files amount to,
+    /// for `check-config` and the daemon's start-up log.
+    pub fn to_zenoh_with_tls(&self) -> Result<(zenoh::Config, TlsReport)> {
+        let cfg = self.session_config()?;
+        let report = self.inspect_tls(&cfg)?;
+        Ok((cfg, report))
     }
 
     fn inspect_tls(&self, cfg: &zenoh::Config) -> Result<TlsReport> {

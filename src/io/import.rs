@@ -5,6 +5,7 @@
 //! write them). Mapping the columns to the config's sensors happens above
 //! (`studies::import`).
 
+use crate::io::uff::{field, fortran_real, record_values};
 use crate::io::wire::{parse_timestamp, ChannelQuantity};
 use thiserror::Error;
 
@@ -284,11 +285,6 @@ pub fn read_uff58(text: &str) -> Result<ImportedSeries, ImportError> {
     Ok(series)
 }
 
-/// Fixed-width field `[from, to)` of a record line (shorter lines pad).
-fn field(line: &str, from: usize, to: usize) -> &str {
-    line.get(from.min(line.len())..to.min(line.len())).unwrap_or("").trim()
-}
-
 fn dataset58(d: &[&str], first_line: usize, series: &mut ImportedSeries) -> Result<(), ImportError> {
     let err = |offset: usize, message: String| ImportError::Uff {
         line: first_line + offset,
@@ -303,10 +299,8 @@ fn dataset58(d: &[&str], first_line: usize, series: &mut ImportedSeries) -> Resu
             .map_err(|_| err(offset, format!("columns {}-{}: not an integer", from + 1, to)))
     };
     let real = |offset: usize, from: usize, to: usize| -> Result<f64, ImportError> {
-        field(d[offset], from, to)
-            .replace(['D', 'd'], "E")
-            .parse()
-            .map_err(|_| err(offset, format!("columns {}-{}: not a number", from + 1, to)))
+        fortran_real(field(d[offset], from, to))
+            .ok_or_else(|| err(offset, format!("columns {}-{}: not a number", from + 1, to)))
     };
     // Record 6: function type (I5) …; record 7: ordinate data type (I10),
     // number of points (I10), abscissa spacing (I10), minimum (E13.5),
@@ -353,7 +347,7 @@ fn dataset58(d: &[&str], first_line: usize, series: &mut ImportedSeries) -> Resu
     if name.is_empty() {
         return Err(err(1, "record 1 (ID line 1) must name the channel".into()));
     }
-    let data = uff_values(&d[12..], points).map_err(|(k, token)| err(12 + k, format!("{token:?} is not a number")))?;
+    let data = record_values(&d[12..]).map_err(|(k, token)| err(12 + k, format!("{token:?} is not a number")))?;
     if data.len() != points {
         return Err(err(7, format!("{points} points announced, {} found", data.len())));
     }
@@ -367,20 +361,4 @@ fn dataset58(d: &[&str], first_line: usize, series: &mut ImportedSeries) -> Resu
         data,
     });
     Ok(())
-}
-
-/// The data records of a dataset: every whitespace-separated number (Fortran
-/// `D` exponents too); on failure the record offset and the token.
-fn uff_values(records: &[&str], points: usize) -> Result<Vec<f64>, (usize, String)> {
-    let mut data = Vec::with_capacity(points);
-    for (k, line) in records.iter().enumerate() {
-        for token in line.split_whitespace() {
-            let v: f64 = token
-                .replace(['D', 'd'], "E")
-                .parse()
-                .map_err(|_| (k, token.to_string()))?;
-            data.push(v);
-        }
-    }
-    Ok(data)
 }

@@ -12,7 +12,8 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 use zenoh::Wait;
 
-/// The queryables every daemon declares under its prefix.
+/// The queryables every daemon declares under its prefix
+/// (`<prefix>/<kind>/latest`, in the order of the daemon's `Latest`).
 pub const LATEST_KINDS: [&str; 3] = ["updating", "monitoring", "health"];
 
 /// One span's latest messages (`None`: no reply, or the daemon has not

@@ -52,3 +52,25 @@ impl UffPoint {
         d
     }
 }
+
+/// Fixed-width field `[from, to)` of a record (shorter records pad).
+pub(crate) fn field(line: &str, from: usize, to: usize) -> &str {
+    line.get(from.min(line.len())..to.min(line.len())).unwrap_or("").trim()
+}
+
+/// A Fortran real: `E` or `D` exponent.
+pub(crate) fn fortran_real(token: &str) -> Option<f64> {
+    token.replace(['D', 'd'], "E").parse().ok()
+}
+
+/// Every whitespace-separated real of a dataset's data records; on failure
+/// the record's offset and the token.
+pub(crate) fn record_values(records: &[&str]) -> Result<Vec<f64>, (usize, String)> {
+    let mut data = Vec::new();
+    for (k, line) in records.iter().enumerate() {
+        for token in line.split_whitespace() {
+            data.push(fortran_real(token).ok_or_else(|| (k, token.to_string()))?);
+        }
+    }
+    Ok(data)
+}

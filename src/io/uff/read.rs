@@ -1,6 +1,6 @@
 //! Reading FRFs from universal files (see the parent module).
 
-use super::UffPoint;
+use super::{field, fortran_real, record_values, UffPoint};
 use crate::io::frf_json::{FrfEntry, FrfFile};
 use splinewatch_core::frf::Quantity;
 use thiserror::Error;
@@ -161,11 +161,6 @@ fn binary_block<'a>(bytes: &'a [u8], pos: usize, d: &Dataset<'_>) -> Result<(&'a
     ))
 }
 
-/// Fixed-width field `[from, to)` of a record (shorter records pad).
-fn field(line: &str, from: usize, to: usize) -> &str {
-    line.get(from.min(line.len())..to.min(line.len())).unwrap_or("").trim()
-}
-
 /// Records 6–11 of a dataset 58 (offsets 5–10 after the type record).
 struct Header58 {
     function: i64,
@@ -199,7 +194,7 @@ fn header58(d: &Dataset<'_>) -> Result<Header58, UffError> {
     };
     let real = |k: usize, from: usize, to: usize| -> Result<f64, UffError> {
         let f = field(r(k), from, to);
-        f.replace(['D', 'd'], "E").parse().map_err(|_| {
+        fortran_real(f).ok_or_else(|| {
             d.err(
                 k,
                 format!("record {k}, columns {}-{to}: {f:?} is not a number", from + 1),
@@ -242,18 +237,7 @@ fn data58(d: &Dataset<'_>, h: &Header58) -> Result<(Vec<f64>, Ordinates), UffErr
     let values: Vec<f64> = match d.binary {
         Some(bytes) => binary_values(d, bytes, matches!(h.ordinate_type, 2 | 5))?,
         None => {
-            let mut v = Vec::new();
-            for (k, line) in d.records[11..].iter().enumerate() {
-                for token in line.split_whitespace() {
-                    v.push(
-                        token
-                            .replace(['D', 'd'], "E")
-                            .parse()
-                            .map_err(|_| d.err(12 + k, format!("{token:?} is not a number")))?,
-                    );
-                }
-            }
-            v
+            record_values(&d.records[11..]).map_err(|(k, token)| d.err(12 + k, format!("{token:?} is not a number")))?
         }
     };
     let per_point = 1 + usize::from(complex) + usize::from(!h.even);
@@ -320,9 +304,9 @@ fn unit_factors(sets: &[Dataset<'_>]) -> Result<(f64, f64), UffError> {
         .get(1)
         .ok_or_else(|| d.err(1, "a dataset 164 needs its unit factors record"))?
         .split_whitespace()
-        .map(|t| t.replace(['D', 'd'], "E").parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| d.err(2, "record 2: unit factors are not numbers"))?;
+        .map(fortran_real)
+        .collect::<Option<_>>()
+        .ok_or_else(|| d.err(2, "record 2: unit factors are not numbers"))?;
     match values[..] {
         [length, force, ..] if length > 0.0 && force > 0.0 && length.is_finite() && force.is_finite() => {
             Ok((length, force))

@@ -51,11 +51,7 @@ impl Latest {
     const ALL: [Latest; 3] = [Latest::Updating, Latest::Monitoring, Latest::Health];
 
     fn segment(self) -> &'static str {
-        match self {
-            Latest::Updating => "updating",
-            Latest::Monitoring => "monitoring",
-            Latest::Health => "health",
-        }
+        crate::service::fleet::LATEST_KINDS[self as usize]
     }
 }
 
@@ -82,12 +78,13 @@ fn log_tls(report: &crate::config::TlsReport) {
 }
 
 impl ZenohLink {
-    /// Opens the session, subscribes to `<prefix>/accel/*`, `force/*` and
-    /// `frf/**`, and declares the queryable; returns the ingest queue.
+    /// Opens the session, subscribes to the inputs (`INPUTS`) and declares
+    /// the `latest` queryables; returns the ingest queue.
     pub(super) async fn open(config: &Config) -> Result<(Self, mpsc::Receiver<RawMessage>)> {
         let prefix = config.topic_prefix();
-        log_tls(&config.zenoh.tls_report()?);
-        let session = zenoh::open(config.zenoh.to_zenoh()?)
+        let (zenoh_config, tls) = config.zenoh.to_zenoh_with_tls()?;
+        log_tls(&tls);
+        let session = zenoh::open(zenoh_config)
             .await
             .map_err(|e| anyhow!("cannot open the zenoh session: {e}"))?;
         let (tx, rx) = mpsc::channel::<RawMessage>(INGEST_QUEUE);
