@@ -373,11 +373,23 @@ fn secured_site(dir: &Path, transport: Transport) {
     eprintln!("latest query: {} replies after {asks} asks", replies.len());
     // So may `splinewatch fleet` with the dashboard's credentials: its
     // wildcard queries (bridge/*/…/latest) pass the access control.
-    let fleet = std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
-        .args(["fleet", "--json", "--connect", &endpoint, "--zenoh-config"])
-        .arg(transport.client_file(dir, "dashboard"))
-        .output()
-        .unwrap();
+    // (Asked up to five times, for the same reason as the query above.)
+    let fleet_file = transport.client_file(dir, "dashboard");
+    let run_fleet = || {
+        std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args(["fleet", "--json", "--connect", &endpoint, "--zenoh-config"])
+            .arg(&fleet_file)
+            .output()
+            .unwrap()
+    };
+    let mut fleet = run_fleet();
+    for _ in 1..5 {
+        if fleet.status.success() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(500));
+        fleet = run_fleet();
+    }
     let fleet_out = String::from_utf8_lossy(&fleet.stdout).into_owned();
     assert!(fleet.status.success(), "{}", String::from_utf8_lossy(&fleet.stderr));
     let span: serde_json::Value = serde_json::from_str(fleet_out.trim()).unwrap();
