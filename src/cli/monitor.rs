@@ -4,6 +4,7 @@
 use crate::config::load_config;
 use crate::io::console::{errln, outln};
 use crate::io::files;
+use crate::io::recording::RecordingSource;
 use crate::io::wire;
 use crate::outputs::rerun::{self, RerunOutput};
 use crate::outputs::results::ResultsWriter;
@@ -36,6 +37,10 @@ pub struct ReplayArgs {
     /// e.g. rerun+http://127.0.0.1:9876/proxy.
     #[arg(long)]
     pub rerun_connect: Option<String>,
+    /// Read, ingest and update on one thread (the same results as the
+    /// default three-stage pipeline, slower; for comparison).
+    #[arg(long)]
+    pub single_thread: bool,
 }
 
 #[derive(Args)]
@@ -286,21 +291,12 @@ fn write_monitor_summary(statuses: &[crate::io::monitoring_json::StatusMessage],
 pub fn replay(a: ReplayArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let out = a.out.unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
-    let files = a
+    // Read as the replay goes: memory bounded whatever the files' size.
+    let recordings = a
         .inputs
         .iter()
-        .map(|p| {
-            let bytes = std::fs::read(p).with_context(|| format!("cannot read {}", p.display()))?;
-            if !bytes.starts_with(mcap::MAGIC) {
-                anyhow::bail!(
-                    "{} is not an MCAP file (it does not start with the MCAP magic)",
-                    p.display()
-                );
-            }
-            Ok(bytes)
-        })
+        .map(|p| RecordingSource::open(p))
         .collect::<Result<Vec<_>>>()?;
-    let recordings: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
     let initial = match &a.state {
         Some(p) => state::load_state(p)?,
         None => None,
@@ -319,8 +315,9 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         viewer: viewer.as_mut(),
         state_path: a.state.as_deref(),
         keep_latest: 1,
+        pipelined: !a.single_thread,
     };
-    let summary = replay::replay(&cfg, &recordings, &mut writer, options, &mut |p, note| {
+    let summary = replay::replay_sources(&cfg, recordings, &mut writer, options, &mut |p, note| {
         progress.show(p, note)
     })?;
     progress.bar.finish_and_clear();

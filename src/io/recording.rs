@@ -8,7 +8,7 @@ use crate::io::wire::{self, ChannelBlock, Encoding, Limits, WireError};
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
 use std::fs::File;
-use std::io::{BufWriter, Seek, Write};
+use std::io::{BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
 
 /// JSON Schema of a channel block (for `json` channels).
@@ -169,11 +169,95 @@ pub fn mcap_messages(
     if !bytes.starts_with(mcap::MAGIC) {
         anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
     }
-    let options = mcap::sans_io::LinearReaderOptions::default()
+    Ok(mcap::io::MessageReader::new_with_options(
+        bytes,
+        reader_options(salvage),
+    ))
+}
+
+fn reader_options(salvage: bool) -> mcap::sans_io::LinearReaderOptions {
+    mcap::sans_io::LinearReaderOptions::default()
         .with_record_length_limit(MAX_RECORD_BYTES)
         .with_validate_chunk_crcs(true)
-        .with_skip_end_magic(salvage);
-    Ok(mcap::io::MessageReader::new_with_options(bytes, options))
+        .with_skip_end_magic(salvage)
+}
+
+/// One MCAP message as read (its data decompressed and owned).
+pub type McapMessage = mcap::McapResult<mcap::Message<'static>>;
+
+/// A recording to read in file order: bytes in memory, or a file read as
+/// it goes (memory bounded by the largest chunk, not the file), with the
+/// message count of its summary for progress (0 without one).
+pub struct RecordingSource<'a> {
+    source: Box<dyn Read + Send + 'a>,
+    message_count: u64,
+}
+
+impl<'a> RecordingSource<'a> {
+    pub fn from_bytes(bytes: &'a [u8]) -> Result<Self> {
+        if !bytes.starts_with(mcap::MAGIC) {
+            anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
+        }
+        let message_count = mcap::Summary::read(bytes)
+            .ok()
+            .flatten()
+            .and_then(|s| s.stats.map(|st| st.message_count))
+            .unwrap_or(0);
+        Ok(Self {
+            source: Box::new(bytes),
+            message_count,
+        })
+    }
+
+    pub fn message_count(&self) -> u64 {
+        self.message_count
+    }
+
+    /// The messages, CRCs checked and record lengths bounded as
+    /// [`mcap_messages`].
+    pub fn messages(self) -> impl Iterator<Item = McapMessage> + Send + 'a {
+        mcap::io::MessageReader::new_with_options(self.source, reader_options(false))
+    }
+}
+
+impl RecordingSource<'static> {
+    /// Opens a recording file: refused, naming it, when it is not MCAP.
+    pub fn open(path: &Path) -> Result<Self> {
+        let mut file = File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let mut magic = [0u8; 8];
+        let head = file
+            .read(&mut magic)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        if !magic[..head].starts_with(mcap::MAGIC) || head < mcap::MAGIC.len() {
+            anyhow::bail!(
+                "{} is not an MCAP file (it does not start with the MCAP magic)",
+                path.display()
+            );
+        }
+        let message_count = summary_message_count(&mut file).unwrap_or(0);
+        file.rewind()
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        Ok(Self {
+            source: Box::new(BufReader::with_capacity(1 << 20, file)),
+            message_count,
+        })
+    }
+}
+
+/// The message count in a file's summary (read from its end).
+fn summary_message_count(file: &mut File) -> Option<u64> {
+    use mcap::sans_io::summary_reader::{SummaryReadEvent, SummaryReader};
+    let mut reader = SummaryReader::new();
+    while let Some(event) = reader.next_event() {
+        match event.ok()? {
+            SummaryReadEvent::ReadRequest(need) => {
+                let read = file.read(reader.insert(need)).ok()?;
+                reader.notify_read(read);
+            }
+            SummaryReadEvent::SeekRequest(to) => reader.notify_seeked(file.seek(to).ok()?),
+        }
+    }
+    reader.finish()?.stats.map(|s| s.message_count)
 }
 
 /// Reads every raw-input block of a recording, in file order. Messages on

@@ -138,7 +138,7 @@ impl Pipeline {
                 .data
                 .extend(std::iter::repeat_n(f64::NAN, (index - expected) as usize));
         }
-        queue.data.extend(block.data.iter().copied());
+        queue.data.extend(&block.data);
         self.health.blocks += 1;
         self.health.samples += block.data.len() as u64;
         // Channels too far behind the leader: their missing stretch is a gap.

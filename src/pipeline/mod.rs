@@ -29,12 +29,14 @@ mod job;
 mod monitoring;
 pub mod oma;
 mod reports;
+mod updater;
 mod windows;
 
 pub use job::{Fit, Measured, ModeShape, PairedMode, UpdateJob, UpdateOutcome, UpdateReport, BENDING_MODES_KEPT};
 pub use monitoring::{rescore, Environment, MonitoringOutcome, Training};
 pub use oma::{ModelPair, WindowModes};
 pub use reports::{AcceptedParameters, Health, StateParameter, WindowReport};
+pub use updater::{UpdateCounters, Updater};
 
 use crate::config::{Config, FrfSetup, ScheduleConfig};
 use crate::io::frf_json::FrfEntry;
@@ -42,8 +44,8 @@ use crate::io::wire::{ChannelBlock, ChannelQuantity, Limits, WireError};
 use align::ChannelQueue;
 use anyhow::{bail, Result};
 use oma::Identification;
-use splinewatch_core::frf::{ModalState, Quantity};
-use splinewatch_core::updating::{ModelPoint, Parameter, UpdateSettings};
+use splinewatch_core::frf::Quantity;
+use splinewatch_core::updating::{Parameter, UpdateSettings};
 use splinewatch_core::welch::{Estimator, WelchSettings};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
@@ -69,9 +71,6 @@ pub struct Pipeline {
     accels: Vec<usize>,
     /// Output-only: how windows are identified.
     identification: Option<Identification>,
-    /// Output-only: the model's modes at the last accepted parameters, to
-    /// pair identified modes with (computed when first needed).
-    model_state: Option<Arc<ModalState>>,
     /// Channel identities in queue order: force first (if any).
     channels: Vec<(String, ChannelQuantity)>,
     queues: Vec<ChannelQueue>,
@@ -101,12 +100,12 @@ pub struct Pipeline {
     frf_sets: u64,
     /// Measurement time of the last update (or the first sample).
     last_update_ns: Option<i128>,
-    last: Option<AcceptedParameters>,
-    /// The model at `last`, when the update that produced it ran here.
-    last_point: Option<Arc<ModelPoint>>,
-    /// `[monitoring]`: temperatures per window and the monitor.
+    /// `[monitoring]`: temperatures per window.
     temperatures: Option<monitoring::TemperatureStore>,
-    monitoring: Option<monitoring::Monitoring>,
+    /// The last accepted parameters, the model at them, the monitor.
+    updater: Updater,
+    /// Whether `updater` was handed to another thread (`split_updater`).
+    split: bool,
     health: Health,
 }
 
@@ -159,6 +158,7 @@ impl Pipeline {
             })
             .collect();
         let (temperatures, monitoring) = monitoring::for_config(config, &parameters, &setup)?;
+        let updater = Updater::new(Arc::clone(&setup), parameters.clone(), state, monitoring);
         Ok(Self {
             config: config.clone(),
             schedule,
@@ -168,7 +168,6 @@ impl Pipeline {
             force,
             accels,
             identification,
-            model_state: None,
             channels,
             queues,
             fs: None,
@@ -186,10 +185,9 @@ impl Pipeline {
             frf_span: None,
             frf_sets: 0,
             last_update_ns: None,
-            last: state,
-            last_point: None,
+            updater,
+            split: false,
             temperatures,
-            monitoring,
             health: Health::default(),
         })
     }
@@ -204,7 +202,27 @@ impl Pipeline {
 
     /// The last accepted parameters, if any update succeeded (or a state was loaded).
     pub fn accepted(&self) -> Option<&AcceptedParameters> {
-        self.last.as_ref()
+        self.updater.accepted()
+    }
+
+    /// The update side's health counters.
+    pub fn update_counters(&self) -> UpdateCounters {
+        self.updater.counters()
+    }
+
+    /// Hands the update side to the caller, for updates on another thread
+    /// than the ingest: the caller rebases each job on it, runs it and
+    /// applies the outcome to it, in order, and stamps health messages with
+    /// [`Health::set_updates`]. Jobs from this pipeline then start from its
+    /// initial parameters until rebased. Refused output-only, where a
+    /// window's identified modes are paired with the model at the last
+    /// update, so ingest cannot run ahead of the updates.
+    pub fn split_updater(&mut self) -> Result<Updater> {
+        if self.identification.is_some() {
+            bail!("output-only windows are paired with the model at the last update: updates run in line");
+        }
+        self.split = true;
+        Ok(self.updater.clone())
     }
 
     /// Measurement time up to which every channel's samples have been
@@ -273,114 +291,37 @@ impl Pipeline {
             setup: Arc::clone(&self.setup),
             parameters: self.parameters.clone(),
             settings: self.settings.clone(),
-            start: self.start_values(),
-            previous: self.last_point.clone(),
+            start: self.updater.start_values(),
+            previous: self.updater.last_point(),
         }
     }
 
-    /// The last accepted parameters (the config's values for those never
-    /// updated).
-    fn start_values(&self) -> Vec<f64> {
-        let base = splinewatch_core::updating::base_values(
-            &self.parameters,
-            &self.setup.kappa,
-            self.setup.model.field_coefficients(),
-            &self.setup.damping,
-        );
-        match &self.last {
-            Some(last) => self
-                .parameters
-                .iter()
-                .zip(base)
-                .map(|(p, b)| last.parameters.iter().find(|s| s.name == p.name).map_or(b, |s| s.value))
-                .collect(),
-            None => base,
-        }
-    }
-
-    /// Moves a job made earlier (one that waited while another update ran)
-    /// to start from the parameters accepted since: every update starts
-    /// from the latest result, however the updates were scheduled, so the
-    /// live daemon gives the replay's parameters even when its updates queue.
+    /// Moves a job made earlier to start from the parameters accepted since
+    /// ([`Updater::rebase`]).
     pub fn rebase(&self, job: &mut UpdateJob) {
-        job.start = self.start_values();
-        job.previous = self.last_point.clone();
+        self.updater.rebase(job);
     }
 
-    /// Records an update's outcome: accepted parameters replace the last
-    /// good ones; a failure keeps them. With `[monitoring]`, an accepted
-    /// update is scored: the status (and alarm) messages are returned.
+    /// Records an update's outcome ([`Updater::apply`]): accepted parameters
+    /// replace the last good ones; a failure keeps them. With `[monitoring]`,
+    /// an accepted update is scored: the status (and alarm) messages are
+    /// returned.
     pub fn apply(&mut self, outcome: &mut UpdateOutcome) -> Option<MonitoringOutcome> {
-        self.health.update_runs += 1;
-        match &outcome.result {
-            Ok(report) => {
-                let mut values: BTreeMap<String, f64> = report
-                    .result
-                    .parameters
-                    .iter()
-                    .map(|p| (p.name.clone(), p.value))
-                    .collect();
-                if let (Fit::Modes(pairs), Some(state)) = (&report.fit, &outcome.state) {
-                    let pairs: Vec<(usize, f64)> = pairs
-                        .iter()
-                        .map(|p| (p.model_mode, p.identified_frequency_hz))
-                        .collect();
-                    values.extend(monitoring::identified_frequencies(&pairs, state));
-                }
-                let scored = self.score(outcome.window, outcome.time_ns, &values, &outcome.environment);
-                self.last_point = outcome.point.take();
-                self.model_state = outcome
-                    .state
-                    .take()
-                    .or_else(|| self.last_point.as_ref().map(|p| Arc::new(p.state().clone())));
-                self.last = Some(AcceptedParameters {
-                    window: outcome.window,
-                    time: crate::io::wire::format_timestamp(outcome.time_ns),
-                    parameters: report
-                        .result
-                        .parameters
-                        .iter()
-                        .map(|p| StateParameter {
-                            name: p.name.clone(),
-                            value: p.value,
-                            std: p.std,
-                        })
-                        .collect(),
-                });
-                scored
-            }
-            Err(_) => {
-                self.health.update_failures += 1;
-                None
-            }
-        }
+        debug_assert!(!self.split, "outcomes go to the split-off updater");
+        let scored = self.updater.apply(outcome);
+        self.health.set_updates(self.updater.counters());
+        scored
     }
 
     /// The monitor (`[monitoring]`), to persist its reference and state.
     pub fn monitor(&self) -> Option<&splinewatch_core::monitoring::Monitor> {
-        self.monitoring.as_ref().map(|m| &m.monitor)
+        self.updater.monitor()
     }
 
     /// Resumes a persisted monitor (a restart does not retrain); refused
     /// when it does not fit this config's parameters and channels.
     pub fn restore_monitor(&mut self, monitor: splinewatch_core::monitoring::Monitor) -> Result<()> {
-        let Some(current) = self.monitoring.as_mut() else {
-            bail!("the config has no [monitoring] section");
-        };
-        if monitor.settings().temperature_channels != current.monitor.settings().temperature_channels {
-            bail!("the saved monitor has another number of temperature channels");
-        }
-        if let Some(r) = monitor.reference() {
-            if r.features != self.parameters.len() {
-                bail!(
-                    "the saved reference scores {} features, this config updates {} parameters",
-                    r.features,
-                    self.parameters.len()
-                );
-            }
-        }
-        current.monitor = monitor;
-        Ok(())
+        self.updater.restore_monitor(monitor)
     }
 }
 

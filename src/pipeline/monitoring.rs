@@ -94,6 +94,7 @@ impl TemperatureStore {
 }
 
 /// The monitor and the names of what it scores.
+#[derive(Clone)]
 pub(super) struct Monitoring {
     pub(super) monitor: Monitor,
     features: Vec<String>,
@@ -113,9 +114,32 @@ impl Monitoring {
         })
     }
 
-    /// Scores one window: the status message, and the alarm message when
-    /// the state entered or left alarm. Errors only when the feature count
-    /// differs from the reference's.
+    /// Scores an accepted update (its features by name: parameters, and
+    /// output-only the identified frequencies; an absent one is missing)
+    /// measured at `environment`: the status message, and the alarm message
+    /// when the state entered or left alarm. Errors only when the feature
+    /// count differs from the reference's.
+    pub(super) fn score(
+        &mut self,
+        window: u64,
+        time_ns: i128,
+        values: &BTreeMap<String, f64>,
+        environment: &Environment,
+    ) -> Result<MonitoringOutcome, splinewatch_core::monitoring::MonitoringError> {
+        let observation = Observation {
+            features: self
+                .features
+                .iter()
+                .map(|n| values.get(n).copied().unwrap_or(f64::NAN))
+                .collect(),
+            temperatures: environment.temperatures.clone(),
+            time_ns,
+        };
+        self.observe(window, &observation, environment)
+    }
+
+    /// Scores one observation: the status message, and the alarm message
+    /// when the state entered or left alarm.
     fn observe(
         &mut self,
         window: u64,
@@ -245,39 +269,6 @@ impl Pipeline {
             *self.health.temperature_flags.entry(flag.clone()).or_default() += 1;
         }
         environment
-    }
-
-    /// Scores an accepted update (its features by name: parameters, and
-    /// output-only the identified frequencies; an absent one is missing)
-    /// measured at `environment`; `None` without `[monitoring]`.
-    pub(super) fn score(
-        &mut self,
-        window: u64,
-        time_ns: i128,
-        values: &BTreeMap<String, f64>,
-        environment: &Environment,
-    ) -> Option<MonitoringOutcome> {
-        let monitoring = self.monitoring.as_mut()?;
-        let features: Vec<f64> = monitoring
-            .features
-            .iter()
-            .map(|n| values.get(n).copied().unwrap_or(f64::NAN))
-            .collect();
-        let observation = Observation {
-            features,
-            temperatures: environment.temperatures.clone(),
-            time_ns,
-        };
-        match monitoring.observe(window, &observation, environment) {
-            Ok(outcome) => Some(outcome),
-            Err(e) => {
-                // Another feature count than the reference (a resumed
-                // monitor of another config is refused earlier): counted.
-                self.health.monitoring_errors += 1;
-                tracing::warn!("monitoring: {e}");
-                None
-            }
-        }
     }
 }
 

@@ -2,9 +2,7 @@
 //! or, output-only, the samples themselves); a window that ends is accepted
 //! or skipped with a reason, and may trigger an update.
 
-use super::align::ChannelQueue;
 use super::{Measured, Pipeline, UpdateJob, WindowReport};
-use splinewatch_core::frf::ModalState;
 use splinewatch_core::welch::{WelchEstimator, WelchSettings};
 use std::sync::Arc;
 
@@ -71,29 +69,41 @@ impl Pipeline {
         }
     }
 
-    /// Moves the next `n` aligned samples of every channel into the open windows.
+    /// Moves the next `n` aligned samples of every channel into the open
+    /// windows, straight from the channel queues (made contiguous; no copy
+    /// in between).
     fn push_samples(&mut self, n: usize) {
         let fed = self.fed;
-        let take = |q: &mut ChannelQueue| -> Vec<f64> {
-            let skip = (fed - q.first).max(0) as usize;
-            q.data.drain(..skip.min(q.data.len()));
+        for q in &mut self.queues {
+            let skip = ((fed - q.first).max(0) as usize).min(q.data.len());
+            q.data.drain(..skip);
             q.first += skip as i64;
-            let v: Vec<f64> = q.data.drain(..n.min(q.data.len())).collect();
-            q.first += v.len() as i64;
-            v
-        };
-        let cols: Vec<Vec<f64>> = self.queues.iter_mut().map(take).collect();
+            q.data.make_contiguous();
+        }
+        let cols: Vec<&[f64]> = self
+            .queues
+            .iter()
+            .map(|q| {
+                let (front, _) = q.data.as_slices();
+                &front[..n.min(front.len())]
+            })
+            .collect();
         let first_output = usize::from(self.force.is_some());
-        let outputs: Vec<&[f64]> = cols[first_output..].iter().map(|v| v.as_slice()).collect();
+        let outputs = &cols[first_output..];
         for (_, data) in &mut self.open {
             match data {
-                WindowData::Welch(welch) => welch.push(&cols[0], &outputs).expect("equal lengths by construction"),
+                WindowData::Welch(welch) => welch.push(cols[0], outputs).expect("equal lengths by construction"),
                 WindowData::Samples(samples) => {
-                    for (s, c) in samples.iter_mut().zip(&outputs) {
+                    for (s, c) in samples.iter_mut().zip(outputs) {
                         s.extend_from_slice(c);
                     }
                 }
             }
+        }
+        for q in &mut self.queues {
+            let taken = n.min(q.data.len());
+            q.data.drain(..taken);
+            q.first += taken as i64;
         }
     }
 
@@ -203,7 +213,7 @@ impl Pipeline {
         if fraction < self.schedule.min_segment_fraction || valid == 0 {
             report.skipped = Some("too_little_data".into());
         } else {
-            match self.model_state() {
+            match self.updater.model_state() {
                 Ok(state) => {
                     let fs = self.fs.expect("set with the reference");
                     let identification = self.identification.as_ref().expect("output-only");
@@ -220,23 +230,6 @@ impl Pipeline {
         }
         self.count_window(&report);
         report
-    }
-
-    /// The model's modal state at the last accepted parameters (cached).
-    fn model_state(&mut self) -> anyhow::Result<Arc<ModalState>> {
-        if let Some(s) = &self.model_state {
-            return Ok(Arc::clone(s));
-        }
-        let (state, _) = splinewatch_core::updating::modal_state_at(
-            &self.setup.model,
-            &self.parameters,
-            &self.setup.kappa,
-            &self.setup.damping,
-            &self.start_values(),
-        )?;
-        let state = Arc::new(state);
-        self.model_state = Some(Arc::clone(&state));
-        Ok(state)
     }
 
     fn count_window(&mut self, report: &WindowReport) {

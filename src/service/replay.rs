@@ -1,20 +1,43 @@
 //! Offline replay of a raw-input recording through the pipeline: the same
-//! code path as the live daemon, deterministic (updates run inline, in
-//! order, single-threaded).
+//! code path as the live daemon, deterministic.
+//!
+//! Three stages with bounded channels between them, so that the slowest
+//! sets the pace: reading (MCAP records, decompression) on one thread,
+//! decoding + alignment + Welch on another (it owns the [`Pipeline`]), and
+//! the updates with every output on the calling thread, which rebases each
+//! job on its own [`Updater`], runs it and applies it in window order.
+//! Every health message carries the ingest's counters as they were when
+//! the job's window closed, so the results are exactly those of running
+//! the stages in line (`ReplayOptions::pipelined = false`, the reference a
+//! test compares with). Output-only, a window's modes are paired with the
+//! model at the last update, so ingest and updates share one thread there
+//! (reading still runs ahead).
 //! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
 use super::{keep_latest, resume_monitor};
 use crate::config::Config;
 use crate::io::monitoring_json::StatusMessage;
-use crate::io::wire::{self, Encoding};
+use crate::io::recording::{McapMessage, RecordingSource};
+use crate::io::wire::{self, Encoding, Limits};
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsWriter};
 use crate::outputs::state;
-use crate::pipeline::{AcceptedParameters, Pipeline, UpdateJob, UpdateOutcome, WindowReport};
+use crate::pipeline::{
+    AcceptedParameters, Health, MonitoringOutcome, Pipeline, UpdateCounters, UpdateJob, UpdateOutcome, Updater,
+    WindowReport,
+};
 use anyhow::{Context, Result};
 use std::collections::VecDeque;
 use std::io::{Seek, Write};
 use std::path::Path;
+use std::sync::mpsc::{sync_channel, Receiver};
+
+/// MCAP messages handed from the reading stage to the ingest, per batch.
+const READ_BATCH: usize = 64;
+/// Batches of read messages in flight (bounded memory: a few MB).
+const READ_QUEUE: usize = 8;
+/// Ingest events in flight to the update stage.
+const EVENT_QUEUE: usize = 256;
 
 /// Progress callback data.
 #[derive(Debug, Clone, Copy)]
@@ -36,6 +59,10 @@ pub struct ReplayOptions<'a> {
     /// How many of the latest windows and update outcomes the summary keeps
     /// (a month of 10-minute windows would otherwise hold about 1 GB).
     pub keep_latest: usize,
+    /// Reading, ingest and updates on threads of their own (the default);
+    /// `false` runs every stage in line on the calling thread, with the
+    /// same results.
+    pub pipelined: bool,
 }
 
 impl Default for ReplayOptions<'_> {
@@ -45,6 +72,7 @@ impl Default for ReplayOptions<'_> {
             viewer: None,
             state_path: None,
             keep_latest: 64,
+            pipelined: true,
         }
     }
 }
@@ -66,12 +94,29 @@ pub struct ReplaySummary {
     pub monitoring: Vec<StatusMessage>,
 }
 
-/// Replays `recordings` (MCAP files, in order: e.g. the rotated raw-input
-/// files of a daemon) into `out` (and `viewer`, if any); saves the state
-/// after every accepted update when `state_path` is given.
+/// Replays `recordings` (MCAP files in memory, in order: e.g. the rotated
+/// raw-input files of a daemon) into `out` (and `viewer`, if any); saves
+/// the state after every accepted update when `state_path` is given.
 pub fn replay<W: Write + Seek>(
     config: &Config,
     recordings: &[&[u8]],
+    out: &mut ResultsWriter<W>,
+    options: ReplayOptions<'_>,
+    progress: &mut dyn FnMut(Progress, Option<&str>),
+) -> Result<ReplaySummary> {
+    let sources = recordings
+        .iter()
+        .enumerate()
+        .map(|(k, bytes)| RecordingSource::from_bytes(bytes).with_context(|| format!("recording {}", k + 1)))
+        .collect::<Result<Vec<_>>>()?;
+    replay_sources(config, sources, out, options, progress)
+}
+
+/// [`replay`] of recordings in memory or read from files as the replay goes
+/// ([`RecordingSource::open`]: memory bounded whatever the files' size).
+pub fn replay_sources<W: Write + Seek>(
+    config: &Config,
+    recordings: Vec<RecordingSource<'_>>,
     out: &mut ResultsWriter<W>,
     options: ReplayOptions<'_>,
     progress: &mut dyn FnMut(Progress, Option<&str>),
@@ -81,11 +126,12 @@ pub fn replay<W: Write + Seek>(
         viewer,
         state_path,
         keep_latest,
+        pipelined,
     } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
     let monitor_path = resume_monitor(config, state_path, &mut pipeline)?;
     let limits = crate::pipeline::block_limits(config);
-    let total = recordings.iter().map(|bytes| message_count(bytes)).sum();
+    let total = recordings.iter().map(RecordingSource::message_count).sum();
     let mut sink = Outputs {
         out,
         viewer,
@@ -97,75 +143,250 @@ pub fn replay<W: Write + Seek>(
         last_time: 0,
         summary: ReplaySummary::default(),
     };
-    let messages = recordings.iter().enumerate().map(|(k, bytes)| {
-        crate::io::recording::mcap_messages(bytes, false).with_context(|| format!("recording {}", k + 1))
-    });
-    for message in messages.collect::<Result<Vec<_>>>()?.into_iter().flatten() {
-        let message = message.context("corrupt MCAP record")?;
-        sink.summary.messages += 1;
-        let topic = &message.channel.topic;
-        if topic.contains("/frf/") {
-            // A recorded pre-computed FRF: the log time stands for its end.
-            let time_ns = i128::from(message.log_time);
-            if let Some(job) = pipeline.ingest_frf(&message.data, time_ns) {
-                sink.handle(&mut pipeline, Vec::new(), vec![job])?;
-            }
-            continue;
+    let messages = recordings.into_iter().flat_map(RecordingSource::messages);
+    let split = if pipelined { pipeline.split_updater().ok() } else { None };
+    let (end, counters, accepted) = match split {
+        None if !pipelined => in_line(pipeline, limits, messages, &mut sink),
+        None => std::thread::scope(|scope| {
+            let batches = read_on_a_thread(scope, messages);
+            in_line(pipeline, limits, batches.into_iter().flatten(), &mut sink)
+        }),
+        Some(mut updater) => {
+            let end = std::thread::scope(|scope| {
+                let batches = read_on_a_thread(scope, messages);
+                let (events, received) = sync_channel(EVENT_QUEUE);
+                let mut ingest = Ingest::new(pipeline, limits);
+                let ingesting = scope.spawn(move || {
+                    let mut send = |_: &mut Pipeline, event: Event| {
+                        events
+                            .send(event)
+                            .map_err(|_| anyhow::anyhow!("the update stage stopped"))
+                    };
+                    ingest.all(batches.into_iter().flatten(), &mut send)
+                });
+                for event in received {
+                    sink.event(event, &mut Updates::Split(&mut updater))?;
+                }
+                ingesting
+                    .join()
+                    .map_err(|_| anyhow::anyhow!("the ingest stage panicked"))?
+            });
+            (end, updater.counters(), updater.accepted().cloned())
         }
-        if !(topic.contains("/accel/") || topic.contains("/force/") || topic.contains("/temperature/")) {
-            continue;
-        }
-        let Some(encoding) = Encoding::from_name(&message.channel.message_encoding) else {
-            pipeline.health_mut().reject("unknown_encoding");
-            continue;
-        };
-        let blocks = match wire::decode(&message.data, encoding, &limits) {
-            Ok(b) => b,
-            Err(e) => {
-                pipeline.reject_message(&e);
-                continue;
-            }
-        };
-        for block in blocks {
-            let (windows, jobs) = pipeline.ingest(block);
-            sink.handle(&mut pipeline, windows, jobs)?;
-        }
-        if sink.summary.messages % 256 == 0 {
-            sink.report(None);
-        }
-    }
-    // Blocks still held for the stream's reference (a very short recording).
-    let (windows, jobs) = pipeline.finish();
-    sink.handle(&mut pipeline, windows, jobs)?;
+    };
+    let end = end?;
     // The final health, at the last window's end (or, with none closed, the
     // data analysed so far); without any data there is no measurement time
     // to stamp it with, and no message.
     let last_time = Some(sink.last_time)
         .filter(|&t| t > 0)
-        .or_else(|| pipeline.measured_until().filter(|&t| t > 0));
+        .or_else(|| end.measured_until.filter(|&t| t > 0));
+    sink.summary.messages = end.messages;
     if let Some(last_time) = last_time {
-        sink.out.write(
-            "health",
-            last_time,
-            &results::health_message(last_time, pipeline.health()),
-        )?;
+        let mut health = end.health;
+        health.set_updates(counters);
+        sink.out
+            .write("health", last_time, &results::health_message(last_time, &health))?;
         if let Some(v) = sink.viewer {
-            v.log_health(last_time, pipeline.health())?;
+            v.log_health(last_time, &health)?;
         }
     }
     let mut summary = sink.summary;
-    summary.accepted = pipeline.accepted().cloned();
+    summary.accepted = accepted;
     Ok(summary)
 }
 
-/// The message count in a recording's summary (0 when it has none), for
-/// the progress bar.
-fn message_count(recording: &[u8]) -> u64 {
-    mcap::Summary::read(recording)
-        .ok()
-        .flatten()
-        .and_then(|s| s.stats.map(|st| st.message_count))
-        .unwrap_or(0)
+type Message = McapMessage;
+
+/// The reading stage: `messages` read on a thread of its own, in batches.
+fn read_on_a_thread<'scope, I>(scope: &'scope std::thread::Scope<'scope, '_>, messages: I) -> Receiver<Vec<Message>>
+where
+    I: Iterator<Item = Message> + Send + 'scope,
+{
+    let (batches, received) = sync_channel(READ_QUEUE);
+    scope.spawn(move || {
+        let mut batch = Vec::with_capacity(READ_BATCH);
+        for message in messages {
+            batch.push(message);
+            if batch.len() == READ_BATCH
+                && batches
+                    .send(std::mem::replace(&mut batch, Vec::with_capacity(READ_BATCH)))
+                    .is_err()
+            {
+                return; // the ingest stopped (an error): nothing more to read for
+            }
+        }
+        let _ = batches.send(batch);
+    });
+    received
+}
+
+/// What the ingest stage hands to the update stage, in order.
+enum Event {
+    Windows(Vec<WindowReport>),
+    /// An update job with the ingest's health when its window closed.
+    Job(Box<UpdateJob>, Box<Health>),
+    Progress(u64),
+}
+
+/// The ingest's state when the recordings ended.
+struct End {
+    messages: u64,
+    health: Health,
+    measured_until: Option<i128>,
+}
+
+/// The ingest stage: decoding, alignment and Welch (the [`Pipeline`]).
+struct Ingest {
+    pipeline: Pipeline,
+    limits: Limits,
+    messages: u64,
+}
+
+impl Ingest {
+    fn new(pipeline: Pipeline, limits: Limits) -> Self {
+        Self {
+            pipeline,
+            limits,
+            messages: 0,
+        }
+    }
+
+    /// Takes one message; what it produced goes to `emit` in order.
+    fn message(
+        &mut self,
+        message: mcap::Message<'static>,
+        emit: &mut dyn FnMut(&mut Pipeline, Event) -> Result<()>,
+    ) -> Result<()> {
+        self.messages += 1;
+        let topic = &message.channel.topic;
+        if topic.contains("/frf/") {
+            // A recorded pre-computed FRF: the log time stands for its end.
+            let time_ns = i128::from(message.log_time);
+            if let Some(job) = self.pipeline.ingest_frf(&message.data, time_ns) {
+                self.emit_jobs(vec![job], emit)?;
+            }
+            return Ok(());
+        }
+        if !(topic.contains("/accel/") || topic.contains("/force/") || topic.contains("/temperature/")) {
+            return Ok(());
+        }
+        let Some(encoding) = Encoding::from_name(&message.channel.message_encoding) else {
+            self.pipeline.health_mut().reject("unknown_encoding");
+            return Ok(());
+        };
+        let blocks = match wire::decode(&message.data, encoding, &self.limits) {
+            Ok(b) => b,
+            Err(e) => {
+                self.pipeline.reject_message(&e);
+                return Ok(());
+            }
+        };
+        for block in blocks {
+            let (windows, jobs) = self.pipeline.ingest(block);
+            if !windows.is_empty() {
+                emit(&mut self.pipeline, Event::Windows(windows))?;
+            }
+            self.emit_jobs(jobs, emit)?;
+        }
+        if self.messages % 256 == 0 {
+            emit(&mut self.pipeline, Event::Progress(self.messages))?;
+        }
+        Ok(())
+    }
+
+    fn emit_jobs(
+        &mut self,
+        jobs: Vec<UpdateJob>,
+        emit: &mut dyn FnMut(&mut Pipeline, Event) -> Result<()>,
+    ) -> Result<()> {
+        for job in jobs {
+            let health = Box::new(self.pipeline.health().clone());
+            emit(&mut self.pipeline, Event::Job(Box::new(job), health))?;
+        }
+        Ok(())
+    }
+
+    /// Every message, then the end of the stream (blocks still held for
+    /// the stream's reference, a very short recording, are decided on).
+    fn all(
+        &mut self,
+        messages: impl Iterator<Item = Message>,
+        emit: &mut dyn FnMut(&mut Pipeline, Event) -> Result<()>,
+    ) -> Result<End> {
+        for message in messages {
+            self.message(message.context("corrupt MCAP record")?, emit)?;
+        }
+        let (windows, jobs) = self.pipeline.finish();
+        if !windows.is_empty() {
+            emit(&mut self.pipeline, Event::Windows(windows))?;
+        }
+        self.emit_jobs(jobs, emit)?;
+        Ok(End {
+            messages: self.messages,
+            health: self.pipeline.health().clone(),
+            measured_until: self.pipeline.measured_until(),
+        })
+    }
+}
+
+/// Ingest and updates on one thread: each event handled as it is produced.
+fn in_line<W: Write + Seek>(
+    pipeline: Pipeline,
+    limits: Limits,
+    messages: impl Iterator<Item = Message>,
+    sink: &mut Outputs<'_, W>,
+) -> (Result<End>, UpdateCounters, Option<AcceptedParameters>) {
+    let mut ingest = Ingest::new(pipeline, limits);
+    let end = ingest.all(messages, &mut |pipeline, event| {
+        sink.event(event, &mut Updates::InLine(pipeline))
+    });
+    let pipeline = &ingest.pipeline;
+    (end, pipeline.update_counters(), pipeline.accepted().cloned())
+}
+
+/// Where jobs are rebased and outcomes applied: the pipeline's own updater
+/// (ingest and updates on one thread) or one split off it.
+enum Updates<'a> {
+    InLine(&'a mut Pipeline),
+    Split(&'a mut Updater),
+}
+
+impl Updates<'_> {
+    fn rebase(&self, job: &mut UpdateJob) {
+        match self {
+            Updates::InLine(p) => p.rebase(job),
+            Updates::Split(u) => u.rebase(job),
+        }
+    }
+
+    fn apply(&mut self, outcome: &mut UpdateOutcome) -> Option<MonitoringOutcome> {
+        match self {
+            Updates::InLine(p) => p.apply(outcome),
+            Updates::Split(u) => u.apply(outcome),
+        }
+    }
+
+    fn counters(&self) -> UpdateCounters {
+        match self {
+            Updates::InLine(p) => p.update_counters(),
+            Updates::Split(u) => u.counters(),
+        }
+    }
+
+    fn accepted(&self) -> Option<&AcceptedParameters> {
+        match self {
+            Updates::InLine(p) => p.accepted(),
+            Updates::Split(u) => u.accepted(),
+        }
+    }
+
+    fn monitor(&self) -> Option<&splinewatch_core::monitoring::Monitor> {
+        match self {
+            Updates::InLine(p) => p.monitor(),
+            Updates::Split(u) => u.monitor(),
+        }
+    }
 }
 
 /// Where the replay's windows and updates go.
@@ -192,8 +413,20 @@ impl<W: Write + Seek> Outputs<'_, W> {
         );
     }
 
-    /// Writes the closed windows and runs the update jobs inline, in order.
-    fn handle(&mut self, pipeline: &mut Pipeline, windows: Vec<WindowReport>, jobs: Vec<UpdateJob>) -> Result<()> {
+    fn event(&mut self, event: Event, updates: &mut Updates<'_>) -> Result<()> {
+        match event {
+            Event::Windows(windows) => self.windows(windows),
+            Event::Job(job, health) => self.update(*job, *health, updates),
+            Event::Progress(messages) => {
+                self.summary.messages = messages;
+                self.report(None);
+                Ok(())
+            }
+        }
+    }
+
+    /// Writes the closed windows.
+    fn windows(&mut self, windows: Vec<WindowReport>) -> Result<()> {
         for w in windows {
             self.last_time = w.end_ns;
             for (suffix, m) in results::window_messages(&w) {
@@ -218,55 +451,59 @@ impl<W: Write + Seek> Outputs<'_, W> {
             self.summary.windows_accepted += u64::from(w.skipped.is_none());
             keep_latest(&mut self.summary.windows, w, self.keep);
         }
-        for mut job in jobs {
-            // Several jobs from one block: each starts from the one before.
-            pipeline.rebase(&mut job);
-            let mut outcome = job.run();
-            let scored = pipeline.apply(&mut outcome);
-            for (suffix, msg) in results::update_messages(&outcome) {
+        Ok(())
+    }
+
+    /// Runs one update job (rebased on the last accepted parameters) and
+    /// writes its outcome; `health` is the ingest's when its window closed.
+    fn update(&mut self, mut job: UpdateJob, mut health: Health, updates: &mut Updates<'_>) -> Result<()> {
+        updates.rebase(&mut job);
+        let mut outcome = job.run();
+        let scored = updates.apply(&mut outcome);
+        for (suffix, msg) in results::update_messages(&outcome) {
+            self.out.write(suffix, outcome.time_ns, &msg)?;
+        }
+        if let Some(m) = &scored {
+            for (suffix, msg) in results::monitoring_messages(m) {
                 self.out.write(suffix, outcome.time_ns, &msg)?;
             }
-            if let Some(m) = &scored {
-                for (suffix, msg) in results::monitoring_messages(m) {
-                    self.out.write(suffix, outcome.time_ns, &msg)?;
-                }
-                if let Some(v) = self.viewer.as_deref_mut() {
-                    v.log_monitoring(outcome.time_ns, &m.status)?;
-                }
-                self.summary.monitoring.push(m.status.clone());
-            }
-            let note = match &outcome.result {
-                Ok(r) => format!(
-                    "update after window {}: relative residual {:.4}, {} iterations",
-                    outcome.window,
-                    r.result.relative_residual,
-                    r.result.iterations.len() - 1
-                ),
-                Err(e) => format!(
-                    "update after window {} failed, keeping the last parameters: {e}",
-                    outcome.window
-                ),
-            };
-            self.out.flush()?;
-            if let (Some(path), Some(state), Ok(_)) = (self.state_path, pipeline.accepted(), &outcome.result) {
-                state::save_state(path, state)?;
-            }
-            if let (Some(path), Some(monitor), Some(_)) = (self.monitor_path, pipeline.monitor(), &scored) {
-                state::save_monitor(path, monitor)?;
-            }
-            self.out.write(
-                "health",
-                outcome.time_ns,
-                &results::health_message(outcome.time_ns, pipeline.health()),
-            )?;
             if let Some(v) = self.viewer.as_deref_mut() {
-                v.log_update(&outcome)?;
-                v.log_health(outcome.time_ns, pipeline.health())?;
+                v.log_monitoring(outcome.time_ns, &m.status)?;
             }
-            self.report(Some(&note));
-            self.summary.update_count += 1;
-            keep_latest(&mut self.summary.updates, outcome, self.keep);
+            self.summary.monitoring.push(m.status.clone());
         }
+        let note = match &outcome.result {
+            Ok(r) => format!(
+                "update after window {}: relative residual {:.4}, {} iterations",
+                outcome.window,
+                r.result.relative_residual,
+                r.result.iterations.len() - 1
+            ),
+            Err(e) => format!(
+                "update after window {} failed, keeping the last parameters: {e}",
+                outcome.window
+            ),
+        };
+        self.out.flush()?;
+        if let (Some(path), Some(state), Ok(_)) = (self.state_path, updates.accepted(), &outcome.result) {
+            state::save_state(path, state)?;
+        }
+        if let (Some(path), Some(monitor), Some(_)) = (self.monitor_path, updates.monitor(), &scored) {
+            state::save_monitor(path, monitor)?;
+        }
+        health.set_updates(updates.counters());
+        self.out.write(
+            "health",
+            outcome.time_ns,
+            &results::health_message(outcome.time_ns, &health),
+        )?;
+        if let Some(v) = self.viewer.as_deref_mut() {
+            v.log_update(&outcome)?;
+            v.log_health(outcome.time_ns, &health)?;
+        }
+        self.report(Some(&note));
+        self.summary.update_count += 1;
+        keep_latest(&mut self.summary.updates, outcome, self.keep);
         Ok(())
     }
 }

@@ -268,7 +268,6 @@ pub struct WelchEstimator {
     fft: Arc<dyn RealToComplex<f64>>,
     input_window: Vec<f64>,
     output_window: Vec<f64>,
-    scale: f64,
     /// Pending samples: channel 0 is the input.
     pending: Vec<Vec<f64>>,
     s_ff: Vec<f64>,
@@ -280,6 +279,10 @@ pub struct WelchEstimator {
     scratch_in: Vec<f64>,
     spectra: Vec<Vec<c64>>,
     fft_scratch: Vec<c64>,
+    /// Per bin: the density scale, doubled except at DC and (even `n`) Nyquist.
+    bin_scale: Vec<f64>,
+    /// Per channel: the pending segment's sum.
+    sums: Vec<f64>,
 }
 
 impl std::fmt::Debug for WelchEstimator {
@@ -304,11 +307,20 @@ impl WelchEstimator {
         let scale = 1.0 / (settings.fs * (sum_in * sum_out).sqrt());
         let bins = n / 2 + 1;
         let fft_scratch = fft.make_scratch_vec();
+        let bin_scale = (0..bins)
+            .map(|k| {
+                let one_sided = if k == 0 || (n % 2 == 0 && k == bins - 1) {
+                    1.0
+                } else {
+                    2.0
+                };
+                scale * one_sided
+            })
+            .collect();
         Ok(Self {
             fft,
             input_window,
             output_window,
-            scale,
             pending: vec![Vec::with_capacity(2 * n); outputs + 1],
             s_ff: vec![0.0; bins],
             s_fx: vec![vec![c64::new(0.0, 0.0); bins]; outputs],
@@ -319,6 +331,8 @@ impl WelchEstimator {
             scratch_in: vec![0.0; n],
             spectra: vec![vec![c64::new(0.0, 0.0); bins]; outputs + 1],
             fft_scratch,
+            bin_scale,
+            sums: Vec::with_capacity(outputs + 1),
             settings,
         })
     }
@@ -373,8 +387,11 @@ impl WelchEstimator {
         Ok(())
     }
 
-    fn gate(&self) -> Option<fn(&mut SegmentCounts)> {
-        if self.pending.iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+    /// Why the pending segment is rejected, if it is. `sums` are the
+    /// channels' sample sums: a sum is finite exactly when no sample is
+    /// NaN or infinite, or the exact check runs (a finite sum overflowing).
+    fn gate(&self, sums: &[f64]) -> Option<fn(&mut SegmentCounts)> {
+        if sums.iter().any(|s| !s.is_finite()) && self.pending.iter().any(|c| c.iter().any(|v| !v.is_finite())) {
             return Some(|c| c.non_finite += 1);
         }
         if let Some(fs) = self.settings.gates.full_scale {
@@ -403,39 +420,31 @@ impl WelchEstimator {
     }
 
     fn process_segment(&mut self) {
-        if let Some(count) = self.gate() {
+        let n = self.settings.segment;
+        channel_sums(&self.pending, &mut self.sums);
+        if let Some(count) = self.gate(&self.sums) {
             count(&mut self.counts);
             return;
         }
         self.counts.accepted += 1;
-        let n = self.settings.segment;
         for c in 0..self.pending.len() {
             let window = if c == 0 {
                 &self.input_window
             } else {
                 &self.output_window
             };
-            let data = &self.pending[c];
             let mean = match self.settings.detrend {
                 Detrend::None => 0.0,
-                Detrend::Constant => data.iter().sum::<f64>() / n as f64,
+                Detrend::Constant => self.sums[c] / n as f64,
             };
-            for k in 0..n {
-                self.scratch_in[k] = (data[k] - mean) * window[k];
+            for ((out, &x), &w) in self.scratch_in.iter_mut().zip(&self.pending[c]).zip(window) {
+                *out = (x - mean) * w;
             }
             self.fft
                 .process_with_scratch(&mut self.scratch_in, &mut self.spectra[c], &mut self.fft_scratch)
                 .expect("buffers sized by the plan");
         }
         // One-sided density of this segment, then the running average.
-        let bins = n / 2 + 1;
-        let doubled = |k: usize| {
-            if k == 0 || (n % 2 == 0 && k == bins - 1) {
-                1.0
-            } else {
-                2.0
-            }
-        };
         let w = match self.settings.averaging {
             Averaging::Linear => {
                 self.weight_sum += 1.0;
@@ -448,18 +457,19 @@ impl WelchEstimator {
                 1.0 / self.weight_sum
             }
         };
+        // Channel by channel (each bin's arithmetic as in one pass over the
+        // bins): contiguous, and the same bits.
         let f = &self.spectra[0];
-        for k in 0..bins {
-            let s = self.scale * doubled(k);
-            let pff = f[k].norm_sqr() * s;
-            self.s_ff[k] += (pff - self.s_ff[k]) * w;
-            for o in 0..self.s_fx.len() {
-                let x = self.spectra[o + 1][k];
-                let pfx = f[k].conj() * x * s;
-                let pxx = x.norm_sqr() * s;
-                let (old_fx, old_xx) = (self.s_fx[o][k], self.s_xx[o][k]);
-                self.s_fx[o][k] = old_fx + (pfx - old_fx) * w;
-                self.s_xx[o][k] = old_xx + (pxx - old_xx) * w;
+        for ((s_ff, fk), &s) in self.s_ff.iter_mut().zip(f).zip(&self.bin_scale) {
+            let pff = fk.norm_sqr() * s;
+            *s_ff += (pff - *s_ff) * w;
+        }
+        for ((s_fx, s_xx), x) in self.s_fx.iter_mut().zip(&mut self.s_xx).zip(&self.spectra[1..]) {
+            for ((((fx, xx), fk), xk), &s) in s_fx.iter_mut().zip(s_xx.iter_mut()).zip(f).zip(x).zip(&self.bin_scale) {
+                let pfx = fk.conj() * xk * s;
+                let pxx = xk.norm_sqr() * s;
+                *fx = *fx + (pfx - *fx) * w;
+                *xx += (pxx - *xx) * w;
             }
         }
     }
@@ -477,6 +487,28 @@ impl WelchEstimator {
                 0.0
             },
         }
+    }
+}
+
+/// The sum of every channel's samples, each in index order from `-0.0`
+/// exactly as `Iterator::sum` adds them (so the means keep their bits),
+/// eight channels at a time so that the additions of different channels
+/// overlap instead of waiting on each other.
+fn channel_sums(channels: &[Vec<f64>], sums: &mut Vec<f64>) {
+    const LANES: usize = 8;
+    sums.clear();
+    let len = channels.first().map_or(0, Vec::len);
+    for group in channels.chunks(LANES) {
+        // A short last group repeats its first channel in the spare lanes
+        // (their sums are dropped): the loop keeps eight fixed lanes.
+        let lanes: [&[f64]; LANES] = std::array::from_fn(|l| &group[l.min(group.len() - 1)][..len]);
+        let mut acc = [-0.0f64; LANES];
+        for k in 0..len {
+            for l in 0..LANES {
+                acc[l] += lanes[l][k];
+            }
+        }
+        sums.extend_from_slice(&acc[..group.len()]);
     }
 }
 
@@ -536,6 +568,69 @@ mod tests {
         assert_eq!(one.counts().accepted, ((1000 - 32) / 32) as u64);
         assert_eq!(one.spectra(), many.spectra());
         assert!(many.pending_samples() < 64);
+    }
+
+    /// The streaming estimator (channel sums eight at a time, channel-major
+    /// averaging) gives exactly the bits of the textbook loop: per segment,
+    /// per channel `mean = Σx / n` (`Iterator::sum`), window, FFT; then per
+    /// bin the running averages. Ten channels, so one group of eight lanes
+    /// and one of two.
+    #[test]
+    fn streaming_estimator_is_bit_identical_to_the_plain_loop() {
+        let (n, overlap, outputs) = (64, 24, 9);
+        let len = 1000;
+        let channel = |c: usize| -> Vec<f64> {
+            (0..len)
+                .map(|k| ((k * (c + 3)) as f64 * 0.173).sin() * (1.0 + c as f64) + 0.3 * c as f64)
+                .collect()
+        };
+        let input = channel(0);
+        let outs: Vec<Vec<f64>> = (1..=outputs).map(channel).collect();
+        let mut s = settings(n, overlap, Window::Hann);
+        s.output_window = Window::Hamming;
+        let mut est = WelchEstimator::new(s.clone(), outputs).unwrap();
+        let refs: Vec<&[f64]> = outs.iter().map(Vec::as_slice).collect();
+        est.push(&input, &refs).unwrap();
+
+        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(n);
+        let (w_in, w_out) = (s.input_window.samples(n), s.output_window.samples(n));
+        let sum_sq = |w: &[f64]| w.iter().map(|v| v * v).sum::<f64>();
+        let scale = 1.0 / (s.fs * (sum_sq(&w_in) * sum_sq(&w_out)).sqrt());
+        let bins = n / 2 + 1;
+        let mut s_ff = vec![0.0; bins];
+        let mut s_fx = vec![vec![c64::new(0.0, 0.0); bins]; outputs];
+        let mut s_xx = vec![vec![0.0; bins]; outputs];
+        let mut count = 0.0;
+        let mut start = 0;
+        while start + n <= len {
+            let spectrum = |x: &[f64], w: &[f64]| {
+                let seg = &x[start..start + n];
+                let mean = seg.iter().sum::<f64>() / n as f64;
+                let mut buf: Vec<f64> = (0..n).map(|k| (seg[k] - mean) * w[k]).collect();
+                let mut out = fft.make_output_vec();
+                fft.process(&mut buf, &mut out).unwrap();
+                out
+            };
+            let f = spectrum(&input, &w_in);
+            let xs: Vec<Vec<c64>> = outs.iter().map(|x| spectrum(x, &w_out)).collect();
+            count += 1.0;
+            let w = 1.0 / count;
+            for k in 0..bins {
+                let s = scale * if k == 0 || k == bins - 1 { 1.0 } else { 2.0 };
+                s_ff[k] += (f[k].norm_sqr() * s - s_ff[k]) * w;
+                for o in 0..outputs {
+                    let pfx = f[k].conj() * xs[o][k] * s;
+                    s_fx[o][k] = s_fx[o][k] + (pfx - s_fx[o][k]) * w;
+                    s_xx[o][k] += (xs[o][k].norm_sqr() * s - s_xx[o][k]) * w;
+                }
+            }
+            start += n - overlap;
+        }
+        let spectra = est.spectra();
+        assert_eq!(est.counts().accepted, count as u64);
+        assert_eq!(spectra.s_ff, s_ff);
+        assert_eq!(spectra.s_fx, s_fx);
+        assert_eq!(spectra.s_xx, s_xx);
     }
 
     #[test]
