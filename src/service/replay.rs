@@ -11,7 +11,8 @@
 //! the stages in line (`ReplayOptions::pipelined = false`, the reference a
 //! test compares with). Output-only, a window's modes are paired with the
 //! model at the last update, so ingest and updates share one thread there
-//! (reading still runs ahead).
+//! (reading still runs ahead). With a Rerun output, a fourth thread logs
+//! to it, so the viewer never holds the updates up.
 //! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
 use super::{keep_latest, resume_monitor};
@@ -30,7 +31,7 @@ use anyhow::{Context, Result};
 use std::collections::VecDeque;
 use std::io::{Seek, Write};
 use std::path::Path;
-use std::sync::mpsc::{sync_channel, Receiver};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 
 /// MCAP messages handed from the reading stage to the ingest, per batch.
 const READ_BATCH: usize = 64;
@@ -38,6 +39,8 @@ const READ_BATCH: usize = 64;
 const READ_QUEUE: usize = 8;
 /// Ingest events in flight to the update stage.
 const EVENT_QUEUE: usize = 256;
+/// Windows and updates in flight to the Rerun stage.
+const VIEWER_QUEUE: usize = 64;
 
 /// Progress callback data.
 #[derive(Debug, Clone, Copy)]
@@ -132,45 +135,82 @@ pub fn replay_sources<W: Write + Seek>(
     let monitor_path = resume_monitor(config, state_path, &mut pipeline)?;
     let limits = crate::pipeline::block_limits(config);
     let total = recordings.iter().map(RecordingSource::message_count).sum();
-    let mut sink = Outputs {
-        out,
-        viewer,
-        state_path,
-        monitor_path: monitor_path.as_deref(),
-        progress,
-        total,
-        keep: keep_latest,
-        last_time: 0,
-        summary: ReplaySummary::default(),
-    };
     let messages = recordings.into_iter().flat_map(RecordingSource::messages);
+    std::thread::scope(|scope| {
+        let (viewer, logging) = match viewer {
+            Some(v) if pipelined => {
+                let (events, received) = sync_channel::<ViewerEvent>(VIEWER_QUEUE);
+                let logging = scope.spawn(move || -> Result<()> {
+                    for event in received {
+                        event.log_to(v)?;
+                    }
+                    Ok(())
+                });
+                (Viewer::Stage(events), Some(logging))
+            }
+            Some(v) => (Viewer::InLine(v), None),
+            None => (Viewer::Off, None),
+        };
+        let mut sink = Outputs {
+            out,
+            viewer,
+            state_path,
+            monitor_path: monitor_path.as_deref(),
+            progress,
+            total,
+            keep: keep_latest,
+            last_time: 0,
+            summary: ReplaySummary::default(),
+        };
+        let replayed = run_stages(scope, pipeline, limits, messages, pipelined, &mut sink);
+        sink.viewer = Viewer::Off; // the Rerun stage's queue ends
+        if let Some(logging) = logging {
+            // Its own error first: the update stage then only saw it stop.
+            logging
+                .join()
+                .map_err(|_| anyhow::anyhow!("the Rerun stage panicked"))?
+                .context("Rerun output")?;
+        }
+        replayed
+    })
+}
+
+/// The stages on `scope`'s threads (or in line), then the final health.
+fn run_stages<'scope, W: Write + Seek>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    mut pipeline: Pipeline,
+    limits: Limits,
+    messages: impl Iterator<Item = Message> + Send + 'scope,
+    pipelined: bool,
+    sink: &mut Outputs<'_, W>,
+) -> Result<ReplaySummary> {
     let split = if pipelined { pipeline.split_updater().ok() } else { None };
     let (end, counters, accepted) = match split {
-        None if !pipelined => in_line(pipeline, limits, messages, &mut sink),
-        None => std::thread::scope(|scope| {
-            let batches = read_on_a_thread(scope, messages);
-            in_line(pipeline, limits, batches.into_iter().flatten(), &mut sink)
-        }),
+        None if !pipelined => in_line(pipeline, limits, messages, sink),
+        None => in_line(
+            pipeline,
+            limits,
+            read_on_a_thread(scope, messages).into_iter().flatten(),
+            sink,
+        ),
         Some(mut updater) => {
-            let end = std::thread::scope(|scope| {
-                let batches = read_on_a_thread(scope, messages);
-                let (events, received) = sync_channel(EVENT_QUEUE);
-                let mut ingest = Ingest::new(pipeline, limits);
-                let ingesting = scope.spawn(move || {
-                    let mut send = |_: &mut Pipeline, event: Event| {
-                        events
-                            .send(event)
-                            .map_err(|_| anyhow::anyhow!("the update stage stopped"))
-                    };
-                    ingest.all(batches.into_iter().flatten(), &mut send)
-                });
-                for event in received {
-                    sink.event(event, &mut Updates::Split(&mut updater))?;
-                }
-                ingesting
-                    .join()
-                    .map_err(|_| anyhow::anyhow!("the ingest stage panicked"))?
+            let batches = read_on_a_thread(scope, messages);
+            let (events, received) = sync_channel(EVENT_QUEUE);
+            let mut ingest = Ingest::new(pipeline, limits);
+            let ingesting = scope.spawn(move || {
+                let mut send = |_: &mut Pipeline, event: Event| {
+                    events
+                        .send(event)
+                        .map_err(|_| anyhow::anyhow!("the update stage stopped"))
+                };
+                ingest.all(batches.into_iter().flatten(), &mut send)
             });
+            for event in received {
+                sink.event(event, &mut Updates::Split(&mut updater))?;
+            }
+            let end = ingesting
+                .join()
+                .map_err(|_| anyhow::anyhow!("the ingest stage panicked"))?;
             (end, updater.counters(), updater.accepted().cloned())
         }
     };
@@ -187,13 +227,51 @@ pub fn replay_sources<W: Write + Seek>(
         health.set_updates(counters);
         sink.out
             .write("health", last_time, &results::health_message(last_time, &health))?;
-        if let Some(v) = sink.viewer {
-            v.log_health(last_time, &health)?;
-        }
+        sink.viewer.log(|| ViewerEvent::Health(last_time, Box::new(health)))?;
     }
-    let mut summary = sink.summary;
+    let mut summary = std::mem::take(&mut sink.summary);
     summary.accepted = accepted;
     Ok(summary)
+}
+
+/// What the Rerun output is given, in order.
+enum ViewerEvent {
+    Window(Box<WindowReport>),
+    Monitoring(i128, Box<StatusMessage>),
+    Update(Box<UpdateOutcome>),
+    Health(i128, Box<Health>),
+}
+
+impl ViewerEvent {
+    fn log_to(self, viewer: &mut RerunOutput) -> Result<()> {
+        match self {
+            ViewerEvent::Window(w) => viewer.log_window(&w),
+            ViewerEvent::Monitoring(time, status) => viewer.log_monitoring(time, &status),
+            ViewerEvent::Update(outcome) => viewer.log_update(&outcome),
+            ViewerEvent::Health(time, health) => viewer.log_health(time, &health),
+        }
+    }
+}
+
+/// Where the Rerun output is: none, on the update stage's thread, or on a
+/// thread of its own (its queue).
+enum Viewer<'a> {
+    Off,
+    InLine(&'a mut RerunOutput),
+    Stage(SyncSender<ViewerEvent>),
+}
+
+impl Viewer<'_> {
+    /// Logs `event` (made only when there is a viewer).
+    fn log(&mut self, event: impl FnOnce() -> ViewerEvent) -> Result<()> {
+        match self {
+            Viewer::Off => Ok(()),
+            Viewer::InLine(v) => event().log_to(v),
+            Viewer::Stage(events) => events
+                .send(event())
+                .map_err(|_| anyhow::anyhow!("the Rerun stage stopped")),
+        }
+    }
 }
 
 type Message = McapMessage;
@@ -392,7 +470,7 @@ impl Updates<'_> {
 /// Where the replay's windows and updates go.
 struct Outputs<'a, W: Write + Seek> {
     out: &'a mut ResultsWriter<W>,
-    viewer: Option<&'a mut RerunOutput>,
+    viewer: Viewer<'a>,
     state_path: Option<&'a Path>,
     monitor_path: Option<&'a Path>,
     progress: &'a mut dyn FnMut(Progress, Option<&str>),
@@ -432,9 +510,7 @@ impl<W: Write + Seek> Outputs<'_, W> {
             for (suffix, m) in results::window_messages(&w) {
                 self.out.write(suffix, w.end_ns, &m)?;
             }
-            if let Some(v) = self.viewer.as_deref_mut() {
-                v.log_window(&w)?;
-            }
+            self.viewer.log(|| ViewerEvent::Window(Box::new(w.clone())))?;
             let note = match &w.skipped {
                 Some(reason) => format!("window {} skipped: {reason}", w.index),
                 None => match &w.modes {
@@ -467,9 +543,8 @@ impl<W: Write + Seek> Outputs<'_, W> {
             for (suffix, msg) in results::monitoring_messages(m) {
                 self.out.write(suffix, outcome.time_ns, &msg)?;
             }
-            if let Some(v) = self.viewer.as_deref_mut() {
-                v.log_monitoring(outcome.time_ns, &m.status)?;
-            }
+            self.viewer
+                .log(|| ViewerEvent::Monitoring(outcome.time_ns, Box::new(m.status.clone())))?;
             self.summary.monitoring.push(m.status.clone());
         }
         let note = match &outcome.result {
@@ -497,10 +572,9 @@ impl<W: Write + Seek> Outputs<'_, W> {
             outcome.time_ns,
             &results::health_message(outcome.time_ns, &health),
         )?;
-        if let Some(v) = self.viewer.as_deref_mut() {
-            v.log_update(&outcome)?;
-            v.log_health(outcome.time_ns, &health)?;
-        }
+        self.viewer.log(|| ViewerEvent::Update(Box::new(outcome.clone())))?;
+        self.viewer
+            .log(|| ViewerEvent::Health(outcome.time_ns, Box::new(health)))?;
         self.report(Some(&note));
         self.summary.update_count += 1;
         keep_latest(&mut self.summary.updates, outcome, self.keep);

@@ -277,7 +277,9 @@ pub struct WelchEstimator {
     weight_square_sum: f64,
     counts: SegmentCounts,
     scratch_in: Vec<f64>,
-    spectra: Vec<Vec<c64>>,
+    /// The input's spectrum of the segment being averaged, and one output's.
+    input_spectrum: Vec<c64>,
+    spectrum: Vec<c64>,
     fft_scratch: Vec<c64>,
     /// Per bin: the density scale, doubled except at DC and (even `n`) Nyquist.
     bin_scale: Vec<f64>,
@@ -329,7 +331,8 @@ impl WelchEstimator {
             weight_square_sum: 0.0,
             counts: SegmentCounts::default(),
             scratch_in: vec![0.0; n],
-            spectra: vec![vec![c64::new(0.0, 0.0); bins]; outputs + 1],
+            input_spectrum: vec![c64::new(0.0, 0.0); bins],
+            spectrum: vec![c64::new(0.0, 0.0); bins],
             fft_scratch,
             bin_scale,
             sums: Vec::with_capacity(outputs + 1),
@@ -420,31 +423,13 @@ impl WelchEstimator {
     }
 
     fn process_segment(&mut self) {
-        let n = self.settings.segment;
         channel_sums(&self.pending, &mut self.sums);
         if let Some(count) = self.gate(&self.sums) {
             count(&mut self.counts);
             return;
         }
         self.counts.accepted += 1;
-        for c in 0..self.pending.len() {
-            let window = if c == 0 {
-                &self.input_window
-            } else {
-                &self.output_window
-            };
-            let mean = match self.settings.detrend {
-                Detrend::None => 0.0,
-                Detrend::Constant => self.sums[c] / n as f64,
-            };
-            for ((out, &x), &w) in self.scratch_in.iter_mut().zip(&self.pending[c]).zip(window) {
-                *out = (x - mean) * w;
-            }
-            self.fft
-                .process_with_scratch(&mut self.scratch_in, &mut self.spectra[c], &mut self.fft_scratch)
-                .expect("buffers sized by the plan");
-        }
-        // One-sided density of this segment, then the running average.
+        // The running-average weight of this segment.
         let w = match self.settings.averaging {
             Averaging::Linear => {
                 self.weight_sum += 1.0;
@@ -457,14 +442,18 @@ impl WelchEstimator {
                 1.0 / self.weight_sum
             }
         };
-        // Channel by channel (each bin's arithmetic as in one pass over the
-        // bins): contiguous, and the same bits.
-        let f = &self.spectra[0];
-        for ((s_ff, fk), &s) in self.s_ff.iter_mut().zip(f).zip(&self.bin_scale) {
+        // One channel at a time: its spectrum, then its one-sided densities
+        // into the running averages while the spectrum is still in cache
+        // (each bin's arithmetic as in one pass over the bins: the same bits).
+        self.transform(0);
+        for ((s_ff, fk), &s) in self.s_ff.iter_mut().zip(&self.input_spectrum).zip(&self.bin_scale) {
             let pff = fk.norm_sqr() * s;
             *s_ff += (pff - *s_ff) * w;
         }
-        for ((s_fx, s_xx), x) in self.s_fx.iter_mut().zip(&mut self.s_xx).zip(&self.spectra[1..]) {
+        for o in 0..self.s_fx.len() {
+            self.transform(o + 1);
+            let (f, x) = (&self.input_spectrum, &self.spectrum);
+            let (s_fx, s_xx) = (&mut self.s_fx[o], &mut self.s_xx[o]);
             for ((((fx, xx), fk), xk), &s) in s_fx.iter_mut().zip(s_xx.iter_mut()).zip(f).zip(x).zip(&self.bin_scale) {
                 let pfx = fk.conj() * xk * s;
                 let pxx = xk.norm_sqr() * s;
@@ -472,6 +461,26 @@ impl WelchEstimator {
                 *xx += (pxx - *xx) * w;
             }
         }
+    }
+
+    /// The spectrum of pending channel `c` (mean removed, windowed): into
+    /// `input_spectrum` for the input (`c = 0`), `spectrum` otherwise.
+    fn transform(&mut self, c: usize) {
+        let (window, spectrum) = if c == 0 {
+            (&self.input_window, &mut self.input_spectrum)
+        } else {
+            (&self.output_window, &mut self.spectrum)
+        };
+        let mean = match self.settings.detrend {
+            Detrend::None => 0.0,
+            Detrend::Constant => self.sums[c] / self.settings.segment as f64,
+        };
+        for ((out, &x), &w) in self.scratch_in.iter_mut().zip(&self.pending[c]).zip(window) {
+            *out = (x - mean) * w;
+        }
+        self.fft
+            .process_with_scratch(&mut self.scratch_in, spectrum, &mut self.fft_scratch)
+            .expect("buffers sized by the plan");
     }
 
     /// The averaged spectra so far.

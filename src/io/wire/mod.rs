@@ -444,7 +444,13 @@ fn block(
     if data.is_empty() {
         return Err(WireError::Empty { index });
     }
-    if let Some(sample) = data.iter().position(|v| !v.is_finite()) {
+    // All finite, checked 64 samples at a time without a branch per sample
+    // (vectorised); the position only when one is not.
+    if !data
+        .chunks(64)
+        .all(|c| c.iter().fold(true, |all, v| all & v.is_finite()))
+    {
+        let sample = data.iter().position(|v| !v.is_finite()).expect("one is not finite");
         return Err(WireError::NonFinite { index, sample });
     }
     Ok(ChannelBlock {
@@ -528,15 +534,22 @@ fn typed_samples(index: usize, tag: u64, bytes: &[u8], limits: &Limits) -> Resul
             limit: limits.max_samples,
         });
     }
-    Ok(bytes
-        .chunks_exact(width)
-        .map(|c| match tag {
-            81 => f32::from_be_bytes([c[0], c[1], c[2], c[3]]) as f64,
-            85 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f64,
-            82 => f64::from_be_bytes(c.try_into().expect("8 bytes")),
-            _ => f64::from_le_bytes(c.try_into().expect("8 bytes")),
-        })
-        .collect())
+    // One loop per format (no branch per sample: a little-endian float64
+    // array is a plain copy).
+    Ok(match tag {
+        81 => floats(bytes, |b: [u8; 4]| f32::from_be_bytes(b).into()),
+        85 => floats(bytes, |b: [u8; 4]| f32::from_le_bytes(b).into()),
+        82 => floats(bytes, f64::from_be_bytes),
+        _ => floats(bytes, f64::from_le_bytes),
+    })
+}
+
+/// The floats of `W`-byte words.
+fn floats<const W: usize>(bytes: &[u8], convert: impl Fn([u8; W]) -> f64) -> Vec<f64> {
+    bytes
+        .chunks_exact(W)
+        .map(|c| convert(c.try_into().expect("chunks of W bytes")))
+        .collect()
 }
 
 #[cfg(test)]
