@@ -5,7 +5,9 @@ use crate::io::frf_json::FrfFile;
 use crate::io::wire::format_timestamp;
 use crate::pipeline::{Fit, Health, Measured, MonitoringOutcome, UpdateOutcome, WindowModes, WindowReport};
 use anyhow::{Context, Result};
+use serde::Serialize;
 use serde_json::{json, Value};
+use splinewatch_core::frf::Quantity;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
@@ -116,19 +118,73 @@ fn oma_modes_message(w: &WindowReport, modes: &WindowModes) -> Value {
     v
 }
 
-fn frf_message(time: &str, window: u64, frf: &FrfFile) -> Value {
-    let mut v = serde_json::to_value(frf).expect("plain data");
-    v["time"] = json!(time);
-    v["window"] = json!(window);
-    v
+/// A result message: a JSON value, or a typed one for the large FRF
+/// messages (serialised straight from the FRFs, no value tree); both give
+/// the same bytes.
+#[derive(Debug, Serialize)]
+#[serde(untagged)]
+pub enum ResultMessage<'a> {
+    Json(Value),
+    Frf(FrfMessage<'a>),
 }
 
-/// The messages of an update outcome, as `(topic suffix, message)`.
-pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
-    let time = format_timestamp(o.time_ns);
+/// `frf/measured` and `frf/model`: the FRF file with the update's time and
+/// window. Fields in key order, as a JSON object value writes them.
+#[derive(Debug, Serialize)]
+pub struct FrfMessage<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    end_timestamp: Option<&'a str>,
+    frequency_hz: &'a [f64],
+    frfs: Vec<FrfMessageEntry<'a>>,
+    quantity: Quantity,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    start_timestamp: Option<&'a str>,
+    time: &'a str,
+    window: u64,
+}
+
+/// One FRF of [`FrfMessage`], fields in key order.
+#[derive(Debug, Serialize)]
+struct FrfMessageEntry<'a> {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    coherence: Option<&'a [f64]>,
+    im: &'a [f64],
+    input: &'a str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    n_averages: Option<f64>,
+    output: &'a str,
+    re: &'a [f64],
+}
+
+fn frf_message<'a>(time: &'a str, window: u64, frf: &'a FrfFile) -> ResultMessage<'a> {
+    ResultMessage::Frf(FrfMessage {
+        end_timestamp: frf.end_timestamp.as_deref(),
+        frequency_hz: &frf.frequency_hz,
+        frfs: frf
+            .frfs
+            .iter()
+            .map(|e| FrfMessageEntry {
+                coherence: e.coherence.as_deref(),
+                im: &e.im,
+                input: &e.input,
+                n_averages: e.n_averages,
+                output: &e.output,
+                re: &e.re,
+            })
+            .collect(),
+        quantity: frf.quantity,
+        start_timestamp: frf.start_timestamp.as_deref(),
+        time,
+        window,
+    })
+}
+
+/// The messages of an update outcome, as `(topic suffix, message)`;
+/// `time` is the outcome's time, formatted (`format_timestamp`).
+pub fn update_messages<'a>(o: &'a UpdateOutcome, time: &'a str) -> Vec<(&'static str, ResultMessage<'a>)> {
     let mut out = Vec::new();
     if let Measured::Frf(frf) = &o.measured {
-        out.push(("frf/measured", frf_message(&time, o.window, frf)));
+        out.push(("frf/measured", frf_message(time, o.window, frf)));
     }
     match &o.result {
         Ok(r) => {
@@ -147,25 +203,25 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
             if let Some(truncation) = &r.truncation {
                 parameters["truncation"] = json!(truncation);
             }
-            out.push(("updating/parameters", parameters));
+            out.push(("updating/parameters", ResultMessage::Json(parameters)));
             match &r.fit {
                 Fit::Frf { model, residue } => {
                     out.push((
                         "updating/residue",
-                        json!({
+                        ResultMessage::Json(json!({
                             "time": time,
                             "window": o.window,
                             "frequency_hz": model.frequency_hz,
                             "frfs": model.frfs.iter().zip(residue).map(|(f, res)| json!({
                                 "input": f.input, "output": f.output, "relative_residue": res
                             })).collect::<Vec<_>>(),
-                        }),
+                        })),
                     ));
-                    out.push(("frf/model", frf_message(&time, o.window, model)));
+                    out.push(("frf/model", frf_message(time, o.window, model)));
                 }
                 Fit::Modes(pairs) => out.push((
                     "updating/residue",
-                    json!({
+                    ResultMessage::Json(json!({
                         "time": time,
                         "window": o.window,
                         "modes": pairs.iter().map(|p| json!({
@@ -179,23 +235,23 @@ pub fn update_messages(o: &UpdateOutcome) -> Vec<(&'static str, Value)> {
                             "model_damping": p.model_damping,
                             "mac": p.mac,
                         })).collect::<Vec<_>>(),
-                    }),
+                    })),
                 )),
             }
             out.push((
                 "modes",
-                json!({
+                ResultMessage::Json(json!({
                     "time": time,
                     "window": o.window,
                     "modes": r.modes.iter().enumerate().map(|(i, (f, z, k))| json!({
                         "index": i + 1, "frequency_hz": f, "damping_ratio": z, "kind": k
                     })).collect::<Vec<_>>(),
-                }),
+                })),
             ));
         }
         Err(e) => out.push((
             "updating/failures",
-            json!({"time": time, "window": o.window, "error": e}),
+            ResultMessage::Json(json!({"time": time, "window": o.window, "error": e})),
         )),
     }
     out
@@ -246,7 +302,7 @@ impl<W: Write + Seek> ResultsWriter<W> {
     }
 
     /// Writes `message` on `<prefix>/<suffix>` at `time_ns`.
-    pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) -> Result<()> {
+    pub fn write<M: Serialize + ?Sized>(&mut self, suffix: &str, time_ns: i128, message: &M) -> Result<()> {
         if !self.channels.contains_key(suffix) {
             if let Some((name, schema)) = MONITORING_TOPICS.iter().find(|(n, _)| *n == suffix) {
                 let topic = format!("{}/{name}", self.prefix);
@@ -386,7 +442,7 @@ impl<W: Write + Seek> ResultsSink<W> {
         self.writer.as_mut()
     }
 
-    pub fn write(&mut self, suffix: &str, time_ns: i128, message: &Value) {
+    pub fn write<M: Serialize + ?Sized>(&mut self, suffix: &str, time_ns: i128, message: &M) {
         self.rotate_if_due(time_ns);
         if let Some(w) = self.writer() {
             if let Err(e) = w.write(suffix, time_ns, message) {
@@ -433,4 +489,51 @@ pub fn results_files(path: &Path) -> Box<dyn FnMut(u32) -> Result<BufWriter<File
 /// Creates `path` (and its folder) for buffered writing.
 fn create_buffered(path: &Path) -> Result<BufWriter<File>> {
     Ok(BufWriter::new(crate::io::files::create_output_file(path)?))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::frf_json::FrfEntry;
+
+    /// The typed FRF message writes exactly the bytes of the JSON value it
+    /// replaced (the FRF file's value with `time` and `window` added: keys
+    /// sorted), with and without the optional fields.
+    #[test]
+    fn the_typed_frf_message_writes_the_bytes_of_the_value_tree() {
+        let entry = |coherence: Option<Vec<f64>>, n_averages| FrfEntry {
+            input: "P1".into(),
+            output: "P7".into(),
+            re: vec![1.5, -2.25e-7, f64::NAN],
+            im: vec![0.0, 3.0e12, -0.1],
+            coherence,
+            n_averages,
+        };
+        let files = [
+            FrfFile {
+                quantity: Quantity::Accelerance,
+                frequency_hz: vec![0.25, 0.5, 80.0],
+                frfs: vec![entry(Some(vec![0.9, 1.0, 0.5]), Some(12.0)), entry(None, None)],
+                start_timestamp: Some("2026-11-23T10:00:00Z".into()),
+                end_timestamp: Some("2026-11-23T10:10:00Z".into()),
+            },
+            FrfFile {
+                quantity: Quantity::Receptance,
+                frequency_hz: vec![1.0],
+                frfs: vec![entry(None, Some(3.0))],
+                start_timestamp: None,
+                end_timestamp: None,
+            },
+        ];
+        for frf in &files {
+            let mut tree = serde_json::to_value(frf).unwrap();
+            tree["time"] = json!("2026-11-23T10:10:00Z");
+            tree["window"] = json!(7);
+            let typed = frf_message("2026-11-23T10:10:00Z", 7, frf);
+            assert_eq!(
+                String::from_utf8(serde_json::to_vec(&typed).unwrap()).unwrap(),
+                String::from_utf8(serde_json::to_vec(&tree).unwrap()).unwrap()
+            );
+        }
+    }
 }

@@ -536,7 +536,8 @@ impl<W: Write + Seek> Outputs<'_, W> {
         updates.rebase(&mut job);
         let mut outcome = job.run();
         let scored = updates.apply(&mut outcome);
-        for (suffix, msg) in results::update_messages(&outcome) {
+        let time = crate::io::wire::format_timestamp(outcome.time_ns);
+        for (suffix, msg) in results::update_messages(&outcome, &time) {
             self.out.write(suffix, outcome.time_ns, &msg)?;
         }
         if let Some(m) = &scored {

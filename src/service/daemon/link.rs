@@ -131,7 +131,7 @@ impl ZenohLink {
     }
 
     /// Publishes a result message (JSON) under its key; a failure is logged.
-    pub(super) fn publish(&self, suffix: &str, v: &serde_json::Value) {
+    pub(super) fn publish<M: serde::Serialize + ?Sized>(&self, suffix: &str, v: &M) {
         let key = zenoh_result_key(&self.prefix, suffix);
         if let Err(e) = self
             .session

@@ -288,7 +288,8 @@ impl Daemon {
     fn handle_outcome(&mut self, outcome: &mut UpdateOutcome, link: &ZenohLink) -> Result<()> {
         let scored = self.pipeline.apply(outcome);
         let outcome = &*outcome;
-        for (suffix, msg) in results::update_messages(outcome) {
+        let time = wire::format_timestamp(outcome.time_ns);
+        for (suffix, msg) in results::update_messages(outcome, &time) {
             self.results.write(suffix, outcome.time_ns, &msg);
             link.publish(suffix, &msg);
             if suffix == "updating/parameters" {
