@@ -303,6 +303,11 @@ impl<W: Write + Seek> ResultsWriter<W> {
 
     /// Writes `message` on `<prefix>/<suffix>` at `time_ns`.
     pub fn write<M: Serialize + ?Sized>(&mut self, suffix: &str, time_ns: i128, message: &M) -> Result<()> {
+        self.write_json(suffix, time_ns, &serde_json::to_vec(message)?)
+    }
+
+    /// Writes a message already serialised to JSON.
+    pub fn write_json(&mut self, suffix: &str, time_ns: i128, json: &[u8]) -> Result<()> {
         if !self.channels.contains_key(suffix) {
             if let Some((name, schema)) = MONITORING_TOPICS.iter().find(|(n, _)| *n == suffix) {
                 let topic = format!("{}/{name}", self.prefix);
@@ -326,7 +331,7 @@ impl<W: Write + Seek> ResultsWriter<W> {
                 log_time,
                 publish_time: log_time,
             },
-            &serde_json::to_vec(message)?,
+            json,
         )?;
         Ok(())
     }
@@ -443,9 +448,17 @@ impl<W: Write + Seek> ResultsSink<W> {
     }
 
     pub fn write<M: Serialize + ?Sized>(&mut self, suffix: &str, time_ns: i128, message: &M) {
+        match serde_json::to_vec(message) {
+            Ok(json) => self.write_json(suffix, time_ns, &json),
+            Err(e) => self.fail("write", e.into()),
+        }
+    }
+
+    /// Writes a message already serialised to JSON.
+    pub fn write_json(&mut self, suffix: &str, time_ns: i128, json: &[u8]) {
         self.rotate_if_due(time_ns);
         if let Some(w) = self.writer() {
-            if let Err(e) = w.write(suffix, time_ns, message) {
+            if let Err(e) = w.write_json(suffix, time_ns, json) {
                 self.fail("write", e);
             }
         }

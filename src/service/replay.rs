@@ -37,8 +37,9 @@ use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 const READ_BATCH: usize = 64;
 /// Batches of read messages in flight (bounded memory: a few MB).
 const READ_QUEUE: usize = 8;
-/// Ingest events in flight to the update stage.
-const EVENT_QUEUE: usize = 256;
+/// Ingest events in flight to the update stage: the ingest runs at most
+/// this far ahead (a window's event holds its FRFs, about 0.25 MB).
+const EVENT_QUEUE: usize = 32;
 /// Windows and updates in flight to the Rerun stage.
 const VIEWER_QUEUE: usize = 64;
 

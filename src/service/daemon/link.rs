@@ -132,10 +132,15 @@ impl ZenohLink {
 
     /// Publishes a result message (JSON) under its key; a failure is logged.
     pub(super) fn publish<M: serde::Serialize + ?Sized>(&self, suffix: &str, v: &M) {
+        self.publish_json(suffix, serde_json::to_vec(v).unwrap_or_default());
+    }
+
+    /// Publishes a message already serialised to JSON.
+    pub(super) fn publish_json(&self, suffix: &str, json: Vec<u8>) {
         let key = zenoh_result_key(&self.prefix, suffix);
         if let Err(e) = self
             .session
-            .put(&key, serde_json::to_vec(v).unwrap_or_default())
+            .put(&key, json)
             .encoding(zenoh::bytes::Encoding::APPLICATION_JSON)
             .wait()
         {

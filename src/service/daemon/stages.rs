@@ -256,11 +256,25 @@ impl Daemon {
         health.log_writes_dropped = console::log_writes_dropped();
     }
 
+    /// Writes a result message to the results file and publishes it,
+    /// serialised once; returns the JSON (for a `latest` reply).
+    fn send(
+        &mut self,
+        link: &ZenohLink,
+        suffix: &'static str,
+        time_ns: i128,
+        message: &impl serde::Serialize,
+    ) -> Vec<u8> {
+        let json = serde_json::to_vec(message).expect("result messages are plain data");
+        self.results.write_json(suffix, time_ns, &json);
+        link.publish_json(suffix, json.clone());
+        json
+    }
+
     /// Writes, publishes, counts and logs a closed window.
     fn report_window(&mut self, w: &WindowReport, link: &ZenohLink) {
         for (suffix, m) in results::window_messages(w) {
-            self.results.write(suffix, w.end_ns, &m);
-            link.publish(suffix, &m);
+            self.send(link, suffix, w.end_ns, &m);
         }
         if let Some(v) = self.viewer.as_mut() {
             count_output_error(
@@ -290,10 +304,9 @@ impl Daemon {
         let outcome = &*outcome;
         let time = wire::format_timestamp(outcome.time_ns);
         for (suffix, msg) in results::update_messages(outcome, &time) {
-            self.results.write(suffix, outcome.time_ns, &msg);
-            link.publish(suffix, &msg);
+            let json = self.send(link, suffix, outcome.time_ns, &msg);
             if suffix == "updating/parameters" {
-                link.set_latest(Latest::Updating, serde_json::to_vec(&msg)?);
+                link.set_latest(Latest::Updating, json);
             }
         }
         if let Some(m) = &scored {
@@ -344,10 +357,9 @@ impl Daemon {
     /// `monitoring/latest` reply, the log, Rerun) and saves the monitor.
     fn report_monitoring(&mut self, m: &MonitoringOutcome, time_ns: i128, link: &ZenohLink) -> Result<()> {
         for (suffix, msg) in results::monitoring_messages(m) {
-            self.results.write(suffix, time_ns, &msg);
-            link.publish(suffix, &msg);
+            let json = self.send(link, suffix, time_ns, &msg);
             if suffix == "monitoring/status" {
-                link.set_latest(Latest::Monitoring, serde_json::to_vec(&msg)?);
+                link.set_latest(Latest::Monitoring, json);
             }
         }
         match &m.alarm {
