@@ -166,13 +166,18 @@ pub fn mcap_messages(
     bytes: &[u8],
     salvage: bool,
 ) -> Result<impl Iterator<Item = mcap::McapResult<mcap::Message<'static>>> + '_> {
-    if !bytes.starts_with(mcap::MAGIC) {
-        anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
-    }
+    check_magic(bytes)?;
     Ok(mcap::io::MessageReader::new_with_options(
         bytes,
         reader_options(salvage),
     ))
+}
+
+fn check_magic(bytes: &[u8]) -> Result<()> {
+    if !bytes.starts_with(mcap::MAGIC) {
+        anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
+    }
+    Ok(())
 }
 
 fn reader_options(salvage: bool) -> mcap::sans_io::LinearReaderOptions {
@@ -195,9 +200,7 @@ pub struct RecordingSource<'a> {
 
 impl<'a> RecordingSource<'a> {
     pub fn from_bytes(bytes: &'a [u8]) -> Result<Self> {
-        if !bytes.starts_with(mcap::MAGIC) {
-            anyhow::bail!("not an MCAP file (no MCAP magic at the start)");
-        }
+        check_magic(bytes)?;
         let message_count = mcap::Summary::read(bytes)
             .ok()
             .flatten()
@@ -224,11 +227,12 @@ impl RecordingSource<'static> {
     /// Opens a recording file: refused, naming it, when it is not MCAP.
     pub fn open(path: &Path) -> Result<Self> {
         let mut file = File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let mut magic = [0u8; 8];
-        let head = file
-            .read(&mut magic)
-            .with_context(|| format!("cannot read {}", path.display()))?;
-        if !magic[..head].starts_with(mcap::MAGIC) || head < mcap::MAGIC.len() {
+        let mut magic = [0u8; mcap::MAGIC.len()];
+        let head = match file.read_exact(&mut magic) {
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => None, // shorter than the magic
+            read => Some(read.with_context(|| format!("cannot read {}", path.display()))?),
+        };
+        if head.is_none() || magic != *mcap::MAGIC {
             anyhow::bail!(
                 "{} is not an MCAP file (it does not start with the MCAP magic)",
                 path.display()

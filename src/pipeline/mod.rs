@@ -214,15 +214,15 @@ impl Pipeline {
     /// than the ingest: the caller rebases each job on it, runs it and
     /// applies the outcome to it, in order, and stamps health messages with
     /// [`Health::set_updates`]. Jobs from this pipeline then start from its
-    /// initial parameters until rebased. Refused output-only, where a
+    /// initial parameters until rebased. `None` output-only, where a
     /// window's identified modes are paired with the model at the last
     /// update, so ingest cannot run ahead of the updates.
-    pub fn split_updater(&mut self) -> Result<Updater> {
+    pub fn split_updater(&mut self) -> Option<Updater> {
         if self.identification.is_some() {
-            bail!("output-only windows are paired with the model at the last update: updates run in line");
+            return None;
         }
         self.split = true;
-        Ok(self.updater.clone())
+        Some(self.updater.clone())
     }
 
     /// Measurement time up to which every channel's samples have been

@@ -181,11 +181,11 @@ fn run_stages<'scope, W: Write + Seek>(
     scope: &'scope std::thread::Scope<'scope, '_>,
     mut pipeline: Pipeline,
     limits: Limits,
-    messages: impl Iterator<Item = Message> + Send + 'scope,
+    messages: impl Iterator<Item = McapMessage> + Send + 'scope,
     pipelined: bool,
     sink: &mut Outputs<'_, W>,
 ) -> Result<ReplaySummary> {
-    let split = if pipelined { pipeline.split_updater().ok() } else { None };
+    let split = if pipelined { pipeline.split_updater() } else { None };
     let (end, counters, accepted) = match split {
         None if !pipelined => in_line(pipeline, limits, messages, sink),
         None => in_line(
@@ -275,12 +275,10 @@ impl Viewer<'_> {
     }
 }
 
-type Message = McapMessage;
-
 /// The reading stage: `messages` read on a thread of its own, in batches.
-fn read_on_a_thread<'scope, I>(scope: &'scope std::thread::Scope<'scope, '_>, messages: I) -> Receiver<Vec<Message>>
+fn read_on_a_thread<'scope, I>(scope: &'scope std::thread::Scope<'scope, '_>, messages: I) -> Receiver<Vec<McapMessage>>
 where
-    I: Iterator<Item = Message> + Send + 'scope,
+    I: Iterator<Item = McapMessage> + Send + 'scope,
 {
     let (batches, received) = sync_channel(READ_QUEUE);
     scope.spawn(move || {
@@ -390,7 +388,7 @@ impl Ingest {
     /// the stream's reference, a very short recording, are decided on).
     fn all(
         &mut self,
-        messages: impl Iterator<Item = Message>,
+        messages: impl Iterator<Item = McapMessage>,
         emit: &mut dyn FnMut(&mut Pipeline, Event) -> Result<()>,
     ) -> Result<End> {
         for message in messages {
@@ -413,7 +411,7 @@ impl Ingest {
 fn in_line<W: Write + Seek>(
     pipeline: Pipeline,
     limits: Limits,
-    messages: impl Iterator<Item = Message>,
+    messages: impl Iterator<Item = McapMessage>,
     sink: &mut Outputs<'_, W>,
 ) -> (Result<End>, UpdateCounters, Option<AcceptedParameters>) {
     let mut ingest = Ingest::new(pipeline, limits);

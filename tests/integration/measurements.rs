@@ -1,14 +1,14 @@
 //! Measurements end to end: MCAP written by another tool, round trips,
 //! deterministic simulation, and simulate → Welch → update.
 
+use crate::common::simulated_recording;
 use splinewatch::config::load_config;
 use splinewatch::config::Config;
-use splinewatch::io::recording::{read_recording, RecordedBlock, RecordingWriter};
+use splinewatch::io::recording::{read_recording, RecordedBlock};
 use splinewatch::io::wire::{parse_timestamp, ChannelQuantity, Encoding, Limits};
 use splinewatch::pipeline::estimate::estimate;
 use splinewatch::studies;
-use splinewatch::studies::simulation::{parse_scenario, simulate, SimulationOptions};
-use std::io::Cursor;
+use splinewatch::studies::simulation::{parse_scenario, SimulationOptions};
 use std::path::Path;
 
 fn config() -> Config {
@@ -17,14 +17,6 @@ fn config() -> Config {
 
 fn options(seconds: f64, seed: u64) -> SimulationOptions {
     SimulationOptions::random_excitation(&config(), seconds, seed)
-}
-
-/// Simulates into an in-memory MCAP file.
-fn record(cfg: &Config, opts: &SimulationOptions, encoding: Encoding) -> Vec<u8> {
-    let mut writer = RecordingWriter::new(Cursor::new(Vec::new()), encoding).unwrap();
-    let prefix = cfg.topic_prefix();
-    simulate(cfg, opts, &mut |b| writer.write_block(&prefix, &b).map(|_| ())).unwrap();
-    writer.finish().unwrap().into_inner()
 }
 
 #[test]
@@ -57,8 +49,8 @@ fn reads_a_recording_written_by_the_python_mcap_package() {
 fn recordings_round_trip_in_both_encodings_and_are_deterministic() {
     let cfg = config();
     for encoding in [Encoding::Cbor, Encoding::Json] {
-        let bytes = record(&cfg, &options(6.0, 7), encoding);
-        let again = record(&cfg, &options(6.0, 7), encoding);
+        let bytes = simulated_recording(&cfg, &options(6.0, 7), encoding);
+        let again = simulated_recording(&cfg, &options(6.0, 7), encoding);
         assert_eq!(bytes, again, "same seed, same bytes");
         let (blocks, rejected) = read_recording(&bytes, &Limits::default()).unwrap();
         assert!(rejected.is_empty());
@@ -72,11 +64,11 @@ fn recordings_round_trip_in_both_encodings_and_are_deterministic() {
         assert!(p5
             .windows(2)
             .all(|w| w[1].block.start_ns - w[0].block.start_ns == 1_000_000_000));
-        let other = record(&cfg, &options(6.0, 8), encoding);
+        let other = simulated_recording(&cfg, &options(6.0, 8), encoding);
         assert_ne!(bytes, other, "another seed, other data");
     }
     // The summary section is present: the file is finalised.
-    let bytes = record(&cfg, &options(2.0, 1), Encoding::Cbor);
+    let bytes = simulated_recording(&cfg, &options(2.0, 1), Encoding::Cbor);
     let summary = mcap::Summary::read(&bytes).unwrap().expect("summary");
     assert_eq!(summary.channels.len(), 13);
 }
@@ -84,7 +76,7 @@ fn recordings_round_trip_in_both_encodings_and_are_deterministic() {
 #[test]
 fn simulate_estimate_and_update_recover_the_springs() {
     let cfg = config();
-    let bytes = record(&cfg, &options(300.0, 3), Encoding::Cbor);
+    let bytes = simulated_recording(&cfg, &options(300.0, 3), Encoding::Cbor);
     let (blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
     let report = estimate(&cfg, &blocks, None, None).unwrap();
     assert_eq!(report.frf.frfs.len(), 12);
@@ -123,7 +115,7 @@ fn a_bearing_damage_scenario_shows_in_the_identified_springs() {
         scenario: Some(scenario),
         ..options(420.0, 5)
     };
-    let bytes = record(&cfg, &opts, Encoding::Cbor);
+    let bytes = simulated_recording(&cfg, &opts, Encoding::Cbor);
     let (blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
     let t0 = parse_timestamp("2026-11-21T10:00:00Z").unwrap();
     let minutes = |m: f64| Some(t0 + (m * 60e9) as i128);
@@ -142,7 +134,7 @@ fn a_bearing_damage_scenario_shows_in_the_identified_springs() {
 #[test]
 fn gaps_and_missing_channels_are_clear_errors() {
     let cfg = config();
-    let bytes = record(&cfg, &options(20.0, 9), Encoding::Cbor);
+    let bytes = simulated_recording(&cfg, &options(20.0, 9), Encoding::Cbor);
     let (mut blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
     // Drop second 5 of P3: a gap.
     let t5 = parse_timestamp("2026-11-21T10:00:05Z").unwrap();

@@ -1,6 +1,6 @@
 //! Offline replay of the bundled recording: outputs, determinism, state.
 
-use crate::common::{bundled_blocks, fresh_dir};
+use crate::common::{bundled_blocks, fresh_dir, simulated_recording};
 use splinewatch::config::load_config;
 use splinewatch::config::Config;
 use splinewatch::outputs::results::ResultsWriter;
@@ -550,19 +550,11 @@ fn the_pipelined_replay_writes_the_bytes_of_the_in_line_one() {
         + "\n[monitoring]\ntraining_windows = 10\n";
     let mut monitored = Config::from_toml(&text).unwrap();
     monitored.frf.window_seconds = 120.0;
-    let simulated = {
-        let mut writer = splinewatch::io::recording::RecordingWriter::new(
-            Cursor::new(Vec::new()),
-            splinewatch::io::wire::Encoding::Cbor,
-        )
-        .unwrap();
-        let options = splinewatch::studies::simulation::SimulationOptions::random_excitation(&hour, 3600.0, 7);
-        splinewatch::studies::simulation::simulate(&hour, &options, &mut |b| {
-            writer.write_block(&hour.topic_prefix(), &b).map(|_| ())
-        })
-        .unwrap();
-        writer.finish().unwrap().into_inner()
-    };
+    let simulated = simulated_recording(
+        &hour,
+        &splinewatch::studies::simulation::SimulationOptions::random_excitation(&hour, 3600.0, 7),
+        splinewatch::io::wire::Encoding::Cbor,
+    );
     for (name, cfg, recording) in [
         ("bundled", config(), &bundled),
         ("hour", hour, &simulated),

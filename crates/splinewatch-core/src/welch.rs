@@ -390,11 +390,11 @@ impl WelchEstimator {
         Ok(())
     }
 
-    /// Why the pending segment is rejected, if it is. `sums` are the
-    /// channels' sample sums: a sum is finite exactly when no sample is
-    /// NaN or infinite, or the exact check runs (a finite sum overflowing).
-    fn gate(&self, sums: &[f64]) -> Option<fn(&mut SegmentCounts)> {
-        if sums.iter().any(|s| !s.is_finite()) && self.pending.iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+    /// Why the pending segment is rejected, if it is. A channel's sum
+    /// (`sums`) is finite exactly when none of its samples is NaN or
+    /// infinite, or the exact check runs (a finite sum overflowing).
+    fn gate(&self) -> Option<fn(&mut SegmentCounts)> {
+        if self.sums.iter().any(|s| !s.is_finite()) && self.pending.iter().any(|c| c.iter().any(|v| !v.is_finite())) {
             return Some(|c| c.non_finite += 1);
         }
         if let Some(fs) = self.settings.gates.full_scale {
@@ -424,7 +424,7 @@ impl WelchEstimator {
 
     fn process_segment(&mut self) {
         channel_sums(&self.pending, &mut self.sums);
-        if let Some(count) = self.gate(&self.sums) {
+        if let Some(count) = self.gate() {
             count(&mut self.counts);
             return;
         }

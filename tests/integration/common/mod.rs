@@ -58,6 +58,20 @@ pub fn spawn_daemon(
 }
 
 /// The blocks of the bundled recording, in file order.
+/// Simulates into an in-memory MCAP file.
+pub fn simulated_recording(
+    cfg: &splinewatch::config::Config,
+    options: &splinewatch::studies::simulation::SimulationOptions,
+    encoding: splinewatch::io::wire::Encoding,
+) -> Vec<u8> {
+    let mut writer =
+        splinewatch::io::recording::RecordingWriter::new(std::io::Cursor::new(Vec::new()), encoding).unwrap();
+    let prefix = cfg.topic_prefix();
+    splinewatch::studies::simulation::simulate(cfg, options, &mut |b| writer.write_block(&prefix, &b).map(|_| ()))
+        .unwrap();
+    writer.finish().unwrap().into_inner()
+}
+
 pub fn bundled_blocks() -> Vec<splinewatch::io::recording::RecordedBlock> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/sinello-demo.mcap");
     let bytes = std::fs::read(path).unwrap();
