@@ -29,6 +29,7 @@ pub mod sparse;
 pub mod sparse_model;
 pub mod springs;
 pub mod stiffness_field;
+pub mod subtree_solve;
 pub mod surface;
 pub mod truncation;
 pub mod updating;

@@ -17,6 +17,7 @@
 //! the values.
 
 use crate::sparse::{NonZeros, Pattern, SparseSymmetric};
+use crate::subtree_solve::SubtreeSplit;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::matrix_free::eigen::{partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams};
@@ -25,11 +26,10 @@ use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef};
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering,
+    factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
 use faer::sparse::linalg::SupernodalThreshold;
-use faer::{Conj, Mat, MatMut, MatRef, Par, Side};
+use faer::{Mat, MatMut, MatRef, Par, Side};
 use std::sync::Arc;
 use thiserror::Error;
 
@@ -89,12 +89,15 @@ pub struct PartialModes {
 pub struct ShiftInvert {
     pattern: Arc<Pattern>,
     symbolic: Arc<SymbolicCholesky<usize>>,
+    /// The factor's elimination tree split for solves on two threads.
+    split: Arc<SubtreeSplit>,
 }
 
 /// `C = L⁻¹ P M Pᵀ L⁻ᵀ` as a faer linear operator.
 #[derive(Debug)]
 struct ShiftedOperator<'a> {
     llt: SupernodalLltRef<'a, usize, f64>,
+    split: &'a SubtreeSplit,
     forward: &'a [usize],
     inverse: &'a [usize],
     mass: &'a NonZeros,
@@ -102,16 +105,15 @@ struct ShiftedOperator<'a> {
 
 impl ShiftedOperator<'_> {
     /// `Pᵀ L⁻ᵀ y` for the columns of `y`.
-    fn back_transform(&self, mut y: Mat<f64>, stack: &mut MemStack) -> Mat<f64> {
-        self.llt
-            .l_transpose_solve_with_conj(Conj::No, y.as_mut(), Par::Seq, stack);
+    fn back_transform(&self, mut y: Mat<f64>) -> Mat<f64> {
+        self.split.l_transpose_solve(self.llt, y.as_mut());
         Mat::from_fn(y.nrows(), y.ncols(), |j, k| y[(self.inverse[j], k)])
     }
 }
 
 impl LinOp<f64> for ShiftedOperator<'_> {
-    fn apply_scratch(&self, rhs_ncols: usize, _par: Par) -> StackReq {
-        self.llt.symbolic().solve_in_place_scratch::<f64>(rhs_ncols, Par::Seq)
+    fn apply_scratch(&self, _rhs_ncols: usize, _par: Par) -> StackReq {
+        StackReq::EMPTY
     }
 
     fn nrows(&self) -> usize {
@@ -122,15 +124,15 @@ impl LinOp<f64> for ShiftedOperator<'_> {
         self.forward.len()
     }
 
-    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, stack: &mut MemStack) {
-        let u = self.back_transform(rhs.to_owned(), stack);
+    fn apply(&self, mut out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, _par: Par, _stack: &mut MemStack) {
+        let u = self.back_transform(rhs.to_owned());
         let z = self.mass.mul(&u);
         for k in 0..out.ncols() {
             for i in 0..out.nrows() {
                 out[(i, k)] = z[(self.forward[i], k)];
             }
         }
-        self.llt.l_solve_with_conj(Conj::No, out, Par::Seq, stack);
+        self.split.l_solve(self.llt, out);
     }
 
     fn conj_apply(&self, out: MatMut<'_, f64>, rhs: MatRef<'_, f64>, par: Par, stack: &mut MemStack) {
@@ -153,9 +155,14 @@ impl ShiftInvert {
         let ordering = SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, forward.len()));
         let symbolic = factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
             .map_err(|e| PartialEigenError::Symbolic(format!("{e:?}")))?;
+        let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
+            unreachable!("the factorisation is forced supernodal");
+        };
+        let split = Arc::new(SubtreeSplit::new(supernodal));
         Ok(Self {
             pattern: Arc::clone(pattern),
             symbolic: Arc::new(symbolic),
+            split,
         })
     }
 
@@ -187,13 +194,37 @@ impl ShiftInvert {
     /// by its Cholesky factor's values (the residual flexibility and its
     /// first dynamic correction, [`crate::truncation`]).
     fn responses(&self, l_values: &[f64], m: &SparseSymmetric, rhs: &Mat<f64>) -> Responses {
-        let llt = LltRef::new(&self.symbolic, l_values);
-        let mut buffer = MemBuffer::new(self.symbolic.solve_in_place_scratch::<f64>(rhs.ncols(), Par::Seq));
-        let mut x = rhs.clone();
-        llt.solve_in_place_with_conj(Conj::No, x.as_mut(), Par::Seq, MemStack::new(&mut buffer));
-        let mut xmx = m.mul(&x);
-        llt.solve_in_place_with_conj(Conj::No, xmx.as_mut(), Par::Seq, MemStack::new(&mut buffer));
+        let x = self.solve_shifted(l_values, rhs);
+        let xmx = self.solve_shifted(l_values, &m.mul(&x));
         (x, xmx)
+    }
+
+    /// `(K − σM)⁻¹ B` from the factor's values: `Pᵀ L⁻ᵀ L⁻¹ P B`.
+    fn solve_shifted(&self, l_values: &[f64], rhs: &Mat<f64>) -> Mat<f64> {
+        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
+            unreachable!("the factorisation is forced supernodal");
+        };
+        let llt = SupernodalLltRef::new(supernodal, l_values);
+        let n = rhs.nrows();
+        let (forward, inverse) = self.permutation();
+        let mut x = Mat::from_fn(n, rhs.ncols(), |i, k| rhs[(forward[i], k)]);
+        self.split.l_solve(llt, x.as_mut());
+        self.split.l_transpose_solve(llt, x.as_mut());
+        Mat::from_fn(n, rhs.ncols(), |i, k| x[(inverse[i], k)])
+    }
+
+    /// The fill-reducing permutation (forward, inverse).
+    fn permutation(&self) -> (Vec<usize>, Vec<usize>) {
+        match self.symbolic.perm() {
+            Some(p) => {
+                let (f, i) = p.arrays();
+                (f.to_vec(), i.to_vec())
+            }
+            None => {
+                let identity: Vec<usize> = (0..self.pattern.dim()).collect();
+                (identity.clone(), identity)
+            }
+        }
     }
 
     /// The number of eigenvalues of `(k, m)` below `omega2`: the negative
@@ -285,17 +316,11 @@ impl ShiftInvert {
         let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
             unreachable!("the factorisation is forced supernodal");
         };
-        let identity: Vec<usize> = (0..n).collect();
-        let (forward, inverse) = match self.symbolic.perm() {
-            Some(p) => {
-                let (f, i) = p.arrays();
-                (f.to_vec(), i.to_vec())
-            }
-            None => (identity.clone(), identity),
-        };
+        let (forward, inverse) = self.permutation();
         let mass = m.nonzeros();
         let op = ShiftedOperator {
             llt: SupernodalLltRef::new(supernodal, &l_values),
+            split: &self.split,
             forward: &forward,
             inverse: &inverse,
             mass: &mass,
@@ -448,8 +473,7 @@ fn finish(
     y: Mat<f64>,
     requested: usize,
 ) -> Result<PartialModes, PartialEigenError> {
-    let mut buffer = MemBuffer::new(op.apply_scratch(y.ncols(), Par::Seq));
-    let x = op.back_transform(y, MemStack::new(&mut buffer));
+    let x = op.back_transform(y);
     let mut order: Vec<usize> = (0..mu.len()).filter(|&i| mu[i] > 0.0).collect();
     let lambda = |i: usize| settings.shift + 1.0 / mu[i];
     order.retain(|&i| lambda(i) <= settings.cutoff_omega2);
