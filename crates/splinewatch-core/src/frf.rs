@@ -133,6 +133,11 @@ impl ModalState {
         self.amplitudes[(sensor, mode)]
     }
 
+    /// Number of sensors (the rows of the amplitudes).
+    pub fn sensor_count(&self) -> usize {
+        self.amplitudes.nrows()
+    }
+
     /// The residual of the discarded modes (a truncated model's state).
     pub fn residual(&self) -> Option<&Residual> {
         self.residual.as_ref()
@@ -308,6 +313,27 @@ impl FrfModel {
         fields[..field].iter().map(Vec::len).sum::<usize>() + coefficient
     }
 
+    /// Number of stiffness-field coefficients over all fields.
+    pub fn field_coefficient_count(&self) -> usize {
+        self.field_coefficients().iter().map(Vec::len).sum()
+    }
+
+    /// `(∂K/∂θ_k) X` on the generalised dofs, `k` the coefficient's flat
+    /// index ([`Self::flat_field_index`]).
+    #[track_caller]
+    pub(crate) fn field_times(&self, k: usize, x: &Mat<f64>) -> Mat<f64> {
+        match &self.source {
+            Source::Dense(assembled) => {
+                let matrix = assembled.field_matrices.iter().flatten().nth(k);
+                matrix.expect("no such stiffness-field coefficient") * x
+            }
+            Source::Truncated { model, .. } => {
+                let matrix = model.field_products.iter().flatten().nth(k);
+                matrix.expect("no such stiffness-field coefficient").mul(x)
+            }
+        }
+    }
+
     /// Total number of spring coefficients over all fields.
     pub fn spring_coefficient_count(&self) -> usize {
         self.block_positions.len()
@@ -344,6 +370,7 @@ impl FrfModel {
                     &responses,
                     shift,
                     damping,
+                    model.field_products.iter().any(|f| !f.is_empty()),
                 ));
                 Ok(state)
             }

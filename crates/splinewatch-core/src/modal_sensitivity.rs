@@ -15,7 +15,13 @@
 //!
 //! For a stiffness field `∂K/∂θ_k` is dense over the field's part of the
 //! deck: the couplings `C = Φᵀ (∂K/∂θ_k) Φ` of every mode pair are formed
-//! with two products per coefficient, and the same expansion applies.
+//! with two products per coefficient, and the same expansion applies. On a
+//! truncated model (the modes below a cut-off, [`crate::truncation`]) the
+//! product runs over `[Φ | ρ_0 | ρ_1]` (the residual responses to the sensor
+//! loads on every dof): the discarded modes enter the eigenvector
+//! derivatives as for the springs (Wang 1991) and the FRF derivatives
+//! through `∂H_rs = −g_rᵀ (∂K/∂θ) g_s` with the sensors' complete
+//! responses `g_s`.
 
 use crate::damping::DampingCurve;
 use crate::frf::{FrfModel, FrfRequest, ModalState};
@@ -77,32 +83,98 @@ impl FrfModel {
     /// Eigenvalue and sensor-amplitude derivatives of `modes` at `state`
     /// with respect to every stiffness-field coefficient θ (fields flattened
     /// in order); `state` must come from the same coefficients
-    /// ([`FrfModel::modal_state_with_fields`]). The expansion needs every
-    /// mode: a model of the dense path only (the updating refuses field
-    /// parameters on a truncated model, `UpdateError::TruncatedFields`).
-    #[track_caller]
+    /// ([`FrfModel::modal_state_with_fields`]). On a dense model the
+    /// expansion runs over every mode (exact); on a truncated one over the
+    /// kept modes, with the discarded modes' part from the residual on
+    /// every dof (Wang 1991, as for the springs).
     pub fn field_sensitivities(&self, state: &ModalState, modes: &[usize]) -> ModalSensitivities {
-        let dense = self
-            .dense()
-            .expect("stiffness-field sensitivities need the dense model");
-        let matrices: Vec<_> = dense.field_matrices.iter().flatten().collect();
+        let couplings = self.field_couplings(state);
+        field_derivatives(state, modes, &couplings, true)
+    }
+
+    /// Every stiffness-field coefficient's [`FieldCouplings`] at `state`.
+    fn field_couplings(&self, state: &ModalState) -> Vec<FieldCouplings> {
         let phi = &state.modes.shapes;
-        let sensors = self.sensor_count();
-        let mut eigenvalue = Mat::zeros(modes.len(), matrices.len());
-        let mut amplitude = vec![Mat::zeros(sensors, matrices.len()); modes.len()];
-        for (j, dk) in matrices.iter().enumerate() {
-            // C = Φᵀ (∂K/∂θ_j) Φ: every coupling at once.
-            let couplings = phi.transpose() * (*dk * phi);
-            for (row, &i) in modes.iter().enumerate() {
-                eigenvalue[(row, j)] = couplings[(i, i)];
-                expand(state, i, |k| couplings[(k, i)], &mut amplitude[row], j);
+        let everywhere = state.residual().and_then(|r| r.everywhere());
+        (0..self.field_coefficient_count())
+            .map(|k| match everywhere {
+                None => FieldCouplings {
+                    modes: phi.transpose() * self.field_times(k, phi),
+                    residual: None,
+                },
+                Some([rho0, rho1]) => {
+                    // One product over [Φ | ρ_0 | ρ_1] gives every block.
+                    let (nm, ns) = (phi.ncols(), rho0.ncols());
+                    let mut basis = Mat::<f64>::zeros(phi.nrows(), nm + 2 * ns);
+                    basis.subcols_mut(0, nm).copy_from(phi);
+                    basis.subcols_mut(nm, ns).copy_from(rho0);
+                    basis.subcols_mut(nm + ns, ns).copy_from(rho1);
+                    let all = basis.transpose() * self.field_times(k, &basis);
+                    let block = |row: usize, col: usize, rows: usize, cols: usize| {
+                        all.submatrix(row, col, rows, cols).to_owned()
+                    };
+                    FieldCouplings {
+                        modes: block(0, 0, nm, nm),
+                        residual: Some(ResidualCouplings {
+                            with_modes: [block(nm, 0, ns, nm), block(nm + ns, 0, ns, nm)],
+                            with_residual: [
+                                block(nm, nm, ns, ns),
+                                block(nm, nm + ns, ns, ns),
+                                block(nm + ns, nm + ns, ns, ns),
+                            ],
+                        }),
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// One stiffness-field coefficient's `∂K/∂θ` seen from the kept modes and,
+/// on a truncated model, from the residual responses `ρ_0`, `ρ_1` to the
+/// sensor loads ([`crate::truncation`]).
+struct FieldCouplings {
+    /// `C = Φᵀ (∂K/∂θ) Φ`: modes × modes.
+    modes: Mat<f64>,
+    residual: Option<ResidualCouplings>,
+}
+
+struct ResidualCouplings {
+    /// `P_p = ρ_pᵀ (∂K/∂θ) Φ`, `p = 0, 1`: sensors × modes.
+    with_modes: [Mat<f64>; 2],
+    /// `S_pq = ρ_pᵀ (∂K/∂θ) ρ_q` for `(p, q) = (0, 0), (0, 1), (1, 1)`:
+    /// sensors × sensors.
+    with_residual: [Mat<f64>; 3],
+}
+
+/// Eigen-derivatives of `modes` from the couplings: `∂λ_i = C_ii`, `∂a_i`
+/// expanded over the state's modes and, with `discarded`, the discarded
+/// modes' part `−(P_0 + (λ_i − σ) P_1)_{s,i}`.
+fn field_derivatives(
+    state: &ModalState,
+    modes: &[usize],
+    couplings: &[FieldCouplings],
+    discarded: bool,
+) -> ModalSensitivities {
+    let sensors = state.sensor_count();
+    let mut eigenvalue = Mat::zeros(modes.len(), couplings.len());
+    let mut amplitude = vec![Mat::zeros(sensors, couplings.len()); modes.len()];
+    for (j, c) in couplings.iter().enumerate() {
+        for (row, &i) in modes.iter().enumerate() {
+            eigenvalue[(row, j)] = c.modes[(i, i)];
+            expand(state, i, |k| c.modes[(k, i)], &mut amplitude[row], j);
+            if let (true, Some(r), Some(residual)) = (discarded, &c.residual, state.residual()) {
+                let shifted = state.modes.omega2[i] - residual.shift();
+                for s in 0..sensors {
+                    amplitude[row][(s, j)] -= r.with_modes[0][(s, i)] + shifted * r.with_modes[1][(s, i)];
+                }
             }
         }
-        ModalSensitivities {
-            modes: modes.to_vec(),
-            eigenvalue,
-            amplitude,
-        }
+    }
+    ModalSensitivities {
+        modes: modes.to_vec(),
+        eigenvalue,
+        amplitude,
     }
 }
 
@@ -117,6 +189,17 @@ impl FrfModel {
     /// with the eigen-derivatives of [`Self::field_sensitivities`] over every
     /// mode (the expansion is then exact) and `ζ'` the damping curve's slope:
     /// the derivative of exactly the FRF [`FrfModel::evaluate`] computes.
+    ///
+    /// On a truncated model the sum runs over the kept modes with their
+    /// expansion over the kept modes only, and the discarded modes enter
+    /// through the residual responses `ρ_s(ω) = ρ_0,s + γ(ω) ρ_1,s`
+    /// ([`crate::truncation`]): with the sensors' complete responses
+    /// `g_s = Σ_i φ_i a_si q_i + ρ_s`, `∂H_rs = −g_rᵀ (∂K/∂θ) g_s` adds
+    /// the kept–discarded couplings
+    /// `−Σ_i q_i (a_ri (P_0 + γ P_1)_si + a_si (P_0 + γ P_1)_ri)` and the
+    /// discarded ones' own `−(S_00 + γ (S_01 + S_01ᵀ) + γ² S_11)_rs`
+    /// (the field couplings); the kept–kept part is the expression above, so
+    /// the result tends to the dense one as the cut-off rises.
     pub fn field_frf_sensitivities(
         &self,
         state: &ModalState,
@@ -125,7 +208,8 @@ impl FrfModel {
     ) -> Vec<Vec<c64>> {
         let nm = state.modes.len();
         let all: Vec<usize> = (0..nm).collect();
-        let sens = self.field_sensitivities(state, &all);
+        let couplings = self.field_couplings(state);
+        let sens = field_derivatives(state, &all, &couplings, false);
         let (nf, np) = (request.frequencies_hz.len(), request.pairs.len());
         let omega: Vec<f64> = (0..nm).map(|i| state.modes.omega2[i].max(0.0).sqrt()).collect();
         let nk = sens.eigenvalue.ncols();
@@ -164,6 +248,18 @@ impl FrfModel {
                             2.0 * w * (state.zeta[i] * dw + omega[i] * slope[i] * dw),
                         );
                         sum += q[i] * (c64::new(da, 0.0) - q[i] * d_denominator * (ar * as_));
+                    }
+                    if let (Some(c), Some(residual)) = (&couplings[k].residual, state.residual()) {
+                        let gamma = residual.expansion_factor(w);
+                        for i in 0..nm {
+                            let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
+                            // φ_iᵀ (∂K/∂θ) ρ_sensor(ω).
+                            let towards =
+                                |sensor: usize| gamma * c.with_modes[1][(sensor, i)] + c.with_modes[0][(sensor, i)];
+                            sum -= q[i] * (towards(s) * ar + towards(r) * as_);
+                        }
+                        let [s00, s01, s11] = &c.with_residual;
+                        sum -= gamma * gamma * s11[(r, s)] + gamma * (s01[(r, s)] + s01[(s, r)]) + s00[(r, s)];
                     }
                     dh[p * nf + f] = sum * factor;
                 }

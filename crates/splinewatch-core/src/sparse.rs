@@ -201,15 +201,35 @@ impl NonZeros {
     /// its row `c`, so each `y_c` is a gather and a sum (no scattered writes).
     pub fn mul(&self, x: &Mat<f64>) -> Mat<f64> {
         let n = self.col_ptr.len() - 1;
-        Mat::from_fn(n, x.ncols(), |c, k| {
-            let x = x.col(k);
-            let (a, b) = (self.col_ptr[c], self.col_ptr[c + 1]);
-            self.row_idx[a..b]
-                .iter()
-                .zip(&self.values[a..b])
-                .map(|(&r, &v)| v * x[r])
-                .sum()
-        })
+        if x.ncols() == 1 {
+            return Mat::from_fn(n, 1, |c, _| {
+                let x = x.col(0);
+                let (a, b) = (self.col_ptr[c], self.col_ptr[c + 1]);
+                self.row_idx[a..b]
+                    .iter()
+                    .zip(&self.values[a..b])
+                    .map(|(&r, &v)| v * x[r])
+                    .sum()
+            });
+        }
+        // Many columns: the matrix is read once, each entry against a row of
+        // `x` (contiguous in its transpose); every output entry sums the
+        // same products in the same order as above, from −0.0 as
+        // `Iterator::sum`, so the result is the same bit for bit.
+        let k = x.ncols();
+        let rows = x.transpose().to_owned();
+        let mut out = Mat::<f64>::zeros(k, n);
+        for c in 0..n {
+            let sums = out.col_as_slice_mut(c);
+            sums.fill(-0.0);
+            for e in self.col_ptr[c]..self.col_ptr[c + 1] {
+                let v = self.values[e];
+                for (sum, &x) in sums.iter_mut().zip(rows.col_as_slice(self.row_idx[e])) {
+                    *sum += v * x;
+                }
+            }
+        }
+        out.transpose().to_owned()
     }
 
     pub fn nnz(&self) -> usize {

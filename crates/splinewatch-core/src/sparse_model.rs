@@ -14,7 +14,7 @@ use crate::modal::{classify_lumped, Modes};
 use crate::model::{ModelError, ShellModel};
 use crate::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
 use crate::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
-use crate::sparse::{reduced_pattern, Pattern, SparseError, SparseSymmetric};
+use crate::sparse::{reduced_pattern, NonZeros, Pattern, SparseError, SparseSymmetric};
 use crate::springs::LowRankBlock;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -78,6 +78,9 @@ pub struct SparseModel {
     pub spring_stiffness: Vec<Vec<f64>>,
     /// `Tᵀ ∂K/∂θ_k T` per stiffness field and coefficient.
     pub field_terms: Vec<Vec<SparseTerm>>,
+    /// `∂K/∂θ_k` on the generalised dofs, its non-zeros only (products
+    /// with the modes and residuals of the field sensitivities).
+    pub field_products: Vec<Vec<NonZeros>>,
     pub field_coefficients: Vec<Vec<f64>>,
     /// Row-sum translational mass per control point (mode classification).
     lumped: Vec<f64>,
@@ -243,7 +246,7 @@ impl SparseModel {
                     .map_err(sparse_error)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let field_terms = model
+        let (field_terms, field_products): (Vec<_>, Vec<_>) = model
             .stiffness_fields
             .iter()
             .enumerate()
@@ -252,13 +255,16 @@ impl SparseModel {
                 let matrices = f
                     .coefficient_matrices_into(shell, &model.material, zeros)
                     .map_err(|source| ModelError::StiffnessField { index, source })?;
-                matrices
+                let terms = matrices
                     .iter()
                     .map(|d| d.reduce(&reduction, &pattern).map(|r| SparseTerm::from_matrix(&r)))
                     .collect::<Result<Vec<_>, _>>()
-                    .map_err(sparse_error)
+                    .map_err(sparse_error)?;
+                Ok((terms, matrices.iter().map(SparseSymmetric::nonzeros).collect()))
             })
-            .collect::<Result<Vec<_>, _>>()?;
+            .collect::<Result<Vec<_>, ModelError>>()?
+            .into_iter()
+            .unzip();
         let free_stiffness = k.reduce(&reduction, &pattern).map_err(sparse_error)?;
         let mass = m.reduce(&reduction, &pattern).map_err(sparse_error)?;
         let mut coupled: Vec<bool> = free_stiffness
@@ -281,6 +287,7 @@ impl SparseModel {
             spring_terms,
             spring_stiffness: model.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
             field_terms,
+            field_products,
             field_coefficients: model
                 .stiffness_fields
                 .iter()

@@ -31,7 +31,11 @@
 //! q_i + ρ_s` keep `∂H_rs/∂κ_j = −g_rᵀ (∂K/∂κ_j) g_s` accurate; an
 //! eigenvector derivative's expansion over the kept modes gets the discarded
 //! modes' part as `−(ρ_0,s + (λ_i − σ) ρ_1,s)ᵀ (∂K/∂κ_j) φ_i` (the modified
-//! modal method, Wang 1991, with the same first-order correction).
+//! modal method, Wang 1991, with the same first-order correction). A
+//! stiffness field's `∂K/∂θ` reaches the whole deck, so models with fields
+//! keep `ρ_0`, `ρ_1` on every dof ([`Residual::everywhere`], one product
+//! each) and the same two formulas apply there
+//! ([`crate::modal_sensitivity`]).
 
 use crate::damping::DampingCurve;
 use crate::modal::Modes;
@@ -60,6 +64,9 @@ pub struct Residual {
     sensors: [Mat<f64>; 2],
     /// `ρ_0`, `ρ_1` on the spring dofs `U`: `|U|` × sensors.
     springs: [Mat<f64>; 2],
+    /// `ρ_0`, `ρ_1` on every generalised dof (models with stiffness
+    /// fields, whose `∂K/∂θ` reach the whole deck): dofs × sensors.
+    everywhere: Option<[Mat<f64>; 2]>,
     /// `ζ_e ω_e` of the effective discarded mode.
     damping_rate: f64,
     /// `∂(ζ_e ω_e)/∂γ_z = B_z(f_e) ω_e`.
@@ -72,7 +79,12 @@ impl Residual {
     /// spring dofs `U`, the responses `(X Nᵀ, X M X Nᵀ)` on the generalised
     /// dofs ([`crate::sparse_model::SparseModel::modes_and_responses`]) and the
     /// shift `σ` they were solved at; `damping` gives the discarded modes'
-    /// damping ratio.
+    /// damping ratio. With `everywhere`, `ρ_0` and `ρ_1` are kept on every
+    /// generalised dof too (stiffness-field sensitivities).
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the residual's inputs, each a different quantity of eq. 31"
+    )]
     #[track_caller]
     pub fn new(
         modes: &Modes,
@@ -82,6 +94,7 @@ impl Residual {
         responses: &(Mat<f64>, Mat<f64>),
         shift: f64,
         damping: &DampingCurve,
+        everywhere: bool,
     ) -> Self {
         let ns = sensor_rows.len();
         let nm = modes.len();
@@ -126,9 +139,19 @@ impl Residual {
                 .map(|(b, g)| b * g)
                 .sum();
         }
+        // ρ_p = R_p − Φ diag((λ − σ)^−p) Aᵀ on every dof: one product each.
+        let everywhere = everywhere.then(|| {
+            [(&responses.0, 1), (&responses.1, 2)].map(|(response, power)| {
+                let scaled = Mat::from_fn(nm, ns, |i, s| {
+                    amplitudes[(s, i)] / (modes.omega2[i] - shift).powi(power)
+                });
+                response - phi * scaled
+            })
+        });
         Self {
             shift,
             sensors,
+            everywhere,
             springs: [on_springs(&responses.0, 1), on_springs(&responses.1, 2)],
             damping_rate,
             damping_gradient,
@@ -155,6 +178,16 @@ impl Residual {
     /// derivatives).
     pub fn expansion_on_springs(&self, u: usize, s: usize, lambda: f64) -> f64 {
         self.springs[0][(u, s)] + (lambda - self.shift) * self.springs[1][(u, s)]
+    }
+
+    /// The shift `σ` the residual is expanded about.
+    pub fn shift(&self) -> f64 {
+        self.shift
+    }
+
+    /// `ρ_0`, `ρ_1` on every generalised dof (dofs × sensors), when kept.
+    pub fn everywhere(&self) -> Option<&[Mat<f64>; 2]> {
+        self.everywhere.as_ref()
     }
 
     /// `∂/∂γ_z` of [`Self::at_sensors`]: `−2j ω B_z(f_e) ω_e R_1,rs`.

@@ -53,8 +53,6 @@ pub enum UpdateError {
     Damping(#[from] DampingError),
     #[error("the model produced non-finite FRFs at the parameters {0:?}")]
     NonFinite(Vec<f64>),
-    #[error("parameter {0}: stiffness-field sensitivities need every mode; update stiffness fields with `[model.solver] modes = \"all\"`")]
-    TruncatedFields(String),
 }
 
 /// What a parameter is.
@@ -79,8 +77,7 @@ pub struct Parameter {
 }
 
 /// Every parameter names an existing coefficient of `model` and has
-/// finite, ordered, non-negative bounds; at least one is updated; a
-/// truncated model updates no stiffness field.
+/// finite, ordered, non-negative bounds; at least one is updated.
 pub(crate) fn check_parameters(
     parameters: &[Parameter],
     kappa: &[Vec<f64>],
@@ -91,14 +88,6 @@ pub(crate) fn check_parameters(
         return Err(UpdateError::NoParameters);
     }
     let theta = model.field_coefficients();
-    if let Some(p) = parameters
-        .iter()
-        .find(|p| matches!(p.kind, ParameterKind::Stiffness { .. }))
-    {
-        if model.dense().is_none() {
-            return Err(UpdateError::TruncatedFields(p.name.clone()));
-        }
-    }
     for p in parameters {
         let bad = |reason: String| {
             Err(UpdateError::Parameter {
