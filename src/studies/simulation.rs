@@ -201,11 +201,7 @@ pub fn simulate(
             let last = sim.last_forces().to_vec();
             state = state_at(t0)?;
             sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
-            let dense = setup
-                .model
-                .dense()
-                .context("a scenario that changes the model needs every mode: set [model.solver] modes = \"all\"")?;
-            sim.set_physical_state(&state, &dense.mass, &x, &v);
+            sim.set_physical_state(&state, &setup.model.mass_times(&x), &setup.model.mass_times(&v));
             sim.set_last_forces(&last);
             summary.model_updates += 1;
         }

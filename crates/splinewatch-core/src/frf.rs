@@ -313,6 +313,25 @@ impl FrfModel {
         fields[..field].iter().map(Vec::len).sum::<usize>() + coefficient
     }
 
+    /// `M x` on the generalised dofs (the consistent mass, eq. 17).
+    #[track_caller]
+    pub fn mass_times(&self, x: &[f64]) -> Vec<f64> {
+        match &self.source {
+            Source::Dense(assembled) => {
+                let mass = &assembled.mass;
+                assert_eq!(x.len(), mass.ncols(), "a value per generalised dof");
+                (0..mass.nrows())
+                    .map(|r| (0..x.len()).map(|c| mass[(r, c)] * x[c]).sum())
+                    .collect()
+            }
+            Source::Truncated { model, .. } => {
+                assert_eq!(x.len(), model.dof_count(), "a value per generalised dof");
+                let column = Mat::from_fn(x.len(), 1, |r, _| x[r]);
+                model.generalised_mass.mul(&column).col_as_slice(0).to_vec()
+            }
+        }
+    }
+
     /// Number of stiffness-field coefficients over all fields.
     pub fn field_coefficient_count(&self) -> usize {
         self.field_coefficients().iter().map(Vec::len).sum()

@@ -18,7 +18,6 @@
 //! application) so the error is negligible.
 
 use crate::frf::ModalState;
-use faer::Mat;
 use std::f64::consts::PI;
 
 #[derive(Debug, Clone)]
@@ -156,17 +155,17 @@ impl ModalSimulator {
         (x, v)
     }
 
-    /// Continues from physical state `(x, v)` on a new modal model (a
-    /// parameter change during the simulation): `q' = Φ'ᵀ M x`.
-    pub fn set_physical_state(&mut self, state: &ModalState, mass: &Mat<f64>, x: &[f64], v: &[f64]) {
+    /// Continues from a physical state on a new modal model (a parameter
+    /// change during the simulation): `q' = Φ'ᵀ M x`, given the products
+    /// `M x` and `M v` of the state `(x, v)` with the model's mass
+    /// ([`crate::frf::FrfModel::mass_times`]).
+    pub fn set_physical_state(&mut self, state: &ModalState, mass_x: &[f64], mass_v: &[f64]) {
         let shapes = &state.modes.shapes;
         let n = shapes.nrows();
-        let mx: Vec<f64> = (0..n).map(|r| (0..n).map(|c| mass[(r, c)] * x[c]).sum()).collect();
-        let mv: Vec<f64> = (0..n).map(|r| (0..n).map(|c| mass[(r, c)] * v[c]).sum()).collect();
         for (m, &i) in self.modes.iter_mut().zip(&self.kept) {
             m.state = [
-                (0..n).map(|d| shapes[(d, i)] * mx[d]).sum(),
-                (0..n).map(|d| shapes[(d, i)] * mv[d]).sum(),
+                (0..n).map(|d| shapes[(d, i)] * mass_x[d]).sum(),
+                (0..n).map(|d| shapes[(d, i)] * mass_v[d]).sum(),
             ];
         }
     }

@@ -70,6 +70,9 @@ pub struct SparseModel {
     pub free_stiffness: SparseSymmetric,
     /// `Tᵀ M T`.
     pub mass: SparseSymmetric,
+    /// `M` on the generalised dofs, its non-zeros (the simulator's state
+    /// transfer between models, [`crate::frf::FrfModel::mass_times`]).
+    pub generalised_mass: NonZeros,
     /// `∂K/∂κ_j` per spring field and coefficient on the generalised dofs
     /// (eq. 22, low rank).
     pub spring_blocks: Vec<Vec<LowRankBlock>>,
@@ -267,6 +270,7 @@ impl SparseModel {
             .unzip();
         let free_stiffness = k.reduce(&reduction, &pattern).map_err(sparse_error)?;
         let mass = m.reduce(&reduction, &pattern).map_err(sparse_error)?;
+        let generalised_mass = m.nonzeros();
         let mut coupled: Vec<bool> = free_stiffness
             .values()
             .iter()
@@ -281,6 +285,7 @@ impl SparseModel {
             shell: shell.clone(),
             free_stiffness,
             mass,
+            generalised_mass,
             reduction,
             pattern,
             spring_blocks,
