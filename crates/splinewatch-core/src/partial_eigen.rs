@@ -14,7 +14,8 @@
 //! when its residual `‖K x − λ M x‖ / ((‖K‖ + |λ| ‖M‖) ‖x‖)` is below the
 //! tolerance. The symbolic factorisation depends on the pattern only and is
 //! made once per model ([`ShiftInvert::new`]); every solve re-factorises
-//! the values.
+//! the values. The triangular solves, memory bound, run on two threads
+//! ([`crate::subtree_solve`]).
 
 use crate::sparse::{NonZeros, Pattern, SparseSymmetric};
 use crate::subtree_solve::SubtreeSplit;
@@ -24,7 +25,7 @@ use faer::matrix_free::eigen::{partial_self_adjoint_eigen, partial_self_adjoint_
 use faer::matrix_free::LinOp;
 use faer::perm::PermRef;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef};
+use faer::sparse::linalg::cholesky::supernodal::{SupernodalLdltRef, SupernodalLltRef, SymbolicSupernodalCholesky};
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
@@ -155,10 +156,7 @@ impl ShiftInvert {
         let ordering = SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, forward.len()));
         let symbolic = factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
             .map_err(|e| PartialEigenError::Symbolic(format!("{e:?}")))?;
-        let SymbolicCholeskyRaw::Supernodal(supernodal) = symbolic.raw() else {
-            unreachable!("the factorisation is forced supernodal");
-        };
-        let split = Arc::new(SubtreeSplit::new(supernodal));
+        let split = Arc::new(SubtreeSplit::new(supernodal_part(&symbolic)));
         Ok(Self {
             pattern: Arc::clone(pattern),
             symbolic: Arc::new(symbolic),
@@ -199,11 +197,14 @@ impl ShiftInvert {
         (x, xmx)
     }
 
+    /// The supernodal part of the symbolic factorisation.
+    fn supernodal(&self) -> &SymbolicSupernodalCholesky<usize> {
+        supernodal_part(&self.symbolic)
+    }
+
     /// `(K − σM)⁻¹ B` from the factor's values: `Pᵀ L⁻ᵀ L⁻¹ P B`.
     fn solve_shifted(&self, l_values: &[f64], rhs: &Mat<f64>) -> Mat<f64> {
-        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
-            unreachable!("the factorisation is forced supernodal");
-        };
+        let supernodal = self.supernodal();
         let llt = SupernodalLltRef::new(supernodal, l_values);
         let n = rhs.nrows();
         let (forward, inverse) = self.permutation();
@@ -249,9 +250,7 @@ impl ShiftInvert {
                 Default::default(),
             )
             .ok()?;
-        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
-            unreachable!("the factorisation is forced supernodal");
-        };
+        let supernodal = self.supernodal();
         let ldlt = SupernodalLdltRef::new(supernodal, &values);
         let mut negative = 0;
         for s in 0..supernodal.n_supernodes() {
@@ -313,9 +312,7 @@ impl ShiftInvert {
         });
         let l_values = l_values?;
         let responses = rhs.map(|rhs| self.responses(&l_values, m, rhs));
-        let SymbolicCholeskyRaw::Supernodal(supernodal) = self.symbolic.raw() else {
-            unreachable!("the factorisation is forced supernodal");
-        };
+        let supernodal = self.supernodal();
         let (forward, inverse) = self.permutation();
         let mass = m.nonzeros();
         let op = ShiftedOperator {
@@ -347,6 +344,15 @@ impl ShiftInvert {
             }
         }
         Ok((finish(&op, k, m, settings, mu, y, wanted)?, responses))
+    }
+}
+
+/// The supernodal part of a symbolic factorisation made with
+/// `SupernodalThreshold::FORCE_SUPERNODAL` ([`ShiftInvert::new`]).
+fn supernodal_part(symbolic: &SymbolicCholesky<usize>) -> &SymbolicSupernodalCholesky<usize> {
+    match symbolic.raw() {
+        SymbolicCholeskyRaw::Supernodal(supernodal) => supernodal,
+        SymbolicCholeskyRaw::Simplicial(_) => unreachable!("the factorisation is forced supernodal"),
     }
 }
 

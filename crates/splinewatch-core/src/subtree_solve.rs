@@ -38,16 +38,28 @@ pub struct SubtreeSplit {
     top: Vec<usize>,
     /// The dimension of the factor.
     dim: usize,
+    /// Its supernodes.
+    supernodes: usize,
 }
 
 /// Descents tried from the roots towards a balanced split.
 const MAX_DESCENTS: usize = 64;
 
+/// Factors of fewer entries are solved on one thread: a solve of 200 000
+/// entries takes about 0.1 ms, a thread's start some tens of µs.
+const MIN_SPLIT_ENTRIES: usize = 200_000;
+
 impl SubtreeSplit {
     /// The split of `symbolic`'s supernodal elimination tree that minimises
     /// the work on the longer path (the common ancestors, then the larger
-    /// group), measured in factor entries.
+    /// group), measured in factor entries; none (one thread) for a factor
+    /// of fewer than 200 000 entries (about 0.1 ms a solve).
     pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
+        Self::with_threshold(symbolic, MIN_SPLIT_ENTRIES)
+    }
+
+    /// [`Self::new`] with the smallest factor (in entries) worth splitting.
+    fn with_threshold(symbolic: &SymbolicSupernodalCholesky<usize>, min_entries: usize) -> Self {
         let n_super = symbolic.n_supernodes();
         let begin = symbolic.supernode_begin();
         let end = symbolic.supernode_end();
@@ -77,6 +89,14 @@ impl SubtreeSplit {
             if let Some(p) = parent[s] {
                 subtree[p] += subtree[s];
             }
+        }
+        if work.iter().sum::<usize>() < min_entries {
+            return Self {
+                groups: [Vec::new(), Vec::new()],
+                top: (0..n_super).collect(),
+                dim,
+                supernodes: n_super,
+            };
         }
         let mut roots: Vec<usize> = (0..n_super).filter(|&s| parent[s].is_none()).collect();
         let mut top_work = 0;
@@ -115,14 +135,19 @@ impl SubtreeSplit {
             members.sort_unstable();
             members
         });
-        Self { groups, top, dim }
+        Self {
+            groups,
+            top,
+            dim,
+            supernodes: n_super,
+        }
     }
 
     /// Solves `L x = rhs` in place.
     pub fn l_solve(&self, llt: SupernodalLltRef<'_, usize, f64>, mut rhs: MatMut<'_, f64>) {
-        assert_eq!(rhs.nrows(), self.dim, "right-hand side of the wrong size");
+        self.check(llt, &rhs);
         if self.groups.iter().any(Vec::is_empty) {
-            let all: Vec<usize> = (0..llt.symbolic().n_supernodes()).collect();
+            let all: Vec<usize> = (0..self.supernodes).collect();
             forward(llt, all.iter(), rhs);
             return;
         }
@@ -155,9 +180,9 @@ impl SubtreeSplit {
 
     /// Solves `Lᵀ x = rhs` in place.
     pub fn l_transpose_solve(&self, llt: SupernodalLltRef<'_, usize, f64>, mut rhs: MatMut<'_, f64>) {
-        assert_eq!(rhs.nrows(), self.dim, "right-hand side of the wrong size");
+        self.check(llt, &rhs);
         if self.groups.iter().any(Vec::is_empty) {
-            let all: Vec<usize> = (0..llt.symbolic().n_supernodes()).collect();
+            let all: Vec<usize> = (0..self.supernodes).collect();
             backward(llt, all.iter().rev(), rhs);
             return;
         }
@@ -176,6 +201,20 @@ impl SubtreeSplit {
                 .subrows_mut(begin[s], rows)
                 .copy_from(second.subrows(begin[s], rows));
         }
+    }
+}
+
+impl SubtreeSplit {
+    /// The factor is the one the split was made for, the right-hand side
+    /// of its size.
+    #[track_caller]
+    fn check(&self, llt: SupernodalLltRef<'_, usize, f64>, rhs: &MatMut<'_, f64>) {
+        assert_eq!(
+            (llt.symbolic().nrows(), llt.symbolic().n_supernodes()),
+            (self.dim, self.supernodes),
+            "a factor of another structure"
+        );
+        assert_eq!(rhs.nrows(), self.dim, "right-hand side of the wrong size");
     }
 }
 
@@ -336,7 +375,7 @@ mod tests {
     fn the_groups_are_independent_subtrees() {
         let (symbolic, _) = grid_factor(40, 30);
         let tree = supernodal(&symbolic);
-        let split = SubtreeSplit::new(tree);
+        let split = SubtreeSplit::with_threshold(tree, 0);
         assert!(split.groups.iter().all(|g| !g.is_empty()), "a 40 × 30 grid splits");
         let n = tree.n_supernodes();
         let mut part = vec![None; n];
@@ -365,7 +404,7 @@ mod tests {
         let (symbolic, values) = grid_factor(40, 30);
         let tree = supernodal(&symbolic);
         let llt = SupernodalLltRef::new(tree, &values);
-        let split = SubtreeSplit::new(tree);
+        let split = SubtreeSplit::with_threshold(tree, 0);
         let n = tree.nrows();
         let rhs = Mat::<f64>::from_fn(n, 3, |i, j| ((i * 31 + j * 17) % 23) as f64 - 11.0);
         let req = symbolic.solve_in_place_scratch::<f64>(3, Par::Seq);
@@ -386,5 +425,24 @@ mod tests {
                 "transpose {transpose}: {difference:e} of {scale:e}"
             );
         }
+    }
+
+    /// A small factor is not split (one thread), and then the solves are
+    /// faer's operations in faer's order: the same bits.
+    #[test]
+    fn a_small_factor_is_solved_on_one_thread_as_faer_does() {
+        let (symbolic, values) = grid_factor(12, 10);
+        let tree = supernodal(&symbolic);
+        let llt = SupernodalLltRef::new(tree, &values);
+        let split = SubtreeSplit::new(tree);
+        assert!(split.groups.iter().all(Vec::is_empty), "{split:?}");
+        let rhs = Mat::<f64>::from_fn(tree.nrows(), 2, |i, j| ((i * 7 + j) % 5) as f64 - 2.0);
+        let mut buffer = MemBuffer::new(symbolic.solve_in_place_scratch::<f64>(2, Par::Seq));
+        let (mut ours, mut theirs) = (rhs.clone(), rhs);
+        split.l_solve(llt, ours.as_mut());
+        split.l_transpose_solve(llt, ours.as_mut());
+        llt.l_solve_with_conj(Conj::No, theirs.as_mut(), Par::Seq, MemStack::new(&mut buffer));
+        llt.l_transpose_solve_with_conj(Conj::No, theirs.as_mut(), Par::Seq, MemStack::new(&mut buffer));
+        assert!(ours == theirs);
     }
 }
