@@ -190,9 +190,11 @@ pub struct ImportArgs {
 
 pub fn import(a: ImportArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let text = std::fs::read_to_string(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
+    let bytes = std::fs::read(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
     let series = match a.format {
         ImportFormat::Csv => {
+            let text = std::str::from_utf8(&bytes)
+                .with_context(|| format!("cannot read {}: not UTF-8 text", a.input.display()))?;
             let delimiter = a
                 .delimiter
                 .map(|d| u8::try_from(d).map_err(|_| anyhow::anyhow!("--delimiter {d:?} is not one ASCII character")))
@@ -202,9 +204,9 @@ pub fn import(a: ImportArgs) -> Result<()> {
                 decimal_comma: a.decimal_comma.then_some(true),
                 time_column: a.time_column.clone(),
             };
-            import::read_csv(&text, &options)
+            import::read_csv(text, &options)
         }
-        ImportFormat::Uff => import::read_uff58(&text),
+        ImportFormat::Uff => import::read_uff58(&bytes),
     }
     .with_context(|| a.input.display().to_string())?;
     let start_ns = a

@@ -1,11 +1,11 @@
 //! Time series from the files loggers already write, read into columns:
 //! CSV/TSV (the `csv` crate; a header row, an optional units row, a time
-//! column or a given rate) and universal file format dataset 58 time
-//! responses (function type 1, ASCII, as pyuff and modal-testing software
-//! write them). Mapping the columns to the config's sensors happens above
+//! column or a given rate) and universal file format dataset 58/58b time
+//! responses (function type 1, ASCII or binary, as pyuff and modal-testing
+//! software write them). Mapping the columns to the config's sensors happens above
 //! (`studies::import`).
 
-use crate::io::uff::{field, fortran_real, record_values};
+use crate::io::uff::{read_time_responses, UffError};
 use crate::io::wire::{parse_timestamp, ChannelQuantity};
 use thiserror::Error;
 
@@ -243,122 +243,44 @@ fn time_axis(
     Ok(())
 }
 
-/// Reads every dataset 58 time response (function type 1, real, evenly
-/// spaced) of a universal file; other datasets are skipped. The channel name
-/// is the first word of the ID 1 line; the quantity follows the ordinate
-/// type (12 acceleration, 9 or 13 force).
-pub fn read_uff58(text: &str) -> Result<ImportedSeries, ImportError> {
-    let lines: Vec<&str> = text.lines().collect();
-    let mut series = ImportedSeries {
-        channels: Vec::new(),
-        fs: None,
+/// Reads every dataset 58 or 58b time response (function type 1, real,
+/// evenly spaced) of a universal file ([`crate::io::uff::read_time_responses`]);
+/// other datasets are skipped. The channel name is the first word of the
+/// ID 1 line; the quantity follows the ordinate type (12 acceleration, 9 or
+/// 13 force); every channel must share the first one's sampling rate.
+pub fn read_uff58(bytes: &[u8]) -> Result<ImportedSeries, ImportError> {
+    let responses = read_time_responses(bytes).map_err(|e| match e {
+        UffError::Dataset { line, message, .. } => ImportError::Uff { line, message },
+        UffError::NoFrf => ImportError::NoUffTimeSeries,
+    })?;
+    let first = responses.first().ok_or(ImportError::NoUffTimeSeries)?;
+    let (fs, offset_seconds) = (first.fs, first.start_seconds);
+    let mut channels = Vec::with_capacity(responses.len());
+    for r in responses {
+        if (r.fs - fs).abs() > 1e-9 * fs {
+            return Err(ImportError::Uff {
+                line: r.line + 7,
+                message: format!(
+                    "sampling rate {} Hz differs from the file's first dataset ({fs} Hz)",
+                    r.fs
+                ),
+            });
+        }
+        channels.push(ImportedChannel {
+            name: r.name,
+            unit: r.unit,
+            quantity: match r.ordinate_type {
+                12 => Some(ChannelQuantity::Acceleration),
+                9 | 13 => Some(ChannelQuantity::Force),
+                _ => None,
+            },
+            data: r.data,
+        });
+    }
+    Ok(ImportedSeries {
+        channels,
+        fs: Some(fs),
         start_ns: None,
-        offset_seconds: 0.0,
-    };
-    let mut i = 0;
-    while i < lines.len() {
-        if lines[i].trim() != "-1" {
-            i += 1;
-            continue;
-        }
-        let Some(kind) = lines.get(i + 1) else { break };
-        let start = i + 1;
-        // The dataset ends at the next "-1" delimiter line.
-        let end = (start + 1..lines.len())
-            .find(|&k| lines[k].trim() == "-1")
-            .unwrap_or(lines.len());
-        match kind.split_whitespace().next() {
-            Some("58") => dataset58(&lines[start..end], start + 1, &mut series)?,
-            Some("58b") => {
-                return Err(ImportError::Uff {
-                    line: start + 1,
-                    message: "binary dataset 58b is not read; export ASCII dataset 58".into(),
-                })
-            }
-            _ => {}
-        }
-        i = end + 1;
-    }
-    if series.channels.is_empty() {
-        return Err(ImportError::NoUffTimeSeries);
-    }
-    Ok(series)
-}
-
-fn dataset58(d: &[&str], first_line: usize, series: &mut ImportedSeries) -> Result<(), ImportError> {
-    let err = |offset: usize, message: String| ImportError::Uff {
-        line: first_line + offset,
-        message,
-    };
-    if d.len() < 12 {
-        return Err(err(0, "a dataset 58 needs 11 header records".into()));
-    }
-    let int = |offset: usize, from: usize, to: usize| -> Result<i64, ImportError> {
-        field(d[offset], from, to)
-            .parse()
-            .map_err(|_| err(offset, format!("columns {}-{}: not an integer", from + 1, to)))
-    };
-    let real = |offset: usize, from: usize, to: usize| -> Result<f64, ImportError> {
-        fortran_real(field(d[offset], from, to))
-            .ok_or_else(|| err(offset, format!("columns {}-{}: not a number", from + 1, to)))
-    };
-    // Record 6: function type (I5) …; record 7: ordinate data type (I10),
-    // number of points (I10), abscissa spacing (I10), minimum (E13.5),
-    // increment (E13.5); record 9: ordinate (numerator) data type (I10).
-    if int(6, 0, 5)? != 1 {
-        return Ok(()); // not a time response (FRF, spectrum, …)
-    }
-    let data_type = int(7, 0, 10)?;
-    let points = usize::try_from(int(7, 10, 20)?).map_err(|_| err(7, "negative number of points".into()))?;
-    if int(7, 20, 30)? != 1 {
-        return Err(err(7, "uneven abscissa spacing is not supported".into()));
-    }
-    let increment = real(7, 43, 56)?;
-    if !(increment.is_finite() && increment > 0.0) {
-        return Err(err(
-            7,
-            format!("abscissa increment {increment} is not a positive time step"),
-        ));
-    }
-    if !matches!(data_type, 2 | 4) {
-        return Err(err(
-            7,
-            format!("ordinate data type {data_type}: only real time series (2, 4) are read"),
-        ));
-    }
-    let fs = 1.0 / increment;
-    match series.fs {
-        Some(f) if (f - fs).abs() > 1e-9 * fs => {
-            return Err(err(
-                7,
-                format!("sampling rate {fs} Hz differs from the file's first dataset ({f} Hz)"),
-            ))
-        }
-        _ => series.fs = Some(fs),
-    }
-    series.offset_seconds = real(7, 30, 43)?;
-    let quantity = match int(9, 0, 10)? {
-        12 => Some(ChannelQuantity::Acceleration),
-        9 | 13 => Some(ChannelQuantity::Force),
-        _ => None,
-    };
-    let unit = field(d[9], 47, 67);
-    let name = d[1].split_whitespace().next().unwrap_or("").to_string();
-    if name.is_empty() {
-        return Err(err(1, "record 1 (ID line 1) must name the channel".into()));
-    }
-    let data = record_values(&d[12..]).map_err(|(k, token)| err(12 + k, format!("{token:?} is not a number")))?;
-    if data.len() != points {
-        return Err(err(7, format!("{points} points announced, {} found", data.len())));
-    }
-    if let Some(k) = data.iter().position(|v| !v.is_finite()) {
-        return Err(err(12, format!("sample {k} is not finite")));
-    }
-    series.channels.push(ImportedChannel {
-        name,
-        unit: (!unit.is_empty()).then(|| unit.to_string()),
-        quantity,
-        data,
-    });
-    Ok(())
+        offset_seconds,
+    })
 }

@@ -92,6 +92,15 @@ fn a_uff58_file_written_by_pyuff_imports() {
     check_fixture_channels(&out, 1e-9);
 }
 
+/// The same channels as binary dataset 58b (little-endian doubles, as
+/// pyuff writes them): exact to the formulas' round-off.
+#[test]
+fn a_binary_uff58b_file_written_by_pyuff_imports() {
+    let dir = fresh_dir("import-uff58b");
+    let out = import_fixture(&dir, "uff", "tests/fixtures/pyuff_time58b.uff");
+    check_fixture_channels(&out, 1e-12);
+}
+
 #[test]
 fn a_logger_csv_with_semicolons_decimal_commas_and_units_imports() {
     let dir = fresh_dir("import-csv");

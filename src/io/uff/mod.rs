@@ -1,7 +1,8 @@
 //! Universal file format (UFF, `.uff`/`.unv`). Read: FRFs from dataset 58 (ASCII) and
 //! 58b (binary) function type 4 (frequency response function), with the
 //! ordinary coherence of the same pair (function type 6) when the file has
-//! it, and dataset 164's units. The lingua franca of modal-testing software
+//! it, and dataset 164's units; time responses (function type 1) from
+//! either for `import` ([`read_time_responses`]). The lingua franca of modal-testing software
 //! (Simcenter Testlab, ME'scope, pyuff, sdypy).
 //!
 //! Response and reference are mapped to the config's sensors by node
@@ -18,7 +19,7 @@
 mod read;
 pub mod write;
 
-pub use read::{looks_like_uff, read_frfs, UffError};
+pub use read::{looks_like_uff, read_frfs, read_time_responses, TimeResponse, UffError};
 
 /// A measurement point: a sensor's node, position (m) and measuring axis.
 #[derive(Debug, Clone, PartialEq)]

@@ -5,7 +5,7 @@ use crate::io::frf_json::{FrfEntry, FrfFile};
 use splinewatch_core::frf::Quantity;
 use thiserror::Error;
 
-#[derive(Debug, Error, PartialEq)]
+#[derive(Debug, Clone, Error, PartialEq)]
 pub enum UffError {
     #[error("UFF dataset {dataset} at line {line}: {message}")]
     Dataset {
@@ -164,8 +164,11 @@ fn binary_block<'a>(bytes: &'a [u8], pos: usize, d: &Dataset<'_>) -> Result<(&'a
 /// Records 6–11 of a dataset 58 (offsets 5–10 after the type record).
 struct Header58 {
     function: i64,
-    response: (i64, i64),
-    reference: (i64, i64),
+    /// Response and reference node and direction (record 6): checked only
+    /// where they are used (FRFs), since writers overflow the entity name
+    /// before them (pyuff's `%-10s`) and time series do not need them.
+    response: Result<(i64, i64), UffError>,
+    reference: Result<(i64, i64), UffError>,
     ordinate_type: i64,
     points: usize,
     even: bool,
@@ -207,8 +210,8 @@ fn header58(d: &Dataset<'_>) -> Result<Header58, UffError> {
     let points = usize::try_from(int(7, 10, 20)?).map_err(|_| d.err(7, "negative number of points"))?;
     Ok(Header58 {
         function: int(6, 0, 5)?,
-        response: (int(6, 41, 51)?, int(6, 51, 55)?),
-        reference: (int(6, 66, 76)?, int(6, 76, 80)?),
+        response: int(6, 41, 51).and_then(|node| Ok((node, int(6, 51, 55)?))),
+        reference: int(6, 66, 76).and_then(|node| Ok((node, int(6, 76, 80)?))),
         ordinate_type: int(7, 0, 10)?,
         points,
         even: int(7, 20, 30)? == 1,
@@ -384,8 +387,8 @@ pub fn read_frfs(bytes: &[u8], sensors: &[UffPoint]) -> Result<FrfFile, UffError
             continue;
         }
         let (x, y) = data58(d, &h)?;
-        let (output, out_sign) = sensor_at(d, sensors, "response", h.response)?;
-        let (input, in_sign) = sensor_at(d, sensors, "reference", h.reference)?;
+        let (output, out_sign) = sensor_at(d, sensors, "response", h.response.clone()?)?;
+        let (input, in_sign) = sensor_at(d, sensors, "reference", h.reference.clone()?)?;
         if h.function == 6 {
             coherences.push((
                 d.line,
@@ -438,6 +441,72 @@ pub fn read_frfs(bytes: &[u8], sensors: &[UffPoint]) -> Result<FrfFile, UffError
     Ok(file)
 }
 
+/// A dataset 58/58b time response (function type 1, real, evenly spaced).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TimeResponse {
+    /// The channel: the first word of ID line 1.
+    pub name: String,
+    /// The ordinate's unit label (record 9), if any.
+    pub unit: Option<String>,
+    /// The ordinate (numerator) specific data type (12 acceleration, 9 or
+    /// 13 force, …).
+    pub ordinate_type: i64,
+    /// Sampling rate, Hz (the abscissa increment's inverse).
+    pub fs: f64,
+    /// The abscissa minimum, s.
+    pub start_seconds: f64,
+    pub data: Vec<f64>,
+    /// The 1-based line of the dataset's type record.
+    pub line: usize,
+}
+
+/// Reads every time response (function type 1) of a universal file, ASCII
+/// (58) or binary (58b), in file order; other datasets and functions are
+/// skipped. Uneven spacing and complex ordinates are refused.
+pub fn read_time_responses(bytes: &[u8]) -> Result<Vec<TimeResponse>, UffError> {
+    let mut out = Vec::new();
+    for d in datasets(bytes)?.iter().filter(|d| d.kind == "58" || d.kind == "58b") {
+        let h = header58(d)?;
+        if h.function != 1 {
+            continue;
+        }
+        if !h.even {
+            return Err(d.err(7, "uneven abscissa spacing is not supported"));
+        }
+        if !(h.increment.is_finite() && h.increment > 0.0) {
+            return Err(d.err(
+                7,
+                format!("abscissa increment {} is not a positive time step", h.increment),
+            ));
+        }
+        if !matches!(h.ordinate_type, 2 | 4) {
+            return Err(d.err(
+                7,
+                format!(
+                    "ordinate data type {}: only real time series (2, 4) are read",
+                    h.ordinate_type
+                ),
+            ));
+        }
+        let name = d.records[0].split_whitespace().next().unwrap_or("").to_string();
+        if name.is_empty() {
+            return Err(d.err(1, "record 1 (ID line 1) must name the channel"));
+        }
+        let (_, y) = data58(d, &h)?;
+        let unit = field(d.records[8], 47, 67);
+        out.push(TimeResponse {
+            name,
+            unit: (!unit.is_empty()).then(|| unit.to_string()),
+            ordinate_type: h.numerator.0,
+            fs: 1.0 / h.increment,
+            start_seconds: h.minimum,
+            data: y.into_iter().map(|(re, _)| re).collect(),
+            line: d.line,
+        });
+    }
+    Ok(out)
+}
+
 /// A coherence dataset: its line, response and reference sensors, values.
 type Coherence = (usize, String, String, Vec<f64>);
 
@@ -472,6 +541,7 @@ mod tests {
     use proptest::prelude::*;
 
     const CAMPAIGN: &[u8] = include_bytes!("../../../tests/fixtures/uff/campaign_binary.uff");
+    const TIME_58B: &[u8] = include_bytes!("../../../tests/fixtures/pyuff_time58b.uff");
 
     fn points() -> Vec<UffPoint> {
         (1..=13)
@@ -512,6 +582,18 @@ mod tests {
         assert_eq!(frf.frfs[0].im, vec![-2.0, 0.25]);
     }
 
+    /// `file` cut at `cut` with bytes overwritten at `flips`.
+    fn damaged(file: &[u8], cut: usize, flips: &[(prop::sample::Index, u8)]) -> Vec<u8> {
+        let mut bytes = file[..cut].to_vec();
+        for (i, b) in flips {
+            if !bytes.is_empty() {
+                let k = i.index(bytes.len());
+                bytes[k] = *b;
+            }
+        }
+        bytes
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(200))]
 
@@ -521,14 +603,16 @@ mod tests {
             cut in 0usize..CAMPAIGN.len(),
             flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
         ) {
-            let mut bytes = CAMPAIGN[..cut].to_vec();
-            for (i, b) in &flips {
-                if !bytes.is_empty() {
-                    let k = i.index(bytes.len());
-                    bytes[k] = *b;
-                }
-            }
-            let _ = read_frfs(&bytes, &points());
+            let _ = read_frfs(&damaged(CAMPAIGN, cut, &flips), &points());
+        }
+
+        /// The same for the time responses of a binary file (pyuff's 58b).
+        #[test]
+        fn damaged_time_files_never_panic(
+            cut in 0usize..TIME_58B.len(),
+            flips in prop::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 0..8),
+        ) {
+            let _ = read_time_responses(&damaged(TIME_58B, cut, &flips));
         }
     }
 }
