@@ -271,6 +271,13 @@ pub struct ResultsWriter<W: Write + Seek> {
     sequence: u32,
 }
 
+/// Adds `<prefix>/<suffix>` (JSON, with its JSON schema) to `writer`: its
+/// channel id.
+fn register<W: Write + Seek>(writer: &mut mcap::Writer<W>, prefix: &str, suffix: &str, schema: &str) -> Result<u16> {
+    let schema_id = writer.add_schema(&format!("splinewatch.{suffix}"), "jsonschema", schema.as_bytes())?;
+    Ok(writer.add_channel(schema_id, &format!("{prefix}/{suffix}"), "json", &BTreeMap::new())?)
+}
+
 impl ResultsWriter<BufWriter<File>> {
     pub fn create(path: &Path, prefix: &str) -> Result<Self> {
         Self::new(create_buffered(path)?, prefix)
@@ -284,10 +291,7 @@ impl<W: Write + Seek> ResultsWriter<W> {
             .context("cannot start the results MCAP file")?;
         let mut channels = BTreeMap::new();
         for (suffix, schema) in TOPICS {
-            let topic = format!("{prefix}/{suffix}");
-            let schema_id = writer.add_schema(&format!("splinewatch.{suffix}"), "jsonschema", schema.as_bytes())?;
-            let id = writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
-            channels.insert(suffix, id);
+            channels.insert(suffix, register(&mut writer, prefix, suffix, schema)?);
         }
         Ok(Self {
             writer,
@@ -310,11 +314,7 @@ impl<W: Write + Seek> ResultsWriter<W> {
     pub fn write_json(&mut self, suffix: &str, time_ns: i128, json: &[u8]) -> Result<()> {
         if !self.channels.contains_key(suffix) {
             if let Some((name, schema)) = MONITORING_TOPICS.iter().find(|(n, _)| *n == suffix) {
-                let topic = format!("{}/{name}", self.prefix);
-                let schema_id =
-                    self.writer
-                        .add_schema(&format!("splinewatch.{name}"), "jsonschema", schema.as_bytes())?;
-                let id = self.writer.add_channel(schema_id, &topic, "json", &BTreeMap::new())?;
+                let id = register(&mut self.writer, &self.prefix, name, schema)?;
                 self.channels.insert(name, id);
             }
         }
