@@ -130,12 +130,8 @@ impl ZenohLink {
         Ok((link, rx))
     }
 
-    /// Publishes a result message (JSON) under its key; a failure is logged.
-    pub(super) fn publish<M: serde::Serialize + ?Sized>(&self, suffix: &str, v: &M) {
-        self.publish_json(suffix, serde_json::to_vec(v).unwrap_or_default());
-    }
-
-    /// Publishes a message already serialised to JSON.
+    /// Publishes a result message already serialised to JSON under its key;
+    /// a failure is logged.
     pub(super) fn publish_json(&self, suffix: &str, json: Vec<u8>) {
         let key = zenoh_result_key(&self.prefix, suffix);
         if let Err(e) = self

@@ -175,9 +175,10 @@ impl Daemon {
             }
             return;
         };
-        let h = self.record_health(time);
-        link.publish("health", &h);
-        link.set_latest(Latest::Health, serde_json::to_vec(&h).unwrap_or_default());
+        // Serialised once for the results file, zenoh and the `latest` reply.
+        let json = self.record_health(time);
+        link.publish_json("health", json.clone());
+        link.set_latest(Latest::Health, json);
         let health = self.pipeline.health();
         tracing::info!(
             message = "health",
@@ -237,10 +238,10 @@ impl Daemon {
     }
 
     /// The health message at `time` into the results file and Rerun;
-    /// returned for publishing.
-    fn record_health(&mut self, time: i128) -> serde_json::Value {
-        let h = results::health_message(time, self.pipeline.health());
-        self.results.write("health", time, &h);
+    /// returned (JSON) for publishing.
+    fn record_health(&mut self, time: i128) -> Vec<u8> {
+        let h = serde_json::to_vec(&results::health_message(time, self.pipeline.health())).unwrap_or_default();
+        self.results.write_json("health", time, &h);
         if let Some(v) = self.viewer.as_mut() {
             let r = v.log_health(time, self.pipeline.health());
             count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
