@@ -21,7 +21,7 @@
 use crate::knots::{KnotError, KnotVector, MAX_DEGREE};
 use crate::material::OrthotropicMaterial;
 use crate::quadrature::GaussLegendre;
-use crate::sparse::{Pattern, SparseError, SparseSymmetric};
+use crate::sparse::{Pattern, SparseAccumulator, SparseError, SparseSymmetric};
 use crate::surface::{BSplineSurface, Direction, SurfaceError};
 use crate::vec3::{axpy, cross, det_inverse, dot, mat_vec, normalize, scale, Vec3};
 use faer::linalg::matmul::matmul;
@@ -535,6 +535,12 @@ impl Assembly for Mat<f64> {
 impl Assembly for SparseSymmetric {
     fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
         SparseSymmetric::add_local(self, local, dofs)
+    }
+}
+
+impl Assembly for SparseAccumulator {
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        SparseAccumulator::add_local(self, local, dofs)
     }
 }
 

@@ -163,6 +163,35 @@ impl Pattern {
     /// The pattern of the dofs `dofs` (ascending) alone, as a control net
     /// with their counts per point, and for each of its entries the position
     /// of the same entry in `self`.
+    /// Visits `(r, c, position)` for every entry `(dofs[r], dofs[c])` of an
+    /// element matrix on `dofs` (an assembly's scatter). A control point's
+    /// dofs are consecutive in `dofs` and in every column of the pattern, so
+    /// one search finds a run of them.
+    pub fn for_each_local_position(
+        &self,
+        dofs: &[usize],
+        mut visit: impl FnMut(usize, usize, usize),
+    ) -> Result<(), SparseError> {
+        for (c, &dc) in dofs.iter().enumerate() {
+            let column = self.col_ptr[dc]..self.col_ptr[dc + 1];
+            let mut r = 0;
+            while r < dofs.len() {
+                let at = self.row_idx[column.clone()]
+                    .binary_search(&dofs[r])
+                    .map_err(|_| SparseError::OutsidePattern { row: dofs[r], col: dc })?
+                    + column.start;
+                // The run: rows that follow each other in `dofs` and in the column.
+                let mut k = 0;
+                while r + k < dofs.len() && at + k < column.end && self.row_idx[at + k] == dofs[r + k] {
+                    visit(r + k, c, at + k);
+                    k += 1;
+                }
+                r += k;
+            }
+        }
+        Ok(())
+    }
+
     pub fn restricted(&self, dofs: &[usize]) -> Result<(Pattern, Vec<usize>), SparseError> {
         let mut counts = vec![0usize; self.first.len() - 1];
         for &d in dofs {
@@ -283,29 +312,11 @@ impl SparseSymmetric {
         SparseColMatRef::new(self.pattern.symbolic(), &self.values)
     }
 
-    /// `self[dofs, dofs] += local`. A control point's dofs are consecutive
-    /// in `dofs` and in every column of the pattern, so one search finds a
-    /// run of them.
+    /// `self[dofs, dofs] += local`.
     pub fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
-        let p = &self.pattern;
-        for (c, &dc) in dofs.iter().enumerate() {
-            let column = p.col_ptr[dc]..p.col_ptr[dc + 1];
-            let mut r = 0;
-            while r < dofs.len() {
-                let at = p.row_idx[column.clone()]
-                    .binary_search(&dofs[r])
-                    .map_err(|_| SparseError::OutsidePattern { row: dofs[r], col: dc })?
-                    + column.start;
-                // The run: rows that follow each other in `dofs` and in the column.
-                let mut k = 0;
-                while r + k < dofs.len() && at + k < column.end && p.row_idx[at + k] == dofs[r + k] {
-                    self.values[at + k] += local[(r + k, c)];
-                    k += 1;
-                }
-                r += k;
-            }
-        }
-        Ok(())
+        let values = &mut self.values;
+        self.pattern
+            .for_each_local_position(dofs, |r, c, at| values[at] += local[(r, c)])
     }
 
     /// `self += scale · other` (same pattern).
@@ -390,6 +401,11 @@ impl SparseSymmetric {
         for (j, column) in reduction.columns().iter().enumerate() {
             for &(c, tc) in column {
                 for e in p.col_ptr[c]..p.col_ptr[c + 1] {
+                    // Zeros add nothing (a stiffness field's matrix is mostly
+                    // zeros on the whole deck's pattern).
+                    if self.values[e] == 0.0 {
+                        continue;
+                    }
                     let v = self.values[e] * tc;
                     for &(i, tr) in &owners[p.row_idx[e]] {
                         let k = reduced
@@ -404,6 +420,47 @@ impl SparseSymmetric {
     }
 }
 
+/// A symmetric matrix on a shared [`Pattern`] that stores only the columns
+/// an assembly reached (a stiffness field's `∂K/∂θ_k` covers part of the
+/// deck): many of them cost about their own support, not the pattern each,
+/// and each becomes a [`SparseSymmetric`] (the same values, summed in the
+/// same order) only when it is used.
+#[derive(Debug, Clone)]
+pub struct SparseAccumulator {
+    pattern: Arc<Pattern>,
+    /// Per column of the pattern, its values once anything was added there.
+    columns: Vec<Option<Box<[f64]>>>,
+}
+
+impl SparseAccumulator {
+    pub fn new(pattern: Arc<Pattern>) -> Self {
+        let columns = vec![None; pattern.n];
+        Self { pattern, columns }
+    }
+
+    /// `self[dofs, dofs] += local`.
+    pub fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        let (p, columns) = (&self.pattern, &mut self.columns);
+        p.for_each_local_position(dofs, |r, c, at| {
+            let col = dofs[c];
+            let (start, end) = (p.col_ptr[col], p.col_ptr[col + 1]);
+            let values = columns[col].get_or_insert_with(|| vec![0.0; end - start].into_boxed_slice());
+            values[at - start] += local[(r, c)];
+        })
+    }
+
+    /// The matrix on the whole pattern (zero where nothing was added).
+    pub fn to_matrix(&self) -> SparseSymmetric {
+        let mut m = SparseSymmetric::zeros(Arc::clone(&self.pattern));
+        for (col, values) in self.columns.iter().enumerate() {
+            if let Some(values) = values {
+                m.values[self.pattern.col_ptr[col]..self.pattern.col_ptr[col + 1]].copy_from_slice(values);
+            }
+        }
+        m
+    }
+}
+
 /// The pattern of the free coordinates of `reduction` on `shell`'s net.
 pub fn reduced_pattern(shell: &Shell, reduction: &DofReduction) -> Pattern {
     let cps = shell.control_point_count();
@@ -414,4 +471,43 @@ pub fn reduced_pattern(shell: &Shell, reduction: &DofReduction) -> Pattern {
     }
     let s = shell.surface();
     Pattern::control_net(s.net_size(), (s.xi().degree(), s.eta().degree()), &dofs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The same element matrices added into an accumulator and into a
+    /// matrix on the whole pattern give the same matrix, bit for bit, and
+    /// the accumulator holds only the columns it was given.
+    #[test]
+    fn an_accumulator_assembles_what_the_whole_pattern_does() {
+        // A 6 × 4 net of bilinear elements (point (a, b) is number 4a + b),
+        // 2 dofs per control point.
+        let pattern = Arc::new(Pattern::control_net((6, 4), (1, 1), &[2; 24]));
+        let mut whole = SparseSymmetric::zeros(Arc::clone(&pattern));
+        let mut part = SparseAccumulator::new(Arc::clone(&pattern));
+        for (i, j) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
+            let points = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)];
+            let mut dofs: Vec<usize> = points
+                .iter()
+                .flat_map(|&(a, b)| [2 * (a * 4 + b), 2 * (a * 4 + b) + 1])
+                .collect();
+            dofs.sort_unstable();
+            let local = Mat::from_fn(8, 8, |r, c| {
+                1.0 / (1.0 + r as f64 + c as f64) + 0.1 * (i + 2 * j) as f64
+            });
+            whole.add_local(&local, &dofs).unwrap();
+            part.add_local(&local, &dofs).unwrap();
+        }
+        let built = part.to_matrix();
+        assert!(built
+            .values()
+            .iter()
+            .zip(whole.values())
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        let held = part.columns.iter().filter(|c| c.is_some()).count();
+        assert!(held < pattern.dim() / 2, "{held} of {} columns held", pattern.dim());
+        assert!(whole.values().iter().any(|&v| v != 0.0));
+    }
 }
