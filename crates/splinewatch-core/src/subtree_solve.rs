@@ -147,8 +147,7 @@ impl SubtreeSplit {
     pub fn l_solve(&self, llt: SupernodalLltRef<'_, usize, f64>, mut rhs: MatMut<'_, f64>) {
         self.check(llt, &rhs);
         if self.groups.iter().any(Vec::is_empty) {
-            let all: Vec<usize> = (0..self.supernodes).collect();
-            forward(llt, all.iter(), rhs);
+            forward(llt, 0..self.supernodes, rhs);
             return;
         }
         let begin = llt.symbolic().supernode_begin();
@@ -159,38 +158,44 @@ impl SubtreeSplit {
         for &s in &self.top {
             second.subrows_mut(begin[s], end[s] - begin[s]).fill(0.0);
         }
-        std::thread::scope(|scope| {
-            let other = scope.spawn(|| forward(llt, self.groups[1].iter(), second.as_mut()));
-            forward(llt, self.groups[0].iter(), rhs.rb_mut());
-            other.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        self.on_both_groups(llt, rhs.rb_mut(), &mut second, |group, x| {
+            forward(llt, group.iter().copied(), x);
         });
-        for &s in &self.groups[1] {
-            let rows = end[s] - begin[s];
-            rhs.rb_mut()
-                .subrows_mut(begin[s], rows)
-                .copy_from(second.subrows(begin[s], rows));
-        }
         for &s in &self.top {
             let rows = end[s] - begin[s];
             let mut mine = rhs.rb_mut().subrows_mut(begin[s], rows);
             mine += second.subrows(begin[s], rows);
         }
-        forward(llt, self.top.iter(), rhs);
+        forward(llt, self.top.iter().copied(), rhs);
     }
 
     /// Solves `Lᵀ x = rhs` in place.
     pub fn l_transpose_solve(&self, llt: SupernodalLltRef<'_, usize, f64>, mut rhs: MatMut<'_, f64>) {
         self.check(llt, &rhs);
         if self.groups.iter().any(Vec::is_empty) {
-            let all: Vec<usize> = (0..self.supernodes).collect();
-            backward(llt, all.iter().rev(), rhs);
+            backward(llt, (0..self.supernodes).rev(), rhs);
             return;
         }
-        backward(llt, self.top.iter().rev(), rhs.rb_mut());
+        backward(llt, self.top.iter().rev().copied(), rhs.rb_mut());
         let mut second = rhs.to_owned();
+        self.on_both_groups(llt, rhs, &mut second, |group, x| {
+            backward(llt, group.iter().rev().copied(), x);
+        });
+    }
+
+    /// `solve` on the first group in `rhs` and, on a second thread, on the
+    /// second group in `second`; then the second group's rows of `rhs` taken
+    /// from `second` (the first group never writes them).
+    fn on_both_groups(
+        &self,
+        llt: SupernodalLltRef<'_, usize, f64>,
+        mut rhs: MatMut<'_, f64>,
+        second: &mut Mat<f64>,
+        solve: impl Fn(&[usize], MatMut<'_, f64>) + Sync,
+    ) {
         std::thread::scope(|scope| {
-            let other = scope.spawn(|| backward(llt, self.groups[1].iter().rev(), second.as_mut()));
-            backward(llt, self.groups[0].iter().rev(), rhs.rb_mut());
+            let other = scope.spawn(|| solve(&self.groups[1], second.as_mut()));
+            solve(&self.groups[0], rhs.rb_mut());
             other.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
         });
         let begin = llt.symbolic().supernode_begin();
@@ -235,14 +240,14 @@ fn longest_processing_time(roots: &[usize], subtree: &[usize]) -> (usize, [Vec<u
 
 /// The forward steps of `supernodes` (in an order children first), as
 /// faer's `l_solve_with_conj`.
-fn forward<'s>(
+fn forward(
     llt: SupernodalLltRef<'_, usize, f64>,
-    supernodes: impl Iterator<Item = &'s usize> + Clone,
+    supernodes: impl Iterator<Item = usize> + Clone,
     mut x: MatMut<'_, f64>,
 ) {
     let k = x.ncols();
     let mut buffer = Mat::<f64>::zeros(longest_pattern(llt, supernodes.clone()), k);
-    for &s in supernodes {
+    for s in supernodes {
         let node = llt.supernode(s);
         let matrix = node.val();
         let size = matrix.ncols();
@@ -270,14 +275,14 @@ fn forward<'s>(
 
 /// The backward steps of `supernodes` (in an order parents first), as
 /// faer's `l_transpose_solve_with_conj`.
-fn backward<'s>(
+fn backward(
     llt: SupernodalLltRef<'_, usize, f64>,
-    supernodes: impl Iterator<Item = &'s usize> + Clone,
+    supernodes: impl Iterator<Item = usize> + Clone,
     mut x: MatMut<'_, f64>,
 ) {
     let k = x.ncols();
     let mut buffer = Mat::<f64>::zeros(longest_pattern(llt, supernodes.clone()), k);
-    for &s in supernodes {
+    for s in supernodes {
         let node = llt.supernode(s);
         let matrix = node.val();
         let size = matrix.ncols();
@@ -304,8 +309,8 @@ fn backward<'s>(
 }
 
 /// The longest off-diagonal pattern among `supernodes`.
-fn longest_pattern<'s>(llt: SupernodalLltRef<'_, usize, f64>, supernodes: impl Iterator<Item = &'s usize>) -> usize {
-    supernodes.map(|&s| llt.supernode(s).pattern().len()).max().unwrap_or(0)
+fn longest_pattern(llt: SupernodalLltRef<'_, usize, f64>, supernodes: impl Iterator<Item = usize>) -> usize {
+    supernodes.map(|s| llt.supernode(s).pattern().len()).max().unwrap_or(0)
 }
 
 #[cfg(test)]
