@@ -6,7 +6,7 @@
 
 use splinewatch::config::Config;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::sparse_model::SparseModel;
+use splinewatch_core::solvers::sparse_model::SparseModel;
 
 const SINELLO: &str = include_str!("../config/sinello.toml");
 

@@ -3,7 +3,7 @@
 //! Run: `cargo bench --bench updating`.
 
 use splinewatch::studies::paper::{bundled_configs, run, EXPERIMENTS};
-use splinewatch_core::frf::{FrfEvaluation, FrfRequest, ModalState, Quantity};
+use splinewatch_core::response::frf::{FrfEvaluation, FrfRequest, ModalState, Quantity};
 use std::path::Path;
 
 fn root() -> &'static Path {

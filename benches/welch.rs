@@ -3,7 +3,9 @@
 //! `python3 benches/welch_scipy.py` (scipy.signal.csd/welch on the same sizes).
 //! Run: `cargo bench --bench welch`.
 
-use splinewatch_core::welch::{Averaging, Detrend, Estimator, Gates, WelchEstimator, WelchSettings, Window};
+use splinewatch_core::identification::welch::{
+    Averaging, Detrend, Estimator, Gates, WelchEstimator, WelchSettings, Window,
+};
 
 const FS: f64 = 256.0;
 const SAMPLES: usize = 3600 * 256;

@@ -9,7 +9,7 @@ mod monitor;
 use crate::io::console::errln;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
-use splinewatch_core::frf::Quantity;
+use splinewatch_core::response::frf::Quantity;
 use std::process::ExitCode;
 
 #[derive(Parser)]

@@ -7,7 +7,7 @@ use crate::io::console::{errln, outln};
 use crate::studies::{self, paper, SynthOptions};
 use anyhow::{Context, Result};
 use clap::Args;
-use splinewatch_core::frf::Quantity;
+use splinewatch_core::response::frf::Quantity;
 use splinewatch_core::updating::IterationRecord;
 use std::io::Write;
 use std::path::{Path, PathBuf};

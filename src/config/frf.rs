@@ -2,8 +2,8 @@
 
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::frf::Quantity;
-use splinewatch_core::welch::{Averaging, Detrend, Estimator, Gates, WelchSettings, Window};
+use splinewatch_core::identification::welch::{Averaging, Detrend, Estimator, Gates, WelchSettings, Window};
+use splinewatch_core::response::frf::Quantity;
 
 /// `[frf]`: Welch FRF estimation from time series.
 #[derive(Debug, Clone, Deserialize, Serialize)]

@@ -20,8 +20,8 @@ mod zenoh;
 pub use frf::FrfConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
-    MaterialConfig, ModelConfig, ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig,
-    StiffnessFieldConfig, SupportConfig, AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
+    ModelConfig, ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig,
+    SupportConfig, AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
 };
 pub use monitoring::MonitoringConfig;
 pub use oma::OmaConfig;

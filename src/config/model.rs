@@ -3,16 +3,16 @@
 
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::SensorPoint;
-use splinewatch_core::knots::KnotVector;
-use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::geometry::knots::KnotVector;
+use splinewatch_core::geometry::surface::Direction;
+use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::model::shell::{Shell, ShellError};
+use splinewatch_core::model::springs::{Face, SpringDirection, SpringField};
+use splinewatch_core::model::stiffness_field::{StiffnessField, StiffnessScale};
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::shell::{Shell, ShellError};
-use splinewatch_core::springs::{Face, SpringDirection, SpringField};
-use splinewatch_core::stiffness_field::{StiffnessField, StiffnessScale};
-use splinewatch_core::surface::Direction;
+use splinewatch_core::response::frf::SensorPoint;
 
 /// Largest control net accepted (5 dofs each): the sparse path
 /// (`modes --cutoff`, `matrices`) holds 200 000 dofs in a few GB.
@@ -28,7 +28,7 @@ pub const MAX_DENSE_CONTROL_POINTS: usize = 2000;
 pub struct ModelConfig {
     pub geometry: GeometryConfig,
     pub discretization: DiscretizationConfig,
-    pub material: MaterialConfig,
+    pub material: OrthotropicParameters,
     #[serde(default)]
     pub springs: Vec<SpringConfig>,
     #[serde(default)]
@@ -163,26 +163,6 @@ pub struct DiscretizationConfig {
     /// Knots inserted along η.
     #[serde(default)]
     pub insert_knots_eta: Vec<f64>,
-}
-
-fn default_shear_correction() -> f64 {
-    5.0 / 6.0
-}
-
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct MaterialConfig {
-    pub e1: f64,
-    pub e2: f64,
-    pub g12: f64,
-    pub g13: f64,
-    pub g23: f64,
-    pub nu12: f64,
-    pub density: f64,
-    #[serde(default)]
-    pub angle_deg: f64,
-    #[serde(default = "default_shear_correction")]
-    pub shear_correction: f64,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -450,19 +430,7 @@ impl Config {
     }
 
     fn build_material(&self) -> Result<OrthotropicMaterial, ConfigError> {
-        let mat = &self.model.material;
-        OrthotropicMaterial::new(OrthotropicParameters {
-            e1: mat.e1,
-            e2: mat.e2,
-            g12: mat.g12,
-            g13: mat.g13,
-            g23: mat.g23,
-            nu12: mat.nu12,
-            density: mat.density,
-            angle_deg: mat.angle_deg,
-            shear_correction: mat.shear_correction,
-        })
-        .map_err(|e| err("model.material", e))
+        OrthotropicMaterial::new(self.model.material).map_err(|e| err("model.material", e))
     }
 
     /// `[model.damping]` as a curve; an error if it is missing.
@@ -616,7 +584,7 @@ impl Config {
                     "z" => [0.0, 0.0, 1.0],
                     "normal" => {
                         let e = shell.surface().evaluate(xi, eta);
-                        splinewatch_core::vec3::cross(e.r_xi, e.r_eta)
+                        splinewatch_core::geometry::vec3::cross(e.r_xi, e.r_eta)
                     }
                     other => {
                         return Err(err(
@@ -627,7 +595,7 @@ impl Config {
                 },
                 DirectionConfig::Vector(v) => *v,
             };
-            if splinewatch_core::vec3::normalize(direction).is_none() {
+            if splinewatch_core::geometry::vec3::normalize(direction).is_none() {
                 return Err(err(key("direction"), "must be a finite non-zero vector"));
             }
             let tau = match s.surface {

@@ -2,7 +2,7 @@
 
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::oma::{ClusterCriteria, OmaSettings, StabilityCriteria};
+use splinewatch_core::identification::oma::{ClusterCriteria, OmaSettings, StabilityCriteria};
 
 /// Settings of the identification (`[oma]`); every key is optional. The
 /// defaults suit a deck with modes from a few Hz to the band's top at 12

@@ -3,9 +3,9 @@
 use super::Config;
 use anyhow::{Context, Result};
 use splinewatch_core::c64;
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, FrfRequest, SensorPoint};
-use splinewatch_core::truncation::TruncationReport;
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, SensorPoint};
+use splinewatch_core::solvers::truncation::TruncationReport;
 
 /// The model, its sensors and damping, ready for FRF work.
 pub struct FrfSetup {

@@ -12,8 +12,9 @@
 
 use serde::{Deserialize, Serialize};
 use splinewatch_core::c64;
-use splinewatch_core::frf::Quantity;
-use splinewatch_core::updating::{MeasuredFrf, MeasuredSet, UpdateError};
+use splinewatch_core::response::frf::Quantity;
+use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet};
+use splinewatch_core::updating::UpdateError;
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -4,7 +4,7 @@
 //! 1-based, every value printed so that it reads back bit for bit.
 
 use anyhow::{bail, Context, Result};
-use splinewatch_core::sparse::SparseSymmetric;
+use splinewatch_core::model::sparse::SparseSymmetric;
 use std::io::{BufRead, Write};
 
 /// Writes the lower triangle of `matrix` with `comment` lines after the banner.
@@ -72,7 +72,7 @@ pub fn read_symmetric(input: impl BufRead) -> Result<(usize, Vec<Entry>)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use splinewatch_core::sparse::Pattern;
+    use splinewatch_core::model::sparse::Pattern;
     use std::sync::Arc;
 
     #[test]

@@ -9,7 +9,7 @@
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::c64;
-use splinewatch_core::modal_residual::ObservedMode;
+use splinewatch_core::updating::modal_residual::ObservedMode;
 use std::path::Path;
 
 /// Floors of the identified standard deviations used as weights: a

@@ -7,7 +7,7 @@ use crate::pipeline::{Fit, Health, Measured, MonitoringOutcome, UpdateOutcome, W
 use anyhow::{Context, Result};
 use serde::Serialize;
 use serde_json::{json, Value};
-use splinewatch_core::frf::Quantity;
+use splinewatch_core::response::frf::Quantity;
 use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::{BufWriter, Seek, Write};

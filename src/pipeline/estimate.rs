@@ -7,8 +7,8 @@ use crate::io::recording::RecordedBlock;
 use crate::io::wire::{format_timestamp, ChannelQuantity};
 use anyhow::{bail, Result};
 use splinewatch_core::c64;
-use splinewatch_core::frf::Quantity;
-use splinewatch_core::welch::{FrfEstimate, SegmentCounts, WelchEstimator};
+use splinewatch_core::identification::welch::{FrfEstimate, SegmentCounts, WelchEstimator};
+use splinewatch_core::response::frf::Quantity;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 

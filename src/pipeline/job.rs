@@ -8,12 +8,11 @@ use crate::config::FrfSetup;
 use crate::io::frf_json::{FrfEntry, FrfFile};
 use crate::io::modes_json::ModesFile;
 use anyhow::{bail, Result};
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::ModalState;
-use splinewatch_core::modal::ModeKind;
-use splinewatch_core::updating::{
-    ModalUpdateProblem, ModelPoint, Parameter, UpdateProblem, UpdateResult, UpdateSettings,
-};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::ModalState;
+use splinewatch_core::solvers::modal::ModeKind;
+use splinewatch_core::updating::frf_residual::{ModelPoint, UpdateProblem};
+use splinewatch_core::updating::{ModalUpdateProblem, Parameter, UpdateResult, UpdateSettings};
 use std::sync::Arc;
 
 /// What an update is fitted to.
@@ -116,7 +115,7 @@ pub struct UpdateReport {
     pub theta: Vec<Vec<f64>>,
     pub damping: DampingCurve,
     /// How the modes were truncated, for a `[model.solver]` truncated model.
-    pub truncation: Option<splinewatch_core::truncation::TruncationReport>,
+    pub truncation: Option<splinewatch_core::solvers::truncation::TruncationReport>,
 }
 
 impl UpdateJob {

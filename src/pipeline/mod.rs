@@ -44,9 +44,9 @@ use crate::io::wire::{ChannelBlock, ChannelQuantity, Limits, WireError};
 use align::ChannelQueue;
 use anyhow::{bail, Result};
 use oma::Identification;
-use splinewatch_core::frf::Quantity;
+use splinewatch_core::identification::welch::{Estimator, WelchSettings};
+use splinewatch_core::response::frf::Quantity;
 use splinewatch_core::updating::{Parameter, UpdateSettings};
-use splinewatch_core::welch::{Estimator, WelchSettings};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
 

@@ -7,10 +7,10 @@ use super::Pipeline;
 use crate::config::{FrfSetup, MonitoringConfig};
 use crate::io::monitoring_json::{AlarmMessage, NamedValue, Residual, StatusMessage};
 use crate::io::wire::ChannelBlock;
-use splinewatch_core::frf::ModalState;
-use splinewatch_core::modal::ModeKind;
 use splinewatch_core::monitoring::chart::Flag;
 use splinewatch_core::monitoring::{Monitor, MonitorState, Observation, Status};
+use splinewatch_core::response::frf::ModalState;
+use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::updating::Parameter;
 use std::collections::{BTreeMap, VecDeque};
 

@@ -9,11 +9,11 @@ use crate::io::modes_json::{ModeEntry, ModesFile, ShapeEntry};
 use crate::io::recording::RecordedBlock;
 use crate::io::wire::{format_timestamp, ChannelQuantity};
 use anyhow::{Context, Result};
-use splinewatch_core::frf::ModalState;
-use splinewatch_core::modal_residual::pair_modes;
-use splinewatch_core::oma::{
+use splinewatch_core::identification::oma::{
     identify, spectral_singular_values, OmaError, OmaResult, OmaSettings, OutputCorrelations, SpectralSingularValues,
 };
+use splinewatch_core::response::frf::ModalState;
+use splinewatch_core::updating::modal_residual::pair_modes;
 
 /// What one identification used and found.
 #[derive(Debug, Clone)]

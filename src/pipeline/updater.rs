@@ -8,9 +8,10 @@ use super::monitoring::{self, Monitoring, MonitoringOutcome};
 use super::{AcceptedParameters, Fit, Health, StateParameter, UpdateJob, UpdateOutcome};
 use crate::config::FrfSetup;
 use anyhow::{bail, Result};
-use splinewatch_core::frf::ModalState;
 use splinewatch_core::monitoring::Monitor;
-use splinewatch_core::updating::{ModelPoint, Parameter};
+use splinewatch_core::response::frf::ModalState;
+use splinewatch_core::updating::frf_residual::ModelPoint;
+use splinewatch_core::updating::Parameter;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 

@@ -3,7 +3,7 @@
 //! or skipped with a reason, and may trigger an update.
 
 use super::{Measured, Pipeline, UpdateJob, WindowReport};
-use splinewatch_core::welch::{WelchEstimator, WelchSettings};
+use splinewatch_core::identification::welch::{WelchEstimator, WelchSettings};
 use std::sync::Arc;
 
 /// What an open window accumulates.

@@ -8,7 +8,7 @@ use crate::io::uff::write::{UffMode, UffWriter};
 use crate::io::uff::UffPoint;
 use anyhow::{bail, Context, Result};
 use splinewatch_core::c64;
-use splinewatch_core::modal::ModeKind;
+use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::updating::modal_state_at;
 
 /// The config's sensors as universal-file points: node `uff_node` (default:
@@ -43,7 +43,7 @@ pub fn uff_points(config: &Config) -> Result<Vec<UffPoint>> {
 
 /// The global axis (0 x, 1 y, 2 z) and sign of a direction along one.
 fn axis_of(direction: [f64; 3]) -> Option<(usize, f64)> {
-    let d = splinewatch_core::vec3::normalize(direction)?;
+    let d = splinewatch_core::geometry::vec3::normalize(direction)?;
     (0..3).find(|&k| d[k].abs() > 1.0 - 1e-9).map(|k| (k, d[k].signum()))
 }
 

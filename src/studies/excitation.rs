@@ -17,9 +17,9 @@ use anyhow::{bail, Result};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
-use splinewatch_core::frf::SensorPoint;
-use splinewatch_core::simulate::band_limit;
-use splinewatch_core::surface::BSplineSurface;
+use splinewatch_core::geometry::surface::BSplineSurface;
+use splinewatch_core::response::frf::SensorPoint;
+use splinewatch_core::response::simulate::band_limit;
 
 /// Kind of excitation.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]

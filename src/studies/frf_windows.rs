@@ -11,7 +11,7 @@ use crate::io::wire::{format_timestamp, ChannelBlock};
 use anyhow::{bail, Result};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use splinewatch_core::frf::FrfRequest;
+use splinewatch_core::response::frf::FrfRequest;
 use splinewatch_core::updating::Parameter;
 
 /// Options of a recording of pre-computed FRFs over many windows.
@@ -127,7 +127,7 @@ fn window_frfs(
     let (mut kappa, mut theta) = scenario.coefficients_at(setup, parameters, middle_s);
     environment.apply(temperature, &mut kappa, &mut theta);
     let state = setup.model.modal_state_with_fields(&kappa, &theta, &setup.damping)?;
-    let quantity = splinewatch_core::frf::Quantity::Accelerance;
+    let quantity = splinewatch_core::response::frf::Quantity::Accelerance;
     let eval = setup.model.evaluate(
         &state,
         FrfRequest {

@@ -3,8 +3,8 @@
 use crate::config::Config;
 use anyhow::{Context, Result};
 use serde::Serialize;
-use splinewatch_core::modal::ModeKind;
-use splinewatch_core::sparse_model::SparseModel;
+use splinewatch_core::solvers::modal::ModeKind;
+use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::io::Write;
 use std::time::Instant;
 

@@ -16,7 +16,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::Deserialize;
-use splinewatch_core::simulate::{hammer_impacts, swept_sine, ModalSimulator};
+use splinewatch_core::response::simulate::{hammer_impacts, swept_sine, ModalSimulator};
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
 pub use super::excitation::Excitation;

@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
-use splinewatch_core::frf::{FrfRequest, Quantity};
+use splinewatch_core::response::frf::{FrfRequest, Quantity};
 
 /// Options of `splinewatch synth`.
 #[derive(Debug, Clone)]

@@ -8,10 +8,9 @@ use crate::io::modes_json::ModesFile;
 use crate::io::uff;
 use anyhow::{Context, Result};
 use serde::Deserialize;
-use splinewatch_core::truncation::TruncationReport;
-use splinewatch_core::updating::{
-    IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateProblem, UpdateResult,
-};
+use splinewatch_core::solvers::truncation::TruncationReport;
+use splinewatch_core::updating::frf_residual::UpdateProblem;
+use splinewatch_core::updating::{IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateResult};
 use std::io::Write;
 
 #[derive(Debug, Deserialize)]

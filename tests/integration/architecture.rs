@@ -30,6 +30,24 @@ const ROOMS: [(&str, u32); 7] = [
     ("io", 1),
 ];
 
+/// The floors of the core crate (`crates/splinewatch-core/src`) in pipeline
+/// order: a floor may import only from floors of lower rank, and no two
+/// floors share a rank, so the house reads top-down as the pipeline.
+const CORE_ROOMS: [(&str, u32); 8] = [
+    ("linalg", 0),
+    ("geometry", 1),
+    ("model", 2),
+    ("solvers", 3),
+    ("response", 4),
+    ("identification", 5),
+    ("updating", 6),
+    ("monitoring", 7),
+];
+
+/// The largest core source file and function, in lines (tests included).
+const CORE_MAX_FILE_LINES: usize = 800;
+const CORE_MAX_FUNCTION_LINES: usize = 120;
+
 /// The core crate's only dependencies.
 const CORE_DEPENDENCIES: [&str; 5] = ["faer", "realfft", "serde", "statrs", "thiserror"];
 
@@ -270,10 +288,16 @@ fn expand(rest: &str) -> Vec<Vec<String>> {
     }
 }
 
-/// Checks the dependency rule over `files` (paths relative to `src/`);
-/// returns one line per violation.
+/// Checks the dependency rule of the application's rooms over `files`
+/// (paths relative to `src/`); returns one line per violation.
 fn check(files: &[(PathBuf, String)]) -> Vec<String> {
-    let rank: BTreeMap<&str, u32> = ROOMS.into_iter().collect();
+    check_rooms(&ROOMS, "src", files)
+}
+
+/// Checks the dependency rule over `files` (paths relative to `dir`) with
+/// the given rooms and ranks; returns one line per violation.
+fn check_rooms(rooms: &[(&str, u32)], dir: &str, files: &[(PathBuf, String)]) -> Vec<String> {
+    let rank: BTreeMap<&str, u32> = rooms.iter().copied().collect();
     let modules: BTreeSet<Vec<String>> = files.iter().map(|(p, _)| module_of(p)).collect();
     let mut problems = Vec::new();
     let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
@@ -282,7 +306,7 @@ fn check(files: &[(PathBuf, String)]) -> Vec<String> {
         let Some(room) = module.first() else { continue };
         let Some(&own_rank) = rank.get(room.as_str()) else {
             problems.push(format!(
-                "src/{}: folder {room:?} is not a room of the dependency rule",
+                "{dir}/{}: {room:?} is not a room of the dependency rule",
                 path.display()
             ));
             continue;
@@ -293,12 +317,12 @@ fn check(files: &[(PathBuf, String)]) -> Vec<String> {
                 match rank.get(target_room.as_str()) {
                     Some(&r) if r < own_rank => {}
                     Some(&r) => problems.push(format!(
-                        "src/{}:{line}: {room} (rank {own_rank}) imports crate::{} (rank {r}): arrows must point down",
+                        "{dir}/{}:{line}: {room} (rank {own_rank}) imports crate::{} (rank {r}): arrows must point down",
                         path.display(),
                         target.join("::")
                     )),
                     None => problems.push(format!(
-                        "src/{}:{line}: crate::{} is outside every room",
+                        "{dir}/{}:{line}: crate::{} is outside every room",
                         path.display(),
                         target.join("::")
                     )),
@@ -401,6 +425,131 @@ fn the_core_crate_does_no_io() {
             );
         }
     }
+}
+
+fn core_sources() -> Vec<(PathBuf, String)> {
+    sources(&root().join("crates/splinewatch-core/src"))
+        .into_iter()
+        .filter(|(p, _)| p.to_str() != Some("lib.rs"))
+        .collect()
+}
+
+#[test]
+fn core_imports_follow_the_pipeline_and_never_in_a_circle() {
+    let files = core_sources();
+    assert!(files.len() > 30, "found only {} core source files", files.len());
+    let problems = check_rooms(&CORE_ROOMS, "crates/splinewatch-core/src", &files);
+    assert!(
+        problems.is_empty(),
+        "core dependency rule broken:\n{}",
+        problems.join("\n")
+    );
+    let floors: BTreeSet<String> = files
+        .iter()
+        .filter_map(|(p, _)| module_of(p).first().cloned())
+        .collect();
+    let expected: BTreeSet<String> = CORE_ROOMS.iter().map(|(r, _)| r.to_string()).collect();
+    assert_eq!(floors, expected);
+    // The crate root declares the floors in pipeline order.
+    let lib = std::fs::read_to_string(root().join("crates/splinewatch-core/src/lib.rs")).unwrap();
+    let declared: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("pub mod ")?.strip_suffix(';'))
+        .collect();
+    let mut by_rank = CORE_ROOMS;
+    by_rank.sort_by_key(|(_, r)| *r);
+    assert_eq!(declared, by_rank.map(|(r, _)| r));
+}
+
+#[test]
+fn every_core_floor_says_what_it_may_import() {
+    let src = root().join("crates/splinewatch-core/src");
+    for (floor, _) in CORE_ROOMS {
+        let folder = src.join(floor).join("mod.rs");
+        let path = if folder.exists() {
+            folder
+        } else {
+            src.join(format!("{floor}.rs"))
+        };
+        let text = std::fs::read_to_string(&path).unwrap();
+        let head: Vec<&str> = text.lines().take(6).collect();
+        assert!(
+            head.iter().any(|l| l.starts_with("//!") && l.contains("May import")),
+            "{} does not open with what it may import",
+            path.display()
+        );
+    }
+}
+
+/// Every `fn` with a body in `code` (comments and literals removed): its
+/// name, first line and length in lines, signature to closing brace.
+fn function_lengths(code: &str) -> Vec<(String, usize, usize)> {
+    let bytes = code.as_bytes();
+    let mut out = Vec::new();
+    for (at, _) in code.match_indices("fn ") {
+        if is_ident(code[..at].chars().last().as_ref()) {
+            continue;
+        }
+        let name: String = code[at + 3..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if name.is_empty() {
+            continue;
+        }
+        let rest = &code[at..];
+        let (Some(brace), semi) = (rest.find('{'), rest.find(';')) else {
+            continue;
+        };
+        if semi.is_some_and(|s| s < brace) {
+            continue; // a declaration without a body (trait method)
+        }
+        let mut depth = 0usize;
+        let mut end = at + brace;
+        for (i, &b) in bytes.iter().enumerate().skip(at + brace) {
+            match b {
+                b'{' => depth += 1,
+                b'}' => {
+                    depth -= 1;
+                    if depth == 0 {
+                        end = i;
+                        break;
+                    }
+                }
+                _ => {}
+            }
+        }
+        let first = code[..at].matches('\n').count() + 1;
+        let last = code[..end].matches('\n').count() + 1;
+        out.push((name, first, last - first + 1));
+    }
+    out
+}
+
+#[test]
+fn core_files_and_functions_stay_readable() {
+    let mut problems = Vec::new();
+    for (path, text) in core_sources() {
+        let lines = text.lines().count();
+        if lines > CORE_MAX_FILE_LINES {
+            problems.push(format!(
+                "{}: {lines} lines (at most {CORE_MAX_FILE_LINES})",
+                path.display()
+            ));
+        }
+        for (name, line, length) in function_lengths(&code_only(&text)) {
+            if length > CORE_MAX_FUNCTION_LINES {
+                problems.push(format!(
+                    "{}:{line}: fn {name} is {length} lines (at most {CORE_MAX_FUNCTION_LINES})",
+                    path.display()
+                ));
+            }
+        }
+    }
+    assert!(problems.is_empty(), "split these:\n{}", problems.join("\n"));
+    // The measure itself, on a made-up source.
+    let lengths = function_lengths(&code_only("trait T { fn a(); }\nfn b() {\n  if x { y() }\n}\n"));
+    assert_eq!(lengths, [("b".to_string(), 2, 3)]);
 }
 
 fn made_up(files: &[(&str, &str)]) -> Vec<(PathBuf, String)> {

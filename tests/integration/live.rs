@@ -217,7 +217,7 @@ fn precomputed_frfs_on_the_frf_topic_drive_an_update() {
         &studies::SynthOptions {
             inputs: vec!["P1".into()],
             outputs,
-            quantity: splinewatch_core::frf::Quantity::Accelerance,
+            quantity: splinewatch_core::response::frf::Quantity::Accelerance,
             f_min: 0.5,
             f_max: 80.0,
             step: 0.25,

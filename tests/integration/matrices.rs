@@ -7,7 +7,7 @@
 use crate::common::{fresh_dir, splinewatch};
 use splinewatch::config::load_config;
 use splinewatch::io::matrix_market::{read_symmetric, Entry};
-use splinewatch_core::sparse_model::SparseModel;
+use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -141,7 +141,7 @@ fn matrices_into_an_impossible_folder_is_a_clear_error() {
 #[test]
 fn truncated_frfs_with_residual_compensation_match_the_full_modal_sum() {
     use splinewatch::config::ModesChoice;
-    use splinewatch_core::frf::{FrfRequest, Quantity};
+    use splinewatch_core::response::frf::{FrfRequest, Quantity};
     let mut config = load_config(
         Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("config/sinello.toml")

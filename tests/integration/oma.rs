@@ -5,8 +5,8 @@ use crate::common::{fresh_dir, splinewatch};
 use splinewatch::config::{frf_setup, load_config};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch_core::c64;
-use splinewatch_core::modal::ModeKind;
-use splinewatch_core::oma::shape::mac;
+use splinewatch_core::identification::oma::shape::mac;
+use splinewatch_core::solvers::modal::ModeKind;
 use std::path::Path;
 use std::process::Output;
 

@@ -1,4 +1,6 @@
 //! Small dense helpers shared by the FRF and updating code.
+//!
+//! May import: nothing of the crate (it is the floor every other stands on).
 
 use faer::prelude::Solve;
 use faer::{c64, Mat};

@@ -2,7 +2,7 @@
 
 use super::{field, fortran_real, record_values, UffPoint};
 use crate::io::frf_json::{FrfEntry, FrfFile};
-use splinewatch_core::frf::Quantity;
+use splinewatch_core::response::frf::Quantity;
 use thiserror::Error;
 
 #[derive(Debug, Clone, Error, PartialEq)]

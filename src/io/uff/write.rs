@@ -7,7 +7,7 @@
 use super::UffPoint;
 use crate::io::frf_json::FrfFile;
 use splinewatch_core::c64;
-use splinewatch_core::frf::Quantity;
+use splinewatch_core::response::frf::Quantity;
 use std::fmt::Write;
 
 /// A mode shape at the points (one value per point, in the points' order).

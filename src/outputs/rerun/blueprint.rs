@@ -9,7 +9,7 @@ use rerun::blueprint::{
     Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView, Tabs, TimeSeriesView,
     Vertical,
 };
-use splinewatch_core::frf::SensorPoint;
+use splinewatch_core::response::frf::SensorPoint;
 
 impl RerunOutput {
     /// The layout: trends left, the deck in the middle, and on the right the

@@ -2,8 +2,8 @@
 //! spring field and mode shapes evaluated on it, and the colour ramp.
 
 use super::GRID;
+use splinewatch_core::geometry::vec3::Vec3;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::vec3::Vec3;
 
 pub(super) fn f32x3(v: Vec3) -> [f32; 3] {
     [v[0] as f32, v[1] as f32, v[2] as f32]

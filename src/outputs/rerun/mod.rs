@@ -42,8 +42,8 @@ use crate::config::{frf_setup, Config, FrfSetup};
 use crate::pipeline::{Fit, Health, Measured, UpdateOutcome};
 use anyhow::{anyhow, Result};
 use deck::DeckGrid;
-use splinewatch_core::frf::SensorPoint;
 use splinewatch_core::model::ShellModel;
+use splinewatch_core::response::frf::SensorPoint;
 use std::path::{Path, PathBuf};
 
 /// Where the Rerun stream goes.

@@ -6,7 +6,7 @@ use super::{rerun_error, RerunOutput};
 use crate::io::frf_json::FrfFile;
 use crate::pipeline::UpdateReport;
 use anyhow::Result;
-use splinewatch_core::damping::DampingCurve;
+use splinewatch_core::model::damping::DampingCurve;
 
 impl RerunOutput {
     /// Value and ±1σ of every parameter, and the relative residual.

@@ -3,6 +3,8 @@
 //! identification: Peeters & De Roeck 2001, Z24; Kullaa 2003; Magalhães,
 //! Cunha & Caetano 2012).
 //!
+//! May import: every floor above it (`updating`, …, `geometry`, `linalg`); it uses none of them.
+//!
 //! Each scored update is an [`Observation`]: its features (updated
 //! parameters, identified frequencies) and the mean temperature of every
 //! channel over its span. The first observations train a [`Reference`]:

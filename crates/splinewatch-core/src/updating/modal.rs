@@ -1,14 +1,14 @@
 //! Modal-residue updating (output-only): the residues of
-//! [`crate::modal_residual`] as a [`ResidualModel`] of the shared solver.
+//! [`crate::updating::modal_residual`] as a [`ResidualModel`] of the shared solver.
 //! The pairing is redone at every evaluation, so a mode that changes order
 //! as κ moves is followed; the cost is compared across steps on whatever
 //! pairs each step has.
 
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{check_parameters, IterationRecord, Parameter, UpdateError, UpdateResult, UpdateSettings};
-use crate::damping::DampingCurve;
-use crate::frf::{FrfModel, ModalState};
-use crate::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
+use crate::model::damping::DampingCurve;
+use crate::response::frf::{FrfModel, ModalState};
+use crate::updating::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
 
 /// Updating a model against identified modes.
 #[derive(Debug)]

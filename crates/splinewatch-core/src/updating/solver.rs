@@ -62,10 +62,6 @@ pub struct Solved<E> {
 /// Runs the bounded LM from `start` (warm start: values on or outside a
 /// bound are moved inside by 1e-6 of the range, where the transform of eq.
 /// (42) has a non-zero derivative).
-#[allow(
-    clippy::too_many_lines,
-    reason = "the Levenberg-Marquardt loop of eq. (40)-(43) with its trial steps and stopping rules; split, its state would travel through many arguments"
-)]
 #[track_caller]
 pub fn levenberg_marquardt<M: ResidualModel>(
     model: &M,
@@ -74,91 +70,143 @@ pub fn levenberg_marquardt<M: ResidualModel>(
     observer: &mut dyn FnMut(&IterationRecord),
 ) -> Result<Solved<M::Extra>, UpdateError> {
     assert_eq!(start.len(), model.parameters().len(), "one start value per parameter");
-    let bounds: Vec<(f64, f64)> = model.parameters().iter().map(|p| (p.lower, p.upper)).collect();
-    let settings = model.settings();
-    let to_p = |y: &[f64]| -> Vec<f64> {
-        y.iter()
-            .zip(&bounds)
-            .map(|(&y, &(a, b))| bounded_value(y, a, b))
-            .collect()
-    };
-    // The model is evaluated at the start values themselves (not at
-    // p(y(start)), which differs in the last bits), so that a warm start
-    // lands exactly on the point the previous solve ended on.
-    let mut p: Vec<f64> = start
-        .iter()
-        .zip(&bounds)
-        .map(|(&p, &(a, b))| {
-            let margin = 1e-6 * (b - a);
-            p.clamp(a + margin, b - margin)
-        })
-        .collect();
-    let mut y: Vec<f64> = p
-        .iter()
-        .zip(&bounds)
-        .map(|(&p, &(a, b))| unbounded_value(p, a, b))
-        .collect();
-    let n = y.len();
-    let (mut current, mut evaluations) = model.first(&p, previous)?;
-    let mut cost = 0.5 * norm2(&current.residual);
-    let mut iterations = vec![IterationRecord {
-        iteration: 0,
-        relative_residual: model.relative_residual(&current),
-        cost,
-        parameters: p.clone(),
-        step_norm: 0.0,
-        damping: 0.0,
-        rejected_steps: 0,
-    }];
-    observer(&iterations[0]);
-    let chain = |jp: &Mat<f64>, y: &[f64]| -> Mat<f64> {
-        let dp_dy: Vec<f64> = y
+    let mut search = Search::start(model, start, previous)?;
+    observer(&search.iterations[0]);
+    let (mut stop, mut converged) = (StopReason::MaxIterations, false);
+    while search.iteration < model.settings().max_iterations {
+        if let Some((reason, done)) = search.step(observer)? {
+            (stop, converged) = (reason, done);
+            break;
+        }
+    }
+    Ok(Solved {
+        p: search.p,
+        at: search.current,
+        iterations: search.iterations,
+        converged,
+        stop,
+        cost: search.cost,
+        offset: search.offset,
+        evaluations: search.evaluations,
+    })
+}
+
+/// The state of one Levenberg–Marquardt search: the point in the bounded
+/// parameters `p` and their unbounded images `y` (eq. 42), the evaluation
+/// there, the normal equations of the chained Jacobian (eq. 43) and the
+/// damping.
+struct Search<'m, M: ResidualModel> {
+    model: &'m M,
+    bounds: Vec<(f64, f64)>,
+    p: Vec<f64>,
+    y: Vec<f64>,
+    current: Evaluated<M::Extra>,
+    cost: f64,
+    /// `JᵀJ` and `Jᵀr` in `y`.
+    a: Mat<f64>,
+    g: Vec<f64>,
+    offset: Option<f64>,
+    /// The residual count at the start (the relative offset's `m`).
+    m: usize,
+    lambda: f64,
+    nu: f64,
+    /// Moré's column scaling: the largest diagonal of `JᵀJ` seen.
+    scale: Vec<f64>,
+    /// Steps rejected since the last accepted one.
+    rejected: usize,
+    iteration: usize,
+    evaluations: usize,
+    iterations: Vec<IterationRecord>,
+}
+
+impl<'m, M: ResidualModel> Search<'m, M> {
+    fn start(model: &'m M, start: &[f64], previous: Option<&M::Previous>) -> Result<Self, UpdateError> {
+        let bounds: Vec<(f64, f64)> = model.parameters().iter().map(|p| (p.lower, p.upper)).collect();
+        let settings = model.settings();
+        // The model is evaluated at the start values themselves (not at
+        // p(y(start)), which differs in the last bits), so that a warm start
+        // lands exactly on the point the previous solve ended on.
+        let p: Vec<f64> = start
             .iter()
             .zip(&bounds)
-            .map(|(&y, &(a, b))| bounded_derivative(y, a, b))
+            .map(|(&p, &(a, b))| {
+                let margin = 1e-6 * (b - a);
+                p.clamp(a + margin, b - margin)
+            })
             .collect();
-        Mat::from_fn(jp.nrows(), n, |r, c| jp[(r, c)] * dp_dy[c])
-    };
-    let mut jy = chain(&current.jacobian, &y);
-    let (mut a, mut g) = normal_equations(&jy, &current.residual);
-    let mut lambda = match settings.method {
-        Method::LevenbergMarquardt => settings.initial_damping,
-        Method::GaussNewton => 0.0,
-    };
-    let mut nu = 2.0;
-    let mut scale: Vec<f64> = (0..n).map(|i| a[(i, i)]).collect();
-    let mut stop = StopReason::MaxIterations;
-    let mut converged = false;
-    let mut rejected = 0;
-    let mut iteration = 0;
-    let m = current.residual.len();
-    let mut offset = relative_offset(&a, &g, cost, m);
-    while iteration < settings.max_iterations {
-        if cost == 0.0 {
-            stop = StopReason::ZeroResidual;
-            converged = true;
-            break;
-        }
-        if offset.is_some_and(|o| o < settings.offset_tolerance) {
-            stop = StopReason::RelativeOffset;
-            converged = true;
-            break;
-        }
-        for i in 0..n {
-            scale[i] = scale[i].max(a[(i, i)]);
-        }
-        let Some(step) = solve_damped(&a, &g, &scale, lambda) else {
-            lambda = (lambda * nu).max(1e-12);
-            nu *= 2.0;
-            continue;
+        let y: Vec<f64> = p
+            .iter()
+            .zip(&bounds)
+            .map(|(&p, &(a, b))| unbounded_value(p, a, b))
+            .collect();
+        let (current, evaluations) = model.first(&p, previous)?;
+        let cost = 0.5 * norm2(&current.residual);
+        let iterations = vec![IterationRecord {
+            iteration: 0,
+            relative_residual: model.relative_residual(&current),
+            cost,
+            parameters: p.clone(),
+            step_norm: 0.0,
+            damping: 0.0,
+            rejected_steps: 0,
+        }];
+        let jy = chain(&current.jacobian, &y, &bounds);
+        let (a, g) = normal_equations(&jy, &current.residual);
+        let lambda = match settings.method {
+            Method::LevenbergMarquardt => settings.initial_damping,
+            Method::GaussNewton => 0.0,
         };
-        let y_new: Vec<f64> = y.iter().zip(&step).map(|(y, s)| y + s).collect();
-        evaluations += 1;
+        let scale: Vec<f64> = (0..y.len()).map(|i| a[(i, i)]).collect();
+        let m = current.residual.len();
+        let offset = relative_offset(&a, &g, cost, m);
+        Ok(Self {
+            model,
+            bounds,
+            p,
+            y,
+            current,
+            cost,
+            a,
+            g,
+            offset,
+            m,
+            lambda,
+            nu: 2.0,
+            scale,
+            rejected: 0,
+            iteration: 0,
+            evaluations,
+            iterations,
+        })
+    }
+
+    /// One trial step: `Some((reason, converged))` when the search stops.
+    fn step(&mut self, observer: &mut dyn FnMut(&IterationRecord)) -> Result<Option<(StopReason, bool)>, UpdateError> {
+        let settings = self.model.settings();
+        if self.cost == 0.0 {
+            return Ok(Some((StopReason::ZeroResidual, true)));
+        }
+        if self.offset.is_some_and(|o| o < settings.offset_tolerance) {
+            return Ok(Some((StopReason::RelativeOffset, true)));
+        }
+        for i in 0..self.y.len() {
+            self.scale[i] = self.scale[i].max(self.a[(i, i)]);
+        }
+        let Some(step) = solve_damped(&self.a, &self.g, &self.scale, self.lambda) else {
+            self.lambda = (self.lambda * self.nu).max(1e-12);
+            self.nu *= 2.0;
+            return Ok(None);
+        };
+        let y_new: Vec<f64> = self.y.iter().zip(&step).map(|(y, s)| y + s).collect();
+        self.evaluations += 1;
         // Residual only: the Jacobian is computed once a step is accepted.
-        let p_new = to_p(&y_new);
-        let trial = model.residual(&p_new);
+        let p_new: Vec<f64> = y_new
+            .iter()
+            .zip(&self.bounds)
+            .map(|(&y, &(a, b))| bounded_value(y, a, b))
+            .collect();
         // A trial that fails to evaluate counts as a rejected step.
-        let (trial, new_cost) = match trial {
+        let (trial, new_cost) = match self.model.residual(&p_new) {
             Ok(t) => {
                 let c = 0.5 * norm2(&t.residual);
                 (Some(t), c)
@@ -167,83 +215,107 @@ pub fn levenberg_marquardt<M: ResidualModel>(
             Err(e) => return Err(e),
         };
         // Predicted decrease of the linear model: -gᵀs - ½ sᵀAs.
-        let predicted = -dot(&g, &step) - 0.5 * quadratic(&a, &step);
-        let rho = (cost - new_cost) / predicted.max(f64::MIN_POSITIVE);
+        let predicted = -dot(&self.g, &step) - 0.5 * quadratic(&self.a, &step);
+        let rho = (self.cost - new_cost) / predicted.max(f64::MIN_POSITIVE);
         let accept = match settings.method {
             Method::LevenbergMarquardt => rho > 1e-4,
             Method::GaussNewton => trial.is_some(),
         };
         if !accept {
-            rejected += 1;
+            self.rejected += 1;
             // As in MINPACK, a trust region shrunk below the step tolerance
             // means no better point is resolvable: converged.
-            if norm2(&step).sqrt() <= settings.step_tolerance * (norm2(&y).sqrt() + settings.step_tolerance) {
-                stop = StopReason::StepTolerance;
-                converged = true;
-                break;
+            if norm2(&step).sqrt() <= settings.step_tolerance * (norm2(&self.y).sqrt() + settings.step_tolerance) {
+                return Ok(Some((StopReason::StepTolerance, true)));
             }
-            lambda *= nu;
-            nu *= 2.0;
-            if lambda > 1e16 {
-                stop = StopReason::Stalled;
-                break;
+            self.lambda *= self.nu;
+            self.nu *= 2.0;
+            if self.lambda > 1e16 {
+                return Ok(Some((StopReason::Stalled, false)));
             }
-            continue;
+            return Ok(None);
         }
-        let trial = model.with_jacobian(&p_new, trial.expect("accepted steps evaluated"))?;
-        iteration += 1;
-        let step_norm = norm2(&step).sqrt();
-        let relative_decrease = (cost - new_cost) / cost;
-        let diverged = new_cost > cost;
-        y = y_new;
-        p = p_new;
-        current = trial;
-        cost = new_cost;
-        iterations.push(IterationRecord {
-            iteration,
-            relative_residual: model.relative_residual(&current),
-            cost,
-            parameters: p.clone(),
-            step_norm,
-            damping: lambda,
-            rejected_steps: rejected,
+        let trial = self
+            .model
+            .with_jacobian(&p_new, trial.expect("accepted steps evaluated"))?;
+        let accepted = Accepted {
+            y: y_new,
+            p: p_new,
+            at: trial,
+            cost: new_cost,
+            step_norm: norm2(&step).sqrt(),
+            rho,
+        };
+        Ok(self.accept(accepted, observer))
+    }
+
+    /// Moves to an accepted point, records the iteration, updates the
+    /// damping (Nielsen) and applies the stopping rules.
+    fn accept(
+        &mut self,
+        accepted: Accepted<M::Extra>,
+        observer: &mut dyn FnMut(&IterationRecord),
+    ) -> Option<(StopReason, bool)> {
+        let settings = self.model.settings();
+        self.iteration += 1;
+        let relative_decrease = (self.cost - accepted.cost) / self.cost;
+        let diverged = accepted.cost > self.cost;
+        self.y = accepted.y;
+        self.p = accepted.p;
+        self.current = accepted.at;
+        self.cost = accepted.cost;
+        self.iterations.push(IterationRecord {
+            iteration: self.iteration,
+            relative_residual: self.model.relative_residual(&self.current),
+            cost: self.cost,
+            parameters: self.p.clone(),
+            step_norm: accepted.step_norm,
+            damping: self.lambda,
+            rejected_steps: self.rejected,
         });
-        observer(iterations.last().expect("just pushed"));
-        rejected = 0;
-        jy = chain(&current.jacobian, &y);
-        (a, g) = normal_equations(&jy, &current.residual);
-        offset = relative_offset(&a, &g, cost, m);
+        observer(self.iterations.last().expect("just pushed"));
+        self.rejected = 0;
+        let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
+        (self.a, self.g) = normal_equations(&jy, &self.current.residual);
+        self.offset = relative_offset(&self.a, &self.g, self.cost, self.m);
         if settings.method == Method::LevenbergMarquardt {
-            lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * rho - 1.0).powi(3));
-            nu = 2.0;
+            self.lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * accepted.rho - 1.0).powi(3));
+            self.nu = 2.0;
         }
         // A change within the tolerance, up or down, is convergence; only a
         // real increase means Gauss–Newton diverged.
         if relative_decrease.abs() < settings.cost_tolerance {
-            stop = StopReason::CostTolerance;
-            converged = true;
-            break;
+            return Some((StopReason::CostTolerance, true));
         }
         if diverged {
-            stop = StopReason::Diverged;
-            break;
+            return Some((StopReason::Diverged, false));
         }
-        if step_norm <= settings.step_tolerance * (norm2(&y).sqrt() + settings.step_tolerance) {
-            stop = StopReason::StepTolerance;
-            converged = true;
-            break;
+        if accepted.step_norm <= settings.step_tolerance * (norm2(&self.y).sqrt() + settings.step_tolerance) {
+            return Some((StopReason::StepTolerance, true));
         }
+        None
     }
-    Ok(Solved {
-        p,
-        at: current,
-        iterations,
-        converged,
-        stop,
-        cost,
-        offset,
-        evaluations,
-    })
+}
+
+/// An accepted trial step: the new point, its evaluation with the
+/// Jacobian, its cost, the step's length and its gain ratio.
+struct Accepted<E> {
+    y: Vec<f64>,
+    p: Vec<f64>,
+    at: Evaluated<E>,
+    cost: f64,
+    step_norm: f64,
+    rho: f64,
+}
+
+/// `∂r/∂y = ∂r/∂p · dp/dy` column by column (eq. 43).
+fn chain(jp: &Mat<f64>, y: &[f64], bounds: &[(f64, f64)]) -> Mat<f64> {
+    let dp_dy: Vec<f64> = y
+        .iter()
+        .zip(bounds)
+        .map(|(&y, &(a, b))| bounded_derivative(y, a, b))
+        .collect();
+    Mat::from_fn(jp.nrows(), y.len(), |r, c| jp[(r, c)] * dp_dy[c])
 }
 
 pub(super) fn norm2(v: &[f64]) -> f64 {
@@ -431,7 +503,7 @@ mod tests {
             .iter()
             .map(|n| Parameter {
                 name: (*n).into(),
-                kind: super::super::ParameterKind::Damping { coefficient: 0 },
+                kind: crate::updating::ParameterKind::Damping { coefficient: 0 },
                 lower: 0.0,
                 upper: 1.0,
             })

@@ -1,14 +1,14 @@
 //! Shared fixtures: the paper's Sinello deck and its sensors.
 
-use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::frf::{ModalState, SensorPoint};
-use splinewatch_core::knots::KnotVector;
-use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
-use splinewatch_core::modal::ModeKind;
-use splinewatch_core::modal_sensitivity::ModalSensitivities;
+use splinewatch_core::geometry::knots::KnotVector;
+use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::model::shell::Shell;
+use splinewatch_core::model::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::shell::Shell;
-use splinewatch_core::springs::{Face, SpringDirection, SpringField};
+use splinewatch_core::response::frf::{ModalState, SensorPoint};
+use splinewatch_core::response::modal_sensitivity::ModalSensitivities;
+use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
 pub fn sinello_material() -> OrthotropicMaterial {

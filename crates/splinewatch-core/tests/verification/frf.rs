@@ -3,12 +3,12 @@
 
 use super::common::{sinello_model, sinello_sensors, true_kappa};
 use faer::c64;
-use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity, SensorPoint};
-use splinewatch_core::material::OrthotropicMaterial;
+use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::material::OrthotropicMaterial;
+use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::shell::Shell;
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity, SensorPoint};
 
 fn damping() -> DampingCurve {
     DampingCurve::new(2, vec![0.03, 0.012, 0.02, 0.015, 0.025, 0.018, 0.03], 0.0, 80.0).unwrap()
@@ -193,7 +193,7 @@ fn blocked_evaluation_matches_line_by_line() {
     // one call per line (only the GEMM summation order differs).
     let model = sinello_frf_model();
     let state = model.modal_state(&true_kappa(), &damping()).unwrap();
-    let freqs: Vec<f64> = (0..2 * splinewatch_core::frf::FREQUENCY_BLOCK + 7)
+    let freqs: Vec<f64> = (0..2 * splinewatch_core::response::frf::FREQUENCY_BLOCK + 7)
         .map(|k| 0.5 + 0.57 * k as f64)
         .collect();
     let pairs = [(0, 0), (3, 0), (5, 2), (0, 2)];
@@ -241,7 +241,7 @@ fn threaded_evaluation_is_the_sequential_one_bit_for_bit() {
         pairs: &pairs,
         quantity: Quantity::Accelerance,
     };
-    let bits = |e: &splinewatch_core::frf::FrfEvaluation| -> Vec<u64> {
+    let bits = |e: &splinewatch_core::response::frf::FrfEvaluation| -> Vec<u64> {
         std::iter::once(&e.h)
             .chain(&e.dh_dkappa)
             .chain(&e.dh_dgamma)

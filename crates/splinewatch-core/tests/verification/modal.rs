@@ -6,8 +6,8 @@
 //! round-off (observed ≤ 3e-15): the bounds are 1e-11 and 1e-12.
 
 use super::common::{clamped_curved_panel, sinello_model, true_kappa};
-use splinewatch_core::modal::{self, Modes};
-use splinewatch_core::model::AssembledModel;
+use splinewatch_core::solvers::dense_model::AssembledModel;
+use splinewatch_core::solvers::modal::{self, Modes};
 
 /// Worst relative eigenvalue difference and worst `1 - |φ_aᵀ M φ_b|` over
 /// the modes below `f_max_hz` whose eigenvalue is isolated (relative gap

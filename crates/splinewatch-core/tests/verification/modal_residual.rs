@@ -5,9 +5,9 @@ use super::common::{
     bending_modes_below_80_hz, gaussian, sinello_model, sinello_sensors, spring_parameters, true_kappa,
 };
 use splinewatch_core::c64;
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, ModalState};
-use splinewatch_core::modal_residual::{modal_residue, pair_modes, ObservedMode};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::{FrfModel, ModalState};
+use splinewatch_core::updating::modal_residual::{modal_residue, pair_modes, ObservedMode};
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
 fn parameters() -> Vec<Parameter> {
@@ -122,9 +122,9 @@ fn modal_residue_jacobian_matches_central_differences() {
 /// discarded modes' part of `∂a/∂θ` (`tests/verification/truncation.rs`).
 #[test]
 fn modal_residue_jacobian_for_a_stiffness_field_matches_central_differences() {
-    use splinewatch_core::knots::KnotVector;
+    use splinewatch_core::geometry::knots::KnotVector;
+    use splinewatch_core::model::stiffness_field::StiffnessField;
     use splinewatch_core::model::ShellModel;
-    use splinewatch_core::stiffness_field::StiffnessField;
     let knots = |d, n| KnotVector::uniform(d, n, 0.0, 1.0).unwrap();
     let field = StiffnessField::new(knots(1, 4), knots(1, 2), vec![1.0; 8]).unwrap();
     let deck = ShellModel {

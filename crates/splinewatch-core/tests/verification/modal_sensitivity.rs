@@ -2,8 +2,8 @@
 //! against central finite differences on the Sinello deck.
 
 use super::common::{bending_modes_below_80_hz, check_eigen_derivatives, sinello_model, sinello_sensors, true_kappa};
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::FrfModel;
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::FrfModel;
 
 /// Every bending mode below 80 Hz, every spring coefficient: `∂λ/∂κ` within
 /// 1e-7 relative and the sensor amplitudes' derivatives within 1e-6 of the

@@ -3,12 +3,12 @@
 //! that carry no sensor, twelve vertical accelerometers, 2 % noise.
 
 use super::common::{gaussian, sinello_model, sinello_sensors, true_kappa};
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, ModalState, SensorPoint};
-use splinewatch_core::modal::ModeKind;
-use splinewatch_core::oma::shape::mac_real;
-use splinewatch_core::oma::{identify, IdentifiedMode, OmaResult, OmaSettings, OutputCorrelations};
-use splinewatch_core::simulate::{band_limit, ModalSimulator};
+use splinewatch_core::identification::oma::shape::mac_real;
+use splinewatch_core::identification::oma::{identify, IdentifiedMode, OmaResult, OmaSettings, OutputCorrelations};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::{FrfModel, ModalState, SensorPoint};
+use splinewatch_core::response::simulate::{band_limit, ModalSimulator};
+use splinewatch_core::solvers::modal::ModeKind;
 
 const FS: f64 = 256.0;
 const OVERSAMPLE: usize = 4;

@@ -3,13 +3,13 @@
 
 use super::common::{clamped_curved_panel, sinello_material, sinello_springs};
 use faer::{Mat, Side};
-use splinewatch_core::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::knots::KnotVector;
-use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
-use splinewatch_core::modal::ModeKind;
+use splinewatch_core::geometry::knots::KnotVector;
+use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::model::shell::Shell;
+use splinewatch_core::model::stiffness_field::{StiffnessField, StiffnessScale};
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::shell::Shell;
-use splinewatch_core::stiffness_field::{StiffnessField, StiffnessScale};
+use splinewatch_core::solvers::modal::ModeKind;
 use std::f64::consts::PI;
 
 fn all_edges(kind: SupportKind) -> Vec<EdgeConstraint> {
@@ -145,7 +145,7 @@ fn simply_supported_orthotropic_mindlin_plate_matches_navier() {
 /// 1e-3 of Navier–Mindlin (measured: the mesh, not the solver, limits it).
 #[test]
 fn sparse_path_at_20000_dofs_matches_navier() {
-    use splinewatch_core::sparse_model::SparseModel;
+    use splinewatch_core::solvers::sparse_model::SparseModel;
     let (a, b, h) = (16.0, 9.0, 1.6);
     let mat = sinello_material();
     let model = ShellModel {

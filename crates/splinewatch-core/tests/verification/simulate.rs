@@ -2,11 +2,13 @@
 //! random excitation, Welch H1, and the model accelerance around resonances.
 
 use super::common::{sinello_model, sinello_sensors, true_kappa};
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity};
-use splinewatch_core::modal::ModeKind;
-use splinewatch_core::simulate::{band_limit, hammer_impacts, ModalSimulator};
-use splinewatch_core::welch::{Averaging, Detrend, Estimator, Gates, WelchEstimator, WelchSettings, Window};
+use splinewatch_core::identification::welch::{
+    Averaging, Detrend, Estimator, Gates, WelchEstimator, WelchSettings, Window,
+};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity};
+use splinewatch_core::response::simulate::{band_limit, hammer_impacts, ModalSimulator};
+use splinewatch_core::solvers::modal::ModeKind;
 
 /// Deterministic uniform noise in [-0.5, 0.5) (64-bit LCG, high bits).
 fn noise(n: usize, mut seed: u64) -> Vec<f64> {

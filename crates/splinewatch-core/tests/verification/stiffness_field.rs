@@ -8,14 +8,15 @@ use super::common::{
     spring_parameters, true_kappa,
 };
 use splinewatch_core::c64;
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity};
-use splinewatch_core::knots::KnotVector;
-use splinewatch_core::material::{OrthotropicMaterial, OrthotropicParameters};
-use splinewatch_core::modal::{self, ModeKind};
+use splinewatch_core::geometry::knots::KnotVector;
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::model::stiffness_field::StiffnessField;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::stiffness_field::StiffnessField;
-use splinewatch_core::updating::{MeasuredFrf, MeasuredSet, Parameter, ParameterKind, UpdateProblem, UpdateSettings};
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity};
+use splinewatch_core::solvers::modal::{self, ModeKind};
+use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet, UpdateProblem};
+use splinewatch_core::updating::{Parameter, ParameterKind, UpdateSettings};
 
 fn field(degree: [usize; 2], count: [usize; 2]) -> StiffnessField {
     let knots = |d, n| KnotVector::uniform(d, n, 0.0, 1.0).unwrap();
@@ -291,7 +292,7 @@ fn a_local_stiffness_loss_is_found_in_its_region_with_the_springs_updated() {
 /// strain energy; the springs hold the rest).
 #[test]
 fn section_scales_identifiability_on_the_deck() {
-    use splinewatch_core::stiffness_field::StiffnessScale;
+    use splinewatch_core::model::stiffness_field::StiffnessScale;
     let scaled = |scale| field([0, 0], [1, 1]).with_scale(scale);
     let model = FrfModel::new(
         with_fields(vec![

@@ -5,13 +5,14 @@
 
 use super::common::{bending_modes_below_80_hz, sinello_model, sinello_sensors, spring_parameters, true_kappa};
 use splinewatch_core::c64;
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfEvaluation, FrfModel, FrfRequest, ModalState, Quantity};
-use splinewatch_core::knots::KnotVector;
-use splinewatch_core::modal_sensitivity::ModalSensitivities;
+use splinewatch_core::geometry::knots::KnotVector;
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::stiffness_field::StiffnessField;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::stiffness_field::StiffnessField;
-use splinewatch_core::updating::{MeasuredFrf, MeasuredSet, Parameter, ParameterKind, UpdateProblem, UpdateSettings};
+use splinewatch_core::response::frf::{FrfEvaluation, FrfModel, FrfRequest, ModalState, Quantity};
+use splinewatch_core::response::modal_sensitivity::ModalSensitivities;
+use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet, UpdateProblem};
+use splinewatch_core::updating::{Parameter, ParameterKind, UpdateSettings};
 
 /// 2× the band's top, the default cut-off.
 const CUTOFF_HZ: f64 = 160.0;
@@ -212,7 +213,7 @@ fn region_models() -> (FrfModel, FrfModel, Vec<f64>) {
 
 /// Stiffness-field FRF sensitivities of the truncated model (kept modes,
 /// their couplings to the residual and the residual's own, eq. 33 with
-/// `crate::truncation`) against the dense model's every-mode chain rule,
+/// `crate::solvers::truncation`) against the dense model's every-mode chain rule,
 /// 12 accelerances over 0.5–80 Hz, ζ up to 3 %: within 3e-3 of each
 /// derivative's peak (the springs' tolerance above: the same residual
 /// expansion), and several times closer than the kept modes alone.

@@ -2,11 +2,10 @@
 
 use super::common::{sinello_model, sinello_sensors, spring_parameters, true_kappa};
 use splinewatch_core::c64;
-use splinewatch_core::damping::DampingCurve;
-use splinewatch_core::frf::{FrfModel, FrfRequest, Quantity};
-use splinewatch_core::updating::{
-    LineSelection, MeasuredFrf, MeasuredSet, UpdateError, UpdateProblem, UpdateSettings, Weighting,
-};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity};
+use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet, UpdateProblem};
+use splinewatch_core::updating::{LineSelection, UpdateError, UpdateSettings, Weighting};
 
 /// Noise-free accelerances of the true model at P1..P4 for input P1, with a
 /// band of lines (30–40 Hz) corrupted by a 30 % error and flagged by low

@@ -1,7 +1,7 @@
 //! Welch estimation against scipy.signal (committed fixture made by
 //! tests/fixtures/make_welch_fixture.py).
 
-use splinewatch_core::welch::{Averaging, Detrend, Gates, WelchEstimator, WelchSettings, Window};
+use splinewatch_core::identification::welch::{Averaging, Detrend, Gates, WelchEstimator, WelchSettings, Window};
 
 #[test]
 fn csd_welch_and_coherence_match_scipy() {
@@ -51,7 +51,7 @@ fn csd_welch_and_coherence_match_scipy() {
         let mut est = WelchEstimator::new(settings, 1).unwrap();
         est.push(&f, &[&x]).unwrap();
         let sp = est.spectra();
-        let coherence = &sp.frf(splinewatch_core::welch::Estimator::H1).coherence[0];
+        let coherence = &sp.frf(splinewatch_core::identification::welch::Estimator::H1).coherence[0];
         let (pff, pxx, re, im, coh, freqs) = (
             vec("pff"),
             vec("pxx"),

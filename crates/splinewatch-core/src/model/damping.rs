@@ -7,7 +7,7 @@
 //! eq. (25), `C = Φ⁻ᵀ diag(2 ζ_i ω_i) Φ⁻¹`, is diagonal in modal coordinates,
 //! so the FRF code never forms it except for the direct verification path.
 
-use crate::knots::{KnotError, KnotVector, MAX_DEGREE};
+use crate::geometry::knots::{KnotError, KnotVector, MAX_DEGREE};
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]

@@ -29,9 +29,9 @@
 //! `⌈d/2⌉` Gauss points more per direction than eq. (16) needs for a field
 //! of degree `d` (exact for a flat shell).
 
-use crate::knots::KnotVector;
-use crate::material::OrthotropicMaterial;
-use crate::shell::{self, Assembly, OutsideDomain, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
+use crate::geometry::knots::KnotVector;
+use crate::model::material::OrthotropicMaterial;
+use crate::model::shell::{self, Assembly, OutsideDomain, QuadratureStep, Shell, ShellError, DOFS_PER_CONTROL_POINT};
 use faer::linalg::matmul::matmul;
 use faer::{unzip, zip, Accum, Mat, Par};
 use thiserror::Error;

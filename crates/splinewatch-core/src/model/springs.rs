@@ -15,10 +15,10 @@
 //! spring field, with enough Gauss points to integrate the polynomial
 //! integrand of a flat shell exactly.
 
-use crate::knots::{KnotVector, MAX_DEGREE};
-use crate::quadrature::GaussLegendre;
-use crate::shell::{OutsideDomain, Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
-use crate::vec3::{cross, dot, norm, normalize, scale, Vec3};
+use crate::geometry::knots::{KnotVector, MAX_DEGREE};
+use crate::geometry::quadrature::GaussLegendre;
+use crate::geometry::vec3::{cross, dot, norm, normalize, scale, Vec3};
+use crate::model::shell::{OutsideDomain, Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
 use faer::Mat;
 use std::collections::BTreeSet;
 use thiserror::Error;
@@ -242,7 +242,7 @@ impl SpringField {
             points(ke.degree(), self.eta.degree()),
         );
         let tau = self.face.tau();
-        let mut pt = crate::shell::ShellPoint::new_empty();
+        let mut pt = crate::model::shell::ShellPoint::new_empty();
         let mut basis: Vec<(usize, f64)> = Vec::with_capacity((MAX_DEGREE + 1) * (MAX_DEGREE + 1));
         for wx in cx.windows(2) {
             for we in ce.windows(2) {

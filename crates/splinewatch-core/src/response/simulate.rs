@@ -17,7 +17,7 @@
 //! simulate at an oversampled rate and decimate (see `decimate` in the
 //! application) so the error is negligible.
 
-use crate::frf::ModalState;
+use crate::response::frf::ModalState;
 use std::f64::consts::PI;
 
 #[derive(Debug, Clone)]
@@ -158,7 +158,7 @@ impl ModalSimulator {
     /// Continues from a physical state on a new modal model (a parameter
     /// change during the simulation): `q' = Φ'ᵀ M x`, given the products
     /// `M x` and `M v` of the state `(x, v)` with the model's mass
-    /// ([`crate::frf::FrfModel::mass_times`]).
+    /// ([`crate::response::frf::FrfModel::mass_times`]).
     pub fn set_physical_state(&mut self, state: &ModalState, mass_x: &[f64], mass_v: &[f64]) {
         let shapes = &state.modes.shapes;
         let n = shapes.nrows();

@@ -14,16 +14,16 @@
 //! - damping, against the curve so ζ(f) is still identified:
 //!   `(ζ(f_m) − ζ_x)/σ_ζ`.
 //!
-//! The Jacobian uses the eigen-derivatives of [`crate::modal_sensitivity`]
+//! The Jacobian uses the eigen-derivatives of [`crate::response::modal_sensitivity`]
 //! (`∂f/∂κ = ∂λ/∂κ / (8π² f)`, `∂(α a)/∂κ = α ∂a + a ∂α`,
 //! `∂α = (φ_xᵀ∂a − 2α a_mᵀ∂a)/a_mᵀa_m`), `∂ζ(f_m)/∂κ = ζ'(f_m) ∂f/∂κ` and
 //! `∂ζ/∂γ_z = B_z(f_m)`. The pairing is redone at every evaluation (modes
 //! swap order as κ changes) and held fixed within one Jacobian.
 
-use crate::damping::DampingCurve;
-use crate::frf::{FrfModel, ModalState};
-use crate::modal::ModeKind;
-use crate::oma::shape::mac_real;
+use crate::identification::oma::shape::mac_real;
+use crate::model::damping::DampingCurve;
+use crate::response::frf::{FrfModel, ModalState};
+use crate::solvers::modal::ModeKind;
 use crate::updating::{Parameter, ParameterKind};
 use faer::{c64, Mat};
 use std::f64::consts::PI;
@@ -160,7 +160,7 @@ pub fn modal_residue(
         for (c, par) in parameters.iter().enumerate() {
             // The rows of a stiffness parameter (spring κ or field θ) from
             // the mode's ∂λ and ∂a at the sensors in column j of `s`.
-            let mut stiffness_rows = |s: &crate::modal_sensitivity::ModalSensitivities, j: usize| {
+            let mut stiffness_rows = |s: &crate::response::modal_sensitivity::ModalSensitivities, j: usize| {
                 let df = s.eigenvalue[(k, j)] / (8.0 * PI * PI * f);
                 jac[(row0, c)] = df / x.frequency_std_hz;
                 let da: Vec<f64> = x.shape.iter().map(|&(sensor, _)| s.amplitude[k][(sensor, j)]).collect();

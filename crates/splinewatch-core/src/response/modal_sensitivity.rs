@@ -16,16 +16,16 @@
 //! For a stiffness field `∂K/∂θ_k` is dense over the field's part of the
 //! deck: the couplings `C = Φᵀ (∂K/∂θ_k) Φ` of every mode pair are formed
 //! with two products per coefficient, and the same expansion applies. On a
-//! truncated model (the modes below a cut-off, [`crate::truncation`]) the
+//! truncated model (the modes below a cut-off, [`crate::solvers::truncation`]) the
 //! product runs over `[Φ | ρ_0 | ρ_1]` (the residual responses to the sensor
 //! loads on every dof): the discarded modes enter the eigenvector
 //! derivatives as for the springs (Wang 1991) and the FRF derivatives
 //! through `∂H_rs = −g_rᵀ (∂K/∂θ) g_s` with the sensors' complete
 //! responses `g_s`.
 
-use crate::damping::DampingCurve;
-use crate::frf::{FrfModel, FrfRequest, ModalState};
-use crate::modal::ModeKind;
+use crate::model::damping::DampingCurve;
+use crate::response::frf::{FrfModel, FrfRequest, ModalState};
+use crate::solvers::modal::ModeKind;
 use faer::{c64, Mat};
 use std::f64::consts::PI;
 
@@ -60,7 +60,7 @@ impl FrfModel {
                 let coupling = |k: usize| -> f64 { (0..pos.len()).map(|a| phi_u[(pos[a], k)] * w[a]).sum() };
                 expand(state, i, coupling, &mut da, j);
                 if let Some(residual) = state.residual() {
-                    // The discarded modes' part (crate::truncation, Wang 1991).
+                    // The discarded modes' part (crate::solvers::truncation, Wang 1991).
                     let lambda = state.modes.omega2[i];
                     for s in 0..sensors {
                         let rho: f64 = (0..pos.len())
@@ -132,7 +132,7 @@ impl FrfModel {
 
 /// One stiffness-field coefficient's `∂K/∂θ` seen from the kept modes and,
 /// on a truncated model, from the residual responses `ρ_0`, `ρ_1` to the
-/// sensor loads ([`crate::truncation`]).
+/// sensor loads ([`crate::solvers::truncation`]).
 struct FieldCouplings {
     /// `C = Φᵀ (∂K/∂θ) Φ`: modes × modes.
     modes: Mat<f64>,
@@ -181,7 +181,7 @@ fn field_derivatives(
 impl FrfModel {
     /// `∂H/∂θ_k` of the FRFs of `request` for every stiffness-field
     /// coefficient (fields flattened; pair-major `[pair * n_f + line]` as
-    /// [`crate::frf::FrfEvaluation::h`]), by the chain rule through the
+    /// [`crate::response::frf::FrfEvaluation::h`]), by the chain rule through the
     /// modal superposition `H_rs = Σ_i a_ri a_si q_i`,
     /// `q_i = 1 / (ω_i² − ω² + 2j ζ_i ω_i ω)` (eq. 31 with eq. 28):
     /// `∂H_rs = Σ_i (∂a_ri a_si + a_ri ∂a_si) q_i
@@ -193,7 +193,7 @@ impl FrfModel {
     /// On a truncated model the sum runs over the kept modes with their
     /// expansion over the kept modes only, and the discarded modes enter
     /// through the residual responses `ρ_s(ω) = ρ_0,s + γ(ω) ρ_1,s`
-    /// ([`crate::truncation`]): with the sensors' complete responses
+    /// ([`crate::solvers::truncation`]): with the sensors' complete responses
     /// `g_s = Σ_i φ_i a_si q_i + ρ_s`, `∂H_rs = −g_rᵀ (∂K/∂θ) g_s` adds
     /// the kept–discarded couplings
     /// `−Σ_i q_i (a_ri (P_0 + γ P_1)_si + a_si (P_0 + γ P_1)_ri)` and the

@@ -18,12 +18,12 @@
 //! the plane-stress matrix of eq. (9) applies; this is eq. (8) without
 //! forming `T` explicitly.
 
-use crate::knots::{KnotError, KnotVector, MAX_DEGREE};
-use crate::material::OrthotropicMaterial;
-use crate::quadrature::GaussLegendre;
-use crate::sparse::{Pattern, SparseAccumulator, SparseError, SparseSymmetric};
-use crate::surface::{BSplineSurface, Direction, SurfaceError};
-use crate::vec3::{axpy, cross, det_inverse, dot, mat_vec, normalize, scale, Vec3};
+use crate::geometry::knots::{KnotError, KnotVector, MAX_DEGREE};
+use crate::geometry::quadrature::GaussLegendre;
+use crate::geometry::surface::{BSplineSurface, Direction, SurfaceError};
+use crate::geometry::vec3::{axpy, cross, det_inverse, dot, mat_vec, normalize, scale, Vec3};
+use crate::model::material::OrthotropicMaterial;
+use crate::model::sparse::{Pattern, SparseAccumulator, SparseError, SparseSymmetric};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use std::sync::Arc;
@@ -210,6 +210,17 @@ impl Shell {
     pub fn insert_knot(&self, direction: Direction, u: f64) -> Result<Self, ShellError> {
         let (surface, thickness) = self.surface.insert_knot(direction, u, &self.thickness, 1)?;
         Self::new(surface, thickness)
+    }
+
+    /// The sparsity pattern of the shell's generalised dofs (five per
+    /// control point).
+    pub fn pattern(&self) -> Pattern {
+        let s = self.surface();
+        Pattern::control_net(
+            s.net_size(),
+            (s.xi().degree(), s.eta().degree()),
+            &vec![DOFS_PER_CONTROL_POINT; self.control_point_count()],
+        )
     }
 
     pub fn surface(&self) -> &BSplineSurface {
@@ -519,7 +530,7 @@ pub(crate) fn scatter(target: &mut Mat<f64>, local: &Mat<f64>, dofs: &[usize]) {
 }
 
 /// Where assembled element matrices go: a dense matrix, or a sparse one on
-/// the control net's pattern ([`crate::sparse`]).
+/// the control net's pattern ([`crate::model::sparse`]).
 pub trait Assembly {
     /// `self[dofs, dofs] += local`.
     fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError>;

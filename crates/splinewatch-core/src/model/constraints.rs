@@ -12,9 +12,11 @@
 //!   support of shell-theory closed forms.
 //! - `clamped`: all five dofs are zero.
 
-use crate::shell::{Shell, DOFS_PER_CONTROL_POINT};
-use crate::vec3::{axpy, dot, normalize, Vec3};
+use crate::geometry::vec3::{axpy, dot, normalize, Vec3};
+use crate::model::shell::{Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::sparse::{Pattern, SparseError, SparseSymmetric};
 use faer::Mat;
+use std::sync::Arc;
 
 /// An edge of the parametric square.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -144,6 +146,26 @@ impl DofReduction {
         out
     }
 
+    /// `Tᵀ A T` of a sparse matrix on the pattern of the free coordinates
+    /// ([`DofReduction::reduced_pattern`]): each column of `T` lies on one
+    /// control point, so that pattern is the control net's with fewer dofs
+    /// per point.
+    pub fn reduce_sparse(&self, a: &SparseSymmetric, reduced: &Arc<Pattern>) -> Result<SparseSymmetric, SparseError> {
+        a.congruence(&self.columns, self.full, reduced)
+    }
+
+    /// The pattern of the free coordinates on `shell`'s net.
+    pub fn reduced_pattern(&self, shell: &Shell) -> Pattern {
+        let cps = shell.control_point_count();
+        let mut dofs = vec![0usize; cps];
+        for column in &self.columns {
+            let cp = column[0].0 / DOFS_PER_CONTROL_POINT;
+            dofs[cp] += 1;
+        }
+        let s = shell.surface();
+        Pattern::control_net(s.net_size(), (s.xi().degree(), s.eta().degree()), &dofs)
+    }
+
     /// `Tᵀ v` for full-length column vectors `v`.
     #[track_caller]
     pub fn reduce_vector(&self, v: &Mat<f64>) -> Mat<f64> {
@@ -177,7 +199,7 @@ fn free_directions(fixed: &[Vec3]) -> Vec<Vec3> {
         for b in &basis {
             v = axpy(v, -dot(v, *b), *b);
         }
-        if let Some(u) = normalize(v).filter(|_| crate::vec3::norm(v) > 1e-8) {
+        if let Some(u) = normalize(v).filter(|_| crate::geometry::vec3::norm(v) > 1e-8) {
             basis.push(u);
         }
     }
@@ -197,7 +219,7 @@ fn free_directions(fixed: &[Vec3]) -> Vec<Vec3> {
                 *x = 0.0;
             }
         }
-        if crate::vec3::norm(v) > 1e-6 {
+        if crate::geometry::vec3::norm(v) > 1e-6 {
             free.push(normalize(v).expect("non-zero by the check above"));
         }
     }

@@ -8,10 +8,8 @@
 //! column (faer's compressed sparse column format). Sharing it makes
 //! `K(κ, θ) = K_f + Σ …` and the shifted `K − σM` elementwise sums of value
 //! arrays, and lets one symbolic Cholesky factorisation serve every shift
-//! and every parameter change ([`crate::partial_eigen`]).
+//! and every parameter change ([`crate::solvers::partial_eigen`]).
 
-use crate::constraints::DofReduction;
-use crate::shell::{Shell, DOFS_PER_CONTROL_POINT};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::Mat;
 use std::sync::Arc;
@@ -124,17 +122,6 @@ impl Pattern {
             self.dissect(rows, [mid + q, cols[1]], out);
             natural(out, rows, [mid, mid + q]);
         }
-    }
-
-    /// The pattern of a shell's generalised dofs (five per control point).
-    pub fn of_shell(shell: &Shell) -> Self {
-        let s = shell.surface();
-        let cps = shell.control_point_count();
-        Self::control_net(
-            s.net_size(),
-            (s.xi().degree(), s.eta().degree()),
-            &vec![DOFS_PER_CONTROL_POINT; cps],
-        )
     }
 
     pub fn dim(&self) -> usize {
@@ -379,26 +366,31 @@ impl SparseSymmetric {
         out
     }
 
-    /// `Tᵀ A T` on `reduced` (the pattern of the free coordinates: each
-    /// column of `T` lies on one control point, so the reduced pattern is
-    /// the control-net pattern with fewer dofs per point).
-    pub fn reduce(&self, reduction: &DofReduction, reduced: &Arc<Pattern>) -> Result<Self, SparseError> {
-        if reduction.full_count() != self.dim() {
+    /// `Tᵀ A T` on `reduced`, `T` given by its sparse columns (`(row,
+    /// weight)` pairs) over `t_rows` rows: the reduction to a model's free
+    /// coordinates (`DofReduction::reduce_sparse`).
+    pub fn congruence(
+        &self,
+        t_columns: &[Vec<(usize, f64)>],
+        t_rows: usize,
+        reduced: &Arc<Pattern>,
+    ) -> Result<Self, SparseError> {
+        if t_rows != self.dim() {
             return Err(SparseError::Dimension {
                 found: self.dim(),
-                expected: reduction.full_count(),
+                expected: t_rows,
             });
         }
         // Per full dof, the reduced coordinates it enters and their weights.
         let mut owners: Vec<Vec<(usize, f64)>> = vec![Vec::new(); self.dim()];
-        for (i, column) in reduction.columns().iter().enumerate() {
+        for (i, column) in t_columns.iter().enumerate() {
             for &(d, t) in column {
                 owners[d].push((i, t));
             }
         }
         let mut out = Self::zeros(Arc::clone(reduced));
         let p = &self.pattern;
-        for (j, column) in reduction.columns().iter().enumerate() {
+        for (j, column) in t_columns.iter().enumerate() {
             for &(c, tc) in column {
                 for e in p.col_ptr[c]..p.col_ptr[c + 1] {
                     // Zeros add nothing (a stiffness field's matrix is mostly
@@ -459,18 +451,6 @@ impl SparseAccumulator {
         }
         m
     }
-}
-
-/// The pattern of the free coordinates of `reduction` on `shell`'s net.
-pub fn reduced_pattern(shell: &Shell, reduction: &DofReduction) -> Pattern {
-    let cps = shell.control_point_count();
-    let mut dofs = vec![0usize; cps];
-    for column in reduction.columns() {
-        let cp = column[0].0 / DOFS_PER_CONTROL_POINT;
-        dofs[cp] += 1;
-    }
-    let s = shell.surface();
-    Pattern::control_net(s.net_size(), (s.xi().degree(), s.eta().degree()), &dofs)
 }
 
 #[cfg(test)]

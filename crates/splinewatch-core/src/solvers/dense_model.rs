@@ -1,17 +1,19 @@
-//! The complete structural model: shell + material + springs + supports.
+//! The dense assembled model and the errors of assembling and solving one.
 //!
 //! `K = K_f(θ) + ΔK(κ)` (eq. 23) with `ΔK(κ) = Σ_fields Σ_j κ_j ∂K/∂κ_j`
 //! (eq. 22) and, for stiffness fields of the deck,
-//! `K_f(θ) = K_f + Σ_fields Σ_k (θ_k − 1) ∂K/∂θ_k` ([`crate::stiffness_field`]).
+//! `K_f(θ) = K_f + Σ_fields Σ_k (θ_k − 1) ∂K/∂θ_k` ([`crate::model::stiffness_field`]).
 //! [`AssembledModel`] keeps `K_f`, `M`, every `∂K/∂κ_j` and `∂K/∂θ_k` so that
-//! a change of coefficients (the updating loop) costs only the weighted sums.
+//! a change of coefficients (the updating loop) costs only the weighted sums,
+//! and its prepared eigen-solver ([`ModalSolver`]), built on the first solve.
+//! [`ShellModel::assemble`] is defined here, beside what it builds.
 
-use crate::constraints::{DofReduction, EdgeConstraint};
-use crate::material::OrthotropicMaterial;
-use crate::modal::{ModalError, ModalSolver, Modes};
-use crate::shell::{self, Shell, ShellError};
-use crate::springs::{LowRankBlock, SpringError, SpringField};
-use crate::stiffness_field::{StiffnessField, StiffnessFieldError};
+use crate::model::constraints::DofReduction;
+use crate::model::shell::{self, Shell, ShellError};
+use crate::model::springs::{LowRankBlock, SpringError};
+use crate::model::stiffness_field::StiffnessFieldError;
+use crate::model::ShellModel;
+use crate::solvers::modal::{ModalError, ModalSolver, Modes};
 use faer::Mat;
 use std::sync::OnceLock;
 use thiserror::Error;
@@ -27,7 +29,7 @@ pub enum ModelError {
     #[error("modes: {0}")]
     Modal(#[from] ModalError),
     #[error("partial modes: {0}")]
-    PartialEigen(crate::partial_eigen::PartialEigenError),
+    PartialEigen(crate::solvers::partial_eigen::PartialEigenError),
     #[error("spring field {field}: {found} coefficients given, {expected} expected")]
     CoefficientCount {
         field: usize,
@@ -40,17 +42,6 @@ pub enum ModelError {
         found: usize,
         expected: usize,
     },
-}
-
-/// Physics and discretisation of a deck, validated.
-#[derive(Debug, Clone)]
-pub struct ShellModel {
-    pub shell: Shell,
-    pub material: OrthotropicMaterial,
-    pub springs: Vec<SpringField>,
-    /// Stiffness multiplier fields of the deck (none: the nominal material).
-    pub stiffness_fields: Vec<StiffnessField>,
-    pub constraints: Vec<EdgeConstraint>,
 }
 
 /// Assembled matrices of a [`ShellModel`].

@@ -17,6 +17,7 @@
 //! eq. (8), `E = Tᵀ E' T`, is applied by evaluating strains directly in the
 //! material frame at each quadrature point (see `shell`).
 
+use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -45,8 +46,10 @@ pub struct OrthotropicMaterial {
     shear_correction: f64,
 }
 
-/// Inputs of [`OrthotropicMaterial::new`], named like the configuration keys.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Inputs of [`OrthotropicMaterial::new`]: also the configuration's
+/// `[model.material]` table, key for key (unknown keys are refused).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct OrthotropicParameters {
     pub e1: f64,
     pub e2: f64,
@@ -55,10 +58,18 @@ pub struct OrthotropicParameters {
     pub g23: f64,
     pub nu12: f64,
     pub density: f64,
-    /// Angle of material axis 1 from the `ξ` tangent, about the normal, in degrees.
+    /// Angle of material axis 1 from the `ξ` tangent, about the normal, in
+    /// degrees (default 0).
+    #[serde(default)]
     pub angle_deg: f64,
-    /// Transverse shear correction factor, 5/6 for a homogeneous section.
+    /// Transverse shear correction factor, 5/6 for a homogeneous section
+    /// (the default).
+    #[serde(default = "default_shear_correction")]
     pub shear_correction: f64,
+}
+
+fn default_shear_correction() -> f64 {
+    5.0 / 6.0
 }
 
 impl OrthotropicMaterial {

@@ -35,10 +35,10 @@
 //! stiffness field's `∂K/∂θ` reaches the whole deck, so models with fields
 //! keep `ρ_0`, `ρ_1` on every dof ([`Residual::everywhere`], one product
 //! each) and the same two formulas apply there
-//! ([`crate::modal_sensitivity`]).
+//! ([`crate::response::modal_sensitivity`]).
 
-use crate::damping::DampingCurve;
-use crate::modal::Modes;
+use crate::model::damping::DampingCurve;
+use crate::solvers::modal::Modes;
 use faer::{c64, Mat};
 use std::f64::consts::PI;
 
@@ -77,7 +77,7 @@ impl Residual {
     /// From the kept `modes` (full generalised dofs), their sensor
     /// amplitudes `a_{s,i}` (sensors × modes), the sensor rows, the
     /// spring dofs `U`, the responses `(X Nᵀ, X M X Nᵀ)` on the generalised
-    /// dofs ([`crate::sparse_model::SparseModel::modes_and_responses`]) and the
+    /// dofs ([`crate::solvers::sparse_model::SparseModel::modes_and_responses`]) and the
     /// shift `σ` they were solved at; `damping` gives the discarded modes'
     /// damping ratio. With `everywhere`, `ρ_0` and `ρ_1` are kept on every
     /// generalised dof too (stiffness-field sensitivities).

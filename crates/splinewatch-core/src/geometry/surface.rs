@@ -4,8 +4,8 @@
 //! Control points are stored with `η` running fastest: `P_ij` is
 //! `points[i * n + j]`, `i < m` along `ξ`, `j < n` along `η`.
 
-use crate::knots::{KnotError, KnotVector, MAX_DEGREE};
-use crate::vec3::{axpy, Vec3};
+use crate::geometry::knots::{KnotError, KnotVector, MAX_DEGREE};
+use crate::geometry::vec3::{axpy, Vec3};
 use faer::prelude::Solve;
 use faer::Mat;
 use thiserror::Error;

@@ -15,10 +15,10 @@
 //! tolerance. The symbolic factorisation depends on the pattern only and is
 //! made once per model ([`ShiftInvert::new`]); every solve re-factorises
 //! the values. The triangular solves, memory bound, run on two threads
-//! ([`crate::subtree_solve`]).
+//! ([`crate::solvers::subtree_solve`]).
 
-use crate::sparse::{NonZeros, Pattern, SparseSymmetric};
-use crate::subtree_solve::SubtreeSplit;
+use crate::model::sparse::{NonZeros, Pattern, SparseSymmetric};
+use crate::solvers::subtree_solve::SubtreeSplit;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::matrix_free::eigen::{partial_self_adjoint_eigen, partial_self_adjoint_eigen_scratch, PartialEigenParams};
@@ -190,7 +190,7 @@ impl ShiftInvert {
 
     /// `X B` and `X M X B` for the columns of `rhs`, `X = (K − σM)⁻¹` given
     /// by its Cholesky factor's values (the residual flexibility and its
-    /// first dynamic correction, [`crate::truncation`]).
+    /// first dynamic correction, [`crate::solvers::truncation`]).
     fn responses(&self, l_values: &[f64], m: &SparseSymmetric, rhs: &Mat<f64>) -> Responses {
         let x = self.solve_shifted(l_values, rhs);
         let xmx = self.solve_shifted(l_values, &m.mul(&x));
@@ -533,10 +533,9 @@ fn finish(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::constraints::{DofReduction, Edge, EdgeConstraint, SupportKind};
-    use crate::material::OrthotropicMaterial;
-    use crate::shell::{self, Shell};
-    use crate::sparse::reduced_pattern;
+    use crate::model::constraints::{DofReduction, Edge, EdgeConstraint, SupportKind};
+    use crate::model::material::OrthotropicMaterial;
+    use crate::model::shell::{self, Shell};
 
     fn plate() -> (Shell, OrthotropicMaterial, DofReduction) {
         let shell = Shell::rectangular_plate(16.0, 9.0, 0.4, [3, 3], [14, 9]).unwrap();
@@ -560,7 +559,7 @@ mod tests {
     fn the_partial_solve_matches_the_dense_reference() {
         let (shell, material, reduction) = plate();
         let dense = shell::assemble(&shell, &material).unwrap();
-        let pattern = Arc::new(Pattern::of_shell(&shell));
+        let pattern = Arc::new(shell.pattern());
         let (k, m) = shell::assemble_sparse(&shell, &material, &pattern).unwrap();
         for (sparse, dense) in [(&k, &dense.stiffness), (&m, &dense.mass)] {
             let top = (0..dense.nrows()).map(|i| dense[(i, i)].abs()).fold(0.0, f64::max);
@@ -571,10 +570,10 @@ mod tests {
                 }
             }
         }
-        let reduced = Arc::new(reduced_pattern(&shell, &reduction));
+        let reduced = Arc::new(reduction.reduced_pattern(&shell));
         let (kr, mr) = (
-            k.reduce(&reduction, &reduced).unwrap(),
-            m.reduce(&reduction, &reduced).unwrap(),
+            reduction.reduce_sparse(&k, &reduced).unwrap(),
+            reduction.reduce_sparse(&m, &reduced).unwrap(),
         );
         let (kd, md) = (reduction.reduce(&dense.stiffness), reduction.reduce(&dense.mass));
         let top = (0..kd.nrows()).map(|i| kd[(i, i)].abs()).fold(0.0, f64::max);
@@ -584,7 +583,7 @@ mod tests {
                 assert!((krd[(i, j)] - kd[(i, j)]).abs() <= 1e-12 * top);
             }
         }
-        let reference = crate::modal::solve(&dense.stiffness, &dense.mass, &reduction, &shell).unwrap();
+        let reference = crate::solvers::modal::solve(&dense.stiffness, &dense.mass, &reduction, &shell).unwrap();
         let cutoff = 0.5 * (reference.omega2[30] + reference.omega2[31]);
         let solver = ShiftInvert::new(&reduced).unwrap();
         let settings = PartialSettings {

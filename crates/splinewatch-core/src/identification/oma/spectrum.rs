@@ -11,7 +11,7 @@
 //! singular values are its eigenvalues.
 
 use super::OmaError;
-use crate::welch::Window;
+use crate::identification::welch::Window;
 use faer::{c64, Mat, Side};
 use realfft::RealFftPlanner;
 

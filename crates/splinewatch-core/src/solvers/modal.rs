@@ -21,10 +21,10 @@
 //! along the directors `v3` (out of the surface) and `membrane` when most is
 //! tangential. Energies use the row-sum lumped mass per control point.
 
-use crate::constraints::DofReduction;
-use crate::shell::{Shell, DOFS_PER_CONTROL_POINT};
-use crate::springs::LowRankBlock;
-use crate::vec3::{dot, Vec3};
+use crate::geometry::vec3::{dot, Vec3};
+use crate::model::constraints::DofReduction;
+use crate::model::shell::{Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::springs::LowRankBlock;
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::evd::{self, ComputeEigenvectors, SelfAdjointEvdParams};
@@ -188,7 +188,7 @@ impl ScaledPencil {
 /// symmetric eigensolver on its own size. The eigenpairs of a block-diagonal
 /// pencil are those of its blocks, so this is exact, not an approximation.
 ///
-/// Stiffness fields of the deck ([`crate::stiffness_field`]) change `K_f`
+/// Stiffness fields of the deck ([`crate::model::stiffness_field`]) change `K_f`
 /// itself, `K_f(θ) = K_f + Σ_k (θ_k − 1) ∂K/∂θ_k`: no longer low rank, but
 /// still linear, so each `∂K/∂θ_k` is transformed once per component,
 /// `A_k = L⁻¹ S Tᵀ ∂K/∂θ_k T S L⁻ᵀ`, and a solve adds `Σ (θ_k − 1) A_k` to

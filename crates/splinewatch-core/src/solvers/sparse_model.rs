@@ -1,21 +1,22 @@
 //! The complete model at real scale (10⁴–10⁵ dofs): eq. (23) on the sparse
 //! control-net pattern, reduced to the free coordinates, and its modes below
-//! a cut-off by shift-invert Lanczos ([`crate::partial_eigen`]).
+//! a cut-off by shift-invert Lanczos ([`crate::solvers::partial_eigen`]).
 //!
 //! `K(κ, θ) = K_f + Σ (θ_k − 1) ∂K/∂θ_k + Σ κ_j ∂K/∂κ_j` is a sum of value
 //! arrays on one pattern, so a parameter change costs a weighted sum and a
 //! numeric re-factorisation, never a re-assembly or a new symbolic analysis.
-//! [`crate::model::AssembledModel`] stays the dense reference for small
+//! [`crate::solvers::dense_model::AssembledModel`] stays the dense reference for small
 //! models and the tests.
 
-use crate::constraints::DofReduction;
 use crate::linalg::bitwise_equal;
-use crate::modal::{classify_lumped, Modes};
-use crate::model::{ModelError, ShellModel};
-use crate::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
-use crate::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
-use crate::sparse::{reduced_pattern, NonZeros, Pattern, SparseAccumulator, SparseError, SparseSymmetric};
-use crate::springs::LowRankBlock;
+use crate::model::constraints::DofReduction;
+use crate::model::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::sparse::{NonZeros, Pattern, SparseAccumulator, SparseError, SparseSymmetric};
+use crate::model::springs::LowRankBlock;
+use crate::model::ShellModel;
+use crate::solvers::dense_model::ModelError;
+use crate::solvers::modal::{classify_lumped, Modes};
+use crate::solvers::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::sync::{Arc, Mutex};
@@ -71,7 +72,7 @@ pub struct SparseModel {
     /// `Tᵀ M T`.
     pub mass: SparseSymmetric,
     /// `M` on the generalised dofs, its non-zeros (the simulator's state
-    /// transfer between models, [`crate::frf::FrfModel::mass_times`]).
+    /// transfer between models, [`crate::response::frf::FrfModel::mass_times`]).
     pub generalised_mass: NonZeros,
     /// `∂K/∂κ_j` per spring field and coefficient on the generalised dofs
     /// (eq. 22, low rank).
@@ -246,7 +247,7 @@ fn field_matrices(
             for a in accumulated {
                 let d = a.to_matrix();
                 terms.push(SparseTerm::from_matrix(
-                    &d.reduce(reduction, pattern).map_err(sparse_error)?,
+                    &reduction.reduce_sparse(&d, pattern).map_err(sparse_error)?,
                 ));
                 products.push(d.nonzeros());
             }
@@ -265,9 +266,9 @@ fn sparse_error(e: SparseError) -> ModelError {
 impl SparseModel {
     pub fn assemble(model: &ShellModel) -> Result<Self, ModelError> {
         let shell = &model.shell;
-        let full = Arc::new(Pattern::of_shell(shell));
+        let full = Arc::new(shell.pattern());
         let reduction = DofReduction::new(shell, &model.constraints);
-        let pattern = Arc::new(reduced_pattern(shell, &reduction));
+        let pattern = Arc::new(reduction.reduced_pattern(shell));
         let (k, m) = shell::assemble_sparse(shell, &model.material, &full)?;
         let lumped = lumped_translational_mass(&full, &m, shell.control_point_count());
         let owners = owners(&reduction);
@@ -291,8 +292,8 @@ impl SparseModel {
             })
             .collect::<Result<Vec<_>, _>>()?;
         let (field_terms, field_products) = field_matrices(model, &full, &reduction, &pattern)?;
-        let free_stiffness = k.reduce(&reduction, &pattern).map_err(sparse_error)?;
-        let mass = m.reduce(&reduction, &pattern).map_err(sparse_error)?;
+        let free_stiffness = reduction.reduce_sparse(&k, &pattern).map_err(sparse_error)?;
+        let mass = reduction.reduce_sparse(&m, &pattern).map_err(sparse_error)?;
         let generalised_mass = m.nonzeros();
         let mut coupled: Vec<bool> = free_stiffness
             .values()
@@ -372,7 +373,7 @@ impl SparseModel {
     /// of eq. 32), `X = (K − σM)⁻¹` at the eigen-solve's shift
     /// ([`Self::shift_for`]), with their first dynamic correction
     /// `X M X Fᵀ`, both on the generalised dofs (one column per load), from
-    /// the eigen-solve's factorisation ([`crate::truncation`]).
+    /// the eigen-solve's factorisation ([`crate::solvers::truncation`]).
     pub fn modes_and_responses(
         &self,
         kappa: &[Vec<f64>],
@@ -539,9 +540,9 @@ fn check_counts(terms: &[Vec<SparseTerm>], given: &[Vec<f64>], springs: bool) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::knots::KnotVector;
-    use crate::material::OrthotropicMaterial;
-    use crate::springs::{Face, SpringDirection, SpringField};
+    use crate::geometry::knots::KnotVector;
+    use crate::model::material::OrthotropicMaterial;
+    use crate::model::springs::{Face, SpringDirection, SpringField};
 
     /// A plate on two B-spline spring fields: the
     /// sparse model's K(κ) equals the dense one's reduced (1e-12), and its

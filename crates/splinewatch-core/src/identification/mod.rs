@@ -1,0 +1,10 @@
+//! What the measurements say on their own: FRF estimates from forces and
+//! responses, and output-only modal analysis.
+//!
+//! May import: `linalg` (identification needs no model).
+//!
+//! - [`welch`]: streaming cross spectra, H1/H2/Hv and coherence;
+//! - [`oma`]: SSI-cov with stabilisation, clustering and uncertainty.
+
+pub mod oma;
+pub mod welch;

@@ -1,0 +1,441 @@
+//! Model FRFs at physical points and their sensitivities (paper §3,
+//! eq. 31–33).
+//!
+//! With mass-normalised modes `φ_i` and the damping of eq. (25), the
+//! receptance matrix is exactly `H(ω) = Σ_i φ_i φ_iᵀ / D_i(ω)`,
+//! `D_i = ω_i² - ω² + 2j ζ_i ω_i ω`, when every mode is kept (this module
+//! keeps every mode). At physical points (eq. 32), with the sensor rows
+//! `N_ψ(P_r)` of the shell shape functions and modal amplitudes
+//! `a_{r,i} = N_ψ(P_r) φ_i`: `H_rs(ω) = Σ_i a_{r,i} a_{s,i} / D_i(ω)`.
+//!
+//! Sensitivities:
+//! - spring coefficients, eq. (33) with `∂C/∂κ ≈ 0` as in the paper:
+//!   `∂H_rs/∂κ_j = -g_rᵀ (∂K/∂κ_j) g_s`, `g_s = H N_sᵀ`, evaluated only on the
+//!   few dofs where the low-rank `∂K/∂κ_j` lives;
+//! - damping coefficients, exact: `∂H_rs/∂γ_z = Σ_i a_{r,i} a_{s,i}
+//!   (-2j ω_i ω / D_i²) B_z(f_i)`.
+//!
+//! Mobility and accelerance are `jω H` and `-ω² H`; their sensitivities
+//! scale the same way.
+
+use crate::geometry::vec3::{dot, normalize, Vec3};
+use crate::linalg::dense_rows;
+use crate::model::damping::DampingCurve;
+use crate::model::shell::Shell;
+use crate::model::springs::LowRankBlock;
+use crate::model::ShellModel;
+use crate::solvers::dense_model::{AssembledModel, ModelError};
+use crate::solvers::modal::{ModalError, ModeKind, Modes};
+use crate::solvers::sparse_model::SparseModel;
+use crate::solvers::truncation::Residual;
+
+use faer::{c64, Mat};
+use std::f64::consts::PI;
+use std::sync::atomic::{AtomicU64, Ordering};
+use thiserror::Error;
+
+mod direct;
+mod evaluate;
+mod truncated;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum FrfError {
+    #[error("sensor {index}: (ξ, η, τ) = ({xi}, {eta}, {tau}) lies outside the shell's parameter domain")]
+    SensorOutside { index: usize, xi: f64, eta: f64, tau: f64 },
+    #[error("sensor {index}: direction must be a finite non-zero vector")]
+    SensorDirection { index: usize },
+    #[error("{0}")]
+    Model(#[from] ModelError),
+    #[error("{0}")]
+    Modal(#[from] ModalError),
+    #[error("damping curve has {found} coefficients, {expected} expected")]
+    DampingCount { found: usize, expected: usize },
+    #[error("the direct FRF solve failed at {frequency_hz} Hz: Z(ω) is singular")]
+    SingularImpedance { frequency_hz: f64 },
+    #[error("the modal cut-off must be a positive frequency, got {0} Hz")]
+    Cutoff(f64),
+    #[error("{0} needs every mode (the dense model); this model is truncated")]
+    DenseOnly(&'static str),
+}
+
+/// Which FRF is measured: displacement, velocity or acceleration per force.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quantity {
+    Receptance,
+    Mobility,
+    Accelerance,
+}
+
+impl Quantity {
+    /// Factor turning receptance into this quantity at `ω` rad/s.
+    pub fn factor(self, omega: f64) -> c64 {
+        match self {
+            Quantity::Receptance => c64::new(1.0, 0.0),
+            Quantity::Mobility => c64::new(0.0, omega),
+            Quantity::Accelerance => c64::new(-omega * omega, 0.0),
+        }
+    }
+}
+
+/// A measurement point `P = s(ξ, η, τ)` and direction (eq. 32).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorPoint {
+    pub xi: f64,
+    pub eta: f64,
+    pub tau: f64,
+    pub direction: Vec3,
+}
+
+/// What to evaluate: the frequency lines and `(output, input)` sensor pairs.
+#[derive(Debug, Clone, Copy)]
+pub struct FrfRequest<'a> {
+    pub frequencies_hz: &'a [f64],
+    pub pairs: &'a [(usize, usize)],
+    pub quantity: Quantity,
+}
+
+/// FRFs and sensitivities, each stored pair-major: `[pair * n_f + line]`.
+#[derive(Debug, Clone)]
+pub struct FrfEvaluation {
+    pub h: Vec<c64>,
+    /// One vector per spring coefficient, fields in order, coefficients flattened.
+    pub dh_dkappa: Vec<Vec<c64>>,
+    /// One vector per damping coefficient.
+    pub dh_dgamma: Vec<Vec<c64>>,
+    /// One vector per stiffness-field coefficient (fields flattened): filled
+    /// by the updating when it updates fields
+    /// ([`FrfModel::field_frf_sensitivities`]), empty otherwise.
+    pub dh_dtheta: Vec<Vec<c64>>,
+}
+
+/// The modal model at one parameter point.
+#[derive(Debug, Clone)]
+pub struct ModalState {
+    pub modes: Modes,
+    /// ζ_i of every mode (eq. 28), zero for rigid modes.
+    pub zeta: Vec<f64>,
+    /// `∂ζ_i/∂γ_z`: `n_modes × n_z`.
+    zeta_basis: Mat<f64>,
+    /// `a_{s,i}`: `n_sensors × n_modes`.
+    amplitudes: Mat<f64>,
+    /// Mode shapes on the spring dofs `U`: `|U| × n_modes`.
+    phi_springs: Mat<f64>,
+    omega: Vec<f64>,
+    /// The discarded modes' contribution when only the modes below a
+    /// cut-off were solved ([`crate::solvers::truncation`]).
+    residual: Option<Residual>,
+}
+
+impl ModalState {
+    /// Mode shapes on the union of the spring dofs (`|U| × modes`).
+    pub fn spring_shapes(&self) -> &Mat<f64> {
+        &self.phi_springs
+    }
+
+    /// Modal amplitude of mode `i` at sensor `s` along its direction.
+    pub fn amplitude(&self, sensor: usize, mode: usize) -> f64 {
+        self.amplitudes[(sensor, mode)]
+    }
+
+    /// Number of sensors (the rows of the amplitudes).
+    pub fn sensor_count(&self) -> usize {
+        self.amplitudes.nrows()
+    }
+
+    /// The residual of the discarded modes (a truncated model's state).
+    pub fn residual(&self) -> Option<&Residual> {
+        self.residual.as_ref()
+    }
+}
+
+/// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
+pub fn sensor_rows(shell: &Shell, sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
+    let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+    let mut rows = Vec::with_capacity(sensors.len());
+    for (index, s) in sensors.iter().enumerate() {
+        if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
+            return Err(FrfError::SensorOutside {
+                index,
+                xi: s.xi,
+                eta: s.eta,
+                tau: s.tau,
+            });
+        }
+        let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
+        let row = shell
+            .shape_functions(s.xi, s.eta, s.tau)
+            .into_iter()
+            .map(|(dof, col)| (dof, dot(dir, col)))
+            .filter(|(_, v)| *v != 0.0)
+            .collect();
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// Where a model's modes come from.
+#[derive(Debug, Clone)]
+enum Source {
+    /// Every mode of the dense model (the reference; eq. 31 exact).
+    Dense(Box<AssembledModel>),
+    /// The modes below `cutoff_hz` of the sparse model, the rest as a
+    /// residual ([`crate::solvers::truncation`]).
+    Truncated { model: Box<SparseModel>, cutoff_hz: f64 },
+}
+
+/// An assembled model with sensors: evaluates FRFs and sensitivities.
+#[derive(Debug, Clone)]
+pub struct FrfModel {
+    source: Source,
+    /// Sparse rows `N_ψ(P_s)`.
+    sensor_rows: Vec<Vec<(usize, f64)>>,
+    /// Union `U` of the dofs of all `∂K/∂κ_j`.
+    spring_dofs: Vec<usize>,
+    /// Positions in `U` of each block's dofs, blocks flattened over fields.
+    block_positions: Vec<Vec<usize>>,
+    /// Distinct for every model built (clones share it): results computed
+    /// on one model are not mistaken for another's.
+    id: u64,
+}
+
+static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(0);
+
+impl FrfModel {
+    /// Every mode of the dense model.
+    pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
+        let sensor_rows = sensor_rows(&assembled.shell, sensors)?;
+        Ok(Self::with_source(Source::Dense(Box::new(assembled)), sensor_rows))
+    }
+
+    /// The modes below `cutoff_hz` of the sparse model of `model`, the
+    /// others by their residual ([`crate::solvers::truncation`]): for models too
+    /// large for the dense path.
+    pub fn truncated(model: &ShellModel, sensors: &[SensorPoint], cutoff_hz: f64) -> Result<Self, FrfError> {
+        if !(cutoff_hz.is_finite() && cutoff_hz > 0.0) {
+            return Err(FrfError::Cutoff(cutoff_hz));
+        }
+        let sensor_rows = sensor_rows(&model.shell, sensors)?;
+        let source = Source::Truncated {
+            model: Box::new(SparseModel::assemble(model)?),
+            cutoff_hz,
+        };
+        Ok(Self::with_source(source, sensor_rows))
+    }
+
+    fn with_source(source: Source, sensor_rows: Vec<Vec<(usize, f64)>>) -> Self {
+        let blocks = match &source {
+            Source::Dense(assembled) => &assembled.spring_blocks,
+            Source::Truncated { model, .. } => &model.spring_blocks,
+        };
+        let mut spring_dofs: Vec<usize> = blocks.iter().flatten().flat_map(|b| b.dofs.iter().copied()).collect();
+        spring_dofs.sort_unstable();
+        spring_dofs.dedup();
+        let block_positions = blocks
+            .iter()
+            .flatten()
+            .map(|b| {
+                b.dofs
+                    .iter()
+                    .map(|d| spring_dofs.binary_search(d).expect("in the union"))
+                    .collect()
+            })
+            .collect();
+        Self {
+            source,
+            sensor_rows,
+            spring_dofs,
+            block_positions,
+            id: NEXT_MODEL_ID.fetch_add(1, Ordering::Relaxed),
+        }
+    }
+
+    /// This model's identity (see the field).
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The dense model, when every mode is solved (`None` for a
+    /// [`FrfModel::truncated`] one).
+    pub fn dense(&self) -> Option<&AssembledModel> {
+        match &self.source {
+            Source::Dense(assembled) => Some(assembled),
+            Source::Truncated { .. } => None,
+        }
+    }
+
+    /// The cut-off of a truncated model.
+    pub fn cutoff_hz(&self) -> Option<f64> {
+        match &self.source {
+            Source::Dense(_) => None,
+            Source::Truncated { cutoff_hz, .. } => Some(*cutoff_hz),
+        }
+    }
+
+    /// `∂K/∂κ_j` per spring field and coefficient, on the generalised dofs.
+    pub fn spring_blocks(&self) -> &[Vec<LowRankBlock>] {
+        match &self.source {
+            Source::Dense(assembled) => &assembled.spring_blocks,
+            Source::Truncated { model, .. } => &model.spring_blocks,
+        }
+    }
+
+    /// The model's own stiffness-field coefficients, one vector per field.
+    pub fn field_coefficients(&self) -> &[Vec<f64>] {
+        match &self.source {
+            Source::Dense(assembled) => &assembled.field_coefficients,
+            Source::Truncated { model, .. } => &model.field_coefficients,
+        }
+    }
+
+    pub fn sensor_count(&self) -> usize {
+        self.sensor_rows.len()
+    }
+
+    /// Positions of each `∂K/∂κ_j` block's dofs in the union of spring dofs
+    /// (the rows of [`ModalState::spring_shapes`]), blocks flattened over fields.
+    pub fn spring_block_positions(&self) -> &[Vec<usize>] {
+        &self.block_positions
+    }
+
+    /// Position of coefficient `coefficient` of spring field `field` among
+    /// all spring coefficients, fields flattened in order (the order of
+    /// `FrfEvaluation::dh_dkappa` and of the modal sensitivities).
+    #[track_caller]
+    pub fn flat_spring_index(&self, field: usize, coefficient: usize) -> usize {
+        let blocks = self.spring_blocks();
+        assert!(coefficient < blocks[field].len(), "spring coefficient out of range");
+        blocks[..field].iter().map(Vec::len).sum::<usize>() + coefficient
+    }
+
+    /// Index of stiffness-field coefficient `coefficient` of field `field`
+    /// among all fields' coefficients (the columns of
+    /// [`FrfModel::field_sensitivities`]).
+    #[track_caller]
+    pub fn flat_field_index(&self, field: usize, coefficient: usize) -> usize {
+        let fields = self.field_coefficients();
+        assert!(coefficient < fields[field].len(), "no such stiffness-field coefficient");
+        fields[..field].iter().map(Vec::len).sum::<usize>() + coefficient
+    }
+
+    /// `M x` on the generalised dofs (the consistent mass, eq. 17).
+    #[track_caller]
+    pub fn mass_times(&self, x: &[f64]) -> Vec<f64> {
+        match &self.source {
+            Source::Dense(assembled) => {
+                let mass = &assembled.mass;
+                assert_eq!(x.len(), mass.ncols(), "a value per generalised dof");
+                (0..mass.nrows())
+                    .map(|r| (0..x.len()).map(|c| mass[(r, c)] * x[c]).sum())
+                    .collect()
+            }
+            Source::Truncated { model, .. } => {
+                assert_eq!(x.len(), model.dof_count(), "a value per generalised dof");
+                let column = Mat::from_fn(x.len(), 1, |r, _| x[r]);
+                model.generalised_mass.mul(&column).col_as_slice(0).to_vec()
+            }
+        }
+    }
+
+    /// Number of stiffness-field coefficients over all fields.
+    pub fn field_coefficient_count(&self) -> usize {
+        self.field_coefficients().iter().map(Vec::len).sum()
+    }
+
+    /// `(∂K/∂θ_k) X` on the generalised dofs, `k` the coefficient's flat
+    /// index ([`Self::flat_field_index`]).
+    #[track_caller]
+    pub(crate) fn field_times(&self, k: usize, x: &Mat<f64>) -> Mat<f64> {
+        match &self.source {
+            Source::Dense(assembled) => {
+                let matrix = assembled.field_matrices.iter().flatten().nth(k);
+                matrix.expect("no such stiffness-field coefficient") * x
+            }
+            Source::Truncated { model, .. } => {
+                let matrix = model.field_products.iter().flatten().nth(k);
+                matrix.expect("no such stiffness-field coefficient").mul(x)
+            }
+        }
+    }
+
+    /// Total number of spring coefficients over all fields.
+    pub fn spring_coefficient_count(&self) -> usize {
+        self.block_positions.len()
+    }
+
+    /// Solves the modes for spring coefficients `kappa` (one vector per
+    /// field) and evaluates ζ_i on `damping`.
+    pub fn modal_state(&self, kappa: &[Vec<f64>], damping: &DampingCurve) -> Result<ModalState, FrfError> {
+        self.modal_state_with_fields(kappa, self.field_coefficients(), damping)
+    }
+
+    /// [`Self::modal_state`] with stiffness-field coefficients `theta` (one
+    /// vector per field of the assembled model).
+    pub fn modal_state_with_fields(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        damping: &DampingCurve,
+    ) -> Result<ModalState, FrfError> {
+        match &self.source {
+            Source::Dense(assembled) => {
+                let modes = assembled.modes_with_fields(kappa, theta)?;
+                Ok(self.modal_state_from(modes, damping))
+            }
+            Source::Truncated { model, cutoff_hz, .. } => {
+                let (modes, responses) = model.modes_and_responses(kappa, theta, *cutoff_hz, &self.sensor_rows)?;
+                let shift = SparseModel::shift_for(*cutoff_hz);
+                let mut state = self.modal_state_from(modes, damping);
+                state.residual = Some(Residual::new(
+                    &state.modes,
+                    &state.amplitudes,
+                    &self.sensor_rows,
+                    &self.spring_dofs,
+                    &responses,
+                    shift,
+                    damping,
+                    model.field_products.iter().any(|f| !f.is_empty()),
+                ));
+                Ok(state)
+            }
+        }
+    }
+
+    /// Builds the modal state from already computed modes.
+    pub fn modal_state_from(&self, modes: Modes, damping: &DampingCurve) -> ModalState {
+        let nm = modes.len();
+        let nz = damping.coefficients().len();
+        let omega: Vec<f64> = modes.omega2.iter().map(|w2| w2.max(0.0).sqrt()).collect();
+        let mut zeta = vec![0.0; nm];
+        let mut zeta_basis = Mat::<f64>::zeros(nm, nz);
+        let mut b = vec![0.0; nz];
+        for i in 0..nm {
+            if modes.kinds[i] == ModeKind::Rigid {
+                continue;
+            }
+            damping.basis_at(omega[i] / (2.0 * PI), &mut b);
+            for z in 0..nz {
+                zeta_basis[(i, z)] = b[z];
+            }
+            zeta[i] = b.iter().zip(damping.coefficients()).map(|(b, g)| b * g).sum();
+        }
+        let amplitudes = Mat::from_fn(self.sensor_rows.len(), nm, |s, i| {
+            self.sensor_rows[s].iter().map(|&(d, v)| v * modes.shapes[(d, i)]).sum()
+        });
+        let phi_springs = dense_rows(&modes.shapes, &self.spring_dofs);
+        ModalState {
+            modes,
+            zeta,
+            zeta_basis,
+            amplitudes,
+            phi_springs,
+            omega,
+            residual: None,
+        }
+    }
+}
+
+/// Frequency lines per block in [`FrfModel::evaluate`]: every intermediate
+/// (at most the active modes × 32 lines, re and im: 67 kB for Sinello) stays
+/// in L2, and a typical 300-line band splits evenly over two threads.
+pub const FREQUENCY_BLOCK: usize = 32;

@@ -1,0 +1,17 @@
+//! Assembled models and their eigen-solves (eq. 23, 27).
+//!
+//! May import: `model`, `geometry`, `linalg`.
+//!
+//! - [`dense_model`]: `AssembledModel` (dense `K_f`, `M`, `∂K/∂κ_j`, `∂K/∂θ_k`) and `ShellModel::assemble`;
+//! - [`modal`]: the prepared dense eigen-solver (`ModalSolver`) and the reference `solve`;
+//! - [`sparse_model`]: the sparse, reduced model and the modes below a cut-off;
+//! - [`partial_eigen`]: shift-invert Lanczos with a supernodal Cholesky factor, Sturm counts;
+//! - [`subtree_solve`]: triangular solves with that factor on two threads;
+//! - [`truncation`]: the discarded modes' residual flexibility, inertia and damping.
+
+pub mod dense_model;
+pub mod modal;
+pub mod partial_eigen;
+pub mod sparse_model;
+pub mod subtree_solve;
+pub mod truncation;
