@@ -22,15 +22,23 @@
 // No function longer than clippy.toml's too-many-lines-threshold without a written reason.
 #![warn(clippy::too_many_lines)]
 
+// The floors in pipeline order (each on its own line group, so rustfmt keeps
+// the order; tests/integration/architecture.rs checks it).
 pub mod linalg;
 
 pub mod geometry;
-pub mod identification;
+
 pub mod model;
-pub mod monitoring;
-pub mod response;
+
 pub mod solvers;
+
+pub mod response;
+
+pub mod identification;
+
 pub mod updating;
+
+pub mod monitoring;
 
 /// Complex scalar used for FRFs (re-exported so callers need not depend on faer).
 pub use faer::c64;
