@@ -17,7 +17,7 @@ use std::path::Path;
 pub const TOPICS: [(&str, &str); 9] = [
     (
         "updating/parameters",
-        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}},"truncation":{"type":"object","properties":{"cutoff_hz":{"type":"number"},"modes_kept":{"type":"integer"},"frf_error":{"type":["number","null"]}}}}}"#,
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}},"held":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"reason":{"type":"string","enum":["no_gradient","at_bound","unresolved"]},"value":{"type":"number"}}}},"truncation":{"type":"object","properties":{"cutoff_hz":{"type":"number"},"modes_kept":{"type":"integer"},"frf_error":{"type":["number","null"]}}}}}"#,
     ),
     (
         "updating/residue",
@@ -199,6 +199,7 @@ pub fn update_messages<'a>(o: &'a UpdateOutcome, time: &'a str) -> Vec<(&'static
                 "relative_offset": r.result.relative_offset,
                 "parameters": r.result.parameters,
                 "correlations": r.result.correlations,
+                "held": r.result.held,
             });
             if let Some(truncation) = &r.truncation {
                 parameters["truncation"] = json!(truncation);

@@ -262,13 +262,24 @@ impl UpdateJob {
     }
 }
 
-/// A result the pipeline accepts: finite and converged.
+/// A result the pipeline accepts: finite, and converged or at least better
+/// than where it started (a solve stopped by `max_iterations` or a stall
+/// that lowered the residual is published with `"converged": false` and its
+/// stop reason, and becomes the next warm start: it fits the window better
+/// than the last parameters do).
 fn accepted(result: UpdateResult) -> Result<UpdateResult> {
     if result.parameters.iter().any(|p| !p.value.is_finite()) {
         bail!("non-finite parameters");
     }
-    if !result.converged {
-        bail!("the updating did not converge ({:?})", result.stop_reason);
+    let improved = match (result.iterations.first(), result.iterations.last()) {
+        (Some(first), Some(last)) => last.cost < first.cost,
+        _ => false,
+    };
+    if !result.converged && !improved {
+        bail!(
+            "the updating did not converge ({:?}) and did not lower the residual",
+            result.stop_reason
+        );
     }
     Ok(result)
 }

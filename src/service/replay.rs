@@ -548,12 +548,27 @@ impl<W: Write + Seek> Outputs<'_, W> {
             self.summary.monitoring.push(m.status.clone());
         }
         let note = match &outcome.result {
-            Ok(r) => format!(
-                "update after window {}: relative residual {:.4}, {} iterations",
-                outcome.window,
-                r.result.relative_residual,
-                r.result.iterations.len() - 1
-            ),
+            Ok(r) => {
+                let mut note = format!(
+                    "update after window {}: relative residual {:.4}, {} iterations",
+                    outcome.window,
+                    r.result.relative_residual,
+                    r.result.iterations.len() - 1
+                );
+                if !r.result.converged {
+                    note += &format!(", not converged ({:?})", r.result.stop_reason);
+                }
+                if !r.result.held.is_empty() {
+                    let held: Vec<String> = r
+                        .result
+                        .held
+                        .iter()
+                        .map(|h| format!("{} ({})", h.name, crate::studies::update::hold_reason(h.reason)))
+                        .collect();
+                    note += &format!("; held: {}", held.join(", "));
+                }
+                note
+            }
             Err(e) => format!(
                 "update after window {} failed, keeping the last parameters: {e}",
                 outcome.window

@@ -10,7 +10,9 @@ use anyhow::{Context, Result};
 use serde::Deserialize;
 use splinewatch_core::solvers::truncation::TruncationReport;
 use splinewatch_core::updating::frf_residual::UpdateProblem;
-use splinewatch_core::updating::{IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateResult};
+use splinewatch_core::updating::{
+    HoldReason, IterationRecord, ModalSolution, ModalUpdateProblem, Parameter, UpdateResult,
+};
 use std::io::Write;
 
 #[derive(Debug, Deserialize)]
@@ -176,6 +178,14 @@ pub fn write_update_table(result: &UpdateResult, out: &mut impl Write) -> Result
         result.relative_residual,
         result.condition_number
     )?;
+    if !result.held.is_empty() {
+        let held: Vec<String> = result
+            .held
+            .iter()
+            .map(|h| format!("{} ({}, kept at {:.4e})", h.name, hold_reason(h.reason), h.value))
+            .collect();
+        writeln!(out, "held, the data do not inform them: {}", held.join(", "))?;
+    }
     if !result.correlations.is_empty() {
         let pairs: Vec<String> = result
             .correlations
@@ -186,4 +196,13 @@ pub fn write_update_table(result: &UpdateResult, out: &mut impl Write) -> Result
         writeln!(out, "most correlated estimates (ρ): {}", pairs.join(", "))?;
     }
     Ok(())
+}
+
+/// The words of a [`HoldReason`] in the tables (the JSON's snake_case).
+pub fn hold_reason(reason: HoldReason) -> &'static str {
+    match reason {
+        HoldReason::NoGradient => "no gradient",
+        HoldReason::AtBound => "at its bound",
+        HoldReason::Unresolved => "unresolved",
+    }
 }

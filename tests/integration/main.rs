@@ -18,6 +18,7 @@ mod pipes;
 #[cfg(unix)]
 mod reliability;
 mod replay;
+mod robust_updating;
 #[cfg(unix)]
 mod security;
 mod uff;

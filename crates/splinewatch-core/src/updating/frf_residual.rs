@@ -456,10 +456,10 @@ impl<'a> UpdateProblem<'a> {
             solved.converged,
             solved.offset,
         );
-        let (iterations, evaluations) = (solved.iterations, solved.evaluations);
+        let (iterations, evaluations, held) = (solved.iterations, solved.evaluations, solved.held);
         let (state, frfs) = current.extra;
         let (relative_residual, frf_relative_residuals) = self.relative_residuals(&frfs.h);
-        let e = solver::estimates(&self.parameters, &p, &current.jacobian, cost);
+        let e = solver::estimates(&self.parameters, &p, &current.jacobian, cost, &held);
         let result = UpdateResult {
             parameters: e.parameters,
             iterations,
@@ -474,6 +474,7 @@ impl<'a> UpdateProblem<'a> {
             evaluations,
             lines_used: self.lines.len(),
             correlations: e.correlations,
+            held: e.held,
         };
         let point = self.point(&p, state, frfs)?;
         Ok(Solution { result, point })

@@ -351,6 +351,35 @@ pub enum StopReason {
     Stalled,
     /// Gauss–Newton produced a step that increased the cost.
     Diverged,
+    /// Every parameter was held: the data inform none of them.
+    NothingToUpdate,
+}
+
+/// Why the solver held a parameter (at its start value, or where it is for
+/// [`HoldReason::AtBound`]) instead of updating it: the stop test and the
+/// covariance then refer to the parameters the data determine.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HoldReason {
+    /// No residue depends on it: its whole range moves them by less than
+    /// 1e-8 of what the most influential parameter's range does (a damping
+    /// coefficient whose support holds no identified mode or line).
+    NoGradient,
+    /// It sits on a bound, where the transform of eq. (42) leaves it no
+    /// gradient: held there.
+    AtBound,
+    /// It loads most on a direction of the column-normalised Jacobian whose
+    /// singular value is below 1e-6 of the largest: the data determine only
+    /// a combination of it with others.
+    Unresolved,
+}
+
+/// A parameter the solver held, with the reason and the value it kept.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeldParameter {
+    pub name: String,
+    pub reason: HoldReason,
+    pub value: f64,
 }
 
 /// The correlation of two parameters' estimates, `ρ = C_ab / √(C_aa C_bb)`
@@ -391,6 +420,11 @@ pub struct UpdateResult {
     /// `JᵀJ` is singular.
     #[serde(default)]
     pub correlations: Vec<ParameterCorrelation>,
+    /// Parameters the data could not inform, held during the solve (their
+    /// `std` is `None`); the singular values, condition number, correlations
+    /// and `residual_variance` refer to the others.
+    #[serde(default)]
+    pub held: Vec<HeldParameter>,
 }
 
 #[cfg(test)]

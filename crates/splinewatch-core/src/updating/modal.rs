@@ -134,7 +134,13 @@ impl<'a> ModalUpdateProblem<'a> {
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<ModalSolution, UpdateError> {
         let solved = solver::levenberg_marquardt(self, start, None, observer)?;
-        let e = solver::estimates(&self.parameters, &solved.p, &solved.at.jacobian, solved.cost);
+        let e = solver::estimates(
+            &self.parameters,
+            &solved.p,
+            &solved.at.jacobian,
+            solved.cost,
+            &solved.held,
+        );
         let relative_residual = self.relative_residual(&solved.at);
         let Extra { state, pairs, .. } = solved.at.extra;
         let per_mode = pairs
@@ -159,6 +165,7 @@ impl<'a> ModalUpdateProblem<'a> {
             evaluations: solved.evaluations,
             lines_used: pairs.len(),
             correlations: e.correlations,
+            held: e.held,
         };
         Ok(ModalSolution { result, pairs, state })
     }

@@ -6,8 +6,8 @@
 //! helpers are here, once.
 
 use super::{
-    bounded_derivative, bounded_value, unbounded_value, IterationRecord, Method, Parameter, ParameterCorrelation,
-    ParameterEstimate, StopReason, UpdateError, UpdateSettings,
+    bounded_derivative, bounded_value, unbounded_value, HeldParameter, HoldReason, IterationRecord, Method, Parameter,
+    ParameterCorrelation, ParameterEstimate, StopReason, UpdateError, UpdateSettings,
 };
 use faer::{Mat, Side};
 
@@ -57,6 +57,8 @@ pub struct Solved<E> {
     pub cost: f64,
     pub offset: Option<f64>,
     pub evaluations: usize,
+    /// Per parameter, why it was held (`None`: free).
+    pub held: Vec<Option<HoldReason>>,
 }
 
 /// Runs the bounded LM from `start` (warm start: values on or outside a
@@ -88,6 +90,7 @@ pub fn levenberg_marquardt<M: ResidualModel>(
         cost: search.cost,
         offset: search.offset,
         evaluations: search.evaluations,
+        held: search.held,
     })
 }
 
@@ -117,6 +120,11 @@ struct Search<'m, M: ResidualModel> {
     iteration: usize,
     evaluations: usize,
     iterations: Vec<IterationRecord>,
+    /// Per parameter, why it is held (sticky for the solve); held
+    /// parameters take no step and leave the stop test and the covariance.
+    held: Vec<Option<HoldReason>>,
+    /// The values held parameters return to (the start, after the margin).
+    start_p: Vec<f64>,
 }
 
 impl<'m, M: ResidualModel> Search<'m, M> {
@@ -158,17 +166,16 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         };
         let scale: Vec<f64> = (0..y.len()).map(|i| a[(i, i)]).collect();
         let m = current.residual.len();
-        let offset = relative_offset(&a, &g, cost, m);
-        Ok(Self {
+        let n = y.len();
+        let mut search = Self {
             model,
             bounds,
-            p,
             y,
             current,
             cost,
             a,
             g,
-            offset,
+            offset: None,
             m,
             lambda,
             nu: 2.0,
@@ -177,7 +184,122 @@ impl<'m, M: ResidualModel> Search<'m, M> {
             iteration: 0,
             evaluations,
             iterations,
-        })
+            held: vec![None; n],
+            start_p: p.clone(),
+            p,
+        };
+        search.hold_uninformed()?;
+        Ok(search)
+    }
+
+    /// The indices of the free (not held) parameters.
+    fn free(&self) -> Vec<usize> {
+        (0..self.held.len()).filter(|&k| self.held[k].is_none()).collect()
+    }
+
+    /// `A` and `g` on the free parameters.
+    fn free_normal_equations(&self, free: &[usize]) -> (Mat<f64>, Vec<f64>) {
+        let a = Mat::from_fn(free.len(), free.len(), |i, j| self.a[(free[i], free[j])]);
+        (a, free.iter().map(|&k| self.g[k]).collect())
+    }
+
+    /// Holds the parameters the data cannot inform at the current point
+    /// (see [`HoldReason`]), moves those that must return to their start
+    /// value there (one more evaluation), and forms the relative offset on
+    /// the free parameters. With nothing held every number is the one of the
+    /// plain search.
+    fn hold_uninformed(&mut self) -> Result<(), UpdateError> {
+        loop {
+            let reset = self.find_holds();
+            if !reset.is_empty() {
+                for &k in &reset {
+                    let (lo, hi) = self.bounds[k];
+                    self.p[k] = self.start_p[k];
+                    self.y[k] = unbounded_value(self.p[k], lo, hi);
+                }
+                let trial = self.model.residual(&self.p)?;
+                self.current = self.model.with_jacobian(&self.p, trial)?;
+                self.evaluations += 1;
+                self.cost = 0.5 * norm2(&self.current.residual);
+                let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
+                (self.a, self.g) = normal_equations(&jy, &self.current.residual);
+                continue;
+            }
+            let free = self.free();
+            let (a, g) = self.free_normal_equations(&free);
+            self.offset = relative_offset(&a, &g, self.cost, self.m);
+            return Ok(());
+        }
+    }
+
+    /// Marks newly held parameters; returns those whose value must go back
+    /// to the start (the moved ones held for no gradient or as unresolved).
+    fn find_holds(&mut self) -> Vec<usize> {
+        let j = &self.current.jacobian;
+        let n = self.held.len();
+        if j.ncols() != n {
+            return Vec::new();
+        }
+        // Each column of ∂r/∂p times its half range: how much the whole
+        // range of the parameter moves the residues (dimensionless, so
+        // parameters of every kind compare).
+        let reach: Vec<f64> = (0..n)
+            .map(|k| {
+                let half = 0.5 * (self.bounds[k].1 - self.bounds[k].0);
+                half * (0..j.nrows()).map(|r| j[(r, k)].powi(2)).sum::<f64>().sqrt()
+            })
+            .collect();
+        let largest = reach.iter().copied().filter(|v| v.is_finite()).fold(0.0, f64::max);
+        let mut reset = Vec::new();
+        for k in 0..n {
+            if self.held[k].is_some() {
+                continue;
+            }
+            let (lo, hi) = self.bounds[k];
+            // A NaN reach is no gradient either.
+            let informed = reach[k] > NO_GRADIENT * largest;
+            if !informed {
+                self.held[k] = Some(HoldReason::NoGradient);
+                if self.p[k] != self.start_p[k] {
+                    reset.push(k);
+                }
+            } else if bounded_derivative(self.y[k], lo, hi).abs() <= AT_BOUND * 0.5 * (hi - lo) {
+                self.held[k] = Some(HoldReason::AtBound);
+            }
+        }
+        while let Some(k) = self.unresolved() {
+            self.held[k] = Some(HoldReason::Unresolved);
+            if self.p[k] != self.start_p[k] {
+                reset.push(k);
+            }
+        }
+        reset
+    }
+
+    /// The free parameter that loads most on a direction of the
+    /// column-normalised Jacobian (in `y`) whose singular value is below
+    /// [`UNRESOLVED`] of the largest, if any.
+    fn unresolved(&self) -> Option<usize> {
+        let free = self.free();
+        if free.len() < 2 {
+            return None;
+        }
+        let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
+        let norms: Vec<f64> = free
+            .iter()
+            .map(|&k| (0..jy.nrows()).map(|r| jy[(r, k)].powi(2)).sum::<f64>().sqrt())
+            .collect();
+        let js = Mat::from_fn(jy.nrows(), free.len(), |r, c| jy[(r, free[c])] / norms[c]);
+        let svd = js.thin_svd().ok()?;
+        let last = free.len().min(jy.nrows()).checked_sub(1)?;
+        let (smax, smin) = (svd.S()[0], svd.S()[last]);
+        if smin > UNRESOLVED * smax {
+            return None;
+        }
+        let v = svd.V();
+        (0..free.len())
+            .max_by(|&a, &b| v[(a, last)].abs().total_cmp(&v[(b, last)].abs()))
+            .map(|c| free[c])
     }
 
     /// One trial step: `Some((reason, converged))` when the search stops.
@@ -192,11 +314,26 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         for i in 0..self.y.len() {
             self.scale[i] = self.scale[i].max(self.a[(i, i)]);
         }
-        let Some(step) = solve_damped(&self.a, &self.g, &self.scale, self.lambda) else {
+        let free = self.free();
+        if free.is_empty() {
+            return Ok(Some((StopReason::NothingToUpdate, true)));
+        }
+        let (a, g) = self.free_normal_equations(&free);
+        let scale: Vec<f64> = free.iter().map(|&k| self.scale[k]).collect();
+        let Some(free_step) = solve_damped(&a, &g, &scale, self.lambda) else {
             self.lambda = (self.lambda * self.nu).max(1e-12);
             self.nu *= 2.0;
+            // A system no damping makes positive definite (a NaN in the
+            // Jacobian): stop rather than loop.
+            if self.lambda > 1e16 {
+                return Ok(Some((StopReason::Stalled, false)));
+            }
             return Ok(None);
         };
+        let mut step = vec![0.0; self.y.len()];
+        for (&k, s) in free.iter().zip(free_step) {
+            step[k] = s;
+        }
         let y_new: Vec<f64> = self.y.iter().zip(&step).map(|(y, s)| y + s).collect();
         self.evaluations += 1;
         // Residual only: the Jacobian is computed once a step is accepted.
@@ -246,7 +383,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
             step_norm: norm2(&step).sqrt(),
             rho,
         };
-        Ok(self.accept(accepted, observer))
+        self.accept(accepted, observer)
     }
 
     /// Moves to an accepted point, records the iteration, updates the
@@ -255,7 +392,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         &mut self,
         accepted: Accepted<M::Extra>,
         observer: &mut dyn FnMut(&IterationRecord),
-    ) -> Option<(StopReason, bool)> {
+    ) -> Result<Option<(StopReason, bool)>, UpdateError> {
         let settings = self.model.settings();
         self.iteration += 1;
         let relative_decrease = (self.cost - accepted.cost) / self.cost;
@@ -277,7 +414,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         self.rejected = 0;
         let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
         (self.a, self.g) = normal_equations(&jy, &self.current.residual);
-        self.offset = relative_offset(&self.a, &self.g, self.cost, self.m);
+        self.hold_uninformed()?;
         if settings.method == Method::LevenbergMarquardt {
             self.lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * accepted.rho - 1.0).powi(3));
             self.nu = 2.0;
@@ -285,15 +422,15 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         // A change within the tolerance, up or down, is convergence; only a
         // real increase means Gauss–Newton diverged.
         if relative_decrease.abs() < settings.cost_tolerance {
-            return Some((StopReason::CostTolerance, true));
+            return Ok(Some((StopReason::CostTolerance, true)));
         }
         if diverged {
-            return Some((StopReason::Diverged, false));
+            return Ok(Some((StopReason::Diverged, false)));
         }
         if accepted.step_norm <= settings.step_tolerance * (norm2(&self.y).sqrt() + settings.step_tolerance) {
-            return Some((StopReason::StepTolerance, true));
+            return Ok(Some((StopReason::StepTolerance, true)));
         }
-        None
+        Ok(None)
     }
 }
 
@@ -307,6 +444,21 @@ struct Accepted<E> {
     step_norm: f64,
     rho: f64,
 }
+
+/// A parameter whose whole range moves the residues by less than this
+/// fraction of what the most influential parameter's range does has no
+/// gradient: no residue depends on it (a damping coefficient whose support
+/// holds no identified mode).
+const NO_GRADIENT: f64 = 1e-8;
+
+/// `|dp/dy| / ½(p_max − p_min) = |cos y|` below this: the parameter sits on
+/// its bound (within 5e-7 of its range), where eq. (42) gives it no gradient.
+const AT_BOUND: f64 = 1e-3;
+
+/// A direction of the column-normalised Jacobian with a singular value below
+/// this fraction of the largest is not determined by the data (a condition
+/// number of 10⁶; the covariance's own cut is 10¹²).
+const UNRESOLVED: f64 = 1e-6;
 
 /// `∂r/∂y = ∂r/∂p · dp/dy` column by column (eq. 43).
 fn chain(jp: &Mat<f64>, y: &[f64], bounds: &[(f64, f64)]) -> Mat<f64> {
@@ -428,12 +580,37 @@ pub(super) struct Estimates {
     pub(super) condition_number: f64,
     pub(super) residual_variance: f64,
     pub(super) correlations: Vec<ParameterCorrelation>,
+    pub(super) held: Vec<HeldParameter>,
 }
 
-pub(super) fn estimates(parameters: &[Parameter], p: &[f64], jacobian: &Mat<f64>, cost: f64) -> Estimates {
-    let (m, n) = (jacobian.nrows(), p.len());
+pub(super) fn estimates(
+    parameters: &[Parameter],
+    p: &[f64],
+    jacobian: &Mat<f64>,
+    cost: f64,
+    held: &[Option<HoldReason>],
+) -> Estimates {
+    // The covariance of the free parameters; a held one has no std.
+    let free: Vec<usize> = (0..p.len())
+        .filter(|&k| held.get(k).is_none_or(Option::is_none))
+        .collect();
+    let (m, n) = (jacobian.nrows(), free.len());
     let residual_variance = 2.0 * cost / (m - n) as f64;
-    let (std, singular_values, correlation) = covariance(jacobian, residual_variance);
+    let j_free = Mat::from_fn(m, n, |r, c| jacobian[(r, free[c])]);
+    let (free_std, singular_values, free_correlation) = covariance(&j_free, residual_variance);
+    let mut std = vec![None; p.len()];
+    for (&k, s) in free.iter().zip(free_std) {
+        std[k] = s;
+    }
+    let correlation = free_correlation.map(|rho| {
+        let mut full = Mat::<f64>::zeros(p.len(), p.len());
+        for (a, &k) in free.iter().enumerate() {
+            for (b, &l) in free.iter().enumerate() {
+                full[(k, l)] = rho[(a, b)];
+            }
+        }
+        full
+    });
     let condition_number = match (singular_values.first(), singular_values.last()) {
         (Some(&hi), Some(&lo)) if lo > 0.0 => hi / lo,
         _ => f64::INFINITY,
@@ -451,7 +628,8 @@ pub(super) fn estimates(parameters: &[Parameter], p: &[f64], jacobian: &Mat<f64>
         .collect();
     let mut correlations: Vec<ParameterCorrelation> = match &correlation {
         Some(rho) => (0..n)
-            .flat_map(|k| (k + 1..n).map(move |l| (k, l)))
+            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
+            .map(|(a, b)| (free[a], free[b]))
             .map(|(k, l)| ParameterCorrelation {
                 a: parameters[k].name.clone(),
                 b: parameters[l].name.clone(),
@@ -462,12 +640,24 @@ pub(super) fn estimates(parameters: &[Parameter], p: &[f64], jacobian: &Mat<f64>
     };
     correlations.sort_by(|x, y| y.rho.abs().total_cmp(&x.rho.abs()));
     correlations.truncate(REPORTED_CORRELATIONS);
+    let held = parameters
+        .iter()
+        .zip(p.iter().zip(held))
+        .filter_map(|(par, (&value, reason))| {
+            reason.map(|reason| HeldParameter {
+                name: par.name.clone(),
+                reason,
+                value,
+            })
+        })
+        .collect();
     Estimates {
         parameters: estimates,
         singular_values,
         condition_number,
         residual_variance,
         correlations,
+        held,
     }
 }
 
@@ -508,7 +698,7 @@ mod tests {
                 upper: 1.0,
             })
             .collect();
-        let e = estimates(&parameters, &[0.5; 3], &j, 1.0);
+        let e = estimates(&parameters, &[0.5; 3], &j, 1.0, &[None; 3]);
         assert_eq!((e.correlations[0].a.as_str(), e.correlations[0].b.as_str()), ("a", "c"));
         assert!(e.correlations[0].rho.abs() > 0.9);
         assert_eq!(e.correlations.len(), 3);
