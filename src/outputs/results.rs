@@ -25,7 +25,7 @@ pub const TOPICS: [(&str, &str); 9] = [
     ),
     (
         "updating/failures",
-        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"error":{"type":"string"}}}"#,
+        r#"{"type":"object","properties":{"time":{"type":"string"},"window":{"type":"integer"},"error":{"type":"string"},"skipped":{"type":"boolean"}}}"#,
     ),
     (
         "frf/measured",

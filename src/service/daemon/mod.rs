@@ -8,9 +8,11 @@
 //!   memory stays bounded) (`link.rs`).
 //! - the main task decodes, feeds the pipeline and writes results; an update
 //!   job runs on a blocking worker so ingest never stalls. At most one job
-//!   runs and one waits; a newer job replaces a waiting one (drop oldest,
-//!   counted). A waiting job is rebased when it starts, so it warm-starts
-//!   from the result that finished meanwhile, as in a replay (`worker.rs`).
+//!   runs and 16 wait, in window order; on overflow the oldest waiting job
+//!   is dropped, counted and its window recorded as skipped with the reason
+//!   on `updating/failures`. A waiting job is rebased when it starts, so it
+//!   warm-starts from the result that finished before it, as in a replay
+//!   (`worker.rs`).
 //! - shutdown (SIGINT/SIGTERM, or the caller's future) lets a running update
 //!   finish, writes the last health message, finalises the MCAP file and
 //!   saves the state.

@@ -11,7 +11,7 @@ use crate::outputs::raw_recorder::RawRecorder;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsSink};
 use crate::outputs::state;
-use crate::pipeline::{MonitoringOutcome, Pipeline, UpdateOutcome, WindowReport};
+use crate::pipeline::{MonitoringOutcome, Pipeline, UpdateJob, UpdateOutcome, WindowReport};
 use anyhow::{Context, Result};
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -39,6 +39,9 @@ pub(super) struct Daemon {
     /// Whether the log said what an idle daemon waits for.
     said_waiting: bool,
 }
+
+/// Why a window's update was dropped when the update queue overflowed.
+const QUEUE_FULL: &str = "update skipped: more than 16 newer windows were waiting (the update queue holds 16 behind the running update; the oldest waiting is dropped)";
 
 impl Daemon {
     /// Loads the state, builds the pipeline and opens every output.
@@ -105,7 +108,9 @@ impl Daemon {
             }
             if let Some(job) = self.pipeline.ingest_frf(&msg.payload, now) {
                 tracing::info!(message = "complete FRF set received", window = job.window);
-                self.worker.submit(job);
+                if let Some(dropped) = self.worker.submit(job) {
+                    self.skip_update(&dropped, QUEUE_FULL, link);
+                }
             }
             return;
         }
@@ -141,7 +146,9 @@ impl Daemon {
             self.report_window(w, link);
         }
         for job in jobs {
-            self.worker.submit(job);
+            if let Some(dropped) = self.worker.submit(job) {
+                self.skip_update(&dropped, QUEUE_FULL, link);
+            }
         }
     }
 
@@ -202,10 +209,14 @@ impl Daemon {
     /// the reference, writes the last health message, finalises every file
     /// and closes the session.
     pub(super) async fn shut_down(mut self, link: ZenohLink) -> Result<RunSummary> {
-        if let Some(outcome) = self.worker.drain().await {
+        let (running, waiting) = self.worker.drain().await;
+        if let Some(outcome) = running {
             let mut outcome = outcome.context("the update worker panicked")?;
             self.handle_outcome(&mut outcome, &link)?;
             self.summary.keep(outcome, self.keep_updates);
+        }
+        for job in &waiting {
+            self.skip_update(job, "update skipped: the daemon stopped before it ran", &link);
         }
         // Blocks still held for the stream's reference (fewer than two per
         // channel arrived) are decided on and counted; too little data for an
@@ -270,6 +281,17 @@ impl Daemon {
         self.results.write_json(suffix, time_ns, &json);
         link.publish_json(suffix, json.clone());
         json
+    }
+
+    /// Records that `job`'s window gets no update, and why: a message on
+    /// `updating/failures` (`"skipped": true`) in the results file and on
+    /// zenoh, and a warning (the drop itself is counted in
+    /// `health.queue_drops` by the worker).
+    fn skip_update(&mut self, job: &UpdateJob, reason: &str, link: &ZenohLink) {
+        tracing::warn!(message = "update skipped", window = job.window, reason);
+        let time = wire::format_timestamp(job.time_ns);
+        let message = serde_json::json!({"time": time, "window": job.window, "error": reason, "skipped": true});
+        self.send(link, "updating/failures", job.time_ns, &message);
     }
 
     /// Writes, publishes, counts and logs a closed window.
