@@ -196,6 +196,11 @@ impl FrfModel {
                 (pairs, outputs)
             })
             .collect();
+        let input_amplitudes: Vec<Vec<f64>> = inputs
+            .iter()
+            .map(|&s| (0..nm).map(|i| amplitude(s, i)).collect())
+            .collect();
+        let damping_couplings = self.damping_couplings(state, &active, &phi_u, &phi_b_blocks);
 
         Prepared {
             sensitivities,
@@ -208,7 +213,35 @@ impl FrfModel {
             stacked,
             phi_b_blocks,
             by_input,
+            input_amplitudes,
+            damping_couplings,
         }
+    }
+
+    /// Per spring coefficient, `(Φᵀ (∂K/∂κ_j) Φ) ∘ E` on the active modes
+    /// ([`super::damping_rate_differences`]): the damping part of the
+    /// exact `∂H/∂κ_j`.
+    fn damping_couplings(
+        &self,
+        state: &ModalState,
+        active: &[usize],
+        phi_u: &Mat<f64>,
+        phi_b_blocks: &[Mat<f64>],
+    ) -> Vec<Mat<f64>> {
+        if phi_b_blocks.is_empty() {
+            return Vec::new();
+        }
+        let e = super::damping_rate_differences(state, active);
+        let nm = active.len();
+        phi_b_blocks
+            .iter()
+            .zip(&self.block_positions)
+            .map(|(phi_b, pos)| {
+                let shapes = Mat::from_fn(pos.len(), nm, |a, i| phi_u[(pos[a], i)]);
+                let coupling = phi_b * &shapes;
+                Mat::from_fn(nm, nm, |i, k| coupling[(i, k)] * e[(i, k)])
+            })
+            .collect()
     }
 
     /// The evaluation on the lines of `request` (all or a thread's share),
@@ -259,6 +292,7 @@ impl FrfModel {
                 start,
                 count: nc,
                 total: nf,
+                omega: &w,
                 factor: &factor,
             };
             damping_lines(prepared, &mut s, &w, &lines, &mut dh_dgamma);
@@ -281,6 +315,14 @@ impl FrfModel {
         let (nc, nu) = (lines.count, prepared.nu);
         s.g.product(prepared.by_input.len() * nu, nc, &prepared.stacked, &s.q);
         for (k, (pairs, outputs)) in prepared.by_input.iter().enumerate() {
+            // y = a_s ∘ q for the damping part.
+            let amplitudes = &prepared.input_amplitudes[k];
+            for f in 0..nc {
+                for (i, &a) in amplitudes.iter().enumerate() {
+                    s.y.re[(i, f)] = a * s.q.re[(i, f)];
+                    s.y.im[(i, f)] = a * s.q.im[(i, f)];
+                }
+            }
             for (j, (phi_b, pos)) in prepared.phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
                 for f in 0..nc {
                     for (a, &u) in pos.iter().enumerate() {
@@ -297,6 +339,17 @@ impl FrfModel {
                         1.0,
                         Par::Seq,
                     );
+                }
+                // c ← c − jω (P_j y): the modal damping's share
+                // ([`super::damping_rate_differences`]).
+                let nm = amplitudes.len();
+                s.z.product(nm, nc, &prepared.damping_couplings[j], &s.y);
+                for f in 0..nc {
+                    let w = lines.omega[f];
+                    for i in 0..nm {
+                        s.c.re[(i, f)] += w * s.z.im[(i, f)];
+                        s.c.im[(i, f)] -= w * s.z.re[(i, f)];
+                    }
                 }
                 // c ← q ∘ c in place, then ∂H_p/∂κ_j = -Σ_i a_{r,i} c_i.
                 for f in 0..nc {
@@ -327,6 +380,8 @@ struct Lines<'a> {
     start: usize,
     count: usize,
     total: usize,
+    /// `ω` per line (rad/s).
+    omega: &'a [f64],
     factor: &'a [c64],
 }
 
@@ -382,6 +437,9 @@ struct Scratch {
     c: Split,
     gathered: Split,
     r: Split,
+    /// `a_s ∘ q` of one input, and `P_j` times it (damping part).
+    y: Split,
+    z: Split,
 }
 
 impl Scratch {
@@ -396,6 +454,8 @@ impl Scratch {
             c: Split::zeros(nm, width),
             gathered: Split::zeros(widest, width),
             r: Split::zeros(pairs, width),
+            y: Split::zeros(nm, width),
+            z: Split::zeros(nm, width),
         }
     }
 }
@@ -419,6 +479,11 @@ struct Prepared {
     phi_b_blocks: Vec<Mat<f64>>,
     /// Per input: its pairs and their output amplitudes.
     by_input: Vec<(Vec<usize>, Mat<f64>)>,
+    /// Per input (as `by_input`): its own amplitudes `a_{s,i}`.
+    input_amplitudes: Vec<Vec<f64>>,
+    /// `(Φᵀ ∂K/∂κ_j Φ) ∘ E` per spring coefficient (none without
+    /// sensitivities).
+    damping_couplings: Vec<Mat<f64>>,
 }
 
 /// A complex matrix stored as real and imaginary parts, for real GEMMs.

@@ -117,6 +117,10 @@ pub struct ModalState {
     pub zeta: Vec<f64>,
     /// `∂ζ_i/∂γ_z`: `n_modes × n_z`.
     zeta_basis: Mat<f64>,
+    /// `dc_i/dλ_i` of the modal damping rate `c_i = 2 ζ(f_i) ω_i` as the
+    /// mode's eigenvalue `λ_i = ω_i²` changes: `ζ_i/ω_i + ζ'(f_i)/(2π)`,
+    /// zero for rigid modes (the spring sensitivities' damping term).
+    damping_rate_slope: Vec<f64>,
     /// `a_{s,i}`: `n_sensors × n_modes`.
     amplitudes: Mat<f64>,
     /// Mode shapes on the spring dofs `U`: `|U| × n_modes`.
@@ -408,6 +412,7 @@ impl FrfModel {
         let omega: Vec<f64> = modes.omega2.iter().map(|w2| w2.max(0.0).sqrt()).collect();
         let mut zeta = vec![0.0; nm];
         let mut zeta_basis = Mat::<f64>::zeros(nm, nz);
+        let mut damping_rate_slope = vec![0.0; nm];
         let mut b = vec![0.0; nz];
         for i in 0..nm {
             if modes.kinds[i] == ModeKind::Rigid {
@@ -418,6 +423,9 @@ impl FrfModel {
                 zeta_basis[(i, z)] = b[z];
             }
             zeta[i] = b.iter().zip(damping.coefficients()).map(|(b, g)| b * g).sum();
+            if omega[i] > 0.0 {
+                damping_rate_slope[i] = zeta[i] / omega[i] + damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI);
+            }
         }
         let amplitudes = Mat::from_fn(self.sensor_rows.len(), nm, |s, i| {
             self.sensor_rows[s].iter().map(|&(d, v)| v * modes.shapes[(d, i)]).sum()
@@ -427,6 +435,7 @@ impl FrfModel {
             modes,
             zeta,
             zeta_basis,
+            damping_rate_slope,
             amplitudes,
             phi_springs,
             omega,
@@ -439,3 +448,30 @@ impl FrfModel {
 /// (at most the active modes × 32 lines, re and im: 67 kB for Sinello) stays
 /// in L2, and a typical 300-line band splits evenly over two threads.
 pub const FREQUENCY_BLOCK: usize = 32;
+
+/// `E_ik = −(c_k − c_i)/(λ_k − λ_i)`, and `−dc/dλ` at `λ_i` where the two
+/// eigenvalues (nearly) coincide, for the modes `active` of `state`, with
+/// the modal damping rates `c_i = 2 ζ_i ω_i`: the factor by which a
+/// stiffness coupling `φ_iᵀ (∂K/∂κ) φ_k` changes the modal damping of the
+/// superposition. The FRFs `Σ_i a_ri a_si / D_i`, `D_i = λ_i − ω² + j ω c_i`,
+/// `c_i = c(λ_i)` through ζ(f), have the exact derivative
+/// `−g_rᵀ (∂K/∂κ) g_s + jω Σ_ik x_ri (φ_iᵀ ∂K/∂κ φ_k) E_ik x_sk`,
+/// `x = a ∘ q`: the first term holds the damping matrix fixed (eq. 33 with
+/// `∂C/∂κ ≈ 0`); the second is what the modal damping's dependence on
+/// `λ` adds: on the diagonal `dD_i/dκ ∋ jω c'(λ_i) ∂λ_i/∂κ` (with the
+/// damping curve's slope `ζ'(f_i) ∂f_i/∂κ`), off it the eigenvector
+/// derivatives `Σ_k φ_k (φ_kᵀ ∂K φ_i)/(λ_i − λ_k)` (Fox & Kapoor 1968)
+/// meeting different `c_i`, `c_k`.
+pub(super) fn damping_rate_differences(state: &ModalState, active: &[usize]) -> Mat<f64> {
+    let rate = |i: usize| 2.0 * state.zeta[i] * state.omega[i];
+    Mat::from_fn(active.len(), active.len(), |a, b| {
+        let (i, k) = (active[a], active[b]);
+        let (li, lk) = (state.modes.omega2[i], state.modes.omega2[k]);
+        let gap = lk - li;
+        if i == k || gap.abs() <= 1e-9 * li.abs().max(lk.abs()) {
+            -0.5 * (state.damping_rate_slope[i] + state.damping_rate_slope[k])
+        } else {
+            -(rate(k) - rate(i)) / gap
+        }
+    })
+}

@@ -13,7 +13,9 @@ impl FrfModel {
     /// Adds the residual of the discarded modes to `evaluation.h` and, with
     /// `sensitivities`, replaces `∂H_rs/∂κ_j` by `−g_rᵀ (∂K/∂κ_j) g_s` with
     /// the spring dofs' complete responses `g_s = Σ_i φ_i a_{s,i} q_i + ρ_s`
-    /// ([`crate::solvers::truncation`]); the residual's damping term adds to `∂H/∂γ_z`.
+    /// ([`crate::solvers::truncation`]), less the kept modes' damping share
+    /// `jω x_rᵀ ((Φ_Bᵀ B Φ_B) ∘ E) x_s` ([`super::damping_rate_differences`]);
+    /// the residual's damping term adds to `∂H/∂γ_z`.
     pub(super) fn add_residual(
         &self,
         state: &ModalState,
@@ -59,6 +61,7 @@ impl FrfModel {
         let mut x = vec![vec![zero; nm]; sensors.len()];
         let mut y = vec![vec![zero; nm]; sensors.len()];
         let mut u = vec![vec![zero; nm]; sensors.len()];
+        let mut z = vec![vec![zero; nm]; sensors.len()];
         let dot = |a: &[c64], b: &[c64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<c64>();
         for (f, &hz) in request.frequencies_hz.iter().enumerate() {
             let w = 2.0 * PI * hz;
@@ -78,6 +81,9 @@ impl FrfModel {
                     for (i, yi) in y[t].iter_mut().enumerate() {
                         *yi = (0..nm).map(|k| x[t][k] * b.coupling[(i, k)]).sum();
                     }
+                    for (i, zi) in z[t].iter_mut().enumerate() {
+                        *zi = (0..nm).map(|k| x[t][k] * b.damping[(i, k)]).sum();
+                    }
                 }
                 for (t, ut) in u.iter_mut().enumerate() {
                     for (i, ui) in ut.iter_mut().enumerate() {
@@ -92,7 +98,8 @@ impl FrfModel {
                         + dot(&u[r], &x[s])
                         + c(0)
                         + gamma * (c(1) + c(2))
-                        + gamma * gamma * c(3);
+                        + gamma * gamma * c(3)
+                        - c64::new(0.0, w) * dot(&x[r], &z[s]);
                     dh[p * nf + f] = -value * factor;
                 }
             }
@@ -104,6 +111,8 @@ impl FrfModel {
     fn block_residuals(&self, state: &ModalState, residual: &Residual, sensors: &[usize]) -> Vec<BlockResidual> {
         let nm = state.modes.len();
         let (rho0, rho1) = residual.spring_terms();
+        let all: Vec<usize> = (0..nm).collect();
+        let e = super::damping_rate_differences(state, &all);
         self.spring_blocks()
             .iter()
             .flatten()
@@ -116,8 +125,10 @@ impl FrfModel {
                 };
                 let (r0, r1) = (rho(rho0), rho(rho1));
                 let (b_r0, b_r1) = (&block.values * &r0, &block.values * &r1);
+                let coupling = phi_b.transpose() * &b_phi;
                 BlockResidual {
-                    coupling: phi_b.transpose() * &b_phi,
+                    damping: Mat::from_fn(nm, nm, |i, k| coupling[(i, k)] * e[(i, k)]),
+                    coupling,
                     u0: phi_b.transpose() * &b_r0,
                     u1: phi_b.transpose() * &b_r1,
                     c: [
@@ -165,6 +176,9 @@ impl FrfModel {
 struct BlockResidual {
     /// `Φ_Bᵀ B Φ_B`: modes × modes.
     coupling: Mat<f64>,
+    /// `(Φ_Bᵀ B Φ_B) ∘ E`, the modal damping's share
+    /// ([`super::damping_rate_differences`]).
+    damping: Mat<f64>,
     /// `Φ_Bᵀ B ρ_0,t`, `Φ_Bᵀ B ρ_1,t`: modes × involved sensors.
     u0: Mat<f64>,
     u1: Mat<f64>,
