@@ -511,3 +511,61 @@ fn systemd_status_ends_with_the_monitoring_state() {
     assert!(notes[0].contains("READY=1"), "{notes:?}");
     assert!(notes.last().unwrap().contains("STOPPING=1"), "{notes:?}");
 }
+
+/// Issue 31: a burst of pre-computed FRF windows (a logger uploading a
+/// backlog of 24 at once, faster than the updates run) loses no window
+/// silently: each is either updated or recorded on `updating/failures` as
+/// skipped with the reason (dropped by the full queue, counted in
+/// `queue_drops`, or still waiting when the daemon stopped).
+#[test]
+fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
+    let out = temp("burst");
+    let text = std::fs::read_to_string(root().join("config/sinello-monitoring.toml"))
+        .unwrap()
+        .replace("training_windows = 100", "training_windows = 10");
+    let cfg = Config::from_toml(&text).unwrap();
+    let recording = simulate(&cfg, &out, &[24], |t| t).remove(0);
+    let bytes = std::fs::read(&recording).unwrap();
+    let live =
+        splinewatch::service::demo::run_with_source(cfg.clone(), &out, 0.0, usize::MAX, move |cfg, publisher| {
+            publish_recording(publisher, &cfg.topic_prefix(), &bytes, |_| {})
+        })
+        .unwrap();
+    let results = std::fs::read(out.join("results.mcap")).unwrap();
+    let (mut updated, mut skipped) = (Vec::new(), Vec::new());
+    let (mut queue_drops, mut overflow) = (0, 0);
+    for m in mcap::MessageStream::new(&results).unwrap() {
+        let m = m.unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+        let topic = m
+            .channel
+            .topic
+            .rsplit_once(&format!("{}/", cfg.topic_prefix()))
+            .unwrap()
+            .1
+            .to_string();
+        match topic.as_str() {
+            "updating/parameters" => updated.push(v["window"].as_u64().unwrap()),
+            "updating/failures" => {
+                assert_eq!(v["skipped"], true, "{v}");
+                let reason = v["error"].as_str().unwrap();
+                assert!(reason.starts_with("update skipped: "), "{v}");
+                // Dropped by the full queue, or still waiting at shutdown.
+                overflow += usize::from(reason.contains("the update queue holds 16"));
+                skipped.push(v["window"].as_u64().unwrap());
+            }
+            "health" => queue_drops = v["queue_drops"].as_u64().unwrap(),
+            _ => {}
+        }
+    }
+    let mut every: Vec<u64> = updated.iter().chain(&skipped).copied().collect();
+    every.sort_unstable();
+    assert_eq!(
+        every,
+        (0..24).collect::<Vec<u64>>(),
+        "updated {updated:?}, skipped {skipped:?}"
+    );
+    assert_eq!(live.updates.len(), updated.len());
+    assert!(!updated.is_empty());
+    assert_eq!(queue_drops, overflow as u64, "the overflow skips are the counted drops");
+}

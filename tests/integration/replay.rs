@@ -415,7 +415,10 @@ fn failed_updates_keep_the_last_good_parameters_and_say_why() {
     assert_eq!(summary.updates.len(), 6);
     for o in &summary.updates {
         let e = o.result.as_ref().expect_err("no iteration cannot converge");
-        assert!(e.contains("did not converge") && e.contains("did not lower the residual"), "{e}");
+        assert!(
+            e.contains("did not converge") && e.contains("did not lower the residual"),
+            "{e}"
+        );
     }
     assert_eq!(
         summary.accepted.as_ref(),

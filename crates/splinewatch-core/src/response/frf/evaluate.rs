@@ -218,30 +218,33 @@ impl FrfModel {
         }
     }
 
-    /// Per spring coefficient, `(Φᵀ (∂K/∂κ_j) Φ) ∘ E` on the active modes
-    /// ([`super::damping_rate_differences`]): the damping part of the
-    /// exact `∂H/∂κ_j`.
+    /// `(Φᵀ (∂K/∂κ_j) Φ) ∘ E` on the active modes for every spring
+    /// coefficient, stacked (`j`'s rows at `j·n_m`, one GEMM per input and
+    /// block of lines): the damping part of the exact `∂H/∂κ_j`
+    /// ([`super::damping_rate_differences`]).
     fn damping_couplings(
         &self,
         state: &ModalState,
         active: &[usize],
         phi_u: &Mat<f64>,
         phi_b_blocks: &[Mat<f64>],
-    ) -> Vec<Mat<f64>> {
+    ) -> Mat<f64> {
+        let nm = active.len();
         if phi_b_blocks.is_empty() {
-            return Vec::new();
+            return Mat::zeros(0, nm);
         }
         let e = super::damping_rate_differences(state, active);
-        let nm = active.len();
-        phi_b_blocks
-            .iter()
-            .zip(&self.block_positions)
-            .map(|(phi_b, pos)| {
-                let shapes = Mat::from_fn(pos.len(), nm, |a, i| phi_u[(pos[a], i)]);
-                let coupling = phi_b * &shapes;
-                Mat::from_fn(nm, nm, |i, k| coupling[(i, k)] * e[(i, k)])
-            })
-            .collect()
+        let mut stacked = Mat::<f64>::zeros(phi_b_blocks.len() * nm, nm);
+        for (j, (phi_b, pos)) in phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
+            let shapes = Mat::from_fn(pos.len(), nm, |a, i| phi_u[(pos[a], i)]);
+            let coupling = phi_b * &shapes;
+            for k in 0..nm {
+                for i in 0..nm {
+                    stacked[(j * nm + i, k)] = coupling[(i, k)] * e[(i, k)];
+                }
+            }
+        }
+        stacked
     }
 
     /// The evaluation on the lines of `request` (all or a thread's share),
@@ -315,14 +318,22 @@ impl FrfModel {
         let (nc, nu) = (lines.count, prepared.nu);
         s.g.product(prepared.by_input.len() * nu, nc, &prepared.stacked, &s.q);
         for (k, (pairs, outputs)) in prepared.by_input.iter().enumerate() {
-            // y = a_s ∘ q for the damping part.
+            // y = a_s ∘ q, and P_j y for every coefficient j in one GEMM
+            // (the damping part).
             let amplitudes = &prepared.input_amplitudes[k];
+            let nm = amplitudes.len();
             for f in 0..nc {
                 for (i, &a) in amplitudes.iter().enumerate() {
                     s.y.re[(i, f)] = a * s.q.re[(i, f)];
                     s.y.im[(i, f)] = a * s.q.im[(i, f)];
                 }
             }
+            s.z.product(
+                prepared.damping_couplings.nrows(),
+                nc,
+                &prepared.damping_couplings,
+                &s.y,
+            );
             for (j, (phi_b, pos)) in prepared.phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
                 for f in 0..nc {
                     for (a, &u) in pos.iter().enumerate() {
@@ -342,13 +353,11 @@ impl FrfModel {
                 }
                 // c ← c − jω (P_j y): the modal damping's share
                 // ([`super::damping_rate_differences`]).
-                let nm = amplitudes.len();
-                s.z.product(nm, nc, &prepared.damping_couplings[j], &s.y);
                 for f in 0..nc {
                     let w = lines.omega[f];
                     for i in 0..nm {
-                        s.c.re[(i, f)] += w * s.z.im[(i, f)];
-                        s.c.im[(i, f)] -= w * s.z.re[(i, f)];
+                        s.c.re[(i, f)] += w * s.z.im[(j * nm + i, f)];
+                        s.c.im[(i, f)] -= w * s.z.re[(j * nm + i, f)];
                     }
                 }
                 // c ← q ∘ c in place, then ∂H_p/∂κ_j = -Σ_i a_{r,i} c_i.
@@ -455,7 +464,7 @@ impl Scratch {
             gathered: Split::zeros(widest, width),
             r: Split::zeros(pairs, width),
             y: Split::zeros(nm, width),
-            z: Split::zeros(nm, width),
+            z: Split::zeros(prepared.damping_couplings.nrows(), width),
         }
     }
 }
@@ -481,9 +490,9 @@ struct Prepared {
     by_input: Vec<(Vec<usize>, Mat<f64>)>,
     /// Per input (as `by_input`): its own amplitudes `a_{s,i}`.
     input_amplitudes: Vec<Vec<f64>>,
-    /// `(Φᵀ ∂K/∂κ_j Φ) ∘ E` per spring coefficient (none without
-    /// sensitivities).
-    damping_couplings: Vec<Mat<f64>>,
+    /// `(Φᵀ ∂K/∂κ_j Φ) ∘ E` of every spring coefficient, stacked (no rows
+    /// without sensitivities).
+    damping_couplings: Mat<f64>,
 }
 
 /// A complex matrix stored as real and imaginary parts, for real GEMMs.
