@@ -483,7 +483,7 @@ fn issue_31_an_unconverged_update_that_lowered_the_residual_is_published() {
     assert_eq!(published.len(), 6);
     for v in &published {
         assert_eq!(v["converged"], false);
-        assert_eq!(v["stop_reason"], "MaxIterations");
+        assert_eq!(v["stop_reason"], "max_iterations");
     }
     // The state holds the last one's parameters: the next window's start.
     let saved = load_state(&state).unwrap().expect("a state after accepted updates");

@@ -289,6 +289,7 @@ impl Daemon {
     /// `health.queue_drops` by the worker).
     fn skip_update(&mut self, job: &UpdateJob, reason: &str, link: &ZenohLink) {
         tracing::warn!(message = "update skipped", window = job.window, reason);
+        self.last_time = self.last_time.max(job.time_ns);
         let time = wire::format_timestamp(job.time_ns);
         let message = serde_json::json!({"time": time, "window": job.window, "error": reason, "skipped": true});
         self.send(link, "updating/failures", job.time_ns, &message);
@@ -325,6 +326,10 @@ impl Daemon {
     fn handle_outcome(&mut self, outcome: &mut UpdateOutcome, link: &ZenohLink) -> Result<()> {
         let scored = self.pipeline.apply(outcome);
         let outcome = &*outcome;
+        // Pre-computed FRF windows close no sample window: their updates
+        // date the health messages (else a daemon fed only FRF sets never
+        // wrote one).
+        self.last_time = self.last_time.max(outcome.time_ns);
         let time = wire::format_timestamp(outcome.time_ns);
         for (suffix, msg) in results::update_messages(outcome, &time) {
             let json = self.send(link, suffix, outcome.time_ns, &msg);
