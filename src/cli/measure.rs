@@ -186,6 +186,12 @@ pub struct ImportArgs {
     /// Message encoding: cbor or json.
     #[arg(long, default_value = "cbor", value_parser = parse_encoding)]
     pub encoding: Encoding,
+    /// Refuse columns that name no sensor of the config (default: skip and list them).
+    #[arg(long)]
+    pub strict: bool,
+    /// The unit of every column without one (e.g. cm/s^2, gal, g, mg, kN); a units row wins.
+    #[arg(long)]
+    pub units: Option<String>,
 }
 
 pub fn import(a: ImportArgs) -> Result<()> {
@@ -218,8 +224,18 @@ pub fn import(a: ImportArgs) -> Result<()> {
         fs: a.fs,
         start_ns,
         block_seconds: a.block_seconds,
+        strict: a.strict,
+        units: a.units.clone(),
     };
-    let blocks = studies::import::to_blocks(&cfg, series, &options).with_context(|| a.input.display().to_string())?;
+    let imported = studies::import::to_blocks(&cfg, series, &options).with_context(|| a.input.display().to_string())?;
+    if !imported.skipped.is_empty() {
+        errln!(
+            "skipped {} columns that name no sensor of the config: {}",
+            imported.skipped.len(),
+            imported.skipped.join(", ")
+        );
+    }
+    let blocks = imported.blocks;
     let prefix = cfg.topic_prefix();
     let mut writer = RecordingWriter::create(&a.out, a.encoding)?;
     for b in &blocks {

@@ -2,10 +2,12 @@
 //! mapped to the config's sensors and cut into wire-format channel blocks,
 //! ready for a raw-input recording that `replay` and `frf` read.
 //!
-//! A column belongs to the sensor it names (exactly, else ignoring case);
-//! `P1:force` / `P1:acceleration` say which quantity of a sensor that
-//! measures both, as do a unit (`N`, `kN` → force; `m/s^2`, `m/s²`, `g` →
-//! acceleration, converted to SI) and a UFF ordinate type.
+//! A column belongs to the sensor it names (exactly, else ignoring case); a
+//! column that names no sensor is skipped and listed (refused with
+//! `strict`). `P1:force` / `P1:acceleration` say which quantity of a sensor
+//! that measures both, as do a unit (see `unit_quantity`: force, or
+//! acceleration in SI, g, gal, mg, imperial…, converted to SI; `--units`
+//! gives the unit of every column without one) and a UFF ordinate type.
 
 use crate::config::Config;
 use crate::io::import::{ImportedChannel, ImportedSeries};
@@ -21,6 +23,19 @@ pub struct ImportOptions {
     pub start_ns: Option<i128>,
     /// Samples per block, seconds.
     pub block_seconds: f64,
+    /// Refuse a column that names no sensor instead of skipping it.
+    pub strict: bool,
+    /// The unit of every column whose file states none (a units row, a UFF
+    /// header still wins).
+    pub units: Option<String>,
+}
+
+/// The imported blocks and the columns skipped because they name no
+/// sensor of the config.
+#[derive(Debug)]
+pub struct Imported {
+    pub blocks: Vec<ChannelBlock>,
+    pub skipped: Vec<String>,
 }
 
 /// One mapped column: sensor name, quantity, samples in SI units.
@@ -32,7 +47,7 @@ struct Mapped {
 
 /// The series as channel blocks in time order (per block interval: force
 /// first, then the sensors in config order).
-pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOptions) -> Result<Vec<ChannelBlock>> {
+pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOptions) -> Result<Imported> {
     if !(options.block_seconds.is_finite() && options.block_seconds > 0.0) {
         bail!("--block-seconds must be positive, got {}", options.block_seconds);
     }
@@ -42,11 +57,27 @@ pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOption
         (None, Some(t)) => t,
         (None, None) => bail!("the file gives no absolute start time: pass --start (RFC 3339)"),
     };
-    let mut mapped = series
-        .channels
-        .into_iter()
-        .map(|c| map_channel(config, c))
-        .collect::<Result<Vec<_>>>()?;
+    if let Some(u) = &options.units {
+        unit_quantity(u).with_context(|| format!("--units {u:?}: {}", unknown_unit(u)))?;
+    }
+    let mut mapped = Vec::new();
+    let mut skipped = Vec::new();
+    for mut c in series.channels {
+        if c.unit.is_none() {
+            c.unit.clone_from(&options.units);
+        }
+        let name = c.name.clone();
+        match map_channel(config, c, options.strict)? {
+            Some(m) => mapped.push(m),
+            None => skipped.push(name),
+        }
+    }
+    if mapped.is_empty() {
+        bail!(
+            "no column names a [[sensors]] entry of the config (columns: {})",
+            skipped.join(", ")
+        );
+    }
     for (i, m) in mapped.iter().enumerate() {
         if mapped[..i]
             .iter()
@@ -93,7 +124,7 @@ pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOption
         fs,
         start = %format_timestamp(start_ns)
     );
-    Ok(blocks)
+    Ok(Imported { blocks, skipped })
 }
 
 fn sampling_rate(file: Option<f64>, flag: Option<f64>) -> Result<f64> {
@@ -107,34 +138,74 @@ fn sampling_rate(file: Option<f64>, flag: Option<f64>) -> Result<f64> {
     }
 }
 
-/// The quantity a unit implies and the factor to SI.
-fn unit_quantity(unit: &str) -> Option<(ChannelQuantity, f64)> {
-    match unit.trim() {
-        "N" => Some((ChannelQuantity::Force, 1.0)),
-        "kN" => Some((ChannelQuantity::Force, 1e3)),
-        "m/s^2" | "m/s²" | "m/s2" | "m s^-2" => Some((ChannelQuantity::Acceleration, 1.0)),
-        "g" => Some((ChannelQuantity::Acceleration, 9.806_65)),
-        _ => None,
-    }
+/// What a unit measures.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum UnitKind {
+    Measured(ChannelQuantity),
+    /// Velocity and displacement: recognised, but no sensor channel carries them.
+    Velocity,
+    Displacement,
 }
 
-fn map_channel(config: &Config, c: ImportedChannel) -> Result<Mapped> {
+/// Standard gravity, m/s² (for `g` and `mg`).
+const G: f64 = 9.806_65;
+
+/// What a unit measures and its factor to SI (N, m/s², m/s, m). Strong-motion
+/// and logger files use cm/s² (= gal), mm/s², milli-g and imperial units.
+fn unit_quantity(unit: &str) -> Option<(UnitKind, f64)> {
+    use ChannelQuantity::{Acceleration, Force};
+    use UnitKind::{Displacement, Measured, Velocity};
+    let squared = |u: &str| u.replace('²', "^2").replace("s2", "s^2").replace("s**2", "s^2");
+    let unit = unit.trim();
+    Some(match squared(unit).as_str() {
+        "N" => (Measured(Force), 1.0),
+        "kN" => (Measured(Force), 1e3),
+        "m/s^2" | "m s^-2" => (Measured(Acceleration), 1.0),
+        "cm/s^2" | "gal" | "Gal" => (Measured(Acceleration), 0.01),
+        "mm/s^2" => (Measured(Acceleration), 1e-3),
+        "g" => (Measured(Acceleration), G),
+        "mg" => (Measured(Acceleration), 1e-3 * G),
+        "in/s^2" => (Measured(Acceleration), 0.0254),
+        "ft/s^2" => (Measured(Acceleration), 0.3048),
+        "m/s" => (Velocity, 1.0),
+        "mm/s" => (Velocity, 1e-3),
+        "cm/s" => (Velocity, 0.01),
+        "in/s" => (Velocity, 0.0254),
+        "m" => (Displacement, 1.0),
+        "mm" => (Displacement, 1e-3),
+        "cm" => (Displacement, 0.01),
+        "in" => (Displacement, 0.0254),
+        _ => return None,
+    })
+}
+
+fn unknown_unit(unit: &str) -> String {
+    format!(
+        "unit {unit:?} is not a known unit (force: N, kN; acceleration: m/s^2, cm/s^2 = gal, mm/s^2, g, mg, in/s^2, ft/s^2)"
+    )
+}
+
+/// The sensor and quantity of column `c`, in SI; `None` when it names no
+/// sensor and `strict` is off (the caller lists it as skipped).
+fn map_channel(config: &Config, c: ImportedChannel, strict: bool) -> Result<Option<Mapped>> {
     let (base, suffix) = match c.name.rsplit_once(':') {
         Some((b, q)) => (b, Some(q)),
         None => (c.name.as_str(), None),
     };
     let names: Vec<&str> = config.sensors.iter().map(|s| s.name.as_str()).collect();
-    let sensor = names
+    let found = names
         .iter()
         .position(|n| *n == base)
-        .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(base)))
-        .with_context(|| {
-            format!(
-                "column {:?} matches no [[sensors]] name (sensors: {})",
-                c.name,
-                names.join(", ")
-            )
-        })?;
+        .or_else(|| names.iter().position(|n| n.eq_ignore_ascii_case(base)));
+    let sensor = match found {
+        Some(s) => s,
+        None if !strict => return Ok(None),
+        None => bail!(
+            "column {:?} matches no [[sensors]] name (sensors: {}; without --strict it is skipped)",
+            c.name,
+            names.join(", ")
+        ),
+    };
     let measured: Vec<ChannelQuantity> = config.sensors[sensor]
         .quantity
         .as_slice()
@@ -142,11 +213,19 @@ fn map_channel(config: &Config, c: ImportedChannel) -> Result<Mapped> {
         .filter_map(|q| ChannelQuantity::from_wire(q))
         .collect();
     let (from_unit, scale) = match c.unit.as_deref() {
-        Some(u) => {
-            let (q, s) = unit_quantity(u)
-                .with_context(|| format!("column {:?}: unit {u:?} is not N, kN, m/s^2 or g", c.name))?;
-            (Some(q), s)
-        }
+        Some(u) => match unit_quantity(u) {
+            Some((UnitKind::Measured(q), s)) => (Some(q), s),
+            Some((kind, _)) => bail!(
+                "column {:?}: unit {u:?} is a {}; sensors record force or acceleration",
+                c.name,
+                if kind == UnitKind::Velocity {
+                    "velocity"
+                } else {
+                    "displacement"
+                }
+            ),
+            None => bail!("column {:?}: {}", c.name, unknown_unit(u)),
+        },
         None => (None, 1.0),
     };
     let from_suffix = match suffix {
@@ -179,5 +258,5 @@ fn map_channel(config: &Config, c: ImportedChannel) -> Result<Mapped> {
         ),
     };
     let data = c.data.into_iter().map(|v| v * scale).collect();
-    Ok(Mapped { sensor, quantity, data })
+    Ok(Some(Mapped { sensor, quantity, data }))
 }

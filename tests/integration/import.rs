@@ -122,7 +122,7 @@ fn import_errors_name_the_column_or_what_is_missing() {
     let cases = [
         (
             write("unknown.csv", "time,P1:force,P99\n0,1,2\n0.5,1,2\n"),
-            vec!["--start", "2026-11-21T10:00:00Z"],
+            vec!["--start", "2026-11-21T10:00:00Z", "--strict"],
             "column \"P99\" matches no [[sensors]] name",
         ),
         (
@@ -153,7 +153,22 @@ fn import_errors_name_the_column_or_what_is_missing() {
         (
             write("unit.csv", "time,P2\ns,furlong\n0,1\n0.5,1\n"),
             vec!["--start", "2026-11-21T10:00:00Z"],
-            "column \"P2\": unit \"furlong\" is not N, kN, m/s^2 or g",
+            "column \"P2\": unit \"furlong\" is not a known unit",
+        ),
+        (
+            write("velocity.csv", "time,P2\ns,mm/s\n0,1\n0.5,1\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "column \"P2\": unit \"mm/s\" is a velocity; sensors record force or acceleration",
+        ),
+        (
+            write("nothing.csv", "time,Q1,Q2\n0,1,2\n0.5,1,2\n"),
+            vec!["--start", "2026-11-21T10:00:00Z"],
+            "no column names a [[sensors]] entry of the config (columns: Q1, Q2)",
+        ),
+        (
+            write("units-flag.csv", "time,P2\n0,1\n0.5,1\n"),
+            vec!["--start", "2026-11-21T10:00:00Z", "--units", "furlong"],
+            "--units \"furlong\": unit \"furlong\" is not a known unit",
         ),
     ];
     for (file, extra, expected) in cases {
@@ -278,5 +293,139 @@ fn csv_and_uff_round_trips_replay_to_the_bundled_parameters() {
                 "{format}: {name} = {a} after import, {b} from the bundled recording"
             );
         }
+    }
+}
+
+/// Issue 33: a strong-motion array's CSV of 17 channels in cm/s² without a
+/// units row (`--units cm/s^2`), imported against a config of 4 of its
+/// sensors: the 13 other columns are skipped and listed on stderr, and the
+/// 4 kept ones are converted to m/s² (× 0.01). Units convert to SI.
+#[test]
+fn issue_33_a_17_column_csv_in_cm_per_s2_imports_against_a_4_sensor_config() {
+    let dir = fresh_dir("import-17");
+    // The bundled config with only its sensors P2…P5.
+    let mut cfg: toml::Table =
+        toml::from_str(&std::fs::read_to_string(root().join("config/sinello.toml")).unwrap()).unwrap();
+    let sensors = cfg["sensors"].as_array().unwrap();
+    let kept: Vec<toml::Value> = sensors
+        .iter()
+        .filter(|s| ["P2", "P3", "P4", "P5"].contains(&s["name"].as_str().unwrap()))
+        .cloned()
+        .collect();
+    assert_eq!(kept.len(), 4);
+    cfg.insert("sensors".into(), toml::Value::Array(kept));
+    let config = dir.join("four.toml");
+    std::fs::write(&config, toml::to_string(&cfg).unwrap()).unwrap();
+    // Channels ch1…ch17; ch3…ch6 are P2…P5 (renamed in the header, as a user
+    // maps a station's channels to the config's sensors).
+    let names: Vec<String> = (1..=17)
+        .map(|c| match c {
+            3..=6 => format!("P{}", c - 1),
+            _ => format!("ch{c}"),
+        })
+        .collect();
+    let value = |k: usize, c: usize| (c as f64) * 10.0 + (k as f64 * 0.37).sin();
+    let mut text = format!("time,{}\n", names.join(","));
+    for k in 0..512 {
+        let row: Vec<String> = (1..=17).map(|c| format!("{:.6}", value(k, c))).collect();
+        text += &format!("{},{}\n", k as f64 / 256.0, row.join(","));
+    }
+    let csv = dir.join("array.csv");
+    std::fs::write(&csv, text).unwrap();
+    let out = dir.join("array.mcap");
+    let o = Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args(["import", "--config", config.to_str().unwrap(), "--format", "csv"])
+        .arg(&csv)
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--start",
+            "2026-11-21T10:00:00Z",
+            "--units",
+            "cm/s^2",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let skipped: Vec<String> = names.iter().filter(|n| n.starts_with("ch")).cloned().collect();
+    assert_eq!(skipped.len(), 13);
+    assert!(
+        stderr.contains(&format!(
+            "skipped 13 columns that name no sensor of the config: {}",
+            skipped.join(", ")
+        )),
+        "{stderr}"
+    );
+    let got = channels(&out);
+    assert_eq!(got.len(), 4);
+    for (name, quantity, fs, _, data) in &got {
+        assert_eq!(
+            (*quantity, *fs, data.len()),
+            (ChannelQuantity::Acceleration, 256.0, 512),
+            "{name}"
+        );
+        let column = names.iter().position(|n| n == name).unwrap() + 1;
+        for (k, v) in data.iter().enumerate() {
+            let expected = 0.01 * format!("{:.6}", value(k, column)).parse::<f64>().unwrap();
+            assert!(
+                (v - expected).abs() <= 1e-15 * expected.abs().max(1.0),
+                "{name}[{k}]: {v} vs {expected}"
+            );
+        }
+    }
+    // With --strict the same file is refused, naming the first stray column.
+    let o = Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args(["import", "--config", config.to_str().unwrap(), "--format", "csv"])
+        .arg(&csv)
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--start",
+            "2026-11-21T10:00:00Z",
+            "--strict",
+        ])
+        .current_dir(root())
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("column \"ch1\" matches no [[sensors]] name"));
+}
+
+/// Every unit a logger or strong-motion file writes converts to SI: the
+/// same column in each unit imports to the same m/s² (or N).
+#[test]
+fn issue_33_units_convert_to_si() {
+    let dir = fresh_dir("import-units");
+    let cases: [(&str, &str, f64); 11] = [
+        ("P2", "m/s^2", 1.0),
+        ("P2", "m/s²", 1.0),
+        ("P2", "cm/s^2", 0.01),
+        ("P2", "cm/s²", 0.01),
+        ("P2", "gal", 0.01),
+        ("P2", "mm/s^2", 1e-3),
+        ("P2", "g", 9.806_65),
+        ("P2", "mg", 1e-3 * 9.806_65),
+        ("P2", "in/s^2", 0.0254),
+        ("P2", "ft/s^2", 0.3048),
+        ("P1:force", "kN", 1e3),
+    ];
+    for (column, unit, factor) in cases {
+        let csv = dir.join("u.csv");
+        std::fs::write(&csv, format!("time,{column}\ns,{unit}\n0,2.5\n0.5,-4\n1.0,1\n")).unwrap();
+        let out = dir.join("u.mcap");
+        let o = import(&[
+            "--format",
+            "csv",
+            csv.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--start",
+            "2026-11-21T10:00:00Z",
+        ]);
+        assert!(o.status.success(), "{unit}: {}", String::from_utf8_lossy(&o.stderr));
+        let got = channels(&out);
+        assert_eq!(got[0].4, [2.5 * factor, -4.0 * factor, factor], "{unit}");
     }
 }

@@ -172,6 +172,10 @@ pub enum WireError {
     Name { index: usize, name: String },
     #[error("{count} blocks in one message exceed the limit of {limit}")]
     TooManyBlocks { count: usize, limit: usize },
+    /// An empty list: a message that carries no block would otherwise be
+    /// neither accepted nor rejected.
+    #[error("the message is an empty list of blocks")]
+    NoBlocks,
 }
 
 impl WireError {
@@ -188,6 +192,7 @@ impl WireError {
             WireError::Empty { .. } => "empty",
             WireError::NonFinite { .. } => "non_finite",
             WireError::Name { .. } => "bad_name",
+            WireError::NoBlocks => "no_blocks",
         }
     }
 }
@@ -294,13 +299,25 @@ pub fn decode_generic(bytes: &[u8], encoding: Encoding, limits: &Limits) -> Resu
             json_to_cbor(v)
         }
         Encoding::Cbor => {
-            ciborium::de::from_reader_with_recursion_limit(bytes, 16).map_err(|e| WireError::Malformed {
-                encoding: "CBOR",
-                message: e.to_string(),
-            })?
+            let mut reader = bytes;
+            let value =
+                ciborium::de::from_reader_with_recursion_limit(&mut reader, 16).map_err(|e| WireError::Malformed {
+                    encoding: "CBOR",
+                    message: e.to_string(),
+                })?;
+            // One CBOR item is the whole message: bytes after it are damage
+            // (the JSON parser refuses trailing characters likewise).
+            if !reader.is_empty() {
+                return Err(WireError::Malformed {
+                    encoding: "CBOR",
+                    message: format!("{} bytes after the message's CBOR item", reader.len()),
+                });
+            }
+            value
         }
     };
     let items = match value {
+        Value::Array(items) if items.is_empty() => return Err(WireError::NoBlocks),
         Value::Array(items) => items,
         single => vec![single],
     };
@@ -656,11 +673,23 @@ mod tests {
                 "malformed",
             ),
             ("[1, 2]", "bad_field"),
+            ("[]", "no_blocks"),
         ];
         for (text, reason) in cases {
             let e = decode(text.as_bytes(), Encoding::Json, &lim).unwrap_err();
             assert_eq!(e.reason(), reason, "{text}: {e}");
         }
+        // An empty CBOR list (definite or indefinite length), and trailing
+        // bytes after a valid message: rejected, never silently nothing.
+        for bytes in [&[0x80u8][..], &[0x9f, 0xff]] {
+            assert_eq!(decode(bytes, Encoding::Cbor, &lim).unwrap_err(), WireError::NoBlocks);
+        }
+        let mut trailing = encode(&block(), Encoding::Cbor);
+        trailing.extend_from_slice(&[0x80, 0x01]);
+        assert_eq!(
+            decode(&trailing, Encoding::Cbor, &lim).unwrap_err().reason(),
+            "malformed"
+        );
         let nan = ChannelBlock {
             data: vec![1.0, f64::NAN],
             ..block()

@@ -42,7 +42,8 @@ pub(super) fn decode(bytes: &[u8], limits: &Limits) -> Option<Result<Vec<Channel
     let items = match d.datatype().ok()? {
         Type::Array => {
             let n = usize::try_from(d.array().ok()??).ok()?;
-            if n > limits.max_blocks {
+            // No block, or too many: the generic decoder gives the reason.
+            if n == 0 || n > limits.max_blocks {
                 return None;
             }
             (0..n).map(|_| fields(&mut d, limits)).collect::<Option<Vec<_>>>()?
