@@ -621,6 +621,23 @@ mod tests {
         );
     }
 
+    /// An empty CBOR list (definite or indefinite length) and trailing
+    /// bytes after a valid message are rejected, never silently nothing.
+    #[test]
+    fn empty_lists_and_trailing_bytes_are_rejected() {
+        let lim = Limits::default();
+        for bytes in [&[0x80u8][..], &[0x9f, 0xff]] {
+            assert_eq!(decode(bytes, Encoding::Cbor, &lim).unwrap_err(), WireError::NoBlocks);
+        }
+        let mut trailing = encode(&block(), Encoding::Cbor);
+        assert_eq!(decode(&trailing, Encoding::Cbor, &lim).unwrap().len(), 1);
+        trailing.extend_from_slice(&[0x80, 0x01]);
+        assert_eq!(
+            decode(&trailing, Encoding::Cbor, &lim).unwrap_err().reason(),
+            "malformed"
+        );
+    }
+
     #[test]
     fn rejects_bad_blocks_with_reasons() {
         let lim = Limits {
@@ -679,17 +696,6 @@ mod tests {
             let e = decode(text.as_bytes(), Encoding::Json, &lim).unwrap_err();
             assert_eq!(e.reason(), reason, "{text}: {e}");
         }
-        // An empty CBOR list (definite or indefinite length), and trailing
-        // bytes after a valid message: rejected, never silently nothing.
-        for bytes in [&[0x80u8][..], &[0x9f, 0xff]] {
-            assert_eq!(decode(bytes, Encoding::Cbor, &lim).unwrap_err(), WireError::NoBlocks);
-        }
-        let mut trailing = encode(&block(), Encoding::Cbor);
-        trailing.extend_from_slice(&[0x80, 0x01]);
-        assert_eq!(
-            decode(&trailing, Encoding::Cbor, &lim).unwrap_err().reason(),
-            "malformed"
-        );
         let nan = ChannelBlock {
             data: vec![1.0, f64::NAN],
             ..block()
