@@ -304,3 +304,58 @@ fn model_modes(state: &ModalState, top: f64) -> (Vec<(f64, f64, ModeKind)>, Vec<
         .collect();
     (modes, bending_modes)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use splinewatch_core::updating::{IterationRecord, StopReason};
+
+    fn result(converged: bool, costs: &[f64]) -> UpdateResult {
+        UpdateResult {
+            parameters: Vec::new(),
+            iterations: costs
+                .iter()
+                .enumerate()
+                .map(|(iteration, &cost)| IterationRecord {
+                    iteration,
+                    relative_residual: cost,
+                    cost,
+                    parameters: Vec::new(),
+                    step_norm: 0.0,
+                    damping: 0.0,
+                    rejected_steps: 0,
+                })
+                .collect(),
+            converged,
+            stop_reason: if converged {
+                StopReason::RelativeOffset
+            } else {
+                StopReason::MaxIterations
+            },
+            relative_residual: 0.0,
+            frf_relative_residuals: Vec::new(),
+            singular_values: Vec::new(),
+            condition_number: 1.0,
+            residual_variance: 0.0,
+            relative_offset: None,
+            evaluations: costs.len(),
+            lines_used: 0,
+            correlations: Vec::new(),
+            held: Vec::new(),
+        }
+    }
+
+    /// Issue 31's warm-start policy: converged, or not converged but
+    /// better than the start, is an update; neither is a failure that says so.
+    #[test]
+    fn an_update_is_accepted_when_converged_or_improved() {
+        assert!(accepted(result(true, &[2.0, 1.0])).is_ok());
+        assert!(accepted(result(false, &[2.0, 1.0])).is_ok());
+        let e = accepted(result(false, &[2.0, 2.5])).unwrap_err().to_string();
+        assert!(
+            e.contains("did not converge (MaxIterations) and did not lower the residual"),
+            "{e}"
+        );
+        assert!(accepted(result(false, &[2.0])).is_err());
+    }
+}
