@@ -192,6 +192,18 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         Ok(search)
     }
 
+    /// `A = JᵀJ`, `g = Jᵀr` of the chained Jacobian (eq. 43) at the current point.
+    fn refresh_normal_equations(&mut self) {
+        let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
+        (self.a, self.g) = normal_equations(&jy, &self.current.residual);
+    }
+
+    /// A step this short (in `y`) resolves no better point.
+    fn within_step_tolerance(&self, step_norm: f64) -> bool {
+        let settings = self.model.settings();
+        step_norm <= settings.step_tolerance * (norm2(&self.y).sqrt() + settings.step_tolerance)
+    }
+
     /// The indices of the free (not held) parameters.
     fn free(&self) -> Vec<usize> {
         (0..self.held.len()).filter(|&k| self.held[k].is_none()).collect()
@@ -221,8 +233,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
                 self.current = self.model.with_jacobian(&self.p, trial)?;
                 self.evaluations += 1;
                 self.cost = 0.5 * norm2(&self.current.residual);
-                let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
-                (self.a, self.g) = normal_equations(&jy, &self.current.residual);
+                self.refresh_normal_equations();
                 continue;
             }
             let free = self.free();
@@ -362,7 +373,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
             self.rejected += 1;
             // As in MINPACK, a trust region shrunk below the step tolerance
             // means no better point is resolvable: converged.
-            if norm2(&step).sqrt() <= settings.step_tolerance * (norm2(&self.y).sqrt() + settings.step_tolerance) {
+            if self.within_step_tolerance(norm2(&step).sqrt()) {
                 return Ok(Some((StopReason::StepTolerance, true)));
             }
             self.lambda *= self.nu;
@@ -412,8 +423,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         });
         observer(self.iterations.last().expect("just pushed"));
         self.rejected = 0;
-        let jy = chain(&self.current.jacobian, &self.y, &self.bounds);
-        (self.a, self.g) = normal_equations(&jy, &self.current.residual);
+        self.refresh_normal_equations();
         self.hold_uninformed()?;
         if settings.method == Method::LevenbergMarquardt {
             self.lambda *= (1.0f64 / 3.0).max(1.0 - (2.0 * accepted.rho - 1.0).powi(3));
@@ -427,7 +437,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         if diverged {
             return Ok(Some((StopReason::Diverged, false)));
         }
-        if accepted.step_norm <= settings.step_tolerance * (norm2(&self.y).sqrt() + settings.step_tolerance) {
+        if self.within_step_tolerance(accepted.step_norm) {
             return Ok(Some((StopReason::StepTolerance, true)));
         }
         Ok(None)
