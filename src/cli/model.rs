@@ -110,6 +110,9 @@ pub struct CheckConfigArgs {
 pub fn modes(a: ModesArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let (report, info) = studies::compute_modes(&cfg, a.count, a.cutoff)?;
+    for line in studies::modes::describe_patches(&cfg.build_model()?) {
+        errln!("{line}");
+    }
     errln!(
         "{}: {} dofs ({} free), assembly {:.3} s, eigen-solve {:.3} s",
         cfg.structure.name,
@@ -251,6 +254,9 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     // with every TLS file read and its certificates' validity checked.
     let (_, tls) = cfg.zenoh.to_zenoh_with_tls()?;
     outln!("{}: configuration is valid", cfg.structure.name);
+    for line in studies::modes::describe_patches(&cfg.build_model()?) {
+        outln!("{line}");
+    }
     if tls.endpoints {
         let kind = if tls.mutual { "mutual TLS" } else { "TLS" };
         outln!("zenoh transport: {kind}");

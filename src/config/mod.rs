@@ -11,6 +11,7 @@ mod model;
 mod monitoring;
 mod oma;
 mod output;
+mod patches;
 mod schedule;
 mod setup;
 mod tls;
@@ -180,7 +181,7 @@ impl Config {
     /// Builds every section, so all errors surface at load time.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let model = self.build_model()?;
-        self.build_sensors(&model.shell)?;
+        self.build_sensors(&model)?;
         self.modal_cutoff_hz()?;
         if self.model.damping.is_some() {
             self.build_damping()?;
@@ -261,7 +262,7 @@ mod tests {
     #[test]
     fn bundled_config_builds() {
         let model = Config::from_toml(SINELLO).unwrap().build_model().unwrap();
-        assert_eq!(model.shell.control_point_count(), 65);
+        assert_eq!(model.control_point_count(), 65);
         assert_eq!(model.springs.len(), 2);
     }
 
@@ -314,7 +315,7 @@ mod tests {
         // 4 000 control points: the sparse path takes them, the dense one refuses.
         let big =
             Config::from_toml(&SINELLO.replace("control_points = [13, 5]", "control_points = [100, 40]")).unwrap();
-        assert_eq!(big.build_model().unwrap().shell.control_point_count(), 4000);
+        assert_eq!(big.build_model().unwrap().control_point_count(), 4000);
         let e = big.build_dense_model().unwrap_err().to_string();
         assert!(
             e.contains("model.discretization.control_points") && e.contains("--cutoff"),
@@ -373,7 +374,7 @@ mod tests {
             "control_points = [13, 5]\ninsert_knots_eta = [0.25, 0.75]",
         );
         let model = Config::from_toml(&text).unwrap().build_model().unwrap();
-        assert_eq!(model.shell.surface().net_size(), (13, 7));
+        assert_eq!(model.patches[0].shell.surface().net_size(), (13, 7));
         let e = error_of(|t| {
             t.replace(
                 "control_points = [13, 5]",

@@ -1,18 +1,23 @@
 //! `[model]` and `[[sensors]]`: the shell, its material, springs,
 //! constraints, damping curve and measurement points, built into core types.
 
+use super::patches::{build_patches, locate, patch_index, BearingConfig, MassConfig, PatchConfig};
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::geometry::surface::Direction;
+use splinewatch_core::model::bearings::{Bearing, PointMass};
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::joints::find_joints;
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
+use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::{Shell, ShellError};
 use splinewatch_core::model::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::model::stiffness_field::{StiffnessField, StiffnessScale};
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::SensorPoint;
+use std::collections::BTreeMap;
 
 /// Largest control net accepted (5 dofs each): the sparse path
 /// (`modes --cutoff`, `matrices`) holds 200 000 dofs in a few GB.
@@ -26,9 +31,28 @@ pub const MAX_DENSE_CONTROL_POINTS: usize = 2000;
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ModelConfig {
-    pub geometry: GeometryConfig,
-    pub discretization: DiscretizationConfig,
-    pub material: OrthotropicParameters,
+    /// One patch named `"deck"` (with `discretization` and `material`), or
+    /// [`ModelConfig::patches`].
+    pub geometry: Option<GeometryConfig>,
+    pub discretization: Option<DiscretizationConfig>,
+    pub material: Option<OrthotropicParameters>,
+    /// `[[model.patches]]`: a deck of many patches.
+    #[serde(default)]
+    pub patches: Vec<PatchConfig>,
+    /// `[model.materials.<name>]`, named by the patches.
+    #[serde(default)]
+    pub materials: BTreeMap<String, OrthotropicParameters>,
+    /// Patches whose edge lies within this distance (m) of another patch's
+    /// mid-surface are joined rigidly there.
+    #[serde(default = "default_joint_tolerance")]
+    pub joint_tolerance: f64,
+    /// The joints' dimensionless penalty factor (see `model::joints`).
+    #[serde(default = "default_joint_penalty")]
+    pub joint_penalty: f64,
+    #[serde(default)]
+    pub bearings: Vec<BearingConfig>,
+    #[serde(default)]
+    pub masses: Vec<MassConfig>,
     #[serde(default)]
     pub springs: Vec<SpringConfig>,
     #[serde(default)]
@@ -40,6 +64,14 @@ pub struct ModelConfig {
     /// (sparse, with the residual of the rest).
     #[serde(default)]
     pub solver: SolverConfig,
+}
+
+fn default_joint_tolerance() -> f64 {
+    1e-3
+}
+
+fn default_joint_penalty() -> f64 {
+    splinewatch_core::model::joints::DEFAULT_PENALTY
 }
 
 /// `[model.solver] modes`: which eigen-solution the FRFs and updates use.
@@ -94,10 +126,13 @@ pub struct DampingConfig {
 #[serde(deny_unknown_fields)]
 pub struct SensorConfig {
     pub name: String,
+    /// The patch `xi`/`eta` (or the nearest point to `x, y, z`) is on.
+    pub patch: Option<String>,
     pub xi: Option<f64>,
     pub eta: Option<f64>,
     pub x: Option<f64>,
     pub y: Option<f64>,
+    pub z: Option<f64>,
     pub direction: DirectionConfig,
     /// What is measured there: one of, or a list of, "acceleration",
     /// "force", "displacement", "velocity".
@@ -174,6 +209,15 @@ pub enum DirectionConfig {
     Vector([f64; 3]),
 }
 
+/// τ of a face: 0 bottom, ½ middle, 1 top.
+pub fn face_tau(face: FaceConfig) -> f64 {
+    match face {
+        FaceConfig::Bottom => 0.0,
+        FaceConfig::Middle => 0.5,
+        FaceConfig::Top => 1.0,
+    }
+}
+
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
 pub enum FaceConfig {
@@ -191,6 +235,8 @@ pub(crate) fn default_true() -> bool {
 #[serde(deny_unknown_fields)]
 pub struct SpringConfig {
     pub name: String,
+    /// The patch it lies on (default: the only patch).
+    pub patch: Option<String>,
     pub direction: DirectionConfig,
     pub surface: FaceConfig,
     pub knots_xi: Vec<f64>,
@@ -212,6 +258,8 @@ pub struct SpringConfig {
 #[serde(deny_unknown_fields)]
 pub struct StiffnessFieldConfig {
     pub name: String,
+    /// The patch it multiplies (default: the only patch).
+    pub patch: Option<String>,
     pub knots_xi: Vec<f64>,
     pub degree_xi: usize,
     pub knots_eta: Vec<f64>,
@@ -267,6 +315,8 @@ pub enum SupportConfig {
 pub struct ConstraintConfig {
     pub edge: EdgeConfig,
     pub kind: SupportConfig,
+    /// The patch whose edge is supported (default: the only patch).
+    pub patch: Option<String>,
 }
 
 impl Config {
@@ -277,7 +327,10 @@ impl Config {
         let truncated = match solver.modes {
             ModesChoice::All => false,
             ModesChoice::Truncated => true,
-            ModesChoice::Auto => self.build_shell()?.control_point_count() > AUTO_TRUNCATED_CONTROL_POINTS,
+            ModesChoice::Auto => {
+                let patches = self.build_model_patches()?;
+                patches.len() == 1 && patches[0].shell.control_point_count() > AUTO_TRUNCATED_CONTROL_POINTS
+            }
         };
         if !truncated {
             return Ok(None);
@@ -307,7 +360,7 @@ impl Config {
     /// [`MAX_DENSE_CONTROL_POINTS`] with the way out.
     pub fn build_dense_model(&self) -> Result<ShellModel, ConfigError> {
         let model = self.build_model()?;
-        let total = model.shell.control_point_count();
+        let total = model.control_point_count();
         if total > MAX_DENSE_CONTROL_POINTS {
             return Err(err(
                 "model.discretization.control_points",
@@ -320,67 +373,218 @@ impl Config {
     }
 
     pub fn build_model(&self) -> Result<ShellModel, ConfigError> {
-        let shell = self.build_shell()?;
-        let material = self.build_material()?;
+        let patches = self.build_model_patches()?;
         let m = &self.model;
+        let index = |name: &Option<String>, key: String| patch_index(&patches, name.as_deref(), &key);
         let springs = m
             .springs
             .iter()
             .enumerate()
-            .map(|(i, s)| build_spring(i, s))
-            .collect::<Result<Vec<_>, _>>()?;
+            .map(|(i, s)| Ok(build_spring(i, s)?.on_patch(index(&s.patch, format!("model.springs[{i}].patch"))?)))
+            .collect::<Result<Vec<_>, ConfigError>>()?;
         let constraints = m
             .constraints
             .iter()
-            .map(|c| EdgeConstraint {
-                edge: match c.edge {
-                    EdgeConfig::Xi0 => Edge::Xi0,
-                    EdgeConfig::Xi1 => Edge::Xi1,
-                    EdgeConfig::Eta0 => Edge::Eta0,
-                    EdgeConfig::Eta1 => Edge::Eta1,
-                },
-                kind: match c.kind {
-                    SupportConfig::SimplySupported => SupportKind::SimplySupported,
-                    SupportConfig::ShearDiaphragm => SupportKind::ShearDiaphragm,
-                    SupportConfig::Clamped => SupportKind::Clamped,
-                },
+            .enumerate()
+            .map(|(i, c)| {
+                Ok(EdgeConstraint {
+                    edge: match c.edge {
+                        EdgeConfig::Xi0 => Edge::Xi0,
+                        EdgeConfig::Xi1 => Edge::Xi1,
+                        EdgeConfig::Eta0 => Edge::Eta0,
+                        EdgeConfig::Eta1 => Edge::Eta1,
+                    },
+                    kind: match c.kind {
+                        SupportConfig::SimplySupported => SupportKind::SimplySupported,
+                        SupportConfig::ShearDiaphragm => SupportKind::ShearDiaphragm,
+                        SupportConfig::Clamped => SupportKind::Clamped,
+                    },
+                    patch: index(&c.patch, format!("model.constraints[{i}].patch"))?,
+                })
             })
-            .collect();
+            .collect::<Result<Vec<_>, ConfigError>>()?;
         let stiffness_fields = m
             .stiffness_fields
             .iter()
             .enumerate()
-            .map(|(i, f)| build_stiffness_field(i, f, &shell))
-            .collect::<Result<Vec<_>, _>>()?;
-        let mut names: Vec<&str> = m.springs.iter().map(|s| s.name.as_str()).collect();
-        for (i, f) in m.stiffness_fields.iter().enumerate() {
-            if names.contains(&f.name.as_str()) || f.name == "damping" {
-                return Err(err(
-                    format!("model.stiffness_fields[{i}].name"),
-                    format!("{:?} is already the name of a spring field or of the damping", f.name),
-                ));
-            }
-            names.push(&f.name);
+            .map(|(i, f)| {
+                let patch = index(&f.patch, format!("model.stiffness_fields[{i}].patch"))?;
+                Ok(build_stiffness_field(i, f, &patches[patch].shell)?.on_patch(patch))
+            })
+            .collect::<Result<Vec<_>, ConfigError>>()?;
+        self.check_names()?;
+        let (bearings, masses) = self.build_attachments(&patches)?;
+        if !(m.joint_tolerance.is_finite() && m.joint_tolerance > 0.0) {
+            return Err(err("model.joint_tolerance", "must be a positive distance in metres"));
+        }
+        if !(m.joint_penalty.is_finite() && m.joint_penalty >= 1.0) {
+            return Err(err("model.joint_penalty", "must be a finite factor of at least 1"));
         }
         let model = ShellModel {
-            shell,
-            material,
+            joints: find_joints(&patches, m.joint_tolerance),
+            joint_penalty: m.joint_penalty,
+            patches,
             springs,
             stiffness_fields,
             constraints,
+            bearings,
+            masses,
         };
         // Surface the spring/shell compatibility errors here, with their key.
         for (i, s) in model.springs.iter().enumerate() {
-            s.coefficient_matrices(&model.shell)
+            s.coefficient_matrices(&model.patches[s.patch()].shell)
                 .map_err(|e| err(format!("model.springs[{i}]"), e))?;
         }
+        self.check_every_patch_held(&model)?;
         Ok(model)
+    }
+
+    /// Names of springs, stiffness fields and bearings are distinct (they
+    /// prefix the updating parameters).
+    fn check_names(&self) -> Result<(), ConfigError> {
+        let m = &self.model;
+        let mut names: Vec<&str> = m.springs.iter().map(|s| s.name.as_str()).collect();
+        let others = m
+            .stiffness_fields
+            .iter()
+            .enumerate()
+            .map(|(i, f)| (format!("model.stiffness_fields[{i}].name"), &f.name))
+            .chain(
+                m.bearings
+                    .iter()
+                    .enumerate()
+                    .map(|(i, b)| (format!("model.bearings[{i}].name"), &b.name)),
+            );
+        for (key, name) in others {
+            if names.contains(&name.as_str()) || name == "damping" {
+                return Err(err(
+                    key,
+                    format!(
+                        "{name:?} is already the name of a spring field, stiffness field, bearing or of the damping"
+                    ),
+                ));
+            }
+            names.push(name);
+        }
+        Ok(())
+    }
+
+    /// The bearings and point masses, each at the nearest point of its patch.
+    fn build_attachments(&self, patches: &[Patch]) -> Result<(Vec<Bearing>, Vec<PointMass>), ConfigError> {
+        let m = &self.model;
+        let bearings = m
+            .bearings
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                let key = |k: &str| format!("model.bearings[{i}].{k}");
+                let patch = b
+                    .patch
+                    .as_deref()
+                    .map(|n| patch_index(patches, Some(n), &key("patch")))
+                    .transpose()?;
+                let at = locate(patches, patch, b.at, face_tau(b.surface), &key("at"))?;
+                if let Some([lo, hi]) = b.bounds {
+                    if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+                        return Err(err(
+                            key("bounds"),
+                            format!("[{lo}, {hi}] must satisfy 0 <= lower < upper"),
+                        ));
+                    }
+                    if let Some(k) = b.stiffness.iter().find(|&&k| !(k >= lo && k <= hi)) {
+                        return Err(err(key("stiffness"), format!("{k} lies outside bounds [{lo}, {hi}]")));
+                    }
+                }
+                Bearing::new(at, b.stiffness).map_err(|e| err(key("stiffness"), e))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let masses = m
+            .masses
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let key = |k: &str| format!("model.masses[{i}].{k}");
+                let patch = p
+                    .patch
+                    .as_deref()
+                    .map(|n| patch_index(patches, Some(n), &key("patch")))
+                    .transpose()?;
+                let at = locate(patches, patch, p.at, 0.5, &key("at"))?;
+                PointMass::new(at, p.mass).map_err(|e| err(key("mass"), e))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok((bearings, masses))
+    }
+
+    /// Every patch of a deck of several is joined to another or carries a
+    /// support (constraint, spring field or bearing).
+    fn check_every_patch_held(&self, model: &ShellModel) -> Result<(), ConfigError> {
+        if model.patches.len() < 2 {
+            return Ok(());
+        }
+        for (k, p) in model.patches.iter().enumerate() {
+            let joined = model.joints.iter().any(|j| j.patch == k || j.other == k);
+            let supported = model.constraints.iter().any(|c| c.patch == k)
+                || model.springs.iter().any(|s| s.patch() == k)
+                || model.bearings.iter().any(|b| b.at().patch == k);
+            if !(joined || supported) {
+                return Err(err(
+                    format!("model.patches[{k}]"),
+                    format!(
+                        "patch {:?} is joined to no other patch (no edge within joint_tolerance = {} m of another) and carries no support",
+                        p.name(),
+                        self.model.joint_tolerance
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The patches: `[[model.patches]]`, or the single-patch keys as one
+    /// patch named `"deck"`.
+    pub fn build_model_patches(&self) -> Result<Vec<Patch>, ConfigError> {
+        let m = &self.model;
+        let single = m.geometry.is_some() || m.discretization.is_some() || m.material.is_some();
+        match (single, m.patches.is_empty()) {
+            (true, false) => Err(err(
+                "model.patches",
+                "give either [[model.patches]] or [model.geometry], [model.discretization] and [model.material], not both",
+            )),
+            (false, true) => Err(err(
+                "model",
+                "no deck: give [model.geometry], [model.discretization] and [model.material], or [[model.patches]]",
+            )),
+            (false, false) => {
+                let patches = build_patches(&m.patches, &m.materials)?;
+                let total: usize = patches.iter().map(|p| p.shell.control_point_count()).sum();
+                if total > MAX_DENSE_CONTROL_POINTS {
+                    return Err(err(
+                        "model.patches",
+                        format!("{total} control points in all: a deck of several patches is solved densely for at most {MAX_DENSE_CONTROL_POINTS}"),
+                    ));
+                }
+                Ok(patches)
+            }
+            (true, true) => {
+                let shell = self.build_shell()?;
+                let material = self.build_material()?;
+                Ok(vec![Patch::new("deck", shell, material).expect("a non-empty name")])
+            }
+        }
     }
 
     /// `[model.geometry]` on the `[model.discretization]` net, refined.
     fn build_shell(&self) -> Result<Shell, ConfigError> {
         let m = &self.model;
-        let d = &m.discretization;
+        let d = m
+            .discretization
+            .as_ref()
+            .ok_or_else(|| err("model.discretization", "is required with [model.geometry]"))?;
+        let geometry = m
+            .geometry
+            .as_ref()
+            .ok_or_else(|| err("model.geometry", "is required with [model.discretization]"))?;
         // Refuse nets no path can hold rather than exhausting memory.
         let [cm, cn] = d.control_points;
         let total = cm
@@ -392,7 +596,7 @@ impl Config {
                 format!("{total} control points (after knot insertion) exceed the supported {MAX_CONTROL_POINTS}"),
             ));
         }
-        let mut shell = match m.geometry {
+        let mut shell = match *geometry {
             GeometryConfig::RectangularPlate {
                 length,
                 width,
@@ -430,7 +634,11 @@ impl Config {
     }
 
     fn build_material(&self) -> Result<OrthotropicMaterial, ConfigError> {
-        OrthotropicMaterial::new(self.model.material).map_err(|e| err("model.material", e))
+        let parameters = self
+            .model
+            .material
+            .ok_or_else(|| err("model.material", "is required with [model.geometry]"))?;
+        OrthotropicMaterial::new(parameters).map_err(|e| err("model.material", e))
     }
 
     /// `[model.damping]` as a curve; an error if it is missing.
@@ -543,7 +751,7 @@ fn build_spring(i: usize, s: &SpringConfig) -> Result<SpringField, ConfigError> 
 
 impl Config {
     /// The sensors as model points, in config order, with their names.
-    pub fn build_sensors(&self, shell: &Shell) -> Result<Vec<(String, SensorPoint)>, ConfigError> {
+    pub fn build_sensors(&self, model: &ShellModel) -> Result<Vec<(String, SensorPoint)>, ConfigError> {
         let mut out = Vec::with_capacity(self.sensors.len());
         for (i, s) in self.sensors.iter().enumerate() {
             let key = |k: &str| format!("sensors[{i}].{k}");
@@ -555,21 +763,9 @@ impl Config {
                     ));
                 }
             }
-            let (xi, eta) = match (s.xi, s.eta, s.x, s.y) {
-                (Some(xi), Some(eta), None, None) => (xi, eta),
-                (None, None, Some(x), Some(y)) => shell.surface().locate_xy(x, y).ok_or_else(|| {
-                    err(
-                        key("x"),
-                        format!("point ({x}, {y}) m is not on the deck (outside the model's plan)"),
-                    )
-                })?,
-                _ => {
-                    return Err(err(
-                        format!("sensors[{i}]"),
-                        "give either both xi and eta (parametric) or both x and y (metres)",
-                    ))
-                }
-            };
+            let tau = face_tau(s.surface);
+            let (patch, xi, eta) = self.sensor_position(model, i)?;
+            let shell = &model.patches[patch].shell;
             let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
             if !kx.contains(xi) || !ke.contains(eta) {
                 return Err(err(
@@ -598,14 +794,10 @@ impl Config {
             if splinewatch_core::geometry::vec3::normalize(direction).is_none() {
                 return Err(err(key("direction"), "must be a finite non-zero vector"));
             }
-            let tau = match s.surface {
-                FaceConfig::Bottom => 0.0,
-                FaceConfig::Middle => 0.5,
-                FaceConfig::Top => 1.0,
-            };
             out.push((
                 s.name.clone(),
                 SensorPoint {
+                    patch,
                     xi,
                     eta,
                     tau,
@@ -614,6 +806,44 @@ impl Config {
             ));
         }
         Ok(out)
+    }
+}
+
+impl Config {
+    /// Sensor `i`'s patch and parameters: `xi, eta` on the named (or only)
+    /// patch; `x, y, z` at the nearest point of the named or nearest patch
+    /// (within 0.5 m); `x, y` on a single patch, located in plan.
+    fn sensor_position(&self, model: &ShellModel, i: usize) -> Result<(usize, f64, f64), ConfigError> {
+        let s = &self.sensors[i];
+        let key = |k: &str| format!("sensors[{i}].{k}");
+        let patches = &model.patches;
+        let named = || patch_index(patches, s.patch.as_deref(), &key("patch"));
+        match (s.xi, s.eta, s.x, s.y, s.z) {
+            (Some(xi), Some(eta), None, None, None) => Ok((named()?, xi, eta)),
+            (None, None, Some(x), Some(y), Some(z)) => {
+                let patch = s
+                    .patch
+                    .as_deref()
+                    .map(|n| patch_index(patches, Some(n), &key("patch")))
+                    .transpose()?;
+                let at = locate(patches, patch, [x, y, z], face_tau(s.surface), &key("x"))?;
+                Ok((at.patch, at.xi, at.eta))
+            }
+            (None, None, Some(x), Some(y), None) => {
+                let patch = named().map_err(|_| err(key("z"), "the model has several patches: give x, y and z"))?;
+                let (xi, eta) = patches[patch].shell.surface().locate_xy(x, y).ok_or_else(|| {
+                    err(
+                        key("x"),
+                        format!("point ({x}, {y}) m is not on the deck (outside the model's plan)"),
+                    )
+                })?;
+                Ok((patch, xi, eta))
+            }
+            _ => Err(err(
+                format!("sensors[{i}]"),
+                "give either both xi and eta (parametric), x and y (metres, in plan on a single patch) or x, y and z",
+            )),
+        }
     }
 }
 

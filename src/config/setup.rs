@@ -65,12 +65,12 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
         Some(_) => config.build_model()?,
         None => config.build_dense_model()?,
     };
-    let sensors = config.build_sensors(&model.shell)?;
+    let sensors = config.build_sensors(&model)?;
     if sensors.is_empty() {
         anyhow::bail!("config: sensors: at least one [[sensors]] table is required for FRFs");
     }
     let damping = config.build_damping()?;
-    let kappa = model.springs.iter().map(|s| s.stiffness().to_vec()).collect();
+    let kappa = model.spring_coefficients();
     let points: Vec<_> = sensors.iter().map(|(_, p)| *p).chain(extra.iter().copied()).collect();
     let dense = |model: &splinewatch_core::model::ShellModel| -> Result<FrfModel> {
         Ok(FrfModel::new(
@@ -81,7 +81,7 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
     let (frf_model, reference) = match cutoff_hz {
         Some(cutoff_hz) => {
             let truncated = FrfModel::truncated(&model, &points, cutoff_hz).context("assembling the sparse model")?;
-            let small = model.shell.control_point_count() <= super::model::AUTO_TRUNCATED_CONTROL_POINTS;
+            let small = model.control_point_count() <= super::model::AUTO_TRUNCATED_CONTROL_POINTS;
             (truncated, if small { Some(dense(&model)?) } else { None })
         }
         None => (dense(&model)?, None),

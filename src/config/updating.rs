@@ -113,6 +113,8 @@ fn coefficient_parameters(
 pub enum ParameterFamily {
     /// `<spring>.k<j>`: a spring coefficient κ, N/m³.
     Spring,
+    /// `<bearing>.kx`, `.ky`, `.kz`: a bearing's stiffness, N/m.
+    Bearing,
     /// `<field>.s<j>`: a stiffness-field multiplier θ, a ratio.
     StiffnessField,
     /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
@@ -124,6 +126,8 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
     let last = name.rsplit('.').next().unwrap_or("");
     if name.starts_with("damping.") {
         ParameterFamily::Damping
+    } else if matches!(last, "kx" | "ky" | "kz") {
+        ParameterFamily::Bearing
     } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
         ParameterFamily::StiffnessField
     } else {
@@ -133,7 +137,8 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
 
 impl Config {
     /// The updating parameters: `<spring>.k<j>` for spring fields with
-    /// `update = true` (j from 1, η fastest), `<field>.s<j>` for stiffness
+    /// `update = true` (j from 1, η fastest), `<bearing>.kx`, `.ky`, `.kz`
+    /// for bearings with `update = true`, `<field>.s<j>` for stiffness
     /// fields with `update = true`, and `damping.g<z>`.
     pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
         let mut out = Vec::new();
@@ -145,6 +150,27 @@ impl Config {
                 s.stiffness.len(),
                 |coefficient| ParameterKind::Spring { field, coefficient },
             )?);
+        }
+        // Bearings follow the spring fields among κ (`ShellModel::spring_coefficients`).
+        let springs = self.model.springs.len();
+        for (b, bearing) in self.model.bearings.iter().enumerate().filter(|(_, b)| b.update) {
+            let [lower, upper] = bearing
+                .bounds
+                .ok_or_else(|| err(format!("model.bearings[{b}].bounds"), "required when update = true"))?;
+            out.extend(
+                ["kx", "ky", "kz"]
+                    .into_iter()
+                    .enumerate()
+                    .map(|(coefficient, axis)| Parameter {
+                        name: format!("{}.{axis}", bearing.name),
+                        kind: ParameterKind::Spring {
+                            field: springs + b,
+                            coefficient,
+                        },
+                        lower,
+                        upper,
+                    }),
+            );
         }
         for (field, f) in self.model.stiffness_fields.iter().enumerate().filter(|(_, f)| f.update) {
             out.extend(coefficient_parameters(

@@ -133,6 +133,9 @@ impl Environment {
         if self.deck_modulus_per_c != 0.0 {
             truth.model.stiffness_fields.push(StiffnessFieldConfig {
                 name: MODULUS_FIELD.into(),
+                // A deck of several patches has no single field over it:
+                // building the truth model says so (not yet simulated).
+                patch: None,
                 knots_xi: vec![0.0, 1.0],
                 degree_xi: 0,
                 knots_eta: vec![0.0, 1.0],

@@ -16,13 +16,13 @@ use splinewatch_core::updating::modal_state_at;
 /// measuring axis. Two sensors at one node along one axis are an error.
 pub fn uff_points(config: &Config) -> Result<Vec<UffPoint>> {
     let model = config.build_model()?;
-    let sensors = config.build_sensors(&model.shell)?;
+    let sensors = config.build_sensors(&model)?;
     let mut points: Vec<UffPoint> = Vec::with_capacity(sensors.len());
     for (k, (c, (name, p))) in config.sensors.iter().zip(sensors).enumerate() {
         let point = UffPoint {
             name,
             node: c.uff_node.unwrap_or(k as i64 + 1),
-            position: model.shell.surface().evaluate(p.xi, p.eta).r,
+            position: model.patches[p.patch].shell.surface().evaluate(p.xi, p.eta).r,
             axis: axis_of(p.direction),
         };
         if let Some(other) = points

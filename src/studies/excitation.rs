@@ -66,12 +66,35 @@ const LANES: [(f64, f64); 2] = [(0.3, 1.0), (0.7, -1.0)];
 const LANE_POINTS: usize = 33;
 
 /// The points where unmeasured forces act (appended to the model's sensors).
+/// The length (m) traffic crosses: the deck's (single patch), or the first
+/// patch's along ξ on its centre line.
+fn deck_length(config: &Config) -> Result<f64> {
+    if let Some(GeometryConfig::RectangularPlate { length, .. } | GeometryConfig::CylindricalPanel { length, .. }) =
+        config.model.geometry
+    {
+        return Ok(length);
+    }
+    let patches = config.build_model_patches()?;
+    let surface = patches[0].shell.surface();
+    let steps = 64;
+    let at = |k: usize| surface.evaluate(k as f64 / steps as f64, 0.5).r;
+    Ok((0..steps)
+        .map(|k| {
+            let (a, b) = (at(k), at(k + 1));
+            ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+        })
+        .sum())
+}
+
+/// Where unmeasured forces act: on the first patch (the deck slab of a
+/// deck of several).
 pub fn source_points(
     options: &SourceOptions,
     surface: &BSplineSurface,
     rng: &mut ChaCha8Rng,
 ) -> Result<Vec<SensorPoint>> {
     let vertical = |xi: f64, eta: f64| SensorPoint {
+        patch: 0,
         xi,
         eta,
         tau: 0.5,
@@ -149,9 +172,7 @@ impl UnmeasuredSources {
         {
             bail!("--speed-kmh and --vehicles-per-minute must be positive");
         }
-        let length = match config.model.geometry {
-            GeometryConfig::RectangularPlate { length, .. } | GeometryConfig::CylindricalPanel { length, .. } => length,
-        };
+        let length = deck_length(config)?;
         let arrivals_per_second = options.vehicles_per_minute / 60.0;
         let mut sources = Self {
             excitation: options.excitation,

@@ -3,6 +3,8 @@
 use crate::config::Config;
 use anyhow::{Context, Result};
 use serde::Serialize;
+use splinewatch_core::model::constraints::Edge;
+use splinewatch_core::model::ShellModel;
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::io::Write;
@@ -76,6 +78,37 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         solve_seconds: (t2 - t1).as_secs_f64(),
     };
     Ok((ModesReport { modes: rows }, info))
+}
+
+/// The patches and joints of a deck of several patches, one line each
+/// (patch, edge, the other patch, length); nothing for one patch.
+pub fn describe_patches(model: &ShellModel) -> Vec<String> {
+    if model.patches.len() < 2 {
+        return Vec::new();
+    }
+    let mut lines: Vec<String> = model
+        .patches
+        .iter()
+        .map(|p| {
+            let (m, n) = p.shell.surface().net_size();
+            format!("patch {}: {m} × {n} control points", p.name())
+        })
+        .collect();
+    lines.extend(model.joints.iter().map(|j| {
+        let edge = match j.edge {
+            Edge::Xi0 => "xi0",
+            Edge::Xi1 => "xi1",
+            Edge::Eta0 => "eta0",
+            Edge::Eta1 => "eta1",
+        };
+        format!(
+            "joint: {} edge {edge} on {}, {:.3} m",
+            model.patches[j.patch].name(),
+            model.patches[j.other].name(),
+            j.length
+        )
+    }));
+    lines
 }
 
 /// `splinewatch modes`: a table (or JSON) on `out`.

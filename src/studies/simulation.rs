@@ -264,7 +264,7 @@ impl Forcing {
             return Ok((forcing, frf_setup(config)?, accel_sensors));
         }
         let accel_sensors = config.output_channels()?;
-        let shell = config.build_model()?.shell;
+        let shell = config.build_model()?.patches.swap_remove(0).shell;
         let sources = SourceOptions {
             excitation: o.excitation,
             fs_sim: o.fs * o.oversample as f64,

@@ -124,6 +124,7 @@ pub fn update_from_modes(
 pub fn parameter_unit(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "N/m³",
+        crate::config::ParameterFamily::Bearing => "N/m",
         _ => "-",
     }
 }

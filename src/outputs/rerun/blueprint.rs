@@ -136,10 +136,9 @@ impl RerunOutput {
     }
 
     pub(super) fn log_sensors(&self, sensors: &[(String, SensorPoint)]) -> Result<()> {
-        let shell = &self.model.shell;
         let positions: Vec<[f32; 3]> = sensors
             .iter()
-            .map(|(_, s)| f32x3(shell.position(s.xi, s.eta, 1.0)))
+            .map(|(_, s)| f32x3(self.model.patches[s.patch].shell.position(s.xi, s.eta, 1.0)))
             .collect();
         let labels: Vec<String> = sensors.iter().map(|(name, _)| name.clone()).collect();
         self.rec

@@ -25,7 +25,8 @@ pub(super) fn colormap(t: f64) -> rerun::Color {
 /// The deck's mid-surface sampled on a (ξ, η) grid that includes every
 /// spring field's knots, so narrow spring strips are visible.
 pub(super) struct DeckGrid {
-    pub(super) params: Vec<(f64, f64)>,
+    /// `(patch, ξ, η)` of every vertex, patch after patch.
+    pub(super) params: Vec<(usize, f64, f64)>,
     pub(super) positions: Vec<[f32; 3]>,
     pub(super) normals: Vec<[f32; 3]>,
     pub(super) triangles: Vec<[u32; 3]>,
@@ -42,31 +43,35 @@ impl DeckGrid {
             v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
             v
         };
-        let xs = axis(GRID.0, &mut model.springs.iter().flat_map(|s| s.xi().knots().to_vec()));
-        let ys = axis(GRID.1, &mut model.springs.iter().flat_map(|s| s.eta().knots().to_vec()));
-        let shell = &model.shell;
-        let mut params = Vec::with_capacity(xs.len() * ys.len());
-        let mut positions = Vec::with_capacity(params.capacity());
-        let mut normals = Vec::with_capacity(params.capacity());
-        for &x in &xs {
-            for &y in &ys {
-                params.push((x, y));
-                let p = shell.position(x, y, 0.5);
-                let q = shell.position(x, y, 1.0);
-                let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
-                let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(f64::MIN_POSITIVE);
-                positions.push(f32x3(p));
-                normals.push([(d[0] / norm) as f32, (d[1] / norm) as f32, (d[2] / norm) as f32]);
-            }
-        }
-        let ny = ys.len();
+        let mut params = Vec::new();
+        let mut positions = Vec::new();
+        let mut normals = Vec::new();
         let mut triangles = Vec::new();
-        for i in 0..xs.len() - 1 {
-            for j in 0..ny - 1 {
-                let a = (i * ny + j) as u32;
-                let b = ((i + 1) * ny + j) as u32;
-                triangles.push([a, b, b + 1]);
-                triangles.push([a, b + 1, a + 1]);
+        for (k, patch) in model.patches.iter().enumerate() {
+            let on_patch = || model.springs.iter().filter(move |s| s.patch() == k);
+            let xs = axis(GRID.0, &mut on_patch().flat_map(|s| s.xi().knots().to_vec()));
+            let ys = axis(GRID.1, &mut on_patch().flat_map(|s| s.eta().knots().to_vec()));
+            let shell = &patch.shell;
+            let first = positions.len() as u32;
+            for &x in &xs {
+                for &y in &ys {
+                    params.push((k, x, y));
+                    let p = shell.position(x, y, 0.5);
+                    let q = shell.position(x, y, 1.0);
+                    let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+                    let norm = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt().max(f64::MIN_POSITIVE);
+                    positions.push(f32x3(p));
+                    normals.push([(d[0] / norm) as f32, (d[1] / norm) as f32, (d[2] / norm) as f32]);
+                }
+            }
+            let ny = ys.len();
+            for i in 0..xs.len() - 1 {
+                for j in 0..ny - 1 {
+                    let a = first + (i * ny + j) as u32;
+                    let b = first + ((i + 1) * ny + j) as u32;
+                    triangles.push([a, b, b + 1]);
+                    triangles.push([a, b + 1, a + 1]);
+                }
             }
         }
         let extent = |k: usize| {
@@ -91,11 +96,12 @@ impl DeckGrid {
     pub(super) fn spring_field(&self, model: &ShellModel, kappa: &[Vec<f64>]) -> Vec<f64> {
         self.params
             .iter()
-            .map(|&(x, y)| {
+            .map(|&(patch, x, y)| {
                 model
                     .springs
                     .iter()
                     .zip(kappa)
+                    .filter(|(s, _)| s.patch() == patch)
                     .map(|(s, k)| s.value_with(k, x, y))
                     .sum()
             })
@@ -106,11 +112,12 @@ impl DeckGrid {
     pub(super) fn stiffness_multiplier(&self, model: &ShellModel, theta: &[Vec<f64>]) -> Vec<f64> {
         self.params
             .iter()
-            .map(|&(x, y)| {
+            .map(|&(patch, x, y)| {
                 1.0 + model
                     .stiffness_fields
                     .iter()
                     .zip(theta)
+                    .filter(|(f, _)| f.patch() == patch)
                     .map(|(f, t)| f.value_with(t, x, y) - 1.0)
                     .sum::<f64>()
             })
@@ -120,16 +127,18 @@ impl DeckGrid {
     /// Displacement along the surface normal at each vertex of the shape
     /// with generalised dof values `shape(dof)`.
     pub(super) fn normal_displacement(&self, model: &ShellModel, shape: impl Fn(usize) -> f64) -> Vec<f64> {
+        let offsets = model.dof_offsets();
         self.params
             .iter()
             .zip(&self.normals)
-            .map(|(&(x, y), n)| {
-                model
+            .map(|(&(patch, x, y), n)| {
+                model.patches[patch]
                     .shell
                     .shape_functions(x, y, 0.5)
                     .into_iter()
                     .map(|(dof, col)| {
-                        shape(dof) * (col[0] * f64::from(n[0]) + col[1] * f64::from(n[1]) + col[2] * f64::from(n[2]))
+                        shape(offsets[patch] + dof)
+                            * (col[0] * f64::from(n[0]) + col[1] * f64::from(n[1]) + col[2] * f64::from(n[2]))
                     })
                     .sum()
             })

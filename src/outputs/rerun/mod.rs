@@ -104,7 +104,7 @@ impl RerunOutput {
             .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
         let setup = frf_setup(config)?;
         let model = config.build_model()?;
-        let sensors = config.build_sensors(&model.shell)?;
+        let sensors = config.build_sensors(&model)?;
         let grid = DeckGrid::new(&model);
         let mut out = Self {
             rec,

@@ -51,7 +51,6 @@ impl RerunOutput {
     /// of 1 + 0i) and model shapes (least-squares scaled to it) as arrows at
     /// the sensors, along each sensor's direction.
     fn log_shapes(&self, modes: &WindowModes) -> Result<()> {
-        let shell = &self.model.shell;
         let sensors: Vec<_> = modes
             .report
             .sensors
@@ -81,7 +80,7 @@ impl RerunOutput {
                     .map(|(s, v)| {
                         let d = s.direction;
                         (
-                            f32x3(shell.position(s.xi, s.eta, 1.0)),
+                            f32x3(self.model.patches[s.patch].shell.position(s.xi, s.eta, 1.0)),
                             [
                                 (length * v * d[0]) as f32,
                                 (length * v * d[1]) as f32,

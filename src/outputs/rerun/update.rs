@@ -233,6 +233,7 @@ impl RerunOutput {
 pub(super) fn parameter_group(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "springs",
+        crate::config::ParameterFamily::Bearing => "bearings",
         crate::config::ParameterFamily::StiffnessField => "fields",
         crate::config::ParameterFamily::Damping => "damping",
     }

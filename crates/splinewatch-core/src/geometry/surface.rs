@@ -5,7 +5,7 @@
 //! `points[i * n + j]`, `i < m` along `ξ`, `j < n` along `η`.
 
 use crate::geometry::knots::{KnotError, KnotVector, MAX_DEGREE};
-use crate::geometry::vec3::{axpy, Vec3};
+use crate::geometry::vec3::{axpy, dot, Vec3};
 use faer::prelude::Solve;
 use faer::Mat;
 use thiserror::Error;
@@ -153,6 +153,51 @@ impl BSplineSurface {
         ((e.r[0] - x).abs() + (e.r[1] - y).abs() <= 1e-9 * scale).then_some((u, v))
     }
 
+    /// The point of the surface nearest to `x`: `(ξ, η, distance)`. A grid
+    /// search seeds Gauss–Newton on `|r(ξ, η) − x|²` (the surface's second
+    /// derivatives dropped), clamped to the parameter domain, so a point
+    /// beyond an edge projects onto the edge.
+    pub fn closest_point(&self, x: Vec3) -> (f64, f64, f64) {
+        const SEEDS: usize = 16;
+        let (a, b) = self.xi.domain();
+        let (c, d) = self.eta.domain();
+        let distance2 = |u: f64, v: f64| {
+            let r = self.evaluate(u, v).r;
+            (0..3).map(|k| (r[k] - x[k]).powi(2)).sum::<f64>()
+        };
+        let mut best = (a, c, f64::INFINITY);
+        for i in 0..=SEEDS {
+            for j in 0..=SEEDS {
+                let u = a + (b - a) * i as f64 / SEEDS as f64;
+                let v = c + (d - c) * j as f64 / SEEDS as f64;
+                let e = distance2(u, v);
+                if e < best.2 {
+                    best = (u, v, e);
+                }
+            }
+        }
+        let (mut u, mut v) = (best.0, best.1);
+        for _ in 0..60 {
+            let e = self.evaluate(u, v);
+            let f = [x[0] - e.r[0], x[1] - e.r[1], x[2] - e.r[2]];
+            let (g11, g12, g22) = (dot(e.r_xi, e.r_xi), dot(e.r_xi, e.r_eta), dot(e.r_eta, e.r_eta));
+            let (h1, h2) = (dot(e.r_xi, f), dot(e.r_eta, f));
+            let det = g11 * g22 - g12 * g12;
+            if !(det.is_finite() && det > 0.0) {
+                break;
+            }
+            let du = (g22 * h1 - g12 * h2) / det;
+            let dv = (g11 * h2 - g12 * h1) / det;
+            let (u2, v2) = ((u + du).clamp(a, b), (v + dv).clamp(c, d));
+            let moved = (u2 - u).abs() + (v2 - v).abs();
+            (u, v) = (u2, v2);
+            if moved < 1e-15 {
+                break;
+            }
+        }
+        (u, v, distance2(u, v).sqrt())
+    }
+
     /// The same surface with the knot `u` inserted once along `direction`
     /// (h-refinement); `extra` carries further per-control-point values of
     /// dimension `extra_dim` (e.g. thickness) refined the same way.
@@ -284,6 +329,28 @@ mod tests {
             );
         }
         assert_eq!(s.locate_xy(-5.0, 3.0), None);
+    }
+
+    #[test]
+    fn closest_point_projects_onto_a_curved_surface_and_its_edges() {
+        let xi = KnotVector::uniform(3, 6, 0.0, 1.0).unwrap();
+        let eta = KnotVector::uniform(3, 5, 0.0, 1.0).unwrap();
+        let s = BSplineSurface::interpolate(xi, eta, |u, v| [16.0 * u, 9.0 * v, 0.8 * (u * 3.0).sin()]).unwrap();
+        for &(u, v) in &[(0.2, 0.7), (0.0, 0.0), (1.0, 0.35), (0.61, 1.0)] {
+            let e = s.evaluate(u, v);
+            // Off the surface along its normal: projects back onto (u, v).
+            let n = crate::geometry::vec3::normalize(crate::geometry::vec3::cross(e.r_xi, e.r_eta)).unwrap();
+            let (u2, v2, dist) = s.closest_point(axpy(e.r, 0.05, n));
+            assert!(
+                (u - u2).abs() < 1e-9 && (v - v2).abs() < 1e-9,
+                "({u}, {v}) -> ({u2}, {v2})"
+            );
+            assert!((dist - 0.05).abs() < 1e-9, "{dist}");
+        }
+        // Beyond the η = 1 edge: onto the edge, at the distance from it.
+        let edge = s.evaluate(0.5, 1.0).r;
+        let (u, v, dist) = s.closest_point([edge[0], edge[1] + 2.0, edge[2]]);
+        assert!((u - 0.5).abs() < 1e-9 && v == 1.0 && (dist - 2.0).abs() < 1e-9);
     }
 
     #[test]

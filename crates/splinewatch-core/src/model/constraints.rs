@@ -42,6 +42,8 @@ pub enum SupportKind {
 pub struct EdgeConstraint {
     pub edge: Edge,
     pub kind: SupportKind,
+    /// The patch whose edge is supported ([`crate::model::patch`]).
+    pub patch: usize,
 }
 
 /// The sparse map `δ = T q` from free coordinates to generalised dofs.
@@ -99,6 +101,21 @@ impl DofReduction {
             full: shell.dof_count(),
             columns,
         }
+    }
+
+    /// The reductions of several patches side by side: `T = diag(T_k)`.
+    pub fn block_diagonal(parts: Vec<DofReduction>) -> Self {
+        let mut full = 0;
+        let mut columns = Vec::new();
+        for part in parts {
+            columns.extend(
+                part.columns
+                    .into_iter()
+                    .map(|c| c.into_iter().map(|(d, w)| (d + full, w)).collect::<Vec<_>>()),
+            );
+            full += part.full;
+        }
+        Self { full, columns }
     }
 
     /// No constraints: `T = I`.
@@ -251,6 +268,7 @@ mod tests {
         let all = [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1].map(|edge| EdgeConstraint {
             edge,
             kind: SupportKind::SimplySupported,
+            patch: 0,
         });
         let r = DofReduction::new(&shell, &all);
         // 12 control points, 10 on the boundary lose w; xi edges (6 cps) lose α,
@@ -261,6 +279,7 @@ mod tests {
             &[EdgeConstraint {
                 edge: Edge::Xi0,
                 kind: SupportKind::Clamped,
+                patch: 0,
             }],
         );
         assert_eq!(clamped.free_count(), 60 - 15);

@@ -8,32 +8,107 @@
 //! - [`constraints`]: rigid edge supports as the dof reduction `δ = T q`;
 //! - [`springs`]: B-spline spring fields on a face and their `∂K/∂κ_j` (eq. 19–22);
 //! - [`stiffness_field`]: B-spline multipliers of the deck's stiffness and their `∂K/∂θ_k`;
-//! - [`damping`]: the damping curve ζ(f) (eq. 25–29).
+//! - [`damping`]: the damping curve ζ(f) (eq. 25–29);
+//! - [`patch`]: a shell with its material and added mass, and the global dof
+//!   numbering of several patches;
+//! - [`joints`]: rigid joints between patches by penalty coupling;
+//! - [`bearings`]: discrete elastic bearings and point masses.
 //!
 //! [`ShellModel`] gathers them; the solvers assemble it
 //! ([`crate::solvers::dense_model`], [`crate::solvers::sparse_model`]).
 
+pub mod bearings;
 pub mod constraints;
 pub mod damping;
+pub mod joints;
 pub mod material;
+pub mod patch;
 pub mod shell;
 pub mod sparse;
 pub mod springs;
 pub mod stiffness_field;
 
+use bearings::{Bearing, PointMass};
 use constraints::EdgeConstraint;
+use joints::Joint;
 use material::OrthotropicMaterial;
-use shell::Shell;
+use patch::Patch;
+use shell::{Frame, Shell};
 use springs::SpringField;
 use stiffness_field::StiffnessField;
 
-/// Physics and discretisation of a deck, validated.
+/// Physics and discretisation of a deck of one or many patches, validated.
+/// Springs, stiffness fields, constraints, bearings and masses each name
+/// their patch by index.
 #[derive(Debug, Clone)]
 pub struct ShellModel {
-    pub shell: Shell,
-    pub material: OrthotropicMaterial,
+    pub patches: Vec<Patch>,
     pub springs: Vec<SpringField>,
     /// Stiffness multiplier fields of the deck (none: the nominal material).
     pub stiffness_fields: Vec<StiffnessField>,
     pub constraints: Vec<EdgeConstraint>,
+    /// Rigid joints between patches ([`joints::find_joints`]).
+    pub joints: Vec<Joint>,
+    /// The joints' dimensionless penalty factor `c` ([`joints`]).
+    pub joint_penalty: f64,
+    /// Discrete bearings; their `k_x, k_y, k_z` follow the spring fields'
+    /// coefficients in the assembled model.
+    pub bearings: Vec<Bearing>,
+    pub masses: Vec<PointMass>,
+}
+
+impl ShellModel {
+    /// One patch named `"deck"`, nothing else attached.
+    pub fn new(shell: Shell, material: OrthotropicMaterial) -> Self {
+        Self {
+            patches: vec![Patch::new("deck", shell, material).expect("a non-empty name")],
+            springs: Vec::new(),
+            stiffness_fields: Vec::new(),
+            constraints: Vec::new(),
+            joints: Vec::new(),
+            joint_penalty: joints::DEFAULT_PENALTY,
+            bearings: Vec::new(),
+            masses: Vec::new(),
+        }
+    }
+
+    /// First global dof of every patch, then the total.
+    pub fn dof_offsets(&self) -> Vec<usize> {
+        patch::dof_offsets(&self.patches)
+    }
+
+    pub fn dof_count(&self) -> usize {
+        self.patches.iter().map(|p| p.shell.dof_count()).sum()
+    }
+
+    pub fn control_point_count(&self) -> usize {
+        self.patches.iter().map(|p| p.shell.control_point_count()).sum()
+    }
+
+    /// The spring coefficients κ of eq. (22): each spring field's, then each
+    /// bearing's `[k_x, k_y, k_z]` (the assembled model's order).
+    pub fn spring_coefficients(&self) -> Vec<Vec<f64>> {
+        self.springs
+            .iter()
+            .map(|s| s.stiffness().to_vec())
+            .chain(self.bearings.iter().map(|b| b.stiffness().to_vec()))
+            .collect()
+    }
+
+    /// The director frames of every control point, in global order.
+    pub fn frames(&self) -> Vec<Frame> {
+        self.patches
+            .iter()
+            .flat_map(|p| p.shell.frames().iter().copied())
+            .collect()
+    }
+
+    /// The one patch of a single-patch model with nothing a single shell
+    /// lacks (the sparse path's domain), or `None`.
+    pub fn single_shell(&self) -> Option<&Patch> {
+        match self.patches.as_slice() {
+            [p] if self.bearings.is_empty() && self.masses.is_empty() && p.non_structural_mass() == 0.0 => Some(p),
+            _ => None,
+        }
+    }
 }

@@ -178,6 +178,28 @@ impl Shell {
         Self::new(surface, vec![thickness; count])
     }
 
+    /// A bilinear patch through `corners` in the order (ξ=0,η=0), (ξ=1,η=0),
+    /// (ξ=1,η=1), (ξ=0,η=1): skewed or tapered slabs, webs, flanges. The
+    /// bilinear map is reproduced exactly (interpolation at the Greville
+    /// abscissae), constant thickness.
+    pub fn quadrilateral(
+        corners: [Vec3; 4],
+        thickness: f64,
+        degree: [usize; 2],
+        control_points: [usize; 2],
+    ) -> Result<Self, ShellError> {
+        positive("thickness", thickness)?;
+        let xi = KnotVector::uniform(degree[0], control_points[0], 0.0, 1.0)?;
+        let eta = KnotVector::uniform(degree[1], control_points[1], 0.0, 1.0)?;
+        let [a, b, c, d] = corners;
+        let surface = BSplineSurface::interpolate(xi, eta, |u, v| {
+            let w = [(1.0 - u) * (1.0 - v), u * (1.0 - v), u * v, (1.0 - u) * v];
+            std::array::from_fn(|k| w[0] * a[k] + w[1] * b[k] + w[2] * c[k] + w[3] * d[k])
+        })?;
+        let count = control_points[0] * control_points[1];
+        Self::new(surface, vec![thickness; count])
+    }
+
     /// Open circular-cylindrical panel: axis along `x` (`ξ`, length `length`),
     /// arc of radius `radius` and opening angle `angle` (radians) along `η`,
     /// symmetric about the `xz` plane, crown at `z = 0`. The arc is
@@ -203,6 +225,14 @@ impl Shell {
         })?;
         let count = control_points[0] * control_points[1];
         Self::new(surface, vec![thickness; count])
+    }
+
+    /// The same shell moved by `by` (m).
+    pub fn translated(&self, by: Vec3) -> Result<Self, ShellError> {
+        let s = &self.surface;
+        let points = s.points().iter().map(|&p| axpy(p, 1.0, by)).collect();
+        let surface = BSplineSurface::new(s.xi().clone(), s.eta().clone(), points)?;
+        Self::new(surface, self.thickness.clone())
     }
 
     /// h-refinement: inserts the knot `u` once along `direction`. The

@@ -79,6 +79,8 @@ pub struct SpringField {
     stiffness: Vec<f64>,
     direction: SpringDirection,
     face: Face,
+    /// The patch the field lies on ([`crate::model::patch`]).
+    patch: usize,
 }
 
 /// A symmetric matrix that is zero outside the rows and columns `dofs`.
@@ -89,6 +91,16 @@ pub struct LowRankBlock {
 }
 
 impl LowRankBlock {
+    /// The same block with every dof moved by `offset` (a patch's first
+    /// global dof).
+    #[must_use]
+    pub fn shifted(mut self, offset: usize) -> Self {
+        for d in &mut self.dofs {
+            *d += offset;
+        }
+        self
+    }
+
     /// `target[dofs, dofs] += scale * values`.
     pub fn add_scaled_to(&self, target: &mut Mat<f64>, scale: f64) {
         for (a, &ra) in self.dofs.iter().enumerate() {
@@ -131,7 +143,18 @@ impl SpringField {
             stiffness,
             direction,
             face,
+            patch: 0,
         })
+    }
+
+    /// The same field on patch `patch` (default: the first).
+    #[must_use]
+    pub fn on_patch(self, patch: usize) -> Self {
+        Self { patch, ..self }
+    }
+
+    pub fn patch(&self) -> usize {
+        self.patch
     }
 
     pub fn stiffness(&self) -> &[f64] {

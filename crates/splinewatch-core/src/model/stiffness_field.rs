@@ -92,6 +92,8 @@ pub struct StiffnessField {
     eta: KnotVector,
     coefficients: Vec<f64>,
     scale: StiffnessScale,
+    /// The patch the field lies on ([`crate::model::patch`]).
+    patch: usize,
 }
 
 impl StiffnessField {
@@ -114,7 +116,18 @@ impl StiffnessField {
             eta,
             coefficients,
             scale: StiffnessScale::All,
+            patch: 0,
         })
+    }
+
+    /// The same field on patch `patch` (default: the first).
+    #[must_use]
+    pub fn on_patch(self, patch: usize) -> Self {
+        Self { patch, ..self }
+    }
+
+    pub fn patch(&self) -> usize {
+        self.patch
     }
 
     /// The same field multiplying `scale` only.

@@ -8,9 +8,12 @@
 //! and its prepared eigen-solver ([`ModalSolver`]), built on the first solve.
 //! [`ShellModel::assemble`] is defined here, beside what it builds.
 
+use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
-use crate::model::shell::{self, Shell, ShellError};
-use crate::model::springs::{LowRankBlock, SpringError};
+use crate::model::patch::Patch;
+use crate::model::shell::{self, Frame, ShellError};
+use crate::model::springs::{LowRankBlock, SpringError, SpringField};
+use crate::model::stiffness_field::StiffnessField;
 use crate::model::stiffness_field::StiffnessFieldError;
 use crate::model::ShellModel;
 use crate::solvers::modal::{ModalError, ModalSolver, Modes};
@@ -22,6 +25,16 @@ use thiserror::Error;
 pub enum ModelError {
     #[error("shell: {0}")]
     Shell(#[from] ShellError),
+    #[error("patch {index}: {source}")]
+    Patch { index: usize, source: ShellError },
+    #[error("patch {patch} does not exist (the model has {count})")]
+    UnknownPatch { patch: usize, count: usize },
+    #[error("bearing {index}: {source}")]
+    Bearing { index: usize, source: BearingError },
+    #[error("point mass {index}: {source}")]
+    Mass { index: usize, source: BearingError },
+    #[error("{0} supports one patch with no bearings, point or non-structural masses")]
+    SinglePatchOnly(&'static str),
     #[error("spring field {index}: {source}")]
     Spring { index: usize, source: SpringError },
     #[error("stiffness field {index}: {source}")]
@@ -47,7 +60,11 @@ pub enum ModelError {
 /// Assembled matrices of a [`ShellModel`].
 #[derive(Debug, Clone)]
 pub struct AssembledModel {
-    pub shell: Shell,
+    /// The patches, for the sensors' rows (global dofs by
+    /// [`crate::model::patch::dof_offsets`]).
+    pub patches: Vec<Patch>,
+    /// Every control point's directors, in global order.
+    pub frames: Vec<Frame>,
     /// `K_f`, eq. (16).
     pub free_stiffness: Mat<f64>,
     /// `M`, eq. (17).
@@ -67,42 +84,156 @@ pub struct AssembledModel {
 }
 
 impl ShellModel {
+    /// The global `K_f`, `M`, `∂K/∂κ`, `∂K/∂θ` and `T`: each patch's eq.
+    /// (16)–(17) on its own dofs ([`crate::model::patch`]), then the
+    /// non-structural and point masses, the joints' penalty, the spring
+    /// fields followed by the bearings (three coefficients each), and the
+    /// stiffness fields, each moved to its patch's dofs.
     pub fn assemble(&self) -> Result<AssembledModel, ModelError> {
-        let mats = shell::assemble(&self.shell, &self.material)?;
-        let spring_blocks = self
-            .springs
-            .iter()
-            .enumerate()
-            .map(|(index, s)| {
-                s.coefficient_matrices(&self.shell)
-                    .map_err(|source| ModelError::Spring { index, source })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let field_matrices = self
-            .stiffness_fields
-            .iter()
-            .enumerate()
-            .map(|(index, f)| {
-                f.coefficient_matrices(&self.shell, &self.material)
-                    .map_err(|source| ModelError::StiffnessField { index, source })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+        let offsets = self.dof_offsets();
+        let patch_of = |patch: usize| {
+            self.patches
+                .get(patch)
+                .map(|p| (p, offsets[patch]))
+                .ok_or(ModelError::UnknownPatch {
+                    patch,
+                    count: self.patches.len(),
+                })
+        };
+        let (mut free_stiffness, mut mass) = self.patch_matrices(&offsets)?;
+        for (p, &offset) in self.patches.iter().zip(&offsets) {
+            if let Some(block) = p.surface_mass() {
+                block.shifted(offset).add_scaled_to(&mut mass, 1.0);
+            }
+        }
+        for (index, m) in self.masses.iter().enumerate() {
+            let (p, offset) = patch_of(m.at().patch)?;
+            let block = m
+                .mass_block(&p.shell)
+                .map_err(|source| ModelError::Mass { index, source })?;
+            block.shifted(offset).add_scaled_to(&mut mass, 1.0);
+        }
+        for joint in &self.joints {
+            patch_of(joint.patch)?;
+            patch_of(joint.other)?;
+            joint
+                .penalty(&self.patches, &offsets, self.joint_penalty)
+                .add_scaled_to(&mut free_stiffness, 1.0);
+        }
+        let mut spring_blocks = Vec::with_capacity(self.springs.len() + self.bearings.len());
+        for (index, s) in self.springs.iter().enumerate() {
+            let (p, offset) = patch_of(s.patch())?;
+            let blocks = s
+                .coefficient_matrices(&p.shell)
+                .map_err(|source| ModelError::Spring { index, source })?;
+            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+        }
+        for (index, b) in self.bearings.iter().enumerate() {
+            let (p, offset) = patch_of(b.at().patch)?;
+            let blocks = b
+                .coefficient_matrices(&p.shell)
+                .map_err(|source| ModelError::Bearing { index, source })?;
+            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+        }
+        let dofs = self.dof_count();
+        let mut field_matrices = Vec::with_capacity(self.stiffness_fields.len());
+        for (index, f) in self.stiffness_fields.iter().enumerate() {
+            let (p, offset) = patch_of(f.patch())?;
+            let own = f
+                .coefficient_matrices(&p.shell, &p.material)
+                .map_err(|source| ModelError::StiffnessField { index, source })?;
+            field_matrices.push(own.into_iter().map(|m| embed(m, offset, dofs)).collect());
+        }
+        let spring_stiffness = self.spring_coefficients();
         Ok(AssembledModel {
-            shell: self.shell.clone(),
-            free_stiffness: mats.stiffness,
-            mass: mats.mass,
+            patches: self.patches.clone(),
+            frames: self.frames(),
+            free_stiffness,
+            mass,
             spring_blocks,
-            spring_stiffness: self.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
+            spring_stiffness,
             field_matrices,
             field_coefficients: self
                 .stiffness_fields
                 .iter()
                 .map(|f| f.coefficients().to_vec())
                 .collect(),
-            reduction: DofReduction::new(&self.shell, &self.constraints),
+            reduction: self.reduction()?,
             modal: OnceLock::new(),
         })
     }
+
+    /// Every patch's eq. (16)–(17), side by side (one patch: its own).
+    fn patch_matrices(&self, offsets: &[usize]) -> Result<(Mat<f64>, Mat<f64>), ModelError> {
+        if let [p] = self.patches.as_slice() {
+            let mats = shell::assemble(&p.shell, &p.material)?;
+            return Ok((mats.stiffness, mats.mass));
+        }
+        let n = self.dof_count();
+        let (mut k, mut m) = (Mat::zeros(n, n), Mat::zeros(n, n));
+        for (index, (p, &offset)) in self.patches.iter().zip(offsets).enumerate() {
+            let mats = shell::assemble(&p.shell, &p.material).map_err(|source| ModelError::Patch { index, source })?;
+            let own = p.shell.dof_count();
+            k.as_mut()
+                .submatrix_mut(offset, offset, own, own)
+                .copy_from(&mats.stiffness);
+            m.as_mut().submatrix_mut(offset, offset, own, own).copy_from(&mats.mass);
+        }
+        Ok((k, m))
+    }
+
+    /// Every patch index of the attachments names a patch of the model.
+    pub fn check_patch_indices(&self) -> Result<(), ModelError> {
+        let used = self
+            .springs
+            .iter()
+            .map(SpringField::patch)
+            .chain(self.stiffness_fields.iter().map(StiffnessField::patch))
+            .chain(self.constraints.iter().map(|c| c.patch))
+            .chain(self.bearings.iter().map(|b| b.at().patch))
+            .chain(self.masses.iter().map(|m| m.at().patch))
+            .chain(self.joints.iter().flat_map(|j| [j.patch, j.other]));
+        match used.into_iter().find(|&p| p >= self.patches.len()) {
+            Some(patch) => Err(ModelError::UnknownPatch {
+                patch,
+                count: self.patches.len(),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// `T = diag(T_k)`, each patch's supported edges eliminated.
+    pub fn reduction(&self) -> Result<DofReduction, ModelError> {
+        if let Some(c) = self.constraints.iter().find(|c| c.patch >= self.patches.len()) {
+            return Err(ModelError::UnknownPatch {
+                patch: c.patch,
+                count: self.patches.len(),
+            });
+        }
+        Ok(DofReduction::block_diagonal(
+            self.patches
+                .iter()
+                .enumerate()
+                .map(|(k, p)| {
+                    let own: Vec<_> = self.constraints.iter().filter(|c| c.patch == k).copied().collect();
+                    DofReduction::new(&p.shell, &own)
+                })
+                .collect(),
+        ))
+    }
+}
+
+/// A patch's `n_k × n_k` matrix in the global `n × n` at `offset` (itself
+/// when the patch is the whole model).
+fn embed(own: Mat<f64>, offset: usize, n: usize) -> Mat<f64> {
+    if own.nrows() == n {
+        return own;
+    }
+    let mut out = Mat::zeros(n, n);
+    out.as_mut()
+        .submatrix_mut(offset, offset, own.nrows(), own.ncols())
+        .copy_from(&own);
+    out
 }
 
 impl AssembledModel {
@@ -171,7 +302,7 @@ impl AssembledModel {
         let flat: Vec<f64> = kappa.iter().flatten().copied().collect();
         let theta: Vec<f64> = theta.iter().flatten().copied().collect();
         let solver = self.modal_solver()?;
-        Ok(solver.modes(&flat, &theta, &self.reduction, &self.mass, &self.shell)?)
+        Ok(solver.modes(&flat, &theta, &self.reduction, &self.mass, &self.frames)?)
     }
 
     /// The prepared eigen-solver (see [`ModalSolver`]).

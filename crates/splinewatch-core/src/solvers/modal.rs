@@ -23,7 +23,7 @@
 
 use crate::geometry::vec3::{dot, Vec3};
 use crate::model::constraints::DofReduction;
-use crate::model::shell::{Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::shell::{Frame, DOFS_PER_CONTROL_POINT};
 use crate::model::springs::LowRankBlock;
 use faer::diag::Diag;
 use faer::dyn_stack::{MemBuffer, MemStack};
@@ -89,7 +89,7 @@ pub fn solve(
     stiffness: &Mat<f64>,
     mass: &Mat<f64>,
     reduction: &DofReduction,
-    shell: &Shell,
+    frames: &[Frame],
 ) -> Result<Modes, ModalError> {
     let n = reduction.free_count();
     if n == 0 {
@@ -99,7 +99,7 @@ pub fn solve(
     let pencil = ScaledPencil::new(&reduction.reduce(stiffness), &reduction.reduce(mass), &all)?;
     let (omega2, y) = symmetric_eigen(&pencil.a_free)?;
     let shapes = reduction.expand(&pencil.back_transform(y));
-    let kinds = classify(&omega2, &shapes, mass, shell);
+    let kinds = classify(&omega2, &shapes, mass, frames);
     Ok(Modes { omega2, shapes, kinds })
 }
 
@@ -431,7 +431,7 @@ impl ModalSolver {
         theta: &[f64],
         reduction: &DofReduction,
         mass: &Mat<f64>,
-        shell: &Shell,
+        frames: &[Frame],
     ) -> Result<Modes, ModalError> {
         let nominal;
         let theta = if theta.is_empty() {
@@ -442,7 +442,7 @@ impl ModalSolver {
         };
         let (omega2, y) = self.solve_with_fields(kappa, theta)?;
         let shapes = reduction.expand(&y);
-        let kinds = classify(&omega2, &shapes, mass, shell);
+        let kinds = classify(&omega2, &shapes, mass, frames);
         Ok(Modes { omega2, shapes, kinds })
     }
 }
@@ -507,8 +507,8 @@ pub fn symmetric_eigen(a: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>), ModalError>
     Ok(((0..n).map(|i| s[i]).collect(), u))
 }
 
-fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, shell: &Shell) -> Vec<ModeKind> {
-    let cps = shell.control_point_count();
+fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, frames: &[Frame]) -> Vec<ModeKind> {
+    let cps = frames.len();
     // Row-sum lumped translational mass per control point (x rows).
     let lumped: Vec<f64> = (0..cps)
         .map(|cp| {
@@ -516,15 +516,15 @@ fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, shell: &Shell) -
             (0..cps).map(|c| mass[(r, DOFS_PER_CONTROL_POINT * c)]).sum()
         })
         .collect();
-    classify_lumped(omega2, shapes, &lumped, shell)
+    classify_lumped(omega2, shapes, &lumped, frames)
 }
 
 /// Rigid (`ω² < 1e-12 ω²_max`), bending (the lumped-mass-weighted normal
 /// motion dominates) or membrane, with `lumped` the row-sum translational
 /// mass of every control point.
-pub(crate) fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64], shell: &Shell) -> Vec<ModeKind> {
+pub(crate) fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64], frames: &[Frame]) -> Vec<ModeKind> {
     let max = omega2.iter().copied().fold(0.0f64, f64::max);
-    let cps = shell.control_point_count();
+    let cps = frames.len();
     (0..omega2.len())
         .map(|k| {
             if omega2[k] < 1e-12 * max {
@@ -534,7 +534,7 @@ pub(crate) fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64],
             for cp in 0..cps {
                 let b = DOFS_PER_CONTROL_POINT * cp;
                 let u: Vec3 = [shapes[(b, k)], shapes[(b + 1, k)], shapes[(b + 2, k)]];
-                let un = dot(u, shell.frames()[cp].v3);
+                let un = dot(u, frames[cp].v3);
                 normal += lumped[cp] * un * un;
                 tangential += lumped[cp] * (dot(u, u) - un * un);
             }

@@ -230,6 +230,7 @@ fn field_matrices(
     reduction: &DofReduction,
     pattern: &Arc<Pattern>,
 ) -> Result<(Vec<Vec<SparseTerm>>, Vec<Vec<NonZeros>>), ModelError> {
+    let patch = &model.patches[0];
     let (terms, products): (Vec<_>, Vec<_>) = model
         .stiffness_fields
         .iter()
@@ -240,7 +241,7 @@ fn field_matrices(
             // coefficients of a 20 000-dof deck took 2.5 GB).
             let empty = vec![SparseAccumulator::new(Arc::clone(full)); f.coefficient_count()];
             let accumulated = f
-                .coefficient_matrices_into(&model.shell, &model.material, empty)
+                .coefficient_matrices_into(&patch.shell, &patch.material, empty)
                 .map_err(|source| ModelError::StiffnessField { index, source })?;
             let mut terms = Vec::with_capacity(accumulated.len());
             let mut products = Vec::with_capacity(accumulated.len());
@@ -264,12 +265,17 @@ fn sparse_error(e: SparseError) -> ModelError {
 }
 
 impl SparseModel {
+    /// The sparse model of a single shell ([`ShellModel::single_shell`]).
     pub fn assemble(model: &ShellModel) -> Result<Self, ModelError> {
-        let shell = &model.shell;
+        let patch = model.single_shell().ok_or(ModelError::SinglePatchOnly(
+            "the sparse path (truncated modes, `matrices`)",
+        ))?;
+        model.check_patch_indices()?;
+        let shell = &patch.shell;
         let full = Arc::new(shell.pattern());
         let reduction = DofReduction::new(shell, &model.constraints);
         let pattern = Arc::new(reduction.reduced_pattern(shell));
-        let (k, m) = shell::assemble_sparse(shell, &model.material, &full)?;
+        let (k, m) = shell::assemble_sparse(shell, &patch.material, &full)?;
         let lumped = lumped_translational_mass(&full, &m, shell.control_point_count());
         let owners = owners(&reduction);
         let spring_blocks = model
@@ -447,7 +453,7 @@ impl SparseModel {
         }
         let omega2: Vec<f64> = order.iter().map(|&(b, i)| found[b].omega2[i]).collect();
         let shapes = self.reduction.expand(&reduced);
-        let kinds = classify_lumped(&omega2, &shapes, &self.lumped, &self.shell);
+        let kinds = classify_lumped(&omega2, &shapes, &self.lumped, self.shell.frames());
         let responses = loads.map(|_| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
         Ok((Modes { omega2, shapes, kinds }, responses))
     }
@@ -565,11 +571,10 @@ mod tests {
             .unwrap()
         };
         let model = ShellModel {
-            shell,
-            material,
             springs: vec![spring(0.0, 0.05, 1e9), spring(0.95, 1.0, 3e9)],
             stiffness_fields: Vec::new(),
             constraints: Vec::new(),
+            ..ShellModel::new(shell, material)
         };
         let dense = model.assemble().unwrap();
         let sparse = SparseModel::assemble(&model).unwrap();

@@ -56,11 +56,13 @@ pub fn true_kappa() -> Vec<Vec<f64>> {
 
 pub fn sinello_model() -> ShellModel {
     ShellModel {
-        shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
-        material: sinello_material(),
         springs: sinello_springs(),
         stiffness_fields: vec![],
         constraints: vec![],
+        ..ShellModel::new(
+            Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
+            sinello_material(),
+        )
     }
 }
 
@@ -87,6 +89,7 @@ pub fn sinello_sensors() -> Vec<SensorPoint> {
     SENSOR_XY
         .iter()
         .map(|&(x, y)| SensorPoint {
+            patch: 0,
             xi: x / 16.0,
             eta: y / 9.0,
             tau: 0.5,
@@ -99,14 +102,17 @@ pub fn sinello_sensors() -> Vec<SensorPoint> {
 /// decouples (2 × 3 m, R = 3 m, 0.6 rad, 5 cm, 7 × 6 cubic net).
 pub fn clamped_curved_panel() -> ShellModel {
     ShellModel {
-        shell: Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
-        material: sinello_material(),
         springs: sinello_springs(),
         stiffness_fields: vec![],
         constraints: vec![EdgeConstraint {
             edge: Edge::Eta0,
             kind: SupportKind::Clamped,
+            patch: 0,
         }],
+        ..ShellModel::new(
+            Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
+            sinello_material(),
+        )
     }
 }
 

@@ -109,8 +109,6 @@ fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
     // A simply supported square plate: the first mode (1,1) is 2.5 times
     // below the next ones, so near it the driving-point FRF is SDOF-like.
     let plate = ShellModel {
-        shell: Shell::rectangular_plate(4.0, 4.0, 0.1, [3, 3], [10, 10]).unwrap(),
-        material: OrthotropicMaterial::isotropic(30e9, 0.2, 2400.0).unwrap(),
         springs: vec![],
         stiffness_fields: vec![],
         constraints: [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1]
@@ -118,10 +116,16 @@ fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
             .map(|edge| EdgeConstraint {
                 edge,
                 kind: SupportKind::SimplySupported,
+                patch: 0,
             })
             .collect(),
+        ..ShellModel::new(
+            Shell::rectangular_plate(4.0, 4.0, 0.1, [3, 3], [10, 10]).unwrap(),
+            OrthotropicMaterial::isotropic(30e9, 0.2, 2400.0).unwrap(),
+        )
     };
     let sensor = SensorPoint {
+        patch: 0,
         xi: 0.41,
         eta: 0.37,
         tau: 0.5,

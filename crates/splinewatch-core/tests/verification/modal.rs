@@ -14,7 +14,7 @@ use splinewatch_core::solvers::modal::{self, Modes};
 /// above 1e-6; a shape inside a degenerate cluster is not unique).
 fn compare(asm: &AssembledModel, kappa: &[Vec<f64>], f_max_hz: f64) -> (f64, f64, usize) {
     let k = asm.stiffness_with(kappa).unwrap();
-    let dense: Modes = modal::solve(&k, &asm.mass, &asm.reduction, &asm.shell).unwrap();
+    let dense: Modes = modal::solve(&k, &asm.mass, &asm.reduction, &asm.frames).unwrap();
     let fast = asm.modes_with(kappa).unwrap();
     assert_eq!(dense.len(), fast.len());
     assert_eq!(dense.kinds, fast.kinds);

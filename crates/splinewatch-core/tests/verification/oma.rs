@@ -19,6 +19,7 @@ const FORCE_XY: [(f64, f64); 4] = [(2.0, 1.0), (7.5, 6.5), (13.0, 3.5), (10.0, 8
 fn ambient_model() -> (FrfModel, ModalState) {
     let mut points = sinello_sensors();
     points.extend(FORCE_XY.iter().map(|&(x, y)| SensorPoint {
+        patch: 0,
         xi: x / 16.0,
         eta: y / 9.0,
         tau: 0.5,

@@ -15,7 +15,7 @@ use std::f64::consts::PI;
 fn all_edges(kind: SupportKind) -> Vec<EdgeConstraint> {
     [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1]
         .into_iter()
-        .map(|edge| EdgeConstraint { edge, kind })
+        .map(|edge| EdgeConstraint { edge, kind, patch: 0 })
         .collect()
 }
 
@@ -40,11 +40,13 @@ fn bending_rigidities(mat: &OrthotropicMaterial, h: f64) -> [f64; 4] {
 /// A rectangular plate, degree 4 on a 20 × 14 net, hard simply supported on all edges.
 fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial) -> ShellModel {
     ShellModel {
-        shell: Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
-        material: material.clone(),
         springs: vec![],
         stiffness_fields: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
+        ..ShellModel::new(
+            Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
+            material.clone(),
+        )
     }
 }
 
@@ -149,13 +151,15 @@ fn sparse_path_at_20000_dofs_matches_navier() {
     let (a, b, h) = (16.0, 9.0, 1.6);
     let mat = sinello_material();
     let model = ShellModel {
-        shell: Shell::rectangular_plate(a, b, h, [3, 3], [80, 50]).unwrap(),
-        material: mat.clone(),
         springs: vec![],
         stiffness_fields: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
+        ..ShellModel::new(
+            Shell::rectangular_plate(a, b, h, [3, 3], [80, 50]).unwrap(),
+            mat.clone(),
+        )
     };
-    assert_eq!(model.shell.dof_count(), 20_000);
+    assert_eq!(model.dof_count(), 20_000);
     let exact = mindlin_navier_hz(&mat, (a, b, h), [1.0, 1.0], 20);
     let sparse = SparseModel::assemble(&model).unwrap();
     let modes = sparse.modes_below(&[], &[], 1.02 * exact[19]).unwrap();
@@ -221,11 +225,13 @@ fn donnell_panel(stiffness_fields: Vec<StiffnessField>) -> ShellModel {
     let (e, nu, rho) = DONNELL_MATERIAL;
     let (length, radius, angle, h) = DONNELL_PANEL;
     ShellModel {
-        shell: Shell::cylindrical_panel(length, radius, angle, h, [4, 4], [16, 16]).unwrap(),
-        material: OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
         springs: vec![],
         stiffness_fields,
         constraints: all_edges(SupportKind::ShearDiaphragm),
+        ..ShellModel::new(
+            Shell::cylindrical_panel(length, radius, angle, h, [4, 4], [16, 16]).unwrap(),
+            OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
+        )
     }
 }
 
@@ -324,11 +330,13 @@ fn section_scales_on_a_panel_match_donnell() {
 #[test]
 fn free_plate_has_six_rigid_modes() {
     let model = ShellModel {
-        shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
-        material: sinello_material(),
         springs: vec![],
         stiffness_fields: Vec::new(),
         constraints: vec![],
+        ..ShellModel::new(
+            Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
+            sinello_material(),
+        )
     };
     let modes = model.assemble().unwrap().modes().unwrap();
     let rigid = modes.kinds.iter().filter(|k| **k == ModeKind::Rigid).count();
@@ -339,11 +347,13 @@ fn free_plate_has_six_rigid_modes() {
 #[test]
 fn vertical_springs_leave_three_in_plane_rigid_modes() {
     let model = ShellModel {
-        shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
-        material: sinello_material(),
         springs: sinello_springs(),
         stiffness_fields: Vec::new(),
         constraints: vec![],
+        ..ShellModel::new(
+            Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
+            sinello_material(),
+        )
     };
     let modes = model.assemble().unwrap().modes().unwrap();
     let rigid: Vec<usize> = (0..modes.len())
@@ -366,11 +376,13 @@ fn sinello_deck_has_thirty_modes_below_80_hz() {
     // The documented geometry assumption (16 m × 9 m × 1.6 m) reproduces the
     // paper's statement: 30 flexible modes below 80 Hz, 18 of them bending.
     let model = ShellModel {
-        shell: Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
-        material: sinello_material(),
         springs: sinello_springs(),
         stiffness_fields: Vec::new(),
         constraints: vec![],
+        ..ShellModel::new(
+            Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
+            sinello_material(),
+        )
     };
     let modes = model.assemble().unwrap().modes().unwrap();
     let below: Vec<usize> = (0..modes.len()).filter(|&i| modes.frequency_hz(i) < 80.0).collect();
@@ -445,11 +457,13 @@ fn material_angle_rotates_the_orthotropy() {
     };
     let freqs = |p: OrthotropicParameters| {
         let model = ShellModel {
-            shell: Shell::rectangular_plate(4.0, 3.0, 0.2, [3, 3], [8, 7]).unwrap(),
-            material: OrthotropicMaterial::new(p).unwrap(),
             springs: vec![],
             stiffness_fields: Vec::new(),
             constraints: all_edges(SupportKind::SimplySupported),
+            ..ShellModel::new(
+                Shell::rectangular_plate(4.0, 3.0, 0.2, [3, 3], [8, 7]).unwrap(),
+                OrthotropicMaterial::new(p).unwrap(),
+            )
         };
         bending_frequencies(&model, 8)
     };

@@ -21,7 +21,7 @@
 use crate::geometry::vec3::{dot, normalize, Vec3};
 use crate::linalg::dense_rows;
 use crate::model::damping::DampingCurve;
-use crate::model::shell::Shell;
+use crate::model::patch::{dof_offsets, Patch};
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
@@ -42,6 +42,8 @@ mod truncated;
 pub enum FrfError {
     #[error("sensor {index}: (ξ, η, τ) = ({xi}, {eta}, {tau}) lies outside the shell's parameter domain")]
     SensorOutside { index: usize, xi: f64, eta: f64, tau: f64 },
+    #[error("sensor {index}: patch {patch} does not exist (the model has {count})")]
+    SensorPatch { index: usize, patch: usize, count: usize },
     #[error("sensor {index}: direction must be a finite non-zero vector")]
     SensorDirection { index: usize },
     #[error("{0}")]
@@ -81,6 +83,8 @@ impl Quantity {
 /// A measurement point `P = s(ξ, η, τ)` and direction (eq. 32).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorPoint {
+    /// The patch the point lies on ([`crate::model::patch`]).
+    pub patch: usize,
     pub xi: f64,
     pub eta: f64,
     pub tau: f64,
@@ -154,10 +158,18 @@ impl ModalState {
 }
 
 /// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
-pub fn sensor_rows(shell: &Shell, sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
-    let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
+    let offsets = dof_offsets(patches);
     let mut rows = Vec::with_capacity(sensors.len());
     for (index, s) in sensors.iter().enumerate() {
+        let Some(shell) = patches.get(s.patch).map(|p| &p.shell) else {
+            return Err(FrfError::SensorPatch {
+                index,
+                patch: s.patch,
+                count: patches.len(),
+            });
+        };
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
         if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
             return Err(FrfError::SensorOutside {
                 index,
@@ -170,7 +182,7 @@ pub fn sensor_rows(shell: &Shell, sensors: &[SensorPoint]) -> Result<Vec<Vec<(us
         let row = shell
             .shape_functions(s.xi, s.eta, s.tau)
             .into_iter()
-            .map(|(dof, col)| (dof, dot(dir, col)))
+            .map(|(dof, col)| (offsets[s.patch] + dof, dot(dir, col)))
             .filter(|(_, v)| *v != 0.0)
             .collect();
         rows.push(row);
@@ -208,7 +220,7 @@ static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(0);
 impl FrfModel {
     /// Every mode of the dense model.
     pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
-        let sensor_rows = sensor_rows(&assembled.shell, sensors)?;
+        let sensor_rows = sensor_rows(&assembled.patches, sensors)?;
         Ok(Self::with_source(Source::Dense(Box::new(assembled)), sensor_rows))
     }
 
@@ -219,7 +231,7 @@ impl FrfModel {
         if !(cutoff_hz.is_finite() && cutoff_hz > 0.0) {
             return Err(FrfError::Cutoff(cutoff_hz));
         }
-        let sensor_rows = sensor_rows(&model.shell, sensors)?;
+        let sensor_rows = sensor_rows(&model.patches, sensors)?;
         let source = Source::Truncated {
             model: Box::new(SparseModel::assemble(model)?),
             cutoff_hz,

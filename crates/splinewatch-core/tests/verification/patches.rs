@@ -1,0 +1,140 @@
+//! Multi-patch decks against OpenSees (ShellMITC4 on a converged mesh,
+//! `tests/fixtures/make_opensees_fixtures.py`), and the joints' penalty.
+
+use splinewatch_core::geometry::surface::Direction;
+use splinewatch_core::geometry::vec3::Vec3;
+use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::joints::{find_joints, Joint};
+use splinewatch_core::model::material::OrthotropicMaterial;
+use splinewatch_core::model::patch::Patch;
+use splinewatch_core::model::shell::Shell;
+use splinewatch_core::model::ShellModel;
+use splinewatch_core::solvers::modal::ModeKind;
+
+fn fixture() -> serde_json::Value {
+    serde_json::from_str(include_str!("../fixtures/opensees_decks.json")).unwrap()
+}
+
+fn corners(value: &serde_json::Value) -> [Vec3; 4] {
+    let c: Vec<Vec3> = serde_json::from_value(value.clone()).unwrap();
+    [c[0], c[1], c[2], c[3]]
+}
+
+/// The fixture's deck as B-spline patches (degree 3, `elements` spans per
+/// metre-ish net given per patch), knots inserted at `lines` (η values,
+/// twice: C¹ where a web meets the slab), both ξ ends clamped.
+fn deck(case: &str, nets: &[[usize; 2]], lines: &[Vec<f64>], penalty: f64) -> (ShellModel, Vec<f64>) {
+    let fixture = fixture();
+    let case = &fixture["cases"][case];
+    let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
+    let mut model = ShellModel::new(
+        Shell::rectangular_plate(1.0, 1.0, 1.0, [1, 1], [2, 2]).unwrap(),
+        material.clone(),
+    );
+    model.patches = case["patches"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(nets)
+        .zip(lines)
+        .enumerate()
+        .map(|(k, ((p, &net), lines))| {
+            let t = p["thickness"].as_f64().unwrap();
+            let mut shell = Shell::quadrilateral(corners(&p["corners"]), t, [3, 3], net).unwrap();
+            for &u in lines {
+                shell = shell
+                    .insert_knot(Direction::Eta, u)
+                    .unwrap()
+                    .insert_knot(Direction::Eta, u)
+                    .unwrap();
+            }
+            Patch::new(format!("p{k}"), shell, material.clone()).unwrap()
+        })
+        .collect();
+    model.constraints = (0..model.patches.len())
+        .flat_map(|patch| {
+            [Edge::Xi0, Edge::Xi1].map(|edge| EdgeConstraint {
+                edge,
+                kind: SupportKind::Clamped,
+                patch,
+            })
+        })
+        .collect();
+    model.joints = find_joints(&model.patches, 1e-3);
+    model.joint_penalty = penalty;
+    let reference = case["frequencies_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    (model, reference)
+}
+
+fn first_frequencies(model: &ShellModel, count: usize) -> Vec<f64> {
+    let modes = model.assemble().unwrap().modes().unwrap();
+    assert!(
+        modes.kinds.iter().all(|k| *k != ModeKind::Rigid),
+        "clamped decks have no rigid mode"
+    );
+    modes.frequencies_hz()[..count].to_vec()
+}
+
+fn worst(ours: &[f64], reference: &[f64]) -> f64 {
+    ours.iter()
+        .zip(reference)
+        .map(|(a, b)| (a / b - 1.0).abs())
+        .fold(0.0, f64::max)
+}
+
+fn slab_and_webs(penalty: f64) -> (ShellModel, Vec<f64>) {
+    // The webs hang from the slab's interior lines y = ±2 m: η = 1/6, 5/6.
+    let nets = [[23, 14], [23, 6], [23, 6]];
+    let lines = [vec![1.0 / 6.0, 5.0 / 6.0], vec![], vec![]];
+    deck("slab_and_webs", &nets, &lines, penalty)
+}
+
+/// Two webs under a slab: each web's top edge is found on the slab's
+/// interior line, 20 m long; the first ten modes within 1 % of OpenSees.
+#[test]
+fn a_slab_on_two_webs_matches_opensees() {
+    let (model, reference) = slab_and_webs(splinewatch_core::model::joints::DEFAULT_PENALTY);
+    assert_eq!(model.joints.len(), 2, "{:?}", model.joints);
+    for (j, web) in model.joints.iter().zip([1, 2]) {
+        assert_eq!((j.patch, j.edge, j.other), (web, Edge::Eta0, 0));
+        assert!((j.length - 20.0).abs() < 1e-9);
+    }
+    let ours = first_frequencies(&model, 10);
+    let error = worst(&ours, &reference);
+    eprintln!("slab and webs: ours {ours:.4?}\n opensees {reference:.4?}\n worst {error:.2e}");
+    assert!(error < 0.01, "{error}");
+}
+
+/// A plate skewed by 30°, clamped on its skewed edges: one quadrilateral
+/// patch, the first ten modes within 1 % of OpenSees.
+#[test]
+fn a_skewed_plate_matches_opensees() {
+    let (model, reference) = deck("skewed_plate", &[[19, 14]], &[vec![]], 1e4);
+    assert!(model.joints.is_empty());
+    let ours = first_frequencies(&model, 10);
+    let error = worst(&ours, &reference);
+    eprintln!("skewed plate: ours {ours:.4?}\n opensees {reference:.4?}\n worst {error:.2e}");
+    assert!(error < 0.01, "{error}");
+}
+
+/// The penalty ten times larger moves the first ten modes by less than
+/// 1e-4 (the coupling error decreases like 1/c).
+#[test]
+fn the_joints_do_not_move_the_modes_when_the_penalty_grows_tenfold() {
+    let c = splinewatch_core::model::joints::DEFAULT_PENALTY;
+    let base = first_frequencies(&slab_and_webs(c).0, 10);
+    let stiffer = first_frequencies(&slab_and_webs(10.0 * c).0, 10);
+    let weaker = first_frequencies(&slab_and_webs(0.1 * c).0, 10);
+    let (up, down) = (worst(&base, &stiffer), worst(&weaker, &base));
+    eprintln!("penalty ×10: {up:.2e}, ÷10: {down:.2e}");
+    assert!(up < 1e-4, "{up}");
+    // Unjoined, the webs fall away: the joints carry the deck.
+    let (mut free, _) = slab_and_webs(c);
+    free.joints = Vec::<Joint>::new();
+    assert!(worst(&first_frequencies(&free, 10), &base) > 0.05);
+}

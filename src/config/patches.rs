@@ -1,0 +1,311 @@
+//! Decks of many patches: `[[model.patches]]` with `[model.materials.<name>]`,
+//! `[[model.bearings]]` and `[[model.masses]]`, built into core types; and
+//! where a point given in metres lies on the model.
+
+use super::model::FaceConfig;
+use super::{err, ConfigError};
+use serde::{Deserialize, Serialize};
+use splinewatch_core::geometry::surface::Direction;
+use splinewatch_core::geometry::vec3::Vec3;
+use splinewatch_core::model::bearings::PatchPoint;
+use splinewatch_core::model::material::OrthotropicMaterial;
+use splinewatch_core::model::patch::Patch;
+use splinewatch_core::model::shell::Shell;
+use std::collections::BTreeMap;
+
+/// `[[model.patches]]`: one B-spline patch with its own net and material.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PatchConfig {
+    pub name: String,
+    /// A name from `[model.materials]`.
+    pub material: String,
+    /// m.
+    pub thickness: f64,
+    /// B-spline degrees `[p, q]` along ξ and η.
+    pub degree: [usize; 2],
+    /// Control points `[m, n]` along ξ and η (uniform clamped knots).
+    pub control_points: [usize; 2],
+    #[serde(default)]
+    pub insert_knots_xi: Vec<f64>,
+    #[serde(default)]
+    pub insert_knots_eta: Vec<f64>,
+    /// kg/m² on the mid-surface: pavement, ballast, services.
+    #[serde(default)]
+    pub non_structural_mass: f64,
+    pub geometry: PatchGeometryConfig,
+}
+
+/// `[model.patches.geometry]`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum PatchGeometryConfig {
+    /// Four corners, (ξ=0,η=0), (ξ=1,η=0), (ξ=1,η=1), (ξ=0,η=1), mapped bilinearly.
+    Quadrilateral { corners: [Vec3; 4] },
+    /// `[0, length] × [0, width]` in the xy plane from `origin`.
+    RectangularPlate {
+        length: f64,
+        width: f64,
+        #[serde(default)]
+        origin: Vec3,
+    },
+    /// A circular-cylindrical panel, axis along x, crown at `origin`.
+    CylindricalPanel {
+        length: f64,
+        radius: f64,
+        angle_deg: f64,
+        #[serde(default)]
+        origin: Vec3,
+    },
+}
+
+/// `[[model.bearings]]`: a discrete elastic bearing.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BearingConfig {
+    pub name: String,
+    /// m: on or under a patch.
+    pub at: Vec3,
+    /// The patch it supports (default: the nearest).
+    pub patch: Option<String>,
+    /// The face it acts on (default: the bottom).
+    #[serde(default = "bottom")]
+    pub surface: FaceConfig,
+    /// `[k_x, k_y, k_z]` in N/m, along the global axes.
+    pub stiffness: [f64; 3],
+    /// `[lower, upper]` for each of k_x, k_y, k_z when updating.
+    pub bounds: Option<[f64; 2]>,
+    #[serde(default = "super::model::default_true")]
+    pub update: bool,
+}
+
+fn bottom() -> FaceConfig {
+    FaceConfig::Bottom
+}
+
+/// `[[model.masses]]`: a point mass at the mid-surface.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MassConfig {
+    /// m.
+    pub at: Vec3,
+    /// kg.
+    pub mass: f64,
+    pub patch: Option<String>,
+}
+
+/// How far (m) from a patch's mid-surface a point given in metres may lie
+/// (beyond half the thickness).
+pub const MAX_DISTANCE: f64 = 0.5;
+
+/// Builds the patches of `[[model.patches]]`.
+pub fn build_patches(
+    patches: &[PatchConfig],
+    materials: &BTreeMap<String, splinewatch_core::model::material::OrthotropicParameters>,
+) -> Result<Vec<Patch>, ConfigError> {
+    let mut out: Vec<Patch> = Vec::with_capacity(patches.len());
+    for (i, p) in patches.iter().enumerate() {
+        let key = |k: &str| format!("model.patches[{i}].{k}");
+        if out.iter().any(|q| q.name() == p.name) {
+            return Err(err(key("name"), format!("{:?} names two patches", p.name)));
+        }
+        let parameters = materials.get(&p.material).ok_or_else(|| {
+            err(
+                key("material"),
+                format!(
+                    "{:?} is not in [model.materials] (known: {:?})",
+                    p.material,
+                    materials.keys().collect::<Vec<_>>()
+                ),
+            )
+        })?;
+        let material =
+            OrthotropicMaterial::new(*parameters).map_err(|e| err(format!("model.materials.{}", p.material), e))?;
+        let shell = build_shell(p).map_err(|(k, e)| err(key(k), e))?;
+        let patch = Patch::new(&p.name, shell, material)
+            .and_then(|patch| patch.with_non_structural_mass(p.non_structural_mass))
+            .map_err(|e| err(key("non_structural_mass"), e))?;
+        out.push(patch);
+    }
+    Ok(out)
+}
+
+fn build_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
+    let translated = |shell: Shell, origin: Vec3| shell.translated(origin);
+    let shell = match p.geometry {
+        PatchGeometryConfig::Quadrilateral { corners } => {
+            Shell::quadrilateral(corners, p.thickness, p.degree, p.control_points)
+        }
+        PatchGeometryConfig::RectangularPlate { length, width, origin } => {
+            Shell::rectangular_plate(length, width, p.thickness, p.degree, p.control_points)
+                .and_then(|s| translated(s, origin))
+        }
+        PatchGeometryConfig::CylindricalPanel {
+            length,
+            radius,
+            angle_deg,
+            origin,
+        } => Shell::cylindrical_panel(
+            length,
+            radius,
+            angle_deg.to_radians(),
+            p.thickness,
+            p.degree,
+            p.control_points,
+        )
+        .and_then(|s| translated(s, origin)),
+    }
+    .map_err(|e| ("geometry", e.to_string()))?;
+    let mut shell = shell;
+    for (key, direction, knots) in [
+        ("insert_knots_xi", Direction::Xi, &p.insert_knots_xi),
+        ("insert_knots_eta", Direction::Eta, &p.insert_knots_eta),
+    ] {
+        for &u in knots {
+            shell = shell.insert_knot(direction, u).map_err(|e| {
+                (
+                    key,
+                    format!("cannot insert {u}: {e} (knots must lie strictly inside (0, 1))"),
+                )
+            })?;
+        }
+    }
+    Ok(shell)
+}
+
+/// The patch index a `patch = "name"` key names; with no name, the only
+/// patch (an error naming `key` when there are several).
+pub fn patch_index(patches: &[Patch], name: Option<&str>, key: &str) -> Result<usize, ConfigError> {
+    match name {
+        Some(name) => patches.iter().position(|p| p.name() == name).ok_or_else(|| {
+            err(
+                key,
+                format!(
+                    "{name:?} is not a patch (patches: {:?})",
+                    patches.iter().map(Patch::name).collect::<Vec<_>>()
+                ),
+            )
+        }),
+        None if patches.len() == 1 => Ok(0),
+        None => Err(err(
+            key,
+            format!("the model has {} patches: name one with `patch = \"…\"`", patches.len()),
+        )),
+    }
+}
+
+/// The point of the named patch (or of the nearest one) nearest to `at`,
+/// at face `tau`; an error naming `key` when it is farther than
+/// [`MAX_DISTANCE`] beyond the patch's half thickness.
+pub fn locate(
+    patches: &[Patch],
+    patch: Option<usize>,
+    at: Vec3,
+    tau: f64,
+    key: &str,
+) -> Result<PatchPoint, ConfigError> {
+    let candidates: Vec<usize> = patch.map_or_else(|| (0..patches.len()).collect(), |k| vec![k]);
+    let (best, (xi, eta, distance)) = candidates
+        .into_iter()
+        .map(|k| (k, patches[k].shell.surface().closest_point(at)))
+        .min_by(|a, b| a.1 .2.total_cmp(&b.1 .2))
+        .ok_or_else(|| err(key, "the model has no patch"))?;
+    let half = 0.5 * patches[best].shell.thickness().iter().copied().fold(0.0, f64::max);
+    if distance.is_nan() || distance > MAX_DISTANCE + half {
+        return Err(err(
+            key,
+            format!(
+                "({}, {}, {}) m is {distance:.3} m from the nearest patch ({:?}): more than {MAX_DISTANCE} m off every patch",
+                at[0],
+                at[1],
+                at[2],
+                patches[best].name()
+            ),
+        ));
+    }
+    Ok(PatchPoint {
+        patch: best,
+        xi,
+        eta,
+        tau,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::Config;
+
+    const DECK: &str = include_str!("../../tests/fixtures/slab_on_webs.toml");
+
+    /// A patch away from the deck: joined to nothing, supported by nothing.
+    const FLOATING: &str = r#"
+[[model.patches]]
+name = "floating"
+material = "concrete"
+thickness = 0.2
+degree = [2, 2]
+control_points = [3, 3]
+[model.patches.geometry]
+kind = "rectangular_plate"
+length = 2.0
+width = 2.0
+origin = [30.0, 0.0, 0.0]
+"#;
+
+    fn message(text: &str) -> String {
+        match Config::from_toml(text).and_then(|c| c.validate()) {
+            Ok(()) => panic!("accepted: {}", &text[text.len().saturating_sub(200)..]),
+            Err(e) => e.to_string(),
+        }
+    }
+
+    #[test]
+    fn a_deck_of_patches_becomes_a_model_with_joints_bearings_and_sensors() {
+        let config = Config::from_toml(DECK).unwrap();
+        config.validate().unwrap();
+        let model = config.build_model().unwrap();
+        assert_eq!(model.patches.len(), 3);
+        assert_eq!(model.joints.len(), 2);
+        assert_eq!(model.bearings.len(), 4);
+        // The bearings sit under the webs' bottom edges (η = 1), at the ends.
+        let first = model.bearings[0].at();
+        assert_eq!((first.patch, first.xi, first.eta, first.tau), (1, 0.0, 1.0, 0.0));
+        let sensors = config.build_sensors(&model).unwrap();
+        assert_eq!((sensors[0].1.patch, sensors[1].1.patch), (0, 2));
+        assert!((sensors[0].1.xi - 0.5).abs() < 1e-9 && (sensors[0].1.eta - 1.0 / 6.0).abs() < 1e-9);
+        let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
+        assert_eq!(names[..3], ["west_south.kx", "west_south.ky", "west_south.kz"]);
+        // κ: no spring fields, then the four bearings.
+        assert_eq!(model.spring_coefficients().len(), 4);
+        let modes = model.assemble().unwrap().modes().unwrap();
+        let f = modes.frequencies_hz();
+        assert!(f[0] > 1.0 && f[0] < 30.0, "{f:?}");
+    }
+
+    #[test]
+    fn bad_decks_name_their_key() {
+        let cases = [
+            (DECK.replacen("material = \"concrete\"", "material = \"steel\"", 1), "model.patches[0].material"),
+            (DECK.replacen("name = \"web_north\"", "name = \"slab\"", 1), "model.patches[2].name"),
+            (format!("{DECK}\n{FLOATING}"), "model.patches[3]"),
+            (DECK.replacen("at = [0.0, -2.0, -1.5]", "at = [0.0, -2.0, -4.0]", 1), "model.bearings[0].at"),
+            (
+                DECK.replacen("x = 10.0\ny = -2.0\nz = 0.1", "x = 10.0\ny = -2.0", 1),
+                "sensors[0].z",
+            ),
+            (DECK.replacen("patch = \"web_north\"", "patch = \"web_west\"", 1), "sensors[1].patch"),
+            (
+                format!("{DECK}\n[[model.constraints]]\nedge = \"xi0\"\nkind = \"clamped\"\n"),
+                "model.constraints[0].patch",
+            ),
+            (
+                format!("{DECK}\n[model.geometry]\nkind = \"rectangular_plate\"\nlength = 1.0\nwidth = 1.0\nthickness = 0.1\n"),
+                "model.patches",
+            ),
+        ];
+        for (text, key) in cases {
+            let e = message(&text);
+            assert!(e.contains(key), "{key}: {e}");
+        }
+    }
+}
