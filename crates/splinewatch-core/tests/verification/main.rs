@@ -6,6 +6,7 @@ mod modal;
 mod modal_residual;
 mod modal_sensitivity;
 mod oma;
+mod patches;
 mod shell;
 mod simulate;
 mod stiffness_field;
