@@ -190,7 +190,9 @@ impl Config {
         self.update_settings()?;
         // The sampling rate is only known from the data; check with a nominal one.
         self.welch_settings(256.0)?;
-        if self.is_output_only() || self.oma != OmaConfig::default() {
+        // A config without sensors serves the model's own commands (`modes`,
+        // `check-config`, `matrices`); those that need sensors say so.
+        if !self.sensors.is_empty() && (self.is_output_only() || self.oma != OmaConfig::default()) {
             self.oma_settings()?;
         }
         self.validate_monitoring()?;

@@ -305,3 +305,43 @@ fn bad_frf_files_are_clear_errors_not_panics() {
         assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     }
 }
+
+/// Issue 30: a deck of several patches. `check-config` lists the bundled
+/// overpass's patches and the 14 joints it finds (seven webs under the top
+/// slab and on the soffit); `modes` on a slab on two webs with no sensor
+/// lists its joints on stderr and its modes on stdout.
+#[test]
+fn issue_30_decks_of_several_patches_list_their_joints() {
+    let out = splinewatch(&["check-config", "config/overpass.toml"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("patch ")).count(), 9, "{text}");
+    let joints: Vec<&str> = text.lines().filter(|l| l.starts_with("joint: ")).collect();
+    assert_eq!(joints.len(), 14, "{text}");
+    assert!(
+        joints.contains(&"joint: web_4 edge eta0 on top_slab, 80.800 m"),
+        "{text}"
+    );
+
+    let dir = fresh_dir("issue_30_modes");
+    let deck =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/slab_on_webs.toml")).unwrap();
+    let no_sensors = deck.split("[[sensors]]").next().unwrap();
+    let path = temp_config(&dir, "deck.toml", no_sensors);
+    let out = splinewatch(&["modes", "--config", path.to_str().unwrap(), "--count", "6", "--json"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("joint: web_south edge eta0 on slab, 20.000 m"),
+        "{stderr}"
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let f: Vec<f64> = v["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["frequency_hz"].as_f64().unwrap())
+        .collect();
+    assert_eq!(f.len(), 6);
+    assert!(f[0] > 1.0 && f.windows(2).all(|w| w[0] <= w[1]), "{f:?}");
+}
