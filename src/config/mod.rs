@@ -20,13 +20,14 @@ mod zenoh;
 
 pub use frf::FrfConfig;
 pub use model::{
-    ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, FaceConfig, GeometryConfig,
-    ModelConfig, ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig,
-    SupportConfig, AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
+    ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,
+    ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
+    AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
 };
 pub use monitoring::MonitoringConfig;
 pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
+pub use patches::FaceConfig;
 pub use schedule::ScheduleConfig;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};

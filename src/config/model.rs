@@ -1,7 +1,9 @@
 //! `[model]` and `[[sensors]]`: the shell, its material, springs,
 //! constraints, damping curve and measurement points, built into core types.
 
-use super::patches::{build_patches, locate, patch_index, BearingConfig, MassConfig, PatchConfig};
+use super::patches::{
+    build_patches, default_true, face_tau, locate, patch_index, BearingConfig, FaceConfig, MassConfig, PatchConfig,
+};
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::geometry::knots::KnotVector;
@@ -207,28 +209,6 @@ pub enum DirectionConfig {
     Named(String),
     /// A vector in the global frame (normalised on load).
     Vector([f64; 3]),
-}
-
-/// τ of a face: 0 bottom, ½ middle, 1 top.
-pub fn face_tau(face: FaceConfig) -> f64 {
-    match face {
-        FaceConfig::Bottom => 0.0,
-        FaceConfig::Middle => 0.5,
-        FaceConfig::Top => 1.0,
-    }
-}
-
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum FaceConfig {
-    Bottom,
-    #[serde(alias = "mid")]
-    Middle,
-    Top,
-}
-
-pub(crate) fn default_true() -> bool {
-    true
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]

@@ -2,10 +2,11 @@
 //! `[[model.bearings]]` and `[[model.masses]]`, built into core types; and
 //! where a point given in metres lies on the model.
 
-use super::model::FaceConfig;
 use super::{err, ConfigError};
 use serde::{Deserialize, Serialize};
+use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::geometry::surface::Direction;
+use splinewatch_core::geometry::swept::{swept_surface, Centreline};
 use splinewatch_core::geometry::vec3::Vec3;
 use splinewatch_core::model::bearings::PatchPoint;
 use splinewatch_core::model::material::OrthotropicMaterial;
@@ -42,6 +43,13 @@ pub struct PatchConfig {
 pub enum PatchGeometryConfig {
     /// Four corners, (ξ=0,η=0), (ξ=1,η=0), (ξ=1,η=1), (ξ=0,η=1), mapped bilinearly.
     Quadrilateral { corners: [Vec3; 4] },
+    /// A straight section segment `[[a0, b0], [a1, b1]]` (lateral, vertical)
+    /// swept along a `centreline` interpolated by a B-spline of the patch's
+    /// ξ degree: decks curved in plan or in elevation, their webs and slabs.
+    Swept {
+        centreline: Vec<Vec3>,
+        section: [[f64; 2]; 2],
+    },
     /// `[0, length] × [0, width]` in the xy plane from `origin`.
     RectangularPlate {
         length: f64,
@@ -75,7 +83,7 @@ pub struct BearingConfig {
     pub stiffness: [f64; 3],
     /// `[lower, upper]` for each of k_x, k_y, k_z when updating.
     pub bounds: Option<[f64; 2]>,
-    #[serde(default = "super::model::default_true")]
+    #[serde(default = "default_true")]
     pub update: bool,
 }
 
@@ -92,6 +100,28 @@ pub struct MassConfig {
     /// kg.
     pub mass: f64,
     pub patch: Option<String>,
+}
+
+/// τ of a face: 0 bottom, ½ middle, 1 top.
+pub fn face_tau(face: FaceConfig) -> f64 {
+    match face {
+        FaceConfig::Bottom => 0.0,
+        FaceConfig::Middle => 0.5,
+        FaceConfig::Top => 1.0,
+    }
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FaceConfig {
+    Bottom,
+    #[serde(alias = "mid")]
+    Middle,
+    Top,
+}
+
+pub fn default_true() -> bool {
+    true
 }
 
 /// How far (m) from a patch's mid-surface a point given in metres may lie
@@ -132,15 +162,16 @@ pub fn build_patches(
 
 fn build_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
     let translated = |shell: Shell, origin: Vec3| shell.translated(origin);
-    let shell = match p.geometry {
-        PatchGeometryConfig::Quadrilateral { corners } => {
+    let shell = match &p.geometry {
+        PatchGeometryConfig::Swept { centreline, section } => return swept_shell(p, centreline, *section),
+        &PatchGeometryConfig::Quadrilateral { corners } => {
             Shell::quadrilateral(corners, p.thickness, p.degree, p.control_points)
         }
-        PatchGeometryConfig::RectangularPlate { length, width, origin } => {
+        &PatchGeometryConfig::RectangularPlate { length, width, origin } => {
             Shell::rectangular_plate(length, width, p.thickness, p.degree, p.control_points)
                 .and_then(|s| translated(s, origin))
         }
-        PatchGeometryConfig::CylindricalPanel {
+        &PatchGeometryConfig::CylindricalPanel {
             length,
             radius,
             angle_deg,
@@ -156,6 +187,25 @@ fn build_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
         .and_then(|s| translated(s, origin)),
     }
     .map_err(|e| ("geometry", e.to_string()))?;
+    refine(p, shell)
+}
+
+/// A swept patch on its analysis net, refined.
+fn swept_shell(p: &PatchConfig, centreline: &[Vec3], section: [[f64; 2]; 2]) -> Result<Shell, (&'static str, String)> {
+    let curve = Centreline::interpolate(centreline, p.degree[0]).map_err(|e| ("geometry.centreline", e.to_string()))?;
+    let [m, n] = p.control_points;
+    let xi = KnotVector::uniform(p.degree[0], m, 0.0, 1.0).map_err(|e| ("control_points", e.to_string()))?;
+    let eta = KnotVector::uniform(p.degree[1], n, 0.0, 1.0).map_err(|e| ("control_points", e.to_string()))?;
+    let surface = swept_surface(&curve, section, xi, eta).map_err(|e| ("geometry", e.to_string()))?;
+    if !(p.thickness.is_finite() && p.thickness > 0.0) {
+        return Err(("thickness", format!("must be finite and positive, got {}", p.thickness)));
+    }
+    let shell = Shell::new(surface, vec![p.thickness; m * n]).map_err(|e| ("geometry", e.to_string()))?;
+    refine(p, shell)
+}
+
+/// The patch's knot insertions.
+fn refine(p: &PatchConfig, shell: Shell) -> Result<Shell, (&'static str, String)> {
     let mut shell = shell;
     for (key, direction, knots) in [
         ("insert_knots_xi", Direction::Xi, &p.insert_knots_xi),
