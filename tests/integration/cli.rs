@@ -345,3 +345,73 @@ fn issue_30_decks_of_several_patches_list_their_joints() {
     assert_eq!(f.len(), 6);
     assert!(f[0] > 1.0 && f.windows(2).all(|w| w[0] <= w[1]), "{f:?}");
 }
+
+/// Issue 30: FRF updating on a deck of several patches. The slab on two webs
+/// with its first bearing stiffened from 2e9 to 3e9 N/m vertically: `synth`
+/// (1 % noise) then `update` from the config's values finds `west_south.kz`
+/// within 0.5 % and keeps the horizontal stiffnesses near their value.
+#[test]
+fn issue_30_a_stiffened_bearing_is_found_on_a_deck_of_patches() {
+    let dir = fresh_dir("issue_30_bearing");
+    let start = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/slab_on_webs_measured.toml"
+    ))
+    .unwrap();
+    let truth = start.replacen(
+        "stiffness = [1e8, 1e8, 2e9]\nbounds",
+        "stiffness = [1e8, 1e8, 3e9]\nbounds",
+        1,
+    );
+    assert_ne!(truth, start);
+    let (start, truth) = (
+        temp_config(&dir, "start.toml", &start),
+        temp_config(&dir, "truth.toml", &truth),
+    );
+    let frf = dir.join("frf.json");
+    let out = splinewatch(&[
+        "synth",
+        "--config",
+        truth.to_str().unwrap(),
+        "--inputs",
+        "P1",
+        "--outputs",
+        "P1,P2,P3,P4",
+        "--from",
+        "2",
+        "--to",
+        "40",
+        "--step",
+        "0.1",
+        "--noise",
+        "0.01",
+        "--seed",
+        "3",
+        "--out",
+        frf.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = splinewatch(&[
+        "update",
+        "--config",
+        start.to_str().unwrap(),
+        "--frf",
+        frf.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let value = |name: &str| {
+        v["parameters"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|p| p["name"] == name)
+            .unwrap()["value"]
+            .as_f64()
+            .unwrap()
+    };
+    assert_eq!(v["converged"], true);
+    assert!((value("west_south.kz") / 3e9 - 1.0).abs() < 5e-3, "{v}");
+    assert!((value("west_south.kx") / 1e8 - 1.0).abs() < 0.02, "{v}");
+}
