@@ -11,7 +11,7 @@ use splinewatch_core::geometry::surface::Direction;
 use splinewatch_core::model::bearings::{Bearing, PointMass};
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::damping::DampingCurve;
-use splinewatch_core::model::joints::find_joints;
+use splinewatch_core::model::joints::{find_joints, find_overlap};
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::{Shell, ShellError};
@@ -537,6 +537,16 @@ impl Config {
             )),
             (false, false) => {
                 let patches = build_patches(&m.patches, &m.materials)?;
+                if let Some((a, b)) = find_overlap(&patches, m.joint_tolerance) {
+                    return Err(err(
+                        format!("model.patches[{a}]"),
+                        format!(
+                            "patch {:?} lies on patch {:?} (overlapping patches count the same material twice)",
+                            patches[a].name(),
+                            patches[b].name()
+                        ),
+                    ));
+                }
                 let total: usize = patches.iter().map(|p| p.shell.control_point_count()).sum();
                 if total > MAX_DENSE_CONTROL_POINTS {
                     return Err(err(

@@ -21,8 +21,8 @@ pub struct PatchConfig {
     pub name: String,
     /// A name from `[model.materials]`.
     pub material: String,
-    /// m.
-    pub thickness: f64,
+    /// m: a number, or a B-spline field over the patch (haunches, tapered webs).
+    pub thickness: ThicknessConfig,
     /// B-spline degrees `[p, q]` along ξ and η.
     pub degree: [usize; 2],
     /// Control points `[m, n]` along ξ and η (uniform clamped knots).
@@ -35,6 +35,63 @@ pub struct PatchConfig {
     #[serde(default)]
     pub non_structural_mass: f64,
     pub geometry: PatchGeometryConfig,
+}
+
+/// A patch's thickness: constant, or `{ knots_xi, degree_xi, knots_eta,
+/// degree_eta, values }` (η fastest), sampled at the analysis net's
+/// Greville abscissae (a linear taper is reproduced exactly).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum ThicknessConfig {
+    Constant(f64),
+    Field {
+        knots_xi: Vec<f64>,
+        degree_xi: usize,
+        knots_eta: Vec<f64>,
+        degree_eta: usize,
+        values: Vec<f64>,
+    },
+}
+
+impl ThicknessConfig {
+    /// The thickness at every control point of `shell`'s net.
+    fn per_control_point(&self, shell: &Shell) -> Result<Vec<f64>, (&'static str, String)> {
+        let count = shell.control_point_count();
+        let (knots_xi, degree_xi, knots_eta, degree_eta, values) = match self {
+            ThicknessConfig::Constant(t) => return Ok(vec![*t; count]),
+            ThicknessConfig::Field {
+                knots_xi,
+                degree_xi,
+                knots_eta,
+                degree_eta,
+                values,
+            } => (knots_xi, *degree_xi, knots_eta, *degree_eta, values),
+        };
+        let kx = KnotVector::new(knots_xi.clone(), degree_xi).map_err(|e| ("thickness.knots_xi", e.to_string()))?;
+        let ke = KnotVector::new(knots_eta.clone(), degree_eta).map_err(|e| ("thickness.knots_eta", e.to_string()))?;
+        if values.len() != kx.basis_count() * ke.basis_count() {
+            return Err((
+                "thickness.values",
+                format!(
+                    "{} values given, the knot vectors need {} × {}",
+                    values.len(),
+                    kx.basis_count(),
+                    ke.basis_count()
+                ),
+            ));
+        }
+        let surface = shell.surface();
+        let (gx, ge) = (surface.xi().greville(), surface.eta().greville());
+        let mut basis = Vec::new();
+        let mut out = Vec::with_capacity(count);
+        for &u in &gx {
+            for &v in &ge {
+                kx.tensor_basis_into(&ke, u, v, &mut basis);
+                out.push(basis.iter().map(|&(k, b)| b * values[k]).sum());
+            }
+        }
+        Ok(out)
+    }
 }
 
 /// `[model.patches.geometry]`.
@@ -165,26 +222,18 @@ fn build_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
     let shell = match &p.geometry {
         PatchGeometryConfig::Swept { centreline, section } => return swept_shell(p, centreline, *section),
         &PatchGeometryConfig::Quadrilateral { corners } => {
-            Shell::quadrilateral(corners, p.thickness, p.degree, p.control_points)
+            Shell::quadrilateral(corners, 1.0, p.degree, p.control_points)
         }
         &PatchGeometryConfig::RectangularPlate { length, width, origin } => {
-            Shell::rectangular_plate(length, width, p.thickness, p.degree, p.control_points)
-                .and_then(|s| translated(s, origin))
+            Shell::rectangular_plate(length, width, 1.0, p.degree, p.control_points).and_then(|s| translated(s, origin))
         }
         &PatchGeometryConfig::CylindricalPanel {
             length,
             radius,
             angle_deg,
             origin,
-        } => Shell::cylindrical_panel(
-            length,
-            radius,
-            angle_deg.to_radians(),
-            p.thickness,
-            p.degree,
-            p.control_points,
-        )
-        .and_then(|s| translated(s, origin)),
+        } => Shell::cylindrical_panel(length, radius, angle_deg.to_radians(), 1.0, p.degree, p.control_points)
+            .and_then(|s| translated(s, origin)),
     }
     .map_err(|e| ("geometry", e.to_string()))?;
     refine(p, shell)
@@ -197,10 +246,7 @@ fn swept_shell(p: &PatchConfig, centreline: &[Vec3], section: [[f64; 2]; 2]) -> 
     let xi = KnotVector::uniform(p.degree[0], m, 0.0, 1.0).map_err(|e| ("control_points", e.to_string()))?;
     let eta = KnotVector::uniform(p.degree[1], n, 0.0, 1.0).map_err(|e| ("control_points", e.to_string()))?;
     let surface = swept_surface(&curve, section, xi, eta).map_err(|e| ("geometry", e.to_string()))?;
-    if !(p.thickness.is_finite() && p.thickness > 0.0) {
-        return Err(("thickness", format!("must be finite and positive, got {}", p.thickness)));
-    }
-    let shell = Shell::new(surface, vec![p.thickness; m * n]).map_err(|e| ("geometry", e.to_string()))?;
+    let shell = Shell::new(surface, vec![1.0; m * n]).map_err(|e| ("geometry", e.to_string()))?;
     refine(p, shell)
 }
 
@@ -220,7 +266,10 @@ fn refine(p: &PatchConfig, shell: Shell) -> Result<Shell, (&'static str, String)
             })?;
         }
     }
-    Ok(shell)
+    let thickness = p.thickness.per_control_point(&shell)?;
+    shell
+        .with_thickness(thickness)
+        .map_err(|e| ("thickness", e.to_string()))
 }
 
 /// The patch index a `patch = "name"` key names; with no name, the only
@@ -333,11 +382,35 @@ origin = [30.0, 0.0, 0.0]
     }
 
     #[test]
+    fn a_web_tapers_by_a_thickness_field() {
+        // The south web 0.25 m at the slab, 0.35 m at its bottom edge.
+        let tapered = DECK.replacen(
+            "thickness = 0.25",
+            "thickness = { knots_xi = [0.0, 1.0], degree_xi = 0, knots_eta = [0.0, 0.0, 1.0, 1.0], degree_eta = 1, values = [0.25, 0.35] }",
+            1,
+        );
+        let model = Config::from_toml(&tapered).unwrap().build_model().unwrap();
+        let web = &model.patches[1].shell;
+        let (m, n) = web.surface().net_size();
+        let t = web.thickness();
+        assert!(
+            (t[0] - 0.25).abs() < 1e-12 && (t[n - 1] - 0.35).abs() < 1e-12 && (t[(m - 1) * n + 1] - 0.3).abs() < 1e-12
+        );
+        let wrong = tapered.replace("values = [0.25, 0.35]", "values = [0.25]");
+        let e = Config::from_toml(&wrong)
+            .and_then(|c| c.validate())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("model.patches[1].thickness.values"), "{e}");
+    }
+
+    #[test]
     fn bad_decks_name_their_key() {
         let cases = [
             (DECK.replacen("material = \"concrete\"", "material = \"steel\"", 1), "model.patches[0].material"),
             (DECK.replacen("name = \"web_north\"", "name = \"slab\"", 1), "model.patches[2].name"),
             (format!("{DECK}\n{FLOATING}"), "model.patches[3]"),
+            (format!("{DECK}\n{}", FLOATING.replace("origin = [30.0, 0.0, 0.0]", "origin = [5.0, -1.0, 0.0]")), "lies on patch"),
             (DECK.replacen("at = [0.0, -2.0, -1.5]", "at = [0.0, -2.0, -4.0]", 1), "model.bearings[0].at"),
             (
                 DECK.replacen("x = 10.0\ny = -2.0\nz = 0.1", "x = 10.0\ny = -2.0", 1),

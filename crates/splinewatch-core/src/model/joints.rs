@@ -113,6 +113,31 @@ pub fn find_joints(patches: &[Patch], tolerance: f64) -> Vec<Joint> {
     joints
 }
 
+/// The first pair `(a, b)` where patch `a` lies on patch `b` (nine interior
+/// points of `a` within `tolerance` of `b`'s mid-surface): overlapping
+/// patches, which would count the same material twice.
+pub fn find_overlap(patches: &[Patch], tolerance: f64) -> Option<(usize, usize)> {
+    let inside = [0.25, 0.5, 0.75];
+    for (a, pa) in patches.iter().enumerate() {
+        let s = pa.shell.surface();
+        let ((u0, u1), (v0, v1)) = (s.xi().domain(), s.eta().domain());
+        let points: Vec<Vec3> = inside
+            .iter()
+            .flat_map(|&u| inside.iter().map(move |&v| (u, v)))
+            .map(|(u, v)| s.evaluate(u0 + u * (u1 - u0), v0 + v * (v1 - v0)).r)
+            .collect();
+        for (b, pb) in patches.iter().enumerate().filter(|&(b, _)| b != a) {
+            if points
+                .iter()
+                .all(|&x| pb.shell.surface().closest_point(x).2 <= tolerance)
+            {
+                return Some((a, b));
+            }
+        }
+    }
+    None
+}
+
 fn edge_length(shell: &Shell, edge: Edge) -> f64 {
     let gauss = GaussLegendre::new(along(shell, edge).degree() + 2);
     let breaks = along(shell, edge).breakpoints();

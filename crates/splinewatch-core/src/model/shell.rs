@@ -227,6 +227,11 @@ impl Shell {
         Self::new(surface, vec![thickness; count])
     }
 
+    /// The same mid-surface with the thickness `thickness` per control point.
+    pub fn with_thickness(&self, thickness: Vec<f64>) -> Result<Self, ShellError> {
+        Self::new(self.surface.clone(), thickness)
+    }
+
     /// The same shell moved by `by` (m).
     pub fn translated(&self, by: Vec3) -> Result<Self, ShellError> {
         let s = &self.surface;
