@@ -5,7 +5,7 @@
 use super::{err, ConfigError};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::geometry::knots::KnotVector;
-use splinewatch_core::geometry::surface::Direction;
+use splinewatch_core::geometry::surface::{BSplineSurface, Direction};
 use splinewatch_core::geometry::swept::{swept_surface, Centreline};
 use splinewatch_core::geometry::vec3::Vec3;
 use splinewatch_core::model::bearings::PatchPoint;
@@ -106,6 +106,17 @@ pub enum PatchGeometryConfig {
     Swept {
         centreline: Vec<Vec3>,
         section: [[f64; 2]; 2],
+    },
+    /// A B-spline surface from CAD: `degree_xi`, `degree_eta`, clamped
+    /// `knots_xi`, `knots_eta`, `control_points` (η fastest, `[x, y, z]` or
+    /// `[x, y, z, w]` with equal weights), refined to the patch's analysis
+    /// net by knot insertion (the geometry unchanged).
+    Nurbs {
+        degree_xi: usize,
+        degree_eta: usize,
+        knots_xi: Vec<f64>,
+        knots_eta: Vec<f64>,
+        control_points: Vec<Vec<f64>>,
     },
     /// `[0, length] × [0, width]` in the xy plane from `origin`.
     RectangularPlate {
@@ -221,6 +232,7 @@ fn build_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
     let translated = |shell: Shell, origin: Vec3| shell.translated(origin);
     let shell = match &p.geometry {
         PatchGeometryConfig::Swept { centreline, section } => return swept_shell(p, centreline, *section),
+        PatchGeometryConfig::Nurbs { .. } => return refine(p, nurbs_shell(p)?),
         &PatchGeometryConfig::Quadrilateral { corners } => {
             Shell::quadrilateral(corners, 1.0, p.degree, p.control_points)
         }
@@ -248,6 +260,102 @@ fn swept_shell(p: &PatchConfig, centreline: &[Vec3], section: [[f64; 2]; 2]) -> 
     let surface = swept_surface(&curve, section, xi, eta).map_err(|e| ("geometry", e.to_string()))?;
     let shell = Shell::new(surface, vec![1.0; m * n]).map_err(|e| ("geometry", e.to_string()))?;
     refine(p, shell)
+}
+
+/// A CAD surface (equal weights: a B-spline) refined to the patch's
+/// `degree` and `control_points` by inserting the midpoint of its longest
+/// span until the net has the requested size.
+fn nurbs_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
+    let PatchGeometryConfig::Nurbs {
+        degree_xi,
+        degree_eta,
+        knots_xi,
+        knots_eta,
+        control_points,
+    } = &p.geometry
+    else {
+        unreachable!("called for nurbs geometry only")
+    };
+    let xi = KnotVector::new(knots_xi.clone(), *degree_xi).map_err(|e| ("geometry.knots_xi", e.to_string()))?;
+    let eta = KnotVector::new(knots_eta.clone(), *degree_eta).map_err(|e| ("geometry.knots_eta", e.to_string()))?;
+    let mut weights = Vec::with_capacity(control_points.len());
+    let mut points = Vec::with_capacity(control_points.len());
+    for (k, c) in control_points.iter().enumerate() {
+        match c.as_slice() {
+            &[x, y, z] => {
+                points.push([x, y, z]);
+                weights.push(1.0);
+            }
+            &[x, y, z, w] if w.is_finite() && w > 0.0 => {
+                points.push([x, y, z]);
+                weights.push(w);
+            }
+            &[_, _, _, w] => {
+                return Err((
+                    "geometry.control_points",
+                    format!("point {k}: weight {w} must be finite and positive"),
+                ))
+            }
+            other => {
+                return Err((
+                    "geometry.control_points",
+                    format!(
+                        "point {k}: {} coordinates, expected [x, y, z] or [x, y, z, w]",
+                        other.len()
+                    ),
+                ))
+            }
+        }
+    }
+    if weights.iter().any(|&w| w != weights[0]) {
+        return Err((
+            "geometry.control_points",
+            "unequal weights (a rational surface) are not supported yet: give a B-spline (equal or no weights)".into(),
+        ));
+    }
+    if [*degree_xi, *degree_eta] != p.degree {
+        return Err((
+            "degree",
+            format!("must equal the surface's degrees [{degree_xi}, {degree_eta}] (no degree elevation)"),
+        ));
+    }
+    let surface = BSplineSurface::new(xi, eta, points).map_err(|e| ("geometry.control_points", e.to_string()))?;
+    let (m, n) = surface.net_size();
+    let shell = Shell::new(surface, vec![1.0; m * n]).map_err(|e| ("geometry", e.to_string()))?;
+    refine_to_net(shell, p.control_points)
+}
+
+/// `shell` with the midpoint of its longest span inserted, along ξ then η,
+/// until its net is `net` (an error if it is larger already).
+fn refine_to_net(mut shell: Shell, net: [usize; 2]) -> Result<Shell, (&'static str, String)> {
+    for (direction, want) in [(Direction::Xi, net[0]), (Direction::Eta, net[1])] {
+        loop {
+            let kv = match direction {
+                Direction::Xi => shell.surface().xi(),
+                Direction::Eta => shell.surface().eta(),
+            };
+            let have = kv.basis_count();
+            if have > want {
+                return Err((
+                    "control_points",
+                    format!("the surface already has {have} control points along {direction:?}, more than {want}"),
+                ));
+            }
+            if have == want {
+                break;
+            }
+            let breaks = kv.breakpoints();
+            let longest = breaks
+                .windows(2)
+                .max_by(|a, b| (a[1] - a[0]).total_cmp(&(b[1] - b[0])))
+                .expect("a span");
+            let mid = 0.5 * (longest[0] + longest[1]);
+            shell = shell
+                .insert_knot(direction, mid)
+                .map_err(|e| ("control_points", e.to_string()))?;
+        }
+    }
+    Ok(shell)
 }
 
 /// The patch's knot insertions.
@@ -379,6 +487,36 @@ origin = [30.0, 0.0, 0.0]
         let modes = model.assemble().unwrap().modes().unwrap();
         let f = modes.frequencies_hz();
         assert!(f[0] > 1.0 && f[0] < 30.0, "{f:?}");
+    }
+
+    #[test]
+    fn a_cad_surface_is_refined_to_the_analysis_net_unchanged() {
+        // The south web as a bilinear CAD patch (degree 1), analysed at
+        // degree 1 on a 12 × 3 net; a web of the same geometry.
+        let cad = DECK.replacen(
+            "degree = [3, 2]\ncontrol_points = [12, 3]\n[model.patches.geometry]\nkind = \"quadrilateral\"\ncorners = [[0.0, -2.0, 0.0], [20.0, -2.0, 0.0], [20.0, -2.0, -1.5], [0.0, -2.0, -1.5]]",
+            "degree = [1, 1]\ncontrol_points = [12, 3]\n[model.patches.geometry]\nkind = \"nurbs\"\ndegree_xi = 1\ndegree_eta = 1\nknots_xi = [0.0, 0.0, 1.0, 1.0]\nknots_eta = [0.0, 0.0, 1.0, 1.0]\ncontrol_points = [[0.0, -2.0, 0.0], [0.0, -2.0, -1.5, 1.0], [20.0, -2.0, 0.0], [20.0, -2.0, -1.5]]",
+            1,
+        );
+        assert_ne!(cad, DECK);
+        let model = Config::from_toml(&cad).unwrap().build_model().unwrap();
+        let web = model.patches[1].shell.surface();
+        assert_eq!(web.net_size(), (12, 3));
+        let r = web.evaluate(0.3, 0.6).r;
+        assert!(
+            (r[0] - 6.0).abs() < 1e-12 && (r[1] + 2.0).abs() < 1e-12 && (r[2] + 0.9).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert_eq!(model.joints.len(), 2);
+        let rational = cad.replace("[0.0, -2.0, -1.5, 1.0]", "[0.0, -2.0, -1.5, 2.0]");
+        let e = Config::from_toml(&rational)
+            .and_then(|c| c.validate())
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("model.patches[1].geometry.control_points") && e.contains("rational"),
+            "{e}"
+        );
     }
 
     #[test]
