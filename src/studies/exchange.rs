@@ -140,3 +140,23 @@ fn identified_shape(mode: &IdentifiedMode, points: &[UffPoint]) -> Result<UffMod
         shape,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 30: on a deck of several patches a sensor's universal-file
+    /// node is its point in space: the web sensor at the web's bottom edge.
+    #[test]
+    fn uff_points_of_a_deck_of_patches_are_in_three_dimensions() {
+        let config = Config::from_toml(include_str!("../../tests/fixtures/slab_on_webs.toml")).unwrap();
+        let points = uff_points(&config).unwrap();
+        let slab = points[0].position;
+        assert!((slab[0] - 10.0).abs() < 1e-9 && (slab[1] + 2.0).abs() < 1e-9 && slab[2].abs() < 1e-9);
+        let web = points[1].position;
+        assert!(
+            (web[0] - 10.0).abs() < 1e-9 && (web[1] - 2.0).abs() < 1e-9 && (web[2] + 1.5).abs() < 1e-9,
+            "{web:?}"
+        );
+    }
+}
