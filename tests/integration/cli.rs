@@ -1,6 +1,6 @@
 //! End-to-end tests of the `splinewatch` binary on the bundled configuration.
 
-use crate::common::{fresh_dir, splinewatch};
+use crate::common::{fresh_dir, parameter, splinewatch};
 use std::path::{Path, PathBuf};
 
 /// Writes a test input into the test's folder.
@@ -401,16 +401,7 @@ fn issue_30_a_stiffened_bearing_is_found_on_a_deck_of_patches() {
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let value = |name: &str| {
-        v["parameters"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|p| p["name"] == name)
-            .unwrap()["value"]
-            .as_f64()
-            .unwrap()
-    };
+    let value = |name: &str| parameter(&v["parameters"], name)["value"].as_f64().unwrap();
     assert_eq!(v["converged"], true);
     assert!((value("west_south.kz") / 3e9 - 1.0).abs() < 5e-3, "{v}");
     assert!((value("west_south.kx") / 1e8 - 1.0).abs() < 0.02, "{v}");

@@ -1,7 +1,7 @@
 //! Output-only identification end to end: `simulate --excitation ambient`
 //! (and traffic) → MCAP → `splinewatch oma`, its JSON contract, and bad input.
 
-use crate::common::{fresh_dir, splinewatch};
+use crate::common::{fresh_dir, parameter, splinewatch};
 use splinewatch::config::{frf_setup, load_config};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch_core::c64;
@@ -127,13 +127,7 @@ fn replay_output_only(
 /// Relative error of parameter `name` in a `parameters` list (results
 /// message or state file).
 fn relative_error(parameters: &serde_json::Value, name: &str, truth: f64) -> f64 {
-    let p = parameters
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|p| p["name"] == name)
-        .unwrap();
-    p["value"].as_f64().unwrap() / truth - 1.0
+    parameter(parameters, name)["value"].as_f64().unwrap() / truth - 1.0
 }
 
 #[test]
@@ -459,16 +453,7 @@ fn output_only_replay_follows_the_bearing_damage() {
     ];
     for (k, u) in updates.iter().enumerate() {
         assert_eq!(u["converged"], true);
-        let value = |name: &str| {
-            u["parameters"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|p| p["name"] == name)
-                .unwrap()["value"]
-                .as_f64()
-                .unwrap()
-        };
+        let value = |name: &str| parameter(&u["parameters"], name)["value"].as_f64().unwrap();
         let k2 = if k < 2 { 0.4e9 } else { 0.24e9 };
         let error = value("east.k2") / k2 - 1.0;
         assert!(error.abs() < 0.10, "window {k}: east.k2 {:+.1} %", 100.0 * error);

@@ -1,7 +1,7 @@
 //! Issue 31: updates that converge on what the data can tell, and say
 //! plainly when they cannot.
 
-use crate::common::{fresh_dir, splinewatch};
+use crate::common::{fresh_dir, parameter, splinewatch};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -31,14 +31,7 @@ fn by_topic(results: &Path) -> BTreeMap<String, Vec<serde_json::Value>> {
 }
 
 fn value(update: &serde_json::Value, name: &str) -> f64 {
-    update["parameters"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|p| p["name"] == name)
-        .unwrap()["value"]
-        .as_f64()
-        .unwrap()
+    parameter(&update["parameters"], name)["value"].as_f64().unwrap()
 }
 
 /// The case of the issue, from the simulator: 12 accelerometers, six
@@ -128,13 +121,7 @@ fn issue_31_every_window_gets_an_update_and_uninformed_parameters_are_held() {
             let name = h["name"].as_str().unwrap();
             assert!(name.starts_with("damping."), "{name} held: {h}");
             assert!(["no_gradient", "at_bound", "unresolved"].contains(&h["reason"].as_str().unwrap()));
-            let std = u["parameters"]
-                .as_array()
-                .unwrap()
-                .iter()
-                .find(|p| p["name"] == name)
-                .unwrap()["std"]
-                .clone();
+            let std = parameter(&u["parameters"], name)["std"].clone();
             assert!(std.is_null(), "a held parameter has no std: {name} {std}");
         }
         assert!(log.contains("held: damping."), "{log}");

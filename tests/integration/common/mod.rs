@@ -162,3 +162,14 @@ pub fn splinewatch(args: &[&str]) -> std::process::Output {
         .output()
         .expect("the binary runs")
 }
+
+/// The entry named `name` of a `parameters` array (`update --json`, an
+/// `updating/parameters` message, a state file).
+pub fn parameter<'a>(parameters: &'a serde_json::Value, name: &str) -> &'a serde_json::Value {
+    parameters
+        .as_array()
+        .expect("a parameters array")
+        .iter()
+        .find(|p| p["name"] == name)
+        .unwrap_or_else(|| panic!("no parameter {name} in {parameters}"))
+}
