@@ -90,7 +90,7 @@ pub enum ModesChoice {
     Auto,
 }
 
-/// Above this many control points (2 000 dofs: a dense eigen-solve takes
+/// Above this many control points over all patches (2 000 dofs: a dense eigen-solve takes
 /// about a second there and grows as n³, the sparse one about linearly)
 /// `modes = "auto"` truncates.
 pub const AUTO_TRUNCATED_CONTROL_POINTS: usize = 400;
@@ -309,7 +309,8 @@ impl Config {
             ModesChoice::Truncated => true,
             ModesChoice::Auto => {
                 let patches = self.build_model_patches()?;
-                patches.len() == 1 && patches[0].shell.control_point_count() > AUTO_TRUNCATED_CONTROL_POINTS
+                let points: usize = patches.iter().map(|p| p.shell.control_point_count()).sum();
+                points > AUTO_TRUNCATED_CONTROL_POINTS
             }
         };
         if !truncated {
@@ -342,8 +343,13 @@ impl Config {
         let model = self.build_model()?;
         let total = model.control_point_count();
         if total > MAX_DENSE_CONTROL_POINTS {
+            let key = if self.model.patches.is_empty() {
+                "model.discretization.control_points"
+            } else {
+                "model.patches"
+            };
             return Err(err(
-                "model.discretization.control_points",
+                key,
                 format!(
                     "{total} control points: every mode (`[model.solver] modes = \"all\"`, `modes` without --cutoff) is solved densely for at most {MAX_DENSE_CONTROL_POINTS}; `modes = \"truncated\"` or `\"auto\"`, `modes --cutoff` and `matrices` take up to {MAX_CONTROL_POINTS}"
                 ),
@@ -548,10 +554,10 @@ impl Config {
                     ));
                 }
                 let total: usize = patches.iter().map(|p| p.shell.control_point_count()).sum();
-                if total > MAX_DENSE_CONTROL_POINTS {
+                if total > MAX_CONTROL_POINTS {
                     return Err(err(
                         "model.patches",
-                        format!("{total} control points in all: a deck of several patches is solved densely for at most {MAX_DENSE_CONTROL_POINTS}"),
+                        format!("{total} control points in all: at most {MAX_CONTROL_POINTS} (the sparse path's limit)"),
                     ));
                 }
                 Ok(patches)

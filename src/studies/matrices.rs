@@ -31,8 +31,11 @@ pub struct Component {
 pub struct DofEntry {
     /// 1-based, as in the Matrix Market files.
     pub row: usize,
+    /// The patch the control point belongs to (`"deck"` for a model of one).
+    pub patch: String,
+    /// The control point's number within its patch (η fastest).
     pub control_point: usize,
-    /// The control point's indices `(i, j)` in the net (ξ, η).
+    /// The control point's indices `(i, j)` in its patch's net (ξ, η).
     pub net_index: [usize; 2],
     /// The control point's position, m.
     pub position: [f64; 3],
@@ -46,7 +49,8 @@ pub struct DofEntry {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ParameterMatrix {
     pub name: String,
-    /// `"spring"` (κ_j) or `"stiffness_field"` (θ_k).
+    /// `"spring"` (κ_j), `"bearing"` (a bearing's `k_x, k_y, k_z`) or
+    /// `"stiffness_field"` (θ_k).
     pub kind: &'static str,
     /// The config's value.
     pub value: f64,
@@ -94,15 +98,27 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
     write("K_f.mtx", &sparse.free_stiffness, "free stiffness K_f (eq. 16)")?;
     write("M.mtx", &sparse.mass, "consistent mass M (eq. 17)")?;
     let mut parameters = Vec::new();
-    let springs = config.model.springs.iter().zip(&sparse.spring_terms);
-    let fields = config.model.stiffness_fields.iter().zip(&sparse.field_terms);
+    // κ holds the spring fields' coefficients, then the bearings'
+    // (`ShellModel::spring_coefficients`).
+    let springs = config.model.springs.iter().map(|s| (s.name.as_str(), "spring"));
+    let bearings = config.model.bearings.iter().map(|b| (b.name.as_str(), "bearing"));
+    let fields = config
+        .model
+        .stiffness_fields
+        .iter()
+        .map(|f| (f.name.as_str(), "stiffness_field"));
     let terms = springs
-        .map(|(s, t)| (s.name.as_str(), "spring", 'k', t))
-        .chain(fields.map(|(f, t)| (f.name.as_str(), "stiffness_field", 's', t)));
+        .chain(bearings)
+        .chain(fields)
+        .zip(sparse.spring_terms.iter().chain(&sparse.field_terms));
     let values = sparse.spring_stiffness.iter().chain(&theta);
-    for ((field, kind, letter, terms), values) in terms.zip(values) {
+    for (((field, kind), terms), values) in terms.zip(values) {
         for (j, (term, &value)) in terms.iter().zip(values).enumerate() {
-            let parameter = format!("{field}.{letter}{}", j + 1);
+            let parameter = match kind {
+                "bearing" => format!("{field}.{}", ["kx", "ky", "kz"][j]),
+                "spring" => format!("{field}.k{}", j + 1),
+                _ => format!("{field}.s{}", j + 1),
+            };
             let file = format!("dK_d{parameter}.mtx");
             let matrix = term.to_matrix(&sparse.pattern);
             write(&file, &matrix, &format!("∂K/∂{parameter}"))?;
@@ -147,20 +163,28 @@ fn lower_nnz(m: &SparseSymmetric) -> usize {
 }
 
 fn dof_entries(sparse: &SparseModel) -> Vec<DofEntry> {
-    let n = sparse.shell.surface().net_size().1;
-    let points = sparse.shell.surface().points();
+    // Per global control point: its patch and its number there.
+    let owners: Vec<(usize, usize)> = sparse
+        .patches
+        .iter()
+        .enumerate()
+        .flat_map(|(k, p)| (0..p.shell.control_point_count()).map(move |cp| (k, cp)))
+        .collect();
     sparse
         .reduction
         .columns()
         .iter()
         .enumerate()
         .map(|(row, column)| {
-            let cp = column[0].0 / DOFS_PER_CONTROL_POINT;
+            let (k, cp) = owners[column[0].0 / DOFS_PER_CONTROL_POINT];
+            let surface = sparse.patches[k].shell.surface();
+            let n = surface.net_size().1;
             DofEntry {
                 row: row + 1,
+                patch: sparse.patches[k].name().to_owned(),
                 control_point: cp,
                 net_index: [cp / n, cp % n],
-                position: points[cp],
+                position: surface.points()[cp],
                 components: column
                     .iter()
                     .map(|&(d, weight)| Component {

@@ -289,3 +289,50 @@ fn a_truncated_update_from_the_cli_matches_the_every_mode_one() {
         "{stderr}"
     );
 }
+
+/// Issue 30: `matrices` of a deck of several patches (the slab on two
+/// webs on four bearings): every row names its patch and its control point
+/// there, the bearings' `∂K/∂k` come after the spring fields' as
+/// `<name>.kx/ky/kz`, and `K = K_f + Σ k ∂K/∂k` holds on the export.
+#[test]
+fn issue_30_matrices_of_several_patches_name_their_patch_and_bearings() {
+    let dir = fresh_dir("matrices-patches");
+    let o = splinewatch(&[
+        "matrices",
+        "--config",
+        "tests/fixtures/slab_on_webs.toml",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let index: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("index.json")).unwrap()).unwrap();
+    let dofs = index["dofs"].as_array().unwrap();
+    let patches: std::collections::BTreeSet<&str> = dofs.iter().map(|d| d["patch"].as_str().unwrap()).collect();
+    assert_eq!(patches, ["slab", "web_north", "web_south"].into_iter().collect());
+    let first_web_row = dofs.iter().find(|d| d["patch"] == "web_south").unwrap();
+    assert_eq!(first_web_row["control_point"], 0);
+    assert_eq!(first_web_row["net_index"], serde_json::json!([0, 0]));
+    let parameters = index["parameters"].as_array().unwrap();
+    let bearings: Vec<&str> = parameters
+        .iter()
+        .filter(|p| p["kind"] == "bearing")
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(bearings.len(), 12, "{bearings:?}");
+    assert_eq!(bearings[..3], ["west_south.kx", "west_south.ky", "west_south.kz"]);
+    let (n, k) = read(&dir.join("K.mtx"));
+    let (_, mut sum) = read(&dir.join("K_f.mtx"));
+    assert_eq!(n, index["free_dofs"].as_u64().unwrap() as usize);
+    for p in parameters {
+        let (_, dk) = read(&dir.join(p["file"].as_str().unwrap()));
+        let value = p["value"].as_f64().unwrap();
+        for (at, v) in dk {
+            *sum.entry(at).or_insert(0.0) += value * v;
+        }
+    }
+    let top = k.values().fold(0.0f64, |a, v| a.max(v.abs()));
+    for (at, v) in &sum {
+        let exported = k.get(at).copied().unwrap_or(0.0);
+        assert!((exported - v).abs() <= 1e-14 * top, "{at:?}: {exported} vs {v}");
+    }
+}

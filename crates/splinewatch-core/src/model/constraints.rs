@@ -171,16 +171,15 @@ impl DofReduction {
         a.congruence(&self.columns, self.full, reduced)
     }
 
-    /// The pattern of the free coordinates on `shell`'s net.
-    pub fn reduced_pattern(&self, shell: &Shell) -> Pattern {
-        let cps = shell.control_point_count();
-        let mut dofs = vec![0usize; cps];
+    /// The pattern of the free coordinates: `full`'s (the generalised
+    /// dofs', five per control point) with each point's free count.
+    pub fn reduced_pattern(&self, full: &Pattern) -> Pattern {
+        let mut dofs = vec![0usize; full.counts().len()];
         for column in &self.columns {
             let cp = column[0].0 / DOFS_PER_CONTROL_POINT;
             dofs[cp] += 1;
         }
-        let s = shell.surface();
-        Pattern::control_net(s.net_size(), (s.xi().degree(), s.eta().degree()), &dofs)
+        full.with_counts(&dofs)
     }
 
     /// `Tᵀ v` for full-length column vectors `v`.

@@ -218,6 +218,24 @@ impl Joint {
     /// The penalty stiffness of eq. (above) on global dofs (`offsets` from
     /// [`crate::model::patch::dof_offsets`]), penalty factor `c`.
     pub fn penalty(&self, patches: &[Patch], offsets: &[usize], c: f64) -> LowRankBlock {
+        let entries = self.penalty_entries(patches, offsets, c);
+        let mut dofs: Vec<usize> = entries.keys().map(|&(i, _)| i).collect();
+        dofs.dedup();
+        let mut values = Mat::zeros(dofs.len(), dofs.len());
+        for (&(i, j), &x) in &entries {
+            let (a, b) = (
+                dofs.binary_search(&i).expect("listed"),
+                dofs.binary_search(&j).expect("listed"),
+            );
+            values[(a, b)] = x;
+        }
+        LowRankBlock { dofs, values }
+    }
+
+    /// [`Self::penalty`]'s entries `(row, column) → value` alone: a long
+    /// joint couples each point of one edge to a few of the other's, not
+    /// all (the sparse path's pattern).
+    pub fn penalty_entries(&self, patches: &[Patch], offsets: &[usize], c: f64) -> BTreeMap<(usize, usize), f64> {
         let (pa, pb) = (&patches[self.patch], &patches[self.other]);
         let modulus = pa
             .material
@@ -273,16 +291,6 @@ impl Joint {
                 add(&row, alpha_r * ds);
             }
         }
-        let mut dofs: Vec<usize> = entries.keys().map(|&(i, _)| i).collect();
-        dofs.dedup();
-        let mut values = Mat::zeros(dofs.len(), dofs.len());
-        for (&(i, j), &x) in &entries {
-            let (a, b) = (
-                dofs.binary_search(&i).expect("listed"),
-                dofs.binary_search(&j).expect("listed"),
-            );
-            values[(a, b)] = x;
-        }
-        LowRankBlock { dofs, values }
+        entries
     }
 }

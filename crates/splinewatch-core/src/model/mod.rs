@@ -102,13 +102,4 @@ impl ShellModel {
             .flat_map(|p| p.shell.frames().iter().copied())
             .collect()
     }
-
-    /// The one patch of a single-patch model with nothing a single shell
-    /// lacks (the sparse path's domain), or `None`.
-    pub fn single_shell(&self) -> Option<&Patch> {
-        match self.patches.as_slice() {
-            [p] if self.bearings.is_empty() && self.masses.is_empty() && p.non_structural_mass() == 0.0 => Some(p),
-            _ => None,
-        }
-    }
 }

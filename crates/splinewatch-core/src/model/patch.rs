@@ -9,9 +9,10 @@
 use crate::geometry::quadrature::GaussLegendre;
 use crate::geometry::vec3::{cross, norm};
 use crate::model::material::OrthotropicMaterial;
-use crate::model::shell::{Shell, DOFS_PER_CONTROL_POINT};
-use crate::model::springs::LowRankBlock;
+use crate::model::shell::{Assembly, Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::sparse::SparseError;
 use faer::Mat;
+use std::collections::BTreeMap;
 use thiserror::Error;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -63,25 +64,25 @@ impl Patch {
         self.non_structural_mass
     }
 
-    /// The non-structural mass `μ ∫_A N₀ᵀ N₀ dA` on the patch's dofs, `N₀`
-    /// the mid-surface (τ = ½) displacement rows of eq. (3): translations
-    /// only, no rotary inertia. `None` when `μ = 0`. Gauss with `p + 1`
-    /// points per span integrates it exactly on a flat patch.
-    pub fn surface_mass(&self) -> Option<LowRankBlock> {
+    /// Adds the non-structural mass `μ ∫_A N₀ᵀ N₀ dA` on the patch's dofs
+    /// to `target`, span by span, `N₀` the mid-surface (τ = ½) displacement
+    /// rows of eq. (3): translations only, no rotary inertia; nothing when
+    /// `μ = 0`. Gauss with `p + 1` points per span integrates it exactly on
+    /// a flat patch.
+    pub fn add_surface_mass<A: Assembly>(&self, target: &mut A) -> Result<(), SparseError> {
         let mu = self.non_structural_mass;
         if mu == 0.0 {
-            return None;
+            return Ok(());
         }
         let surface = self.shell.surface();
         let (kx, ke) = (surface.xi(), surface.eta());
         let (gx, ge) = (GaussLegendre::new(kx.degree() + 1), GaussLegendre::new(ke.degree() + 1));
-        let cps = self.shell.control_point_count();
-        // The translational block is the same for u, v, w: assemble the
-        // scalar `∫ N_a N_b dA` once and spread it.
-        let mut scalar = Mat::<f64>::zeros(cps, cps);
         let mut basis = Vec::new();
         for sx in kx.breakpoints().windows(2) {
             for se in ke.breakpoints().windows(2) {
+                // The translational block is the same for u, v, w: the
+                // scalar `∫ N_a N_b dA` over the span, spread over them.
+                let mut scalar: BTreeMap<(usize, usize), f64> = BTreeMap::new();
                 for (xi, wx) in gx.mapped(sx[0], sx[1]) {
                     for (eta, we) in ge.mapped(se[0], se[1]) {
                         let e = surface.evaluate(xi, eta);
@@ -89,24 +90,29 @@ impl Patch {
                         kx.tensor_basis_into(ke, xi, eta, &mut basis);
                         for &(a, na) in &basis {
                             for &(b, nb) in &basis {
-                                scalar[(a, b)] += w * na * nb;
+                                *scalar.entry((a, b)).or_insert(0.0) += w * na * nb;
                             }
                         }
                     }
                 }
+                let mut cps: Vec<usize> = scalar.keys().map(|&(a, _)| a).collect();
+                cps.dedup();
+                let dofs: Vec<usize> = cps
+                    .iter()
+                    .flat_map(|&cp| (0..3).map(move |d| DOFS_PER_CONTROL_POINT * cp + d))
+                    .collect();
+                let mut local = Mat::<f64>::zeros(dofs.len(), dofs.len());
+                for (&(a, b), &v) in &scalar {
+                    let (ia, ib) = (cps.binary_search(&a), cps.binary_search(&b));
+                    let (ia, ib) = (ia.expect("listed"), ib.expect("listed"));
+                    for d in 0..3 {
+                        local[(3 * ia + d, 3 * ib + d)] = v;
+                    }
+                }
+                target.add_local(&local, &dofs)?;
             }
         }
-        let dofs: Vec<usize> = (0..cps)
-            .flat_map(|cp| (0..3).map(move |d| DOFS_PER_CONTROL_POINT * cp + d))
-            .collect();
-        let values = Mat::from_fn(dofs.len(), dofs.len(), |r, c| {
-            if r % 3 == c % 3 {
-                scalar[(r / 3, c / 3)]
-            } else {
-                0.0
-            }
-        });
-        Some(LowRankBlock { dofs, values })
+        Ok(())
     }
 }
 
@@ -134,22 +140,36 @@ mod tests {
             .unwrap()
             .with_non_structural_mass(150.0)
             .unwrap();
-        let block = patch.surface_mass().unwrap();
+        let n = patch.shell.dof_count();
+        let mut mass = Mat::<f64>::zeros(n, n);
+        patch.add_surface_mass(&mut mass).unwrap();
         // A rigid translation: the sum of one direction's entries. The arc is
         // interpolated, so its length (and area) is exact to ~1e-5.
         let area = 6.0 * 4.0 * 1.2;
-        for d in 0..3 {
-            let total: f64 = (0..block.dofs.len())
-                .filter(|r| r % 3 == d)
-                .flat_map(|r| (0..block.dofs.len()).filter(|c| c % 3 == d).map(move |c| (r, c)))
-                .map(|(r, c)| block.values[(r, c)])
+        for d in 0..DOFS_PER_CONTROL_POINT {
+            let total: f64 = (0..n)
+                .filter(|r| r % DOFS_PER_CONTROL_POINT == d)
+                .flat_map(|r| (0..n).map(move |c| (r, c)))
+                .map(|(r, c)| mass[(r, c)])
                 .sum();
-            assert!((total / (150.0 * area) - 1.0).abs() < 1e-4, "{total}");
+            let expected = if d < 3 { 150.0 * area } else { 0.0 };
+            assert!((total - expected).abs() <= 1e-4 * 150.0 * area, "{d}: {total}");
+        }
+        // Every direction's mass stays in its own direction.
+        for r in 0..n {
+            for c in 0..n {
+                if r % DOFS_PER_CONTROL_POINT != c % DOFS_PER_CONTROL_POINT {
+                    assert_eq!(mass[(r, c)], 0.0);
+                }
+            }
         }
         assert!(matches!(
             patch.clone().with_non_structural_mass(-1.0),
             Err(PatchError::NonStructuralMass(_))
         ));
-        assert!(patch.with_non_structural_mass(0.0).unwrap().surface_mass().is_none());
+        let mut untouched = Mat::<f64>::zeros(n, n);
+        let bare = patch.with_non_structural_mass(0.0).unwrap();
+        bare.add_surface_mass(&mut untouched).unwrap();
+        assert_eq!(untouched.norm_max(), 0.0);
     }
 }

@@ -571,6 +571,12 @@ pub trait Assembly {
     fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError>;
 }
 
+impl<A: Assembly + ?Sized> Assembly for &mut A {
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        (**self).add_local(local, dofs)
+    }
+}
+
 impl Assembly for Mat<f64> {
     fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
         scatter(self, local, dofs);
@@ -590,6 +596,30 @@ impl Assembly for SparseAccumulator {
     }
 }
 
+/// An assembly target whose element dofs are shifted by `offset`: a
+/// patch's own numbering placed in a model of several patches.
+#[derive(Debug, Clone)]
+pub struct Offset<A> {
+    pub inner: A,
+    pub offset: usize,
+}
+
+impl<A> Offset<A> {
+    pub fn new(inner: A, offset: usize) -> Self {
+        Self { inner, offset }
+    }
+}
+
+impl<A: Assembly> Assembly for Offset<A> {
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), SparseError> {
+        if self.offset == 0 {
+            return self.inner.add_local(local, dofs);
+        }
+        let shifted: Vec<usize> = dofs.iter().map(|d| d + self.offset).collect();
+        self.inner.add_local(local, &shifted)
+    }
+}
+
 /// Assembles eq. (16) and eq. (17) over every knot span.
 pub fn assemble(shell: &Shell, material: &OrthotropicMaterial) -> Result<ShellMatrices, ShellError> {
     let ndof = shell.dof_count();
@@ -606,20 +636,33 @@ pub fn assemble_sparse(
     material: &OrthotropicMaterial,
     pattern: &Arc<Pattern>,
 ) -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
-    // Two threads, each on half of the ξ spans into matrices of its own,
-    // added at the end: a fixed split, so the sums do not depend on the
-    // machine.
-    let spans = shell.surface.xi().breakpoints().len() - 1;
-    let half = spans / 2;
-    let part = |range: (usize, usize)| -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
+    assemble_sparse_patches(&[(shell, material, 0)], pattern)
+}
+
+/// [`assemble_sparse`] of several patches, each `(shell, material, offset)`
+/// with its dofs from `offset` in `pattern`, into one `K` and one `M`.
+pub fn assemble_sparse_patches(
+    patches: &[(&Shell, &OrthotropicMaterial, usize)],
+    pattern: &Arc<Pattern>,
+) -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
+    // Two threads, each on half of every patch's ξ spans into matrices of
+    // its own, added at the end: a fixed split, so the sums do not depend
+    // on the machine.
+    let part = |second_half: bool| -> Result<(SparseSymmetric, SparseSymmetric), ShellError> {
         let mut stiffness = SparseSymmetric::zeros(Arc::clone(pattern));
         let mut mass = SparseSymmetric::zeros(Arc::clone(pattern));
-        assemble_spans(shell, material, &mut stiffness, &mut mass, Some(range))?;
+        for &(shell, material, offset) in patches {
+            let spans = shell.surface.xi().breakpoints().len() - 1;
+            let half = spans / 2;
+            let range = if second_half { (half, spans) } else { (0, half) };
+            let (mut k, mut m) = (Offset::new(&mut stiffness, offset), Offset::new(&mut mass, offset));
+            assemble_spans(shell, material, &mut k, &mut m, Some(range))?;
+        }
         Ok((stiffness, mass))
     };
     let (first, second) = std::thread::scope(|scope| {
-        let other = scope.spawn(|| part((half, spans)));
-        let first = part((0, half));
+        let other = scope.spawn(|| part(true));
+        let first = part(false);
         (first, other.join().expect("assembly thread"))
     });
     let ((mut stiffness, mut mass), (k2, m2)) = (first?, second?);

@@ -30,10 +30,13 @@ pub struct Pattern {
     n: usize,
     col_ptr: Vec<usize>,
     row_idx: Vec<usize>,
-    /// The control net `(m, n)`, the basis degrees `(p, q)` and the first
-    /// dof of every control point (one more entry: the total).
-    net: (usize, usize),
-    degrees: (usize, usize),
+    /// The control-point graph: per control point, the points it is coupled
+    /// to (itself included), ascending.
+    graph: Arc<Vec<Vec<usize>>>,
+    /// The control net `(m, n)` and basis degrees `(p, q)` when the pattern
+    /// is a single net's (its nested dissection follows the net).
+    net: Option<((usize, usize), (usize, usize))>,
+    /// The first dof of every control point (one more entry: the total).
     first: Vec<usize>,
 }
 
@@ -45,6 +48,27 @@ impl Pattern {
         let (m, n) = net;
         let (p, q) = degrees;
         assert_eq!(dofs.len(), m * n, "one dof count per control point");
+        let mut graph = Vec::with_capacity(m * n);
+        for i in 0..m {
+            for j in 0..n {
+                let mut neighbours = Vec::new();
+                for i2 in i.saturating_sub(p)..=(i + p).min(m - 1) {
+                    neighbours.extend((j.saturating_sub(q)..=(j + q).min(n - 1)).map(|j2| i2 * n + j2));
+                }
+                graph.push(neighbours);
+            }
+        }
+        let mut pattern = Self::control_graph(Arc::new(graph), dofs);
+        pattern.net = Some((net, degrees));
+        pattern
+    }
+
+    /// The pattern of a control-point graph (`graph[cp]`: the points `cp`
+    /// is coupled to, itself included, ascending; symmetric), where point
+    /// `cp` carries `dofs[cp]` consecutive dofs: several patches and the
+    /// joints between them.
+    pub fn control_graph(graph: Arc<Vec<Vec<usize>>>, dofs: &[usize]) -> Self {
+        assert_eq!(dofs.len(), graph.len(), "one dof count per control point");
         let mut first = Vec::with_capacity(dofs.len() + 1);
         first.push(0);
         for &d in dofs {
@@ -54,44 +78,67 @@ impl Pattern {
         let mut col_ptr = Vec::with_capacity(total + 1);
         col_ptr.push(0);
         let mut row_idx = Vec::new();
-        for i in 0..m {
-            for j in 0..n {
-                let cp = i * n + j;
-                let mut rows = Vec::new();
-                for i2 in i.saturating_sub(p)..=(i + p).min(m - 1) {
-                    for j2 in j.saturating_sub(q)..=(j + q).min(n - 1) {
-                        let other = i2 * n + j2;
-                        rows.extend(first[other]..first[other + 1]);
-                    }
-                }
-                for _ in 0..dofs[cp] {
-                    row_idx.extend_from_slice(&rows);
-                    col_ptr.push(row_idx.len());
-                }
+        for (cp, neighbours) in graph.iter().enumerate() {
+            let rows: Vec<usize> = neighbours.iter().flat_map(|&o| first[o]..first[o + 1]).collect();
+            for _ in 0..dofs[cp] {
+                row_idx.extend_from_slice(&rows);
+                col_ptr.push(row_idx.len());
             }
         }
         Self {
             n: total,
             col_ptr,
             row_idx,
-            net,
-            degrees,
+            graph,
+            net: None,
             first,
         }
     }
 
+    /// The same control-point graph with `dofs[cp]` dofs per point (the
+    /// free coordinates of a reduction, a decoupled block).
+    pub fn with_counts(&self, dofs: &[usize]) -> Self {
+        let mut pattern = Self::control_graph(Arc::clone(&self.graph), dofs);
+        pattern.net = self.net;
+        pattern
+    }
+
+    /// Whether the pattern is a single control net's (its dissection
+    /// follows the net's geometry).
+    pub fn is_single_net(&self) -> bool {
+        self.net.is_some()
+    }
+
+    /// The control-point graph (per point, the points it is coupled to).
+    pub fn graph(&self) -> &[Vec<usize>] {
+        &self.graph
+    }
+
+    /// Dofs per control point.
+    pub fn counts(&self) -> Vec<usize> {
+        self.first.windows(2).map(|w| w[1] - w[0]).collect()
+    }
+
     /// A fill-reducing order of the dofs (`order[new] = old`) by nested
-    /// dissection of the control net (George 1973): a box of control points
-    /// is split across its longer side by a separator `p` (or `q`) points
-    /// wide, the widest that couples the two halves, and ordered as the two
-    /// halves (recursively), then the separator; a box of at most
+    /// dissection (George 1973). On a single control net a box of control
+    /// points is split across its longer side by a separator `p` (or `q`)
+    /// points wide, the widest that couples the two halves, and ordered as
+    /// the two halves (recursively), then the separator; a box of at most
     /// `ND_LEAF` points is ordered as it is. On a 2-D net it keeps the
     /// Cholesky factor near `O(n log n)`, where minimum degree fills more
     /// (measured on the bundled deck refined to 20 000 dofs: 2.6× fewer
-    /// factor entries).
+    /// factor entries). Several patches: the separators are levels of
+    /// the control-point graph's breadth-first level structure
+    /// ([`Self::graph_dissection`]).
     pub fn nested_dissection(&self) -> Vec<usize> {
-        let mut points = Vec::with_capacity(self.first.len().saturating_sub(1));
-        self.dissect([0, self.net.0], [0, self.net.1], &mut points);
+        let points = match self.net {
+            Some((net, _)) => {
+                let mut points = Vec::with_capacity(self.graph.len());
+                self.dissect([0, net.0], [0, net.1], &mut points);
+                points
+            }
+            None => self.graph_dissection(),
+        };
         points
             .into_iter()
             .flat_map(|cp| self.first[cp]..self.first[cp + 1])
@@ -100,8 +147,9 @@ impl Pattern {
 
     fn dissect(&self, rows: [usize; 2], cols: [usize; 2], out: &mut Vec<usize>) {
         let (h, w) = (rows[1] - rows[0], cols[1] - cols[0]);
-        let (p, q) = self.degrees;
-        let n = self.net.1;
+        let Some(((_, n), (p, q))) = self.net else {
+            unreachable!("dissect is called on a single net")
+        };
         let natural = |out: &mut Vec<usize>, rows: [usize; 2], cols: [usize; 2]| {
             for i in rows[0]..rows[1] {
                 out.extend((cols[0]..cols[1]).map(|j| i * n + j));
@@ -122,6 +170,22 @@ impl Pattern {
             self.dissect(rows, [mid + q, cols[1]], out);
             natural(out, rows, [mid, mid + q]);
         }
+    }
+
+    /// Nested dissection of the control-point graph (George & Liu 1981,
+    /// §8.2): in each connected part, the breadth-first levels from a
+    /// pseudo-peripheral point; the level that halves the part separates
+    /// the levels before it from those after (an edge joins adjacent levels
+    /// only), and is ordered after both halves, dissected in turn. Points
+    /// without dofs are left out.
+    pub fn graph_dissection(&self) -> Vec<usize> {
+        let active: Vec<usize> = (0..self.graph.len())
+            .filter(|&cp| self.first[cp + 1] > self.first[cp])
+            .collect();
+        let mut out = Vec::with_capacity(active.len());
+        let mut marks = GraphMarks::new(self.graph.len());
+        dissect_graph(&self.graph, active, &mut marks, &mut out);
+        out
     }
 
     pub fn dim(&self) -> usize {
@@ -184,7 +248,7 @@ impl Pattern {
         for &d in dofs {
             counts[self.first.partition_point(|&f| f <= d) - 1] += 1;
         }
-        let sub = Pattern::control_net(self.net, self.degrees, &counts);
+        let sub = self.with_counts(&counts);
         let mut positions = Vec::with_capacity(sub.nnz());
         for (local, &j) in dofs.iter().enumerate() {
             for e in sub.col_ptr[local]..sub.col_ptr[local + 1] {
@@ -253,8 +317,143 @@ impl NonZeros {
     }
 }
 
-/// Boxes of at most this many control points are not dissected further.
+/// Boxes (parts) of at most this many control points are not dissected
+/// further.
 const ND_LEAF: usize = 16;
+
+/// [`Pattern::graph_dissection`] of `part` into `out`.
+fn dissect_graph(graph: &[Vec<usize>], part: Vec<usize>, marks: &mut GraphMarks, out: &mut Vec<usize>) {
+    if part.len() <= ND_LEAF {
+        out.extend(part);
+        return;
+    }
+    for component in marks.components(graph, &part) {
+        match marks.split(graph, &component) {
+            Some((low, separator, high)) => {
+                dissect_graph(graph, low, marks, out);
+                dissect_graph(graph, high, marks, out);
+                out.extend(separator);
+            }
+            None => out.extend(component),
+        }
+    }
+}
+
+/// Scratch marks of the graph dissection: which points belong to the part
+/// being split, and which a search has reached (stamps, never cleared).
+struct GraphMarks {
+    member: Vec<u64>,
+    seen: Vec<u64>,
+    stamp: u64,
+}
+
+impl GraphMarks {
+    fn new(points: usize) -> Self {
+        Self {
+            member: vec![0; points],
+            seen: vec![0; points],
+            stamp: 0,
+        }
+    }
+
+    /// Marks `part` as the members; returns the stamp.
+    fn enter(&mut self, part: &[usize]) -> u64 {
+        self.stamp += 1;
+        part.iter().for_each(|&v| self.member[v] = self.stamp);
+        self.stamp
+    }
+
+    /// The breadth-first levels of the members from `root`.
+    fn levels(&mut self, graph: &[Vec<usize>], member: u64, root: usize) -> Vec<Vec<usize>> {
+        self.stamp += 1;
+        let seen = self.stamp;
+        self.seen[root] = seen;
+        let mut levels = vec![vec![root]];
+        loop {
+            let mut next = Vec::new();
+            for &v in levels.last().expect("one level at least") {
+                for &w in &graph[v] {
+                    if self.member[w] == member && self.seen[w] != seen {
+                        self.seen[w] = seen;
+                        next.push(w);
+                    }
+                }
+            }
+            if next.is_empty() {
+                return levels;
+            }
+            levels.push(next);
+        }
+    }
+
+    /// The connected components of `part`, each ascending.
+    fn components(&mut self, graph: &[Vec<usize>], part: &[usize]) -> Vec<Vec<usize>> {
+        let member = self.enter(part);
+        let mut out = Vec::new();
+        for &v in part {
+            if self.member[v] != member {
+                continue;
+            }
+            let mut component: Vec<usize> = self.levels(graph, member, v).concat();
+            component.sort_unstable();
+            // Out of the members: later searches skip it.
+            self.stamp += 1;
+            for &w in &component {
+                self.member[w] = self.stamp;
+            }
+            out.push(component);
+        }
+        out
+    }
+
+    /// A connected part split into `(low, separator, high)` by the level
+    /// halving it in the level structure from a pseudo-peripheral point
+    /// (George & Liu's search: restart from a point of least degree in
+    /// the last level while that deepens the structure), or `None` when
+    /// the part is too small or has fewer than three levels.
+    fn split(&mut self, graph: &[Vec<usize>], part: &[usize]) -> Option<(Vec<usize>, Vec<usize>, Vec<usize>)> {
+        if part.len() <= ND_LEAF {
+            return None;
+        }
+        let member = self.enter(part);
+        let mut levels = self.levels(graph, member, part[0]);
+        for _ in 0..PERIPHERAL_SEARCHES {
+            let last = levels.last().expect("one level at least");
+            let candidate = *last
+                .iter()
+                .min_by_key(|&&v| (graph[v].len(), v))
+                .expect("non-empty level");
+            let deeper = self.levels(graph, member, candidate);
+            if deeper.len() <= levels.len() {
+                break;
+            }
+            levels = deeper;
+        }
+        if levels.len() < 3 {
+            return None;
+        }
+        let half = part.len() / 2;
+        let mut count = 0;
+        let mut at = levels.len() - 2;
+        for (l, level) in levels.iter().enumerate() {
+            count += level.len();
+            if count >= half {
+                at = l.clamp(1, levels.len() - 2);
+                break;
+            }
+        }
+        let sorted = |mut v: Vec<usize>| {
+            v.sort_unstable();
+            v
+        };
+        let low = sorted(levels[..at].concat());
+        let high = sorted(levels[at + 1..].concat());
+        Some((low, sorted(std::mem::take(&mut levels[at])), high))
+    }
+}
+
+/// Restarts of the pseudo-peripheral point search.
+const PERIPHERAL_SEARCHES: usize = 8;
 
 /// A symmetric matrix on a shared [`Pattern`].
 #[derive(Debug, Clone, PartialEq)]
@@ -456,6 +655,34 @@ impl SparseAccumulator {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The graph dissection orders every dof once, on a graph of two nets
+    /// joined by a few couplings with a point without dofs.
+    #[test]
+    fn the_graph_dissection_is_a_permutation() {
+        let net = Pattern::control_net((40, 16), (3, 3), &[5; 640]);
+        let mut graph: Vec<Vec<usize>> = net.graph().to_vec();
+        graph.extend(
+            net.graph()
+                .iter()
+                .map(|n| n.iter().map(|c| c + 640).collect::<Vec<_>>()),
+        );
+        // One net's last row of points coupled to the other's first.
+        for j in 0..16 {
+            let (a, b) = (39 * 16 + j, 640 + j);
+            graph[a].push(b);
+            graph[b].push(a);
+        }
+        graph.iter_mut().for_each(|n| n.sort_unstable());
+        let mut counts = vec![5; 1280];
+        counts[3] = 0; // a point without dofs is left out
+        let joined = Pattern::control_graph(Arc::new(graph), &counts);
+        assert!(!joined.is_single_net());
+        let order = joined.nested_dissection();
+        let mut seen = order.clone();
+        seen.sort_unstable();
+        assert_eq!(seen, (0..joined.dim()).collect::<Vec<_>>());
+    }
 
     /// The same element matrices added into an accumulator and into a
     /// matrix on the whole pattern give the same matrix, bit for bit, and

@@ -11,7 +11,7 @@
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::patch::Patch;
-use crate::model::shell::{self, Frame, ShellError};
+use crate::model::shell::{self, Frame, Offset, ShellError};
 use crate::model::springs::{LowRankBlock, SpringError, SpringField};
 use crate::model::stiffness_field::StiffnessField;
 use crate::model::stiffness_field::StiffnessFieldError;
@@ -33,8 +33,6 @@ pub enum ModelError {
     Bearing { index: usize, source: BearingError },
     #[error("point mass {index}: {source}")]
     Mass { index: usize, source: BearingError },
-    #[error("{0} supports one patch with no bearings, point or non-structural masses")]
-    SinglePatchOnly(&'static str),
     #[error("spring field {index}: {source}")]
     Spring { index: usize, source: SpringError },
     #[error("stiffness field {index}: {source}")]
@@ -91,54 +89,29 @@ impl ShellModel {
     /// stiffness fields, each moved to its patch's dofs.
     pub fn assemble(&self) -> Result<AssembledModel, ModelError> {
         let offsets = self.dof_offsets();
-        let patch_of = |patch: usize| {
-            self.patches
-                .get(patch)
-                .map(|p| (p, offsets[patch]))
-                .ok_or(ModelError::UnknownPatch {
-                    patch,
-                    count: self.patches.len(),
-                })
-        };
         let (mut free_stiffness, mut mass) = self.patch_matrices(&offsets)?;
-        for (p, &offset) in self.patches.iter().zip(&offsets) {
-            if let Some(block) = p.surface_mass() {
-                block.shifted(offset).add_scaled_to(&mut mass, 1.0);
-            }
+        for (index, (p, &offset)) in self.patches.iter().zip(&offsets).enumerate() {
+            p.add_surface_mass(&mut Offset::new(&mut mass, offset))
+                .map_err(|e| ModelError::Patch {
+                    index,
+                    source: ShellError::Sparse(e),
+                })?;
         }
-        for (index, m) in self.masses.iter().enumerate() {
-            let (p, offset) = patch_of(m.at().patch)?;
-            let block = m
-                .mass_block(&p.shell)
-                .map_err(|source| ModelError::Mass { index, source })?;
-            block.shifted(offset).add_scaled_to(&mut mass, 1.0);
+        for block in self.point_mass_blocks(&offsets)? {
+            block.add_scaled_to(&mut mass, 1.0);
         }
         for joint in &self.joints {
-            patch_of(joint.patch)?;
-            patch_of(joint.other)?;
+            self.patch_at(joint.patch, &offsets)?;
+            self.patch_at(joint.other, &offsets)?;
             joint
                 .penalty(&self.patches, &offsets, self.joint_penalty)
                 .add_scaled_to(&mut free_stiffness, 1.0);
         }
-        let mut spring_blocks = Vec::with_capacity(self.springs.len() + self.bearings.len());
-        for (index, s) in self.springs.iter().enumerate() {
-            let (p, offset) = patch_of(s.patch())?;
-            let blocks = s
-                .coefficient_matrices(&p.shell)
-                .map_err(|source| ModelError::Spring { index, source })?;
-            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
-        }
-        for (index, b) in self.bearings.iter().enumerate() {
-            let (p, offset) = patch_of(b.at().patch)?;
-            let blocks = b
-                .coefficient_matrices(&p.shell)
-                .map_err(|source| ModelError::Bearing { index, source })?;
-            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
-        }
+        let spring_blocks = self.spring_blocks(&offsets)?;
         let dofs = self.dof_count();
         let mut field_matrices = Vec::with_capacity(self.stiffness_fields.len());
         for (index, f) in self.stiffness_fields.iter().enumerate() {
-            let (p, offset) = patch_of(f.patch())?;
+            let (p, offset) = self.patch_at(f.patch(), &offsets)?;
             let own = f
                 .coefficient_matrices(&p.shell, &p.material)
                 .map_err(|source| ModelError::StiffnessField { index, source })?;
@@ -161,6 +134,53 @@ impl ShellModel {
             reduction: self.reduction()?,
             modal: OnceLock::new(),
         })
+    }
+
+    /// Patch `patch` and its first global dof.
+    pub(crate) fn patch_at(&self, patch: usize, offsets: &[usize]) -> Result<(&Patch, usize), ModelError> {
+        self.patches
+            .get(patch)
+            .map(|p| (p, offsets[patch]))
+            .ok_or(ModelError::UnknownPatch {
+                patch,
+                count: self.patches.len(),
+            })
+    }
+
+    /// `∂K/∂κ_j` on global dofs: every spring field's coefficients, then
+    /// every bearing's `k_x, k_y, k_z`.
+    pub(crate) fn spring_blocks(&self, offsets: &[usize]) -> Result<Vec<Vec<LowRankBlock>>, ModelError> {
+        let mut spring_blocks = Vec::with_capacity(self.springs.len() + self.bearings.len());
+        for (index, s) in self.springs.iter().enumerate() {
+            let (p, offset) = self.patch_at(s.patch(), offsets)?;
+            let blocks = s
+                .coefficient_matrices(&p.shell)
+                .map_err(|source| ModelError::Spring { index, source })?;
+            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+        }
+        for (index, b) in self.bearings.iter().enumerate() {
+            let (p, offset) = self.patch_at(b.at().patch, offsets)?;
+            let blocks = b
+                .coefficient_matrices(&p.shell)
+                .map_err(|source| ModelError::Bearing { index, source })?;
+            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+        }
+        Ok(spring_blocks)
+    }
+
+    /// Every point mass's block on global dofs.
+    pub(crate) fn point_mass_blocks(&self, offsets: &[usize]) -> Result<Vec<LowRankBlock>, ModelError> {
+        self.masses
+            .iter()
+            .enumerate()
+            .map(|(index, m)| {
+                let (p, offset) = self.patch_at(m.at().patch, offsets)?;
+                let block = m
+                    .mass_block(&p.shell)
+                    .map_err(|source| ModelError::Mass { index, source })?;
+                Ok(block.shifted(offset))
+            })
+            .collect()
     }
 
     /// Every patch's eq. (16)–(17), side by side (one patch: its own).

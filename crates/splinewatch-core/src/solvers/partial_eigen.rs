@@ -142,26 +142,38 @@ impl LinOp<f64> for ShiftedOperator<'_> {
 }
 
 impl ShiftInvert {
-    /// The symbolic (supernodal) Cholesky factorisation of `pattern`.
+    /// The symbolic (supernodal) Cholesky factorisation of `pattern`, in
+    /// its nested-dissection order ([`Pattern::nested_dissection`]); on a
+    /// pattern of several patches also in approximate minimum degree order
+    /// (Amestoy, Davis & Duff 1996, faer's), keeping the one of fewer
+    /// factor entries: a box girder's closed cells make its graph's level
+    /// separators wide, and there minimum degree fills less (the overpass
+    /// refined to 20 500 dofs: 19.7 M entries against 34.0 M).
     pub fn new(pattern: &Arc<Pattern>) -> Result<Self, PartialEigenError> {
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
         let forward = pattern.nested_dissection();
         let mut inverse = vec![0; forward.len()];
         for (new, &old) in forward.iter().enumerate() {
             inverse[old] = new;
         }
-        let ordering = SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, forward.len()));
-        let symbolic = factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
-            .map_err(|e| PartialEigenError::Symbolic(format!("{e:?}")))?;
+        let dissection = SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, forward.len()));
+        let mut symbolic = symbolic_cholesky(pattern, dissection)?;
+        if !pattern.is_single_net() {
+            let by_degree = symbolic_cholesky(pattern, SymmetricOrdering::Amd)?;
+            if by_degree.len_val() < symbolic.len_val() {
+                symbolic = by_degree;
+            }
+        }
         let split = Arc::new(SubtreeSplit::new(supernodal_part(&symbolic)));
         Ok(Self {
             pattern: Arc::clone(pattern),
             symbolic: Arc::new(symbolic),
             split,
         })
+    }
+
+    /// Stored entries of the Cholesky factor (its fill).
+    pub fn factor_entries(&self) -> usize {
+        self.symbolic.len_val()
     }
 
     /// The values of the Cholesky factor of `K − σM` (the symbolic part
@@ -345,6 +357,19 @@ impl ShiftInvert {
         }
         Ok((finish(&op, k, m, settings, mu, y, wanted)?, responses))
     }
+}
+
+/// The supernodal symbolic Cholesky factorisation of `pattern` in `ordering`.
+fn symbolic_cholesky(
+    pattern: &Pattern,
+    ordering: SymmetricOrdering<'_, usize>,
+) -> Result<SymbolicCholesky<usize>, PartialEigenError> {
+    let params = CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    };
+    factorize_symbolic_cholesky(pattern.symbolic(), Side::Lower, ordering, params)
+        .map_err(|e| PartialEigenError::Symbolic(format!("{e:?}")))
 }
 
 /// The supernodal part of a symbolic factorisation made with
@@ -556,6 +581,28 @@ mod tests {
     /// (1e-12 of the largest), and the partial solve finds the dense
     /// solver's lowest modes (ω² within 1e-9, |MAC| within 1e-8), every one
     /// below the cut-off and none missed.
+    /// The graph dissection of a single net's pattern fills within 1.4×
+    /// the net's geometric dissection (measured 1.22× on 40 × 16 points of
+    /// degree 3); a graph pattern keeps the sparser of it and minimum degree.
+    #[test]
+    fn the_graph_dissection_keeps_the_fill_low() {
+        let net = Pattern::control_net((40, 16), (3, 3), &[5; 640]);
+        let graph = Pattern::control_graph(Arc::new(net.graph().to_vec()), &[5; 640]);
+        let fill = |p: &Pattern| ShiftInvert::new(&Arc::new(p.clone())).unwrap().factor_entries();
+        let (geometric, general) = (fill(&net), fill(&graph));
+        assert!((general as f64) < 1.4 * geometric as f64, "{general} vs {geometric}");
+        let forward = graph.nested_dissection();
+        let inverse = {
+            let mut inverse = vec![0; forward.len()];
+            forward.iter().enumerate().for_each(|(new, &old)| inverse[old] = new);
+            inverse
+        };
+        let ordering = SymmetricOrdering::Custom(PermRef::new_checked(&forward, &inverse, forward.len()));
+        let dissection = symbolic_cholesky(&graph, ordering).unwrap().len_val();
+        let by_degree = symbolic_cholesky(&graph, SymmetricOrdering::Amd).unwrap().len_val();
+        assert_eq!(general, dissection.min(by_degree));
+    }
+
     #[test]
     fn the_partial_solve_matches_the_dense_reference() {
         let (shell, material, reduction) = plate();
@@ -571,7 +618,7 @@ mod tests {
                 }
             }
         }
-        let reduced = Arc::new(reduction.reduced_pattern(&shell));
+        let reduced = Arc::new(reduction.reduced_pattern(&shell.pattern()));
         let (kr, mr) = (
             reduction.reduce_sparse(&k, &reduced).unwrap(),
             reduction.reduce_sparse(&m, &reduced).unwrap(),

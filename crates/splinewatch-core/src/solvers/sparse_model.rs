@@ -10,7 +10,8 @@
 
 use crate::linalg::bitwise_equal;
 use crate::model::constraints::DofReduction;
-use crate::model::shell::{self, Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::patch::Patch;
+use crate::model::shell::{self, Frame, Offset, DOFS_PER_CONTROL_POINT};
 use crate::model::sparse::{NonZeros, Pattern, SparseAccumulator, SparseError, SparseSymmetric};
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
@@ -63,7 +64,11 @@ impl SparseTerm {
 /// Eq. (23) assembled sparse and reduced to the free coordinates.
 #[derive(Debug, Clone)]
 pub struct SparseModel {
-    pub shell: Shell,
+    /// The patches, for the sensors' rows and the export (global dofs by
+    /// [`crate::model::patch::dof_offsets`]).
+    pub patches: Vec<Patch>,
+    /// Every control point's directors, in global order.
+    pub frames: Vec<Frame>,
     pub reduction: DofReduction,
     /// The pattern of the free coordinates.
     pub pattern: Arc<Pattern>,
@@ -226,27 +231,28 @@ fn decoupled_blocks(pattern: &Arc<Pattern>, coupled: &[bool]) -> Result<Vec<Bloc
 )]
 fn field_matrices(
     model: &ShellModel,
+    offsets: &[usize],
     full: &Arc<Pattern>,
     reduction: &DofReduction,
     pattern: &Arc<Pattern>,
 ) -> Result<(Vec<Vec<SparseTerm>>, Vec<Vec<NonZeros>>), ModelError> {
-    let patch = &model.patches[0];
     let (terms, products): (Vec<_>, Vec<_>) = model
         .stiffness_fields
         .iter()
         .enumerate()
         .map(|(index, f)| {
+            let (patch, offset) = model.patch_at(f.patch(), offsets)?;
             // Each coefficient's matrix holds its non-zeros only until it
             // is reduced, one at a time (on the whole pattern, 32
             // coefficients of a 20 000-dof deck took 2.5 GB).
-            let empty = vec![SparseAccumulator::new(Arc::clone(full)); f.coefficient_count()];
+            let empty = vec![Offset::new(SparseAccumulator::new(Arc::clone(full)), offset); f.coefficient_count()];
             let accumulated = f
                 .coefficient_matrices_into(&patch.shell, &patch.material, empty)
                 .map_err(|source| ModelError::StiffnessField { index, source })?;
             let mut terms = Vec::with_capacity(accumulated.len());
             let mut products = Vec::with_capacity(accumulated.len());
             for a in accumulated {
-                let d = a.to_matrix();
+                let d = a.inner.to_matrix();
                 terms.push(SparseTerm::from_matrix(
                     &reduction.reduce_sparse(&d, pattern).map_err(sparse_error)?,
                 ));
@@ -264,29 +270,121 @@ fn sparse_error(e: SparseError) -> ModelError {
     ModelError::Shell(shell::ShellError::Sparse(e))
 }
 
+/// The pattern of a model's generalised dofs: each patch's control net
+/// (one patch: its own, [`crate::model::shell::Shell::pattern`]), and the control points a
+/// joint's penalty couples across patches (`joints`: each joint's entries).
+fn model_pattern(model: &ShellModel, joints: &[BTreeMap<(usize, usize), f64>]) -> Pattern {
+    if let [p] = model.patches.as_slice() {
+        return p.shell.pattern();
+    }
+    let mut graph: Vec<Vec<usize>> = Vec::with_capacity(model.control_point_count());
+    for p in &model.patches {
+        let first = graph.len();
+        let own = p.shell.pattern();
+        graph.extend(
+            own.graph()
+                .iter()
+                .map(|n| n.iter().map(|c| c + first).collect::<Vec<_>>()),
+        );
+    }
+    for &(i, j) in joints.iter().flat_map(BTreeMap::keys) {
+        let (a, b) = (i / DOFS_PER_CONTROL_POINT, j / DOFS_PER_CONTROL_POINT);
+        graph[a].push(b);
+    }
+    for neighbours in &mut graph {
+        neighbours.sort_unstable();
+        neighbours.dedup();
+    }
+    Pattern::control_graph(
+        Arc::new(graph),
+        &vec![DOFS_PER_CONTROL_POINT; model.control_point_count()],
+    )
+}
+
+/// `target += B` for the non-zero entries of a block on global dofs.
+fn add_block(target: &mut SparseSymmetric, block: &LowRankBlock) -> Result<(), ModelError> {
+    add_entries(
+        target,
+        block.dofs.iter().enumerate().flat_map(|(c, &dc)| {
+            block
+                .dofs
+                .iter()
+                .enumerate()
+                .map(move |(r, &dr)| ((dr, dc), block.values[(r, c)]))
+        }),
+    )
+}
+
+/// `target[i, j] += v` for the non-zero entries `((i, j), v)`.
+fn add_entries(
+    target: &mut SparseSymmetric,
+    entries: impl IntoIterator<Item = ((usize, usize), f64)>,
+) -> Result<(), ModelError> {
+    for ((i, j), v) in entries {
+        if v == 0.0 {
+            continue;
+        }
+        let at = target
+            .pattern()
+            .position(i, j)
+            .ok_or(SparseError::OutsidePattern { row: i, col: j })
+            .map_err(sparse_error)?;
+        target.values_mut()[at] += v;
+    }
+    Ok(())
+}
+
+/// `K_f` and `M` on the generalised dofs (`full`): every patch's eq.
+/// (16)–(17), the non-structural and point masses, the joints' penalty
+/// (`joints`: each joint's entries), as [`ShellModel::assemble`] does dense.
+fn assemble_matrices(
+    model: &ShellModel,
+    offsets: &[usize],
+    full: &Arc<Pattern>,
+    joints: &[BTreeMap<(usize, usize), f64>],
+) -> Result<(SparseSymmetric, SparseSymmetric), ModelError> {
+    let parts: Vec<_> = model
+        .patches
+        .iter()
+        .zip(offsets)
+        .map(|(p, &offset)| (&p.shell, &p.material, offset))
+        .collect();
+    let (mut k, mut m) = shell::assemble_sparse_patches(&parts, full)?;
+    for (index, (p, &offset)) in model.patches.iter().zip(offsets).enumerate() {
+        p.add_surface_mass(&mut Offset::new(&mut m, offset))
+            .map_err(|e| ModelError::Patch {
+                index,
+                source: shell::ShellError::Sparse(e),
+            })?;
+    }
+    for block in model.point_mass_blocks(offsets)? {
+        add_block(&mut m, &block)?;
+    }
+    for entries in joints {
+        add_entries(&mut k, entries.iter().map(|(&at, &v)| (at, v)))?;
+    }
+    Ok((k, m))
+}
+
 impl SparseModel {
-    /// The sparse model of a single shell ([`ShellModel::single_shell`]).
+    /// The sparse model of `model`: one or several patches, joints,
+    /// springs, bearings, masses and stiffness fields, as
+    /// [`ShellModel::assemble`] builds dense.
     pub fn assemble(model: &ShellModel) -> Result<Self, ModelError> {
-        let patch = model.single_shell().ok_or(ModelError::SinglePatchOnly(
-            "the sparse path (truncated modes, `matrices`)",
-        ))?;
         model.check_patch_indices()?;
-        let shell = &patch.shell;
-        let full = Arc::new(shell.pattern());
-        let reduction = DofReduction::new(shell, &model.constraints);
-        let pattern = Arc::new(reduction.reduced_pattern(shell));
-        let (k, m) = shell::assemble_sparse(shell, &patch.material, &full)?;
-        let lumped = lumped_translational_mass(&full, &m, shell.control_point_count());
-        let owners = owners(&reduction);
-        let spring_blocks = model
-            .springs
+        let offsets = model.dof_offsets();
+        let joints: Vec<_> = model
+            .joints
             .iter()
-            .enumerate()
-            .map(|(index, s)| {
-                s.coefficient_matrices(shell)
-                    .map_err(|source| ModelError::Spring { index, source })
-            })
-            .collect::<Result<Vec<_>, _>>()?;
+            .map(|j| j.penalty_entries(&model.patches, &offsets, model.joint_penalty))
+            .collect();
+        let full = Arc::new(model_pattern(model, &joints));
+        let reduction = model.reduction()?;
+        let pattern = Arc::new(reduction.reduced_pattern(&full));
+        let (k, m) = assemble_matrices(model, &offsets, &full, &joints)?;
+        let lumped = lumped_translational_mass(&full, &m, model.control_point_count());
+        let owners = owners(&reduction);
+        let spring_blocks = model.spring_blocks(&offsets)?;
         let spring_terms = spring_blocks
             .iter()
             .map(|blocks| {
@@ -297,7 +395,7 @@ impl SparseModel {
                     .map_err(sparse_error)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let (field_terms, field_products) = field_matrices(model, &full, &reduction, &pattern)?;
+        let (field_terms, field_products) = field_matrices(model, &offsets, &full, &reduction, &pattern)?;
         let free_stiffness = reduction.reduce_sparse(&k, &pattern).map_err(sparse_error)?;
         let mass = reduction.reduce_sparse(&m, &pattern).map_err(sparse_error)?;
         let generalised_mass = m.nonzeros();
@@ -312,7 +410,8 @@ impl SparseModel {
         }
         let blocks = decoupled_blocks(&pattern, &coupled)?;
         Ok(Self {
-            shell: shell.clone(),
+            patches: model.patches.clone(),
+            frames: model.frames(),
             free_stiffness,
             mass,
             generalised_mass,
@@ -320,7 +419,7 @@ impl SparseModel {
             pattern,
             spring_blocks,
             spring_terms,
-            spring_stiffness: model.springs.iter().map(|s| s.stiffness().to_vec()).collect(),
+            spring_stiffness: model.spring_coefficients(),
             field_terms,
             field_products,
             field_coefficients: model
@@ -453,7 +552,7 @@ impl SparseModel {
         }
         let omega2: Vec<f64> = order.iter().map(|&(b, i)| found[b].omega2[i]).collect();
         let shapes = self.reduction.expand(&reduced);
-        let kinds = classify_lumped(&omega2, &shapes, &self.lumped, self.shell.frames());
+        let kinds = classify_lumped(&omega2, &shapes, &self.lumped, &self.frames);
         let responses = loads.map(|_| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
         Ok((Modes { omega2, shapes, kinds }, responses))
     }
@@ -548,6 +647,7 @@ mod tests {
     use super::*;
     use crate::geometry::knots::KnotVector;
     use crate::model::material::OrthotropicMaterial;
+    use crate::model::shell::Shell;
     use crate::model::springs::{Face, SpringDirection, SpringField};
 
     /// A plate on two B-spline spring fields: the
