@@ -78,6 +78,23 @@ impl Publisher {
             .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
     }
 
+    /// Publishes a message's bytes as they are on `<prefix>/<suffix>`, in
+    /// `encoding` (a logger's own encoder, a damaged message in a test),
+    /// blocking while the link is congested rather than dropping.
+    pub fn publish_bytes(&mut self, suffix: &str, bytes: Vec<u8>, encoding: Encoding) -> Result<()> {
+        let key = format!("{}/{suffix}", self.prefix);
+        let zenc = match encoding {
+            Encoding::Cbor => zenoh::bytes::Encoding::APPLICATION_CBOR,
+            Encoding::Json => zenoh::bytes::Encoding::APPLICATION_JSON,
+        };
+        self.session
+            .put(&key, bytes)
+            .encoding(zenc)
+            .congestion_control(zenoh::qos::CongestionControl::Block)
+            .wait()
+            .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
+    }
+
     pub fn close(self) -> Result<()> {
         self.session
             .close()

@@ -337,9 +337,11 @@ fn damage(rng: &mut rand_chacha::ChaCha8Rng, bytes: &[u8]) -> Vec<u8> {
 
 /// `count` messages drawn at random (so out of order, repeated and
 /// overlapping) from the bundled recording, 70 % of them damaged
-/// ([`damage`]), as an MCAP recording; and how many blocks and undecodable
-/// messages it holds, each of which the pipeline must count once.
-fn damaged_stream(seed: u64, count: usize) -> (Vec<u8>, u64) {
+/// ([`damage`]): `(topic, log time, bytes)` each; and how many blocks and
+/// undecodable messages they hold, each of which the pipeline must count
+/// once.
+#[allow(clippy::type_complexity, reason = "a message's three parts")]
+pub fn damaged_messages(seed: u64, count: usize) -> (Vec<(String, u64, Vec<u8>)>, u64) {
     use rand::{Rng, SeedableRng};
     static MESSAGES: std::sync::OnceLock<Vec<(String, u64, Vec<u8>)>> = std::sync::OnceLock::new();
     let messages = MESSAGES.get_or_init(|| {
@@ -354,24 +356,59 @@ fn damaged_stream(seed: u64, count: usize) -> (Vec<u8>, u64) {
             .collect()
     });
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut expected = 0;
+    let out = (0..count)
+        .map(|_| {
+            let (topic, time, data) = &messages[rng.random_range(0..messages.len())];
+            let data = if rng.random_bool(0.7) {
+                damage(&mut rng, data)
+            } else {
+                data.clone()
+            };
+            expected += wire::decode(&data, Encoding::Cbor, &Limits::default()).map_or(1, |b| b.len() as u64);
+            (topic.clone(), *time, data)
+        })
+        .collect();
+    (out, expected)
+}
+
+/// [`damaged_messages`] as an MCAP recording.
+fn damaged_stream(seed: u64, count: usize) -> (Vec<u8>, u64) {
+    let (messages, expected) = damaged_messages(seed, count);
     let mut s = Splicer {
         out: mcap::Writer::new(Cursor::new(Vec::new())).unwrap(),
         channels: BTreeMap::new(),
         sequence: 0,
     };
-    let mut expected = 0;
-    for _ in 0..count {
-        let (topic, time, data) = &messages[rng.random_range(0..messages.len())];
-        let data = if rng.random_bool(0.7) {
-            damage(&mut rng, data)
-        } else {
-            data.clone()
-        };
-        expected += wire::decode(&data, Encoding::Cbor, &Limits::default()).map_or(1, |b| b.len() as u64);
-        s.write(topic, "cbor", *time, &data);
+    for (topic, time, data) in &messages {
+        s.write(topic, "cbor", *time, data);
     }
     s.out.finish().unwrap();
     (s.out.into_inner().into_inner(), expected)
+}
+
+/// The last health message of a results MCAP file.
+pub fn last_health(results: &[u8]) -> serde_json::Value {
+    mcap::MessageStream::new(results)
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.channel.topic.ends_with("/health"))
+        .last()
+        .map(|m| serde_json::from_slice::<serde_json::Value>(&m.data).unwrap())
+        .expect("a final health message")
+}
+
+/// A health message's blocks taken (samples and temperatures) plus its
+/// rejections by reason.
+pub fn accounted(health: &serde_json::Value) -> u64 {
+    let count = |key: &str| health[key].as_u64().unwrap_or(0);
+    let rejected: u64 = health["rejected"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|v| v.as_u64().unwrap())
+        .sum();
+    count("blocks") + count("temperature_blocks") + rejected
 }
 
 /// Replays a damaged stream; returns the messages replayed and the final
@@ -382,24 +419,7 @@ fn replayed_counts(bytes: &[u8]) -> (u64, u64) {
     let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();
     let summary = replay(&cfg, &[bytes], &mut w, ReplayOptions::default(), &mut |_, _| {}).unwrap();
     let results = w.finish().unwrap().into_inner();
-    let health = mcap::MessageStream::new(&results)
-        .unwrap()
-        .map(Result::unwrap)
-        .filter(|m| m.channel.topic.ends_with("/health"))
-        .last()
-        .map(|m| serde_json::from_slice::<serde_json::Value>(&m.data).unwrap())
-        .expect("a final health message");
-    let count = |key: &str| health[key].as_u64().unwrap_or(0);
-    let rejected: u64 = health["rejected"]
-        .as_object()
-        .unwrap()
-        .values()
-        .map(|v| v.as_u64().unwrap())
-        .sum();
-    (
-        summary.messages,
-        count("blocks") + count("temperature_blocks") + rejected,
-    )
+    (summary.messages, accounted(&last_health(&results)))
 }
 
 /// Messages per damaged stream: `SPLINEWATCH_FUZZ_MESSAGES` (the README's
@@ -427,8 +447,53 @@ proptest::proptest! {
     fn every_damaged_message_is_accepted_or_rejected(seed in proptest::prelude::any::<u64>()) {
         let count = fuzz_messages();
         let (bytes, expected) = damaged_stream(seed, count);
+        // The long run also keeps its stream, for `replay` under
+        // `/usr/bin/time` (README, "Bad input at scale").
+        if let Some(path) = std::env::var_os("SPLINEWATCH_FUZZ_OUT") {
+            std::fs::write(path, &bytes).unwrap();
+            eprintln!("{count} messages, {expected} blocks and undecodable messages");
+        }
         let (messages, counted) = replayed_counts(&bytes);
         proptest::prop_assert_eq!(messages, count as u64);
         proptest::prop_assert_eq!(counted, expected, "blocks and undecodable messages vs accepted + rejected");
     }
+}
+
+/// Issue 34's invariant live: 10 000 damaged messages (one stream of
+/// [`damaged_messages`]) published unpaced over a real zenoh session on
+/// loopback into the daemon. Every message the daemon received is in its
+/// last health message: its blocks accepted or rejected by reason, an
+/// undecodable message rejected once, and what the bounded ingest queue
+/// dropped in `queue_drops`: received = accepted + rejected + queue_drops.
+/// (10⁵ from a Python peer: `benches/damaged_peer.py`, README.)
+#[test]
+fn issue_34_a_live_daemon_accounts_for_every_damaged_message() {
+    let dir = crate::common::fresh_dir("issue_34_live");
+    let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
+    let prefix = cfg.topic_prefix();
+    let (messages, expected) = damaged_messages(34, 10_000);
+    let sent = messages.len() as u64;
+    let single = messages
+        .iter()
+        .all(|(_, _, data)| wire::decode(data, Encoding::Cbor, &Limits::default()).map_or(true, |b| b.len() <= 1));
+    assert!(
+        single,
+        "a dropped message counts once: every message holds one block at most"
+    );
+    let summary = splinewatch::service::demo::run_with_source(cfg, &dir, 0.0, 1, move |_, publisher| {
+        for (topic, _, data) in messages {
+            let suffix = topic.trim_start_matches(&format!("{prefix}/")).to_string();
+            publisher.publish_bytes(&suffix, data, Encoding::Cbor)?;
+        }
+        Ok(sent)
+    })
+    .unwrap();
+    assert_eq!(summary.messages, sent, "every message published was received");
+    let health = last_health(&std::fs::read(dir.join("results.mcap")).unwrap());
+    let drops = health["queue_drops"].as_u64().unwrap();
+    eprintln!(
+        "live: {sent} messages, {} accepted + rejected, {drops} dropped by the ingest queue",
+        accounted(&health)
+    );
+    assert_eq!(accounted(&health) + drops, expected, "{health}");
 }
