@@ -24,7 +24,7 @@ pub use model::{
     ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
     AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
 };
-pub use monitoring::MonitoringConfig;
+pub use monitoring::{MonitoringConfig, NotifyConfig};
 pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use patches::FaceConfig;

@@ -45,6 +45,32 @@ pub struct MonitoringConfig {
     /// Output-only: an identified frequency is monitored when its mode was
     /// identified in at least this share of the training windows.
     pub feature_presence: f64,
+    /// `[monitoring.notify]`: tell the owner when the alarm state changes.
+    pub notify: Option<NotifyConfig>,
+}
+
+/// `[monitoring.notify]`: a command run with the monitoring status JSON on
+/// its standard input whenever the alarm state changes (raised, cleared,
+/// outside the training range entered or left).
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct NotifyConfig {
+    /// The program and its arguments (no shell unless named).
+    pub command: Vec<String>,
+    /// Further runs after a failure, 0.5, 1, 2, … s apart.
+    #[serde(default = "default_notify_retries")]
+    pub retries: u32,
+    /// A run longer than this is killed and counts as failed.
+    #[serde(default = "default_notify_timeout")]
+    pub timeout_seconds: f64,
+}
+
+fn default_notify_retries() -> u32 {
+    3
+}
+
+fn default_notify_timeout() -> f64 {
+    30.0
 }
 
 impl Default for MonitoringConfig {
@@ -67,6 +93,7 @@ impl Default for MonitoringConfig {
             state_file: None,
             limits: d.limits,
             feature_presence: d.feature_presence,
+            notify: None,
         }
     }
 }
@@ -137,6 +164,23 @@ impl Config {
         m.training_span()?;
         if m.stuck_windows < 2 {
             return Err(err("monitoring.stuck_windows", "must be at least 2"));
+        }
+        if let Some(n) = &m.notify {
+            if n.command.first().is_none_or(String::is_empty) {
+                return Err(err(
+                    "monitoring.notify.command",
+                    "must name a program: [\"/path/prog\", \"arg\", …]",
+                ));
+            }
+            if !(n.timeout_seconds.is_finite() && n.timeout_seconds > 0.0) {
+                return Err(err(
+                    "monitoring.notify.timeout_seconds",
+                    "must be a positive number of seconds",
+                ));
+            }
+            if n.retries > 10 {
+                return Err(err("monitoring.notify.retries", "at most 10"));
+            }
         }
         m.settings().check().map_err(|e| match e {
             MonitoringError::Setting { name, .. } => err(format!("monitoring.{name}"), e),

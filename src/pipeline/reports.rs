@@ -47,6 +47,14 @@ pub struct Health {
     /// (`temperature_missing:<name>`, `temperature_stuck:<name>`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub temperature_flags: BTreeMap<String, u64>,
+    /// `[monitoring.notify]`: command runs (retries included), notifications
+    /// delivered, and given up or dropped.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub notification_attempts: u64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub notifications_sent: u64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub notification_failures: u64,
     /// Updates the monitor could not score (training not possible yet).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub monitoring_errors: u64,

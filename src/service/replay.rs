@@ -20,6 +20,7 @@ use crate::config::Config;
 use crate::io::monitoring_json::StatusMessage;
 use crate::io::recording::{McapMessage, RecordingSource};
 use crate::io::wire::{self, Encoding, Limits};
+use crate::outputs::notify::Notifier;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsWriter};
 use crate::outputs::state;
@@ -162,6 +163,13 @@ pub fn replay_sources<W: Write + Seek>(
             keep: keep_latest,
             last_time: 0,
             summary: ReplaySummary::default(),
+            notifier: config
+                .monitoring
+                .as_ref()
+                .and_then(|m| m.notify.as_ref())
+                .map(Notifier::start)
+                .transpose()
+                .context("starting the notify thread")?,
         };
         let replayed = run_stages(scope, pipeline, limits, messages, pipelined, &mut sink);
         sink.viewer = Viewer::Off; // the Rerun stage's queue ends
@@ -226,6 +234,10 @@ fn run_stages<'scope, W: Write + Seek>(
     if let Some(last_time) = last_time {
         let mut health = end.health;
         health.set_updates(counters);
+        if let Some(n) = sink.notifier.as_mut() {
+            n.finish();
+            n.count_into(&mut health);
+        }
         sink.out
             .write("health", last_time, &results::health_message(last_time, &health))?;
         sink.viewer.log(|| ViewerEvent::Health(last_time, Box::new(health)))?;
@@ -477,6 +489,9 @@ struct Outputs<'a, W: Write + Seek> {
     keep: usize,
     last_time: i128,
     summary: ReplaySummary,
+    /// `[monitoring.notify]`: replays run the owner's command too (a
+    /// notification chain can be tried offline).
+    notifier: Option<Notifier>,
 }
 
 impl<W: Write + Seek> Outputs<'_, W> {
@@ -543,6 +558,9 @@ impl<W: Write + Seek> Outputs<'_, W> {
             for (suffix, msg) in results::monitoring_messages(m) {
                 self.out.write(suffix, outcome.time_ns, &msg)?;
             }
+            if let Some(n) = self.notifier.as_mut() {
+                n.observe(&m.status, &serde_json::to_vec(&m.status)?);
+            }
             self.viewer
                 .log(|| ViewerEvent::Monitoring(outcome.time_ns, Box::new(m.status.clone())))?;
             self.summary.monitoring.push(m.status.clone());
@@ -582,6 +600,9 @@ impl<W: Write + Seek> Outputs<'_, W> {
             state::save_monitor(path, monitor)?;
         }
         health.set_updates(updates.counters());
+        if let Some(n) = &self.notifier {
+            n.count_into(&mut health);
+        }
         self.out.write(
             "health",
             outcome.time_ns,

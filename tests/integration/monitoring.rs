@@ -130,7 +130,14 @@ fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
 #[test]
 fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     let dir = temp("two-weeks");
-    let cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
+    let mut cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
+    // The owner's command (issue 33): every status it is given, one a line.
+    let notified = dir.join("notified.jsonl");
+    cfg.monitoring.as_mut().unwrap().notify = Some(splinewatch::config::NotifyConfig {
+        command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", notified.display())],
+        retries: 2,
+        timeout_seconds: 10.0,
+    });
     let recordings = simulate(&cfg, &dir, &[168, 168], |t| t);
     let state = dir.join("state.json");
     let first = replay_with_state(&cfg, &recordings[0], &state);
@@ -167,6 +174,43 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     assert!(statuses
         .iter()
         .any(|s| s.state == "outside_training_range" && s.flags.iter().any(|f| f == "outside_training_range:T1")));
+    // The command got exactly the changes into and out of an alarm or the
+    // outside-range state (each run's first status too when it is one),
+    // in order, the alarm's raise among them.
+    let changes = |s: &str| s == "alarm" || s == "outside_training_range";
+    let mut expected = Vec::new();
+    for run in [&statuses[..168], &statuses[168..]] {
+        let mut previous: Option<&str> = None;
+        for s in run {
+            if previous != Some(s.state.as_str()) && (changes(&s.state) || previous.is_some_and(changes)) {
+                expected.push(s.clone());
+            }
+            previous = Some(s.state.as_str());
+        }
+    }
+    let received: Vec<StatusMessage> = std::fs::read_to_string(&notified)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert!(expected.iter().any(|s| s.state == "alarm"));
+    assert_eq!(
+        serde_json::to_string(&received).unwrap(),
+        serde_json::to_string(&expected).unwrap()
+    );
+    let health = mcap::MessageStream::new(&second)
+        .unwrap()
+        .map(Result::unwrap)
+        .filter(|m| m.channel.topic.ends_with("/health"))
+        .last()
+        .map(|m| serde_json::from_slice::<serde_json::Value>(&m.data).unwrap())
+        .unwrap();
+    let second_run = expected.len() - expected.iter().filter(|s| statuses[..168].contains(s)).count();
+    assert_eq!(
+        health["notifications_sent"].as_u64().unwrap_or(0),
+        second_run as u64,
+        "{health}"
+    );
     // `monitor` reproduces the statuses bit for bit.
     let settings = cfg.monitoring.clone().unwrap();
     let again = rescore(&settings, &statuses, Training::FirstWindows(100), false).unwrap();

@@ -7,6 +7,7 @@ use super::{notify_systemd, RunOptions, RunSummary};
 use crate::config::Config;
 use crate::io::wire::{self, ChannelBlock, Encoding, Limits};
 use crate::io::{console, files};
+use crate::outputs::notify::Notifier;
 use crate::outputs::raw_recorder::RawRecorder;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsSink};
@@ -38,6 +39,8 @@ pub(super) struct Daemon {
     logged_rejections: BTreeMap<String, u64>,
     /// Whether the log said what an idle daemon waits for.
     said_waiting: bool,
+    /// `[monitoring.notify]`: the owner's command.
+    notifier: Option<Notifier>,
 }
 
 /// Why a window's update was dropped when the update queue overflowed.
@@ -87,6 +90,13 @@ impl Daemon {
             last_time: 0,
             logged_rejections: BTreeMap::new(),
             said_waiting: false,
+            notifier: config
+                .monitoring
+                .as_ref()
+                .and_then(|m| m.notify.as_ref())
+                .map(Notifier::start)
+                .transpose()
+                .context("starting the notify thread")?,
         })
     }
 
@@ -234,6 +244,11 @@ impl Daemon {
                 "raw-input recording",
             );
         }
+        // Notifications still queued are delivered (with their retries)
+        // before the last health message counts them.
+        if let Some(n) = self.notifier.as_mut() {
+            n.finish();
+        }
         self.sync_counters(&link);
         if let Some(time) = self.health_time() {
             self.record_health(time);
@@ -266,6 +281,9 @@ impl Daemon {
         health.queue_drops = self.worker.drops + link.ingest_drops();
         health.results_errors = self.results.errors;
         health.log_writes_dropped = console::log_writes_dropped();
+        if let Some(n) = &self.notifier {
+            n.count_into(health);
+        }
     }
 
     /// Writes a result message to the results file and publishes it,
@@ -387,6 +405,9 @@ impl Daemon {
         for (suffix, msg) in results::monitoring_messages(m) {
             let json = self.send(link, suffix, time_ns, &msg);
             if suffix == "monitoring/status" {
+                if let Some(n) = self.notifier.as_mut() {
+                    n.observe(&m.status, &json);
+                }
                 link.set_latest(Latest::Monitoring, json);
             }
         }

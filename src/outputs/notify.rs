@@ -1,0 +1,253 @@
+//! Alarm notifications (`[monitoring.notify]`): a command run with the
+//! monitoring status JSON on its standard input whenever the alarm state
+//! changes: an alarm raised or cleared, or a window outside the training
+//! range entered or left.
+//!
+//! Deliveries run on a thread of their own behind a bounded queue, so the
+//! pipeline never waits for them; a command that fails (non-zero exit, no
+//! start, over its time limit) is tried again after 0.5, 1, 2, … s up to
+//! `retries` times. Every attempt, delivery and failure is counted
+//! ([`NotifyCounts`], on the health topic).
+
+use crate::config::NotifyConfig;
+use crate::io::monitoring_json::StatusMessage;
+use crate::pipeline::Health;
+use std::io::Write;
+use std::process::{Command, Stdio};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{sync_channel, SyncSender, TrySendError};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Statuses waiting for delivery; beyond, a notification is counted as
+/// failed at once rather than hold up the pipeline.
+const QUEUE: usize = 64;
+
+/// States whose entry or exit is notified.
+const NOTIFIED: [&str; 2] = ["alarm", "outside_training_range"];
+
+/// What the notifier did so far.
+#[derive(Debug, Default)]
+pub struct NotifyCounts {
+    /// Command runs, retries included.
+    pub attempts: AtomicU64,
+    /// Notifications the command accepted (exit status 0).
+    pub sent: AtomicU64,
+    /// Notifications given up after every retry, or dropped on a full queue.
+    pub failures: AtomicU64,
+}
+
+/// Sends status changes to the configured command.
+pub struct Notifier {
+    queue: Option<SyncSender<Vec<u8>>>,
+    worker: Option<std::thread::JoinHandle<()>>,
+    counts: Arc<NotifyCounts>,
+    previous: Option<String>,
+}
+
+impl Notifier {
+    /// Starts the delivery thread.
+    pub fn start(config: &NotifyConfig) -> std::io::Result<Self> {
+        let (queue, received) = sync_channel::<Vec<u8>>(QUEUE);
+        let counts = Arc::new(NotifyCounts::default());
+        let (config, shared) = (config.clone(), Arc::clone(&counts));
+        let worker = std::thread::Builder::new().name("notify".into()).spawn(move || {
+            for status in received {
+                deliver(&config, &status, &shared);
+            }
+        })?;
+        Ok(Self {
+            queue: Some(queue),
+            worker: Some(worker),
+            counts,
+            previous: None,
+        })
+    }
+
+    /// Takes a scored window's status (and its JSON): queues it when the
+    /// state changed into or out of an alarm or the outside-range state
+    /// (the first status when it is one of those).
+    pub fn observe(&mut self, status: &StatusMessage, json: &[u8]) {
+        let previous = self.previous.replace(status.state.clone());
+        if previous.as_deref() == Some(status.state.as_str()) {
+            return;
+        }
+        let notified = |s: &str| NOTIFIED.contains(&s);
+        if !(notified(&status.state) || previous.as_deref().is_some_and(notified)) {
+            return;
+        }
+        let Some(queue) = &self.queue else { return };
+        if let Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) = queue.try_send(json.to_vec()) {
+            self.counts.failures.fetch_add(1, Ordering::Relaxed);
+            tracing::warn!(
+                message = "notification dropped: the notify queue is full",
+                window = status.window
+            );
+        }
+    }
+
+    /// The counts so far.
+    pub fn counts(&self) -> &NotifyCounts {
+        &self.counts
+    }
+
+    /// Copies the counts into `health`.
+    pub fn count_into(&self, health: &mut Health) {
+        health.notification_attempts = self.counts.attempts.load(Ordering::Relaxed);
+        health.notifications_sent = self.counts.sent.load(Ordering::Relaxed);
+        health.notification_failures = self.counts.failures.load(Ordering::Relaxed);
+    }
+
+    /// Delivers what is queued (with its retries), then stops.
+    pub fn finish(&mut self) {
+        self.queue = None;
+        if let Some(worker) = self.worker.take() {
+            if worker.join().is_err() {
+                tracing::error!(message = "the notify thread panicked");
+            }
+        }
+    }
+}
+
+impl Drop for Notifier {
+    fn drop(&mut self) {
+        self.finish();
+    }
+}
+
+/// Runs the command with `status` on its standard input until it succeeds
+/// or the retries are spent.
+fn deliver(config: &NotifyConfig, status: &[u8], counts: &NotifyCounts) {
+    for attempt in 0..=config.retries {
+        if attempt > 0 {
+            std::thread::sleep(Duration::from_millis(500 << (attempt - 1).min(6)));
+        }
+        counts.attempts.fetch_add(1, Ordering::Relaxed);
+        match run_once(config, status) {
+            Ok(()) => {
+                counts.sent.fetch_add(1, Ordering::Relaxed);
+                return;
+            }
+            Err(reason) => tracing::warn!(message = "notify command failed", attempt = attempt + 1, %reason),
+        }
+    }
+    counts.failures.fetch_add(1, Ordering::Relaxed);
+    tracing::error!(
+        message = "notification given up",
+        attempts = config.retries + 1,
+        command = ?config.command
+    );
+}
+
+/// One run of the command: `Err` says why it did not succeed.
+fn run_once(config: &NotifyConfig, status: &[u8]) -> Result<(), String> {
+    let (program, args) = config.command.split_first().ok_or("no command")?;
+    let mut child = Command::new(program)
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .map_err(|e| format!("cannot start {program}: {e}"))?;
+    if let Some(mut stdin) = child.stdin.take() {
+        // A command that exits without reading is judged by its status.
+        let _ = stdin.write_all(status).and_then(|()| stdin.write_all(b"\n"));
+    }
+    let deadline = Instant::now() + Duration::from_secs_f64(config.timeout_seconds);
+    loop {
+        match child.try_wait() {
+            Ok(Some(s)) if s.success() => return Ok(()),
+            Ok(Some(s)) => return Err(format!("{program} exited with {s}")),
+            Ok(None) if Instant::now() >= deadline => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!("{program} ran over {} s", config.timeout_seconds));
+            }
+            Ok(None) => std::thread::sleep(Duration::from_millis(20)),
+            Err(e) => return Err(format!("waiting for {program}: {e}")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn status(window: u64, state: &str) -> StatusMessage {
+        serde_json::from_value(serde_json::json!({
+            "window": window, "time": "2026-11-24T00:00:00Z", "state": state,
+            "t2": null, "t2_limit": null, "mewma": null, "mewma_limit": null,
+            "temperature_c": null, "residuals": []
+        }))
+        .unwrap()
+    }
+
+    /// A real command (`sh`) receives the raise and the clear of an alarm
+    /// and the entry into the outside-range state, one status JSON per run,
+    /// and nothing for windows whose state did not change; a failing
+    /// command is tried `retries + 1` times and counted as a failure.
+    #[test]
+    fn a_command_receives_the_alarm_state_changes() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("received.jsonl");
+        let config = NotifyConfig {
+            command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", file.display())],
+            retries: 2,
+            timeout_seconds: 10.0,
+        };
+        let mut notifier = Notifier::start(&config).unwrap();
+        let states = [
+            "training",
+            "normal",
+            "normal",
+            "alarm",
+            "alarm",
+            "normal",
+            "outside_training_range",
+            "normal",
+        ];
+        for (w, state) in states.iter().enumerate() {
+            let s = status(w as u64, state);
+            notifier.observe(&s, &serde_json::to_vec(&s).unwrap());
+        }
+        notifier.finish();
+        let received: Vec<serde_json::Value> = std::fs::read_to_string(&file)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let seen: Vec<(u64, &str)> = received
+            .iter()
+            .map(|v| (v["window"].as_u64().unwrap(), v["state"].as_str().unwrap()))
+            .collect();
+        assert_eq!(
+            seen,
+            [
+                (3, "alarm"),
+                (5, "normal"),
+                (6, "outside_training_range"),
+                (7, "normal")
+            ]
+        );
+        let counts = notifier.counts();
+        assert_eq!(counts.sent.load(Ordering::Relaxed), 4);
+        assert_eq!(counts.attempts.load(Ordering::Relaxed), 4);
+
+        let failing = NotifyConfig {
+            command: vec!["sh".into(), "-c".into(), "exit 3".into()],
+            retries: 2,
+            timeout_seconds: 10.0,
+        };
+        let mut notifier = Notifier::start(&failing).unwrap();
+        let s = status(0, "alarm");
+        notifier.observe(&s, b"{}");
+        notifier.finish();
+        let counts = notifier.counts();
+        assert_eq!(counts.attempts.load(Ordering::Relaxed), 3);
+        assert_eq!(counts.sent.load(Ordering::Relaxed), 0);
+        assert_eq!(counts.failures.load(Ordering::Relaxed), 1);
+        let mut health = Health::default();
+        notifier.count_into(&mut health);
+        assert_eq!((health.notification_attempts, health.notification_failures), (3, 1));
+    }
+}
