@@ -254,8 +254,15 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     // with every TLS file read and its certificates' validity checked.
     let (_, tls) = cfg.zenoh.to_zenoh_with_tls()?;
     outln!("{}: configuration is valid", cfg.structure.name);
-    for line in studies::modes::describe_patches(&cfg.build_model()?) {
-        outln!("{line}");
+    if cfg.has_model() {
+        for line in studies::modes::describe_patches(&cfg.build_model()?) {
+            outln!("{line}");
+        }
+    } else {
+        outln!(
+            "no model: {} sensors for output-only identification (oma, import, frf); the model's commands need [model]",
+            cfg.sensors.len()
+        );
     }
     if tls.endpoints {
         let kind = if tls.mutual { "mutual TLS" } else { "TLS" };

@@ -59,6 +59,9 @@ pub(crate) fn err(path: impl Into<String>, message: impl Display) -> ConfigError
 #[serde(deny_unknown_fields)]
 pub struct Config {
     pub structure: StructureConfig,
+    /// The deck; absent, only what needs no model works (`oma`, `import`,
+    /// `frf`): the others say `model: no deck`.
+    #[serde(default)]
     pub model: ModelConfig,
     #[serde(default)]
     pub sensors: Vec<SensorConfig>,
@@ -115,6 +118,13 @@ impl Config {
         })?;
         config.validate_names()?;
         Ok(config)
+    }
+
+    /// Whether the config describes a deck (`[model]` with a geometry or
+    /// patches).
+    pub fn has_model(&self) -> bool {
+        let m = &self.model;
+        m.geometry.is_some() || m.discretization.is_some() || m.material.is_some() || !m.patches.is_empty()
     }
 
     fn validate_names(&self) -> Result<(), ConfigError> {
@@ -181,13 +191,22 @@ impl Config {
 
     /// Builds every section, so all errors surface at load time.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let model = self.build_model()?;
-        self.build_sensors(&model)?;
-        self.modal_cutoff_hz()?;
-        if self.model.damping.is_some() {
-            self.build_damping()?;
+        // Without a model only the sensors and the analysis settings are
+        // checked (output-only identification needs no deck).
+        if self.has_model() {
+            let model = self.build_model()?;
+            self.build_sensors(&model)?;
+            self.modal_cutoff_hz()?;
+            if self.model.damping.is_some() {
+                self.build_damping()?;
+            }
+            self.build_parameters()?;
+        } else if self.sensors.is_empty() {
+            return Err(err(
+                "model",
+                "no deck and no sensors: give [model] (or [[model.patches]]), or [[sensors]] for output-only identification",
+            ));
         }
-        self.build_parameters()?;
         self.update_settings()?;
         // The sampling rate is only known from the data; check with a nominal one.
         self.welch_settings(256.0)?;

@@ -68,6 +68,28 @@ pub struct ModelConfig {
     pub solver: SolverConfig,
 }
 
+impl Default for ModelConfig {
+    /// No deck.
+    fn default() -> Self {
+        Self {
+            geometry: None,
+            discretization: None,
+            material: None,
+            patches: Vec::new(),
+            materials: BTreeMap::new(),
+            joint_tolerance: default_joint_tolerance(),
+            joint_penalty: default_joint_penalty(),
+            bearings: Vec::new(),
+            masses: Vec::new(),
+            springs: Vec::new(),
+            stiffness_fields: Vec::new(),
+            constraints: Vec::new(),
+            damping: None,
+            solver: SolverConfig::default(),
+        }
+    }
+}
+
 fn default_joint_tolerance() -> f64 {
     1e-3
 }

@@ -645,3 +645,39 @@ fn issue_30_the_overpass_replay_finds_its_bent_bearings_stiffening() {
         }
     }
 }
+
+/// Issue 33: `oma` needs no model. A config of `[structure]` and the
+/// bundled sensors only identifies the same modes, bit for bit, as the
+/// bundled config on the same ambient recording; `modes` on it says there
+/// is no deck.
+#[test]
+fn issue_33_oma_runs_on_a_config_without_a_model() {
+    let dir = fresh_dir("oma-no-model");
+    let rec = dir.join("ambient.mcap");
+    simulate(&rec, "ambient", "300", "5", &[]);
+    let bundled = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello.toml")).unwrap();
+    let sensors: String = bundled
+        .split("\n[[sensors]]")
+        .skip(1)
+        .map(|s| format!("\n[[sensors]]{}", s.split("\n[").next().unwrap()))
+        .collect();
+    let config = dir.join("sensors-only.toml");
+    std::fs::write(&config, format!("[structure]\nname = \"sinello-span2\"\n{sensors}")).unwrap();
+    let identify = |cfg: &str| {
+        let o = splinewatch(&["oma", "--config", cfg, rec.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{cfg}: {}", stderr(&o));
+        o.stdout
+    };
+    let without = identify(config.to_str().unwrap());
+    let with = identify("config/sinello.toml");
+    let file: ModesFile = serde_json::from_slice(&without).unwrap();
+    assert!(file.modes.len() >= 10, "{} modes", file.modes.len());
+    assert_eq!(without, with, "the model plays no part in the identification");
+    let o = splinewatch(&["modes", "--config", config.to_str().unwrap()]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("model: no deck"), "{}", stderr(&o));
+    let o = splinewatch(&["check-config", config.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8(o.stdout).unwrap();
+    assert!(text.contains("no model: 12 sensors"), "{text}");
+}
