@@ -64,6 +64,16 @@ impl Notifier {
         })
     }
 
+    /// The notifier `[monitoring.notify]` of `config` asks for, if any.
+    pub fn for_config(config: &crate::config::Config) -> std::io::Result<Option<Self>> {
+        config
+            .monitoring
+            .as_ref()
+            .and_then(|m| m.notify.as_ref())
+            .map(Self::start)
+            .transpose()
+    }
+
     /// Takes a scored window's status (and its JSON): queues it when the
     /// state changed into or out of an alarm or the outside-range state
     /// (the first status when it is one of those).

@@ -163,13 +163,7 @@ pub fn replay_sources<W: Write + Seek>(
             keep: keep_latest,
             last_time: 0,
             summary: ReplaySummary::default(),
-            notifier: config
-                .monitoring
-                .as_ref()
-                .and_then(|m| m.notify.as_ref())
-                .map(Notifier::start)
-                .transpose()
-                .context("starting the notify thread")?,
+            notifier: Notifier::for_config(config).context("starting the notify thread")?,
         };
         let replayed = run_stages(scope, pipeline, limits, messages, pipelined, &mut sink);
         sink.viewer = Viewer::Off; // the Rerun stage's queue ends

@@ -44,24 +44,7 @@ fn exported_matrices_read_back_to_equation_23() {
         names,
         ["west.k1", "west.k2", "west.k3", "west.k4", "east.k1", "east.k2", "east.k3", "east.k4"]
     );
-    let (n, k) = read(&dir.join("K.mtx"));
-    let (_, k_f) = read(&dir.join("K_f.mtx"));
-    assert_eq!(n, 325);
-    let mut sum = k_f.clone();
-    for p in parameters {
-        let (_, dk) = read(&dir.join(p["file"].as_str().unwrap()));
-        assert_eq!(dk.len(), p["nnz_lower"].as_u64().unwrap() as usize);
-        let kappa = p["value"].as_f64().unwrap();
-        for (at, v) in dk {
-            *sum.entry(at).or_insert(0.0) += kappa * v;
-        }
-    }
-    let top = k.values().fold(0.0f64, |a, v| a.max(v.abs()));
-    for (at, v) in &sum {
-        let exported = k.get(at).copied().unwrap_or(0.0);
-        assert!((exported - v).abs() <= 1e-14 * top, "{at:?}: {exported} vs {v}");
-    }
-    assert!(k.keys().all(|at| sum.contains_key(at)));
+    assert_eq!(assert_equation_23(&dir, parameters), 325);
     let (_, m) = read(&dir.join("M.mtx"));
     assert!(m.iter().filter(|((r, c), _)| r == c).all(|(_, &v)| v > 0.0));
 }
@@ -320,11 +303,22 @@ fn issue_30_matrices_of_several_patches_name_their_patch_and_bearings() {
         .collect();
     assert_eq!(bearings.len(), 12, "{bearings:?}");
     assert_eq!(bearings[..3], ["west_south.kx", "west_south.ky", "west_south.kz"]);
+    assert_eq!(
+        assert_equation_23(&dir, parameters),
+        index["free_dofs"].as_u64().unwrap() as usize
+    );
+}
+
+/// `K = K_f + Σ value · ∂K/∂parameter` on the export in `dir`, entry by
+/// entry to 1e-14 of K's largest (the values read back exactly, only the
+/// sum rounds), every parameter file holding its `nnz_lower` entries and
+/// every entry of K in the sum; returns the matrices' size.
+fn assert_equation_23(dir: &Path, parameters: &[serde_json::Value]) -> usize {
     let (n, k) = read(&dir.join("K.mtx"));
     let (_, mut sum) = read(&dir.join("K_f.mtx"));
-    assert_eq!(n, index["free_dofs"].as_u64().unwrap() as usize);
     for p in parameters {
         let (_, dk) = read(&dir.join(p["file"].as_str().unwrap()));
+        assert_eq!(dk.len(), p["nnz_lower"].as_u64().unwrap() as usize);
         let value = p["value"].as_f64().unwrap();
         for (at, v) in dk {
             *sum.entry(at).or_insert(0.0) += value * v;
@@ -335,4 +329,6 @@ fn issue_30_matrices_of_several_patches_name_their_patch_and_bearings() {
         let exported = k.get(at).copied().unwrap_or(0.0);
         assert!((exported - v).abs() <= 1e-14 * top, "{at:?}: {exported} vs {v}");
     }
+    assert!(k.keys().all(|at| sum.contains_key(at)));
+    n
 }

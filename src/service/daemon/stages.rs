@@ -90,13 +90,7 @@ impl Daemon {
             last_time: 0,
             logged_rejections: BTreeMap::new(),
             said_waiting: false,
-            notifier: config
-                .monitoring
-                .as_ref()
-                .and_then(|m| m.notify.as_ref())
-                .map(Notifier::start)
-                .transpose()
-                .context("starting the notify thread")?,
+            notifier: Notifier::for_config(config).context("starting the notify thread")?,
         })
     }
 
