@@ -146,6 +146,11 @@ impl ModelPoint {
     pub fn damping(&self) -> &DampingCurve {
         &self.damping
     }
+
+    /// The FRFs and sensitivities at this point, as evaluated.
+    pub(super) fn evaluation(&self) -> &FrfEvaluation {
+        &self.frfs
+    }
 }
 
 /// What [`UpdateProblem::solve_from`] returns: the result and the model at
@@ -305,7 +310,19 @@ impl<'a> UpdateProblem<'a> {
     }
 
     /// [`Self::evaluate`] for a computed modal state.
-    fn evaluate_state(&self, p: &[f64], state: &ModalState, jacobian: bool) -> Result<Evaluation, UpdateError> {
+    pub(super) fn evaluate_state(
+        &self,
+        p: &[f64],
+        state: &ModalState,
+        jacobian: bool,
+    ) -> Result<Evaluation, UpdateError> {
+        let frfs = self.frfs_at(p, state, jacobian)?;
+        self.weighted(p, frfs, jacobian)
+    }
+
+    /// The model FRFs on this problem's lines at `state` (parameters `p`),
+    /// with their sensitivities if `jacobian`.
+    pub(super) fn frfs_at(&self, p: &[f64], state: &ModalState, jacobian: bool) -> Result<FrfEvaluation, UpdateError> {
         let mut frfs = self
             .model
             .evaluate_on_threads(state, self.request(), jacobian, self.settings.threads);
@@ -317,11 +334,11 @@ impl<'a> UpdateProblem<'a> {
             let (_, damping) = self.model_at(p)?;
             frfs.dh_dtheta = self.model.field_frf_sensitivities(state, &damping, self.request());
         }
-        self.weighted(p, frfs, jacobian)
+        Ok(frfs)
     }
 
     /// Residual and, if asked, Jacobian from model FRFs (and sensitivities) at `p`.
-    fn weighted(&self, p: &[f64], frfs: FrfEvaluation, jacobian: bool) -> Result<Evaluation, UpdateError> {
+    pub(super) fn weighted(&self, p: &[f64], frfs: FrfEvaluation, jacobian: bool) -> Result<Evaluation, UpdateError> {
         let nl = self.lines.len();
         let nb = self.pairs.len();
         let mut residual = Vec::with_capacity(2 * nl * nb);
@@ -364,7 +381,11 @@ impl<'a> UpdateProblem<'a> {
     }
 
     /// `previous` if it is this model at `p` on this problem's lines.
-    fn reusable<'p>(&self, previous: Option<&'p ModelPoint>, p: &[f64]) -> Result<Option<&'p ModelPoint>, UpdateError> {
+    pub(super) fn reusable<'p>(
+        &self,
+        previous: Option<&'p ModelPoint>,
+        p: &[f64],
+    ) -> Result<Option<&'p ModelPoint>, UpdateError> {
         let Some(point) = previous else {
             return Ok(None);
         };
@@ -382,7 +403,7 @@ impl<'a> UpdateProblem<'a> {
         Ok(matches.then_some(point))
     }
 
-    fn point(&self, p: &[f64], state: ModalState, frfs: FrfEvaluation) -> Result<ModelPoint, UpdateError> {
+    pub(super) fn point(&self, p: &[f64], state: ModalState, frfs: FrfEvaluation) -> Result<ModelPoint, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
         Ok(ModelPoint {
             model_id: self.model.id(),
@@ -397,7 +418,7 @@ impl<'a> UpdateProblem<'a> {
         })
     }
 
-    fn relative_residuals(&self, h: &[c64]) -> (f64, Vec<f64>) {
+    pub(super) fn relative_residuals(&self, h: &[c64]) -> (f64, Vec<f64>) {
         let nl = self.lines.len();
         let (mut num, mut den) = (0.0, 0.0);
         let mut per = Vec::with_capacity(self.pairs.len());

@@ -17,6 +17,10 @@
 //! change of the cost, the step size or the iteration budget. Plain
 //! Gauss–Newton is available for comparison.
 //!
+//! Residual models: FRF residues ([`frf_residual`]), modal residues of
+//! identified modes ([`ModalUpdateProblem`]), or both stacked, each block in
+//! its own standard deviations ([`joint`]).
+//!
 //! Uncertainty: `Cov(p) = σ̂² (J_pᵀ W J_p)⁻¹` with `σ̂² = ‖r_w‖² / (m - n)`,
 //! computed through the SVD of the column-normalised weighted Jacobian, whose
 //! singular values (and condition number) are reported: a tiny singular
@@ -30,6 +34,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub mod frf_residual;
+pub mod joint;
 mod modal;
 pub mod modal_residual;
 mod solver;

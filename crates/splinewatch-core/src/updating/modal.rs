@@ -8,7 +8,7 @@ use super::solver::{self, Evaluated, ResidualModel};
 use super::{check_parameters, IterationRecord, Parameter, UpdateError, UpdateResult, UpdateSettings};
 use crate::model::damping::DampingCurve;
 use crate::response::frf::{FrfModel, ModalState};
-use crate::updating::modal_residual::{modal_residue, pair_modes, ModePair, ObservedMode};
+use crate::updating::modal_residual::{modal_residue, pair_modes, ModalResidue, ModePair, ObservedMode};
 
 /// Updating a model against identified modes.
 #[derive(Debug)]
@@ -96,21 +96,42 @@ impl<'a> ModalUpdateProblem<'a> {
         super::fields_at(&self.parameters, self.model.field_coefficients(), p)
     }
 
+    /// The identified modes paired with `state`'s ([`pair_modes`]).
+    pub(super) fn pairs_at(&self, state: &ModalState) -> Vec<ModePair> {
+        pair_modes(state, self.observed, self.min_mac, self.max_gap)
+    }
+
+    /// The residues of `pairs` at `state` ([`modal_residue`]).
+    pub(super) fn residue_at(
+        &self,
+        state: &ModalState,
+        damping: &DampingCurve,
+        pairs: &[ModePair],
+        jacobian: bool,
+    ) -> ModalResidue {
+        modal_residue(
+            self.model,
+            state,
+            damping,
+            self.observed,
+            pairs,
+            &self.parameters,
+            jacobian,
+        )
+    }
+
+    /// The identified modes.
+    pub(super) fn observed(&self) -> &[ObservedMode] {
+        self.observed
+    }
+
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
         let (kappa, damping) = self.model_at(p)?;
         let state = self
             .model
             .modal_state_with_fields(&kappa, &self.fields_at(p), &damping)?;
-        let pairs = pair_modes(&state, self.observed, self.min_mac, self.max_gap);
-        let residue = modal_residue(
-            self.model,
-            &state,
-            &damping,
-            self.observed,
-            &pairs,
-            &self.parameters,
-            jacobian,
-        );
+        let pairs = self.pairs_at(&state);
+        let residue = self.residue_at(&state, &damping, &pairs, jacobian);
         if residue.residual.len() <= self.parameters.len() {
             return Err(UpdateError::Underdetermined {
                 residuals: residue.residual.len(),
@@ -200,15 +221,7 @@ impl ResidualModel for ModalUpdateProblem<'_> {
     }
 
     fn with_jacobian(&self, _p: &[f64], trial: Evaluated<Extra>) -> Result<Evaluated<Extra>, UpdateError> {
-        let residue = modal_residue(
-            self.model,
-            &trial.extra.state,
-            &trial.extra.damping,
-            self.observed,
-            &trial.extra.pairs,
-            &self.parameters,
-            true,
-        );
+        let residue = self.residue_at(&trial.extra.state, &trial.extra.damping, &trial.extra.pairs, true);
         Ok(Evaluated {
             residual: residue.residual,
             jacobian: residue.jacobian,

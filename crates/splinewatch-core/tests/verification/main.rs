@@ -2,6 +2,7 @@
 
 mod common;
 mod frf;
+mod joint;
 mod modal;
 mod modal_residual;
 mod modal_sensitivity;
