@@ -59,7 +59,7 @@ fn replay_one_hour_ten_minute_windows(bencher: divan::Bencher) {
 #[divan::bench(sample_count = 3, sample_size = 1)]
 fn replay_one_hour_output_only(bencher: divan::Bencher) {
     let mut cfg = load_config(&root().join("config/sinello-ambient.toml")).unwrap();
-    cfg.oma.window_seconds = Some(600.0);
+    cfg.oma_section.get_or_insert_with(Default::default).window_seconds = Some(600.0);
     let bytes = recording(&cfg, &SimulationOptions::ambient_excitation(&cfg, 3600.0, 7));
     bencher.bench(|| {
         let mut w = ResultsWriter::new(Cursor::new(Vec::new()), &cfg.topic_prefix()).unwrap();

@@ -264,6 +264,14 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
             cfg.sensors.len()
         );
     }
+    if cfg.has_model() && !cfg.sensors.is_empty() {
+        let paths = match (cfg.is_output_only(), cfg.runs_oma()) {
+            (true, _) => "identified modes (output-only)",
+            (false, true) => "FRFs and identified modes (a force sensor and [oma])",
+            (false, false) => "FRFs",
+        };
+        outln!("per window: {paths}; updates fit {}", cfg.residues()?.as_str());
+    }
     if tls.endpoints {
         let kind = if tls.mutual { "mutual TLS" } else { "TLS" };
         outln!("zenoh transport: {kind}");

@@ -31,7 +31,7 @@ pub use patches::FaceConfig;
 pub use schedule::ScheduleConfig;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
-pub use updating::{parameter_family, ParameterFamily, UpdatingConfig};
+pub use updating::{parameter_family, ParameterFamily, Residues, UpdatingConfig};
 pub use zenoh::ZenohConfig;
 
 use anyhow::Context;
@@ -75,8 +75,11 @@ pub struct Config {
     pub output: OutputConfig,
     #[serde(default)]
     pub zenoh: ZenohConfig,
-    #[serde(default)]
-    pub oma: OmaConfig,
+    /// `[oma]`: absent, an output-only config identifies with the defaults
+    /// and a config with a force sensor does not identify at all
+    /// ([`Config::runs_oma`]); read through [`Config::oma`].
+    #[serde(default, rename = "oma")]
+    pub oma_section: Option<OmaConfig>,
     /// `[monitoring]`: compensation and alarms; absent: none.
     #[serde(default)]
     pub monitoring: Option<MonitoringConfig>,
@@ -212,8 +215,11 @@ impl Config {
         self.welch_settings(256.0)?;
         // A config without sensors serves the model's own commands (`modes`,
         // `check-config`, `matrices`); those that need sensors say so.
-        if !self.sensors.is_empty() && (self.is_output_only() || self.oma != OmaConfig::default()) {
+        if !self.sensors.is_empty() && self.runs_oma() {
             self.oma_settings()?;
+        }
+        if !self.sensors.is_empty() {
+            self.residues()?;
         }
         self.validate_monitoring()?;
         for (key, hours) in [

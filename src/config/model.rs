@@ -347,7 +347,7 @@ impl Config {
             None => {
                 let top = [
                     self.updating.band.map(|b| b[1]),
-                    self.oma.band.map(|b| b[1]),
+                    self.oma().band.map(|b| b[1]),
                     Some(self.frf.band[1]),
                 ]
                 .into_iter()

@@ -69,12 +69,26 @@ impl Config {
             .any(|s| s.quantity.as_slice().iter().any(|q| q == "force"))
     }
 
-    /// The pipeline's analysis window and hop (s): `[oma]`'s for an
-    /// output-only config when given, `[frf]`'s otherwise.
+    /// The `[oma]` settings (the defaults when the section is absent).
+    pub fn oma(&self) -> &OmaConfig {
+        static DEFAULT: std::sync::LazyLock<OmaConfig> = std::sync::LazyLock::new(OmaConfig::default);
+        self.oma_section.as_ref().unwrap_or(&DEFAULT)
+    }
+
+    /// True when the pipeline identifies each window's modes output-only:
+    /// an output-only config, or one with a force sensor and an `[oma]`
+    /// section (both paths: FRFs and identified modes per window).
+    pub fn runs_oma(&self) -> bool {
+        self.is_output_only() || self.oma_section.is_some()
+    }
+
+    /// The pipeline's analysis window and hop (s): `[oma]`'s when the
+    /// pipeline identifies modes and `[oma]` gives one (with both paths the
+    /// FRFs are estimated over that window too), `[frf]`'s otherwise.
     pub fn analysis_window(&self) -> (f64, Option<f64>) {
-        if self.is_output_only() {
-            if let Some(w) = self.oma.window_seconds {
-                return (w, self.oma.window_hop_seconds);
+        if self.runs_oma() {
+            if let Some(w) = self.oma().window_seconds {
+                return (w, self.oma().window_hop_seconds);
             }
         }
         (self.frf.window_seconds, self.frf.window_hop_seconds)
@@ -83,7 +97,7 @@ impl Config {
     /// The core settings and the reference channels (positions among
     /// [`Self::output_channels`]).
     pub fn oma_settings(&self) -> Result<(OmaSettings, Vec<usize>), ConfigError> {
-        let o = &self.oma;
+        let o = self.oma();
         let outputs = self.output_channels()?;
         let references = o
             .references

@@ -64,6 +64,33 @@ pub struct UpdatingConfig {
     /// … and if their frequencies differ by at most this fraction.
     #[serde(default = "default_max_frequency_gap")]
     pub max_frequency_gap: f64,
+    /// What the pipeline's updates fit; default: `"frf"` with a force
+    /// sensor, `"modes"` without ([`Config::residues`]).
+    pub residues: Option<Residues>,
+}
+
+/// What an update fits (`[updating] residues`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Residues {
+    /// The window's FRFs (eq. 36–39), weighted by `weighting`.
+    Frf,
+    /// The window's identified modes, in their std (modal residues).
+    Modes,
+    /// Both, each block in its own standard deviations: the FRFs by the H1
+    /// estimator's variance whatever `weighting` says, the modes by theirs
+    /// (`splinewatch_core::updating::joint`).
+    Both,
+}
+
+impl Residues {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Frf => "frf",
+            Self::Modes => "modes",
+            Self::Both => "both",
+        }
+    }
 }
 
 fn default_max_frequency_gap() -> f64 {
@@ -194,6 +221,35 @@ impl Config {
     }
 
     /// `[updating]` as solver settings.
+    /// What the pipeline's updates fit: `[updating] residues`, or `"frf"`
+    /// with a force sensor and `"modes"` without. FRF residues need a force
+    /// sensor; modal residues need the windows' modes, identified
+    /// output-only or, with a force sensor, when `[oma]` is given.
+    pub fn residues(&self) -> Result<Residues, ConfigError> {
+        let output_only = self.is_output_only();
+        let residues = self
+            .updating
+            .residues
+            .unwrap_or(if output_only { Residues::Modes } else { Residues::Frf });
+        let needs_force = matches!(residues, Residues::Frf | Residues::Both);
+        if needs_force && output_only {
+            return Err(err(
+                "updating.residues",
+                format!("{:?} needs a force sensor: no sensor measures force", residues.as_str()),
+            ));
+        }
+        if residues != Residues::Frf && !self.runs_oma() {
+            return Err(err(
+                "updating.residues",
+                format!(
+                    "{:?} fits the windows' identified modes: with a force sensor, add [oma] to identify them",
+                    residues.as_str()
+                ),
+            ));
+        }
+        Ok(residues)
+    }
+
     pub fn update_settings(&self) -> Result<UpdateSettings, ConfigError> {
         let u = &self.updating;
         let positive = |key: &str, v: f64| {

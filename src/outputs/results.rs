@@ -3,7 +3,7 @@
 
 use crate::io::frf_json::FrfFile;
 use crate::io::wire::format_timestamp;
-use crate::pipeline::{Fit, Health, Measured, MonitoringOutcome, UpdateOutcome, WindowModes, WindowReport};
+use crate::pipeline::{Health, MonitoringOutcome, UpdateOutcome, WindowModes, WindowReport};
 use anyhow::{Context, Result};
 use serde::Serialize;
 use serde_json::{json, Value};
@@ -17,7 +17,7 @@ use std::path::Path;
 pub const TOPICS: [(&str, &str); 9] = [
     (
         "updating/parameters",
-        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}},"held":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"reason":{"type":"string","enum":["no_gradient","at_bound","unresolved"]},"value":{"type":"number"}}}},"truncation":{"type":"object","properties":{"cutoff_hz":{"type":"number"},"modes_kept":{"type":"integer"},"frf_error":{"type":["number","null"]}}}}}"#,
+        r#"{"type":"object","required":["time","window","converged","relative_residual","parameters"],"properties":{"time":{"type":"string","format":"date-time"},"window":{"type":"integer"},"converged":{"type":"boolean"},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"stop_reason":{"type":"string"},"condition_number":{"type":"number"},"relative_offset":{"type":["number","null"]},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"correlations":{"type":"array","items":{"type":"object","properties":{"a":{"type":"string"},"b":{"type":"string"},"rho":{"type":"number"}}}},"held":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"reason":{"type":"string","enum":["no_gradient","at_bound","unresolved"]},"value":{"type":"number"}}}},"residues":{"type":"string","enum":["frf","modes","both"]},"blocks":{"type":"object","properties":{"frf":{"type":"object","properties":{"residues":{"type":"integer"},"chi_square":{"type":"number"}}},"modes":{"type":"object","properties":{"residues":{"type":"integer"},"chi_square":{"type":"number"}}}}},"truncation":{"type":"object","properties":{"cutoff_hz":{"type":"number"},"modes_kept":{"type":"integer"},"frf_error":{"type":["number","null"]}}}}}"#,
     ),
     (
         "updating/residue",
@@ -49,7 +49,7 @@ pub const TOPICS: [(&str, &str); 9] = [
     ),
     (
         "windows",
-        r#"{"type":"object","properties":{"index":{"type":"integer"},"start":{"type":"string"},"end":{"type":"string"},"segments_accepted":{"type":"integer"},"segments_rejected":{"type":"integer"},"mean_coherence":{"type":"array","items":{"type":"number"}},"skipped":{"type":["string","null"]}}}"#,
+        r#"{"type":"object","properties":{"index":{"type":"integer"},"start":{"type":"string"},"end":{"type":"string"},"segments_accepted":{"type":"integer"},"segments_rejected":{"type":"integer"},"mean_coherence":{"type":"array","items":{"type":"number"}},"skipped":{"type":["string","null"]},"valid_fraction":{"type":"number"},"frf_skipped":{"type":["string","null"]},"oma_skipped":{"type":["string","null"]}}}"#,
     ),
 ];
 
@@ -93,6 +93,11 @@ pub fn window_messages(w: &WindowReport) -> Vec<(&'static str, Value)> {
     });
     if let Some(f) = w.valid_fraction {
         window["valid_fraction"] = json!(f);
+    }
+    // Both paths: each path's own outcome (null: it produced its part).
+    if w.frf_skipped.is_some() || w.oma_skipped.is_some() || (w.frf.is_some() && w.modes.is_some()) {
+        window["frf_skipped"] = json!(w.frf_skipped);
+        window["oma_skipped"] = json!(w.oma_skipped);
     }
     let mut out = vec![("windows", window)];
     if let Some(modes) = &w.modes {
@@ -183,7 +188,7 @@ fn frf_message<'a>(time: &'a str, window: u64, frf: &'a FrfFile) -> ResultMessag
 /// `time` is the outcome's time, formatted (`format_timestamp`).
 pub fn update_messages<'a>(o: &'a UpdateOutcome, time: &'a str) -> Vec<(&'static str, ResultMessage<'a>)> {
     let mut out = Vec::new();
-    if let Measured::Frf(frf) = &o.measured {
+    if let Some(frf) = o.measured.frf() {
         out.push(("frf/measured", frf_message(time, o.window, frf)));
     }
     match &o.result {
@@ -204,40 +209,41 @@ pub fn update_messages<'a>(o: &'a UpdateOutcome, time: &'a str) -> Vec<(&'static
             if let Some(truncation) = &r.truncation {
                 parameters["truncation"] = json!(truncation);
             }
+            parameters["residues"] = json!(o.measured.residues());
+            if let Some([frf, modes]) = &r.fit.blocks {
+                parameters["blocks"] = json!({
+                    "frf": {"residues": frf.residues, "chi_square": frf.chi_square},
+                    "modes": {"residues": modes.residues, "chi_square": modes.chi_square},
+                });
+            }
             out.push(("updating/parameters", ResultMessage::Json(parameters)));
-            match &r.fit {
-                Fit::Frf { model, residue } => {
-                    out.push((
-                        "updating/residue",
-                        ResultMessage::Json(json!({
-                            "time": time,
-                            "window": o.window,
-                            "frequency_hz": model.frequency_hz,
-                            "frfs": model.frfs.iter().zip(residue).map(|(f, res)| json!({
-                                "input": f.input, "output": f.output, "relative_residue": res
-                            })).collect::<Vec<_>>(),
-                        })),
-                    ));
-                    out.push(("frf/model", frf_message(time, o.window, model)));
-                }
-                Fit::Modes(pairs) => out.push((
-                    "updating/residue",
-                    ResultMessage::Json(json!({
-                        "time": time,
-                        "window": o.window,
-                        "modes": pairs.iter().map(|p| json!({
-                            "identified": p.identified + 1,
-                            "model_mode": p.model_mode + 1,
-                            "identified_frequency_hz": p.identified_frequency_hz,
-                            "model_frequency_hz": p.model_frequency_hz,
-                            "relative_frequency_error": (p.model_frequency_hz - p.identified_frequency_hz) / p.identified_frequency_hz,
-                            "normalised_frequency_residue": (p.model_frequency_hz - p.identified_frequency_hz) / p.frequency_std_hz,
-                            "identified_damping": p.identified_damping,
-                            "model_damping": p.model_damping,
-                            "mac": p.mac,
-                        })).collect::<Vec<_>>(),
-                    })),
-                )),
+            let mut residue = json!({"time": time, "window": o.window});
+            if let Some(frf) = &r.fit.frf {
+                residue["frequency_hz"] = json!(frf.model.frequency_hz);
+                residue["frfs"] = frf
+                    .model
+                    .frfs
+                    .iter()
+                    .zip(&frf.residue)
+                    .map(|(f, res)| json!({"input": f.input, "output": f.output, "relative_residue": res}))
+                    .collect();
+            }
+            if let Some(pairs) = &r.fit.modes {
+                residue["modes"] = pairs.iter().map(|p| json!({
+                    "identified": p.identified + 1,
+                    "model_mode": p.model_mode + 1,
+                    "identified_frequency_hz": p.identified_frequency_hz,
+                    "model_frequency_hz": p.model_frequency_hz,
+                    "relative_frequency_error": (p.model_frequency_hz - p.identified_frequency_hz) / p.identified_frequency_hz,
+                    "normalised_frequency_residue": (p.model_frequency_hz - p.identified_frequency_hz) / p.frequency_std_hz,
+                    "identified_damping": p.identified_damping,
+                    "model_damping": p.model_damping,
+                    "mac": p.mac,
+                })).collect();
+            }
+            out.push(("updating/residue", ResultMessage::Json(residue)));
+            if let Some(frf) = &r.fit.frf {
+                out.push(("frf/model", frf_message(time, o.window, &frf.model)));
             }
             out.push((
                 "modes",

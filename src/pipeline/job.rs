@@ -11,7 +11,9 @@ use anyhow::{bail, Result};
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::solvers::modal::ModeKind;
-use splinewatch_core::updating::frf_residual::{ModelPoint, UpdateProblem};
+use splinewatch_core::updating::frf_residual::{MeasuredSet, ModelPoint, UpdateProblem};
+use splinewatch_core::updating::joint::{BlockFit, JointUpdateProblem};
+use splinewatch_core::updating::modal_residual::{ModePair, ObservedMode};
 use splinewatch_core::updating::{ModalUpdateProblem, Parameter, UpdateResult, UpdateSettings};
 use std::sync::Arc;
 
@@ -22,6 +24,28 @@ pub enum Measured {
     Frf(FrfFile),
     /// Modes identified output-only in a window (with their std).
     Modes(ModesFile),
+    /// Both, of one window (`[updating] residues = "both"`).
+    Both(FrfFile, ModesFile),
+}
+
+impl Measured {
+    /// The measured FRFs, if the update fits them.
+    pub fn frf(&self) -> Option<&FrfFile> {
+        match self {
+            Self::Frf(frf) | Self::Both(frf, _) => Some(frf),
+            Self::Modes(_) => None,
+        }
+    }
+
+    /// What the update fits: `"frf"`, `"modes"` or `"both"`
+    /// (`updating/parameters`' `residues`).
+    pub fn residues(&self) -> &'static str {
+        match self {
+            Self::Frf(_) => "frf",
+            Self::Modes(_) => "modes",
+            Self::Both(..) => "both",
+        }
+    }
 }
 
 /// An updating run to do: owns everything it needs, so it can run on
@@ -60,17 +84,24 @@ pub struct UpdateOutcome {
     pub(super) state: Option<Arc<ModalState>>,
 }
 
-/// How the model fits what was measured.
-#[derive(Debug, Clone)]
-pub enum Fit {
-    Frf {
-        /// Model FRFs at the identified parameters, on the measured lines.
-        model: FrfFile,
-        /// `|h_x - h_a| / |h_x|` per FRF and line.
-        residue: Vec<Vec<f64>>,
-    },
+/// How the model fits what was measured: the FRFs, the identified modes,
+/// or both.
+#[derive(Debug, Clone, Default)]
+pub struct Fit {
+    pub frf: Option<FrfFit>,
     /// One entry per paired mode.
-    Modes(Vec<PairedMode>),
+    pub modes: Option<Vec<PairedMode>>,
+    /// With both: each block's residue count and chi-square at the solution.
+    pub blocks: Option<[BlockFit; 2]>,
+}
+
+/// The model's FRFs against the measured ones.
+#[derive(Debug, Clone)]
+pub struct FrfFit {
+    /// Model FRFs at the identified parameters, on the measured lines.
+    pub model: FrfFile,
+    /// `|h_x - h_a| / |h_x|` per FRF and line.
+    pub residue: Vec<Vec<f64>>,
 }
 
 /// An identified mode and its model mode at the identified parameters.
@@ -123,6 +154,9 @@ impl UpdateJob {
         let computed = match &self.measured {
             Measured::Frf(frf) => self.compute_frf(frf).map(|(r, p)| (r, Some(Arc::new(p)), None)),
             Measured::Modes(modes) => self.compute_modal(modes).map(|(r, s)| (r, None, Some(Arc::new(s)))),
+            Measured::Both(frf, modes) => self
+                .compute_joint(frf, modes)
+                .map(|(r, p)| (r, Some(Arc::new(p)), None)),
         };
         let (result, point, state) = match computed {
             Ok((report, point, state)) => (Ok(report), point, state),
@@ -157,32 +191,18 @@ impl UpdateJob {
         let (kappa, damping) = problem.model_at(&values)?;
         let theta = problem.fields_at(&values);
         let state = solution.state;
-        let pairs = solution
-            .pairs
-            .iter()
-            .map(|p| {
-                let (x, f) = (&observed[p.observed], state.modes.frequency_hz(p.model));
-                PairedMode {
-                    identified: p.observed,
-                    model_mode: p.model,
-                    identified_frequency_hz: x.frequency_hz,
-                    model_frequency_hz: f,
-                    frequency_std_hz: x.frequency_std_hz,
-                    identified_damping: x.damping_ratio,
-                    model_damping: state.zeta[p.model],
-                    mac: p.mac,
-                }
-            })
-            .collect();
-        // The model's modes up to the highest identified one, and a little above.
-        let top = observed.iter().map(|m| m.frequency_hz).fold(0.0, f64::max) * (1.0 + self.pairing.1);
-        let (modes, bending_modes) = model_modes(&state, top);
+        let fit = Fit {
+            modes: Some(paired(&observed, &solution.pairs, &state)),
+            ..Fit::default()
+        };
+        let top = self.modes_top(&observed);
         let truncation = self
             .setup
             .truncation_report(&kappa, &theta, &damping, state.modes.len(), None)?;
+        let (modes, bending_modes) = model_modes(&state, top);
         let report = UpdateReport {
             result,
-            fit: Fit::Modes(pairs),
+            fit,
             modes,
             bending_modes,
             kappa,
@@ -191,6 +211,12 @@ impl UpdateJob {
             truncation,
         };
         Ok((report, state))
+    }
+
+    /// The model's modes are reported up to the highest identified one, and
+    /// a little above.
+    fn modes_top(&self, observed: &[ObservedMode]) -> f64 {
+        observed.iter().map(|m| m.frequency_hz).fold(0.0, f64::max) * (1.0 + self.pairing.1)
     }
 
     fn compute_frf(&self, frf: &FrfFile) -> Result<(UpdateReport, ModelPoint)> {
@@ -204,7 +230,53 @@ impl UpdateJob {
             self.settings.clone(),
         )?;
         let solution = problem.solve_from(&self.start, self.previous.as_deref(), &mut |_| {})?;
-        let (result, point) = (accepted(solution.result)?, solution.point);
+        let result = accepted(solution.result)?;
+        self.frf_report(result, frf, &measured, &problem, solution.point, Fit::default(), 0.0)
+    }
+
+    /// FRF and modal residues together, each block in its own std
+    /// (`splinewatch_core::updating::joint`).
+    fn compute_joint(&self, frf: &FrfFile, modes: &ModesFile) -> Result<(UpdateReport, ModelPoint)> {
+        let measured = frf.to_measured(&self.setup.sensor_names)?;
+        let observed = modes.to_observed(&self.setup.sensor_names)?;
+        let problem = JointUpdateProblem::new(
+            &self.setup.model,
+            self.setup.kappa.clone(),
+            self.setup.damping.clone(),
+            self.parameters.clone(),
+            &measured,
+            &observed,
+            self.settings.clone(),
+            self.pairing,
+        )?;
+        let solution = problem.solve_from(&self.start, self.previous.as_deref(), &mut |_| {})?;
+        let result = accepted(solution.result)?;
+        let fit = Fit {
+            modes: Some(paired(&observed, &solution.pairs, solution.point.state())),
+            blocks: Some(solution.blocks),
+            frf: None,
+        };
+        let top = self.modes_top(&observed);
+        self.frf_report(result, frf, &measured, problem.frf(), solution.point, fit, top)
+    }
+
+    /// The report of an update that fitted FRFs (`fit` holds any other
+    /// part): the model FRFs and residues on the fitted lines, the model's
+    /// modes up to the highest line or `top`, the truncation.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "what the FRF and joint updates share: the result, the measured set in both forms, the problem, the model at the result and the rest of the fit"
+    )]
+    fn frf_report(
+        &self,
+        result: UpdateResult,
+        frf: &FrfFile,
+        measured: &MeasuredSet,
+        problem: &UpdateProblem,
+        point: ModelPoint,
+        mut fit: Fit,
+        top: f64,
+    ) -> Result<(UpdateReport, ModelPoint)> {
         let (state, h) = (point.state(), point.frfs());
         let lines = problem.line_frequencies().to_vec();
         let sel = problem.line_indices();
@@ -233,24 +305,25 @@ impl UpdateJob {
         }
         let (kappa, damping) = (point.kappa().to_vec(), point.damping().clone());
         let theta = point.theta().to_vec();
-        let top = lines.last().copied().unwrap_or(0.0);
+        let top = lines.last().copied().unwrap_or(0.0).max(top);
         let (modes, bending_modes) = model_modes(state, top);
         let fitted = Some((h, problem.request()));
         let truncation = self
             .setup
             .truncation_report(&kappa, &theta, &damping, state.modes.len(), fitted)?;
+        fit.frf = Some(FrfFit {
+            model: FrfFile {
+                quantity: frf.quantity,
+                frequency_hz: lines,
+                frfs: model_entries,
+                start_timestamp: None,
+                end_timestamp: None,
+            },
+            residue,
+        });
         let report = UpdateReport {
             result,
-            fit: Fit::Frf {
-                model: FrfFile {
-                    quantity: frf.quantity,
-                    frequency_hz: lines,
-                    frfs: model_entries,
-                    start_timestamp: None,
-                    end_timestamp: None,
-                },
-                residue,
-            },
+            fit,
             modes,
             bending_modes,
             kappa,
@@ -260,6 +333,27 @@ impl UpdateJob {
         };
         Ok((report, point))
     }
+}
+
+/// The paired modes of a modal fit, with the model's frequency and damping
+/// at `state`.
+fn paired(observed: &[ObservedMode], pairs: &[ModePair], state: &ModalState) -> Vec<PairedMode> {
+    pairs
+        .iter()
+        .map(|p| {
+            let (x, f) = (&observed[p.observed], state.modes.frequency_hz(p.model));
+            PairedMode {
+                identified: p.observed,
+                model_mode: p.model,
+                identified_frequency_hz: x.frequency_hz,
+                model_frequency_hz: f,
+                frequency_std_hz: x.frequency_std_hz,
+                identified_damping: x.damping_ratio,
+                model_damping: state.zeta[p.model],
+                mac: p.mac,
+            }
+        })
+        .collect()
 }
 
 /// A result the pipeline accepts: finite, and converged or at least better

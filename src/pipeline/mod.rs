@@ -69,8 +69,10 @@ pub struct Pipeline {
     /// The force sensor; `None` for an output-only config.
     force: Option<usize>,
     accels: Vec<usize>,
-    /// Output-only: how windows are identified.
+    /// How windows are identified (output-only, or both paths).
     identification: Option<Identification>,
+    /// What the updates fit (`[updating] residues`).
+    residues: crate::config::Residues,
     /// Channel identities in queue order: force first (if any).
     channels: Vec<(String, ChannelQuantity)>,
     queues: Vec<ChannelQueue>,
@@ -114,31 +116,15 @@ impl Pipeline {
         let setup = Arc::new(crate::config::frf_setup(config)?);
         let parameters = config.build_parameters()?;
         let settings = config.update_settings()?;
-        let (force, accels, identification) = if config.is_output_only() {
-            let identification = Identification::new(config)?;
-            (None, config.output_channels()?, Some(identification))
+        let (force, accels) = if config.is_output_only() {
+            (None, config.output_channels()?)
         } else {
             let (force, accels) = config.channel_roles()?;
-            (Some(force), accels, None)
+            (Some(force), accels)
         };
-        if schedule.update_every_windows == 0 {
-            bail!("config: schedule.update_every_windows: must be at least 1");
-        }
-        if let Some(m) = schedule.update_every_minutes {
-            if !(m.is_finite() && m > 0.0) {
-                bail!("config: schedule.update_every_minutes: must be positive, got {m}");
-            }
-        }
-        if let Some(s) = &state {
-            for p in &s.parameters {
-                if !parameters.iter().any(|q| q.name == p.name) {
-                    bail!(
-                        "state: parameter {:?} is not an updating parameter of this config",
-                        p.name
-                    );
-                }
-            }
-        }
+        let identification = config.runs_oma().then(|| Identification::new(config)).transpose()?;
+        let residues = config.residues()?;
+        check_schedule_and_state(&schedule, state.as_ref(), &parameters)?;
         let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
         let mut channels: Vec<_> = force
             .iter()
@@ -168,6 +154,7 @@ impl Pipeline {
             force,
             accels,
             identification,
+            residues,
             channels,
             queues,
             fs: None,
@@ -323,6 +310,32 @@ impl Pipeline {
     pub fn restore_monitor(&mut self, monitor: splinewatch_core::monitoring::Monitor) -> Result<()> {
         self.updater.restore_monitor(monitor)
     }
+}
+
+/// The schedule's values, and a persisted state's parameters against the
+/// config's.
+fn check_schedule_and_state(
+    schedule: &ScheduleConfig,
+    state: Option<&AcceptedParameters>,
+    parameters: &[Parameter],
+) -> Result<()> {
+    if schedule.update_every_windows == 0 {
+        bail!("config: schedule.update_every_windows: must be at least 1");
+    }
+    if let Some(m) = schedule.update_every_minutes {
+        if !(m.is_finite() && m > 0.0) {
+            bail!("config: schedule.update_every_minutes: must be positive, got {m}");
+        }
+    }
+    for p in state.iter().flat_map(|s| &s.parameters) {
+        if !parameters.iter().any(|q| q.name == p.name) {
+            bail!(
+                "state: parameter {:?} is not an updating parameter of this config",
+                p.name
+            );
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

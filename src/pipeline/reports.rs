@@ -55,6 +55,11 @@ pub struct Health {
     pub notifications_sent: u64,
     #[serde(default, skip_serializing_if = "is_zero")]
     pub notification_failures: u64,
+    /// With both paths, windows whose FRFs or identification failed, by
+    /// `frf:<reason>` / `oma:<reason>` (the window may still be updated on
+    /// the other part).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub window_paths_skipped: BTreeMap<String, u64>,
     /// Updates the monitor could not score (training not possible yet).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub monitoring_errors: u64,
@@ -102,4 +107,9 @@ pub struct WindowReport {
     pub valid_fraction: Option<f64>,
     /// Output-only: the identified modes, paired with the model's.
     pub modes: Option<Arc<WindowModes>>,
+    /// With both paths (a force sensor and `[oma]`): why the FRFs, or the
+    /// identification, failed in this window (`skipped` is the window's own
+    /// reason: nothing for the update to fit).
+    pub frf_skipped: Option<String>,
+    pub oma_skipped: Option<String>,
 }

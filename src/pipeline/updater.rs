@@ -5,7 +5,7 @@
 //! and give exactly the results of running them in line.
 
 use super::monitoring::{self, Monitoring, MonitoringOutcome};
-use super::{AcceptedParameters, Fit, Health, StateParameter, UpdateJob, UpdateOutcome};
+use super::{AcceptedParameters, Health, StateParameter, UpdateJob, UpdateOutcome};
 use crate::config::FrfSetup;
 use anyhow::{bail, Result};
 use splinewatch_core::monitoring::Monitor;
@@ -140,7 +140,7 @@ impl Updater {
             .iter()
             .map(|p| (p.name.clone(), p.value))
             .collect();
-        if let (Fit::Modes(pairs), Some(state)) = (&report.fit, &outcome.state) {
+        if let (Some(pairs), Some(state)) = (&report.fit.modes, &outcome.state) {
             let pairs: Vec<(usize, f64)> = pairs
                 .iter()
                 .map(|p| (p.model_mode, p.identified_frequency_hz))

@@ -2,28 +2,30 @@
 //! or, output-only, the samples themselves); a window that ends is accepted
 //! or skipped with a reason, and may trigger an update.
 
-use super::{Measured, Pipeline, UpdateJob, WindowReport};
+use super::{Measured, Pipeline, UpdateJob, WindowModes, WindowReport};
+use crate::config::Residues;
+use crate::io::frf_json::FrfFile;
 use splinewatch_core::identification::welch::{WelchEstimator, WelchSettings};
 use std::sync::Arc;
 
-/// What an open window accumulates.
-pub(super) enum WindowData {
-    /// FRF path: the window's Welch estimator (force first).
-    Welch(Box<WelchEstimator>),
-    /// Output-only: the window's samples per output channel (NaN where missing).
-    Samples(Vec<Vec<f64>>),
+/// What an open window accumulates: the FRF path's Welch estimator (force
+/// first), the output-only path's samples per output channel (NaN where
+/// missing), or both.
+pub(super) struct WindowData {
+    welch: Option<Box<WelchEstimator>>,
+    samples: Option<Vec<Vec<f64>>>,
 }
 
 impl Pipeline {
     fn open_window(&self) -> WindowData {
-        match &self.welch {
-            Some((settings, _)) => WindowData::Welch(Box::new(
-                WelchEstimator::new(settings.clone(), self.accels.len()).expect("validated"),
-            )),
-            None => WindowData::Samples(vec![
-                Vec::with_capacity(self.window_samples as usize);
-                self.accels.len()
-            ]),
+        WindowData {
+            welch: self.welch.as_ref().map(|(settings, _)| {
+                Box::new(WelchEstimator::new(settings.clone(), self.accels.len()).expect("validated"))
+            }),
+            samples: self
+                .identification
+                .is_some()
+                .then(|| vec![Vec::with_capacity(self.window_samples as usize); self.accels.len()]),
         }
     }
 
@@ -55,10 +57,7 @@ impl Pipeline {
             }
             if self.fed == oldest_end {
                 let (index, data) = self.open.pop_front().expect("an open window ends here");
-                let report = match data {
-                    WindowData::Welch(welch) => self.close_window(index, *welch),
-                    WindowData::Samples(samples) => self.close_output_only(index, samples),
-                };
+                let report = self.close_window(index, data);
                 if report.skipped.is_none() {
                     self.schedule_update(&report, jobs);
                 }
@@ -91,12 +90,12 @@ impl Pipeline {
         let first_output = usize::from(self.force.is_some());
         let outputs = &cols[first_output..];
         for (_, data) in &mut self.open {
-            match data {
-                WindowData::Welch(welch) => welch.push(cols[0], outputs).expect("equal lengths by construction"),
-                WindowData::Samples(samples) => {
-                    for (s, c) in samples.iter_mut().zip(outputs) {
-                        s.extend_from_slice(c);
-                    }
+            if let Some(welch) = &mut data.welch {
+                welch.push(cols[0], outputs).expect("equal lengths by construction");
+            }
+            if let Some(samples) = &mut data.samples {
+                for (s, c) in samples.iter_mut().zip(outputs) {
+                    s.extend_from_slice(c);
                 }
             }
         }
@@ -122,10 +121,16 @@ impl Pipeline {
         }
         self.accepted_since_update = 0;
         self.last_update_ns = Some(report.end_ns);
-        let measured = match (&report.frf, &report.modes) {
-            (Some(frf), _) => Measured::Frf(frf.clone()),
-            (None, Some(modes)) => Measured::Modes(modes.report.modes_file()),
-            (None, None) => return,
+        // `[updating] residues`; with both, a window that produced one part
+        // is updated on that part (`updating/parameters` says which).
+        let modes = || report.modes.as_ref().map(|m| m.report.modes_file());
+        let measured = match (self.residues, report.frf.clone(), modes()) {
+            (Residues::Frf, Some(frf), _) => Measured::Frf(frf),
+            (Residues::Modes, _, Some(modes)) => Measured::Modes(modes),
+            (Residues::Both, Some(frf), Some(modes)) => Measured::Both(frf, modes),
+            (Residues::Both, Some(frf), None) => Measured::Frf(frf),
+            (Residues::Both, None, Some(modes)) => Measured::Modes(modes),
+            _ => return,
         };
         jobs.push(self.job(report.index, (report.start_ns, report.end_ns), measured));
     }
@@ -140,64 +145,13 @@ impl Pipeline {
         (start_ns, end_ns)
     }
 
-    fn close_window(&mut self, index: u64, welch: WelchEstimator) -> WindowReport {
+    /// A window that ended: its FRFs (FRF path) and its identified modes
+    /// (output-only path), each produced or failed with a reason. The
+    /// window is skipped when the updates get nothing to fit from it; with
+    /// both paths, a path that failed says why in `frf_skipped` /
+    /// `oma_skipped` (and `window_paths_skipped` counts it).
+    fn close_window(&mut self, index: u64, data: WindowData) -> WindowReport {
         let (start_ns, end_ns) = self.window_span(index);
-        let (_, estimator) = self.welch.as_ref().expect("set with the reference");
-        let counts = welch.counts();
-        self.health.segments_accepted += counts.accepted;
-        self.health.segments_rejected += counts.rejected();
-        let settings: &WelchSettings = welch.settings();
-        let possible = ((self.window_samples as usize).saturating_sub(settings.segment) / settings.step() + 1) as f64;
-        let mut report = WindowReport {
-            index,
-            start_ns,
-            end_ns,
-            segments_accepted: counts.accepted,
-            segments_rejected: counts.rejected(),
-            mean_coherence: Vec::new(),
-            skipped: None,
-            frf: None,
-            valid_fraction: None,
-            modes: None,
-        };
-        if (counts.accepted as f64) < self.schedule.min_segment_fraction * possible || counts.accepted == 0 {
-            report.skipped = Some("too_little_data".into());
-        } else {
-            let est = welch.spectra().frf(*estimator);
-            let [lo, hi] = self.config.frf.band;
-            let lines: Vec<usize> = (0..est.frequencies.len())
-                .filter(|&k| est.frequencies[k] > 0.0 && est.frequencies[k] >= lo && est.frequencies[k] <= hi)
-                .collect();
-            report.mean_coherence = est
-                .coherence
-                .iter()
-                .map(|c| lines.iter().map(|&k| c[k]).sum::<f64>() / lines.len().max(1) as f64)
-                .collect();
-            if report
-                .mean_coherence
-                .iter()
-                .any(|c| !(c.is_finite() && *c >= self.schedule.min_coherence))
-            {
-                report.skipped = Some("low_coherence".into());
-            } else {
-                let force = self.force.expect("the FRF path has a force sensor");
-                report.frf = super::estimate::frf_file(&self.config, &est, force, &self.accels);
-                if report.frf.is_none() {
-                    report.skipped = Some("no_lines_in_band".into());
-                }
-            }
-        }
-        self.count_window(&report);
-        report
-    }
-
-    /// Output-only: enough valid instants, then SSI-cov and the pairing with
-    /// the model's modes (see `oma.rs`).
-    fn close_output_only(&mut self, index: u64, samples: Vec<Vec<f64>>) -> WindowReport {
-        let (start_ns, end_ns) = self.window_span(index);
-        let n = samples.first().map_or(0, Vec::len);
-        let valid = (0..n).filter(|&t| samples.iter().all(|c| !c[t].is_nan())).count();
-        let fraction = valid as f64 / n.max(1) as f64;
         let mut report = WindowReport {
             index,
             start_ns,
@@ -207,29 +161,91 @@ impl Pipeline {
             mean_coherence: Vec::new(),
             skipped: None,
             frf: None,
-            valid_fraction: Some(fraction),
+            valid_fraction: None,
             modes: None,
+            frf_skipped: None,
+            oma_skipped: None,
         };
-        if fraction < self.schedule.min_segment_fraction || valid == 0 {
-            report.skipped = Some("too_little_data".into());
-        } else {
-            match self.updater.model_state() {
-                Ok(state) => {
-                    let fs = self.fs.expect("set with the reference");
-                    let identification = self.identification.as_ref().expect("output-only");
-                    match identification.run(&samples, start_ns, fs, &state, &self.setup.sensor_names) {
-                        Ok(modes) => report.modes = Some(Arc::new(modes)),
-                        Err(reason) => report.skipped = Some(reason.into()),
-                    }
-                }
-                Err(e) => {
-                    tracing::warn!(message = "the model's modes at the last parameters failed", error = %e);
-                    report.skipped = Some("model_failed".into());
+        let frf = data.welch.map(|welch| self.estimate_frfs(&mut report, *welch));
+        let modes = data.samples.map(|samples| self.identify_window(&mut report, &samples));
+        let both = frf.is_some() && modes.is_some();
+        let frf_failed = frf.and_then(|r| r.map(|f| report.frf = Some(f)).err());
+        let oma_failed = modes.and_then(|r| r.map(|m| report.modes = Some(Arc::new(m))).err());
+        report.skipped = match self.residues {
+            _ if !both => frf_failed.clone().or_else(|| oma_failed.clone()),
+            Residues::Frf => frf_failed.clone(),
+            Residues::Modes => oma_failed.clone(),
+            Residues::Both => frf_failed.clone().filter(|_| oma_failed.is_some()),
+        };
+        if both {
+            for (path, failed) in [("frf", &frf_failed), ("oma", &oma_failed)] {
+                if let Some(reason) = failed {
+                    *self
+                        .health
+                        .window_paths_skipped
+                        .entry(format!("{path}:{reason}"))
+                        .or_insert(0) += 1;
                 }
             }
+            (report.frf_skipped, report.oma_skipped) = (frf_failed, oma_failed);
         }
         self.count_window(&report);
         report
+    }
+
+    /// The FRF path: enough clean segments and coherence, then the FRFs in
+    /// the band; the error is the reason.
+    fn estimate_frfs(&mut self, report: &mut WindowReport, welch: WelchEstimator) -> Result<FrfFile, String> {
+        let (_, estimator) = self.welch.as_ref().expect("set with the reference");
+        let counts = welch.counts();
+        self.health.segments_accepted += counts.accepted;
+        self.health.segments_rejected += counts.rejected();
+        (report.segments_accepted, report.segments_rejected) = (counts.accepted, counts.rejected());
+        let settings: &WelchSettings = welch.settings();
+        let possible = ((self.window_samples as usize).saturating_sub(settings.segment) / settings.step() + 1) as f64;
+        if (counts.accepted as f64) < self.schedule.min_segment_fraction * possible || counts.accepted == 0 {
+            return Err("too_little_data".into());
+        }
+        let est = welch.spectra().frf(*estimator);
+        let [lo, hi] = self.config.frf.band;
+        let lines: Vec<usize> = (0..est.frequencies.len())
+            .filter(|&k| est.frequencies[k] > 0.0 && est.frequencies[k] >= lo && est.frequencies[k] <= hi)
+            .collect();
+        report.mean_coherence = est
+            .coherence
+            .iter()
+            .map(|c| lines.iter().map(|&k| c[k]).sum::<f64>() / lines.len().max(1) as f64)
+            .collect();
+        if report
+            .mean_coherence
+            .iter()
+            .any(|c| !(c.is_finite() && *c >= self.schedule.min_coherence))
+        {
+            return Err("low_coherence".into());
+        }
+        let force = self.force.expect("the FRF path has a force sensor");
+        super::estimate::frf_file(&self.config, &est, force, &self.accels).ok_or_else(|| "no_lines_in_band".into())
+    }
+
+    /// The output-only path: enough valid instants, then SSI-cov and the
+    /// pairing with the model's modes (see `oma.rs`); the error is the reason.
+    fn identify_window(&mut self, report: &mut WindowReport, samples: &[Vec<f64>]) -> Result<WindowModes, String> {
+        let n = samples.first().map_or(0, Vec::len);
+        let valid = (0..n).filter(|&t| samples.iter().all(|c| !c[t].is_nan())).count();
+        let fraction = valid as f64 / n.max(1) as f64;
+        report.valid_fraction = Some(fraction);
+        if fraction < self.schedule.min_segment_fraction || valid == 0 {
+            return Err("too_little_data".into());
+        }
+        let state = self.updater.model_state().map_err(|e| {
+            tracing::warn!(message = "the model's modes at the last parameters failed", error = %e);
+            "model_failed".to_string()
+        })?;
+        let fs = self.fs.expect("set with the reference");
+        let identification = self.identification.as_ref().expect("the output-only path");
+        identification
+            .run(samples, report.start_ns, fs, &state, &self.setup.sensor_names)
+            .map_err(String::from)
     }
 
     fn count_window(&mut self, report: &WindowReport) {

@@ -12,18 +12,9 @@ use rerun::blueprint::{
 use splinewatch_core::response::frf::SensorPoint;
 
 impl RerunOutput {
-    /// The layout: trends left, the deck in the middle, and on the right the
-    /// FRFs (FRF path) or the stabilisation diagram, identified-frequency
-    /// trends and shapes at the sensors (output-only).
+    /// The layout: trends left, the deck in the middle, and on the right
+    /// the FRFs and/or the identification ([`Self::right_column`]).
     pub(super) fn send_blueprint(&self) -> Result<()> {
-        let frf_tabs = |what: &str| -> ContainerLike {
-            Tabs::new(self.setup.sensor_names.iter().map(|o| {
-                BarChartView::new(format!("{o} {what}"))
-                    .with_origin(format!("/frf/{o}/{what}"))
-                    .into()
-            }))
-            .into()
-        };
         let mode_tabs = Tabs::new((1..=MODES_SHOWN).map(|k| {
             Spatial3DView::new(format!("mode {k}"))
                 .with_origin(format!("/modes/{k}"))
@@ -66,31 +57,7 @@ impl RerunOutput {
             ])
             .into(),
             Vertical::new([self.deck_views(), mode_tabs.into()]).into(),
-            if self.output_only {
-                Vertical::new([
-                    Spatial2DView::new(
-                        "Stabilisation diagram (order × Hz) over the spectral matrix's first singular value",
-                    )
-                    .with_origin("/oma/stabilisation")
-                    .into(),
-                    TimeSeriesView::new("Identified frequencies by model mode (Hz, ±1σ)")
-                        .with_origin("/oma/trends")
-                        .into(),
-                    Spatial3DView::new("Shapes at the sensors on the deck: identified (orange), model (blue)")
-                        .with_origin("/")
-                        .with_contents(["/deck/springs", "/deck/sensors", "/oma/shapes/**"])
-                        .into(),
-                    BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
-                ])
-                .into()
-            } else {
-                Vertical::new([
-                    frf_tabs("magnitude"),
-                    frf_tabs("phase"),
-                    BarChartView::new("ζ(f) in %").with_origin("/damping").into(),
-                ])
-                .into()
-            },
+            Vertical::new(self.right_column()).into(),
         ]));
         blueprint
             .send(
@@ -101,6 +68,42 @@ impl RerunOutput {
                 },
             )
             .map_err(|e| anyhow!("sending the Rerun blueprint: {e}"))
+    }
+
+    /// The FRFs (FRF path) and the stabilisation diagram, identified-frequency
+    /// trends and shapes at the sensors (windows identified output-only),
+    /// then ζ(f).
+    fn right_column(&self) -> Vec<ContainerLike> {
+        let frf_tabs = |what: &str| -> ContainerLike {
+            Tabs::new(self.setup.sensor_names.iter().map(|o| {
+                BarChartView::new(format!("{o} {what}"))
+                    .with_origin(format!("/frf/{o}/{what}"))
+                    .into()
+            }))
+            .into()
+        };
+        let mut views = Vec::new();
+        if self.frf_views {
+            views.extend([frf_tabs("magnitude"), frf_tabs("phase")]);
+        }
+        if self.oma_views {
+            views.extend([
+                Spatial2DView::new(
+                    "Stabilisation diagram (order × Hz) over the spectral matrix's first singular value",
+                )
+                .with_origin("/oma/stabilisation")
+                .into(),
+                TimeSeriesView::new("Identified frequencies by model mode (Hz, ±1σ)")
+                    .with_origin("/oma/trends")
+                    .into(),
+                Spatial3DView::new("Shapes at the sensors on the deck: identified (orange), model (blue)")
+                    .with_origin("/")
+                    .with_contents(["/deck/springs", "/deck/sensors", "/oma/shapes/**"])
+                    .into(),
+            ]);
+        }
+        views.push(BarChartView::new("ζ(f) in %").with_origin("/damping").into());
+        views
     }
 
     /// The deck coloured by the spring field r33 and, with stiffness

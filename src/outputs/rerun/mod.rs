@@ -39,7 +39,7 @@ mod update;
 pub use rrd::{inspect_rrd, RrdSummary};
 
 use crate::config::{frf_setup, Config, FrfSetup};
-use crate::pipeline::{Fit, Health, Measured, UpdateOutcome};
+use crate::pipeline::{Health, UpdateOutcome};
 use anyhow::{anyhow, Result};
 use deck::DeckGrid;
 use splinewatch_core::model::ShellModel;
@@ -80,8 +80,10 @@ pub struct RerunOutput {
     targets: RerunTargets,
     sensors: Vec<(String, SensorPoint)>,
     rotate_ns: i128,
-    /// An output-only config (the blueprint shows OMA views instead of FRFs).
-    output_only: bool,
+    /// The blueprint's right column: FRF views with a force sensor, OMA
+    /// views when windows are identified (output-only, or both paths).
+    frf_views: bool,
+    oma_views: bool,
     /// Names of the stiffness fields (their parameters are `<name>.s<j>`).
     field_names: Vec<String>,
     /// θ and σ of the first update with stiffness fields: the reference of
@@ -116,7 +118,8 @@ impl RerunOutput {
             targets: targets.clone(),
             sensors,
             rotate_ns: (config.output.rerun_rotate_hours * 3600e9) as i128,
-            output_only: config.is_output_only(),
+            frf_views: !config.is_output_only(),
+            oma_views: config.runs_oma(),
             field_names: config.model.stiffness_fields.iter().map(|f| f.name.clone()).collect(),
             first_fields: None,
             file_start_ns: None,
@@ -225,22 +228,20 @@ impl RerunOutput {
             }
         };
         self.log_parameters(report)?;
-        if let Measured::Frf(frf) = &outcome.measured {
+        if let Some(frf) = outcome.measured.frf() {
             self.log_frfs(frf, "measured")?;
         }
-        match &report.fit {
-            Fit::Frf { model, .. } => self.log_frfs(model, "model")?,
-            Fit::Modes(pairs) => {
-                for p in pairs {
-                    let error = 100.0 * (p.model_frequency_hz - p.identified_frequency_hz) / p.identified_frequency_hz;
-                    self.rec
-                        .log(
-                            format!("residual/modes/mode_{}", p.model_mode + 1).as_str(),
-                            &rerun::Scalars::new([error]),
-                        )
-                        .map_err(rerun_error)?;
-                }
-            }
+        if let Some(frf) = &report.fit.frf {
+            self.log_frfs(&frf.model, "model")?;
+        }
+        for p in report.fit.modes.iter().flatten() {
+            let error = 100.0 * (p.model_frequency_hz - p.identified_frequency_hz) / p.identified_frequency_hz;
+            self.rec
+                .log(
+                    format!("residual/modes/mode_{}", p.model_mode + 1).as_str(),
+                    &rerun::Scalars::new([error]),
+                )
+                .map_err(rerun_error)?;
         }
         self.log_damping(&report.damping)?;
         self.log_spring_field(&report.kappa)?;
