@@ -50,19 +50,113 @@ pub struct MonitoringConfig {
 }
 
 /// `[monitoring.notify]`: a command run with the monitoring status JSON on
-/// its standard input whenever the alarm state changes (raised, cleared,
-/// outside the training range entered or left).
+/// its standard input, and/or a webhook it is POSTed to, whenever the alarm
+/// state changes (raised, cleared, outside the training range entered or
+/// left).
 #[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct NotifyConfig {
-    /// The program and its arguments (no shell unless named).
+    /// The program and its arguments (no shell unless named); empty: none.
+    #[serde(default)]
     pub command: Vec<String>,
+    /// An `https://` URL the status JSON is POSTed to (TLS verified).
+    #[serde(default)]
+    pub webhook: Option<String>,
+    /// A file whose first line is the webhook's bearer token (read at each
+    /// delivery, so a rotated token needs no restart).
+    #[serde(default)]
+    pub bearer_token_file: Option<std::path::PathBuf>,
+    /// CA certificates (PEM) the webhook's server certificate must chain
+    /// to, in place of the Mozilla roots (a site's own CA).
+    #[serde(default)]
+    pub ca_file: Option<std::path::PathBuf>,
     /// Further runs after a failure, 0.5, 1, 2, … s apart.
     #[serde(default = "default_notify_retries")]
     pub retries: u32,
     /// A run longer than this is killed and counts as failed.
     #[serde(default = "default_notify_timeout")]
     pub timeout_seconds: f64,
+}
+
+impl NotifyConfig {
+    /// A command or a webhook (or both), `https` and files that can be
+    /// read, a positive time limit, at most 10 retries.
+    fn check(&self) -> Result<(), ConfigError> {
+        if self.command.is_empty() && self.webhook.is_none() {
+            return Err(err(
+                "monitoring.notify",
+                "give a command = [\"/path/prog\", \"arg\", …] or a webhook = \"https://…\"",
+            ));
+        }
+        if !self.command.is_empty() && self.command[0].is_empty() {
+            return Err(err(
+                "monitoring.notify.command",
+                "must name a program: [\"/path/prog\", \"arg\", …]",
+            ));
+        }
+        if let Some(url) = &self.webhook {
+            let rest = url.strip_prefix("https://").unwrap_or_default();
+            if rest.is_empty() || rest.starts_with('/') {
+                return Err(err(
+                    "monitoring.notify.webhook",
+                    format!("must be an https:// URL with a host (the status is sent over verified TLS), got {url:?}"),
+                ));
+            }
+        } else if self.bearer_token_file.is_some() || self.ca_file.is_some() {
+            return Err(err(
+                "monitoring.notify",
+                "bearer_token_file and ca_file are for a webhook: give webhook = \"https://…\"",
+            ));
+        }
+        if let Some(path) = &self.bearer_token_file {
+            self.bearer_token(path)
+                .map_err(|e| err("monitoring.notify.bearer_token_file", e))?;
+        }
+        if let Some(path) = &self.ca_file {
+            let pem = std::fs::read(path)
+                .map_err(|e| err("monitoring.notify.ca_file", format!("{}: {e}", path.display())))?;
+            if !String::from_utf8_lossy(&pem).contains("-----BEGIN CERTIFICATE-----") {
+                return Err(err(
+                    "monitoring.notify.ca_file",
+                    format!("{}: no PEM certificate in it", path.display()),
+                ));
+            }
+        }
+        if !(self.timeout_seconds.is_finite() && self.timeout_seconds > 0.0) {
+            return Err(err(
+                "monitoring.notify.timeout_seconds",
+                "must be a positive number of seconds",
+            ));
+        }
+        if self.retries > 10 {
+            return Err(err("monitoring.notify.retries", "at most 10"));
+        }
+        Ok(())
+    }
+
+    /// The bearer token: the first line of `path`, trimmed, not empty.
+    pub fn bearer_token(&self, path: &std::path::Path) -> Result<String, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let token = text.lines().next().unwrap_or_default().trim();
+        if token.is_empty() {
+            return Err(format!("{}: the first line holds no token", path.display()));
+        }
+        Ok(token.to_string())
+    }
+}
+
+impl Default for NotifyConfig {
+    /// No target yet; the defaults of `retries` and `timeout_seconds`.
+    fn default() -> Self {
+        Self {
+            command: Vec::new(),
+            webhook: None,
+            bearer_token_file: None,
+            ca_file: None,
+            retries: default_notify_retries(),
+            timeout_seconds: default_notify_timeout(),
+        }
+    }
 }
 
 fn default_notify_retries() -> u32 {
@@ -166,21 +260,7 @@ impl Config {
             return Err(err("monitoring.stuck_windows", "must be at least 2"));
         }
         if let Some(n) = &m.notify {
-            if n.command.first().is_none_or(String::is_empty) {
-                return Err(err(
-                    "monitoring.notify.command",
-                    "must name a program: [\"/path/prog\", \"arg\", …]",
-                ));
-            }
-            if !(n.timeout_seconds.is_finite() && n.timeout_seconds > 0.0) {
-                return Err(err(
-                    "monitoring.notify.timeout_seconds",
-                    "must be a positive number of seconds",
-                ));
-            }
-            if n.retries > 10 {
-                return Err(err("monitoring.notify.retries", "at most 10"));
-            }
+            n.check()?;
         }
         m.settings().check().map_err(|e| match e {
             MonitoringError::Setting { name, .. } => err(format!("monitoring.{name}"), e),

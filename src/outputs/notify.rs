@@ -1,12 +1,15 @@
 //! Alarm notifications (`[monitoring.notify]`): a command run with the
-//! monitoring status JSON on its standard input whenever the alarm state
-//! changes: an alarm raised or cleared, or a window outside the training
-//! range entered or left.
+//! monitoring status JSON on its standard input, and/or a webhook the JSON
+//! is POSTed to (ureq over rustls, the server's certificate verified against
+//! the Mozilla roots or the configured CA, an optional bearer token),
+//! whenever the alarm state changes: an alarm raised or cleared, or a
+//! window outside the training range entered or left.
 //!
 //! Deliveries run on a thread of their own behind a bounded queue, so the
-//! pipeline never waits for them; a command that fails (non-zero exit, no
-//! start, over its time limit) is tried again after 0.5, 1, 2, … s up to
-//! `retries` times. Every attempt, delivery and failure is counted
+//! pipeline never waits for them; a target that fails (non-zero exit, no
+//! start, a refused connection or certificate, a non-2xx answer, over its
+//! time limit) is tried again after 0.5, 1, 2, … s up to `retries` times.
+//! Every attempt, delivery and failure is counted per target
 //! ([`NotifyCounts`], on the health topic).
 
 use crate::config::NotifyConfig;
@@ -29,11 +32,13 @@ const NOTIFIED: [&str; 2] = ["alarm", "outside_training_range"];
 /// What the notifier did so far.
 #[derive(Debug, Default)]
 pub struct NotifyCounts {
-    /// Command runs, retries included.
+    /// Command runs and webhook requests, retries included.
     pub attempts: AtomicU64,
-    /// Notifications the command accepted (exit status 0).
+    /// Notifications a target accepted (exit status 0, a 2xx answer), one
+    /// per target.
     pub sent: AtomicU64,
-    /// Notifications given up after every retry, or dropped on a full queue.
+    /// Notifications a target was given up on after every retry, or
+    /// dropped on a full queue.
     pub failures: AtomicU64,
 }
 
@@ -51,9 +56,15 @@ impl Notifier {
         let (queue, received) = sync_channel::<Vec<u8>>(QUEUE);
         let counts = Arc::new(NotifyCounts::default());
         let (config, shared) = (config.clone(), Arc::clone(&counts));
+        let agent = config
+            .webhook
+            .is_some()
+            .then(|| webhook_agent(&config))
+            .transpose()
+            .map_err(std::io::Error::other)?;
         let worker = std::thread::Builder::new().name("notify".into()).spawn(move || {
             for status in received {
-                deliver(&config, &status, &shared);
+                deliver(&config, agent.as_ref(), &status, &shared);
             }
         })?;
         Ok(Self {
@@ -125,28 +136,81 @@ impl Drop for Notifier {
     }
 }
 
-/// Runs the command with `status` on its standard input until it succeeds
-/// or the retries are spent.
-fn deliver(config: &NotifyConfig, status: &[u8], counts: &NotifyCounts) {
+/// Delivers `status` to every target: the command, then the webhook.
+fn deliver(config: &NotifyConfig, agent: Option<&ureq::Agent>, status: &[u8], counts: &NotifyCounts) {
+    if !config.command.is_empty() {
+        deliver_to(config, "command", counts, || run_once(config, status));
+    }
+    if let (Some(url), Some(agent)) = (&config.webhook, agent) {
+        deliver_to(config, "webhook", counts, || post_once(config, agent, url, status));
+    }
+}
+
+/// Tries `once` until it succeeds or the retries are spent.
+fn deliver_to(
+    config: &NotifyConfig,
+    target: &str,
+    counts: &NotifyCounts,
+    mut once: impl FnMut() -> Result<(), String>,
+) {
     for attempt in 0..=config.retries {
         if attempt > 0 {
             std::thread::sleep(Duration::from_millis(500 << (attempt - 1).min(6)));
         }
         counts.attempts.fetch_add(1, Ordering::Relaxed);
-        match run_once(config, status) {
+        match once() {
             Ok(()) => {
                 counts.sent.fetch_add(1, Ordering::Relaxed);
                 return;
             }
-            Err(reason) => tracing::warn!(message = "notify command failed", attempt = attempt + 1, %reason),
+            Err(reason) => tracing::warn!(message = "notification failed", target, attempt = attempt + 1, %reason),
         }
     }
     counts.failures.fetch_add(1, Ordering::Relaxed);
-    tracing::error!(
-        message = "notification given up",
-        attempts = config.retries + 1,
-        command = ?config.command
-    );
+    tracing::error!(message = "notification given up", target, attempts = config.retries + 1);
+}
+
+/// The webhook's HTTP client: TLS verified against the Mozilla roots or
+/// the `ca_file`'s certificates, https only, no redirect followed (a POST
+/// is not re-sent elsewhere), every request within `timeout_seconds`.
+fn webhook_agent(config: &NotifyConfig) -> Result<ureq::Agent, String> {
+    use ureq::tls::{parse_pem, PemItem, RootCerts, TlsConfig};
+    let mut tls = TlsConfig::builder();
+    if let Some(path) = &config.ca_file {
+        let pem = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let certificates: Vec<_> = parse_pem(&pem)
+            .filter_map(|item| match item {
+                Ok(PemItem::Certificate(c)) => Some(c),
+                _ => None,
+            })
+            .collect();
+        if certificates.is_empty() {
+            return Err(format!("{}: no PEM certificate in it", path.display()));
+        }
+        tls = tls.root_certs(RootCerts::Specific(Arc::new(certificates)));
+    }
+    Ok(ureq::Agent::config_builder()
+        .tls_config(tls.build())
+        .https_only(true)
+        .max_redirects(0)
+        .timeout_global(Some(Duration::from_secs_f64(config.timeout_seconds)))
+        .build()
+        .into())
+}
+
+/// One POST of `status` to the webhook. The log names the host only: a
+/// webhook URL often carries its secret in the path.
+fn post_once(config: &NotifyConfig, agent: &ureq::Agent, url: &str, status: &[u8]) -> Result<(), String> {
+    let host = url.split('/').nth(2).unwrap_or(url);
+    let mut request = agent.post(url).header("Content-Type", "application/json");
+    if let Some(path) = &config.bearer_token_file {
+        request = request.header("Authorization", format!("Bearer {}", config.bearer_token(path)?));
+    }
+    match request.send(status) {
+        Ok(_) => Ok(()),
+        Err(ureq::Error::StatusCode(code)) => Err(format!("{host} answered {code}")),
+        Err(e) => Err(format!("{host}: {e}")),
+    }
 }
 
 /// One run of the command: `Err` says why it did not succeed.
@@ -204,6 +268,7 @@ mod tests {
             command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", file.display())],
             retries: 2,
             timeout_seconds: 10.0,
+            ..NotifyConfig::default()
         };
         let mut notifier = Notifier::start(&config).unwrap();
         let states = [
@@ -247,6 +312,7 @@ mod tests {
             command: vec!["sh".into(), "-c".into(), "exit 3".into()],
             retries: 2,
             timeout_seconds: 10.0,
+            ..NotifyConfig::default()
         };
         let mut notifier = Notifier::start(&failing).unwrap();
         let s = status(0, "alarm");

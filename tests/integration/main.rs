@@ -12,6 +12,8 @@ mod live;
 mod matrices;
 mod measurements;
 mod monitoring;
+#[cfg(unix)]
+mod notify;
 mod oma;
 mod paper;
 mod pipes;

@@ -137,6 +137,7 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
         command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", notified.display())],
         retries: 2,
         timeout_seconds: 10.0,
+        ..Default::default()
     });
     let recordings = simulate(&cfg, &dir, &[168, 168], |t| t);
     let state = dir.join("state.json");
