@@ -540,6 +540,11 @@ pub struct FleetArgs {
     /// Parameters shown per line (text output).
     #[arg(long, default_value_t = 4)]
     pub parameters: usize,
+    /// A span that must answer (its `structure.name`); repeat for several.
+    /// One that is not running or does not answer is reported and makes
+    /// the exit status 1.
+    #[arg(long = "expect")]
+    pub expect: Vec<String>,
 }
 
 pub fn fleet(a: FleetArgs) -> Result<()> {
@@ -557,7 +562,7 @@ pub fn fleet(a: FleetArgs) -> Result<()> {
     let session = zenoh::open(zenoh.to_zenoh()?)
         .wait()
         .map_err(|e| anyhow::anyhow!("cannot connect to {}: {e}", a.connect.join(", ")))?;
-    let spans = fleet::gather(&session, std::time::Duration::from_secs_f64(a.timeout));
+    let spans = fleet::gather(&session, std::time::Duration::from_secs_f64(a.timeout), &a.expect);
     let _ = session.close().wait();
     let spans = spans?;
     if spans.is_empty() {
@@ -574,6 +579,18 @@ pub fn fleet(a: FleetArgs) -> Result<()> {
         } else {
             outln!("{}", summary.line(a.parameters));
         }
+    }
+    let silent: Vec<&str> = spans
+        .iter()
+        .filter(|s| s.answered.is_empty())
+        .map(|s| s.name.as_str())
+        .collect();
+    if !silent.is_empty() {
+        anyhow::bail!(
+            "{} did not answer within {} s (see the lines above)",
+            silent.join(", "),
+            a.timeout
+        );
     }
     Ok(())
 }

@@ -2,8 +2,11 @@
 //!
 //! Each daemon (one per span, `bridge/<structure.name>`) answers queries on
 //! `<prefix>/{updating,monitoring,health}/latest` with its last message of
-//! that kind. A dashboard-side session asks `bridge/*/<kind>/latest` once per
-//! kind and groups the replies by span.
+//! that kind, and holds the liveliness token `<prefix>/alive` once those
+//! queryables are declared. A dashboard-side session first asks which
+//! tokens are alive, then `bridge/*/<kind>/latest` once per kind, and groups
+//! the replies by span: a span that is alive (or expected) but did not
+//! answer is reported as such, never left out.
 
 use anyhow::{anyhow, Result};
 use serde::Serialize;
@@ -16,21 +19,64 @@ use zenoh::Wait;
 /// (`<prefix>/<kind>/latest`, in the order of the daemon's `Latest`).
 pub const LATEST_KINDS: [&str; 3] = ["updating", "monitoring", "health"];
 
+/// The liveliness token every daemon holds under its prefix.
+pub const ALIVE: &str = "alive";
+
 /// One span's latest messages (`None`: no reply, or the daemon has not
 /// produced one yet: its queryable answers `{}`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct SpanStatus {
     /// `structure.name`: the key segment after `bridge/`.
     pub name: String,
+    /// Its daemon's liveliness token was seen.
+    pub alive: bool,
+    /// The kinds it answered (`updating`, `monitoring`, `health`); empty: it
+    /// did not answer at all.
+    pub answered: Vec<String>,
     pub updating: Option<Value>,
     pub monitoring: Option<Value>,
     pub health: Option<Value>,
 }
 
+/// The spans whose daemon holds its liveliness token, waiting up to `timeout`.
+pub fn alive_spans(session: &zenoh::Session, timeout: Duration) -> Result<Vec<String>> {
+    let selector = format!("bridge/*/{ALIVE}");
+    let replies = session
+        .liveliness()
+        .get(&selector)
+        .timeout(timeout)
+        .wait()
+        .map_err(|e| anyhow!("cannot query the liveliness tokens {selector}: {e}"))?;
+    let mut names: Vec<String> = replies
+        .into_iter()
+        .filter_map(|r| {
+            r.result()
+                .ok()
+                .and_then(|s| span_name(s.key_expr().as_str()).map(str::to_string))
+        })
+        .collect();
+    names.sort();
+    names.dedup();
+    Ok(names)
+}
+
 /// Asks every span behind `session` for its latest messages, waiting up to
-/// `timeout` per kind; the spans in name order.
-pub fn gather(session: &zenoh::Session, timeout: Duration) -> Result<Vec<SpanStatus>> {
+/// `timeout` per kind; the spans in name order: every span that answered,
+/// and every span alive or named in `expected` that did not (with empty
+/// `answered`).
+pub fn gather(session: &zenoh::Session, timeout: Duration, expected: &[String]) -> Result<Vec<SpanStatus>> {
     let mut spans: BTreeMap<String, SpanStatus> = BTreeMap::new();
+    let listed = |name: &str, alive: bool| SpanStatus {
+        name: name.to_string(),
+        alive,
+        ..SpanStatus::default()
+    };
+    for name in alive_spans(session, timeout)? {
+        spans.insert(name.clone(), listed(&name, true));
+    }
+    for name in expected {
+        spans.entry(name.clone()).or_insert_with(|| listed(name, false));
+    }
     for kind in LATEST_KINDS {
         let selector = format!("bridge/*/{kind}/latest");
         let replies = session
@@ -52,10 +98,10 @@ pub fn gather(session: &zenoh::Session, timeout: Duration) -> Result<Vec<SpanSta
                     continue;
                 }
             };
-            let span = spans.entry(name.to_string()).or_insert_with(|| SpanStatus {
-                name: name.to_string(),
-                ..SpanStatus::default()
-            });
+            let span = spans.entry(name.to_string()).or_insert_with(|| listed(name, false));
+            if !span.answered.iter().any(|k| k == kind) {
+                span.answered.push(kind.to_string());
+            }
             let empty = body.as_object().is_some_and(|o| o.is_empty());
             let slot = match kind {
                 "updating" => &mut span.updating,
@@ -79,6 +125,9 @@ fn span_name(key: &str) -> Option<&str> {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SpanSummary {
     pub name: String,
+    /// `answering`; `no reply` (its daemon is alive but answered nothing
+    /// within the timeout); `not running` (expected, no daemon alive).
+    pub reachability: String,
     /// Measurement time of the latest update (RFC 3339), if any.
     pub last_update: Option<String>,
     pub converged: Option<bool>,
@@ -113,8 +162,14 @@ impl SpanStatus {
                     .collect()
             })
             .unwrap_or_default();
+        let reachability = match (self.answered.is_empty(), self.alive) {
+            (false, _) => "answering",
+            (true, true) => "no reply",
+            (true, false) => "not running",
+        };
         SpanSummary {
             name: self.name.clone(),
+            reachability: reachability.into(),
             last_update: updating.and_then(|u| u["time"].as_str()).map(str::to_string),
             converged: updating.and_then(|u| u["converged"].as_bool()),
             parameters,
@@ -165,6 +220,9 @@ impl SpanSummary {
     /// One console line: name, last update, up to `parameters` parameters,
     /// monitoring state, health.
     pub fn line(&self, parameters: usize) -> String {
+        if self.reachability != "answering" {
+            return format!("{}  {}", self.name, self.reachability);
+        }
         let update = match (&self.last_update, self.converged) {
             (Some(t), Some(false)) => format!("updated {t} (not converged)"),
             (Some(t), _) => format!("updated {t}"),
@@ -198,6 +256,8 @@ mod tests {
     fn a_span_is_summarised_from_its_latest_messages() {
         let span = SpanStatus {
             name: "span-a".into(),
+            alive: true,
+            answered: vec!["updating".into(), "monitoring".into(), "health".into()],
             updating: Some(json!({"time": "2026-11-23T10:00:00Z", "converged": true,
                 "parameters": [{"name": "east.k1", "value": 4.0e8}, {"name": "east.k2", "value": 2.5e8}]})),
             monitoring: Some(json!({"state": "alarm"})),
@@ -214,12 +274,24 @@ mod tests {
         );
         let quiet = SpanStatus {
             name: "span-b".into(),
+            answered: vec!["updating".into()],
             ..SpanStatus::default()
         };
         assert_eq!(
             quiet.summary().line(3),
             "span-b  no update yet    monitoring: off  health: no report yet"
         );
+        let silent = SpanStatus {
+            name: "span-c".into(),
+            alive: true,
+            ..SpanStatus::default()
+        };
+        assert_eq!(silent.summary().line(3), "span-c  no reply");
+        let absent = SpanStatus {
+            name: "span-d".into(),
+            ..SpanStatus::default()
+        };
+        assert_eq!(absent.summary().reachability, "not running");
     }
 
     #[test]

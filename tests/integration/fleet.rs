@@ -94,6 +94,52 @@ fn fleet_lists_every_span_behind_one_router() {
     assert!(ok, "{stderr}");
     eprintln!("splinewatch fleet --connect {endpoint}\n{text}");
 
+    // A span whose daemon is alive but answers nothing (a token without
+    // queryables), and one expected that is not running: both reported by
+    // name, the exit status 1; the answering spans still listed.
+    let mute = zenoh::open({
+        let mut c = zenoh::Config::default();
+        c.insert_json5("mode", "\"client\"").unwrap();
+        c.insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
+            .unwrap();
+        c.insert_json5("scouting/multicast/enabled", "false").unwrap();
+        c
+    })
+    .wait()
+    .unwrap();
+    let token = mute
+        .liveliness()
+        .declare_token("bridge/span-mute/alive")
+        .wait()
+        .unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args([
+            "fleet",
+            "--connect",
+            &endpoint,
+            "--expect",
+            "span-gone",
+            "--expect",
+            "span-a",
+        ])
+        .output()
+        .unwrap();
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(!out.status.success(), "{stdout}");
+    assert!(stdout.lines().any(|l| l == "span-mute  no reply"), "{stdout}");
+    assert!(stdout.lines().any(|l| l == "span-gone  not running"), "{stdout}");
+    assert_eq!(
+        stdout.lines().filter(|l| l.contains("health: ok")).count(),
+        SPANS.len(),
+        "{stdout}"
+    );
+    assert!(stderr.contains("span-gone, span-mute did not answer"), "{stderr}");
+    token.undeclare().wait().unwrap();
+    mute.close().wait().unwrap();
+
     let mut statuses = Vec::new();
     for (span, state, daemon) in daemons {
         let (status, _) = terminate(daemon.take());

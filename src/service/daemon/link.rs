@@ -1,7 +1,7 @@
 //! The daemon's zenoh session: subscribers that push raw messages into the
-//! bounded ingest queue, the `<prefix>/updating/latest` and
-//! `<prefix>/monitoring/latest` queryables, and the
-//! publishing of result messages.
+//! bounded ingest queue, the `<prefix>/{updating,monitoring,health}/latest`
+//! queryables, the `<prefix>/alive` liveliness token, and the publishing of
+//! result messages.
 
 use crate::config::Config;
 use crate::io::wire::Encoding;
@@ -60,6 +60,10 @@ pub(super) struct ZenohLink {
     session: zenoh::Session,
     subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
     queryables: Vec<zenoh::query::Queryable<()>>,
+    /// `<prefix>/alive`, declared once the queryables are: a dashboard or
+    /// `fleet` that sees it may ask (the router got the queryables' declarations
+    /// first, on the same ordered link).
+    alive: zenoh::liveliness::LivelinessToken,
     /// The bodies of the replies to `<prefix>/<Latest::segment>/latest`.
     latest: [Arc<Mutex<Vec<u8>>>; 3],
     prefix: String,
@@ -119,10 +123,17 @@ impl ZenohLink {
             queryables.push(queryable);
             latest.push(body);
         }
+        let alive_key = format!("{prefix}/{}", crate::service::fleet::ALIVE);
+        let alive = session
+            .liveliness()
+            .declare_token(&alive_key)
+            .await
+            .map_err(|e| anyhow!("cannot declare the liveliness token {alive_key}: {e}"))?;
         let link = Self {
             session,
             subscribers,
             queryables,
+            alive,
             latest: latest.try_into().expect("one body per Latest"),
             prefix,
             ingest_drops,
@@ -164,6 +175,7 @@ impl ZenohLink {
     }
 
     pub(super) async fn close(self) -> Result<()> {
+        drop(self.alive);
         drop(self.queryables);
         drop(self.subscribers);
         self.session
