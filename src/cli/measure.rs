@@ -11,7 +11,7 @@ use crate::pipeline::estimate;
 use crate::studies::frf_windows;
 use crate::studies::simulation::{self, Excitation, SimulationOptions};
 use crate::studies::{self, import::ImportOptions};
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -150,6 +150,10 @@ pub enum ImportFormat {
     Csv,
     /// Universal file format, dataset 58 time responses (ASCII).
     Uff,
+    /// CSMIP/COSMOS Volume 2 corrected accelerograms: .V2 files (one
+    /// channel each, or a station's channels in one file) or a station's
+    /// .zip; channel N is the column chN.
+    V2,
 }
 
 #[derive(Args)]
@@ -160,8 +164,9 @@ pub struct ImportArgs {
     /// File format.
     #[arg(long, value_enum)]
     pub format: ImportFormat,
-    /// The logger's file.
-    pub input: PathBuf,
+    /// The logger's file (with --format v2: one or more .V2 or .zip files).
+    #[arg(required = true, num_args = 1..)]
+    pub input: Vec<PathBuf>,
     /// Output recording (MCAP).
     #[arg(long)]
     pub out: PathBuf,
@@ -196,11 +201,19 @@ pub struct ImportArgs {
 
 pub fn import(a: ImportArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let bytes = std::fs::read(&a.input).with_context(|| format!("cannot read {}", a.input.display()))?;
+    let mut files = Vec::new();
+    for path in &a.input {
+        let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        files.push((bytes, path.display().to_string()));
+    }
+    let input = files.iter().map(|(_, n)| n.as_str()).collect::<Vec<_>>().join(", ");
+    if files.len() > 1 && !matches!(a.format, ImportFormat::V2) {
+        bail!("--format {:?} reads one file, got {}: {input}", a.format, files.len());
+    }
+    let bytes = &files[0].0;
     let series = match a.format {
         ImportFormat::Csv => {
-            let text = std::str::from_utf8(&bytes)
-                .with_context(|| format!("cannot read {}: not UTF-8 text", a.input.display()))?;
+            let text = std::str::from_utf8(bytes).with_context(|| format!("cannot read {input}: not UTF-8 text"))?;
             let delimiter = a
                 .delimiter
                 .map(|d| u8::try_from(d).map_err(|_| anyhow::anyhow!("--delimiter {d:?} is not one ASCII character")))
@@ -212,9 +225,10 @@ pub fn import(a: ImportArgs) -> Result<()> {
             };
             import::read_csv(text, &options)
         }
-        ImportFormat::Uff => import::read_uff58(&bytes),
+        ImportFormat::Uff => import::read_uff58(bytes),
+        ImportFormat::V2 => crate::io::cosmos_v2::read_v2(&files),
     }
-    .with_context(|| a.input.display().to_string())?;
+    .with_context(|| input.clone())?;
     let start_ns = a
         .start
         .as_deref()
@@ -227,7 +241,7 @@ pub fn import(a: ImportArgs) -> Result<()> {
         strict: a.strict,
         units: a.units.clone(),
     };
-    let imported = studies::import::to_blocks(&cfg, series, &options).with_context(|| a.input.display().to_string())?;
+    let imported = studies::import::to_blocks(&cfg, series, &options).with_context(|| input.clone())?;
     if !imported.skipped.is_empty() {
         errln!(
             "skipped {} columns that name no sensor of the config: {}",
@@ -242,12 +256,7 @@ pub fn import(a: ImportArgs) -> Result<()> {
         writer.write_block(&prefix, b)?;
     }
     writer.finish()?;
-    errln!(
-        "{} blocks from {} written to {}",
-        blocks.len(),
-        a.input.display(),
-        a.out.display()
-    );
+    errln!("{} blocks from {input} written to {}", blocks.len(), a.out.display());
     Ok(())
 }
 

@@ -48,6 +48,8 @@ pub enum ImportError {
     Uff { line: usize, message: String },
     #[error("no dataset 58 time response in the file")]
     NoUffTimeSeries,
+    #[error("Volume 2 file {file}: {message}")]
+    V2 { file: String, message: String },
 }
 
 /// How to read a CSV/TSV file; `None` = detect.

@@ -1,9 +1,10 @@
 //! Bytes in and out: the console (never fatal), the wire format of channel blocks, MCAP recordings, FRF and identified-modes
-//! files, loggers' CSV and UFF 58 files, output-file creation and numbering,
+//! files, loggers' CSV and UFF 58 files, strong-motion Volume 2 files, output-file creation and numbering,
 //! and salvaging unfinished MCAP.
 //! Room: the bottom of the application. May import: the core crate only.
 
 pub mod console;
+pub mod cosmos_v2;
 pub mod files;
 pub mod frf_json;
 pub mod import;

@@ -429,3 +429,106 @@ fn issue_33_units_convert_to_si() {
         assert_eq!(got[0].4, [2.5 * factor, -4.0 * factor, factor], "{unit}");
     }
 }
+
+/// Issue 33: CSMIP/COSMOS Volume 2 files (tests/fixtures/make_v2_fixtures.py,
+/// checked there with quakeio) import as the channels `ch<N>` of a config
+/// naming them (here an output-only config of three of the four: the
+/// fourth is skipped and listed): one file per channel, the station's zip,
+/// or the station's channels in one file give the same recording, the
+/// values quakeio read × 0.01 (cm/sec2 → m/s²), at 100 Hz from the record's
+/// `Rcrd of` time; a file with another unit, a short channel or a
+/// different time step is an error naming it.
+#[test]
+fn issue_33_a_v2_file_set_imports() {
+    let dir = fresh_dir("import-v2");
+    let config = dir.join("channels.toml");
+    let sensors: String = (1..=3)
+        .map(|c| format!("[[sensors]]\nname = \"ch{c}\"\nquantity = \"acceleration\"\ndirection = \"z\"\n\n"))
+        .collect();
+    std::fs::write(&config, format!("[structure]\nname = \"v2-station\"\n\n{sensors}")).unwrap();
+    let expected: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(root().join("tests/fixtures/v2/expected.json")).unwrap())
+            .unwrap();
+    let fixture = |f: &str| root().join("tests/fixtures/v2").join(f).to_str().unwrap().to_string();
+    let run = |label: &str, inputs: &[String]| {
+        let out = dir.join(format!("{label}.mcap"));
+        let o = Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args(["import", "--config", config.to_str().unwrap(), "--format", "v2"])
+            .args(inputs)
+            .args(["--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{label}: {stderr}");
+        assert!(
+            stderr.contains("skipped 1 columns that name no sensor of the config: ch4"),
+            "{label}: {stderr}"
+        );
+        channels(&out)
+    };
+    let per_file: Vec<String> = (1..=4).map(|c| fixture(&format!("CHAN{c:03}.V2"))).collect();
+    let recordings = [
+        run("per-file", &per_file),
+        run("zip", &[fixture("station.zip")]),
+        run("station", &[fixture("station.V2")]),
+    ];
+    let start = parse_timestamp("2026-11-23T10:00:00Z").unwrap();
+    for got in &recordings {
+        assert_eq!(got.len(), 3);
+        for (name, quantity, fs, start_ns, data) in got {
+            assert_eq!(
+                (*quantity, *fs, *start_ns),
+                (ChannelQuantity::Acceleration, 100.0, start),
+                "{name}"
+            );
+            let reference = expected[name]["accel"].as_array().unwrap();
+            assert_eq!(expected[name]["time_step"], 0.01);
+            assert_eq!(expected[name]["units"], "cm/sec2");
+            assert_eq!(data.len(), reference.len(), "{name}");
+            for (k, (v, r)) in data.iter().zip(reference).enumerate() {
+                let r = r.as_f64().unwrap() * 0.01;
+                assert!(
+                    (v - r).abs() <= 1e-15 * r.abs().max(1e-3),
+                    "{name}[{k}]: {v} vs quakeio {r}"
+                );
+            }
+        }
+    }
+    assert_eq!(recordings[0], recordings[1]);
+    assert_eq!(recordings[0], recordings[2]);
+
+    // Errors name the file and channel.
+    let text = std::fs::read_to_string(fixture("CHAN001.V2")).unwrap();
+    let bad = |label: &str, content: String| {
+        let path = dir.join(format!("{label}.V2"));
+        std::fs::write(&path, content).unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args(["import", "--config", config.to_str().unwrap(), "--format", "v2"])
+            .args([path.to_str().unwrap(), &fixture("CHAN002.V2")])
+            .args(["--out", dir.join("bad.mcap").to_str().unwrap()])
+            .output()
+            .unwrap();
+        assert!(!o.status.success(), "{label}");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let lines: Vec<&str> = text.lines().collect();
+    // The header (45 lines), the accel line and 100 of its 188 data lines.
+    let short: String = lines[..146].join("\n");
+    let e = bad("short", short);
+    assert!(
+        e.contains("short.V2, channel 1") && e.contains("of the 1500 accel values"),
+        "{e}"
+    );
+    let e = bad(
+        "rate",
+        text.replace("equally spaced at  0.010 sec", "equally spaced at  0.005 sec"),
+    );
+    assert!(
+        e.contains("channel 2 is sampled every 0.01 s, channel 1 every 0.005 s"),
+        "{e}"
+    );
+    let e = bad("unit", text.replace("in cm/sec2.", "in furlongs."));
+    assert!(e.contains("furlongs"), "{e}");
+    let e = bad("twice", std::fs::read_to_string(fixture("CHAN002.V2")).unwrap());
+    assert!(e.contains("channel 2 appears twice"), "{e}");
+}

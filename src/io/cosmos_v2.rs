@@ -1,0 +1,343 @@
+//! CSMIP/COSMOS "Volume 2" corrected accelerograms, as the California
+//! Geological Survey's CESMD distributes the records of instrumented
+//! bridges: one channel per `.V2` file (often zipped per station), or every
+//! channel of a station in one file, each ending with
+//! `/&  ---------- End of data for channel  N ----------`.
+//!
+//! A channel is 25 text lines (line 8 `Chan  N: …`, and the record's start
+//! `Rcrd of Mon Nov 23, 2026 10:00:00.0 UTC`), 100 integers and 100 reals,
+//! then per series a line `1500 points of accel data equally spaced at
+//! 0.010 sec, in cm/sec2. (8f10.5)` and the values in fixed-width fields,
+//! eight to a line; the velocity and displacement series follow. Only the
+//! acceleration is read (the sensors measure it); rather than count header
+//! lines, which differ between processing vintages, the reader finds that
+//! line. Each channel becomes a column `ch<N>`.
+
+use crate::io::import::{ImportError, ImportedChannel, ImportedSeries};
+use crate::io::wire::ChannelQuantity;
+use std::io::Read;
+
+/// One channel's acceleration as the file gives it.
+#[derive(Debug, Clone, PartialEq)]
+struct V2Channel {
+    number: u32,
+    time_step: f64,
+    unit: String,
+    start_ns: Option<i128>,
+    values: Vec<f64>,
+}
+
+fn error(what: &str, message: impl Into<String>) -> ImportError {
+    ImportError::V2 {
+        file: what.to_string(),
+        message: message.into(),
+    }
+}
+
+/// Reads `.V2` files or `.zip` files of them (told by their first bytes),
+/// each given with its name (for messages and, when line 8 gives none, the
+/// channel number), into one series: the channels of all of them.
+pub fn read_v2(files: &[(Vec<u8>, String)]) -> Result<ImportedSeries, ImportError> {
+    let mut channels = Vec::new();
+    for (bytes, name) in files {
+        channels.extend(read_file(bytes, name)?);
+    }
+    let names: Vec<&str> = files.iter().map(|(_, n)| n.as_str()).collect();
+    to_series(channels, &names.join(", "))
+}
+
+/// The channels of one `.V2` or `.zip` file.
+fn read_file(bytes: &[u8], name: &str) -> Result<Vec<V2Channel>, ImportError> {
+    let mut channels = Vec::new();
+    if bytes.starts_with(b"PK\x03\x04") {
+        let mut archive = zip::ZipArchive::new(std::io::Cursor::new(bytes))
+            .map_err(|e| error(name, format!("not a zip file: {e}")))?;
+        for i in 0..archive.len() {
+            let mut file = archive.by_index(i).map_err(|e| error(name, e.to_string()))?;
+            let inner = file.name().to_string();
+            if !inner.to_ascii_lowercase().ends_with(".v2") {
+                continue;
+            }
+            let mut text = Vec::new();
+            file.read_to_end(&mut text)
+                .map_err(|e| error(&format!("{name}:{inner}"), e.to_string()))?;
+            channels.extend(read_text(&text, &format!("{name}:{inner}"))?);
+        }
+        if channels.is_empty() {
+            return Err(error(name, "the zip file holds no .V2 file"));
+        }
+    } else {
+        channels = read_text(bytes, name)?;
+    }
+    Ok(channels)
+}
+
+/// The channels of one `.V2` file.
+fn read_text(bytes: &[u8], name: &str) -> Result<Vec<V2Channel>, ImportError> {
+    let text = String::from_utf8_lossy(bytes);
+    let lines: Vec<&str> = text.lines().collect();
+    let mut channels = Vec::new();
+    let mut from = 0;
+    for (i, line) in lines.iter().enumerate() {
+        if line.contains("End of data for channel") {
+            channels.push(read_channel(&lines[from..i], name)?);
+            from = i + 1;
+        }
+    }
+    if lines[from..].iter().any(|l| l.contains("points of accel data")) {
+        channels.push(read_channel(&lines[from..], name)?);
+    }
+    if channels.is_empty() {
+        return Err(error(name, "no \"points of accel data\" line: not a Volume 2 file"));
+    }
+    Ok(channels)
+}
+
+/// One channel's section of a file.
+fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
+    let at = lines
+        .iter()
+        .position(|l| l.contains("points of accel data equally spaced at"))
+        .ok_or_else(|| error(name, "a channel without a \"points of accel data\" line"))?;
+    let number = lines
+        .iter()
+        .take(at)
+        .find_map(|l| channel_number(l))
+        .or_else(|| file_channel_number(name))
+        .ok_or_else(|| error(name, "no \"Chan N:\" line and no channel number in the file name"))?;
+    let what = format!("{name}, channel {number}");
+    let descriptor = lines[at];
+    let count: usize = descriptor
+        .split_whitespace()
+        .next()
+        .and_then(|n| n.parse().ok())
+        .ok_or_else(|| error(&what, format!("no point count in {descriptor:?}")))?;
+    let time_step = number_after(descriptor, "spaced at")
+        .filter(|dt| dt.is_finite() && *dt > 0.0)
+        .ok_or_else(|| error(&what, format!("no positive time step in {descriptor:?}")))?;
+    let unit = descriptor
+        .split_once(" in ")
+        .map(|(_, rest)| rest.split(['.', ' ']).find(|w| !w.is_empty()).unwrap_or_default())
+        .map(si_spelling)
+        .ok_or_else(|| error(&what, format!("no unit in {descriptor:?}")))?;
+    let width = field_width(descriptor).unwrap_or(10);
+    let mut values = Vec::with_capacity(count);
+    for (k, line) in lines[at + 1..].iter().enumerate() {
+        if values.len() == count || line.contains("points of") || line.contains("End of data") {
+            break;
+        }
+        for field in fields(line, width) {
+            let v: f64 = field.trim().parse().map_err(|_| {
+                error(
+                    &what,
+                    format!("line {} after the accel header: {field:?} is not a number", k + 1),
+                )
+            })?;
+            values.push(v);
+        }
+    }
+    if values.len() != count {
+        return Err(error(
+            &what,
+            format!("{} of the {count} accel values announced", values.len()),
+        ));
+    }
+    let start_ns = lines.iter().take(at).find_map(|l| record_start(l));
+    Ok(V2Channel {
+        number,
+        time_step,
+        unit,
+        start_ns,
+        values,
+    })
+}
+
+/// `Chan  5: 90 Deg …` → 5 (the first `chan` followed by a number and a colon).
+fn channel_number(line: &str) -> Option<u32> {
+    let lower = line.to_ascii_lowercase();
+    lower.match_indices("chan").find_map(|(i, _)| {
+        let rest = lower[i + 4..].trim_start();
+        let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+        let after = rest[digits.len()..].trim_start();
+        (!digits.is_empty() && after.starts_with(':'))
+            .then(|| digits.parse().ok())
+            .flatten()
+    })
+}
+
+/// `CHAN005.V2`, `26327_ch5.v2` → 5: the last number in the file's stem.
+fn file_channel_number(name: &str) -> Option<u32> {
+    let file = name.rsplit(['/', ':']).next()?;
+    let stem = file.rsplit_once('.').map_or(file, |(s, _)| s);
+    stem.split(|c: char| !c.is_ascii_digit())
+        .rfind(|d| !d.is_empty())
+        .and_then(|d| d.parse().ok())
+}
+
+/// The number after `marker` in `line`.
+fn number_after(line: &str, marker: &str) -> Option<f64> {
+    let rest = &line[line.find(marker)? + marker.len()..];
+    let token: String = rest
+        .trim_start()
+        .chars()
+        .take_while(|c| c.is_ascii_digit() || *c == '.' || *c == '-' || *c == 'e' || *c == 'E')
+        .collect();
+    token.parse().ok()
+}
+
+/// `(8f10.5)` / `(8F10.3)` → 10.
+fn field_width(line: &str) -> Option<usize> {
+    let lower = line.to_ascii_lowercase();
+    let start = lower.find("(8f")? + 3;
+    let digits: String = lower[start..].chars().take_while(char::is_ascii_digit).collect();
+    digits.parse().ok().filter(|&w| w > 0)
+}
+
+/// The fixed-width fields of a data line (values may touch: `-1234.567-1234.567`).
+fn fields(line: &str, width: usize) -> Vec<&str> {
+    let line = line.trim_end();
+    (0..line.len().div_ceil(width))
+        .filter_map(|k| line.get(k * width..((k + 1) * width).min(line.len())))
+        .filter(|f| !f.trim().is_empty())
+        .collect()
+}
+
+/// The file's spelling of a unit in the importer's (`cm/sec2` → `cm/s^2`).
+fn si_spelling(unit: &str) -> String {
+    match unit.to_ascii_lowercase().as_str() {
+        "cm/sec2" | "cm/sec/sec" | "cm/s/s" | "cm/sec**2" => "cm/s^2".into(),
+        "m/sec2" | "m/sec/sec" => "m/s^2".into(),
+        "g" => "g".into(),
+        _ => unit.to_string(),
+    }
+}
+
+/// `Rcrd of Mon Nov 23, 2026 10:00:00.0 UTC` → its instant, when the zone is
+/// UTC/GMT or a US Pacific one (CGS records are stamped in PST/PDT);
+/// another zone gives `None` (`--start` then says when).
+fn record_start(line: &str) -> Option<i128> {
+    let rest = line.trim_start().strip_prefix("Rcrd of ")?;
+    let words: Vec<&str> = rest.split_whitespace().collect();
+    let [_, month, day, year, clock, zone, ..] = words.as_slice() else {
+        return None;
+    };
+    const MONTHS: [&str; 12] = [
+        "jan", "feb", "mar", "apr", "may", "jun", "jul", "aug", "sep", "oct", "nov", "dec",
+    ];
+    let month = MONTHS.iter().position(|m| month.to_ascii_lowercase().starts_with(m))? + 1;
+    let day: u32 = day.trim_end_matches(',').parse().ok()?;
+    let year: i32 = year.parse().ok()?;
+    let offset_hours: i64 = match zone.to_ascii_uppercase().as_str() {
+        "UTC" | "GMT" | "UT" | "Z" => 0,
+        "PST" => -8,
+        "PDT" => -7,
+        _ => return None,
+    };
+    let mut parts = clock.split(':');
+    let (h, m, s) = (parts.next()?, parts.next()?, parts.next()?);
+    let seconds: f64 = s.parse().ok()?;
+    let text = format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:00Z",
+        h.parse::<u32>().ok()?,
+        m.parse::<u32>().ok()?
+    );
+    let midnight = crate::io::wire::parse_timestamp(&text)?;
+    Some(midnight + (seconds * 1e9).round() as i128 - i128::from(offset_hours) * 3_600_000_000_000)
+}
+
+/// The channels on one grid: one time step, one length, one start.
+fn to_series(mut channels: Vec<V2Channel>, name: &str) -> Result<ImportedSeries, ImportError> {
+    channels.sort_by_key(|c| c.number);
+    let first = &channels[0];
+    if let Some(pair) = channels.windows(2).find(|w| w[0].number == w[1].number) {
+        return Err(error(name, format!("channel {} appears twice", pair[0].number)));
+    }
+    for c in &channels {
+        if (c.time_step - first.time_step).abs() > 1e-9 * first.time_step {
+            return Err(error(
+                name,
+                format!(
+                    "channel {} is sampled every {} s, channel {} every {} s",
+                    c.number, c.time_step, first.number, first.time_step
+                ),
+            ));
+        }
+        if c.values.len() != first.values.len() {
+            return Err(error(
+                name,
+                format!(
+                    "channel {} has {} points, channel {} {}: cut them to one length first",
+                    c.number,
+                    c.values.len(),
+                    first.number,
+                    first.values.len()
+                ),
+            ));
+        }
+        if c.start_ns != first.start_ns {
+            return Err(error(
+                name,
+                format!("channels {} and {} start at different times", first.number, c.number),
+            ));
+        }
+    }
+    Ok(ImportedSeries {
+        fs: Some(1.0 / first.time_step),
+        start_ns: first.start_ns,
+        offset_seconds: 0.0,
+        channels: channels
+            .into_iter()
+            .map(|c| ImportedChannel {
+                name: format!("ch{}", c.number),
+                unit: Some(c.unit),
+                quantity: Some(ChannelQuantity::Acceleration),
+                data: c.values,
+            })
+            .collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_lines_are_read_whatever_their_spacing() {
+        assert_eq!(channel_number("Chan  5: 90 Deg   Location: deck"), Some(5));
+        assert_eq!(channel_number("CHAN 12:  Up"), Some(12));
+        assert_eq!(channel_number("Station channel list"), None);
+        assert_eq!(file_channel_number("station.zip:CHAN005.V2"), Some(5));
+        assert_eq!(file_channel_number("dir/26327_ch3.v2"), Some(3));
+        let d = "  8000 points of accel data equally spaced at   .005 sec, in cm/sec2.  (8F10.3)";
+        assert_eq!(number_after(d, "spaced at"), Some(0.005));
+        assert_eq!(field_width(d), Some(10));
+        assert_eq!(
+            fields("-1234.567-1234.567    1.000   ", 9),
+            ["-1234.567", "-1234.567", "    1.000"]
+        );
+        assert_eq!(
+            record_start("Rcrd of Mon Nov 23, 2026 02:00:00.5 PST"),
+            crate::io::wire::parse_timestamp("2026-11-23T10:00:00.5Z")
+        );
+        assert_eq!(record_start("Rcrd of Mon Nov 23, 2026 02:00:00.0 CET"), None);
+    }
+
+    #[test]
+    fn a_short_or_garbled_channel_is_an_error_naming_it() {
+        let good = "Chan  2: 90 Deg\n     3 points of accel data equally spaced at  0.010 sec, in cm/sec2. (8f10.5)\n   1.00000   2.00000   3.00000\n";
+        let read = |text: &str, name: &str| read_v2(&[(text.as_bytes().to_vec(), name.to_string())]);
+        let s = read(good, "a.V2").unwrap();
+        assert_eq!(s.channels[0].name, "ch2");
+        assert_eq!(s.channels[0].data, [1.0, 2.0, 3.0]);
+        assert_eq!(s.channels[0].unit.as_deref(), Some("cm/s^2"));
+        assert_eq!(s.fs, Some(100.0));
+        let short = good.replace("   3.00000", "");
+        let e = read(&short, "a.V2").unwrap_err().to_string();
+        assert!(e.contains("a.V2, channel 2") && e.contains("2 of the 3"), "{e}");
+        let garbled = good.replace("2.00000", "2.0x000");
+        let e = read(&garbled, "a.V2").unwrap_err().to_string();
+        assert!(e.contains("is not a number"), "{e}");
+        let e = read("just text\n", "b.V2").unwrap_err().to_string();
+        assert!(e.contains("not a Volume 2 file"), "{e}");
+    }
+}
