@@ -29,6 +29,7 @@ pub use super::excitation::Excitation;
 /// start_minute = 30.0
 /// end_minute = 40.0
 /// factor = 0.6              # value × factor after end_minute, linear in between
+/// repair_minute = 90.0      # optional: back to the value from then on (a repair)
 /// ```
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -64,13 +65,18 @@ pub struct Change {
     pub start_minute: f64,
     pub end_minute: f64,
     pub factor: f64,
+    /// From this minute on the value is back (a bearing replaced, a repair):
+    /// a temporary change, whose alarm should clear.
+    #[serde(default)]
+    pub repair_minute: Option<f64>,
 }
 
 impl Change {
     /// Multiplier at time `t` seconds.
     pub fn factor_at(&self, t: f64) -> f64 {
         let (a, b) = (self.start_minute * 60.0, self.end_minute * 60.0);
-        if t <= a {
+        let repaired = self.repair_minute.is_some_and(|r| t >= r * 60.0);
+        if repaired || t <= a {
             1.0
         } else if t >= b {
             self.factor
@@ -395,6 +401,12 @@ impl Scenario {
             if !(c.factor.is_finite() && c.factor > 0.0 && c.end_minute >= c.start_minute) {
                 bail!(
                     "scenario: change of {} needs factor > 0 and end_minute >= start_minute",
+                    c.parameter
+                );
+            }
+            if c.repair_minute.is_some_and(|r| !(r.is_finite() && r >= c.end_minute)) {
+                bail!(
+                    "scenario: change of {}: repair_minute must be at or after end_minute",
                     c.parameter
                 );
             }

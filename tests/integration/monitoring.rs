@@ -614,3 +614,69 @@ fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
     assert!(!updated.is_empty());
     assert_eq!(queue_drops, overflow as u64, "the overflow skips are the counted drops");
 }
+
+/// Issue 33: a notify command receives the raise **and** the clear of an
+/// alarm. The two-week case with the softened bearing replaced at hour 260
+/// (`repair_minute`): the alarm raised after hour 200 clears after the
+/// repair, and the command gets both, in order, with nothing in between but
+/// state changes.
+#[test]
+fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
+    let dir = temp("notify-clear");
+    let mut cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
+    let notified = dir.join("notified.jsonl");
+    cfg.monitoring.as_mut().unwrap().notify = Some(splinewatch::config::NotifyConfig {
+        command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", notified.display())],
+        retries: 2,
+        timeout_seconds: 10.0,
+        ..Default::default()
+    });
+    let recordings = simulate(&cfg, &dir, &[300], |t| {
+        t.replace("factor = 0.8", "factor = 0.8\nrepair_minute = 15600.0      # hour 260")
+    });
+    let results = replay_with_state(&cfg, &recordings[0], &dir.join("state.json"));
+    let statuses = read_statuses(&[&results], &cfg.topic_prefix()).unwrap();
+    let states: Vec<&str> = statuses.iter().map(|s| s.state.as_str()).collect();
+    let raised = 200
+        + states[200..]
+            .iter()
+            .position(|&s| s == "alarm")
+            .expect("an alarm after the damage");
+    let last_alarm = states.iter().rposition(|&s| s == "alarm").unwrap();
+    let cleared = last_alarm
+        + states[last_alarm..]
+            .iter()
+            .position(|&s| s == "normal")
+            .expect("the alarm clears");
+    eprintln!("alarm raised at window {raised}, cleared at window {cleared} (the repair: window 260)");
+    assert!(raised < 212 && cleared > 260, "raised {raised}, cleared {cleared}");
+    // The command got exactly the changes into and out of an alarm or the
+    // outside-range state (the days' warm hours leave the training range),
+    // in order: the raise and the clear among them.
+    let changes = |s: &str| s == "alarm" || s == "outside_training_range";
+    let mut expected = Vec::new();
+    let mut previous: Option<&str> = None;
+    for s in &statuses {
+        if previous != Some(s.state.as_str()) && (changes(&s.state) || previous.is_some_and(changes)) {
+            expected.push((s.window, s.state.clone()));
+        }
+        previous = Some(s.state.as_str());
+    }
+    let received: Vec<(u64, String)> = std::fs::read_to_string(&notified)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let v: serde_json::Value = serde_json::from_str(l).unwrap();
+            (v["window"].as_u64().unwrap(), v["state"].as_str().unwrap().to_string())
+        })
+        .collect();
+    assert_eq!(received, expected);
+    assert!(
+        received.contains(&(statuses[raised].window, "alarm".into())),
+        "{received:?}"
+    );
+    assert!(
+        received.contains(&(statuses[cleared].window, "normal".into())),
+        "{received:?}"
+    );
+}
