@@ -469,34 +469,14 @@ impl<'a> UpdateProblem<'a> {
     ) -> Result<Solution, UpdateError> {
         assert_eq!(start.len(), self.parameters.len(), "one start value per parameter");
         let solved = solver::levenberg_marquardt(self, start, previous, observer)?;
-        let (p, current, cost, stop, converged, offset) = (
-            solved.p,
-            solved.at,
-            solved.cost,
-            solved.stop,
-            solved.converged,
-            solved.offset,
-        );
-        let (iterations, evaluations, held) = (solved.iterations, solved.evaluations, solved.held);
-        let (state, frfs) = current.extra;
-        let (relative_residual, frf_relative_residuals) = self.relative_residuals(&frfs.h);
-        let e = solver::estimates(&self.parameters, &p, &current.jacobian, cost, &held);
-        let result = UpdateResult {
-            parameters: e.parameters,
-            iterations,
-            converged,
-            stop_reason: stop,
+        let (relative_residual, per_block) = self.relative_residuals(&solved.at.extra.1.h);
+        let fit = solver::FitMeasures {
             relative_residual,
-            frf_relative_residuals,
-            singular_values: e.singular_values,
-            condition_number: e.condition_number,
-            residual_variance: e.residual_variance,
-            relative_offset: offset,
-            evaluations,
+            per_block,
             lines_used: self.lines.len(),
-            correlations: e.correlations,
-            held: e.held,
         };
+        let (result, p, at) = solved.into_result(&self.parameters, fit);
+        let (state, frfs) = at.extra;
         let point = self.point(&p, state, frfs)?;
         Ok(Solution { result, point })
     }

@@ -169,23 +169,15 @@ impl<'a> JointUpdateProblem<'a> {
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<JointSolution, UpdateError> {
         let solved = solver::levenberg_marquardt(self, start, previous, observer)?;
-        let e = solver::estimates(
-            self.frf.parameters(),
-            &solved.p,
-            &solved.at.jacobian,
-            solved.cost,
-            &solved.held,
-        );
-        let Extra {
-            state,
-            frfs,
-            pairs,
-            frf_rows,
-            ..
-        } = solved.at.extra;
-        let (relative_residual, frf_relative_residuals) = self.frf.relative_residuals(&frfs.h);
+        let (relative_residual, per_block) = self.frf.relative_residuals(&solved.at.extra.frfs.h);
+        let fit = solver::FitMeasures {
+            relative_residual,
+            per_block,
+            lines_used: self.frf.line_frequencies().len(),
+        };
+        let (result, p, at) = solved.into_result(self.frf.parameters(), fit);
         let chi_square = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-        let (frf_block, modal_block) = solved.at.residual.split_at(frf_rows);
+        let (frf_block, modal_block) = at.residual.split_at(at.extra.frf_rows);
         let blocks = [
             BlockFit {
                 residues: frf_block.len(),
@@ -196,23 +188,8 @@ impl<'a> JointUpdateProblem<'a> {
                 chi_square: chi_square(modal_block),
             },
         ];
-        let result = UpdateResult {
-            parameters: e.parameters,
-            iterations: solved.iterations,
-            converged: solved.converged,
-            stop_reason: solved.stop,
-            relative_residual,
-            frf_relative_residuals,
-            singular_values: e.singular_values,
-            condition_number: e.condition_number,
-            residual_variance: e.residual_variance,
-            relative_offset: solved.offset,
-            evaluations: solved.evaluations,
-            lines_used: self.frf.line_frequencies().len(),
-            correlations: e.correlations,
-            held: e.held,
-        };
-        let point = self.frf.point(&solved.p, state, frfs)?;
+        let Extra { state, frfs, pairs, .. } = at.extra;
+        let point = self.frf.point(&p, state, frfs)?;
         Ok(JointSolution {
             result,
             point,

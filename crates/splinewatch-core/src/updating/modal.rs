@@ -155,39 +155,22 @@ impl<'a> ModalUpdateProblem<'a> {
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<ModalSolution, UpdateError> {
         let solved = solver::levenberg_marquardt(self, start, None, observer)?;
-        let e = solver::estimates(
-            &self.parameters,
-            &solved.p,
-            &solved.at.jacobian,
-            solved.cost,
-            &solved.held,
-        );
         let relative_residual = self.relative_residual(&solved.at);
-        let Extra { state, pairs, .. } = solved.at.extra;
-        let per_mode = pairs
-            .iter()
-            .map(|p| {
-                let f = state.modes.frequency_hz(p.model);
-                let x = self.observed[p.observed].frequency_hz;
-                ((f - x) / x).abs()
-            })
-            .collect();
-        let result = UpdateResult {
-            parameters: e.parameters,
-            iterations: solved.iterations,
-            converged: solved.converged,
-            stop_reason: solved.stop,
+        let Extra { state, pairs, .. } = &solved.at.extra;
+        let fit = solver::FitMeasures {
             relative_residual,
-            frf_relative_residuals: per_mode,
-            singular_values: e.singular_values,
-            condition_number: e.condition_number,
-            residual_variance: e.residual_variance,
-            relative_offset: solved.offset,
-            evaluations: solved.evaluations,
+            per_block: pairs
+                .iter()
+                .map(|p| {
+                    let f = state.modes.frequency_hz(p.model);
+                    let x = self.observed[p.observed].frequency_hz;
+                    ((f - x) / x).abs()
+                })
+                .collect(),
             lines_used: pairs.len(),
-            correlations: e.correlations,
-            held: e.held,
         };
+        let (result, _, at) = solved.into_result(&self.parameters, fit);
+        let Extra { state, pairs, .. } = at.extra;
         Ok(ModalSolution { result, pairs, state })
     }
 }

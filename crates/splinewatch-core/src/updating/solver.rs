@@ -7,7 +7,7 @@
 
 use super::{
     bounded_derivative, bounded_value, unbounded_value, HeldParameter, HoldReason, IterationRecord, Method, Parameter,
-    ParameterCorrelation, ParameterEstimate, StopReason, UpdateError, UpdateSettings,
+    ParameterCorrelation, ParameterEstimate, StopReason, UpdateError, UpdateResult, UpdateSettings,
 };
 use faer::{Mat, Side};
 
@@ -59,6 +59,46 @@ pub struct Solved<E> {
     pub evaluations: usize,
     /// Per parameter, why it was held (`None`: free).
     pub held: Vec<Option<HoldReason>>,
+}
+
+/// How well a residual model fits at a solution, for its [`UpdateResult`].
+pub(super) struct FitMeasures {
+    /// The unweighted relative residual ([`ResidualModel::relative_residual`]).
+    pub(super) relative_residual: f64,
+    /// Per block: per measured FRF, or per paired mode.
+    pub(super) per_block: Vec<f64>,
+    /// Frequency lines (FRF residues) or pairs (modal residues) used.
+    pub(super) lines_used: usize,
+}
+
+impl<E> Solved<E> {
+    /// The [`UpdateResult`] of this solve (the estimates at its point, its
+    /// history and stop) with the model's `fit`; its point and evaluation
+    /// are handed back.
+    pub(super) fn into_result(
+        self,
+        parameters: &[Parameter],
+        fit: FitMeasures,
+    ) -> (UpdateResult, Vec<f64>, Evaluated<E>) {
+        let e = estimates(parameters, &self.p, &self.at.jacobian, self.cost, &self.held);
+        let result = UpdateResult {
+            parameters: e.parameters,
+            iterations: self.iterations,
+            converged: self.converged,
+            stop_reason: self.stop,
+            relative_residual: fit.relative_residual,
+            frf_relative_residuals: fit.per_block,
+            singular_values: e.singular_values,
+            condition_number: e.condition_number,
+            residual_variance: e.residual_variance,
+            relative_offset: self.offset,
+            evaluations: self.evaluations,
+            lines_used: fit.lines_used,
+            correlations: e.correlations,
+            held: e.held,
+        };
+        (result, self.p, self.at)
+    }
 }
 
 /// Runs the bounded LM from `start` (warm start: values on or outside a
