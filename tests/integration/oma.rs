@@ -1,7 +1,7 @@
 //! Output-only identification end to end: `simulate --excitation ambient`
 //! (and traffic) → MCAP → `splinewatch oma`, its JSON contract, and bad input.
 
-use crate::common::{fresh_dir, parameter, splinewatch};
+use crate::common::{fresh_dir, parameter, results_by_topic, splinewatch};
 use splinewatch::config::{frf_setup, load_config};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch_core::c64;
@@ -398,20 +398,7 @@ fn output_only_replay_follows_the_bearing_damage() {
         &["--scenario", scenario.to_str().unwrap()],
     );
     let (results, _) = replay_output_only(&dir, &rec, 600.0, "");
-    let bytes = std::fs::read(&results).unwrap();
-    let mut by_topic: std::collections::BTreeMap<String, Vec<serde_json::Value>> = Default::default();
-    for m in mcap::MessageStream::new(&bytes).unwrap() {
-        let m = m.unwrap();
-        let suffix = m
-            .channel
-            .topic
-            .trim_start_matches("bridge/sinello-span2-ambient/")
-            .to_string();
-        by_topic
-            .entry(suffix)
-            .or_default()
-            .push(serde_json::from_slice(&m.data).unwrap());
-    }
+    let by_topic = results_by_topic(&std::fs::read(&results).unwrap());
     assert!(!by_topic.contains_key("frf/measured") && !by_topic.contains_key("frf/model"));
     let windows = &by_topic["windows"];
     assert_eq!(windows.len(), 4);
@@ -609,18 +596,9 @@ fn issue_30_the_overpass_replay_finds_its_bent_bearings_stiffening() {
         results.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let bytes = std::fs::read(&results).unwrap();
-    let mut updates = Vec::new();
-    let mut identified = Vec::new();
-    for m in mcap::MessageStream::new(&bytes).unwrap() {
-        let m = m.unwrap();
-        let value: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
-        match m.channel.topic.as_str() {
-            "bridge/overpass/updating/parameters" => updates.push(value),
-            "bridge/overpass/oma/modes" => identified.push(value),
-            _ => {}
-        }
-    }
+    let mut by_topic = results_by_topic(&std::fs::read(&results).unwrap());
+    let updates = by_topic.remove("updating/parameters").unwrap_or_default();
+    let identified = by_topic.remove("oma/modes").unwrap_or_default();
     assert_eq!(updates.len(), 2, "one update per 20-minute window");
     for w in &identified {
         let paired = w["modes"]

@@ -1,7 +1,7 @@
 //! Issue 31: updates that converge on what the data can tell, and say
 //! plainly when they cannot.
 
-use crate::common::{fresh_dir, parameter, splinewatch};
+use crate::common::{fresh_dir, parameter, results_by_topic, splinewatch};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -14,17 +14,7 @@ fn ambient_config() -> String {
 
 /// The messages of a results file by topic suffix.
 fn by_topic(results: &Path) -> BTreeMap<String, Vec<serde_json::Value>> {
-    let bytes = std::fs::read(results).unwrap();
-    let mut out: BTreeMap<String, Vec<serde_json::Value>> = BTreeMap::new();
-    for m in mcap::MessageStream::new(&bytes).unwrap() {
-        let m = m.unwrap();
-        // `bridge/<structure>/<suffix>`
-        let suffix = m.channel.topic.splitn(3, '/').nth(2).unwrap_or_default().to_string();
-        out.entry(suffix)
-            .or_default()
-            .push(serde_json::from_slice(&m.data).unwrap());
-    }
-    out
+    results_by_topic(&std::fs::read(results).unwrap())
 }
 
 fn value(update: &serde_json::Value, name: &str) -> f64 {

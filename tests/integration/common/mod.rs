@@ -173,3 +173,17 @@ pub fn parameter<'a>(parameters: &'a serde_json::Value, name: &str) -> &'a serde
         .find(|p| p["name"] == name)
         .unwrap_or_else(|| panic!("no parameter {name} in {parameters}"))
 }
+
+/// The JSON messages of a results file by topic suffix (what follows
+/// `bridge/<structure>/`), in file order.
+pub fn results_by_topic(bytes: &[u8]) -> std::collections::BTreeMap<String, Vec<serde_json::Value>> {
+    let mut out: std::collections::BTreeMap<String, Vec<serde_json::Value>> = Default::default();
+    for m in mcap::MessageStream::new(bytes).expect("an MCAP file") {
+        let m = m.expect("a readable message");
+        let suffix = m.channel.topic.splitn(3, '/').nth(2).unwrap_or_default().to_string();
+        out.entry(suffix)
+            .or_default()
+            .push(serde_json::from_slice(&m.data).expect("a JSON message"));
+    }
+    out
+}
