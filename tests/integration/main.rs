@@ -12,7 +12,6 @@ mod live;
 mod matrices;
 mod measurements;
 mod monitoring;
-#[cfg(unix)]
 mod notify;
 mod oma;
 mod paper;

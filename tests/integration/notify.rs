@@ -1,40 +1,124 @@
 //! Issue 33: alarm notifications to a webhook, over verified TLS to a real
-//! HTTPS server (Python's, a child process) with a certificate of a site CA
-//! made at test time.
+//! HTTPS server (rustls on a loopback socket, in a thread) with a
+//! certificate of a CA made at test time (rcgen).
 
 use crate::common::fresh_dir;
-use crate::security::make_test_pki;
 use splinewatch::config::{Config, NotifyConfig};
 use splinewatch::io::monitoring_json::StatusMessage;
 use splinewatch::outputs::notify::Notifier;
-use std::io::BufRead;
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpListener;
 use std::path::Path;
-use std::process::{Child, Command, Stdio};
 use std::sync::atomic::Ordering;
+use std::sync::{Arc, Mutex};
 
-/// The webhook server on 127.0.0.1 with the site's `router` certificate
-/// (valid for localhost), failing its first `fail_first` requests; its
-/// child and port.
-fn webhook_server(pki: &Path, log: &Path, fail_first: u32) -> (Child, u16) {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/integration/webhook_server.py");
-    let mut child = Command::new("python3")
-        .arg(script)
-        .args(["--cert", pki.join("router.pem").to_str().unwrap()])
-        .args(["--key", pki.join("router.key").to_str().unwrap()])
-        .args(["--log", log.to_str().unwrap()])
-        .args(["--fail-first", &fail_first.to_string()])
-        .stdout(Stdio::piped())
-        .spawn()
-        .expect("python3 runs the webhook server");
-    let mut line = String::new();
-    std::io::BufReader::new(child.stdout.take().unwrap())
-        .read_line(&mut line)
+/// One request the server received: path, Authorization and Content-Type
+/// headers, the status it answered, the body.
+#[derive(Debug, Clone)]
+struct Received {
+    path: String,
+    authorization: Option<String>,
+    content_type: Option<String>,
+    status: u16,
+    body: String,
+}
+
+/// A site CA and a server certificate for localhost and 127.0.0.1: the CA's
+/// PEM is written to `ca_pem`; the server's TLS configuration is returned.
+fn site_pki(ca_pem: &Path) -> Arc<rustls::ServerConfig> {
+    use rcgen::{BasicConstraints, CertificateParams, CertifiedIssuer, DnType, IsCa, KeyPair, KeyUsagePurpose};
+    use rustls::pki_types::{CertificateDer, PrivateKeyDer, PrivatePkcs8KeyDer};
+    let mut ca = CertificateParams::new(Vec::<String>::new()).unwrap();
+    ca.is_ca = IsCa::Ca(BasicConstraints::Unconstrained);
+    ca.distinguished_name
+        .push(DnType::CommonName, "splinewatch webhook test CA");
+    ca.key_usages = vec![KeyUsagePurpose::KeyCertSign, KeyUsagePurpose::CrlSign];
+    let issuer = CertifiedIssuer::self_signed(ca, KeyPair::generate().unwrap()).unwrap();
+    std::fs::write(ca_pem, issuer.pem()).unwrap();
+    let mut leaf = CertificateParams::new(vec!["localhost".to_string(), "127.0.0.1".to_string()]).unwrap();
+    leaf.distinguished_name.push(DnType::CommonName, "hooks");
+    let key = KeyPair::generate().unwrap();
+    let cert = leaf.signed_by(&key, &issuer).unwrap();
+    let provider = Arc::new(rustls::crypto::ring::default_provider());
+    let config = rustls::ServerConfig::builder_with_provider(provider)
+        .with_safe_default_protocol_versions()
+        .unwrap()
+        .with_no_client_auth()
+        .with_single_cert(
+            vec![CertificateDer::from(cert.der().to_vec())],
+            PrivateKeyDer::Pkcs8(PrivatePkcs8KeyDer::from(key.serialize_der())),
+        )
         .unwrap();
-    let port = line
-        .trim()
-        .parse()
-        .unwrap_or_else(|_| panic!("the server's port, got {line:?}"));
-    (child, port)
+    Arc::new(config)
+}
+
+/// An HTTPS server on 127.0.0.1 (a thread that lives as long as the test
+/// process): one request per connection, the first `fail_first` answered
+/// 503, the rest 200. Its port and what it received.
+fn webhook_server(tls: Arc<rustls::ServerConfig>, fail_first: usize) -> (u16, Arc<Mutex<Vec<Received>>>) {
+    let listener = TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = listener.local_addr().unwrap().port();
+    let received = Arc::new(Mutex::new(Vec::new()));
+    let log = Arc::clone(&received);
+    std::thread::spawn(move || {
+        for stream in listener.incoming().flatten() {
+            let connection = rustls::ServerConnection::new(Arc::clone(&tls)).unwrap();
+            // A client that refuses the certificate ends the handshake: no request.
+            let _ = serve(rustls::StreamOwned::new(connection, stream), &log, fail_first);
+        }
+    });
+    (port, received)
+}
+
+/// Reads one HTTP/1.1 request, records it and answers.
+fn serve(
+    stream: rustls::StreamOwned<rustls::ServerConnection, std::net::TcpStream>,
+    log: &Mutex<Vec<Received>>,
+    fail_first: usize,
+) -> std::io::Result<()> {
+    let mut reader = BufReader::new(stream);
+    let mut line = String::new();
+    reader.read_line(&mut line)?;
+    let path = line.split_whitespace().nth(1).unwrap_or_default().to_string();
+    let (mut length, mut authorization, mut content_type) = (0, None, None);
+    loop {
+        line.clear();
+        reader.read_line(&mut line)?;
+        let header = line.trim_end();
+        if header.is_empty() {
+            break;
+        }
+        if let Some((name, value)) = header.split_once(':') {
+            let value = value.trim().to_string();
+            match name.to_ascii_lowercase().as_str() {
+                "content-length" => length = value.parse().unwrap_or(0),
+                "authorization" => authorization = Some(value),
+                "content-type" => content_type = Some(value),
+                _ => {}
+            }
+        }
+    }
+    let mut body = vec![0; length];
+    reader.read_exact(&mut body)?;
+    let mut log = log.lock().unwrap();
+    let status = if log.len() < fail_first { 503 } else { 200 };
+    log.push(Received {
+        path,
+        authorization,
+        content_type,
+        status,
+        body: String::from_utf8_lossy(&body).into_owned(),
+    });
+    drop(log);
+    let mut stream = reader.into_inner();
+    let reason = if status == 200 { "OK" } else { "Service Unavailable" };
+    write!(
+        stream,
+        "HTTP/1.1 {status} {reason}\r\nContent-Length: 0\r\nConnection: close\r\n\r\n"
+    )?;
+    stream.flush()?;
+    stream.conn.send_close_notify();
+    stream.flush()
 }
 
 fn status(window: u64, state: &str) -> StatusMessage {
@@ -63,16 +147,13 @@ fn notify_all(notifier: &mut Notifier, states: &[&str]) {
 #[test]
 fn a_webhook_receives_the_alarm_state_changes_over_verified_tls() {
     let dir = fresh_dir("notify-webhook");
-    let pki = dir.join("pki");
-    make_test_pki(&pki);
-    let log = dir.join("requests.jsonl");
-    let (mut server, port) = webhook_server(&pki, &log, 1);
+    let (port, received) = webhook_server(site_pki(&dir.join("ca.pem")), 1);
     let token = dir.join("token");
     std::fs::write(&token, "s3cret-token\n").unwrap();
     let config = NotifyConfig {
         webhook: Some(format!("https://localhost:{port}/hooks/bridge-a")),
         bearer_token_file: Some(token.clone()),
-        ca_file: Some(pki.join("ca.pem")),
+        ca_file: Some(dir.join("ca.pem")),
         retries: 2,
         timeout_seconds: 10.0,
         ..NotifyConfig::default()
@@ -92,22 +173,18 @@ fn a_webhook_receives_the_alarm_state_changes_over_verified_tls() {
     assert_eq!(counts.attempts.load(Ordering::Relaxed), 5, "one retry after the 503");
     assert_eq!(counts.sent.load(Ordering::Relaxed), 4);
     assert_eq!(counts.failures.load(Ordering::Relaxed), 0);
-    let requests: Vec<serde_json::Value> = std::fs::read_to_string(&log)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let requests = received.lock().unwrap().clone();
     let seen: Vec<(u64, String, u64)> = requests
         .iter()
         .map(|r| {
-            assert_eq!(r["path"], "/hooks/bridge-a");
-            assert_eq!(r["authorization"], "Bearer s3cret-token");
-            assert_eq!(r["content_type"], "application/json");
-            let body: serde_json::Value = serde_json::from_str(r["body"].as_str().unwrap()).unwrap();
+            assert_eq!(r.path, "/hooks/bridge-a");
+            assert_eq!(r.authorization.as_deref(), Some("Bearer s3cret-token"));
+            assert_eq!(r.content_type.as_deref(), Some("application/json"));
+            let body: serde_json::Value = serde_json::from_str(&r.body).unwrap();
             (
                 body["window"].as_u64().unwrap(),
                 body["state"].as_str().unwrap().to_string(),
-                r["status"].as_u64().unwrap(),
+                u64::from(r.status),
             )
         })
         .collect();
@@ -133,13 +210,7 @@ fn a_webhook_receives_the_alarm_state_changes_over_verified_tls() {
     assert_eq!(counts.attempts.load(Ordering::Relaxed), 2);
     assert_eq!(counts.sent.load(Ordering::Relaxed), 0);
     assert_eq!(counts.failures.load(Ordering::Relaxed), 1);
-    assert_eq!(
-        std::fs::read_to_string(&log).unwrap().lines().count(),
-        5,
-        "nothing reached the server"
-    );
-    server.kill().unwrap();
-    server.wait().unwrap();
+    assert_eq!(received.lock().unwrap().len(), 5, "nothing reached the server");
 }
 
 /// Bad `[monitoring.notify]` settings are refused by name.

@@ -195,7 +195,7 @@ fn json_path(path: &Path) -> String {
 /// A site PKI made now in `dir`: `ca.pem`; `router.{pem,key}` for 127.0.0.1
 /// and localhost; `<role>.{pem,key}` with CN = role; `other-ca/logger.*`
 /// from an unrelated CA (`other-ca/ca.pem`); `expired/logger.*` from the site CA, expired.
-pub(crate) fn make_test_pki(dir: &Path) {
+fn make_test_pki(dir: &Path) {
     use rcgen::{BasicConstraints, CertificateParams, CertifiedIssuer, DnType, IsCa, KeyPair, KeyUsagePurpose};
     let ca = |name: &str| {
         let mut p = CertificateParams::new(Vec::<String>::new()).unwrap();
