@@ -130,15 +130,7 @@ fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
 #[test]
 fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     let dir = temp("two-weeks");
-    let mut cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
-    // The owner's command (issue 33): every status it is given, one a line.
-    let notified = dir.join("notified.jsonl");
-    cfg.monitoring.as_mut().unwrap().notify = Some(splinewatch::config::NotifyConfig {
-        command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", notified.display())],
-        retries: 2,
-        timeout_seconds: 10.0,
-        ..Default::default()
-    });
+    let (cfg, notified) = notifying_config(&dir);
     let recordings = simulate(&cfg, &dir, &[168, 168], |t| t);
     let state = dir.join("state.json");
     let first = replay_with_state(&cfg, &recordings[0], &state);
@@ -178,17 +170,8 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     // The command got exactly the changes into and out of an alarm or the
     // outside-range state (each run's first status too when it is one),
     // in order, the alarm's raise among them.
-    let changes = |s: &str| s == "alarm" || s == "outside_training_range";
-    let mut expected = Vec::new();
-    for run in [&statuses[..168], &statuses[168..]] {
-        let mut previous: Option<&str> = None;
-        for s in run {
-            if previous != Some(s.state.as_str()) && (changes(&s.state) || previous.is_some_and(changes)) {
-                expected.push(s.clone());
-            }
-            previous = Some(s.state.as_str());
-        }
-    }
+    let mut expected = notified_changes(&statuses[..168]);
+    expected.extend(notified_changes(&statuses[168..]));
     let received: Vec<StatusMessage> = std::fs::read_to_string(&notified)
         .unwrap()
         .lines()
@@ -615,14 +598,9 @@ fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
     assert_eq!(queue_drops, overflow as u64, "the overflow skips are the counted drops");
 }
 
-/// Issue 33: a notify command receives the raise **and** the clear of an
-/// alarm. The two-week case with the softened bearing replaced at hour 260
-/// (`repair_minute`): the alarm raised after hour 200 clears after the
-/// repair, and the command gets both, in order, with nothing in between but
-/// state changes.
-#[test]
-fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
-    let dir = temp("notify-clear");
+/// The bundled monitoring config whose notify command (issue 33) appends
+/// every status it is given, one a line, to the returned file in `dir`.
+fn notifying_config(dir: &Path) -> (Config, PathBuf) {
     let mut cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
     let notified = dir.join("notified.jsonl");
     cfg.monitoring.as_mut().unwrap().notify = Some(splinewatch::config::NotifyConfig {
@@ -631,6 +609,34 @@ fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
         timeout_seconds: 10.0,
         ..Default::default()
     });
+    (cfg, notified)
+}
+
+/// What the notifier must send for one run's statuses: each change into or
+/// out of an alarm or the outside-range state (the run's first status too
+/// when it is one), in order.
+fn notified_changes(run: &[StatusMessage]) -> Vec<StatusMessage> {
+    let changes = |s: &str| s == "alarm" || s == "outside_training_range";
+    let mut expected = Vec::new();
+    let mut previous: Option<&str> = None;
+    for s in run {
+        if previous != Some(s.state.as_str()) && (changes(&s.state) || previous.is_some_and(changes)) {
+            expected.push(s.clone());
+        }
+        previous = Some(s.state.as_str());
+    }
+    expected
+}
+
+/// Issue 33: a notify command receives the raise **and** the clear of an
+/// alarm. The two-week case with the softened bearing replaced at hour 260
+/// (`repair_minute`): the alarm raised after hour 200 clears after the
+/// repair, and the command gets both, in order, with nothing in between but
+/// state changes.
+#[test]
+fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
+    let dir = temp("notify-clear");
+    let (cfg, notified) = notifying_config(&dir);
     let recordings = simulate(&cfg, &dir, &[300], |t| {
         t.replace("factor = 0.8", "factor = 0.8\nrepair_minute = 15600.0      # hour 260")
     });
@@ -653,15 +659,10 @@ fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
     // The command got exactly the changes into and out of an alarm or the
     // outside-range state (the days' warm hours leave the training range),
     // in order: the raise and the clear among them.
-    let changes = |s: &str| s == "alarm" || s == "outside_training_range";
-    let mut expected = Vec::new();
-    let mut previous: Option<&str> = None;
-    for s in &statuses {
-        if previous != Some(s.state.as_str()) && (changes(&s.state) || previous.is_some_and(changes)) {
-            expected.push((s.window, s.state.clone()));
-        }
-        previous = Some(s.state.as_str());
-    }
+    let expected: Vec<(u64, String)> = notified_changes(&statuses)
+        .into_iter()
+        .map(|s| (s.window, s.state))
+        .collect();
     let received: Vec<(u64, String)> = std::fs::read_to_string(&notified)
         .unwrap()
         .lines()
