@@ -109,8 +109,9 @@ pub enum PatchGeometryConfig {
     },
     /// A B-spline surface from CAD: `degree_xi`, `degree_eta`, clamped
     /// `knots_xi`, `knots_eta`, `control_points` (η fastest, `[x, y, z]` or
-    /// `[x, y, z, w]` with equal weights), refined to the patch's analysis
-    /// net by knot insertion (the geometry unchanged).
+    /// `[x, y, z, w]`: a NURBS surface, weights finite and positive),
+    /// refined to the patch's analysis net by knot insertion (the geometry
+    /// unchanged, arcs exact).
     Nurbs {
         degree_xi: usize,
         degree_eta: usize,
@@ -262,9 +263,11 @@ fn swept_shell(p: &PatchConfig, centreline: &[Vec3], section: [[f64; 2]; 2]) -> 
     refine(p, shell)
 }
 
-/// A CAD surface (equal weights: a B-spline) refined to the patch's
-/// `degree` and `control_points` by inserting the midpoint of its longest
-/// span until the net has the requested size.
+/// A CAD surface (NURBS: weights optional, equal weights a B-spline)
+/// refined to the patch's `degree` and `control_points` by inserting the
+/// midpoint of its longest span until the net has the requested size; knot
+/// insertion in homogeneous coordinates keeps the geometry exactly, arcs
+/// included, and the analysis uses the rational basis.
 fn nurbs_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
     let PatchGeometryConfig::Nurbs {
         degree_xi,
@@ -307,19 +310,14 @@ fn nurbs_shell(p: &PatchConfig) -> Result<Shell, (&'static str, String)> {
             }
         }
     }
-    if weights.iter().any(|&w| w != weights[0]) {
-        return Err((
-            "geometry.control_points",
-            "unequal weights (a rational surface) are not supported yet: give a B-spline (equal or no weights)".into(),
-        ));
-    }
     if [*degree_xi, *degree_eta] != p.degree {
         return Err((
             "degree",
             format!("must equal the surface's degrees [{degree_xi}, {degree_eta}] (no degree elevation)"),
         ));
     }
-    let surface = BSplineSurface::new(xi, eta, points).map_err(|e| ("geometry.control_points", e.to_string()))?;
+    let surface =
+        BSplineSurface::rational(xi, eta, points, weights).map_err(|e| ("geometry.control_points", e.to_string()))?;
     let (m, n) = surface.net_size();
     let shell = Shell::new(surface, vec![1.0; m * n]).map_err(|e| ("geometry", e.to_string()))?;
     refine_to_net(shell, p.control_points)
@@ -508,13 +506,29 @@ origin = [30.0, 0.0, 0.0]
             "{r:?}"
         );
         assert_eq!(model.joints.len(), 2);
+        // A weight of 2 at the (ξ=0, η=1) corner: a rational surface, refined
+        // exactly (homogeneous coordinates). At (½, ½) all four bilinear
+        // products are ¼, W = ¼ (1 + 2 + 1 + 1) = 1.25, so
+        // r = ¼ (P00 + 2 P01 + P10 + P11) / 1.25 = (8, −2, −0.9).
         let rational = cad.replace("[0.0, -2.0, -1.5, 1.0]", "[0.0, -2.0, -1.5, 2.0]");
-        let e = Config::from_toml(&rational)
+        let model = Config::from_toml(&rational).unwrap().build_model().unwrap();
+        let web = model.patches[1].shell.surface();
+        assert_eq!(web.net_size(), (12, 3));
+        assert!(web.weights().is_some());
+        let r = web.evaluate(0.5, 0.5).r;
+        assert!(
+            (r[0] - 8.0).abs() < 1e-12 && (r[1] + 2.0).abs() < 1e-12 && (r[2] + 0.9).abs() < 1e-12,
+            "{r:?}"
+        );
+        assert_eq!(model.joints.len(), 2);
+        let zero = cad.replace("[0.0, -2.0, -1.5, 1.0]", "[0.0, -2.0, -1.5, 0.0]");
+        let e = Config::from_toml(&zero)
             .and_then(|c| c.validate())
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("model.patches[1].geometry.control_points") && e.contains("rational"),
+            e.contains("model.patches[1].geometry.control_points")
+                && e.contains("weight 0 must be finite and positive"),
             "{e}"
         );
     }

@@ -1,5 +1,12 @@
 //! Tensor-product B-spline surfaces, paper eq. (1):
-//! `r(ξ, η) = Σ_i Σ_j B_i^p(ξ) B_j^q(η) P_ij`.
+//! `r(ξ, η) = Σ_i Σ_j B_i^p(ξ) B_j^q(η) P_ij`, and their rational
+//! generalisation (NURBS, Piegl & Tiller, The NURBS Book, §4.4):
+//! `r = Σ R_ij P_ij` with `R_ij = w_ij B_i B_j / W`, `W = Σ w_kl B_k B_l`, so
+//! circles and arcs from CAD are exact. An isogeometric shell interpolates
+//! its displacements with the same `R_ij` (Hughes et al. 2005), so the
+//! rational basis is applied wherever the basis is evaluated
+//! ([`BSplineSurface::rationalise`]); equal weights are stored as a plain
+//! B-spline, whose results stay bit for bit.
 //!
 //! Control points are stored with `η` running fastest: `P_ij` is
 //! `points[i * n + j]`, `i < m` along `ξ`, `j < n` along `η`.
@@ -18,6 +25,10 @@ pub enum SurfaceError {
     NotFinite { index: usize },
     #[error("interpolation at the Greville abscissae is singular")]
     SingularInterpolation,
+    #[error("control point {index} has weight {weight}: weights must be finite and positive")]
+    BadWeight { index: usize, weight: f64 },
+    #[error("{found} weights given for {points} control points")]
+    WeightCount { found: usize, points: usize },
     #[error("knot insertion: {0}")]
     Knot(#[from] KnotError),
 }
@@ -35,6 +46,8 @@ pub struct BSplineSurface {
     xi: KnotVector,
     eta: KnotVector,
     points: Vec<Vec3>,
+    /// NURBS weights per control point; `None` for a B-spline (all equal).
+    weights: Option<Vec<f64>>,
 }
 
 /// Position and first parametric derivatives at a point of a surface.
@@ -58,7 +71,74 @@ impl BSplineSurface {
         if let Some(index) = points.iter().position(|p| p.iter().any(|c| !c.is_finite())) {
             return Err(SurfaceError::NotFinite { index });
         }
-        Ok(Self { xi, eta, points })
+        Ok(Self {
+            xi,
+            eta,
+            points,
+            weights: None,
+        })
+    }
+
+    /// A NURBS surface with `weights` per control point (finite, positive);
+    /// equal weights give the B-spline surface.
+    pub fn rational(
+        xi: KnotVector,
+        eta: KnotVector,
+        points: Vec<Vec3>,
+        weights: Vec<f64>,
+    ) -> Result<Self, SurfaceError> {
+        let mut surface = Self::new(xi, eta, points)?;
+        if weights.len() != surface.points.len() {
+            return Err(SurfaceError::WeightCount {
+                found: weights.len(),
+                points: surface.points.len(),
+            });
+        }
+        if let Some(index) = weights.iter().position(|w| !(w.is_finite() && *w > 0.0)) {
+            return Err(SurfaceError::BadWeight {
+                index,
+                weight: weights[index],
+            });
+        }
+        if weights.iter().any(|&w| w != weights[0]) {
+            surface.weights = Some(weights);
+        }
+        Ok(surface)
+    }
+
+    /// The same knots and weights with other control points.
+    pub fn with_points(&self, points: Vec<Vec3>) -> Result<Self, SurfaceError> {
+        match &self.weights {
+            None => Self::new(self.xi.clone(), self.eta.clone(), points),
+            Some(w) => Self::rational(self.xi.clone(), self.eta.clone(), points, w.clone()),
+        }
+    }
+
+    /// The NURBS weights, `None` for a B-spline.
+    pub fn weights(&self) -> Option<&[f64]> {
+        self.weights.as_deref()
+    }
+
+    /// Turns the tensor products `B_i B_j` (`n`) and their derivatives
+    /// (`n_xi`, `n_eta`) at the control points `cps` into the rational
+    /// basis `R = w B_i B_j / W` and its derivatives
+    /// `R_ξ = w (B_ξ W − B W_ξ) / W²`; nothing changes on a B-spline.
+    pub fn rationalise(&self, cps: &[usize], n: &mut [f64], n_xi: &mut [f64], n_eta: &mut [f64]) {
+        let Some(weights) = &self.weights else {
+            return;
+        };
+        let (mut w, mut w_xi, mut w_eta) = (0.0, 0.0, 0.0);
+        for (k, &cp) in cps.iter().enumerate() {
+            w += weights[cp] * n[k];
+            w_xi += weights[cp] * n_xi[k];
+            w_eta += weights[cp] * n_eta[k];
+        }
+        for (k, &cp) in cps.iter().enumerate() {
+            let c = weights[cp] / (w * w);
+            n_xi[k] = c * (n_xi[k] * w - n[k] * w_xi);
+            n_eta[k] = c * (n_eta[k] * w - n[k] * w_eta);
+            n[k] *= weights[cp] / w;
+        }
     }
 
     /// The surface interpolating `map` at the tensor grid of Greville
@@ -98,6 +178,7 @@ impl BSplineSurface {
 
     /// Eq. (1) and its first derivatives at `(ξ, η)`.
     pub fn evaluate(&self, xi: f64, eta: f64) -> SurfacePoint {
+        const LOCAL: usize = (MAX_DEGREE + 1) * (MAX_DEGREE + 1);
         let (p, q) = (self.xi.degree(), self.eta.degree());
         let n = self.eta.basis_count();
         let (si, sj) = (self.xi.span(xi), self.eta.span(eta));
@@ -109,18 +190,26 @@ impl BSplineSurface {
         );
         self.xi.basis_with_derivatives(si, xi, &mut bx, &mut dbx);
         self.eta.basis_with_derivatives(sj, eta, &mut be, &mut dbe);
+        let (mut cps, mut nv, mut nx, mut ne) = ([0; LOCAL], [0.0; LOCAL], [0.0; LOCAL], [0.0; LOCAL]);
+        let mut count = 0;
+        for a in 0..=p {
+            for b in 0..=q {
+                cps[count] = (si - p + a) * n + (sj - q + b);
+                (nv[count], nx[count], ne[count]) = (bx[a] * be[b], dbx[a] * be[b], bx[a] * dbe[b]);
+                count += 1;
+            }
+        }
+        self.rationalise(&cps[..count], &mut nv[..count], &mut nx[..count], &mut ne[..count]);
         let mut out = SurfacePoint {
             r: [0.0; 3],
             r_xi: [0.0; 3],
             r_eta: [0.0; 3],
         };
-        for a in 0..=p {
-            for b in 0..=q {
-                let pt = self.points[(si - p + a) * n + (sj - q + b)];
-                out.r = axpy(out.r, bx[a] * be[b], pt);
-                out.r_xi = axpy(out.r_xi, dbx[a] * be[b], pt);
-                out.r_eta = axpy(out.r_eta, bx[a] * dbe[b], pt);
-            }
+        for k in 0..count {
+            let pt = self.points[cps[k]];
+            out.r = axpy(out.r, nv[k], pt);
+            out.r_xi = axpy(out.r_xi, nx[k], pt);
+            out.r_eta = axpy(out.r_eta, ne[k], pt);
         }
         out
     }
@@ -200,7 +289,9 @@ impl BSplineSurface {
 
     /// The same surface with the knot `u` inserted once along `direction`
     /// (h-refinement); `extra` carries further per-control-point values of
-    /// dimension `extra_dim` (e.g. thickness) refined the same way.
+    /// dimension `extra_dim` (e.g. thickness) refined the same way. A NURBS
+    /// surface is refined in homogeneous coordinates (`w P`, `w`, `w e`:
+    /// P&T §5.2), so both the geometry and the fields `Σ R e` are kept.
     pub fn insert_knot(
         &self,
         direction: Direction,
@@ -209,13 +300,16 @@ impl BSplineSurface {
         extra_dim: usize,
     ) -> Result<(Self, Vec<f64>), SurfaceError> {
         let (m, n) = self.net_size();
-        let dim = 3 + extra_dim;
+        // Coordinates, then the weight when rational, then the extras.
+        let rational = usize::from(self.weights.is_some());
+        let dim = 3 + rational + extra_dim;
         let value = |i: usize, j: usize, d: usize| {
             let k = i * n + j;
-            if d < 3 {
-                self.points[k][d]
-            } else {
-                extra[k * extra_dim + d - 3]
+            let w = self.weights.as_ref().map_or(1.0, |w| w[k]);
+            match d {
+                0..=2 => w * self.points[k][d],
+                3 if rational == 1 => w,
+                _ => w * extra[k * extra_dim + d - 3 - rational],
             }
         };
         let (lines, along, kv) = match direction {
@@ -244,19 +338,31 @@ impl BSplineSurface {
         };
         let (m2, n2) = (xi.basis_count(), eta.basis_count());
         let mut points = vec![[0.0; 3]; m2 * n2];
+        let mut weights = vec![1.0; m2 * n2];
         let mut extra_out = vec![0.0; m2 * n2 * extra_dim];
         for (line, col) in columns.iter().enumerate() {
-            for k in 0..col.len() / dim {
+            for (k, c) in col.chunks_exact(dim).enumerate() {
                 let (i, j) = match direction {
                     Direction::Xi => (k, line),
                     Direction::Eta => (line, k),
                 };
                 let idx = i * n2 + j;
-                points[idx] = [col[k * dim], col[k * dim + 1], col[k * dim + 2]];
-                extra_out[idx * extra_dim..(idx + 1) * extra_dim].copy_from_slice(&col[k * dim + 3..(k + 1) * dim]);
+                let w = if rational == 1 { c[3] } else { 1.0 };
+                points[idx] = [c[0] / w, c[1] / w, c[2] / w];
+                weights[idx] = w;
+                for (out, e) in extra_out[idx * extra_dim..(idx + 1) * extra_dim]
+                    .iter_mut()
+                    .zip(&c[3 + rational..])
+                {
+                    *out = e / w;
+                }
             }
         }
-        Ok((Self::new(xi, eta, points)?, extra_out))
+        let refined = match rational {
+            0 => Self::new(xi, eta, points)?,
+            _ => Self::rational(xi, eta, points, weights)?,
+        };
+        Ok((refined, extra_out))
     }
 }
 
@@ -351,6 +457,77 @@ mod tests {
         let edge = s.evaluate(0.5, 1.0).r;
         let (u, v, dist) = s.closest_point([edge[0], edge[1] + 2.0, edge[2]]);
         assert!((u - 0.5).abs() < 1e-9 && v == 1.0 && (dist - 2.0).abs() < 1e-9);
+    }
+
+    /// A quarter of a cylinder (radius 2, length 3) as the textbook NURBS:
+    /// degree 2 over the arc with weights 1, √½, 1 (P&T Ex. 7.1), degree 1
+    /// along the axis.
+    fn quarter_cylinder() -> BSplineSurface {
+        let xi = KnotVector::new(vec![0.0, 0.0, 0.0, 1.0, 1.0, 1.0], 2).unwrap();
+        let eta = KnotVector::new(vec![0.0, 0.0, 1.0, 1.0], 1).unwrap();
+        let arc = [[2.0, 0.0], [2.0, 2.0], [0.0, 2.0]];
+        let w = [1.0, 0.5f64.sqrt(), 1.0];
+        let points = arc.iter().flat_map(|&[x, y]| [[x, y, 0.0], [x, y, 3.0]]).collect();
+        let weights = w.iter().flat_map(|&w| [w, w]).collect();
+        BSplineSurface::rational(xi, eta, points, weights).unwrap()
+    }
+
+    #[test]
+    fn a_nurbs_cylinder_is_exact_and_stays_so_under_knot_insertion() {
+        let s = quarter_cylinder();
+        let thickness: Vec<f64> = (0..6).map(|k| 0.1 + 0.01 * k as f64).collect();
+        let (r1, t1) = s.insert_knot(Direction::Xi, 0.3, &thickness, 1).unwrap();
+        let (r2, t2) = r1.insert_knot(Direction::Xi, 0.3, &t1, 1).unwrap();
+        let (r3, t3) = r2.insert_knot(Direction::Eta, 0.6, &t2, 1).unwrap();
+        assert_eq!(r3.net_size(), (5, 3));
+        // The thickness field Σ R t as a surface of its own: kept as well.
+        let field = |surface: &BSplineSurface, t: &[f64], u: f64, v: f64| {
+            let pts = t.iter().map(|&t| [t, 0.0, 0.0]).collect();
+            surface.with_points(pts).unwrap().evaluate(u, v).r[0]
+        };
+        for &(u, v) in &[(0.0, 0.0), (0.17, 0.4), (0.3, 0.6), (0.77, 0.93), (1.0, 1.0)] {
+            for surface in [&s, &r3] {
+                let e = surface.evaluate(u, v);
+                assert!(((e.r[0].hypot(e.r[1])) - 2.0).abs() < 1e-14, "off the circle: {e:?}");
+                assert!((e.r[2] - 3.0 * v).abs() < 1e-14);
+                // The tangent is square to the radius and along the axis.
+                assert!(dot(e.r_xi, [e.r[0], e.r[1], 0.0]).abs() < 1e-13);
+                assert!((e.r_eta[2] - 3.0).abs() < 1e-13);
+            }
+            let (a, b) = (s.evaluate(u, v), r3.evaluate(u, v));
+            for k in 0..3 {
+                assert!((a.r[k] - b.r[k]).abs() < 1e-14 && (a.r_xi[k] - b.r_xi[k]).abs() < 1e-12);
+            }
+            assert!((field(&s, &thickness, u, v) - field(&r3, &t3, u, v)).abs() < 1e-15);
+        }
+        // The rational derivatives against central differences.
+        let (u, v, h) = (0.41, 0.27, 1e-6);
+        let e = r3.evaluate(u, v);
+        let (xp, xm) = (r3.evaluate(u + h, v).r, r3.evaluate(u - h, v).r);
+        let (ep, em) = (r3.evaluate(u, v + h).r, r3.evaluate(u, v - h).r);
+        for k in 0..3 {
+            assert!((e.r_xi[k] - (xp[k] - xm[k]) / (2.0 * h)).abs() < 1e-8);
+            assert!((e.r_eta[k] - (ep[k] - em[k]) / (2.0 * h)).abs() < 1e-8);
+        }
+    }
+
+    #[test]
+    fn weights_are_checked_and_equal_ones_give_a_b_spline() {
+        let s = quarter_cylinder();
+        let (xi, eta, pts) = (s.xi().clone(), s.eta().clone(), s.points().to_vec());
+        assert!(matches!(
+            BSplineSurface::rational(xi.clone(), eta.clone(), pts.clone(), vec![1.0; 5]),
+            Err(SurfaceError::WeightCount { found: 5, points: 6 })
+        ));
+        let mut bad = vec![1.0; 6];
+        bad[3] = 0.0;
+        assert!(matches!(
+            BSplineSurface::rational(xi.clone(), eta.clone(), pts.clone(), bad),
+            Err(SurfaceError::BadWeight { index: 3, .. })
+        ));
+        let equal = BSplineSurface::rational(xi.clone(), eta.clone(), pts.clone(), vec![2.5; 6]).unwrap();
+        assert_eq!(equal, BSplineSurface::new(xi, eta, pts).unwrap());
+        assert_eq!(equal.weights(), None);
     }
 
     #[test]

@@ -9,7 +9,7 @@
 use crate::geometry::quadrature::GaussLegendre;
 use crate::geometry::vec3::{cross, norm};
 use crate::model::material::OrthotropicMaterial;
-use crate::model::shell::{Assembly, Shell, DOFS_PER_CONTROL_POINT};
+use crate::model::shell::{Assembly, Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
 use crate::model::sparse::SparseError;
 use faer::Mat;
 use std::collections::BTreeMap;
@@ -77,7 +77,7 @@ impl Patch {
         let surface = self.shell.surface();
         let (kx, ke) = (surface.xi(), surface.eta());
         let (gx, ge) = (GaussLegendre::new(kx.degree() + 1), GaussLegendre::new(ke.degree() + 1));
-        let mut basis = Vec::new();
+        let (mut basis, mut pt) = (Vec::new(), ShellPoint::new_empty());
         for sx in kx.breakpoints().windows(2) {
             for se in ke.breakpoints().windows(2) {
                 // The translational block is the same for u, v, w: the
@@ -87,7 +87,14 @@ impl Patch {
                     for (eta, we) in ge.mapped(se[0], se[1]) {
                         let e = surface.evaluate(xi, eta);
                         let w = wx * we * norm(cross(e.r_xi, e.r_eta)) * mu;
-                        kx.tensor_basis_into(ke, xi, eta, &mut basis);
+                        // The mid-surface basis (rational on a NURBS patch).
+                        self.shell.evaluate_into(xi, eta, 0.5, &mut pt);
+                        basis.clear();
+                        basis.extend(
+                            (0..pt.count)
+                                .map(|k| (pt.control_points[k], pt.n[k]))
+                                .filter(|b| b.1 != 0.0),
+                        );
                         for &(a, na) in &basis {
                             for &(b, nb) in &basis {
                                 *scalar.entry((a, b)).or_insert(0.0) += w * na * nb;

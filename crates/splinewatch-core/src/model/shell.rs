@@ -235,8 +235,7 @@ impl Shell {
     /// The same shell moved by `by` (m).
     pub fn translated(&self, by: Vec3) -> Result<Self, ShellError> {
         let s = &self.surface;
-        let points = s.points().iter().map(|&p| axpy(p, 1.0, by)).collect();
-        let surface = BSplineSurface::new(s.xi().clone(), s.eta().clone(), points)?;
+        let surface = s.with_points(s.points().iter().map(|&p| axpy(p, 1.0, by)).collect())?;
         Self::new(surface, self.thickness.clone())
     }
 
@@ -292,26 +291,31 @@ impl Shell {
         );
         kx.basis_with_derivatives(si, xi, &mut bx, &mut dbx);
         ke.basis_with_derivatives(sj, eta, &mut be, &mut dbe);
-        let zeta = tau - 0.5;
-        let points = self.surface.points();
-        let mut jac = [[0.0; 3]; 3];
         let mut k = 0;
         for a in 0..=p {
             for b in 0..=q {
-                let cp = (si - p + a) * n_eta + (sj - q + b);
-                let (nv, nx, ne) = (bx[a] * be[b], dbx[a] * be[b], bx[a] * dbe[b]);
-                out.control_points[k] = cp;
-                out.n[k] = nv;
-                out.n_xi[k] = nx;
-                out.n_eta[k] = ne;
-                let t = self.thickness[cp];
-                let v3 = self.frames[cp].v3;
-                let pos = axpy(points[cp], t * zeta, v3);
-                jac[0] = axpy(jac[0], nx, pos);
-                jac[1] = axpy(jac[1], ne, pos);
-                jac[2] = axpy(jac[2], nv * t, v3);
+                out.control_points[k] = (si - p + a) * n_eta + (sj - q + b);
+                (out.n[k], out.n_xi[k], out.n_eta[k]) = (bx[a] * be[b], dbx[a] * be[b], bx[a] * dbe[b]);
                 k += 1;
             }
+        }
+        self.surface.rationalise(
+            &out.control_points[..k],
+            &mut out.n[..k],
+            &mut out.n_xi[..k],
+            &mut out.n_eta[..k],
+        );
+        let zeta = tau - 0.5;
+        let points = self.surface.points();
+        let mut jac = [[0.0; 3]; 3];
+        for j in 0..k {
+            let cp = out.control_points[j];
+            let t = self.thickness[cp];
+            let v3 = self.frames[cp].v3;
+            let pos = axpy(points[cp], t * zeta, v3);
+            jac[0] = axpy(jac[0], out.n_xi[j], pos);
+            jac[1] = axpy(jac[1], out.n_eta[j], pos);
+            jac[2] = axpy(jac[2], out.n[j] * t, v3);
         }
         out.count = k;
         out.zeta = zeta;
