@@ -28,7 +28,13 @@ fn ssi_cov_10_minutes_12_channels(bencher: divan::Bencher) {
         std::fs::write(path, &bytes).unwrap();
     }
     let (blocks, _) = read_recording(&bytes, &Limits::default()).unwrap();
-    bencher.bench(|| identify_span(&config, &blocks, None, None).unwrap().result.modes.len());
+    bencher.bench(|| {
+        identify_span(&config, &blocks, None, None, false)
+            .unwrap()
+            .result
+            .modes
+            .len()
+    });
 }
 
 fn main() {

@@ -494,7 +494,7 @@ pub fn oma(a: OmaArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let blocks = read_recordings(&cfg, &a.inputs)?;
     let (from, to) = span_bounds(&blocks, &a.from, &a.to)?;
-    let report = crate::pipeline::oma::identify_span(&cfg, &blocks, from, to)?;
+    let report = crate::pipeline::oma::identify_span(&cfg, &blocks, from, to, a.rerun_save.is_some())?;
     let stable = report.result.diagram.iter().filter(|p| p.stable).count();
     errln!(
         "{} samples ({:.1} s at {} Hz) of {} channels from {}: {} poles, {} stable, {} modes",

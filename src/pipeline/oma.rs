@@ -25,7 +25,8 @@ pub struct OmaReport {
     pub sensors: Vec<String>,
     pub result: OmaResult,
     /// Singular values of the output spectral matrix (the diagram's
-    /// backdrop); `None` for a span shorter than one segment.
+    /// backdrop, for Rerun); `None` when not asked for or for a span
+    /// shorter than one segment.
     pub spectrum: Option<SpectralSingularValues>,
 }
 
@@ -37,14 +38,20 @@ fn spectrum(channels: &[&[f64]], fs: f64) -> Option<SpectralSingularValues> {
     spectral_singular_values(channels, fs, (SPECTRUM_SEGMENT_SECONDS * fs).round() as usize).ok()
 }
 
-/// Identifies the modes over `[from_ns, to_ns)` of the recording.
+/// Identifies the modes over `[from_ns, to_ns)` of the recording; with
+/// `with_spectrum` also the spectral matrix's singular values (the
+/// diagram's backdrop: 60 ms on a 10-minute, 12-channel window).
 pub fn identify_span(
     config: &Config,
     blocks: &[RecordedBlock],
     from_ns: Option<i128>,
     to_ns: Option<i128>,
+    with_spectrum: bool,
 ) -> Result<OmaReport> {
-    let identification = Identification::new(config)?;
+    let identification = Identification {
+        with_spectrum,
+        ..Identification::new(config)?
+    };
     let outputs = config.output_channels()?;
     let wanted: Vec<(usize, ChannelQuantity)> = outputs.iter().map(|&i| (i, ChannelQuantity::Acceleration)).collect();
     let span = aligned_span(config, blocks, from_ns, to_ns, &wanted)?;
@@ -102,6 +109,9 @@ pub(super) struct Identification {
     /// Pairing: smallest MAC, largest relative frequency gap (`[updating]`).
     pub(super) min_mac: f64,
     pub(super) max_gap: f64,
+    /// Whether reports carry the spectral singular values (only Rerun
+    /// draws them; the pipeline's windows never do).
+    pub(super) with_spectrum: bool,
 }
 
 /// The output-only identification of one window and the pairing of its
@@ -135,6 +145,7 @@ impl Identification {
             sensors: outputs.iter().map(|&i| config.sensors[i].name.clone()).collect(),
             min_mac: config.updating.min_mac,
             max_gap: config.updating.max_frequency_gap,
+            with_spectrum: false,
         })
     }
 
@@ -150,7 +161,7 @@ impl Identification {
             fs,
             sensors: self.sensors.clone(),
             result: identify(&correlations, fs, &self.settings)?,
-            spectrum: spectrum(&views, fs),
+            spectrum: self.with_spectrum.then(|| spectrum(&views, fs)).flatten(),
         })
     }
 

@@ -8,8 +8,17 @@
 //! unbiased estimate, as KOMA's `xcorr_lag`, up to the pairs that straddle a
 //! batch boundary), and the leave-one-batch-out estimates
 //! `(Σ S − S^b) / (Σ c − c^b)` feed the jackknife of [`super::uncertainty`].
-//! Sums are computed per batch by FFT (zero padded past `n_b + max_lag`, so
-//! no circular wrap), `O(l n log n + l r n)` per batch.
+//! Sums are computed per batch by FFT in chunks (overlap-save): a chunk of
+//! `m − K` reference samples (`K` the largest lag), zero padded to `m`,
+//! against the `m` samples of each channel from the same start (cut at the
+//! batch's end), so the circular correlation's first `K + 1` lags are the
+//! chunk's sums exactly; the cross spectra `Y_a X_refᴴ` add up over the
+//! chunks and one inverse FFT of length `m` per pair and batch gives `S_k`.
+//! With `m ≈ 8 (K + 1)` the work is `O(n l r)` products plus short FFTs,
+//! where transforms of whole batches cost `l r` long inverse FFTs per batch
+//! (95 → ~20 ms on a 10-minute, 12-channel window). Batches run on up to
+//! four threads ([`super::ordered_map`]), so the sums do not depend on the
+//! thread count.
 //!
 //! **Missing samples.** A NaN marks a missing sample (the pipeline fills a
 //! gap with NaN). An instant is valid when every channel is finite there;
@@ -91,15 +100,23 @@ impl OutputCorrelations {
             sums: Vec::with_capacity(batches),
             counts: Vec::with_capacity(batches),
         };
-        let mut planner = RealFftPlanner::<f64>::new();
-        for b in 0..batches {
-            // The last batch takes the remainder.
-            let start = b * batch_len;
-            let end = if b + 1 == batches { n } else { start + batch_len };
+        let plan = ChunkPlan::new(max_lag);
+        let bounds: Vec<(usize, usize)> = (0..batches)
+            .map(|b| {
+                // The last batch takes the remainder.
+                let start = b * batch_len;
+                (start, if b + 1 == batches { n } else { start + batch_len })
+            })
+            .collect();
+        let references = &out.references;
+        out.sums = super::ordered_map(&bounds, |&(start, end)| {
             let slices: Vec<&[f64]> = centred.iter().map(|c| &c[start..end]).collect();
-            out.sums.push(out.batch_sums(&slices, &mut planner));
-            out.counts.push(pair_counts(&valid[start..end], max_lag));
-        }
+            plan.batch_sums(&slices, references)
+        });
+        out.counts = bounds
+            .iter()
+            .map(|&(start, end)| pair_counts(&valid[start..end], max_lag))
+            .collect();
         // Every jackknife replicate (every batch but one) needs pairs at every lag.
         let needed_batches = 2.min(batches);
         let short = (0..=max_lag).any(|k| out.counts.iter().filter(|c| c[k] > 0.0).count() < needed_batches);
@@ -110,43 +127,6 @@ impl OutputCorrelations {
             });
         }
         Ok(out)
-    }
-
-    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` of one batch, by FFT (missing samples
-    /// are zeros, so they add nothing).
-    fn batch_sums(&self, batch: &[&[f64]], planner: &mut RealFftPlanner<f64>) -> Vec<f64> {
-        let (l, r, n) = (self.channels, self.references.len(), batch[0].len());
-        let m = (n + self.max_lag + 1).next_power_of_two();
-        let forward = planner.plan_fft_forward(m);
-        let inverse = planner.plan_fft_inverse(m);
-        let spectra: Vec<Vec<c64>> = batch
-            .iter()
-            .map(|y| {
-                let mut padded = vec![0.0; m];
-                padded[..n].copy_from_slice(y);
-                let mut spectrum = forward.make_output_vec();
-                forward.process(&mut padded, &mut spectrum).expect("sized by the plan");
-                spectrum
-            })
-            .collect();
-        let mut sums = vec![0.0; (self.max_lag + 1) * l * r];
-        let mut product = inverse.make_input_vec();
-        let mut lagged = inverse.make_output_vec();
-        for a in 0..l {
-            for (j, &reference) in self.references.iter().enumerate() {
-                // Σ_t y_a[t+k] y_ref[t] = IFFT(Y_a · conj(Y_ref))[k].
-                for ((p, ya), yr) in product.iter_mut().zip(&spectra[a]).zip(&spectra[reference]) {
-                    *p = ya * yr.conj();
-                }
-                product[0].im = 0.0;
-                product[m / 2].im = 0.0;
-                inverse.process(&mut product, &mut lagged).expect("sized by the plan");
-                for k in 0..=self.max_lag {
-                    sums[(k * l + a) * r + j] = lagged[k] / m as f64;
-                }
-            }
-        }
-        sums
     }
 
     pub fn channels(&self) -> usize {
@@ -186,6 +166,74 @@ impl OutputCorrelations {
             *v /= count[i / block];
         }
         sum
+    }
+}
+
+/// The FFTs of the chunked sums (see the module documentation).
+struct ChunkPlan {
+    max_lag: usize,
+    /// FFT length `m`; chunks start every `m − max_lag` samples.
+    len: usize,
+    forward: std::sync::Arc<dyn realfft::RealToComplex<f64>>,
+    inverse: std::sync::Arc<dyn realfft::ComplexToReal<f64>>,
+}
+
+impl ChunkPlan {
+    fn new(max_lag: usize) -> Self {
+        let len = (8 * (max_lag + 1)).next_power_of_two();
+        let mut planner = RealFftPlanner::<f64>::new();
+        Self {
+            max_lag,
+            len,
+            forward: planner.plan_fft_forward(len),
+            inverse: planner.plan_fft_inverse(len),
+        }
+    }
+
+    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` of one batch, lag-major then row-major
+    /// (missing samples are zeros, so they add nothing).
+    fn batch_sums(&self, batch: &[&[f64]], references: &[usize]) -> Vec<f64> {
+        let (l, r, n, m) = (batch.len(), references.len(), batch[0].len(), self.len);
+        let (hop, bins) = (m - self.max_lag, m / 2 + 1);
+        let zero = c64::new(0.0, 0.0);
+        // Per pair (a, j), the cross spectrum summed over the chunks.
+        let mut cross = vec![zero; l * r * bins];
+        let mut buffer = vec![0.0; m];
+        let mut outputs = vec![vec![zero; bins]; l];
+        let mut refs = vec![vec![zero; bins]; r];
+        let mut transform = |samples: &[f64], spectrum: &mut [c64]| {
+            buffer[..samples.len()].copy_from_slice(samples);
+            buffer[samples.len()..].fill(0.0);
+            self.forward.process(&mut buffer, spectrum).expect("sized by the plan");
+        };
+        for start in (0..n).step_by(hop) {
+            for (y, spectrum) in batch.iter().zip(&mut outputs) {
+                transform(&y[start..n.min(start + m)], spectrum);
+            }
+            for (&reference, spectrum) in references.iter().zip(&mut refs) {
+                transform(&batch[reference][start..n.min(start + hop)], spectrum);
+            }
+            for (a, ya) in outputs.iter().enumerate() {
+                for (j, xr) in refs.iter().enumerate() {
+                    let acc = &mut cross[(a * r + j) * bins..(a * r + j + 1) * bins];
+                    for ((s, y), x) in acc.iter_mut().zip(ya).zip(xr) {
+                        *s += y * x.conj();
+                    }
+                }
+            }
+        }
+        let mut sums = vec![0.0; (self.max_lag + 1) * l * r];
+        let mut lagged = vec![0.0; m];
+        for (pair, spectrum) in cross.chunks_exact_mut(bins).enumerate() {
+            let (a, j) = (pair / r, pair % r);
+            spectrum[0].im = 0.0;
+            spectrum[bins - 1].im = 0.0;
+            self.inverse.process(spectrum, &mut lagged).expect("sized by the plan");
+            for k in 0..=self.max_lag {
+                sums[(k * l + a) * r + j] = lagged[k] / m as f64;
+            }
+        }
+        sums
     }
 }
 

@@ -62,6 +62,34 @@ pub enum OmaError {
     InvalidSettings(String),
 }
 
+/// `f` of every item, on up to four threads (item `i` on worker
+/// `i % threads`), gathered in item order: the result does not depend on
+/// the thread count.
+pub(crate) fn ordered_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .clamp(1, 4)
+        .min(items.len().max(1));
+    if threads == 1 {
+        return items.iter().map(f).collect();
+    }
+    std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|t| {
+                let f = &f;
+                scope.spawn(move || items.iter().skip(t).step_by(threads).map(f).collect::<Vec<_>>())
+            })
+            .collect();
+        let mut per_worker: Vec<_> = workers
+            .into_iter()
+            .map(|w| w.join().expect("a worker of ordered_map panicked").into_iter())
+            .collect();
+        (0..items.len())
+            .map(|i| per_worker[i % threads].next().expect("one result per item"))
+            .collect()
+    })
+}
+
 /// Checks that there are channels and that all are as long as the first;
 /// returns that length.
 pub(crate) fn channel_length(channels: &[&[f64]]) -> Result<usize, OmaError> {
@@ -204,8 +232,9 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
     )?;
     let mut orders = settings.orders(model.max_order());
     let mut by_order = Vec::new();
-    for &order in &orders {
-        match model.poles(order) {
+    // One eigenvalue problem per order, independent: on both cores.
+    for result in ordered_map(&orders, |&order| model.poles(order)) {
+        match result {
             Ok(poles) => by_order.push(poles),
             // Fewer modes in the data than the order: stop at the last one.
             Err(OmaError::SingularHankel { .. }) if !by_order.is_empty() => break,

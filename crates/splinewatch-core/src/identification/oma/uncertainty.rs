@@ -9,12 +9,14 @@
 //! `var θ ≈ (B−1)/B Σ_b (θ_(b) − θ̄)²`, and it is asymptotically equal to
 //! the delta method for a smooth `g`. Each replicate uses almost all the
 //! data, so it keeps the full window's bias (unlike re-identifying on short
-//! sub-windows). Cost: one SVD per batch; poles only at the orders of the
-//! reported modes. Checked against the scatter over independent records
+//! sub-windows). Cost: one factorisation per batch (the eigenvectors of
+//! `HᵀH`, [`Factorisation::GramEigen`]: the replicates only need orders the
+//! full window's SVD has passed); poles only at the orders of the reported
+//! modes. Checked against the scatter over independent records
 //! (tests/integration and README).
 
 use super::correlation::OutputCorrelations;
-use super::ssi::{Pole, SubspaceModel};
+use super::ssi::{Factorisation, Pole, SubspaceModel};
 use super::stabilisation::{median, pole_distance};
 use faer::c64;
 use std::collections::BTreeMap;
@@ -71,28 +73,10 @@ pub fn jackknife(
         .flat_map(|m| m.members.iter().chain([&m.medoid]).map(|p| p.order))
         .max()
         .unwrap_or(1);
-    // Replicates are independent: spread over up to four threads, gathered
-    // in batch order, so the result is the same whatever the thread count.
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).clamp(1, 4);
-    let replicate = |b: usize| replicate_modes(correlations, b, block_rows, fs, max_order, modes, max_distance);
-    let per_batch: Vec<Vec<Option<Replicate>>> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads)
-            .map(|t| {
-                let replicate = &replicate;
-                scope.spawn(move || {
-                    (t..batches)
-                        .step_by(threads)
-                        .map(|b| (b, replicate(b)))
-                        .collect::<Vec<_>>()
-                })
-            })
-            .collect();
-        let mut all: Vec<_> = workers
-            .into_iter()
-            .flat_map(|w| w.join().expect("a jackknife replicate panicked"))
-            .collect();
-        all.sort_by_key(|(b, _)| *b);
-        all.into_iter().map(|(_, r)| r).collect()
+    // Replicates are independent: on up to four threads, in batch order.
+    let left_out: Vec<usize> = (0..batches).collect();
+    let per_batch = super::ordered_map(&left_out, |&b| {
+        replicate_modes(correlations, b, block_rows, fs, max_order, modes, max_distance)
     });
     for replicate in per_batch {
         for (m, found_here) in replicate.into_iter().enumerate() {
@@ -123,13 +107,14 @@ fn replicate_modes(
     max_distance: f64,
 ) -> Vec<Option<Replicate>> {
     let r = correlations.estimate_without(Some(left_out));
-    let Ok(model) = SubspaceModel::new(
+    let Ok(model) = SubspaceModel::factorised(
         &r,
         correlations.channels(),
         correlations.references().len(),
         block_rows,
         max_order,
         fs,
+        Factorisation::GramEigen,
     ) else {
         return vec![None; modes.len()];
     };
