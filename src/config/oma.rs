@@ -2,7 +2,7 @@
 
 use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::identification::oma::{ClusterCriteria, OmaSettings, StabilityCriteria};
+use splinewatch_core::identification::oma::{ClusterCriteria, OmaSettings, StabilityCriteria, UncertaintyMethod};
 
 /// Settings of the identification (`[oma]`); every key is optional. The
 /// defaults suit a deck with modes from a few Hz to the band's top at 12
@@ -24,8 +24,11 @@ pub struct OmaConfig {
     pub order_step: usize,
     /// Band of the reported modes (Hz); default: `frf.band`.
     pub band: Option<[f64; 2]>,
-    /// Correlation batches of the jackknife uncertainty.
+    /// Correlation batches of the uncertainty (delete-one replicates).
     pub batches: usize,
+    /// `"first_order"` (default) or `"jackknife"`: how each replicate's
+    /// poles are obtained.
+    pub uncertainty: UncertaintyMethod,
     pub stability: StabilityCriteria,
     pub clustering: ClusterCriteria,
 }
@@ -43,6 +46,7 @@ impl Default for OmaConfig {
             order_step: d.order_step,
             band: None,
             batches: d.batches,
+            uncertainty: d.uncertainty,
             stability: d.stability,
             clustering: d.clustering,
         }
@@ -118,6 +122,7 @@ impl Config {
             stability: o.stability,
             clustering: o.clustering,
             batches: o.batches,
+            uncertainty: o.uncertainty,
         };
         settings.check().map_err(|e| err("oma", e))?;
         if let Some(w) = o.window_seconds {

@@ -3,8 +3,11 @@
 //! that carry no sensor, twelve vertical accelerometers, 2 % noise.
 
 use super::common::{gaussian, sinello_model, sinello_sensors, true_kappa};
+use faer::c64;
 use splinewatch_core::identification::oma::shape::mac_real;
-use splinewatch_core::identification::oma::{identify, IdentifiedMode, OmaResult, OmaSettings, OutputCorrelations};
+use splinewatch_core::identification::oma::{
+    identify, IdentifiedMode, OmaResult, OmaSettings, OutputCorrelations, UncertaintyMethod,
+};
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::response::frf::{FrfModel, ModalState, SensorPoint};
 use splinewatch_core::response::simulate::{band_limit, ModalSimulator};
@@ -130,53 +133,149 @@ fn twenty_minutes_of_ambient_data_give_the_bending_modes() {
     assert_eq!(distinct.len(), 18);
 }
 
-/// The jackknife standard deviation of frequency against the scatter over
-/// 20 independent 5-minute records (shorter than the acceptance's 20 min to
-/// keep the suite fast; the estimator is the same): the mean reported std
-/// is within a factor of 2 of the observed std for every mode.
+/// Monte Carlo check of both uncertainty methods (issue 32): `RECORDS`
+/// independent 5-minute records (shorter than the acceptance's 10–20 min
+/// to keep the suite fast; the estimators are the same), each identified
+/// once and its uncertainty estimated twice, by first-order replicates (the
+/// default) and by the exact jackknife. Per mode, the mean reported std of
+/// frequency and of damping is within a factor of 2 of the scatter over
+/// the records (the Monte Carlo truth), for both methods; and the two
+/// methods' mean stds agree within 25 % (a record's jackknife std carries
+/// ~18 % sampling error of its own with 16 batches, `1/√(2·15)`; averaged
+/// over the records, what is left is the first-order method's own
+/// approximation).
 #[test]
-fn reported_frequency_std_matches_the_scatter_over_twenty_records() {
+fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
+    const RECORDS: u64 = 100;
     let (model, state) = ambient_model();
     let exact = exact_modes(&state);
-    let seeds = 20;
-    let mut frequencies = vec![Vec::new(); exact.len()];
-    let mut reported = vec![Vec::new(); exact.len()];
-    for seed in 0..seeds {
+    let first_order = OmaSettings::default();
+    let jackknife = OmaSettings {
+        uncertainty: UncertaintyMethod::Jackknife,
+        ..OmaSettings::default()
+    };
+    // Per mode: frequencies, damping ratios, and per method the reported
+    // (frequency std, damping std).
+    // And per method the RMS over sensors of the reported shape std.
+    let mut found = vec![
+        (
+            Vec::new(),
+            Vec::new(),
+            [Vec::new(), Vec::new()],
+            [Vec::new(), Vec::new()]
+        );
+        exact.len()
+    ];
+    // The identified shapes (largest component 1 + 0i), per mode.
+    let mut shapes: Vec<Vec<Vec<c64>>> = vec![Vec::new(); exact.len()];
+    for seed in 0..RECORDS {
         let record = ambient_record(&model, &state, 300.0, 1000 + seed);
-        let result = run(&record, &OmaSettings::default());
-        for (m, ((_, shape), mode)) in exact.iter().zip(paired(&result, &exact)).enumerate() {
-            if mac_real(&mode.shape, shape) > 0.9 {
-                frequencies[m].push(mode.frequency_hz);
-                reported[m].extend(mode.frequency_std_hz);
+        let views: Vec<&[f64]> = record.iter().map(Vec::as_slice).collect();
+        let correlations = OutputCorrelations::from_samples(&views, &[], first_order.max_lag(), 16).unwrap();
+        let results = [&first_order, &jackknife].map(|s| identify(&correlations, FS, s).unwrap());
+        let (a, b) = (paired(&results[0], &exact), paired(&results[1], &exact));
+        for (m, ((_, shape), (x, y))) in exact.iter().zip(a.into_iter().zip(b)).enumerate() {
+            assert_eq!(x.frequency_hz, y.frequency_hz, "the methods differ in the std only");
+            if mac_real(&x.shape, shape) > 0.9 {
+                let entry = &mut found[m];
+                entry.0.push(x.frequency_hz);
+                entry.1.push(x.damping_ratio);
+                shapes[m].push(x.shape.clone());
+                for (k, mode) in [x, y].into_iter().enumerate() {
+                    if let (Some(f), Some(z), Some(d)) = (mode.frequency_std_hz, mode.damping_std, &mode.shape_std) {
+                        entry.2[k].push((f, z));
+                        entry.3[k].push((d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt());
+                    }
+                }
             }
         }
     }
-    let mut ratios = Vec::new();
-    for (m, (f, r)) in frequencies.iter().zip(&reported).enumerate() {
+    let std_of = |v: &[f64]| {
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt()
+    };
+    let mean_of = |v: &[(f64, f64)], pick: fn(&(f64, f64)) -> f64| v.iter().map(pick).sum::<f64>() / v.len() as f64;
+    // The scatter of a shape: each record's shape scaled by the complex
+    // factor that best fits it to the exact one (largest component 1), as
+    // the replicates are to the reported shape; per sensor the std of the
+    // component over the records, RMS over the sensors (the reported shape
+    // std's measure).
+    let shape_scatter = |shapes: &[Vec<c64>], exact: &[f64]| {
+        let peak = exact.iter().fold(0.0f64, |m, v| if v.abs() > m.abs() { *v } else { m });
+        let reference: Vec<c64> = exact.iter().map(|v| c64::new(v / peak, 0.0)).collect();
+        let aligned: Vec<Vec<c64>> = shapes
+            .iter()
+            .map(|s| {
+                let num: c64 = s.iter().zip(&reference).map(|(a, r)| a.conj() * r).sum();
+                let alpha = num / s.iter().map(|a| a.norm_sqr()).sum::<f64>();
+                s.iter().map(|a| a * alpha).collect()
+            })
+            .collect();
+        let n = aligned.len() as f64;
+        let var: f64 = (0..reference.len())
+            .map(|k| {
+                let mean = aligned.iter().map(|s| s[k]).sum::<c64>() / n;
+                aligned.iter().map(|s| (s[k] - mean).norm_sqr()).sum::<f64>() / (n - 1.0)
+            })
+            .sum();
+        (var / reference.len() as f64).sqrt()
+    };
+    for (((f_exact, exact_shape), (frequencies, dampings, reported, shape_stds)), shapes) in
+        exact.iter().zip(&found).zip(&shapes)
+    {
         // The closest pair (73.49 / 73.99 Hz, 0.7 % apart) is not always
-        // separated in 5 minutes; everything else is found in every record.
-        let needed = if (73.0..74.5).contains(&exact[m].0) { 12 } else { 20 };
+        // separated in 5 minutes; everything else is found (MAC > 0.9 with
+        // the exact shape) in nearly every record.
+        let needed = if (73.0..74.5).contains(f_exact) { 60 } else { 95 };
         assert!(
-            f.len() >= needed,
-            "mode {m} found in only {} of {seeds} records",
-            f.len()
+            frequencies.len() >= needed,
+            "{f_exact:.3} Hz found in only {}",
+            frequencies.len()
         );
-        let mean = f.iter().sum::<f64>() / f.len() as f64;
-        let scatter = (f.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (f.len() - 1) as f64).sqrt();
-        let claimed = r.iter().sum::<f64>() / r.len() as f64;
-        ratios.push(claimed / scatter);
+        let (sf, sz) = (std_of(frequencies), std_of(dampings));
+        let [ours, jack] = [0, 1].map(|k| {
+            assert!(reported[k].len() >= needed * 9 / 10, "{f_exact:.3} Hz: std missing");
+            (mean_of(&reported[k], |r| r.0), mean_of(&reported[k], |r| r.1))
+        });
         eprintln!(
-            "{:7.3} Hz: found in {:2}, scatter {scatter:.5} Hz, reported {claimed:.5} Hz",
-            exact[m].0,
-            f.len()
+            "{f_exact:7.3} Hz ({:3}): frequency scatter {sf:.5}, first order {:.5}, jackknife {:.5}; \
+             damping scatter {sz:.5}, first order {:.5}, jackknife {:.5}",
+            frequencies.len(),
+            ours.0,
+            jack.0,
+            ours.1,
+            jack.1
         );
-    }
-    for (m, ratio) in ratios.iter().enumerate() {
-        assert!(
-            (0.5..=2.0).contains(ratio),
-            "mode at {:.3} Hz: reported/observed std {ratio:.2}",
-            exact[m].0
+        for (name, claimed, truth) in [
+            ("first-order frequency", ours.0, sf),
+            ("jackknife frequency", jack.0, sf),
+            ("first-order damping", ours.1, sz),
+            ("jackknife damping", jack.1, sz),
+        ] {
+            let ratio = claimed / truth;
+            assert!(
+                (0.5..=2.0).contains(&ratio),
+                "{f_exact:.3} Hz: {name} std / scatter {ratio:.2}"
+            );
+        }
+        let [shape_ours, shape_jack] = [0, 1].map(|k| shape_stds[k].iter().sum::<f64>() / shape_stds[k].len() as f64);
+        let sp = shape_scatter(shapes, exact_shape);
+        eprintln!(
+            "{f_exact:7.3} Hz: shape (RMS over sensors) scatter {sp:.5}, first order {shape_ours:.5}, jackknife {shape_jack:.5}"
         );
+        for (name, claimed) in [("first-order shape", shape_ours), ("jackknife shape", shape_jack)] {
+            let ratio = claimed / sp;
+            assert!(
+                (0.5..=2.0).contains(&ratio),
+                "{f_exact:.3} Hz: {name} std / scatter {ratio:.2}"
+            );
+        }
+        for (what, a, b) in [("frequency", ours.0, jack.0), ("damping", ours.1, jack.1)] {
+            assert!(
+                (a / b - 1.0).abs() < 0.25,
+                "{f_exact:.3} Hz: {what} std {a} (first order) vs {b} (jackknife)"
+            );
+        }
     }
 }
 

@@ -25,6 +25,7 @@ pub use correlation::OutputCorrelations;
 pub use spectrum::{spectral_singular_values, SpectralSingularValues};
 pub use ssi::{Pole, SubspaceModel};
 pub use stabilisation::{ClusterCriteria, StabilityCriteria};
+pub use uncertainty::UncertaintyMethod;
 
 use faer::c64;
 use serde::{Deserialize, Serialize};
@@ -118,9 +119,11 @@ pub struct OmaSettings {
     pub band: [f64; 2],
     pub stability: StabilityCriteria,
     pub clustering: ClusterCriteria,
-    /// Correlation batches for the jackknife (≥ 2; more batches, a better
-    /// variance estimate, one SVD each).
+    /// Correlation batches for the uncertainty (≥ 2; more batches, a better
+    /// variance estimate, one replicate each).
     pub batches: usize,
+    /// How the replicates' poles are obtained (default first order).
+    pub uncertainty: UncertaintyMethod,
 }
 
 impl Default for OmaSettings {
@@ -134,6 +137,7 @@ impl Default for OmaSettings {
             stability: StabilityCriteria::default(),
             clustering: ClusterCriteria::default(),
             batches: 16,
+            uncertainty: UncertaintyMethod::FirstOrder,
         }
     }
 }
@@ -256,7 +260,7 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
             min_poles: settings.clustering.min_poles(by_order.len()),
         });
     }
-    let modes = summarise(correlations, fs, settings, &orders, &clusters, &stable_poles);
+    let modes = summarise(correlations, &model, fs, settings, &orders, &clusters, &stable_poles);
     let mut mode_of = std::collections::HashMap::new();
     for (m, members) in clusters.iter().enumerate() {
         for &i in members {
@@ -289,6 +293,7 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
 /// orders rather than all (the eigenvalue problems dominate its cost).
 fn summarise(
     correlations: &OutputCorrelations,
+    model: &SubspaceModel,
     fs: f64,
     settings: &OmaSettings,
     orders: &[usize],
@@ -311,8 +316,10 @@ fn summarise(
             }
         })
         .collect();
-    let spreads = uncertainty::jackknife(
+    let spreads = uncertainty::spreads(
+        settings.uncertainty,
         correlations,
+        model,
         settings.block_rows,
         fs,
         &poles_of,

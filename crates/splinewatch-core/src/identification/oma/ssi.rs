@@ -21,8 +21,8 @@
 
 use super::shape::{mpc, normalise};
 use super::OmaError;
-use faer::linalg::solvers::Solve;
-use faer::{c64, Mat, Side};
+use faer::linalg::solvers::{DenseSolveCore, Solve};
+use faer::{c64, Mat, MatRef, Side};
 use std::f64::consts::PI;
 
 /// One pole of the identified state-space model at one order.
@@ -46,29 +46,25 @@ pub struct SubspaceModel {
     gram_up: Mat<f64>,
     gram_shift: Mat<f64>,
     singular_values: Vec<f64>,
-    /// Orders whose singular value is below `floor σ₁` are singular.
-    floor: f64,
+    /// `V Σ⁻¹` on the orders' columns (zero beyond the floor), for
+    /// [`SubspaceModel::replicate`].
+    right: Mat<f64>,
     channels: usize,
     fs: f64,
 }
 
 /// Below this fraction of `σ₁`, a singular value of the SVD is zero.
 const SVD_FLOOR: f64 = 1e-13;
-/// The same for [`Factorisation::GramEigen`] (√ε of the squared matrix).
-const GRAM_FLOOR: f64 = 1e-7;
 
-/// How [`SubspaceModel`] factorises the block Hankel matrix `H`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Factorisation {
-    /// The thin SVD of `H` (the reported identification).
-    Svd,
-    /// The symmetric eigendecomposition of `HᵀH = V Σ² Vᵀ`, then
-    /// `U_n = H V_n Σ_n⁻¹` on the columns asked for: about half the SVD's
-    /// time on a 492 × 480 Hankel matrix. Squaring `H` costs precision: a
-    /// singular value is accurate to `ε σ₁² / σ_i` and orders whose `σ_n`
-    /// is below `1e-7 σ₁` are refused as singular (the jackknife's
-    /// replicates, whose orders the full window's SVD has already passed).
-    GramEigen,
+/// The block Hankel matrix `[R_{i+j+1}]`, `i = 0..=p`, `j = 0..p−1`.
+fn block_hankel(correlations: &[f64], l: usize, r: usize, p: usize) -> Result<Mat<f64>, OmaError> {
+    if p == 0 || correlations.len() < (2 * p + 1) * l * r {
+        return Err(OmaError::TooFewLags { block_rows: p });
+    }
+    let lag = |k: usize, a: usize, b: usize| correlations[(k * l + a) * r + b];
+    Ok(Mat::from_fn(l * (p + 1), r * p, |row, col| {
+        lag(row / l + col / r + 1, row % l, col % r)
+    }))
 }
 
 impl SubspaceModel {
@@ -84,77 +80,68 @@ impl SubspaceModel {
         max_order: usize,
         fs: f64,
     ) -> Result<Self, OmaError> {
-        Self::factorised(
-            correlations,
-            channels,
-            references,
-            block_rows,
-            max_order,
-            fs,
-            Factorisation::Svd,
-        )
-    }
-
-    /// [`SubspaceModel::new`] by the chosen [`Factorisation`].
-    pub fn factorised(
-        correlations: &[f64],
-        channels: usize,
-        references: usize,
-        block_rows: usize,
-        max_order: usize,
-        fs: f64,
-        factorisation: Factorisation,
-    ) -> Result<Self, OmaError> {
-        let (l, r, p) = (channels, references, block_rows);
-        if p == 0 || correlations.len() < (2 * p + 1) * l * r {
-            return Err(OmaError::TooFewLags { block_rows: p });
-        }
-        let lag = |k: usize, a: usize, b: usize| correlations[(k * l + a) * r + b];
-        let hankel = Mat::from_fn(l * (p + 1), r * p, |row, col| {
-            lag(row / l + col / r + 1, row % l, col % r)
-        });
-        let cap = (l * p).min(max_order.max(1));
-        let (u, singular_values, floor) = match factorisation {
-            Factorisation::Svd => {
-                let svd = hankel.thin_svd().map_err(|_| OmaError::SvdFailed)?;
-                let values: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-                let cap = cap.min(values.len());
-                (svd.U().subcols(0, cap).to_owned(), values, SVD_FLOOR)
-            }
-            Factorisation::GramEigen => {
-                let gram = hankel.transpose() * &hankel;
-                let eigen = gram.self_adjoint_eigen(Side::Lower).map_err(|_| OmaError::SvdFailed)?;
-                // Ascending eigenvalues: the largest singular value last.
-                let k = eigen.S().dim();
-                let values: Vec<f64> = (0..k).rev().map(|i| eigen.S()[i].max(0.0).sqrt()).collect();
-                let cap = cap.min(values.len());
-                let v = Mat::from_fn(hankel.ncols(), cap, |row, col| eigen.U()[(row, k - 1 - col)]);
-                let mut u = &hankel * &v;
-                for (col, &sigma) in values.iter().take(cap).enumerate() {
-                    let scale = if sigma > GRAM_FLOOR * values[0] {
-                        1.0 / sigma
-                    } else {
-                        0.0
-                    };
-                    u.col_mut(col).iter_mut().for_each(|x| *x *= scale);
-                }
-                (u, values, GRAM_FLOOR)
-            }
-        };
+        let hankel = block_hankel(correlations, channels, references, block_rows)?;
+        let svd = hankel.thin_svd().map_err(|_| OmaError::SvdFailed)?;
+        let singular_values: Vec<f64> = svd.S().column_vector().iter().copied().collect();
         if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
             return Err(OmaError::SingularHankel { order: 1 });
         }
-        let rows = u.nrows();
+        let cap = (channels * block_rows).min(singular_values.len()).min(max_order.max(1));
+        let right = Mat::from_fn(hankel.ncols(), cap, |row, col| {
+            let sigma = singular_values[col];
+            if sigma > SVD_FLOOR * singular_values[0] {
+                svd.V()[(row, col)] / sigma
+            } else {
+                0.0
+            }
+        });
+        Ok(Self::from_left(
+            svd.U().subcols(0, cap),
+            singular_values,
+            right,
+            channels,
+            fs,
+        ))
+    }
+
+    /// The model of a perturbed Hankel matrix `H_b` (a jackknife replicate's
+    /// `correlations`) on this model's right singular vectors:
+    /// `U_b = H_b V Σ⁻¹`, which is `U` for `H_b = H`. Its poles differ from
+    /// those of `H_b`'s own SVD only in second order of `H_b − H`, or in
+    /// first order times `σ_{n+1}/σ_i` (the rotation of the right singular
+    /// vectors into those beyond the order, which the full window's
+    /// singular values weigh by `σ_{n+1}`); the first-order perturbation of
+    /// `U` that Döhler & Mevel (2013) propagate has the same leading terms.
+    /// One product instead of an SVD per replicate, and no sign or rotation
+    /// ambiguity between replicates.
+    pub fn replicate(&self, correlations: &[f64], references: usize, block_rows: usize) -> Result<Self, OmaError> {
+        let hankel = block_hankel(correlations, self.channels, references, block_rows)?;
+        if hankel.ncols() != self.right.nrows() {
+            return Err(OmaError::TooFewLags { block_rows });
+        }
+        let left = &hankel * &self.right;
+        Ok(Self::from_left(
+            left.as_ref(),
+            self.singular_values.clone(),
+            self.right.clone(),
+            self.channels,
+            self.fs,
+        ))
+    }
+
+    /// The model on the left basis `u` (its columns the orders).
+    fn from_left(u: MatRef<'_, f64>, singular_values: Vec<f64>, right: Mat<f64>, channels: usize, fs: f64) -> Self {
+        let (rows, l) = (u.nrows(), channels);
         let (up, down) = (u.subrows(0, rows - l), u.subrows(l, rows - l));
-        Ok(Self {
+        Self {
             u_top: u.subrows(0, l).to_owned(),
             gram_up: up.transpose() * up,
             gram_shift: up.transpose() * down,
             singular_values,
-            floor,
+            right,
             channels: l,
             fs,
-        })
+        }
     }
 
     /// Singular values of `H`, non-increasing.
@@ -170,47 +157,152 @@ impl SubspaceModel {
 
     /// The oscillating poles (one of each conjugate pair) at order `n`.
     pub fn poles(&self, order: usize) -> Result<Vec<Pole>, OmaError> {
-        let l = self.channels;
+        let shift = self.shift_matrix(order)?;
+        let eigen = shift.eigen().map_err(|_| OmaError::EigenFailed { order })?;
+        let (values, vectors) = (eigen.S().column_vector(), eigen.U());
+        let mut poles: Vec<Pole> = (0..order)
+            .filter_map(|j| self.pole(order, values[j], |k| vectors[(k, j)]))
+            .collect();
+        poles.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
+        Ok(poles)
+    }
+
+    /// `B_n = (G↑)⁻¹ S` on the first `order` columns (see the module
+    /// documentation), after the order's checks.
+    fn shift_matrix(&self, order: usize) -> Result<Mat<f64>, OmaError> {
         if order == 0 || order > self.max_order() {
             return Err(OmaError::OrderTooHigh {
                 order,
                 max: self.max_order(),
             });
         }
-        if self.singular_values[order - 1] <= self.floor * self.singular_values[0] {
+        if self.singular_values[order - 1] <= SVD_FLOOR * self.singular_values[0] {
             return Err(OmaError::SingularHankel { order });
         }
         let n = order;
-        let shift = self
+        Ok(self
             .gram_up
             .submatrix(0, 0, n, n)
             .llt(Side::Lower)
             .map_err(|_| OmaError::SingularHankel { order })?
-            .solve(self.gram_shift.submatrix(0, 0, n, n));
-        let eigen = shift.eigen().map_err(|_| OmaError::EigenFailed { order })?;
-        let (values, vectors) = (eigen.S().column_vector(), eigen.U());
-        let mut poles = Vec::new();
-        for j in 0..order {
-            let mu = values[j];
-            if mu.im <= 0.0 || mu.norm() == 0.0 {
-                continue; // the conjugate, a real pole or a pure delay
-            }
-            let lambda = c64::new(mu.norm().ln(), mu.im.atan2(mu.re)) * self.fs;
-            let mut shape: Vec<c64> = (0..l)
-                .map(|a| (0..n).map(|k| vectors[(k, j)] * self.u_top[(a, k)]).sum())
-                .collect();
-            normalise(&mut shape);
-            poles.push(Pole {
-                order,
-                frequency_hz: lambda.norm() / (2.0 * PI),
-                damping_ratio: -lambda.re / lambda.norm(),
-                mpc: mpc(&shape),
-                shape,
-            });
-        }
-        poles.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-        Ok(poles)
+            .solve(self.gram_shift.submatrix(0, 0, n, n)))
     }
+
+    /// The pole of the eigenvalue `mu` of `B_n` with eigenvector `psi`;
+    /// `None` for the conjugate of an oscillating pole (`Im μ ≤ 0`), a real
+    /// pole or a pure delay.
+    fn pole(&self, order: usize, mu: c64, psi: impl Fn(usize) -> c64) -> Option<Pole> {
+        if mu.im <= 0.0 || mu.norm() == 0.0 {
+            return None;
+        }
+        let lambda = c64::new(mu.norm().ln(), mu.im.atan2(mu.re)) * self.fs;
+        let mut shape: Vec<c64> = (0..self.channels)
+            .map(|a| (0..order).map(|k| psi(k) * self.u_top[(a, k)]).sum())
+            .collect();
+        normalise(&mut shape);
+        Some(Pole {
+            order,
+            frequency_hz: lambda.norm() / (2.0 * PI),
+            damping_ratio: -lambda.re / lambda.norm(),
+            mpc: mpc(&shape),
+            shape,
+        })
+    }
+
+    /// The eigendecomposition of `B_n` at `order`, for first-order
+    /// continuation of its poles on replicates ([`SubspaceModel::continued`]).
+    pub fn eigenpairs(&self, order: usize) -> Result<OrderEigen, OmaError> {
+        let shift = self.shift_matrix(order)?;
+        let eigen = shift.eigen().map_err(|_| OmaError::EigenFailed { order })?;
+        let values: Vec<c64> = eigen.S().column_vector().iter().copied().collect();
+        let vectors = eigen.U().to_owned();
+        let inverse = vectors.partial_piv_lu().inverse();
+        if !inverse
+            .col_iter()
+            .all(|c| c.iter().all(|v| v.re.is_finite() && v.im.is_finite()))
+        {
+            return Err(OmaError::EigenFailed { order });
+        }
+        Ok(OrderEigen {
+            order,
+            shift,
+            values,
+            vectors,
+            inverse,
+        })
+    }
+
+    /// The index of `pole` (of this model, at `base.order`) among `base`'s
+    /// eigenvalues: the eigenvalue whose pole is nearest in frequency and
+    /// damping (the same one that made it).
+    pub fn eigen_index(&self, base: &OrderEigen, pole: &Pole) -> Option<usize> {
+        (0..base.values.len())
+            .filter_map(|j| {
+                let p = self.pole(base.order, base.values[j], |k| base.vectors[(k, j)])?;
+                let d = (p.frequency_hz - pole.frequency_hz).abs() / pole.frequency_hz.max(f64::MIN_POSITIVE)
+                    + (p.damping_ratio - pole.damping_ratio).abs();
+                Some((d, j))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, j)| j)
+    }
+
+    /// The poles of this model (a [`SubspaceModel::replicate`] of the one
+    /// `base` was taken from) continued from `base`'s eigenpairs `indices`
+    /// to first order (Wilkinson 1965; Döhler & Mevel 2013, §3): with
+    /// `ΔB = B_n − B_n^base` and `c = Ψ⁻¹ ΔB ψ_j`,
+    /// `μ = μ_j + c_j`, `ψ = ψ_j + Σ_{k≠j} ψ_k c_k / (μ_j − μ_k)`, the
+    /// shape `U_top ψ` on this model's basis. `O(n²)` per pole after one
+    /// `B_n` (`O(n³)`), where an eigendecomposition costs `~25 n³`; the
+    /// error is second order in `ΔB` (relative to the eigenvalue gaps).
+    /// `None` where this model has no `B_n` (or an index is no pole).
+    pub fn continued(&self, base: &OrderEigen, indices: &[usize]) -> Option<Vec<Pole>> {
+        let (n, order) = (base.values.len(), base.order);
+        let shift = self.shift_matrix(order).ok()?;
+        let zero = c64::new(0.0, 0.0);
+        indices
+            .iter()
+            .map(|&j| {
+                // ΔB ψ_j, then c = Ψ⁻¹ ΔB ψ_j.
+                let delta: Vec<c64> = (0..n)
+                    .map(|r| {
+                        (0..n).fold(zero, |acc, k| {
+                            acc + base.vectors[(k, j)] * (shift[(r, k)] - base.shift[(r, k)])
+                        })
+                    })
+                    .collect();
+                let c: Vec<c64> = (0..n)
+                    .map(|r| (0..n).fold(zero, |acc, k| acc + base.inverse[(r, k)] * delta[k]))
+                    .collect();
+                let mu_j = base.values[j];
+                let weights: Vec<c64> = (0..n)
+                    .map(|k| {
+                        let gap = mu_j - base.values[k];
+                        if k == j || gap.norm() <= 1e-12 * mu_j.norm() {
+                            zero
+                        } else {
+                            c[k] / gap
+                        }
+                    })
+                    .collect();
+                let psi = |r: usize| {
+                    base.vectors[(r, j)] + (0..n).fold(zero, |acc, k| acc + base.vectors[(r, k)] * weights[k])
+                };
+                let psi: Vec<c64> = (0..n).map(psi).collect();
+                self.pole(order, mu_j + c[j], |k| psi[k])
+            })
+            .collect()
+    }
+}
+
+/// The eigendecomposition `B_n = Ψ diag(μ) Ψ⁻¹` of one order.
+#[derive(Debug, Clone)]
+pub struct OrderEigen {
+    pub order: usize,
+    shift: Mat<f64>,
+    values: Vec<c64>,
+    vectors: Mat<c64>,
+    inverse: Mat<c64>,
 }
 
 #[cfg(test)]
@@ -254,54 +346,122 @@ mod tests {
         assert!(matches!(model.poles(31), Err(OmaError::OrderTooHigh { .. })));
     }
 
-    /// The Gram factorisation gives the SVD's poles on a noisy record's
-    /// correlations (to the precision it states), and refuses orders below
-    /// its floor.
+    /// A replicate on the model's own correlations is the model; on a
+    /// slightly different record's (a tenth of it left out), the physical
+    /// poles move as with that record's own SVD: within 2 % of the change
+    /// at order 4 (the signal's rank), frequencies within 20 % at order 8,
+    /// where four noise directions join the subspace and the rotation of
+    /// the right singular vectors into them (weighed by their `σ`) is left
+    /// out (measured: 11 % of the change of the 2.3 Hz pole there). The
+    /// first-order continuation matches the replicate's own eigenvalues.
     #[test]
-    fn the_gram_factorisation_gives_the_svd_poles() {
+    fn a_replicate_projects_on_the_right_singular_vectors() {
         let (l, p, fs) = (3, 12, 50.0);
-        let mut seed = 7u64;
-        let mut noise = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed as f64 / u64::MAX as f64 - 0.5
-        };
-        // Two damped oscillators seen by three channels, plus noise.
-        let n = 6000;
-        let (mut x1, mut v1, mut x2, mut v2) = (0.0, 0.0, 0.0, 0.0);
-        let dt = 1.0 / fs;
-        let (w1, w2) = (2.0 * PI * 2.3, 2.0 * PI * 7.1);
-        let mut y = vec![vec![0.0; n]; l];
-        for t in 0..n {
-            let (f1, f2) = (noise(), noise());
-            v1 += dt * (-w1 * w1 * x1 - 2.0 * 0.02 * w1 * v1 + 40.0 * f1);
-            x1 += dt * v1;
-            v2 += dt * (-w2 * w2 * x2 - 2.0 * 0.03 * w2 * v2 + 40.0 * f2);
-            x2 += dt * v2;
-            for (a, shape) in [[1.0, 0.4], [0.6, -1.0], [-0.3, 0.8]].iter().enumerate() {
-                y[a][t] = shape[0] * x1 + shape[1] * x2 + 0.01 * noise();
+        let record = |seed: u64, n: usize| {
+            let mut seed = seed;
+            let mut noise = move || {
+                seed ^= seed << 13;
+                seed ^= seed >> 7;
+                seed ^= seed << 17;
+                seed as f64 / u64::MAX as f64 - 0.5
+            };
+            // Two damped oscillators seen by three channels, plus noise.
+            let (mut x1, mut v1, mut x2, mut v2) = (0.0, 0.0, 0.0, 0.0);
+            let dt = 1.0 / fs;
+            let (w1, w2) = (2.0 * PI * 2.3, 2.0 * PI * 7.1);
+            let mut y = vec![vec![0.0; n]; l];
+            for t in 0..n {
+                let (f1, f2) = (noise(), noise());
+                v1 += dt * (-w1 * w1 * x1 - 2.0 * 0.02 * w1 * v1 + 40.0 * f1);
+                x1 += dt * v1;
+                v2 += dt * (-w2 * w2 * x2 - 2.0 * 0.03 * w2 * v2 + 40.0 * f2);
+                x2 += dt * v2;
+                for (a, shape) in [[1.0, 0.4], [0.6, -1.0], [-0.3, 0.8]].iter().enumerate() {
+                    y[a][t] = shape[0] * x1 + shape[1] * x2 + 0.01 * noise();
+                }
             }
-        }
-        let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
-        let r = super::super::OutputCorrelations::from_samples(&views, &[], 2 * p, 1)
-            .unwrap()
-            .estimate();
-        let exact = SubspaceModel::new(&r, l, l, p, 20, fs).unwrap();
-        let gram = SubspaceModel::factorised(&r, l, l, p, 20, fs, Factorisation::GramEigen).unwrap();
-        for (a, b) in exact.singular_values().iter().zip(gram.singular_values()).take(8) {
-            assert!((a - b).abs() < 1e-9 * exact.singular_values()[0], "{a} vs {b}");
-        }
-        for order in [4, 8, 12] {
-            let (a, b) = (exact.poles(order).unwrap(), gram.poles(order).unwrap());
-            assert_eq!(a.len(), b.len());
+            y
+        };
+        let correlations = |y: &[Vec<f64>]| {
+            let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
+            super::super::OutputCorrelations::from_samples(&views, &[], 2 * p, 1)
+                .unwrap()
+                .estimate()
+        };
+        let full = record(7, 20000);
+        let r = correlations(&full);
+        let model = SubspaceModel::new(&r, l, l, p, 20, fs).unwrap();
+        let same = model.replicate(&r, l, p).unwrap();
+        // The record without its last tenth: a replicate-sized change.
+        let r_b = correlations(&full.iter().map(|c| c[..18000].to_vec()).collect::<Vec<_>>());
+        let own = SubspaceModel::new(&r_b, l, l, p, 20, fs).unwrap();
+        let projected = model.replicate(&r_b, l, p).unwrap();
+        for (order, share) in [(4, 0.02), (8, 0.2)] {
+            let (a, b) = (model.poles(order).unwrap(), same.poles(order).unwrap());
             for (a, b) in a.iter().zip(&b) {
+                assert!((a.frequency_hz - b.frequency_hz).abs() < 1e-10 * a.frequency_hz);
+                assert!((a.damping_ratio - b.damping_ratio).abs() < 1e-10);
+            }
+            // The two physical poles (beyond order 4 the rest is noise,
+            // which no first-order argument holds for).
+            let (exact, approx) = (own.poles(order).unwrap(), projected.poles(order).unwrap());
+            let nearest = |poles: &[Pole], f: f64| {
+                poles
+                    .iter()
+                    .min_by(|x, y| (x.frequency_hz - f).abs().total_cmp(&(y.frequency_hz - f).abs()))
+                    .cloned()
+                    .unwrap()
+            };
+            // (The explicit integration moves the oscillators to ~2.3 and
+            // ~7.5 Hz; order 4 holds just the two.)
+            let physical: Vec<f64> = model.poles(4).unwrap().iter().map(|p| p.frequency_hz).collect();
+            assert_eq!(physical.len(), 2);
+            for f in physical {
+                let (o, e, x) = (nearest(&a, f), nearest(&exact, f), nearest(&approx, f));
+                assert!((o.frequency_hz - f).abs() < 0.01 * f, "{o:?}");
+                let change = (e.frequency_hz - o.frequency_hz).abs();
                 assert!(
-                    (a.frequency_hz - b.frequency_hz).abs() < 1e-7 * a.frequency_hz,
-                    "{a:?} {b:?}"
+                    (x.frequency_hz - e.frequency_hz).abs() < share * change + 1e-7 * f,
+                    "{o:?} {e:?} {x:?}"
                 );
-                assert!((a.damping_ratio - b.damping_ratio).abs() < 1e-7, "{a:?} {b:?}");
-                assert!((super::super::shape::mac(&a.shape, &b.shape) - 1.0).abs() < 1e-9);
+                // Damping: at order 4 as close; at order 8 this toy's
+                // damping change is carried by the noise directions' rotation
+                // (exact +1.8e-5, projected −2e-6 for the 2.3 Hz pole), so
+                // only the frequency is held there. On the deck, where the
+                // modes dominate the subspace, the damping std of both
+                // methods matches the scatter over 100 records
+                // (tests/verification/oma.rs).
+                if order == 4 {
+                    let change = (e.damping_ratio - o.damping_ratio).abs();
+                    assert!(
+                        (x.damping_ratio - e.damping_ratio).abs() < 0.05 * change + 1e-7,
+                        "{o:?} {e:?} {x:?}"
+                    );
+                }
+                // The first-order continuation of the model's eigenpair on
+                // the projected replicate: the replicate's own eigenvalue
+                // to second order (within 1 % of the change at order 4; at
+                // order 8, where noise poles come close, measured 2.3090 Hz
+                // against 2.3075 from 2.3052: this tenth of the record is a
+                // larger change than a replicate's sixteenth, and the
+                // verification holds the stds, not single poles).
+                if order != 4 {
+                    continue;
+                }
+                let base = model.eigenpairs(order).unwrap();
+                let j = model.eigen_index(&base, &o).unwrap();
+                let c = &projected.continued(&base, &[j]).unwrap()[0];
+                let change = (x.frequency_hz - o.frequency_hz).abs();
+                assert!(
+                    (c.frequency_hz - x.frequency_hz).abs() < 0.01 * change + 1e-9 * f,
+                    "{c:?} {x:?}"
+                );
+                let change = (x.damping_ratio - o.damping_ratio).abs();
+                assert!(
+                    (c.damping_ratio - x.damping_ratio).abs() < 0.01 * change + 1e-9,
+                    "{c:?} {x:?}"
+                );
+                assert!((super::super::shape::mac(&c.shape, &x.shape) - 1.0).abs() < 1e-6);
             }
         }
     }

@@ -1,5 +1,6 @@
-//! Uncertainty of identified modes by the delete-one-batch jackknife
-//! (Efron & Stein 1981) over the correlation batches.
+//! Uncertainty of identified modes by delete-one-batch replicates
+//! (the jackknife, Efron & Stein 1981) over the correlation batches, each
+//! replicate either re-identified exactly or continued to first order.
 //!
 //! Each identified quantity is a smooth function of the mean correlations,
 //! `θ = g(R̄)`. Döhler & Mevel (2013) propagate the sample covariance of the
@@ -9,17 +10,55 @@
 //! `var θ ≈ (B−1)/B Σ_b (θ_(b) − θ̄)²`, and it is asymptotically equal to
 //! the delta method for a smooth `g`. Each replicate uses almost all the
 //! data, so it keeps the full window's bias (unlike re-identifying on short
-//! sub-windows). Cost: one factorisation per batch (the eigenvectors of
-//! `HᵀH`, [`Factorisation::GramEigen`]: the replicates only need orders the
-//! full window's SVD has passed); poles only at the orders of the reported
-//! modes. Checked against the scatter over independent records
-//! (tests/integration and README).
+//! sub-windows). Two ways to get a replicate's poles
+//! ([`UncertaintyMethod`]):
+//! - `jackknife`: its own SVD and eigenvalue problems at the orders of the
+//!   reported modes, each member matched to the nearest pole (the exact
+//!   replicate; 16 SVDs and ~15 eigenvalue problems each);
+//! - `first_order` (default): the replicate's Hankel matrix on the full
+//!   window's right singular vectors ([`SubspaceModel::replicate`]) and each
+//!   member's eigenpair continued to first order
+//!   ([`SubspaceModel::continued`]): the first-order propagation of Döhler
+//!   & Mevel (2013) evaluated on the batch deviations, which is the delta
+//!   method with the batches' covariance; one product and one small solve
+//!   per order and replicate, `O(n²)` per pole. Both recompute the same
+//!   medians per replicate; `tests/verification/oma.rs` compares both with
+//!   the scatter over independent records.
 
 use super::correlation::OutputCorrelations;
-use super::ssi::{Factorisation, Pole, SubspaceModel};
+use super::ssi::{OrderEigen, Pole, SubspaceModel};
 use super::stabilisation::{median, pole_distance};
 use faer::c64;
-use std::collections::BTreeMap;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, BTreeSet};
+
+/// How the replicates' poles are obtained (`[oma] uncertainty`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum UncertaintyMethod {
+    /// Each replicate continued to first order from the full window.
+    #[default]
+    FirstOrder,
+    /// Each replicate re-identified (SVD, eigenvalue problems, matching).
+    Jackknife,
+}
+
+/// Standard deviations of `modes` (identified by `full` from
+/// `correlations` at `fs`) by `method`; see the module documentation.
+pub fn spreads(
+    method: UncertaintyMethod,
+    correlations: &OutputCorrelations,
+    full: &SubspaceModel,
+    block_rows: usize,
+    fs: f64,
+    modes: &[ModePoles<'_>],
+    max_distance: f64,
+) -> Vec<Option<Spread>> {
+    match method {
+        UncertaintyMethod::FirstOrder => first_order(correlations, full, block_rows, modes),
+        UncertaintyMethod::Jackknife => jackknife(correlations, block_rows, fs, modes, max_distance),
+    }
+}
 
 /// Jackknife standard deviations of one mode.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,9 +91,10 @@ impl ModePoles<'_> {
     }
 }
 
-/// Spreads of `modes`: every replicate recomputes each member's pole (the
-/// nearest at its order within `max_distance`, see [`pole_distance`]) and
-/// the same medians, so the spread is that of exactly what is reported.
+/// Spreads of `modes`: every replicate is re-identified and recomputes
+/// each member's pole (the nearest at its order within `max_distance`, see
+/// [`pole_distance`]) and the same medians, so the spread is that of
+/// exactly what is reported.
 pub fn jackknife(
     correlations: &OutputCorrelations,
     block_rows: usize,
@@ -63,7 +103,6 @@ pub fn jackknife(
     max_distance: f64,
 ) -> Vec<Option<Spread>> {
     let batches = correlations.batches();
-    let mut found: Vec<Vec<Replicate>> = vec![Vec::new(); modes.len()];
     if batches < 2 {
         return vec![None; modes.len()];
     }
@@ -75,9 +114,98 @@ pub fn jackknife(
         .unwrap_or(1);
     // Replicates are independent: on up to four threads, in batch order.
     let left_out: Vec<usize> = (0..batches).collect();
+    gather(
+        super::ordered_map(&left_out, |&b| {
+            replicate_modes(correlations, b, block_rows, fs, max_order, modes, max_distance)
+        }),
+        modes.len(),
+    )
+}
+
+/// Spreads of `modes` from first-order replicates (see the module
+/// documentation): the orders of the modes' poles are decomposed once,
+/// each replicate continues exactly the members' eigenpairs.
+pub fn first_order(
+    correlations: &OutputCorrelations,
+    full: &SubspaceModel,
+    block_rows: usize,
+    modes: &[ModePoles<'_>],
+) -> Vec<Option<Spread>> {
+    let batches = correlations.batches();
+    if batches < 2 {
+        return vec![None; modes.len()];
+    }
+    let orders: Vec<usize> = modes
+        .iter()
+        .flat_map(|m| m.members.iter().chain([&m.medoid]).map(|p| p.order))
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    let bases: Vec<Option<OrderEigen>> = super::ordered_map(&orders, |&o| full.eigenpairs(o).ok());
+    let base_of = |order: usize| orders.binary_search(&order).ok().and_then(|i| bases[i].as_ref());
+    // Per mode, (order, eigenvalue index) of each member and the medoid.
+    let index = |p: &Pole| {
+        base_of(p.order)
+            .and_then(|b| full.eigen_index(b, p))
+            .map(|j| (p.order, j))
+    };
+    let located: Vec<Option<Located>> = modes
+        .iter()
+        .map(|m| {
+            Some((
+                m.members.iter().map(|p| index(p)).collect::<Option<Vec<_>>>()?,
+                index(m.medoid)?,
+            ))
+        })
+        .collect();
+    let mut needed: BTreeMap<usize, BTreeSet<usize>> = BTreeMap::new();
+    for (members, medoid) in located.iter().flatten() {
+        for &(order, j) in members.iter().chain([medoid]) {
+            needed.entry(order).or_default().insert(j);
+        }
+    }
+    let references = correlations.references().len();
+    let left_out: Vec<usize> = (0..batches).collect();
     let per_batch = super::ordered_map(&left_out, |&b| {
-        replicate_modes(correlations, b, block_rows, fs, max_order, modes, max_distance)
+        let r = correlations.estimate_without(Some(b));
+        let Ok(model) = full.replicate(&r, references, block_rows) else {
+            return vec![None; modes.len()];
+        };
+        let continued: BTreeMap<(usize, usize), Pole> = needed
+            .iter()
+            .filter_map(|(&order, js)| {
+                let js: Vec<usize> = js.iter().copied().collect();
+                let poles = model.continued(base_of(order)?, &js)?;
+                Some(js.into_iter().map(move |j| (order, j)).zip(poles))
+            })
+            .flatten()
+            .collect();
+        located
+            .iter()
+            .zip(modes)
+            .map(|(at, mode)| {
+                let (members, medoid) = at.as_ref()?;
+                let medoid_pole = continued.get(medoid)?;
+                let replicate = ModePoles {
+                    members: members.iter().map(|m| continued.get(m)).collect::<Option<Vec<_>>>()?,
+                    medoid: medoid_pole,
+                };
+                let (f, zeta) = replicate.medians();
+                Some((f, zeta, aligned(&medoid_pole.shape, &mode.medoid.shape)))
+            })
+            .collect()
     });
+    gather(per_batch, modes.len())
+}
+
+/// A pole as `(order, eigenvalue index)`; a mode as its members' and its
+/// medoid's.
+type PoleAt = (usize, usize);
+type Located = (Vec<PoleAt>, PoleAt);
+
+/// Each mode's spread over the replicates that found it (at least two).
+fn gather(per_batch: Vec<Vec<Option<Replicate>>>, modes: usize) -> Vec<Option<Spread>> {
+    let mut found: Vec<Vec<Replicate>> = vec![Vec::new(); modes];
     for replicate in per_batch {
         for (m, found_here) in replicate.into_iter().enumerate() {
             if let Some(v) = found_here {
@@ -107,14 +235,13 @@ fn replicate_modes(
     max_distance: f64,
 ) -> Vec<Option<Replicate>> {
     let r = correlations.estimate_without(Some(left_out));
-    let Ok(model) = SubspaceModel::factorised(
+    let Ok(model) = SubspaceModel::new(
         &r,
         correlations.channels(),
         correlations.references().len(),
         block_rows,
         max_order,
         fs,
-        Factorisation::GramEigen,
     ) else {
         return vec![None; modes.len()];
     };
