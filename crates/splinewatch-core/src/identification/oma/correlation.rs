@@ -17,7 +17,7 @@
 //! With `m ≈ 8 (K + 1)` the work is `O(n l r)` products plus short FFTs,
 //! where transforms of whole batches cost `l r` long inverse FFTs per batch
 //! (95 → ~20 ms on a 10-minute, 12-channel window). Batches run on up to
-//! four threads ([`super::ordered_map`]), so the sums do not depend on the
+//! four threads (`ordered_map`), so the sums do not depend on the
 //! thread count.
 //!
 //! **Missing samples.** A NaN marks a missing sample (the pipeline fills a

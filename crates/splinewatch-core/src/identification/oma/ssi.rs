@@ -346,6 +346,34 @@ mod tests {
         assert!(matches!(model.poles(31), Err(OmaError::OrderTooHigh { .. })));
     }
 
+    /// `n` samples at `fs` of two damped oscillators (2.3 and 7.1 Hz,
+    /// explicit integration) driven by noise, seen by `l = 3` channels with
+    /// 1 % noise.
+    fn two_oscillators(seed: u64, n: usize, l: usize, fs: f64) -> Vec<Vec<f64>> {
+        let mut seed = seed;
+        let mut noise = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed as f64 / u64::MAX as f64 - 0.5
+        };
+        let (mut x1, mut v1, mut x2, mut v2) = (0.0, 0.0, 0.0, 0.0);
+        let dt = 1.0 / fs;
+        let (w1, w2) = (2.0 * PI * 2.3, 2.0 * PI * 7.1);
+        let mut y = vec![vec![0.0; n]; l];
+        for t in 0..n {
+            let (f1, f2) = (noise(), noise());
+            v1 += dt * (-w1 * w1 * x1 - 2.0 * 0.02 * w1 * v1 + 40.0 * f1);
+            x1 += dt * v1;
+            v2 += dt * (-w2 * w2 * x2 - 2.0 * 0.03 * w2 * v2 + 40.0 * f2);
+            x2 += dt * v2;
+            for (a, shape) in [[1.0, 0.4], [0.6, -1.0], [-0.3, 0.8]].iter().enumerate().take(l) {
+                y[a][t] = shape[0] * x1 + shape[1] * x2 + 0.01 * noise();
+            }
+        }
+        y
+    }
+
     /// A replicate on the model's own correlations is the model; on a
     /// slightly different record's (a tenth of it left out), the physical
     /// poles move as with that record's own SVD: within 2 % of the change
@@ -357,31 +385,7 @@ mod tests {
     #[test]
     fn a_replicate_projects_on_the_right_singular_vectors() {
         let (l, p, fs) = (3, 12, 50.0);
-        let record = |seed: u64, n: usize| {
-            let mut seed = seed;
-            let mut noise = move || {
-                seed ^= seed << 13;
-                seed ^= seed >> 7;
-                seed ^= seed << 17;
-                seed as f64 / u64::MAX as f64 - 0.5
-            };
-            // Two damped oscillators seen by three channels, plus noise.
-            let (mut x1, mut v1, mut x2, mut v2) = (0.0, 0.0, 0.0, 0.0);
-            let dt = 1.0 / fs;
-            let (w1, w2) = (2.0 * PI * 2.3, 2.0 * PI * 7.1);
-            let mut y = vec![vec![0.0; n]; l];
-            for t in 0..n {
-                let (f1, f2) = (noise(), noise());
-                v1 += dt * (-w1 * w1 * x1 - 2.0 * 0.02 * w1 * v1 + 40.0 * f1);
-                x1 += dt * v1;
-                v2 += dt * (-w2 * w2 * x2 - 2.0 * 0.03 * w2 * v2 + 40.0 * f2);
-                x2 += dt * v2;
-                for (a, shape) in [[1.0, 0.4], [0.6, -1.0], [-0.3, 0.8]].iter().enumerate() {
-                    y[a][t] = shape[0] * x1 + shape[1] * x2 + 0.01 * noise();
-                }
-            }
-            y
-        };
+        let record = |seed: u64, n: usize| two_oscillators(seed, n, l, fs);
         let correlations = |y: &[Vec<f64>]| {
             let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
             super::super::OutputCorrelations::from_samples(&views, &[], 2 * p, 1)
