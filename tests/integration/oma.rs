@@ -1,7 +1,7 @@
 //! Output-only identification end to end: `simulate --excitation ambient`
 //! (and traffic) → MCAP → `splinewatch oma`, its JSON contract, and bad input.
 
-use crate::common::{fresh_dir, parameter, results_by_topic, splinewatch};
+use crate::common::{fresh_dir, loss_scenario, parameter, results_by_topic, splinewatch};
 use splinewatch::config::{frf_setup, load_config};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch_core::c64;
@@ -64,20 +64,6 @@ fn pairs(file: &ModesFile) -> Vec<(f64, f64, f64)> {
             (f, m.frequency_hz, value)
         })
         .collect()
-}
-
-/// A scenario where `east.k2` loses 40 % between `start` and `end` minutes
-/// (negative: before the record), re-solved every `update_seconds`.
-fn loss_scenario(dir: &Path, start: f64, end: f64, update_seconds: f64) -> std::path::PathBuf {
-    let path = dir.join("loss.toml");
-    std::fs::write(
-        &path,
-        format!(
-            "update_seconds = {update_seconds}\n[[change]]\nparameter = \"east.k2\"\nstart_minute = {start}\nend_minute = {end}\nfactor = 0.6\n"
-        ),
-    )
-    .unwrap();
-    path
 }
 
 /// The deck's κ after the scenario's loss (`east.k2` at 60 %).

@@ -1,7 +1,7 @@
 //! Issue 31: updates that converge on what the data can tell, and say
 //! plainly when they cannot.
 
-use crate::common::{fresh_dir, parameter, results_by_topic, splinewatch};
+use crate::common::{fresh_dir, loss_scenario, parameter, results_by_topic, splinewatch};
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -44,12 +44,7 @@ fn issue_31_every_window_gets_an_update_and_uninformed_parameters_are_held() {
     );
     let truth_path = dir.join("truth.toml");
     std::fs::write(&truth_path, truth).unwrap();
-    let scenario = dir.join("soften.toml");
-    std::fs::write(
-        &scenario,
-        "update_seconds = 5.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = 9.9\nend_minute = 10.0\nfactor = 0.6\n",
-    )
-    .unwrap();
+    let scenario = loss_scenario(&dir, 9.9, 10.0, 5.0);
     let rec = dir.join("ambient.mcap");
     let sim = splinewatch(&[
         "simulate",
@@ -194,12 +189,7 @@ fn replay_both_paths(
 #[test]
 fn issue_31_a_force_sensor_and_oma_run_both_paths() {
     let dir = fresh_dir("both-paths");
-    let scenario = dir.join("loss.toml");
-    std::fs::write(
-        &scenario,
-        "update_seconds = 30.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = 19.9\nend_minute = 20.0\nfactor = 0.6\n",
-    )
-    .unwrap();
+    let scenario = loss_scenario(&dir, 19.9, 20.0, 30.0);
     let rec = dir.join("shaken.mcap");
     let sim = splinewatch(&[
         "simulate",

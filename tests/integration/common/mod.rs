@@ -187,3 +187,18 @@ pub fn results_by_topic(bytes: &[u8]) -> std::collections::BTreeMap<String, Vec<
     }
     out
 }
+
+/// A scenario in `dir/loss.toml` where `east.k2` loses 40 % between
+/// `start` and `end` minutes (negative: before the record), re-solved every
+/// `update_seconds`.
+pub fn loss_scenario(dir: &std::path::Path, start: f64, end: f64, update_seconds: f64) -> std::path::PathBuf {
+    let path = dir.join("loss.toml");
+    std::fs::write(
+        &path,
+        format!(
+            "update_seconds = {update_seconds}\n[[change]]\nparameter = \"east.k2\"\nstart_minute = {start}\nend_minute = {end}\nfactor = 0.6\n"
+        ),
+    )
+    .unwrap();
+    path
+}
