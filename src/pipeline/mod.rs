@@ -197,6 +197,16 @@ impl Pipeline {
         self.updater.counters()
     }
 
+    /// Output-only windows' reports also carry the spectral singular values
+    /// (the stabilisation diagram's backdrop), for a Rerun output that
+    /// draws them; without one they are not computed (60 ms a 10-minute,
+    /// 12-channel window).
+    pub fn draw_spectra(&mut self) {
+        if let Some(identification) = self.identification.as_mut() {
+            identification.with_spectrum = true;
+        }
+    }
+
     /// Hands the update side to the caller, for updates on another thread
     /// than the ingest: the caller rebases each job on it, runs it and
     /// applies the outcome to it, in order, and stamps health messages with

@@ -134,6 +134,9 @@ pub fn replay_sources<W: Write + Seek>(
         pipelined,
     } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+    if viewer.is_some() {
+        pipeline.draw_spectra();
+    }
     let monitor_path = resume_monitor(config, state_path, &mut pipeline)?;
     let limits = crate::pipeline::block_limits(config);
     let total = recordings.iter().map(RecordingSource::message_count).sum();

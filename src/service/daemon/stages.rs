@@ -57,6 +57,9 @@ impl Daemon {
             tracing::info!(message = "warm start from the state file", window = s.window, time = %s.time);
         }
         let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+        if !options.rerun.is_empty() {
+            pipeline.draw_spectra();
+        }
         let monitor_file = crate::service::resume_monitor(config, options.state.as_deref(), &mut pipeline)?;
         let prefix = config.topic_prefix();
         let results = ResultsSink::new(&prefix, results::results_files(&options.results))?
