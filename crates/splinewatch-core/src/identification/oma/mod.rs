@@ -235,11 +235,15 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
         fs,
     )?;
     let mut orders = settings.orders(model.max_order());
-    let mut by_order = Vec::new();
-    // One eigenvalue problem per order, independent: on both cores.
-    for result in ordered_map(&orders, |&order| model.poles(order)) {
+    let (mut by_order, mut eigens) = (Vec::new(), Vec::new());
+    // One eigenvalue problem per order, independent: on both cores. The
+    // eigendecompositions are kept for the first-order uncertainty.
+    for result in ordered_map(&orders, |&order| model.eigen(order)) {
         match result {
-            Ok(poles) => by_order.push(poles),
+            Ok(eigen) => {
+                by_order.push(model.poles_of(&eigen));
+                eigens.push(eigen);
+            }
             // Fewer modes in the data than the order: stop at the last one.
             Err(OmaError::SingularHankel { .. }) if !by_order.is_empty() => break,
             Err(e) => return Err(e),
@@ -260,7 +264,15 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
             min_poles: settings.clustering.min_poles(by_order.len()),
         });
     }
-    let modes = summarise(correlations, &model, fs, settings, &orders, &clusters, &stable_poles);
+    let modes = summarise(
+        correlations,
+        (&model, &eigens),
+        fs,
+        settings,
+        &orders,
+        &clusters,
+        &stable_poles,
+    );
     let mut mode_of = std::collections::HashMap::new();
     for (m, members) in clusters.iter().enumerate() {
         for &i in members {
@@ -293,7 +305,7 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
 /// orders rather than all (the eigenvalue problems dominate its cost).
 fn summarise(
     correlations: &OutputCorrelations,
-    model: &SubspaceModel,
+    (model, eigens): (&SubspaceModel, &[ssi::OrderEigen]),
     fs: f64,
     settings: &OmaSettings,
     orders: &[usize],
@@ -319,7 +331,7 @@ fn summarise(
     let spreads = uncertainty::spreads(
         settings.uncertainty,
         correlations,
-        model,
+        (model, eigens),
         settings.block_rows,
         fs,
         &poles_of,

@@ -9,7 +9,9 @@
 //! invariance, `A = O↑⁺ O↓` (least squares; `O↑`/`O↓` drop the last/first
 //! block row). Each eigenpair `(μ, ψ)` of `A` is a pole
 //! `λ = ln(μ) f_s`, frequency `|λ|/2π`, damping ratio `−Re λ/|λ|`, shape
-//! `φ = C ψ` at the sensors. One SVD serves every order.
+//! `φ = C ψ` at the sensors. One SVD serves every order, and only its
+//! leading `max_order` vectors are formed (from the eigenproblem of `HᵀH`,
+//! see [`SubspaceModel::new`]).
 //!
 //! Every order from one pair of Gram matrices: `A = Σ^{-1/2} B Σ^{1/2}` with
 //! `B = U↑⁺ U↓ = (U↑ᵀU↑)⁻¹ U↑ᵀU↓` on the first `n` columns, so the
@@ -56,6 +58,51 @@ pub struct SubspaceModel {
 /// Below this fraction of `σ₁`, a singular value of the SVD is zero.
 const SVD_FLOOR: f64 = 1e-13;
 
+/// The leading `cap` right singular vectors `V` of `H` and `H V` (the left
+/// ones times `Σ`).
+struct Truncated {
+    right: Mat<f64>,
+    left: Mat<f64>,
+}
+
+/// The singular values of `hankel` (non-increasing) with its `cap` leading
+/// right singular vectors, from the symmetric eigenproblem of `HᵀH`
+/// (tridiagonalisation, about half the cost of a full SVD with vectors; only
+/// the leading `cap` vectors are kept, as the orders need no more). The
+/// leading singular values are `‖H v_i‖`, accurate to round-off relative to
+/// `σ₁` even where `σ_i² < ε σ₁²` (so a rank-deficient `H` is still seen as
+/// one); the eigenvectors have the same backward error as an SVD's
+/// (`ε σ₁²/gap` in angle). The values beyond `cap` (reported only) are
+/// `√λ_i`, accurate to `ε σ₁²/σ_i`.
+fn truncated_svd(hankel: &Mat<f64>, cap: usize) -> Result<(Vec<f64>, Truncated), OmaError> {
+    let gram = hankel.transpose() * hankel;
+    let eigen = gram.self_adjoint_eigen(Side::Lower).map_err(|_| OmaError::SvdFailed)?;
+    let (values, vectors) = (eigen.S().column_vector(), eigen.U());
+    let cols = gram.ncols();
+    // Descending: column c is the eigenpair cols − 1 − c.
+    let v = Mat::from_fn(cols, cap, |row, col| vectors[(row, cols - 1 - col)]);
+    let hv = hankel * &v;
+    let norms: Vec<f64> = (0..cap).map(|c| hv.col(c).norm_l2()).collect();
+    let mut order: Vec<usize> = (0..cap).collect();
+    order.sort_by(|&a, &b| norms[b].total_cmp(&norms[a]));
+    let last = order.last().map_or(0.0, |&c| norms[c]);
+    let singular_values: Vec<f64> = order
+        .iter()
+        .map(|&c| norms[c])
+        .chain((cap..cols).map(|c| values[cols - 1 - c].max(0.0).sqrt().min(last)))
+        .collect();
+    if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
+        return Err(OmaError::SingularHankel { order: 1 });
+    }
+    Ok((
+        singular_values,
+        Truncated {
+            right: Mat::from_fn(cols, cap, |row, col| v[(row, order[col])]),
+            left: Mat::from_fn(hv.nrows(), cap, |row, col| hv[(row, order[col])]),
+        },
+    ))
+}
+
 /// The block Hankel matrix `[R_{i+j+1}]`, `i = 0..=p`, `j = 0..p−1`.
 fn block_hankel(correlations: &[f64], l: usize, r: usize, p: usize) -> Result<Mat<f64>, OmaError> {
     if p == 0 || correlations.len() < (2 * p + 1) * l * r {
@@ -71,7 +118,10 @@ impl SubspaceModel {
     /// `correlations` as [`super::OutputCorrelations::estimate`] lays them
     /// out (`(max_lag + 1) × l × r`, lag-major), `max_lag ≥ 2p`; poles will
     /// be asked for up to `max_order` (the Gram matrices are formed on that
-    /// many columns only).
+    /// many columns only). The SVD is truncated to those columns and comes
+    /// from the symmetric eigenproblem of `HᵀH` (about half the cost of a
+    /// full SVD; the leading singular values are `‖H v_i‖`, accurate to
+    /// round-off, so a rank-deficient `H` is still seen as one).
     pub fn new(
         correlations: &[f64],
         channels: usize,
@@ -81,27 +131,25 @@ impl SubspaceModel {
         fs: f64,
     ) -> Result<Self, OmaError> {
         let hankel = block_hankel(correlations, channels, references, block_rows)?;
-        let svd = hankel.thin_svd().map_err(|_| OmaError::SvdFailed)?;
-        let singular_values: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-        if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
-            return Err(OmaError::SingularHankel { order: 1 });
-        }
-        let cap = (channels * block_rows).min(singular_values.len()).min(max_order.max(1));
-        let right = Mat::from_fn(hankel.ncols(), cap, |row, col| {
-            let sigma = singular_values[col];
-            if sigma > SVD_FLOOR * singular_values[0] {
-                svd.V()[(row, col)] / sigma
+        let cap = (channels * block_rows).min(hankel.ncols()).min(max_order.max(1));
+        let (singular_values, right_vectors) = truncated_svd(&hankel, cap)?;
+        let sigma_1 = singular_values[0];
+        let kept = |col: usize| singular_values[col] > SVD_FLOOR * sigma_1;
+        let left = Mat::from_fn(hankel.nrows(), cap, |row, col| {
+            if kept(col) {
+                right_vectors.left[(row, col)] / singular_values[col]
             } else {
                 0.0
             }
         });
-        Ok(Self::from_left(
-            svd.U().subcols(0, cap),
-            singular_values,
-            right,
-            channels,
-            fs,
-        ))
+        let right = Mat::from_fn(hankel.ncols(), cap, |row, col| {
+            if kept(col) {
+                right_vectors.right[(row, col)] / singular_values[col]
+            } else {
+                0.0
+            }
+        });
+        Ok(Self::from_left(left.as_ref(), singular_values, right, channels, fs))
     }
 
     /// The model of a perturbed Hankel matrix `H_b` (a jackknife replicate's
@@ -157,19 +205,42 @@ impl SubspaceModel {
 
     /// The oscillating poles (one of each conjugate pair) at order `n`.
     pub fn poles(&self, order: usize) -> Result<Vec<Pole>, OmaError> {
+        Ok(self.poles_of(&self.eigen(order)?))
+    }
+
+    /// The eigendecomposition of `B_n` at `order`: its poles
+    /// ([`SubspaceModel::poles_of`]) and the base of their first-order
+    /// continuation ([`SubspaceModel::continuation`]).
+    pub fn eigen(&self, order: usize) -> Result<OrderEigen, OmaError> {
         let shift = self.shift_matrix(order)?;
         let eigen = shift.eigen().map_err(|_| OmaError::EigenFailed { order })?;
-        let (values, vectors) = (eigen.S().column_vector(), eigen.U());
-        let mut poles: Vec<Pole> = (0..order)
-            .filter_map(|j| self.pole(order, values[j], |k| vectors[(k, j)]))
+        Ok(OrderEigen {
+            order,
+            values: eigen.S().column_vector().iter().copied().collect(),
+            vectors: eigen.U().to_owned(),
+        })
+    }
+
+    /// The oscillating poles of `eigen` (one of each conjugate pair), by
+    /// frequency.
+    pub fn poles_of(&self, eigen: &OrderEigen) -> Vec<Pole> {
+        let mut poles: Vec<Pole> = (0..eigen.order)
+            .filter_map(|j| self.pole(eigen.order, eigen.values[j], |k| eigen.vectors[(k, j)]))
             .collect();
         poles.sort_by(|a, b| a.frequency_hz.total_cmp(&b.frequency_hz));
-        Ok(poles)
+        poles
     }
 
     /// `B_n = (G↑)⁻¹ S` on the first `order` columns (see the module
     /// documentation), after the order's checks.
     fn shift_matrix(&self, order: usize) -> Result<Mat<f64>, OmaError> {
+        Ok(self
+            .gram_factor(order)?
+            .solve(self.gram_shift.submatrix(0, 0, order, order)))
+    }
+
+    /// The Cholesky factor of `G↑` on the first `order` columns.
+    fn gram_factor(&self, order: usize) -> Result<faer::linalg::solvers::Llt<f64>, OmaError> {
         if order == 0 || order > self.max_order() {
             return Err(OmaError::OrderTooHigh {
                 order,
@@ -179,119 +250,139 @@ impl SubspaceModel {
         if self.singular_values[order - 1] <= SVD_FLOOR * self.singular_values[0] {
             return Err(OmaError::SingularHankel { order });
         }
-        let n = order;
-        Ok(self
-            .gram_up
-            .submatrix(0, 0, n, n)
+        self.gram_up
+            .submatrix(0, 0, order, order)
             .llt(Side::Lower)
-            .map_err(|_| OmaError::SingularHankel { order })?
-            .solve(self.gram_shift.submatrix(0, 0, n, n)))
+            .map_err(|_| OmaError::SingularHankel { order })
     }
 
     /// The pole of the eigenvalue `mu` of `B_n` with eigenvector `psi`;
     /// `None` for the conjugate of an oscillating pole (`Im μ ≤ 0`), a real
     /// pole or a pure delay.
     fn pole(&self, order: usize, mu: c64, psi: impl Fn(usize) -> c64) -> Option<Pole> {
-        if mu.im <= 0.0 || mu.norm() == 0.0 {
-            return None;
-        }
-        let lambda = c64::new(mu.norm().ln(), mu.im.atan2(mu.re)) * self.fs;
+        let (frequency_hz, damping_ratio) = self.modal(mu)?;
         let mut shape: Vec<c64> = (0..self.channels)
             .map(|a| (0..order).map(|k| psi(k) * self.u_top[(a, k)]).sum())
             .collect();
         normalise(&mut shape);
         Some(Pole {
             order,
-            frequency_hz: lambda.norm() / (2.0 * PI),
-            damping_ratio: -lambda.re / lambda.norm(),
+            frequency_hz,
+            damping_ratio,
             mpc: mpc(&shape),
             shape,
         })
     }
 
-    /// The eigendecomposition of `B_n` at `order`, for first-order
-    /// continuation of its poles on replicates ([`SubspaceModel::continued`]).
-    pub fn eigenpairs(&self, order: usize) -> Result<OrderEigen, OmaError> {
-        let shift = self.shift_matrix(order)?;
-        let eigen = shift.eigen().map_err(|_| OmaError::EigenFailed { order })?;
-        let values: Vec<c64> = eigen.S().column_vector().iter().copied().collect();
-        let vectors = eigen.U().to_owned();
-        let inverse = vectors.partial_piv_lu().inverse();
-        if !inverse
-            .col_iter()
-            .all(|c| c.iter().all(|v| v.re.is_finite() && v.im.is_finite()))
-        {
-            return Err(OmaError::EigenFailed { order });
+    /// Frequency (Hz) and damping ratio of the eigenvalue `mu` of `B_n`
+    /// (`λ = ln(μ) f_s`); `None` unless `Im μ > 0`.
+    fn modal(&self, mu: c64) -> Option<(f64, f64)> {
+        if mu.im <= 0.0 || mu.norm() == 0.0 {
+            return None;
         }
-        Ok(OrderEigen {
-            order,
-            shift,
-            values,
-            vectors,
-            inverse,
-        })
+        let lambda = c64::new(mu.norm().ln(), mu.im.atan2(mu.re)) * self.fs;
+        Some((lambda.norm() / (2.0 * PI), -lambda.re / lambda.norm()))
     }
 
-    /// The index of `pole` (of this model, at `base.order`) among `base`'s
-    /// eigenvalues: the eigenvalue whose pole is nearest in frequency and
-    /// damping (the same one that made it).
-    pub fn eigen_index(&self, base: &OrderEigen, pole: &Pole) -> Option<usize> {
-        (0..base.values.len())
+    /// The index of `pole` (one of [`SubspaceModel::poles_of`]`(eigen)`)
+    /// among `eigen`'s eigenvalues: the one it was made from.
+    pub fn eigen_index(&self, eigen: &OrderEigen, pole: &Pole) -> Option<usize> {
+        (0..eigen.values.len())
             .filter_map(|j| {
-                let p = self.pole(base.order, base.values[j], |k| base.vectors[(k, j)])?;
-                let d = (p.frequency_hz - pole.frequency_hz).abs() / pole.frequency_hz.max(f64::MIN_POSITIVE)
-                    + (p.damping_ratio - pole.damping_ratio).abs();
+                let (f, zeta) = self.modal(eigen.values[j])?;
+                let d = (f - pole.frequency_hz).abs() / pole.frequency_hz.max(f64::MIN_POSITIVE)
+                    + (zeta - pole.damping_ratio).abs();
                 Some((d, j))
             })
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, j)| j)
     }
 
-    /// The poles of this model (a [`SubspaceModel::replicate`] of the one
-    /// `base` was taken from) continued from `base`'s eigenpairs `indices`
-    /// to first order (Wilkinson 1965; Döhler & Mevel 2013, §3): with
-    /// `ΔB = B_n − B_n^base` and `c = Ψ⁻¹ ΔB ψ_j`,
-    /// `μ = μ_j + c_j`, `ψ = ψ_j + Σ_{k≠j} ψ_k c_k / (μ_j − μ_k)`, the
-    /// shape `U_top ψ` on this model's basis. `O(n²)` per pole after one
-    /// `B_n` (`O(n³)`), where an eigendecomposition costs `~25 n³`; the
-    /// error is second order in `ΔB` (relative to the eigenvalue gaps).
-    /// `None` where this model has no `B_n` (or an index is no pole).
-    pub fn continued(&self, base: &OrderEigen, indices: &[usize]) -> Option<Vec<Pole>> {
-        let (n, order) = (base.values.len(), base.order);
-        let shift = self.shift_matrix(order).ok()?;
-        let zero = c64::new(0.0, 0.0);
-        indices
+    /// What the first-order continuation of `eigen`'s poles needs
+    /// ([`SubspaceModel::continued`]): `Ψ⁻¹`.
+    pub fn continuation(&self, eigen: OrderEigen) -> Result<Continuation, OmaError> {
+        let inverse = eigen.vectors.partial_piv_lu().inverse();
+        if !inverse
+            .col_iter()
+            .all(|c| c.iter().all(|v| v.re.is_finite() && v.im.is_finite()))
+        {
+            return Err(OmaError::EigenFailed { order: eigen.order });
+        }
+        Ok(Continuation { eigen, inverse })
+    }
+
+    /// The eigenvalues `indices` of `base` continued to first order onto
+    /// this model (a [`SubspaceModel::replicate`] of the one `base` was
+    /// taken from), as frequency and damping ratio; the shapes of those
+    /// also in `shaped`. With `ΔB = B_n − B_n^base` (Wilkinson 1965;
+    /// Döhler & Mevel 2013, §3), `y_j = ΔB ψ_j = B_n ψ_j − μ_j ψ_j` and
+    /// `c = Ψ⁻¹ y_j`: `μ = μ_j + c_j`, `ψ = ψ_j + Σ_{k≠j} ψ_k c_k / (μ_j − μ_k)`,
+    /// the shape `U_top ψ` on this model's basis. `B_n ψ_j = G↑⁻¹ S ψ_j`
+    /// for all members at once (a Cholesky factor and one product per
+    /// order), then `O(n)` per pole (`O(n²)` for a shape), where an
+    /// eigendecomposition costs `~25 n³`; the error is second order in `ΔB`
+    /// (relative to the eigenvalue gaps).
+    pub fn continued(&self, base: &Continuation, indices: &[usize], shaped: &[usize]) -> Option<Vec<ContinuedPole>> {
+        let (n, order) = (base.eigen.values.len(), base.eigen.order);
+        if indices.iter().chain(shaped).any(|&j| j >= n) {
+            return None;
+        }
+        let all: Vec<usize> = indices.iter().chain(shaped).copied().collect();
+        let vectors = &base.eigen.vectors;
+        let parts = Mat::from_fn(n, 2 * all.len(), |r, c| {
+            let v = vectors[(r, all[c / 2])];
+            if c % 2 == 0 {
+                v.re
+            } else {
+                v.im
+            }
+        });
+        let shifted = self
+            .gram_factor(order)
+            .ok()?
+            .solve(self.gram_shift.submatrix(0, 0, n, n) * &parts);
+        let y = |i: usize, k: usize| {
+            c64::new(shifted[(k, 2 * i)], shifted[(k, 2 * i + 1)]) - base.eigen.values[all[i]] * vectors[(k, all[i])]
+        };
+        let c_of = |i: usize, row: usize| -> c64 { (0..n).map(|k| base.inverse[(row, k)] * y(i, k)).sum() };
+        let mut continued: Vec<ContinuedPole> = indices
             .iter()
-            .map(|&j| {
-                // ΔB ψ_j, then c = Ψ⁻¹ ΔB ψ_j.
-                let delta: Vec<c64> = (0..n)
-                    .map(|r| {
-                        (0..n).fold(zero, |acc, k| {
-                            acc + base.vectors[(k, j)] * (shift[(r, k)] - base.shift[(r, k)])
-                        })
-                    })
-                    .collect();
-                let c: Vec<c64> = (0..n)
-                    .map(|r| (0..n).fold(zero, |acc, k| acc + base.inverse[(r, k)] * delta[k]))
-                    .collect();
-                let mu_j = base.values[j];
-                let weights: Vec<c64> = (0..n)
-                    .map(|k| {
-                        let gap = mu_j - base.values[k];
-                        if k == j || gap.norm() <= 1e-12 * mu_j.norm() {
-                            zero
-                        } else {
-                            c[k] / gap
-                        }
-                    })
-                    .collect();
-                let psi = |r: usize| {
-                    base.vectors[(r, j)] + (0..n).fold(zero, |acc, k| acc + base.vectors[(r, k)] * weights[k])
-                };
-                let psi: Vec<c64> = (0..n).map(psi).collect();
-                self.pole(order, mu_j + c[j], |k| psi[k])
+            .enumerate()
+            .map(|(i, &j)| {
+                let (frequency_hz, damping_ratio) = self.modal(base.eigen.values[j] + c_of(i, j))?;
+                Some(ContinuedPole {
+                    frequency_hz,
+                    damping_ratio,
+                    shape: None,
+                })
             })
-            .collect()
+            .collect::<Option<_>>()?;
+        for (i, &j) in shaped.iter().enumerate() {
+            let i = indices.len() + i;
+            let c: Vec<c64> = (0..n).map(|row| c_of(i, row)).collect();
+            let mu_j = base.eigen.values[j];
+            let weights: Vec<c64> = (0..n)
+                .map(|k| {
+                    let gap = mu_j - base.eigen.values[k];
+                    if k == j || gap.norm() <= 1e-12 * mu_j.norm() {
+                        c64::new(0.0, 0.0)
+                    } else {
+                        c[k] / gap
+                    }
+                })
+                .collect();
+            let vectors = &base.eigen.vectors;
+            let psi: Vec<c64> = (0..n)
+                .map(|r| vectors[(r, j)] + (0..n).map(|k| vectors[(r, k)] * weights[k]).sum::<c64>())
+                .collect();
+            let pole = self.pole(order, mu_j + c[j], |k| psi[k])?;
+            continued.push(ContinuedPole {
+                frequency_hz: pole.frequency_hz,
+                damping_ratio: pole.damping_ratio,
+                shape: Some(pole.shape),
+            });
+        }
+        Some(continued)
     }
 }
 
@@ -299,10 +390,32 @@ impl SubspaceModel {
 #[derive(Debug, Clone)]
 pub struct OrderEigen {
     pub order: usize,
-    shift: Mat<f64>,
     values: Vec<c64>,
     vectors: Mat<c64>,
+}
+
+/// The base of a first-order continuation at one order
+/// ([`SubspaceModel::continuation`]).
+#[derive(Debug, Clone)]
+pub struct Continuation {
+    eigen: OrderEigen,
+    /// `Ψ⁻¹`.
     inverse: Mat<c64>,
+}
+
+impl Continuation {
+    pub fn order(&self) -> usize {
+        self.eigen.order
+    }
+}
+
+/// A pole continued to a replicate: frequency, damping and, where asked
+/// for, the shape (scaled as [`Pole::shape`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContinuedPole {
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+    pub shape: Option<Vec<c64>>,
 }
 
 #[cfg(test)]
@@ -452,9 +565,12 @@ mod tests {
                 if order != 4 {
                     continue;
                 }
-                let base = model.eigenpairs(order).unwrap();
-                let j = model.eigen_index(&base, &o).unwrap();
-                let c = &projected.continued(&base, &[j]).unwrap()[0];
+                let eigen = model.eigen(order).unwrap();
+                let j = model.eigen_index(&eigen, &o).unwrap();
+                let base = model.continuation(eigen).unwrap();
+                let continued = projected.continued(&base, &[j], &[j]).unwrap();
+                let c = &continued[1];
+                assert_eq!(continued[0].frequency_hz, c.frequency_hz);
                 let change = (x.frequency_hz - o.frequency_hz).abs();
                 assert!(
                     (c.frequency_hz - x.frequency_hz).abs() < 0.01 * change + 1e-9 * f,
@@ -465,7 +581,7 @@ mod tests {
                     (c.damping_ratio - x.damping_ratio).abs() < 0.01 * change + 1e-9,
                     "{c:?} {x:?}"
                 );
-                assert!((super::super::shape::mac(&c.shape, &x.shape) - 1.0).abs() < 1e-6);
+                assert!((super::super::shape::mac(c.shape.as_ref().unwrap(), &x.shape) - 1.0).abs() < 1e-6);
             }
         }
     }

@@ -20,13 +20,14 @@
 //!   member's eigenpair continued to first order
 //!   ([`SubspaceModel::continued`]): the first-order propagation of Döhler
 //!   & Mevel (2013) evaluated on the batch deviations, which is the delta
-//!   method with the batches' covariance; one product and one small solve
-//!   per order and replicate, `O(n²)` per pole. Both recompute the same
+//!   method with the batches' covariance; the eigendecompositions are the
+//!   identification's own, and a replicate costs one product, one small
+//!   Cholesky solve per order and `O(n)` per pole (`O(n²)` per shape). Both recompute the same
 //!   medians per replicate; `tests/verification/oma.rs` compares both with
 //!   the scatter over independent records.
 
 use super::correlation::OutputCorrelations;
-use super::ssi::{OrderEigen, Pole, SubspaceModel};
+use super::ssi::{Continuation, OrderEigen, Pole, SubspaceModel};
 use super::stabilisation::{median, pole_distance};
 use faer::c64;
 use serde::{Deserialize, Serialize};
@@ -44,18 +45,19 @@ pub enum UncertaintyMethod {
 }
 
 /// Standard deviations of `modes` (identified by `full` from
-/// `correlations` at `fs`) by `method`; see the module documentation.
+/// `correlations` at `fs`, with the eigendecompositions `eigens` of its
+/// orders) by `method`; see the module documentation.
 pub fn spreads(
     method: UncertaintyMethod,
     correlations: &OutputCorrelations,
-    full: &SubspaceModel,
+    (full, eigens): (&SubspaceModel, &[OrderEigen]),
     block_rows: usize,
     fs: f64,
     modes: &[ModePoles<'_>],
     max_distance: f64,
 ) -> Vec<Option<Spread>> {
     match method {
-        UncertaintyMethod::FirstOrder => first_order(correlations, full, block_rows, modes),
+        UncertaintyMethod::FirstOrder => first_order(correlations, full, eigens, block_rows, modes),
         UncertaintyMethod::Jackknife => jackknife(correlations, block_rows, fs, modes, max_distance),
     }
 }
@@ -123,11 +125,14 @@ pub fn jackknife(
 }
 
 /// Spreads of `modes` from first-order replicates (see the module
-/// documentation): the orders of the modes' poles are decomposed once,
-/// each replicate continues exactly the members' eigenpairs.
+/// documentation): the eigendecompositions of the orders the modes' poles
+/// come from (`eigens`, the identification's own) are inverted once, each
+/// replicate continues exactly the members' eigenvalues and the medoids'
+/// shapes.
 pub fn first_order(
     correlations: &OutputCorrelations,
     full: &SubspaceModel,
+    eigens: &[OrderEigen],
     block_rows: usize,
     modes: &[ModePoles<'_>],
 ) -> Vec<Option<Spread>> {
@@ -135,19 +140,17 @@ pub fn first_order(
     if batches < 2 {
         return vec![None; modes.len()];
     }
-    let orders: Vec<usize> = modes
+    let orders: BTreeSet<usize> = modes
         .iter()
         .flat_map(|m| m.members.iter().chain([&m.medoid]).map(|p| p.order))
-        .collect::<BTreeSet<_>>()
-        .into_iter()
         .collect();
-    let bases: Vec<Option<OrderEigen>> = super::ordered_map(&orders, |&o| full.eigenpairs(o).ok());
-    let base_of = |order: usize| orders.binary_search(&order).ok().and_then(|i| bases[i].as_ref());
+    let wanted: Vec<&OrderEigen> = eigens.iter().filter(|e| orders.contains(&e.order)).collect();
+    let bases: Vec<Option<Continuation>> = super::ordered_map(&wanted, |e| full.continuation((*e).clone()).ok());
+    let base_of = |order: usize| bases.iter().flatten().find(|b| b.order() == order);
     // Per mode, (order, eigenvalue index) of each member and the medoid.
     let index = |p: &Pole| {
-        base_of(p.order)
-            .and_then(|b| full.eigen_index(b, p))
-            .map(|j| (p.order, j))
+        let eigen = wanted.iter().find(|e| e.order == p.order)?;
+        full.eigen_index(eigen, p).map(|j| (p.order, j))
     };
     let located: Vec<Option<Located>> = modes
         .iter()
@@ -158,11 +161,13 @@ pub fn first_order(
             ))
         })
         .collect();
-    let mut needed: BTreeMap<usize, BTreeSet<usize>> = BTreeMap::new();
+    // Per order, the members' and the medoids' eigenvalue indices.
+    let mut needed: BTreeMap<usize, (BTreeSet<usize>, BTreeSet<usize>)> = BTreeMap::new();
     for (members, medoid) in located.iter().flatten() {
-        for &(order, j) in members.iter().chain([medoid]) {
-            needed.entry(order).or_default().insert(j);
+        for &(order, j) in members {
+            needed.entry(order).or_default().0.insert(j);
         }
+        needed.entry(medoid.0).or_default().1.insert(medoid.1);
     }
     let references = correlations.references().len();
     let left_out: Vec<usize> = (0..batches).collect();
@@ -171,27 +176,30 @@ pub fn first_order(
         let Ok(model) = full.replicate(&r, references, block_rows) else {
             return vec![None; modes.len()];
         };
-        let continued: BTreeMap<(usize, usize), Pole> = needed
-            .iter()
-            .filter_map(|(&order, js)| {
-                let js: Vec<usize> = js.iter().copied().collect();
-                let poles = model.continued(base_of(order)?, &js)?;
-                Some(js.into_iter().map(move |j| (order, j)).zip(poles))
-            })
-            .flatten()
-            .collect();
+        let mut values: BTreeMap<PoleAt, (f64, f64)> = BTreeMap::new();
+        let mut shapes: BTreeMap<PoleAt, Vec<c64>> = BTreeMap::new();
+        for (&order, (members, medoids)) in &needed {
+            let (members, medoids): (Vec<usize>, Vec<usize>) =
+                (members.iter().copied().collect(), medoids.iter().copied().collect());
+            let Some(poles) = base_of(order).and_then(|base| model.continued(base, &members, &medoids)) else {
+                continue;
+            };
+            for (&j, pole) in members.iter().zip(&poles) {
+                values.insert((order, j), (pole.frequency_hz, pole.damping_ratio));
+            }
+            for (&j, pole) in medoids.iter().zip(&poles[members.len()..]) {
+                shapes.extend(pole.shape.clone().map(|s| ((order, j), s)));
+            }
+        }
         located
             .iter()
             .zip(modes)
             .map(|(at, mode)| {
                 let (members, medoid) = at.as_ref()?;
-                let medoid_pole = continued.get(medoid)?;
-                let replicate = ModePoles {
-                    members: members.iter().map(|m| continued.get(m)).collect::<Option<Vec<_>>>()?,
-                    medoid: medoid_pole,
-                };
-                let (f, zeta) = replicate.medians();
-                Some((f, zeta, aligned(&medoid_pole.shape, &mode.medoid.shape)))
+                let pairs: Vec<(f64, f64)> = members.iter().map(|m| values.get(m).copied()).collect::<Option<_>>()?;
+                let f = median(pairs.iter().map(|p| p.0).collect());
+                let zeta = median(pairs.iter().map(|p| p.1).collect());
+                Some((f, zeta, aligned(shapes.get(medoid)?, &mode.medoid.shape)))
             })
             .collect()
     });
