@@ -107,12 +107,25 @@ impl FrfModel {
 
     /// The frequency-independent factors of an evaluation, computed once and
     /// shared by the threads.
+    #[track_caller]
+    fn prepare(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> Prepared {
+        self.prepare_with(state, request, sensitivities, NEAR_EIGENVALUES)
+    }
+
+    /// [`Self::prepare`] with pairs of modes closer than `near_fraction`
+    /// in the spring sensitivities' product form ([`Self::spring_terms`]).
     #[allow(
         clippy::too_many_lines,
         reason = "one pass forms every frequency-independent factor of eq. (31)-(33); each is a few lines and used by the next"
     )]
     #[track_caller]
-    fn prepare(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> Prepared {
+    fn prepare_with(
+        &self,
+        state: &ModalState,
+        request: FrfRequest<'_>,
+        sensitivities: bool,
+        near_fraction: f64,
+    ) -> Prepared {
         let np = request.pairs.len();
         for &(r, s) in request.pairs {
             assert!(
@@ -163,45 +176,17 @@ impl FrfModel {
                 (lo, weights)
             })
             .collect();
-        // Springs (eq. 33, low rank): ∂H_rs/∂κ_j = -g_rᵀ B_j g_s on the
-        // block's dofs, g_s = Φ_U diag(a_s) q the response of the spring dofs
-        // U to input s. With g_r = Φ_U diag(a_r) q this is
-        // -Σ_i a_{r,i} q_i c_{j,i}, c_j = Φ_{B_j}ᵀ B_j g_s: g_s only for the
-        // inputs (not for every sensor), then per block one small GEMM for
-        // c_j and one against the output amplitudes.
-        let blocks: Vec<&LowRankBlock> = if sensitivities {
-            self.spring_blocks().iter().flatten().collect()
+        let springs = if sensitivities {
+            self.spring_terms(state, request, &active, near_fraction)
         } else {
-            Vec::new()
+            SpringTerms {
+                count: 0,
+                far: Mat::zeros(0, 0),
+                diagonal: Mat::zeros(0, 0),
+                diagonal_rate: Vec::new(),
+                near_pairs: Vec::new(),
+            }
         };
-        let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| s).collect();
-        inputs.sort_unstable();
-        inputs.dedup();
-        let nu = if sensitivities { state.phi_springs.nrows() } else { 0 };
-        let phi_u = Mat::from_fn(nu, nm, |u, i| state.phi_springs[(u, active[i])]);
-        let stacked = Mat::from_fn(inputs.len() * nu, nm, |row, i| {
-            phi_u[(row % nu, i)] * amplitude(inputs[row / nu], i)
-        });
-        // Φ_{B_j}ᵀ B_j, frequency-independent: c_j = (Φ_{B_j}ᵀ B_j) g_s[B_j].
-        let phi_b_blocks: Vec<Mat<f64>> = blocks
-            .iter()
-            .zip(&self.block_positions)
-            .map(|(block, pos)| Mat::from_fn(nm, pos.len(), |i, a| phi_u[(pos[a], i)]) * &block.values)
-            .collect();
-        let by_input: Vec<(Vec<usize>, Mat<f64>)> = inputs
-            .iter()
-            .map(|&s| {
-                let pairs: Vec<usize> = (0..np).filter(|&p| request.pairs[p].1 == s).collect();
-                let outputs = Mat::from_fn(pairs.len(), nm, |row, i| amplitude(request.pairs[pairs[row]].0, i));
-                (pairs, outputs)
-            })
-            .collect();
-        let input_amplitudes: Vec<Vec<f64>> = inputs
-            .iter()
-            .map(|&s| (0..nm).map(|i| amplitude(s, i)).collect())
-            .collect();
-        let damping_couplings = self.damping_couplings(state, &active, &phi_u, &phi_b_blocks);
-
         Prepared {
             sensitivities,
             omega,
@@ -209,42 +194,92 @@ impl FrfModel {
             two_zeta_omega,
             coupling,
             damping_terms,
-            nu,
-            stacked,
-            phi_b_blocks,
-            by_input,
-            input_amplitudes,
-            damping_couplings,
+            springs,
         }
     }
 
-    /// `(Φᵀ (∂K/∂κ_j) Φ) ∘ E` on the active modes for every spring
-    /// coefficient, stacked (`j`'s rows at `j·n_m`, one GEMM per input and
-    /// block of lines): the damping part of the exact `∂H/∂κ_j`
-    /// ([`super::damping_rate_differences`]).
-    fn damping_couplings(
+    /// The frequency-independent factors of the exact `∂H/∂κ_j` (eq. 33
+    /// with the modal damping's dependence on `λ`, see
+    /// [`super::damping_rate_differences`]) on the `active` modes:
+    /// `∂H_rs/∂κ_j = Σ_ik a_ri a_sk M_ik q_i q_k (jω E_ik − 1)`,
+    /// `M = Φᵀ (∂K/∂κ_j) Φ`. For two modes apart (`λ_i ≠ λ_k`),
+    /// `D_k − D_i = (λ_k − λ_i) + jω (c_k − c_i)` turns the pair's factor
+    /// into `q_i q_k (jω E_ik − 1) = (q_k − q_i)/(λ_k − λ_i)`, so with the
+    /// antisymmetric `F = M ∘ W`, `W_ik = 1/(λ_k − λ_i)` on those pairs,
+    /// their share is `−Σ_i q_i (a_si (F a_r)_i + a_ri (F a_s)_i)`: linear in
+    /// `q`, one GEMM per block of lines like `H` itself. Pairs closer than
+    /// [`NEAR_EIGENVALUES`] (the diagonal, and repeated modes) keep the
+    /// product form, where the difference quotient would cancel: the
+    /// diagonal as one more GEMM on `q_i² (jω E_ii − 1)`, the rest pair by
+    /// pair. Exact to round-off (amplified at most `1/NEAR_EIGENVALUES` in
+    /// the far pairs' cancellation).
+    fn spring_terms(
         &self,
         state: &ModalState,
+        request: FrfRequest<'_>,
         active: &[usize],
-        phi_u: &Mat<f64>,
-        phi_b_blocks: &[Mat<f64>],
-    ) -> Mat<f64> {
-        let nm = active.len();
-        if phi_b_blocks.is_empty() {
-            return Mat::zeros(0, nm);
-        }
+        near_fraction: f64,
+    ) -> SpringTerms {
+        let (np, nm) = (request.pairs.len(), active.len());
+        let amplitude = |sensor: usize, i: usize| state.amplitudes[(sensor, active[i])];
+        let lambda: Vec<f64> = active.iter().map(|&i| state.modes.omega2[i]).collect();
+        // Far pairs' cancellation grows as max(λ, ω²)/|λ_k − λ_i| over the lines.
+        let top = request
+            .frequencies_hz
+            .iter()
+            .fold(0.0f64, |m, f| m.max((2.0 * PI * f).powi(2)));
+        let near = |i: usize, k: usize| {
+            (lambda[k] - lambda[i]).abs() <= near_fraction * lambda[i].abs().max(lambda[k].abs()).max(top)
+        };
         let e = super::damping_rate_differences(state, active);
-        let mut stacked = Mat::<f64>::zeros(phi_b_blocks.len() * nm, nm);
-        for (j, (phi_b, pos)) in phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
-            let shapes = Mat::from_fn(pos.len(), nm, |a, i| phi_u[(pos[a], i)]);
-            let coupling = phi_b * &shapes;
-            for k in 0..nm {
+        let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
+        sensors.sort_unstable();
+        sensors.dedup();
+        let slot = |sensor: usize| sensors.binary_search(&sensor).expect("an involved sensor");
+        let a = Mat::from_fn(nm, sensors.len(), |i, t| amplitude(sensors[t], i));
+        let blocks: Vec<&LowRankBlock> = self.spring_blocks().iter().flatten().collect();
+        let count = blocks.len();
+        let mut terms = SpringTerms {
+            count,
+            far: Mat::zeros(count * np, nm),
+            diagonal: Mat::zeros(count * np, nm),
+            diagonal_rate: (0..nm).map(|i| e[(i, i)]).collect(),
+            near_pairs: Vec::new(),
+        };
+        for (j, (block, pos)) in blocks.iter().zip(&self.block_positions).enumerate() {
+            let shapes = Mat::from_fn(pos.len(), nm, |b, i| state.phi_springs[(pos[b], active[i])]);
+            let m = shapes.transpose() * (&block.values * &shapes);
+            let f = Mat::from_fn(nm, nm, |i, k| {
+                if near(i, k) {
+                    0.0
+                } else {
+                    m[(i, k)] / (lambda[k] - lambda[i])
+                }
+            });
+            let fa = &f * &a;
+            for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                let (tr, ts) = (slot(r), slot(s));
                 for i in 0..nm {
-                    stacked[(j * nm + i, k)] = coupling[(i, k)] * e[(i, k)];
+                    terms.far[(j * np + p, i)] = a[(i, ts)] * fa[(i, tr)] + a[(i, tr)] * fa[(i, ts)];
+                    terms.diagonal[(j * np + p, i)] = a[(i, tr)] * a[(i, ts)] * m[(i, i)];
+                }
+            }
+            for i in 0..nm {
+                for k in (0..nm).filter(|&k| k != i && near(i, k)) {
+                    terms.near_pairs.push(NearPair {
+                        coefficient: j,
+                        modes: (i, k),
+                        rate: e[(i, k)],
+                        weights: request
+                            .pairs
+                            .iter()
+                            .map(|&(r, s)| a[(i, slot(r))] * a[(k, slot(s))] * m[(i, k)])
+                            .collect(),
+                    });
                 }
             }
         }
-        stacked
+        terms
     }
 
     /// The evaluation on the lines of `request` (all or a thread's share),
@@ -256,7 +291,7 @@ impl FrfModel {
         let zero = c64::new(0.0, 0.0);
         let mut h = vec![zero; np * nf];
         let mut dh_dgamma = vec![vec![zero; np * nf]; prepared.damping_terms.len()];
-        let mut dh_dkappa = vec![vec![zero; np * nf]; prepared.phi_b_blocks.len()];
+        let mut dh_dkappa = vec![vec![zero; np * nf]; prepared.springs.count];
         let width = FREQUENCY_BLOCK.min(nf.max(1));
         let mut s = Scratch::new(prepared, np, width);
         for start in (0..nf).step_by(width) {
@@ -300,7 +335,7 @@ impl FrfModel {
             };
             damping_lines(prepared, &mut s, &w, &lines, &mut dh_dgamma);
             if !dh_dkappa.is_empty() {
-                self.spring_lines(prepared, &mut s, &lines, &mut dh_dkappa);
+                spring_lines(prepared, &mut s, &lines, &mut dh_dkappa);
             }
         }
         FrfEvaluation {
@@ -310,77 +345,84 @@ impl FrfModel {
             dh_dtheta: Vec::new(),
         }
     }
+}
 
-    /// `∂H/∂κ_j` on one block of lines (eq. 33): `g_s` for every input, then
-    /// per spring block `c_j = (Φ_{B_j}ᵀ B_j) g_s[B_j]`, `c ← q ∘ c` and
-    /// `∂H_p/∂κ_j = −Σ_i a_{r,i} c_i`; `s.q` holds the block's `1/D_i`.
-    fn spring_lines(&self, prepared: &Prepared, s: &mut Scratch, lines: &Lines<'_>, dh_dkappa: &mut [Vec<c64>]) {
-        let (nc, nu) = (lines.count, prepared.nu);
-        s.g.product(prepared.by_input.len() * nu, nc, &prepared.stacked, &s.q);
-        for (k, (pairs, outputs)) in prepared.by_input.iter().enumerate() {
-            // y = a_s ∘ q, and P_j y for every coefficient j in one GEMM
-            // (the damping part).
-            let amplitudes = &prepared.input_amplitudes[k];
-            let nm = amplitudes.len();
+/// `∂H/∂κ_j` on one block of lines ([`FrfModel::spring_terms`]): the far
+/// pairs' `−F q` and the diagonal's `G (q² ∘ (jω E_ii − 1))` as GEMMs, the
+/// near off-diagonal pairs one by one; `s.q` holds the block's `1/D_i`.
+fn spring_lines(prepared: &Prepared, s: &mut Scratch, lines: &Lines<'_>, dh_dkappa: &mut [Vec<c64>]) {
+    let terms = &prepared.springs;
+    let (np, nc) = (prepared.coupling.nrows(), lines.count);
+    for (f, &w) in lines.omega.iter().enumerate() {
+        let (q_re, q_im) = (s.q.re.col_as_slice(f), s.q.im.col_as_slice(f));
+        let (re, im) = s.squared.col_mut(f);
+        for ((((re, im), &a), &b), &rate) in re
+            .iter_mut()
+            .zip(im.iter_mut())
+            .zip(q_re)
+            .zip(q_im)
+            .zip(&terms.diagonal_rate)
+        {
+            // (a + jb)² (−1 + jωE)
+            let (sq_re, sq_im) = (a * a - b * b, 2.0 * a * b);
+            *re = -sq_re - w * rate * sq_im;
+            *im = w * rate * sq_re - sq_im;
+        }
+    }
+    s.far.product(terms.count * np, nc, &terms.far, &s.q);
+    s.diagonal.product(terms.count * np, nc, &terms.diagonal, &s.squared);
+    for (j, dj) in dh_dkappa.iter_mut().enumerate() {
+        for p in 0..np {
+            let row = j * np + p;
             for f in 0..nc {
-                for (i, &a) in amplitudes.iter().enumerate() {
-                    s.y.re[(i, f)] = a * s.q.re[(i, f)];
-                    s.y.im[(i, f)] = a * s.q.im[(i, f)];
-                }
-            }
-            s.z.product(
-                prepared.damping_couplings.nrows(),
-                nc,
-                &prepared.damping_couplings,
-                &s.y,
-            );
-            for (j, (phi_b, pos)) in prepared.phi_b_blocks.iter().zip(&self.block_positions).enumerate() {
-                for f in 0..nc {
-                    for (a, &u) in pos.iter().enumerate() {
-                        s.gathered.re[(a, f)] = s.g.re[(k * nu + u, f)];
-                        s.gathered.im[(a, f)] = s.g.im[(k * nu + u, f)];
-                    }
-                }
-                for (dst, src) in [(&mut s.c.re, &s.gathered.re), (&mut s.c.im, &s.gathered.im)] {
-                    matmul(
-                        dst.subcols_mut(0, nc),
-                        Accum::Replace,
-                        phi_b.as_ref(),
-                        src.submatrix(0, 0, pos.len(), nc),
-                        1.0,
-                        Par::Seq,
-                    );
-                }
-                // c ← c − jω (P_j y): the modal damping's share
-                // ([`super::damping_rate_differences`]).
-                for f in 0..nc {
-                    let w = lines.omega[f];
-                    for i in 0..nm {
-                        s.c.re[(i, f)] += w * s.z.im[(j * nm + i, f)];
-                        s.c.im[(i, f)] -= w * s.z.re[(j * nm + i, f)];
-                    }
-                }
-                // c ← q ∘ c in place, then ∂H_p/∂κ_j = -Σ_i a_{r,i} c_i.
-                for f in 0..nc {
-                    let (q_re, q_im) = (s.q.re.col_as_slice(f), s.q.im.col_as_slice(f));
-                    let (c_re, c_im) = s.c.col_mut(f);
-                    for (((cr, ci), &qr), &qi) in c_re.iter_mut().zip(c_im.iter_mut()).zip(q_re).zip(q_im) {
-                        let (a, b) = (*cr, *ci);
-                        *cr = qr * a - qi * b;
-                        *ci = qr * b + qi * a;
-                    }
-                }
-                s.r.product(pairs.len(), nc, outputs, &s.c);
-                let dj = &mut dh_dkappa[j];
-                for (row, &p) in pairs.iter().enumerate() {
-                    for f in 0..nc {
-                        let v = c64::new(s.r.re[(row, f)], s.r.im[(row, f)]);
-                        dj[p * lines.total + lines.start + f] = -v * lines.factor[f];
-                    }
-                }
+                let v = c64::new(
+                    s.diagonal.re[(row, f)] - s.far.re[(row, f)],
+                    s.diagonal.im[(row, f)] - s.far.im[(row, f)],
+                );
+                dj[p * lines.total + lines.start + f] = v * lines.factor[f];
             }
         }
     }
+    for pair in &terms.near_pairs {
+        let (i, k) = pair.modes;
+        let dj = &mut dh_dkappa[pair.coefficient];
+        for f in 0..nc {
+            let qi = c64::new(s.q.re[(i, f)], s.q.im[(i, f)]);
+            let qk = c64::new(s.q.re[(k, f)], s.q.im[(k, f)]);
+            let t = qi * qk * c64::new(-1.0, lines.omega[f] * pair.rate) * lines.factor[f];
+            for (p, &weight) in pair.weights.iter().enumerate() {
+                dj[p * lines.total + lines.start + f] += t * weight;
+            }
+        }
+    }
+}
+
+/// Pairs of modes whose eigenvalues differ by less than this fraction of
+/// `max(λ_i, λ_k, ω²_max)` keep the product form in [`FrfModel::spring_terms`].
+const NEAR_EIGENVALUES: f64 = 1e-3;
+
+/// The frequency-independent factors of the spring sensitivities
+/// ([`FrfModel::spring_terms`]); rows `j · n_pairs + p`.
+struct SpringTerms {
+    /// Spring coefficients.
+    count: usize,
+    /// `a_si (F_j a_r)_i + a_ri (F_j a_s)_i`.
+    far: Mat<f64>,
+    /// `a_ri a_si M_j,ii`.
+    diagonal: Mat<f64>,
+    /// `E_ii` of every active mode.
+    diagonal_rate: Vec<f64>,
+    near_pairs: Vec<NearPair>,
+}
+
+/// One ordered pair of distinct modes with (nearly) equal eigenvalues.
+struct NearPair {
+    coefficient: usize,
+    modes: (usize, usize),
+    /// `E_ik`.
+    rate: f64,
+    /// `a_ri a_sk M_ik` per pair `(r, s)`.
+    weights: Vec<f64>,
 }
 
 /// One block of frequency lines: where it starts, how many, the total, and
@@ -441,30 +483,24 @@ struct Scratch {
     e: Split,
     /// Pair rows of a product.
     out: Split,
-    /// `g_s` on the spring dofs, stacked per input.
-    g: Split,
-    c: Split,
-    gathered: Split,
-    r: Split,
-    /// `a_s ∘ q` of one input, and `P_j` times it (damping part).
-    y: Split,
-    z: Split,
+    /// `q² (jω E_ii − 1)`, and the spring products' rows.
+    squared: Split,
+    far: Split,
+    diagonal: Split,
 }
 
 impl Scratch {
     fn new(prepared: &Prepared, pairs: usize, width: usize) -> Self {
         let nm = prepared.omega.len();
-        let widest = prepared.phi_b_blocks.iter().map(Mat::ncols).max().unwrap_or(0);
+        let springs = if prepared.springs.count > 0 { nm } else { 0 };
+        let rows = prepared.springs.count * pairs;
         Self {
             q: Split::zeros(nm, width),
             e: Split::zeros(nm, width),
             out: Split::zeros(pairs, width),
-            g: Split::zeros(prepared.by_input.len() * prepared.nu, width),
-            c: Split::zeros(nm, width),
-            gathered: Split::zeros(widest, width),
-            r: Split::zeros(pairs, width),
-            y: Split::zeros(nm, width),
-            z: Split::zeros(prepared.damping_couplings.nrows(), width),
+            squared: Split::zeros(springs, width),
+            far: Split::zeros(rows, width),
+            diagonal: Split::zeros(rows, width),
         }
     }
 }
@@ -481,18 +517,8 @@ struct Prepared {
     coupling: Mat<f64>,
     /// Per damping coefficient: first mode of its support, weights.
     damping_terms: Vec<(usize, Mat<f64>)>,
-    nu: usize,
-    /// `Φ_U diag(a_s)` per input, stacked.
-    stacked: Mat<f64>,
-    /// `Φ_{B_j}ᵀ B_j` per spring coefficient (none without sensitivities).
-    phi_b_blocks: Vec<Mat<f64>>,
-    /// Per input: its pairs and their output amplitudes.
-    by_input: Vec<(Vec<usize>, Mat<f64>)>,
-    /// Per input (as `by_input`): its own amplitudes `a_{s,i}`.
-    input_amplitudes: Vec<Vec<f64>>,
-    /// `(Φᵀ ∂K/∂κ_j Φ) ∘ E` of every spring coefficient, stacked (no rows
-    /// without sensitivities).
-    damping_couplings: Mat<f64>,
+    /// The spring sensitivities' factors (empty without sensitivities).
+    springs: SpringTerms,
 }
 
 /// A complex matrix stored as real and imaginary parts, for real GEMMs.
@@ -525,6 +551,97 @@ impl Split {
                 1.0,
                 Par::Seq,
             );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::knots::KnotVector;
+    use crate::model::damping::DampingCurve;
+    use crate::model::material::{OrthotropicMaterial, OrthotropicParameters};
+    use crate::model::shell::Shell;
+    use crate::model::springs::{Face, SpringDirection, SpringField};
+    use crate::model::ShellModel;
+    use crate::response::frf::{Quantity, SensorPoint};
+
+    /// A square isotropic plate on four equal edge strips of springs:
+    /// symmetric under `x ↔ y`, so its modes come in exactly repeated pairs.
+    fn square_plate_on_springs() -> (FrfModel, Vec<Vec<f64>>) {
+        let material = OrthotropicMaterial::new(OrthotropicParameters {
+            e1: 3.0e10,
+            e2: 3.0e10,
+            g12: 1.25e10,
+            g13: 1.25e10,
+            g23: 1.25e10,
+            nu12: 0.2,
+            density: 2500.0,
+            angle_deg: 0.0,
+            shear_correction: 5.0 / 6.0,
+        })
+        .unwrap();
+        let z = SpringDirection::fixed([0.0, 0.0, 1.0]).unwrap();
+        let knots = |a: f64, b: f64| KnotVector::new(vec![a, b], 0).unwrap();
+        let strip = |xi: KnotVector, eta: KnotVector| SpringField::new(xi, eta, vec![2.0e8], z, Face::Bottom).unwrap();
+        let springs = vec![
+            strip(knots(0.0, 0.05), knots(0.0, 1.0)),
+            strip(knots(0.95, 1.0), knots(0.0, 1.0)),
+            strip(knots(0.0, 1.0), knots(0.0, 0.05)),
+            strip(knots(0.0, 1.0), knots(0.95, 1.0)),
+        ];
+        let model = ShellModel {
+            springs,
+            stiffness_fields: vec![],
+            constraints: vec![],
+            ..ShellModel::new(
+                Shell::rectangular_plate(6.0, 6.0, 0.15, [3, 3], [7, 7]).unwrap(),
+                material,
+            )
+        };
+        let sensors: Vec<SensorPoint> = [(0.21, 0.33), (0.67, 0.18), (0.41, 0.77)]
+            .iter()
+            .map(|&(xi, eta)| SensorPoint {
+                patch: 0,
+                xi,
+                eta,
+                tau: 0.5,
+                direction: [0.0, 0.0, 1.0],
+            })
+            .collect();
+        let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
+        (frf, vec![vec![2.0e8]; 4])
+    }
+
+    /// The far pairs' difference quotient (linear in `q`) and the product
+    /// form `Σ_ik a_ri a_sk M_ik q_i q_k (jω E_ik − 1)` on every pair give
+    /// the same `∂H/∂κ_j` to round-off, with exactly repeated modes among
+    /// the near pairs.
+    #[test]
+    fn the_difference_quotient_equals_the_product_form() {
+        let (model, kappa) = square_plate_on_springs();
+        let curve = DampingCurve::new(2, vec![0.005, 0.03, 0.01, 0.06, 0.02], 0.0, 200.0).unwrap();
+        let state = model.modal_state(&kappa, &curve).unwrap();
+        let freqs: Vec<f64> = (1..=70).map(|k| 2.7 * k as f64).collect();
+        let pairs = [(0, 0), (1, 0), (2, 0), (2, 1)];
+        let request = FrfRequest {
+            frequencies_hz: &freqs,
+            pairs: &pairs,
+            quantity: Quantity::Accelerance,
+        };
+        let split = model.prepare_with(&state, request, true, NEAR_EIGENVALUES);
+        let product = model.prepare_with(&state, request, true, f64::INFINITY);
+        let repeated = split.springs.near_pairs.len();
+        assert!(repeated > 0, "the square plate has repeated modes");
+        assert_eq!(product.springs.far.norm_l2(), 0.0);
+        let (a, b) = (
+            model.evaluate_lines(&split, request),
+            model.evaluate_lines(&product, request),
+        );
+        for (j, (x, y)) in a.dh_dkappa.iter().zip(&b.dh_dkappa).enumerate() {
+            let scale = y.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            let error = x.iter().zip(y).map(|(x, y)| (x - y).norm()).fold(0.0, f64::max);
+            assert!(scale > 0.0 && error < 1e-11 * scale, "κ_{j}: {error:e} of {scale:e}");
         }
     }
 }

@@ -11,11 +11,11 @@ use std::f64::consts::PI;
 
 impl FrfModel {
     /// Adds the residual of the discarded modes to `evaluation.h` and, with
-    /// `sensitivities`, replaces `∂H_rs/∂κ_j` by `−g_rᵀ (∂K/∂κ_j) g_s` with
+    /// `sensitivities`, completes `∂H_rs/∂κ_j` to `−g_rᵀ (∂K/∂κ_j) g_s` with
     /// the spring dofs' complete responses `g_s = Σ_i φ_i a_{s,i} q_i + ρ_s`
-    /// ([`crate::solvers::truncation`]), less the kept modes' damping share
-    /// `jω x_rᵀ ((Φ_Bᵀ B Φ_B) ∘ E) x_s` ([`super::damping_rate_differences`]);
-    /// the residual's damping term adds to `∂H/∂γ_z`.
+    /// ([`crate::solvers::truncation`]) (the kept modes' part, with their
+    /// damping share, is the modal sum's); the residual's damping term adds
+    /// to `∂H/∂γ_z`.
     pub(super) fn add_residual(
         &self,
         state: &ModalState,
@@ -52,16 +52,16 @@ impl FrfModel {
         // g_rᵀ B g_s = x_rᵀ P x_s + x_rᵀ (u_0,s + γ u_1,s) + (u_0,r + γ u_1,r)ᵀ x_s
         //            + c_00 + γ (c_01 + c_10) + γ² c_11,
         // P = Φ_Bᵀ B Φ_B, u_p,t = Φ_Bᵀ B ρ_p,t, c_pq = ρ_p,rᵀ B ρ_q,s: every
-        // factor frequency-independent, so a line costs O(modes²) per block.
+        // factor frequency-independent. The modal sum holds the x_rᵀ P x_s
+        // part (and the kept modes' damping share); the rest costs O(modes)
+        // a line per block.
         let prepared = self.block_residuals(state, residual, &sensors);
         let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| slot(s)).collect();
         inputs.sort_unstable();
         inputs.dedup();
         let zero = c64::new(0.0, 0.0);
         let mut x = vec![vec![zero; nm]; sensors.len()];
-        let mut y = vec![vec![zero; nm]; sensors.len()];
         let mut u = vec![vec![zero; nm]; sensors.len()];
-        let mut z = vec![vec![zero; nm]; sensors.len()];
         let dot = |a: &[c64], b: &[c64]| a.iter().zip(b).map(|(a, b)| a * b).sum::<c64>();
         for (f, &hz) in request.frequencies_hz.iter().enumerate() {
             let w = 2.0 * PI * hz;
@@ -77,14 +77,6 @@ impl FrfModel {
             }
             let factor = request.quantity.factor(w);
             for (b, dh) in prepared.iter().zip(&mut evaluation.dh_dkappa) {
-                for &t in &inputs {
-                    for (i, yi) in y[t].iter_mut().enumerate() {
-                        *yi = (0..nm).map(|k| x[t][k] * b.coupling[(i, k)]).sum();
-                    }
-                    for (i, zi) in z[t].iter_mut().enumerate() {
-                        *zi = (0..nm).map(|k| x[t][k] * b.damping[(i, k)]).sum();
-                    }
-                }
                 for (t, ut) in u.iter_mut().enumerate() {
                     for (i, ui) in ut.iter_mut().enumerate() {
                         *ui = gamma * b.u1[(i, t)] + b.u0[(i, t)];
@@ -93,14 +85,9 @@ impl FrfModel {
                 for (p, &(r, s)) in request.pairs.iter().enumerate() {
                     let (r, s) = (slot(r), slot(s));
                     let c = |k: usize| b.c[k][(r, s)];
-                    let value = dot(&x[r], &y[s])
-                        + dot(&x[r], &u[s])
-                        + dot(&u[r], &x[s])
-                        + c(0)
-                        + gamma * (c(1) + c(2))
-                        + gamma * gamma * c(3)
-                        - c64::new(0.0, w) * dot(&x[r], &z[s]);
-                    dh[p * nf + f] = -value * factor;
+                    let value =
+                        dot(&x[r], &u[s]) + dot(&u[r], &x[s]) + c(0) + gamma * (c(1) + c(2)) + gamma * gamma * c(3);
+                    dh[p * nf + f] -= value * factor;
                 }
             }
         }
@@ -111,24 +98,18 @@ impl FrfModel {
     fn block_residuals(&self, state: &ModalState, residual: &Residual, sensors: &[usize]) -> Vec<BlockResidual> {
         let nm = state.modes.len();
         let (rho0, rho1) = residual.spring_terms();
-        let all: Vec<usize> = (0..nm).collect();
-        let e = super::damping_rate_differences(state, &all);
         self.spring_blocks()
             .iter()
             .flatten()
             .zip(&self.block_positions)
             .map(|(block, positions)| {
                 let phi_b = Mat::from_fn(positions.len(), nm, |a, i| state.phi_springs[(positions[a], i)]);
-                let b_phi = &block.values * &phi_b;
                 let rho = |terms: &Mat<f64>| {
                     Mat::from_fn(positions.len(), sensors.len(), |a, t| terms[(positions[a], sensors[t])])
                 };
                 let (r0, r1) = (rho(rho0), rho(rho1));
                 let (b_r0, b_r1) = (&block.values * &r0, &block.values * &r1);
-                let coupling = phi_b.transpose() * &b_phi;
                 BlockResidual {
-                    damping: Mat::from_fn(nm, nm, |i, k| coupling[(i, k)] * e[(i, k)]),
-                    coupling,
                     u0: phi_b.transpose() * &b_r0,
                     u1: phi_b.transpose() * &b_r1,
                     c: [
@@ -174,11 +155,6 @@ impl FrfModel {
 /// The frequency-independent factors of one spring block's sensitivity
 /// on a truncated model ([`FrfModel::add_residual`]).
 struct BlockResidual {
-    /// `Φ_Bᵀ B Φ_B`: modes × modes.
-    coupling: Mat<f64>,
-    /// `(Φ_Bᵀ B Φ_B) ∘ E`, the modal damping's share
-    /// ([`super::damping_rate_differences`]).
-    damping: Mat<f64>,
     /// `Φ_Bᵀ B ρ_0,t`, `Φ_Bᵀ B ρ_1,t`: modes × involved sensors.
     u0: Mat<f64>,
     u1: Mat<f64>,

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# Benchmark (3) of issue 32: the monitoring workload. One simulated hour of
+# the bundled deck (13 channels at 256 Hz, seed 7) with a bearing losing
+# stiffness mid-way (`east.k2` down 40 % between minutes 24 and 36, the
+# demo's scenario), 10-minute windows and 8-s Welch segments (0.125 Hz
+# lines, what decks need): six warm-started FRF updates, replayed by the
+# whole CLI next to `cat` of the file; also in line (`--single-thread`) and
+# a check that both write the same bytes.
+# Needs a release build (`cargo build --release`). Usage:
+# benches/replay_bearing_hour.sh [RUNS]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${SPLINEWATCH_BIN:-${CARGO_TARGET_DIR:-target}/release/splinewatch}
+runs=${1:-3}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+sed -e "s/^window_seconds = 20.0 .*/window_seconds = 600.0/" \
+  -e "s/^segment_seconds = 4.0.*/segment_seconds = 8.0/" config/sinello.toml > "$work/hour.toml"
+grep -q "^window_seconds = 600.0" "$work/hour.toml"
+grep -q "^segment_seconds = 8.0" "$work/hour.toml"
+cat > "$work/bearing.toml" << 'SCENARIO'
+[[change]]
+parameter = "east.k2"
+start_minute = 24.0
+end_minute = 36.0
+factor = 0.6
+SCENARIO
+"$bin" simulate --config "$work/hour.toml" --duration 3600 --seed 7 --scenario "$work/bearing.toml" \
+  --out "$work/hour.mcap" 2> /dev/null
+seconds() { local t0 t1; t0=$(date +%s.%N); "$@" > /dev/null 2>&1; t1=$(date +%s.%N); echo "$t1 - $t0" | bc; }
+cat "$work/hour.mcap" > /dev/null # in the page cache, as for every run below
+echo "file: $(stat -c %s "$work/hour.mcap") bytes"
+for run in $(seq 1 "$runs"); do
+  cat_s=$(seconds cat "$work/hour.mcap")
+  replay_s=$(seconds "$bin" replay --config "$work/hour.toml" "$work/hour.mcap" --out "$work/results.mcap")
+  inline_s=$(seconds "$bin" replay --config "$work/hour.toml" "$work/hour.mcap" --out "$work/results-in-line.mcap" --single-thread)
+  cmp "$work/results.mcap" "$work/results-in-line.mcap"
+  printf 'run %d: cat %.3f s; replay %.3f s (%.0fx real time); in line %.3f s (%.0fx)\n' \
+    "$run" "$cat_s" "$replay_s" "$(echo "3600 / $replay_s" | bc -l)" "$inline_s" "$(echo "3600 / $inline_s" | bc -l)"
+done
+if [ -n "${SPLINEWATCH_BENCH_KEEP:-}" ]; then
+  cp "$work/hour.toml" "$work/hour.mcap" "$SPLINEWATCH_BENCH_KEEP"/
+  "$bin" replay --config "$work/hour.toml" "$work/hour.mcap" --out "$work/results.mcap" 2>&1 | grep -i "east.k2\|window" | head -20 || true
+fi
