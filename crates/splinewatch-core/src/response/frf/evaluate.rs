@@ -231,6 +231,23 @@ impl FrfModel {
         let near = |i: usize, k: usize| {
             (lambda[k] - lambda[i]).abs() <= near_fraction * lambda[i].abs().max(lambda[k].abs()).max(top)
         };
+        // W (zero on the near pairs) and the near pairs: the same for every
+        // coefficient.
+        let inverse_gaps = Mat::from_fn(
+            nm,
+            nm,
+            |i, k| {
+                if near(i, k) {
+                    0.0
+                } else {
+                    1.0 / (lambda[k] - lambda[i])
+                }
+            },
+        );
+        let near_pairs: Vec<(usize, usize)> = (0..nm)
+            .flat_map(|i| (0..nm).map(move |k| (i, k)))
+            .filter(|&(i, k)| i != k && near(i, k))
+            .collect();
         let e = super::damping_rate_differences(state, active);
         let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
         sensors.sort_unstable();
@@ -249,13 +266,12 @@ impl FrfModel {
         for (j, (block, pos)) in blocks.iter().zip(&self.block_positions).enumerate() {
             let shapes = Mat::from_fn(pos.len(), nm, |b, i| state.phi_springs[(pos[b], active[i])]);
             let m = shapes.transpose() * (&block.values * &shapes);
-            let f = Mat::from_fn(nm, nm, |i, k| {
-                if near(i, k) {
-                    0.0
-                } else {
-                    m[(i, k)] / (lambda[k] - lambda[i])
+            let mut f = m.clone();
+            for k in 0..nm {
+                for (fik, wik) in f.col_as_slice_mut(k).iter_mut().zip(inverse_gaps.col_as_slice(k)) {
+                    *fik *= wik;
                 }
-            });
+            }
             let fa = &f * &a;
             for (p, &(r, s)) in request.pairs.iter().enumerate() {
                 let (tr, ts) = (slot(r), slot(s));
@@ -264,19 +280,17 @@ impl FrfModel {
                     terms.diagonal[(j * np + p, i)] = a[(i, tr)] * a[(i, ts)] * m[(i, i)];
                 }
             }
-            for i in 0..nm {
-                for k in (0..nm).filter(|&k| k != i && near(i, k)) {
-                    terms.near_pairs.push(NearPair {
-                        coefficient: j,
-                        modes: (i, k),
-                        rate: e[(i, k)],
-                        weights: request
-                            .pairs
-                            .iter()
-                            .map(|&(r, s)| a[(i, slot(r))] * a[(k, slot(s))] * m[(i, k)])
-                            .collect(),
-                    });
-                }
+            for &(i, k) in &near_pairs {
+                terms.near_pairs.push(NearPair {
+                    coefficient: j,
+                    modes: (i, k),
+                    rate: e[(i, k)],
+                    weights: request
+                        .pairs
+                        .iter()
+                        .map(|&(r, s)| a[(i, slot(r))] * a[(k, slot(s))] * m[(i, k)])
+                        .collect(),
+                });
             }
         }
         terms
@@ -371,27 +385,30 @@ fn spring_lines(prepared: &Prepared, s: &mut Scratch, lines: &Lines<'_>, dh_dkap
     }
     s.far.product(terms.count * np, nc, &terms.far, &s.q);
     s.diagonal.product(terms.count * np, nc, &terms.diagonal, &s.squared);
-    for (j, dj) in dh_dkappa.iter_mut().enumerate() {
-        for p in 0..np {
-            let row = j * np + p;
-            for f in 0..nc {
-                let v = c64::new(
-                    s.diagonal.re[(row, f)] - s.far.re[(row, f)],
-                    s.diagonal.im[(row, f)] - s.far.im[(row, f)],
-                );
-                dj[p * lines.total + lines.start + f] = v * lines.factor[f];
-            }
-        }
-    }
+    // The near pairs into the diagonal's rows (contiguous per line).
     for pair in &terms.near_pairs {
         let (i, k) = pair.modes;
-        let dj = &mut dh_dkappa[pair.coefficient];
+        let rows = pair.coefficient * np;
         for f in 0..nc {
             let qi = c64::new(s.q.re[(i, f)], s.q.im[(i, f)]);
             let qk = c64::new(s.q.re[(k, f)], s.q.im[(k, f)]);
-            let t = qi * qk * c64::new(-1.0, lines.omega[f] * pair.rate) * lines.factor[f];
+            let t = qi * qk * c64::new(-1.0, lines.omega[f] * pair.rate);
+            let (re, im) = s.diagonal.col_mut(f);
             for (p, &weight) in pair.weights.iter().enumerate() {
-                dj[p * lines.total + lines.start + f] += t * weight;
+                re[rows + p] += t.re * weight;
+                im[rows + p] += t.im * weight;
+            }
+        }
+    }
+    for (j, dj) in dh_dkappa.iter_mut().enumerate() {
+        for p in 0..np {
+            let row = j * np + p;
+            let out = &mut dj[p * lines.total + lines.start..][..nc];
+            for (f, v) in out.iter_mut().enumerate() {
+                *v = c64::new(
+                    s.diagonal.re[(row, f)] - s.far.re[(row, f)],
+                    s.diagonal.im[(row, f)] - s.far.im[(row, f)],
+                ) * lines.factor[f];
             }
         }
     }
