@@ -27,18 +27,5 @@ factor = 0.6
 SCENARIO
 "$bin" simulate --config "$work/hour.toml" --duration 3600 --seed 7 --scenario "$work/bearing.toml" \
   --out "$work/hour.mcap" 2> /dev/null
-seconds() { local t0 t1; t0=$(date +%s.%N); "$@" > /dev/null 2>&1; t1=$(date +%s.%N); echo "$t1 - $t0" | bc; }
-cat "$work/hour.mcap" > /dev/null # in the page cache, as for every run below
-echo "file: $(stat -c %s "$work/hour.mcap") bytes"
-for run in $(seq 1 "$runs"); do
-  cat_s=$(seconds cat "$work/hour.mcap")
-  replay_s=$(seconds "$bin" replay --config "$work/hour.toml" "$work/hour.mcap" --out "$work/results.mcap")
-  inline_s=$(seconds "$bin" replay --config "$work/hour.toml" "$work/hour.mcap" --out "$work/results-in-line.mcap" --single-thread)
-  cmp "$work/results.mcap" "$work/results-in-line.mcap"
-  printf 'run %d: cat %.3f s; replay %.3f s (%.0fx real time); in line %.3f s (%.0fx)\n' \
-    "$run" "$cat_s" "$replay_s" "$(echo "3600 / $replay_s" | bc -l)" "$inline_s" "$(echo "3600 / $inline_s" | bc -l)"
-done
-if [ -n "${SPLINEWATCH_BENCH_KEEP:-}" ]; then
-  cp "$work/hour.toml" "$work/hour.mcap" "$SPLINEWATCH_BENCH_KEEP"/
-  "$bin" replay --config "$work/hour.toml" "$work/hour.mcap" --out "$work/results.mcap" 2>&1 | grep -i "east.k2\|window" | head -20 || true
-fi
+. benches/replay_runs.sh
+replay_runs "$bin" "$work/hour.toml" "$work/hour.mcap" "$work" "$runs"
