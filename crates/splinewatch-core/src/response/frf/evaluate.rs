@@ -138,9 +138,7 @@ impl FrfModel {
         // round-off, below 1e-10 of the largest) add nothing to H, g_s or
         // the sensitivities beyond that round-off: leave them out (195 of
         // 325 for Sinello).
-        let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
-        sensors.sort_unstable();
-        sensors.dedup();
+        let sensors = request.involved_sensors();
         let amax = sensors
             .iter()
             .flat_map(|&s| (0..state.modes.len()).map(move |i| state.amplitudes[(s, i)].abs()))
@@ -249,9 +247,7 @@ impl FrfModel {
             .filter(|&(i, k)| i != k && near(i, k))
             .collect();
         let e = super::damping_rate_differences(state, active);
-        let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
-        sensors.sort_unstable();
-        sensors.dedup();
+        let sensors = request.involved_sensors();
         let slot = |sensor: usize| sensors.binary_search(&sensor).expect("an involved sensor");
         let a = Mat::from_fn(nm, sensors.len(), |i, t| amplitude(sensors[t], i));
         let blocks: Vec<&LowRankBlock> = self.spring_blocks().iter().flatten().collect();

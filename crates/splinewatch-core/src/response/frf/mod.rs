@@ -99,6 +99,16 @@ pub struct FrfRequest<'a> {
     pub quantity: Quantity,
 }
 
+impl FrfRequest<'_> {
+    /// The sensors of the pairs, ascending, each once.
+    pub(super) fn involved_sensors(&self) -> Vec<usize> {
+        let mut sensors: Vec<usize> = self.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
+        sensors.sort_unstable();
+        sensors.dedup();
+        sensors
+    }
+}
+
 /// FRFs and sensitivities, each stored pair-major: `[pair * n_f + line]`.
 #[derive(Debug, Clone)]
 pub struct FrfEvaluation {

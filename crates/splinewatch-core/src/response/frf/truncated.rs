@@ -42,9 +42,7 @@ impl FrfModel {
                 }
             }
         }
-        let mut sensors: Vec<usize> = request.pairs.iter().flat_map(|&(r, s)| [r, s]).collect();
-        sensors.sort_unstable();
-        sensors.dedup();
+        let sensors = request.involved_sensors();
         let slot = |sensor: usize| sensors.binary_search(&sensor).expect("an involved sensor");
         let nm = state.modes.len();
         // Per block j (B = ∂K/∂κ_j on its dofs), with g_t = Φ_B x_t + ρ_0,t +
