@@ -7,13 +7,16 @@
 //! bundled overpass refined to 4 100 control points (nine patches, 14
 //! joints, 9 bearings) and two panels of 4 100 points, 100 × 41 (the
 //! overpass's span and width) and 50 × 82 (as many points along and across
-//! as the overpass's nets side by side: its section's perimeter), each
-//! assembled sparse and solved for its modes below 40 Hz (twice the
-//! overpass's 20 Hz band).
+//! as the overpass's nets side by side: its section's perimeter), and the
+//! 100 × 41 panel cut into four patches of 25 × 41 joined across the span
+//! (the patches' own cost, shape and size unchanged), each assembled sparse
+//! and solved for its modes below 40 Hz (twice the overpass's 20 Hz band).
 
 use splinewatch::config::Config;
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::joints::find_joints;
 use splinewatch_core::model::material::OrthotropicMaterial;
+use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::solvers::sparse_model::SparseModel;
@@ -87,13 +90,14 @@ fn panel(net: [usize; 2], width: f64) -> ShellModel {
 }
 
 #[divan::bench(
-    args = ["overpass, 9 patches", "panel 100 x 41", "panel 50 x 82"],
+    args = ["overpass, 9 patches", "panel 100 x 41", "panel 100 x 41 in 4 patches", "panel 50 x 82"],
     sample_count = 3,
     sample_size = 1
 )]
 fn deck_20k_dofs_assembled_and_modes_below_40_hz(bencher: divan::Bencher, deck: &str) {
     let model = match deck {
         "panel 100 x 41" => panel([100, 41], 15.85),
+        "panel 100 x 41 in 4 patches" => split_panel(4, [25, 41], 15.85),
         // The box's perimeter: both slabs and the seven webs' depths.
         "panel 50 x 82" => panel([50, 82], 15.85 + 12.0 + 7.0 * 1.575),
         _ => overpass_refined(),
@@ -108,6 +112,36 @@ fn deck_20k_dofs_assembled_and_modes_below_40_hz(bencher: divan::Bencher, deck: 
     let (dofs, modes) = solve();
     eprintln!("{deck}: {dofs} dofs, {modes} modes below 40 Hz");
     bencher.bench(solve);
+}
+
+/// The same panel as `panel` cut across its span into `pieces` patches of
+/// `net` points each, joined where they meet (penalty coupling,
+/// `joints::find_joints`): the cost of the patches alone, the deck's shape
+/// and size unchanged.
+fn split_panel(pieces: usize, net: [usize; 2], width: f64) -> ShellModel {
+    let length = 80.8 / pieces as f64;
+    let material = OrthotropicMaterial::isotropic(28e9, 0.2, 2400.0).unwrap();
+    let piece = Shell::cylindrical_panel(length, 30.0, width / 30.0, 0.5, [3, 3], net).unwrap();
+    let patches: Vec<Patch> = (0..pieces)
+        .map(|k| {
+            let shell = piece.translated([k as f64 * length, 0.0, 0.0]).unwrap();
+            Patch::new(format!("piece_{k}"), shell, material.clone()).unwrap()
+        })
+        .collect();
+    let joints = find_joints(&patches, 1e-3);
+    assert_eq!(joints.len(), pieces - 1, "one joint between neighbours");
+    ShellModel {
+        patches,
+        joints,
+        constraints: [(Edge::Xi0, 0), (Edge::Xi1, pieces - 1)]
+            .map(|(edge, patch)| EdgeConstraint {
+                edge,
+                kind: SupportKind::Clamped,
+                patch,
+            })
+            .to_vec(),
+        ..ShellModel::new(piece, material)
+    }
 }
 
 fn main() {

@@ -125,40 +125,58 @@ impl Environment {
         1.0 + self.support_stiffening_per_c * (self.knee_c - temperature).max(0.0)
     }
 
-    /// The config the truth is simulated with: a hidden single-coefficient
-    /// stiffness field over the deck (not updated) carries the modulus
-    /// factor when the deck has a temperature coefficient.
+    /// The config the truth is simulated with: hidden single-coefficient
+    /// stiffness fields (not updated) carry the modulus factor when the deck
+    /// has a temperature coefficient, one over the deck (`environment_modulus`)
+    /// or one per patch of a deck of several (`environment_modulus.<patch>`).
     pub fn truth_config(&self, config: &Config) -> Config {
         let mut truth = config.clone();
         if self.deck_modulus_per_c != 0.0 {
-            truth.model.stiffness_fields.push(StiffnessFieldConfig {
-                name: MODULUS_FIELD.into(),
-                // A deck of several patches has no single field over it:
-                // building the truth model says so (not yet simulated).
-                patch: None,
-                knots_xi: vec![0.0, 1.0],
-                degree_xi: 0,
-                knots_eta: vec![0.0, 1.0],
-                degree_eta: 0,
-                scales: "all".into(),
-                coefficients: Some(vec![1.0]),
-                bounds: None,
-                update: false,
-            });
+            let patches: Vec<Option<String>> = match config.model.patches.as_slice() {
+                [] => vec![None],
+                patches => patches.iter().map(|p| Some(p.name.clone())).collect(),
+            };
+            let several = patches.len() > 1;
+            truth
+                .model
+                .stiffness_fields
+                .extend(patches.into_iter().map(|patch| StiffnessFieldConfig {
+                    name: match (&patch, several) {
+                        (Some(name), true) => format!("{MODULUS_FIELD}.{name}"),
+                        _ => MODULUS_FIELD.into(),
+                    },
+                    patch,
+                    knots_xi: vec![0.0, 1.0],
+                    degree_xi: 0,
+                    knots_eta: vec![0.0, 1.0],
+                    degree_eta: 0,
+                    scales: "all".into(),
+                    coefficients: Some(vec![1.0]),
+                    bounds: None,
+                    update: false,
+                }));
         }
         truth
     }
 
+    /// How many hidden fields `truth_config` appends to `config`'s.
+    pub fn hidden_fields(&self, config: &Config) -> usize {
+        if self.deck_modulus_per_c == 0.0 {
+            0
+        } else {
+            config.model.patches.len().max(1)
+        }
+    }
+
     /// Applies the environment at `temperature` to coefficients of the
     /// truth config (`truth_config`): springs × support factor, the hidden
-    /// field (the last) at the modulus factor.
-    pub fn apply(&self, temperature: f64, kappa: &mut [Vec<f64>], theta: &mut [Vec<f64>]) {
+    /// fields (the last `hidden`, from `hidden_fields`) at the modulus factor.
+    pub fn apply(&self, temperature: f64, hidden: usize, kappa: &mut [Vec<f64>], theta: &mut [Vec<f64>]) {
         let support = self.support_factor(temperature);
         kappa.iter_mut().flatten().for_each(|k| *k *= support);
-        if self.deck_modulus_per_c != 0.0 {
-            if let Some(last) = theta.last_mut() {
-                last[0] = self.modulus_factor(temperature);
-            }
+        let first_hidden = theta.len().saturating_sub(hidden);
+        for field in &mut theta[first_hidden..] {
+            field[0] = self.modulus_factor(temperature);
         }
     }
 
@@ -194,5 +212,90 @@ impl Environment {
                     .collect(),
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::frf_setup;
+
+    /// The lowest flexible frequencies (Hz) of `config` with spring and
+    /// bearing coefficients scaled by `support` and the stiffness fields at
+    /// `theta`.
+    fn frequencies(config: &Config, support: f64, theta: Option<f64>) -> Vec<f64> {
+        let setup = frf_setup(config).unwrap();
+        let kappa: Vec<Vec<f64>> = setup
+            .kappa
+            .iter()
+            .map(|k| k.iter().map(|v| v * support).collect())
+            .collect();
+        let mut fields = setup.model.field_coefficients().to_vec();
+        if let Some(factor) = theta {
+            fields.iter_mut().flatten().for_each(|t| *t = factor);
+        }
+        let state = setup
+            .model
+            .modal_state_with_fields(&kappa, &fields, &setup.damping)
+            .unwrap();
+        state
+            .modes
+            .omega2
+            .iter()
+            .take(10)
+            .map(|w2| w2.sqrt() / (2.0 * PI))
+            .collect()
+    }
+
+    /// A deck of several patches gets one hidden modulus field per patch;
+    /// with the modulus and the supports scaled alike every stiffness of
+    /// the model is scaled, so every frequency moves by the square root of
+    /// the factor. The joints' penalty is not scaled with the patches (it
+    /// is fixed at assembly), so the check holds to the coupling error.
+    #[test]
+    fn every_patch_of_a_deck_of_several_carries_the_modulus_factor() {
+        let config = Config::from_toml(include_str!("../../tests/fixtures/slab_on_webs.toml")).unwrap();
+        let environment = Environment {
+            deck_modulus_per_c: -0.004,
+            reference_c: 10.0,
+            support_stiffening_per_c: 0.004,
+            knee_c: 10.0,
+            ..Environment::default()
+        };
+        let truth = environment.truth_config(&config);
+        let hidden = environment.hidden_fields(&config);
+        assert_eq!(hidden, 3);
+        let names: Vec<&str> = truth.model.stiffness_fields.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "environment_modulus.slab",
+                "environment_modulus.web_south",
+                "environment_modulus.web_north"
+            ]
+        );
+        // At 0 °C both factors are 1.04.
+        let factor = environment.modulus_factor(0.0);
+        assert!((factor - 1.04).abs() < 1e-12 && (environment.support_factor(0.0) - factor).abs() < 1e-12);
+        let setup = frf_setup(&truth).unwrap();
+        let (mut kappa, mut theta) = (setup.kappa.clone(), setup.model.field_coefficients().to_vec());
+        environment.apply(0.0, hidden, &mut kappa, &mut theta);
+        assert_eq!(theta, vec![vec![factor]; 3]);
+        let reference = frequencies(&truth, 1.0, None);
+        let cold = frequencies(&truth, factor, Some(factor));
+        for (f0, f1) in reference.iter().zip(&cold) {
+            let scale = f1 / f0;
+            assert!(
+                (scale / factor.sqrt() - 1.0).abs() < 1e-5,
+                "{f0:.4} Hz -> {f1:.4} Hz: {scale} against {}",
+                factor.sqrt()
+            );
+        }
+        // A single-patch deck keeps its one field, named as before.
+        let single = Config::from_toml(include_str!("../../config/sinello.toml")).unwrap();
+        let truth = environment.truth_config(&single);
+        assert_eq!(environment.hidden_fields(&single), 1);
+        assert_eq!(truth.model.stiffness_fields.last().unwrap().name, MODULUS_FIELD);
+        assert_eq!(truth.model.stiffness_fields.last().unwrap().patch, None);
     }
 }

@@ -59,6 +59,7 @@ pub fn simulate_frf_windows(
     let parameters = config.build_parameters()?;
     scenario.check(&parameters)?;
     let truth = environment.truth_config(config);
+    let hidden = environment.hidden_fields(config);
     let setup = frf_setup(&truth)?;
     let (force, accels) = config.channel_roles()?;
     let pairs: Vec<(usize, usize)> = accels.iter().map(|&a| (a, force)).collect();
@@ -82,7 +83,7 @@ pub fn simulate_frf_windows(
             &setup,
             scenario,
             &parameters,
-            (&environment, mean_t),
+            (&environment, hidden, mean_t),
             0.5 * (start_s + end_s),
             (&lines, &pairs),
             o.noise,
@@ -118,14 +119,14 @@ fn window_frfs(
     setup: &FrfSetup,
     scenario: &Scenario,
     parameters: &[Parameter],
-    (environment, temperature): (&Environment, f64),
+    (environment, hidden, temperature): (&Environment, usize, f64),
     middle_s: f64,
     (lines, pairs): (&[f64], &[(usize, usize)]),
     noise: f64,
     rng: &mut ChaCha8Rng,
 ) -> Result<FrfFile> {
     let (mut kappa, mut theta) = scenario.coefficients_at(setup, parameters, middle_s);
-    environment.apply(temperature, &mut kappa, &mut theta);
+    environment.apply(temperature, hidden, &mut kappa, &mut theta);
     let state = setup.model.modal_state_with_fields(&kappa, &theta, &setup.damping)?;
     let quantity = splinewatch_core::response::frf::Quantity::Accelerance;
     let eval = setup.model.evaluate(

@@ -170,13 +170,14 @@ pub fn simulate(
         e.check()?;
     }
     let truth = environment.as_ref().map(|e| e.truth_config(config));
+    let hidden = environment.as_ref().map_or(0, |e| e.hidden_fields(config));
     let (mut forcing, setup, accel_sensors) = Forcing::new(truth.as_ref().unwrap_or(config), o, &mut rng)?;
     let parameters = config.build_parameters()?;
     scenario.check(&parameters)?;
     let state_at = |t: f64| {
         let (mut k, mut theta) = scenario.coefficients_at(&setup, &parameters, t);
         if let Some(e) = &environment {
-            e.apply(e.temperature_at(t / 3600.0), &mut k, &mut theta);
+            e.apply(e.temperature_at(t / 3600.0), hidden, &mut k, &mut theta);
         }
         setup.model.modal_state_with_fields(&k, &theta, &setup.damping)
     };
@@ -270,7 +271,8 @@ impl Forcing {
             return Ok((forcing, frf_setup(config)?, accel_sensors));
         }
         let accel_sensors = config.output_channels()?;
-        let shell = config.build_model()?.patches.swap_remove(0).shell;
+        let model = config.build_model()?;
+        let surfaces: Vec<_> = model.patches.iter().map(|p| p.shell.surface()).collect();
         let sources = SourceOptions {
             excitation: o.excitation,
             fs_sim: o.fs * o.oversample as f64,
@@ -281,13 +283,14 @@ impl Forcing {
             speed_kmh: o.speed_kmh,
             vehicles_per_minute: o.vehicles_per_minute,
         };
-        let points = excitation::source_points(&sources, shell.surface(), rng)?;
-        let setup = frf_setup_with_points(config, &points)?;
+        let layout = excitation::source_points(&sources, config, &surfaces, rng)?;
+        let points = &layout.points;
+        let setup = frf_setup_with_points(config, points)?;
         let first = config.sensors.len();
         let forcing = Self {
             inputs: (first..first + points.len()).collect(),
             measured_at: None,
-            source: Source::Unmeasured(UnmeasuredSources::new(&sources, config, points.len(), rng)?),
+            source: Source::Unmeasured(UnmeasuredSources::new(&sources, &layout, rng)?),
         };
         Ok((forcing, setup, accel_sensors))
     }

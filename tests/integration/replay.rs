@@ -279,6 +279,8 @@ fn replay_writes_a_rerun_recording_with_every_view() {
             "/damping/coefficients",
             "/deck/springs",
             "/deck/sensors",
+            "/deck/model",
+            "/deck/model/elements",
             "/modes/1",
             "/modes/4",
             "/health/blocks",

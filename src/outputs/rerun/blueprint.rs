@@ -107,12 +107,24 @@ impl RerunOutput {
     }
 
     /// The deck coloured by the spring field r33 and, with stiffness
-    /// fields, by the identified multiplier θ: one tab each.
+    /// fields, by the identified multiplier θ; the model's patches and
+    /// element edges: one tab each.
     fn deck_views(&self) -> ContainerLike {
-        let mut views: Vec<ContainerLike> = vec![Spatial3DView::new("Deck: spring field r33")
+        let springs: ContainerLike = Spatial3DView::new("Deck: spring field r33")
             .with_origin("/deck")
             .with_contents(["/deck/springs", "/deck/sensors"])
-            .into()];
+            .into();
+        let model: ContainerLike = Spatial3DView::new("Deck: patches, element edges, bearings")
+            .with_origin("/deck")
+            .with_contents(["/deck/model/**", "/deck/sensors"])
+            .into();
+        // A deck of several patches opens on its model (it seldom has spring
+        // fields to colour); a single patch keeps the spring field first.
+        let (mut views, last) = if self.model.patches.len() > 1 {
+            (vec![model, springs], None)
+        } else {
+            (vec![springs], Some(model))
+        };
         if self.monitoring {
             views.push(
                 Spatial3DView::new("Deck: standardised residual of the field coefficients (−4 → +4)")
@@ -135,6 +147,7 @@ impl RerunOutput {
                     .into(),
             );
         }
+        views.extend(last);
         Tabs::new(views).into()
     }
 

@@ -145,3 +145,94 @@ impl DeckGrid {
             .collect()
     }
 }
+
+/// A qualitative palette (Tableau 10) for telling patches apart.
+const PATCH_COLOURS: [[u8; 3]; 10] = [
+    [78, 121, 167],
+    [242, 142, 43],
+    [225, 87, 89],
+    [118, 183, 178],
+    [89, 161, 79],
+    [237, 201, 72],
+    [176, 122, 161],
+    [255, 157, 167],
+    [156, 117, 95],
+    [186, 176, 172],
+];
+
+/// Element edges drawn per knot span (sampled along the other direction).
+const EDGE_SAMPLES: usize = 16;
+
+/// The model as built, for checking it: `deck/model` (the mid-surface of
+/// every patch in its own colour), `deck/model/elements` (the knot lines of
+/// each patch's analysis net, i.e. the element edges),
+/// `deck/model/bearings` and `deck/model/masses` (at their points).
+pub(super) fn log_model(
+    rec: &rerun::RecordingStream,
+    model: &ShellModel,
+    grid: &DeckGrid,
+) -> Result<(), rerun::RecordingStreamError> {
+    let colours: Vec<rerun::Color> = grid
+        .params
+        .iter()
+        .map(|&(patch, _, _)| {
+            let [r, g, b] = PATCH_COLOURS[patch % PATCH_COLOURS.len()];
+            rerun::Color::from_rgb(r, g, b)
+        })
+        .collect();
+    rec.log_static(
+        "deck/model",
+        &rerun::Mesh3D::new(grid.positions.clone())
+            .with_vertex_normals(grid.normals.clone())
+            .with_triangle_indices(grid.triangles.clone())
+            .with_vertex_colors(colours),
+    )?;
+    let mut edges: Vec<Vec<[f32; 3]>> = Vec::new();
+    for patch in &model.patches {
+        let shell = &patch.shell;
+        let surface = shell.surface();
+        let unique = |knots: &[f64]| {
+            let mut v = knots.to_vec();
+            v.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+            v
+        };
+        let samples = |knots: &[f64]| -> Vec<f64> {
+            let breaks = unique(knots);
+            breaks
+                .windows(2)
+                .flat_map(|w| (0..EDGE_SAMPLES).map(move |k| w[0] + (w[1] - w[0]) * k as f64 / EDGE_SAMPLES as f64))
+                .chain(breaks.last().copied())
+                .collect()
+        };
+        let (xi_knots, eta_knots) = (surface.xi().knots(), surface.eta().knots());
+        let (along_eta, along_xi) = (samples(eta_knots), samples(xi_knots));
+        for &x in &unique(xi_knots) {
+            edges.push(along_eta.iter().map(|&y| f32x3(shell.position(x, y, 0.5))).collect());
+        }
+        for &y in &unique(eta_knots) {
+            edges.push(along_xi.iter().map(|&x| f32x3(shell.position(x, y, 0.5))).collect());
+        }
+    }
+    rec.log_static(
+        "deck/model/elements",
+        &rerun::LineStrips3D::new(edges)
+            .with_colors([rerun::Color::from_rgb(40, 40, 40)])
+            .with_radii([rerun::Radius::new_ui_points(0.6)]),
+    )?;
+    let at = |p: splinewatch_core::model::bearings::PatchPoint| {
+        f32x3(model.patches[p.patch].shell.position(p.xi, p.eta, p.tau))
+    };
+    let radius = (grid.span / 150.0) as f32;
+    rec.log_static(
+        "deck/model/bearings",
+        &rerun::Points3D::new(model.bearings.iter().map(|b| at(b.at())))
+            .with_colors([rerun::Color::from_rgb(20, 20, 20)])
+            .with_radii([radius]),
+    )?;
+    rec.log_static(
+        "deck/model/masses",
+        &rerun::Points3D::new(model.masses.iter().map(|m| at(m.at())))
+            .with_colors([rerun::Color::from_rgb(150, 0, 150)])
+            .with_radii([radius]),
+    )
+}

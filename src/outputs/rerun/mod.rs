@@ -14,7 +14,8 @@
 //!   r33 (N/m³); `deck/stiffness` (with stiffness fields): coloured by the
 //!   identified multiplier θ (0.5 → 1.5), `deck/stiffness_change`: by the
 //!   standardised change of θ since the first update (−3σ → +3σ); `deck/sensors`; `modes/<k>`: the
-//!   first bending modes;
+//!   first bending modes; `deck/model`: every patch in its own colour, with
+//!   `elements` (the knot lines of the analysis nets), `bearings`, `masses`;
 //! - `oma/stabilisation` (poles: frequency × order; its child
 //!   `first_singular_value`: the output spectral matrix's, log scale mapped
 //!   onto the order axis), `oma/singular_values` (Hankel),
@@ -164,6 +165,7 @@ impl RerunOutput {
         }
         self.send_blueprint()?;
         self.log_sensors(&self.sensors)?;
+        deck::log_model(&self.rec, &self.model, &self.grid).map_err(rerun_error)?;
         // The mesh topology never changes: logged once per file, static;
         // updates only carry vertex positions and colours.
         let mesh_paths = [
