@@ -583,4 +583,15 @@ origin = [30.0, 0.0, 0.0]
             assert!(e.contains(key), "{key}: {e}");
         }
     }
+
+    /// The README's multi-patch monitoring example stays a valid config:
+    /// a modulus field on each patch, the bearing updated, `[monitoring]`.
+    #[test]
+    fn the_monitoring_example_of_several_patches_builds() {
+        let config = Config::from_toml(include_str!("../../tests/fixtures/slab_on_webs_monitoring.toml")).unwrap();
+        let model = config.build_model().unwrap();
+        let fields: Vec<usize> = model.stiffness_fields.iter().map(|f| f.patch()).collect();
+        assert_eq!(fields, [0, 1, 2]);
+        assert_eq!(config.monitoring.as_ref().map(|m| m.training_windows), Some(100));
+    }
 }
