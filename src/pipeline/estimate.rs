@@ -42,7 +42,9 @@ pub fn concatenate(name: &str, quantity: ChannelQuantity, blocks: &[&RecordedBlo
     let mut out = ContinuousChannel {
         start_ns: first.block.start_ns,
         fs,
-        data: Vec::new(),
+        // Sized once: growing it block by block reallocated and copied a
+        // 10-minute channel about twenty times (4 % of `oma`'s instructions).
+        data: Vec::with_capacity(sorted.iter().map(|b| b.block.data.len()).sum()),
     };
     for b in sorted {
         if (b.block.fs - fs).abs() > 1e-9 * fs {
