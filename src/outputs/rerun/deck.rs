@@ -191,25 +191,19 @@ pub(super) fn log_model(
     for patch in &model.patches {
         let shell = &patch.shell;
         let surface = shell.surface();
-        let unique = |knots: &[f64]| {
-            let mut v = knots.to_vec();
-            v.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
-            v
-        };
-        let samples = |knots: &[f64]| -> Vec<f64> {
-            let breaks = unique(knots);
+        let samples = |breaks: &[f64]| -> Vec<f64> {
             breaks
                 .windows(2)
                 .flat_map(|w| (0..EDGE_SAMPLES).map(move |k| w[0] + (w[1] - w[0]) * k as f64 / EDGE_SAMPLES as f64))
                 .chain(breaks.last().copied())
                 .collect()
         };
-        let (xi_knots, eta_knots) = (surface.xi().knots(), surface.eta().knots());
-        let (along_eta, along_xi) = (samples(eta_knots), samples(xi_knots));
-        for &x in &unique(xi_knots) {
+        let (xi_breaks, eta_breaks) = (surface.xi().breakpoints(), surface.eta().breakpoints());
+        let (along_eta, along_xi) = (samples(&eta_breaks), samples(&xi_breaks));
+        for &x in &xi_breaks {
             edges.push(along_eta.iter().map(|&y| f32x3(shell.position(x, y, 0.5))).collect());
         }
-        for &y in &unique(eta_knots) {
+        for &y in &eta_breaks {
             edges.push(along_xi.iter().map(|&x| f32x3(shell.position(x, y, 0.5))).collect());
         }
     }
