@@ -23,8 +23,10 @@
 
 use super::shape::{mpc, normalise};
 use super::OmaError;
+use crate::linalg::leading_eigen::leading_eigen;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::{DenseSolveCore, Solve};
-use faer::{c64, Mat, MatRef, Side};
+use faer::{c64, Accum, Mat, MatRef, Par, Side};
 use std::f64::consts::PI;
 
 /// One pole of the identified state-space model at one order.
@@ -44,7 +46,8 @@ pub struct Pole {
 pub struct SubspaceModel {
     /// First `l` rows of `U`.
     u_top: Mat<f64>,
-    /// `U↑ᵀU↑` and `U↑ᵀU↓`, both `max_order × max_order`.
+    /// `U↑ᵀU↑` (its lower triangle; the Cholesky factor reads no more) and
+    /// `U↑ᵀU↓`, both `max_order × max_order`.
     gram_up: Mat<f64>,
     gram_shift: Mat<f64>,
     singular_values: Vec<f64>,
@@ -66,21 +69,31 @@ struct Truncated {
 }
 
 /// The singular values of `hankel` (non-increasing) with its `cap` leading
-/// right singular vectors, from the symmetric eigenproblem of `HᵀH`
-/// (tridiagonalisation, about half the cost of a full SVD with vectors; only
-/// the leading `cap` vectors are kept, as the orders need no more). The
-/// leading singular values are `‖H v_i‖`, accurate to round-off relative to
-/// `σ₁` even where `σ_i² < ε σ₁²` (so a rank-deficient `H` is still seen as
-/// one); the eigenvectors have the same backward error as an SVD's
-/// (`ε σ₁²/gap` in angle). The values beyond `cap` (reported only) are
-/// `√λ_i`, accurate to `ε σ₁²/σ_i`.
+/// right singular vectors, from the symmetric eigenproblem of `HᵀH` (its
+/// lower triangle formed; tridiagonalised, every eigenvalue, and only the
+/// leading `cap` vectors by inverse iteration and back-transformed, as the
+/// orders need no more: [`leading_eigen`]). The leading singular values are
+/// `‖H v_i‖`, accurate to round-off relative to `σ₁` even where
+/// `σ_i² < ε σ₁²` (so a rank-deficient `H` is still seen as one); the
+/// eigenvectors have the same backward error as an SVD's (`ε σ₁²/gap` in
+/// angle). The values beyond `cap` (reported only) are `√λ_i`, accurate to
+/// `ε σ₁²/σ_i`.
 fn truncated_svd(hankel: &Mat<f64>, cap: usize) -> Result<(Vec<f64>, Truncated), OmaError> {
-    let gram = hankel.transpose() * hankel;
-    let eigen = gram.self_adjoint_eigen(Side::Lower).map_err(|_| OmaError::SvdFailed)?;
-    let (values, vectors) = (eigen.S().column_vector(), eigen.U());
-    let cols = gram.ncols();
-    // Descending: column c is the eigenpair cols − 1 − c.
-    let v = Mat::from_fn(cols, cap, |row, col| vectors[(row, cols - 1 - col)]);
+    let cols = hankel.ncols();
+    let mut gram = Mat::<f64>::zeros(cols, cols);
+    triangular::matmul(
+        gram.as_mut(),
+        BlockStructure::TriangularLower,
+        Accum::Replace,
+        hankel.transpose(),
+        BlockStructure::Rectangular,
+        hankel,
+        BlockStructure::Rectangular,
+        1.0,
+        Par::Seq,
+    );
+    let eigen = leading_eigen(gram.as_ref(), cap).map_err(|_| OmaError::SvdFailed)?;
+    let (values, v) = (eigen.values, eigen.vectors);
     let hv = hankel * &v;
     let norms: Vec<f64> = (0..cap).map(|c| hv.col(c).norm_l2()).collect();
     let mut order: Vec<usize> = (0..cap).collect();
@@ -89,7 +102,7 @@ fn truncated_svd(hankel: &Mat<f64>, cap: usize) -> Result<(Vec<f64>, Truncated),
     let singular_values: Vec<f64> = order
         .iter()
         .map(|&c| norms[c])
-        .chain((cap..cols).map(|c| values[cols - 1 - c].max(0.0).sqrt().min(last)))
+        .chain((cap..cols).map(|c| values[c].max(0.0).sqrt().min(last)))
         .collect();
     if !singular_values.iter().all(|s| s.is_finite()) || singular_values[0] <= 0.0 {
         return Err(OmaError::SingularHankel { order: 1 });
@@ -108,10 +121,24 @@ fn block_hankel(correlations: &[f64], l: usize, r: usize, p: usize) -> Result<Ma
     if p == 0 || correlations.len() < (2 * p + 1) * l * r {
         return Err(OmaError::TooFewLags { block_rows: p });
     }
-    let lag = |k: usize, a: usize, b: usize| correlations[(k * l + a) * r + b];
-    Ok(Mat::from_fn(l * (p + 1), r * p, |row, col| {
-        lag(row / l + col / r + 1, row % l, col % r)
-    }))
+    // Block by block (column-major), `R_k` row-major `l × r` at `k l r`.
+    let mut hankel = Mat::<f64>::zeros(l * (p + 1), r * p);
+    for j in 0..p {
+        for b in 0..r {
+            let column = hankel
+                .col_mut(j * r + b)
+                .try_as_col_major_mut()
+                .expect("a Mat's column is contiguous");
+            let column = column.as_slice_mut();
+            for i in 0..=p {
+                let lag = &correlations[(i + j + 1) * l * r..(i + j + 2) * l * r];
+                for a in 0..l {
+                    column[i * l + a] = lag[a * r + b];
+                }
+            }
+        }
+    }
+    Ok(hankel)
 }
 
 impl SubspaceModel {
@@ -181,9 +208,21 @@ impl SubspaceModel {
     fn from_left(u: MatRef<'_, f64>, singular_values: Vec<f64>, right: Mat<f64>, channels: usize, fs: f64) -> Self {
         let (rows, l) = (u.nrows(), channels);
         let (up, down) = (u.subrows(0, rows - l), u.subrows(l, rows - l));
+        let mut gram_up = Mat::<f64>::zeros(u.ncols(), u.ncols());
+        triangular::matmul(
+            gram_up.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            up.transpose(),
+            BlockStructure::Rectangular,
+            up,
+            BlockStructure::Rectangular,
+            1.0,
+            Par::Seq,
+        );
         Self {
             u_top: u.subrows(0, l).to_owned(),
-            gram_up: up.transpose() * up,
+            gram_up,
             gram_shift: up.transpose() * down,
             singular_values,
             right,

@@ -1,6 +1,10 @@
-//! Small dense helpers shared by the FRF and updating code.
+//! Small dense helpers shared by the FRF and updating code, and
+//! [`leading_eigen`] (the largest eigenpairs of a dense symmetric matrix,
+//! for the SSI's truncated SVD).
 //!
 //! May import: nothing of the crate (it is the floor every other stands on).
+
+pub mod leading_eigen;
 
 use faer::prelude::Solve;
 use faer::{c64, Mat};
