@@ -30,11 +30,13 @@ pub const BLOCK_JSON_SCHEMA: &str = r#"{
 /// The MCAP writer settings of every file splinewatch writes: zstd chunks
 /// compressed in the writing thread (zstd's own worker threads only
 /// competed with the replay's stages, which already keep both cores busy:
-/// 0.47–0.49 s against 0.47–0.59 s on the bearing hour), profile and
-/// library named.
+/// 0.47–0.49 s against 0.47–0.59 s on the bearing hour) at zstd's level 1
+/// (ZSTD_fast; level 3's double-fast search spent 6 % of the bearing hour's
+/// replay compressing its results file), profile and library named.
 pub fn mcap_options() -> mcap::WriteOptions {
     mcap::WriteOptions::new()
         .compression(Some(mcap::Compression::Zstd))
+        .compression_level(1)
         .compression_threads(0)
         .profile("splinewatch")
         .library(concat!("splinewatch ", env!("CARGO_PKG_VERSION")))
