@@ -63,9 +63,12 @@ pub enum OmaError {
     InvalidSettings(String),
 }
 
-/// `f` of every item, on up to four threads (item `i` on worker
-/// `i % threads`), gathered in item order: the result does not depend on
-/// the thread count.
+/// `f` of every item, on up to four threads, gathered in item order: each
+/// result is `f` of its item alone, so it does not depend on the thread
+/// count or on which thread computed it. Workers take the next item from
+/// the end (the callers' items cost the same or grow with their index, as
+/// the model orders do: largest first balances the threads, where a fixed
+/// round-robin gave one of two threads 7 % more of the orders' `Σ n³`).
 pub(crate) fn ordered_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
     let threads = std::thread::available_parallelism()
         .map_or(1, |t| t.get())
@@ -74,21 +77,35 @@ pub(crate) fn ordered_map<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + S
     if threads == 1 {
         return items.iter().map(f).collect();
     }
+    let remaining = std::sync::atomic::AtomicUsize::new(items.len());
+    let take = || {
+        remaining
+            .fetch_update(
+                std::sync::atomic::Ordering::Relaxed,
+                std::sync::atomic::Ordering::Relaxed,
+                |n| n.checked_sub(1),
+            )
+            .ok()
+            .map(|n| n - 1)
+    };
+    let mut results: Vec<Option<R>> = std::iter::repeat_with(|| None).take(items.len()).collect();
     std::thread::scope(|scope| {
         let workers: Vec<_> = (0..threads)
-            .map(|t| {
-                let f = &f;
-                scope.spawn(move || items.iter().skip(t).step_by(threads).map(f).collect::<Vec<_>>())
+            .map(|_| {
+                let (f, take) = (&f, &take);
+                scope.spawn(move || std::iter::from_fn(take).map(|i| (i, f(&items[i]))).collect::<Vec<_>>())
             })
             .collect();
-        let mut per_worker: Vec<_> = workers
-            .into_iter()
-            .map(|w| w.join().expect("a worker of ordered_map panicked").into_iter())
-            .collect();
-        (0..items.len())
-            .map(|i| per_worker[i % threads].next().expect("one result per item"))
-            .collect()
-    })
+        for worker in workers {
+            for (i, r) in worker.join().expect("a worker of ordered_map panicked") {
+                results[i] = Some(r);
+            }
+        }
+    });
+    results
+        .into_iter()
+        .map(|r| r.expect("every item is taken once"))
+        .collect()
 }
 
 /// Checks that there are channels and that all are as long as the first;
@@ -356,4 +373,25 @@ fn summarise(
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Items of very unequal cost come back in order, each its own result.
+    #[test]
+    fn ordered_map_keeps_the_items_order() {
+        let items: Vec<u64> = (0..37).collect();
+        let got = ordered_map(&items, |&i| {
+            // Work that grows with the index, so threads finish out of order.
+            (0..i * 2_000).fold(i, |acc, k| acc.wrapping_mul(31).wrapping_add(k)) % 1_000 + 1_000 * i
+        });
+        let want: Vec<u64> = items
+            .iter()
+            .map(|&i| (0..i * 2_000).fold(i, |acc, k| acc.wrapping_mul(31).wrapping_add(k)) % 1_000 + 1_000 * i)
+            .collect();
+        assert_eq!(got, want);
+        assert!(ordered_map(&[] as &[u64], |&i| i).is_empty());
+    }
 }
