@@ -17,6 +17,12 @@ impl Pipeline {
     /// An output-only config has no force sensor to pair: its FRF messages
     /// are rejected as `frf_without_force_sensor`.
     pub fn ingest_frf(&mut self, payload: &[u8], time_ns: i128) -> Option<UpdateJob> {
+        let job = self.collect_frf(payload, time_ns);
+        self.hand_out(usize::from(job.is_some()));
+        job
+    }
+
+    fn collect_frf(&mut self, payload: &[u8], time_ns: i128) -> Option<UpdateJob> {
         let Some(force) = self.force else {
             self.health.reject("frf_without_force_sensor");
             return None;

@@ -45,7 +45,7 @@ use align::ChannelQueue;
 use anyhow::{bail, Result};
 use oma::Identification;
 use splinewatch_core::identification::welch::{Estimator, WelchSettings};
-use splinewatch_core::response::frf::Quantity;
+use splinewatch_core::response::frf::{ModalState, Quantity};
 use splinewatch_core::updating::{Parameter, UpdateSettings};
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
@@ -108,6 +108,9 @@ pub struct Pipeline {
     updater: Updater,
     /// Whether `updater` was handed to another thread (`split_updater`).
     split: bool,
+    /// Split with identification: the model states coming back from the
+    /// update side, for pairing.
+    pairing: Option<updater::PairingLink>,
     health: Health,
 }
 
@@ -174,6 +177,7 @@ impl Pipeline {
             last_update_ns: None,
             updater,
             split: false,
+            pairing: None,
             temperatures,
             health: Health::default(),
         })
@@ -211,15 +215,21 @@ impl Pipeline {
     /// than the ingest: the caller rebases each job on it, runs it and
     /// applies the outcome to it, in order, and stamps health messages with
     /// [`Health::set_updates`]. Jobs from this pipeline then start from its
-    /// initial parameters until rebased. `None` output-only, where a
-    /// window's identified modes are paired with the model at the last
-    /// update, so ingest cannot run ahead of the updates.
-    pub fn split_updater(&mut self) -> Option<Updater> {
-        if self.identification.is_some() {
-            return None;
-        }
+    /// initial parameters until rebased. With identification (output-only
+    /// or both paths), a window's modes are paired with the model at the
+    /// last update: the updater sends the model back after each job, and
+    /// the ingest identifies a window (the costly part, which needs no
+    /// model) while the update side works, then waits for every job it
+    /// handed out before that window closed, exactly the state the in-line
+    /// replay pairs with. The caller must apply every job handed out.
+    pub fn split_updater(&mut self) -> Updater {
         self.split = true;
-        Some(self.updater.clone())
+        if self.identification.is_none() {
+            return self.updater.clone();
+        }
+        let (updater, link) = self.updater.linked();
+        self.pairing = Some(link);
+        updater
     }
 
     /// Measurement time up to which every channel's samples have been
@@ -245,20 +255,17 @@ impl Pipeline {
         let mut jobs = Vec::new();
         if block.quantity == ChannelQuantity::Temperature {
             self.ingest_temperature(&block);
-            return (windows, jobs);
-        }
-        if self.channel_of(&block).is_none() {
+        } else if self.channel_of(&block).is_none() {
             self.health.reject("unknown_channel");
-            return (windows, jobs);
-        }
-        if self.fs.is_none() {
+        } else if self.fs.is_none() {
             self.pending.push(block);
             if self.pending.len() >= 2 * self.channels.len() {
                 self.establish_reference(&mut windows, &mut jobs);
             }
-            return (windows, jobs);
+        } else {
+            self.ingest_block(block, &mut windows, &mut jobs);
         }
-        self.ingest_block(block, &mut windows, &mut jobs);
+        self.hand_out(jobs.len());
         (windows, jobs)
     }
 
@@ -268,7 +275,36 @@ impl Pipeline {
         let mut windows = Vec::new();
         let mut jobs = Vec::new();
         self.establish_reference(&mut windows, &mut jobs);
+        self.hand_out(jobs.len());
         (windows, jobs)
+    }
+
+    /// Counts jobs leaving the pipeline (split with identification: the
+    /// pairing waits for them).
+    fn hand_out(&mut self, jobs: usize) {
+        if let Some(link) = self.pairing.as_mut() {
+            link.handed_out(jobs);
+        }
+    }
+
+    /// The model's modes at the last accepted parameters, to pair a
+    /// window's identified modes with (split: once the update side has
+    /// applied every job handed out); the error is the window's skip reason.
+    fn pairing_state(&mut self) -> Result<Arc<ModalState>, String> {
+        let settled = match self.pairing.as_mut().map(|link| link.settled()).transpose() {
+            Ok(settled) => settled.flatten(),
+            // The update side stopped: the replay ends with its error, and
+            // nothing reads this window.
+            Err(_) => return Err("update_stage_stopped".into()),
+        };
+        let state = match settled {
+            Some(state) => state,
+            None => self.updater.model_state().map_err(|e| format!("{e:#}")),
+        };
+        state.map_err(|e| {
+            tracing::warn!(message = "the model's modes at the last parameters failed", error = %e);
+            "model_failed".to_string()
+        })
     }
 
     fn channel_of(&self, block: &ChannelBlock) -> Option<usize> {

@@ -165,17 +165,25 @@ impl Identification {
         })
     }
 
-    /// Identifies the modes of one window and pairs them with `state`'s;
-    /// the error is the health reason the window is skipped for.
-    pub(super) fn run(
+    /// The identification alone (it needs no model); the error is the
+    /// health reason.
+    pub(super) fn identify_window(
         &self,
         channels: &[Vec<f64>],
         start_ns: i128,
         fs: f64,
+    ) -> Result<OmaReport, &'static str> {
+        self.identify(channels, start_ns, fs).map_err(|e| skip_reason(&e))
+    }
+
+    /// Pairs an identification's modes with `state`'s; the error is the
+    /// health reason the window is skipped for.
+    pub(super) fn pair(
+        &self,
+        report: OmaReport,
         state: &ModalState,
         sensor_names: &[String],
     ) -> Result<WindowModes, &'static str> {
-        let report = self.identify(channels, start_ns, fs).map_err(|e| skip_reason(&e))?;
         let observed = report
             .modes_file()
             .to_observed(sensor_names)

@@ -13,6 +13,7 @@ use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::updating::frf_residual::ModelPoint;
 use splinewatch_core::updating::Parameter;
 use std::collections::BTreeMap;
+use std::sync::mpsc::{channel, Receiver, RecvError, Sender};
 use std::sync::Arc;
 
 /// The health counters only the update side moves.
@@ -33,6 +34,40 @@ impl Health {
     }
 }
 
+/// The model's modes at the last accepted parameters, as the update side
+/// sends them back after each job to an ingest that identifies output-only
+/// windows on another thread (the error is the modal solve's).
+pub(super) type PairingState = Result<Arc<ModalState>, String>;
+
+/// The ingest's end of that link (`Pipeline::split_updater`): a window's
+/// modes are paired once every job handed out before the window closed has
+/// been applied, which is the state an in-line replay pairs with (its jobs
+/// run between two ingest calls).
+pub(super) struct PairingLink {
+    states: Receiver<PairingState>,
+    /// Jobs handed out whose state has not come back yet.
+    outstanding: usize,
+    /// The state after the last applied job; `None` before any.
+    latest: Option<PairingState>,
+}
+
+impl PairingLink {
+    pub(super) fn handed_out(&mut self, jobs: usize) {
+        self.outstanding += jobs;
+    }
+
+    /// The state once every job handed out has been applied: `Ok(None)`
+    /// when none was (the initial model holds), `Err` when the update side
+    /// stopped.
+    pub(super) fn settled(&mut self) -> Result<Option<PairingState>, RecvError> {
+        while self.outstanding > 0 {
+            self.latest = Some(self.states.recv()?);
+            self.outstanding -= 1;
+        }
+        Ok(self.latest.clone())
+    }
+}
+
 #[derive(Clone)]
 pub struct Updater {
     setup: Arc<FrfSetup>,
@@ -45,6 +80,9 @@ pub struct Updater {
     model_state: Option<Arc<ModalState>>,
     monitoring: Option<Monitoring>,
     counters: UpdateCounters,
+    /// Where the model state goes after each applied job (split
+    /// output-only: [`PairingLink`]).
+    pairing: Option<Sender<PairingState>>,
 }
 
 impl Updater {
@@ -62,7 +100,24 @@ impl Updater {
             model_state: None,
             monitoring,
             counters: UpdateCounters::default(),
+            pairing: None,
         }
+    }
+
+    /// A copy of this updater that sends the model state back after each
+    /// applied job, and the ingest's end of the link.
+    pub(super) fn linked(&self) -> (Self, PairingLink) {
+        let (sender, states) = channel();
+        let updater = Self {
+            pairing: Some(sender),
+            ..self.clone()
+        };
+        let link = PairingLink {
+            states,
+            outstanding: 0,
+            latest: None,
+        };
+        (updater, link)
     }
 
     pub fn counters(&self) -> UpdateCounters {
@@ -129,6 +184,16 @@ impl Updater {
     /// good ones; a failure keeps them. With `[monitoring]`, an accepted
     /// update is scored: the status (and alarm) messages are returned.
     pub fn apply(&mut self, outcome: &mut UpdateOutcome) -> Option<MonitoringOutcome> {
+        let scored = self.record(outcome);
+        if let Some(link) = self.pairing.clone() {
+            let state = self.model_state().map_err(|e| format!("{e:#}"));
+            // A closed link: the ingest has finished and pairs no more.
+            let _ = link.send(state);
+        }
+        scored
+    }
+
+    fn record(&mut self, outcome: &mut UpdateOutcome) -> Option<MonitoringOutcome> {
         self.counters.update_runs += 1;
         let Ok(report) = &outcome.result else {
             self.counters.update_failures += 1;

@@ -228,7 +228,8 @@ impl Pipeline {
     }
 
     /// The output-only path: enough valid instants, then SSI-cov and the
-    /// pairing with the model's modes (see `oma.rs`); the error is the reason.
+    /// pairing with the model's modes at the last update (see `oma.rs`); the
+    /// error is the reason.
     fn identify_window(&mut self, report: &mut WindowReport, samples: &[Vec<f64>]) -> Result<WindowModes, String> {
         let n = samples.first().map_or(0, Vec::len);
         let valid = (0..n).filter(|&t| samples.iter().all(|c| !c[t].is_nan())).count();
@@ -237,14 +238,29 @@ impl Pipeline {
         if fraction < self.schedule.min_segment_fraction || valid == 0 {
             return Err("too_little_data".into());
         }
-        let state = self.updater.model_state().map_err(|e| {
-            tracing::warn!(message = "the model's modes at the last parameters failed", error = %e);
-            "model_failed".to_string()
-        })?;
         let fs = self.fs.expect("set with the reference");
+        // In line, the model comes first (no identification without it);
+        // split, the identification runs while the update side may still
+        // apply earlier jobs, and the pairing waits for the model. Either
+        // way a failed model is the reason, then a failed identification.
+        let identified = match self.pairing {
+            None => None,
+            Some(_) => {
+                let identification = self.identification.as_ref().expect("the output-only path");
+                Some(identification.identify_window(samples, report.start_ns, fs))
+            }
+        };
+        let state = self.pairing_state()?;
+        let identified = match identified {
+            Some(identified) => identified,
+            None => {
+                let identification = self.identification.as_ref().expect("the output-only path");
+                identification.identify_window(samples, report.start_ns, fs)
+            }
+        };
         let identification = self.identification.as_ref().expect("the output-only path");
         identification
-            .run(samples, report.start_ns, fs, &state, &self.setup.sensor_names)
+            .pair(identified?, &state, &self.setup.sensor_names)
             .map_err(String::from)
     }
 

@@ -9,10 +9,14 @@
 //! Every health message carries the ingest's counters as they were when
 //! the job's window closed, so the results are exactly those of running
 //! the stages in line (`ReplayOptions::pipelined = false`, the reference a
-//! test compares with). Output-only, a window's modes are paired with the
-//! model at the last update, so ingest and updates share one thread there
-//! (reading still runs ahead). With a Rerun output, a fourth thread logs
-//! to it, so the viewer never holds the updates up.
+//! test compares with). With identification (output-only or both paths),
+//! a window's modes are paired with the model at the last update: the
+//! ingest identifies a window (SSI-cov, which needs no model) while the
+//! update stage runs the previous window's job, then waits for the model
+//! the update stage sends back after every job handed out so far, the
+//! state the in-line replay pairs with, so the results are again exactly
+//! the in-line ones. With a Rerun output, a fourth thread logs to it, so
+//! the viewer never holds the updates up.
 //! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
 use super::{keep_latest, resume_monitor};
@@ -190,15 +194,9 @@ fn run_stages<'scope, W: Write + Seek>(
     pipelined: bool,
     sink: &mut Outputs<'_, W>,
 ) -> Result<ReplaySummary> {
-    let split = if pipelined { pipeline.split_updater() } else { None };
+    let split = pipelined.then(|| pipeline.split_updater());
     let (end, counters, accepted) = match split {
-        None if !pipelined => in_line(pipeline, limits, messages, sink),
-        None => in_line(
-            pipeline,
-            limits,
-            read_on_a_thread(scope, messages).into_iter().flatten(),
-            sink,
-        ),
+        None => in_line(pipeline, limits, messages, sink),
         Some(mut updater) => {
             let batches = read_on_a_thread(scope, messages);
             let (events, received) = sync_channel(EVENT_QUEUE);

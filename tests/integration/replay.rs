@@ -643,7 +643,12 @@ fn replay_bytes(cfg: &Config, recording: &[u8], pipelined: bool, state: &Path) -
 /// (six updates, an update per 20-second window) and on a simulated hour
 /// in 10-minute windows, and the same hour in 2-minute windows with
 /// `[monitoring]` (trained on 10 updates, 20 scored: status messages and
-/// the monitor file too); the state files match.
+/// the monitor file too); with identification, where the ingest identifies
+/// a window while the update stage runs the previous job and pairs it with
+/// the model that stage sends back: 40 minutes of ambient data on the
+/// output-only config (four windows, modal-residue updates) and the hour
+/// with a force sensor and `[oma]`, both paths updated jointly; the state
+/// files match.
 #[test]
 fn the_pipelined_replay_writes_the_bytes_of_the_in_line_one() {
     let dir = fresh_dir("pipelined-replay");
@@ -659,10 +664,25 @@ fn the_pipelined_replay_writes_the_bytes_of_the_in_line_one() {
         &splinewatch::studies::simulation::SimulationOptions::random_excitation(&hour, 3600.0, 7),
         splinewatch::io::wire::Encoding::Cbor,
     );
+    let mut ambient = load_config(&root().join("config/sinello-ambient.toml")).unwrap();
+    ambient.frf.window_seconds = 600.0;
+    let ambient_recording = simulated_recording(
+        &ambient,
+        &splinewatch::studies::simulation::SimulationOptions::ambient_excitation(&ambient, 2400.0, 5),
+        splinewatch::io::wire::Encoding::Cbor,
+    );
+    let sinello = std::fs::read_to_string(root().join("config/sinello.toml")).unwrap();
+    let method = "method = \"levenberg_marquardt\"\n";
+    let both = Config::from_toml(
+        &(sinello.replace(method, &format!("residues = \"both\"\n{method}")) + "\n[oma]\nwindow_seconds = 600.0\n"),
+    )
+    .unwrap();
     for (name, cfg, recording) in [
         ("bundled", config(), &bundled),
         ("hour", hour, &simulated),
         ("monitored", monitored, &simulated),
+        ("output-only", ambient, &ambient_recording),
+        ("both paths", both, &simulated),
     ] {
         // Apart: the monitor file goes beside the state file.
         let (a, b) = (
