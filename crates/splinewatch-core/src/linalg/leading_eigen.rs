@@ -23,6 +23,7 @@ use faer::linalg::householder::{
 };
 use faer::linalg::triangular_solve;
 use faer::{Auto, ColRef, Conj, Mat, MatRef, Par, Side, Spec};
+use std::ops::Range;
 use thiserror::Error;
 
 /// The tridiagonal QR did not converge, or an input was not finite.
@@ -66,7 +67,6 @@ pub fn leading_eigen(a: MatRef<'_, f64>, k: usize) -> Result<LeadingEigen, Eigen
     let mut buffer = MemBuffer::new(StackReq::any_of(&[
         tridiag_in_place_scratch::<f64>(n, par, params.tridiag.into()),
         evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::No, par, params),
-        apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(n.saturating_sub(1), block, k),
     ]));
     let stack = MemStack::new(&mut buffer);
 
@@ -100,14 +100,25 @@ pub fn leading_eigen(a: MatRef<'_, f64>, k: usize) -> Result<LeadingEigen, Eigen
 
     let mut vectors = tridiagonal_vectors(&diagonal, &off, &values[..k]).ok_or(EigenNotConverged)?;
     if n > 1 {
-        apply_block_householder_sequence_on_the_left_in_place_with_conj(
-            reduced.as_ref().submatrix(1, 0, n - 1, n - 1),
-            householder.as_ref(),
-            Conj::No,
-            vectors.as_mut().subrows_mut(1, n - 1),
-            par,
-            stack,
-        );
+        // Q Z, its columns in two halves on two threads.
+        let (basis, factor) = (reduced.as_ref().submatrix(1, 0, n - 1, n - 1), householder.as_ref());
+        let back_transform = |mut columns: faer::MatMut<'_, f64>| {
+            let mut buffer = MemBuffer::new(apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(
+                n - 1,
+                block,
+                columns.ncols(),
+            ));
+            apply_block_householder_sequence_on_the_left_in_place_with_conj(
+                basis,
+                factor,
+                Conj::No,
+                columns.as_mut(),
+                par,
+                MemStack::new(&mut buffer),
+            );
+        };
+        let (left, right) = vectors.as_mut().subrows_mut(1, n - 1).split_at_col_mut(k / 2);
+        super::join(|| back_transform(left), || back_transform(right));
     }
     Ok(LeadingEigen { values, vectors })
 }
@@ -221,30 +232,61 @@ impl ShiftedFactor {
 fn tridiagonal_vectors(d: &[f64], e: &[f64], values: &[f64]) -> Option<Mat<f64>> {
     let n = d.len();
     let k = values.len();
-    let eps = f64::EPSILON;
     let norm = (0..n)
         .map(|i| d[i].abs() + if i > 0 { e[i - 1].abs() } else { 0.0 } + e.get(i).map_or(0.0, |v| v.abs()))
         .fold(0.0, f64::max);
-    let cluster_tolerance = eps.sqrt() * norm;
-    let growth_target = (0.1 / n as f64).sqrt();
-    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-    let mut uniform = move || {
-        seed ^= seed << 13;
-        seed ^= seed >> 7;
-        seed ^= seed << 17;
-        2.0 * (seed >> 11) as f64 / (1u64 << 53) as f64 - 1.0
-    };
-    let mut z = Mat::<f64>::zeros(n, k);
     if norm == 0.0 {
         // T = 0: any orthonormal basis.
+        let mut z = Mat::<f64>::zeros(n, k);
         (0..k).for_each(|j| z[(j, j)] = 1.0);
         return Some(z);
     }
-    let mut cluster_start = 0;
-    let mut previous = f64::NAN;
+    let cluster_tolerance = f64::EPSILON.sqrt() * norm;
+    // Two halves on two threads, cut between clusters (each vector's start
+    // is its own, so the cut changes nothing).
+    let mut cut = k / 2;
+    while cut > 0 && cut < k && values[cut - 1] - values[cut] <= cluster_tolerance {
+        cut += 1;
+    }
+    let (first, second) = super::join(
+        || inverse_iteration(d, e, values, 0..cut, norm),
+        || inverse_iteration(d, e, values, cut..k, norm),
+    );
+    let (first, second) = (first?, second?);
+    let z = Mat::from_fn(n, k, |r, j| if j < cut { first[(r, j)] } else { second[(r, j - cut)] });
+    let gram = z.transpose() * &z;
+    let factor = gram.llt(Side::Lower).ok()?;
+    let mut q = z.transpose().to_owned();
+    // Zᵀ ← L⁻¹ Zᵀ.
+    triangular_solve::solve_lower_triangular_in_place(factor.L(), q.as_mut(), Par::Seq);
+    let mut z = q.transpose().to_owned();
     for j in 0..k {
+        let largest = z
+            .col(j)
+            .iter()
+            .copied()
+            .fold(0.0f64, |m, v| if v.abs() > m.abs() { v } else { m });
+        if largest < 0.0 {
+            z.col_mut(j).iter_mut().for_each(|v| *v = -*v);
+        }
+    }
+    Some(z)
+}
+
+/// Unit vectors for `values[range]` (see [`tridiagonal_vectors`]), the
+/// range starting a cluster; `None` if an iteration failed.
+fn inverse_iteration(d: &[f64], e: &[f64], values: &[f64], range: Range<usize>, norm: f64) -> Option<Mat<f64>> {
+    let n = d.len();
+    let eps = f64::EPSILON;
+    let cluster_tolerance = eps.sqrt() * norm;
+    let growth_target = (0.1 / n as f64).sqrt();
+    let offset = range.start;
+    let mut z = Mat::<f64>::zeros(n, range.len());
+    let mut cluster_start = offset;
+    let mut previous = f64::NAN;
+    for j in range {
         let mut lambda = values[j];
-        if j > 0 {
+        if j > offset {
             if previous - lambda > cluster_tolerance {
                 cluster_start = j;
             } else if previous - lambda < 10.0 * (eps * lambda).abs() {
@@ -253,6 +295,14 @@ fn tridiagonal_vectors(d: &[f64], e: &[f64], values: &[f64]) -> Option<Mat<f64>>
         }
         previous = lambda;
         let factor = ShiftedFactor::new(d, e, lambda, eps * norm);
+        // Each vector's own pseudo-random start (xorshift seeded by its index).
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64 ^ (j as u64 + 1).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            2.0 * (seed >> 11) as f64 / (1u64 << 53) as f64 - 1.0
+        };
         let mut x: Vec<f64> = (0..n).map(|_| uniform()).collect();
         let mut passed = 0;
         for _ in 0..MAX_ITERATIONS {
@@ -263,7 +313,7 @@ fn tridiagonal_vectors(d: &[f64], e: &[f64], values: &[f64]) -> Option<Mat<f64>>
             if j > cluster_start {
                 // Classical Gram–Schmidt twice ("twice is enough": Giraud et
                 // al. 2005).
-                let basis = z.as_ref().subcols(cluster_start, j - cluster_start);
+                let basis = z.as_ref().subcols(cluster_start - offset, j - cluster_start);
                 for _ in 0..2 {
                     let coefficients = basis.transpose() * ColRef::from_slice(&x);
                     let projection = basis * &coefficients;
@@ -284,23 +334,7 @@ fn tridiagonal_vectors(d: &[f64], e: &[f64], values: &[f64]) -> Option<Mat<f64>>
             return None;
         }
         for r in 0..n {
-            z[(r, j)] = x[r] / length;
-        }
-    }
-    let gram = z.transpose() * &z;
-    let factor = gram.llt(Side::Lower).ok()?;
-    let mut q = z.transpose().to_owned();
-    // Zᵀ ← L⁻¹ Zᵀ.
-    triangular_solve::solve_lower_triangular_in_place(factor.L(), q.as_mut(), Par::Seq);
-    let mut z = q.transpose().to_owned();
-    for j in 0..k {
-        let largest = z
-            .col(j)
-            .iter()
-            .copied()
-            .fold(0.0f64, |m, v| if v.abs() > m.abs() { v } else { m });
-        if largest < 0.0 {
-            z.col_mut(j).iter_mut().for_each(|v| *v = -*v);
+            z[(r, j - offset)] = x[r] / length;
         }
     }
     Some(z)

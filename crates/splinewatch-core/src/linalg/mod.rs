@@ -33,3 +33,16 @@ pub fn complex_solve(a_re: &Mat<f64>, a_im: &Mat<f64>, b: &Mat<f64>) -> Option<(
     let finite = (0..n).all(|i| (0..b.ncols()).all(|j| re[(i, j)].is_finite() && im[(i, j)].is_finite()));
     finite.then_some((re, im))
 }
+
+/// `a()` and `b()`, on two threads when the machine has them (`a` on a
+/// scoped thread, `b` on the caller's); the results do not depend on it.
+pub fn join<A: Send, B>(a: impl FnOnce() -> A + Send, b: impl FnOnce() -> B) -> (A, B) {
+    if std::thread::available_parallelism().map_or(1, |t| t.get()) < 2 {
+        return (a(), b());
+    }
+    std::thread::scope(|scope| {
+        let first = scope.spawn(a);
+        let second = b();
+        (first.join().expect("a joined computation panicked"), second)
+    })
+}

@@ -80,19 +80,23 @@ impl OutputCorrelations {
                 needed: 4 * (max_lag + 1) * batches,
             });
         }
-        let valid: Vec<bool> = (0..n).map(|t| channels.iter().all(|c| !c[t].is_nan())).collect();
+        // Channel by channel on the workers (a 10-minute window's mask and
+        // means took ~6 ms on one thread); without a NaN the mask is all set.
+        let gappy = super::ordered_map(channels, |c| c.iter().any(|v| v.is_nan()));
+        let valid: Vec<bool> = if gappy.iter().any(|&g| g) {
+            (0..n).map(|t| channels.iter().all(|c| !c[t].is_nan())).collect()
+        } else {
+            vec![true; n]
+        };
         let valid_count = valid.iter().filter(|&&v| v).count();
-        let centred: Vec<Vec<f64>> = channels
-            .iter()
-            .map(|c| {
-                let mean =
-                    c.iter().zip(&valid).filter(|(_, &v)| v).map(|(x, _)| x).sum::<f64>() / valid_count.max(1) as f64;
-                c.iter()
-                    .zip(&valid)
-                    .map(|(x, &v)| if v { x - mean } else { 0.0 })
-                    .collect()
-            })
-            .collect();
+        let centred: Vec<Vec<f64>> = super::ordered_map(channels, |c| {
+            let mean =
+                c.iter().zip(&valid).filter(|(_, &v)| v).map(|(x, _)| x).sum::<f64>() / valid_count.max(1) as f64;
+            c.iter()
+                .zip(&valid)
+                .map(|(x, &v)| if v { x - mean } else { 0.0 })
+                .collect()
+        });
         let mut out = Self {
             channels: l,
             references,

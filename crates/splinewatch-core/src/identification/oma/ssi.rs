@@ -23,6 +23,7 @@
 
 use super::shape::{mpc, normalise};
 use super::OmaError;
+use crate::linalg::join;
 use crate::linalg::leading_eigen::leading_eigen;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::{DenseSolveCore, Solve};
@@ -80,21 +81,19 @@ struct Truncated {
 /// `ε σ₁²/σ_i`.
 fn truncated_svd(hankel: &Mat<f64>, cap: usize) -> Result<(Vec<f64>, Truncated), OmaError> {
     let cols = hankel.ncols();
-    let mut gram = Mat::<f64>::zeros(cols, cols);
-    triangular::matmul(
-        gram.as_mut(),
-        BlockStructure::TriangularLower,
-        Accum::Replace,
-        hankel.transpose(),
-        BlockStructure::Rectangular,
-        hankel,
-        BlockStructure::Rectangular,
-        1.0,
-        Par::Seq,
-    );
+    let gram = lower_gram(hankel.as_ref());
     let eigen = leading_eigen(gram.as_ref(), cap).map_err(|_| OmaError::SvdFailed)?;
     let (values, v) = (eigen.values, eigen.vectors);
-    let hv = hankel * &v;
+    // H V, its columns in two halves on two threads.
+    let half = cap / 2;
+    let (first, second) = join(|| hankel * v.subcols(0, half), || hankel * v.subcols(half, cap - half));
+    let hv = Mat::from_fn(hankel.nrows(), cap, |r, c| {
+        if c < half {
+            first[(r, c)]
+        } else {
+            second[(r, c - half)]
+        }
+    });
     let norms: Vec<f64> = (0..cap).map(|c| hv.col(c).norm_l2()).collect();
     let mut order: Vec<usize> = (0..cap).collect();
     order.sort_by(|&a, &b| norms[b].total_cmp(&norms[a]));
@@ -114,6 +113,40 @@ fn truncated_svd(hankel: &Mat<f64>, cap: usize) -> Result<(Vec<f64>, Truncated),
             left: Mat::from_fn(hv.nrows(), cap, |row, col| hv[(row, order[col])]),
         },
     ))
+}
+
+/// The lower triangle of `HᵀH` (the rest zero), in two parts of equal
+/// work on two threads: the leading `c` columns (`c = n(1 − 1/√2)`: their
+/// triangle and the block below it) and the trailing triangle.
+fn lower_gram(hankel: MatRef<'_, f64>) -> Mat<f64> {
+    let n = hankel.ncols();
+    let c = ((n as f64) * (1.0 - std::f64::consts::FRAC_1_SQRT_2)).round() as usize;
+    let mut gram = Mat::<f64>::zeros(n, n);
+    let (left, right) = gram.as_mut().split_at_col_mut(c);
+    let (leading, below) = left.split_at_row_mut(c);
+    let (_, trailing) = right.split_at_row_mut(c);
+    let (h1, h2) = (hankel.subcols(0, c), hankel.subcols(c, n - c));
+    let lower = |dst: faer::MatMut<'_, f64>, h: MatRef<'_, f64>| {
+        triangular::matmul(
+            dst,
+            BlockStructure::TriangularLower,
+            Accum::Replace,
+            h.transpose(),
+            BlockStructure::Rectangular,
+            h,
+            BlockStructure::Rectangular,
+            1.0,
+            Par::Seq,
+        )
+    };
+    join(
+        || {
+            lower(leading, h1);
+            faer::linalg::matmul::matmul(below, Accum::Replace, h2.transpose(), h1, 1.0, Par::Seq);
+        },
+        || lower(trailing, h2),
+    );
+    gram
 }
 
 /// The block Hankel matrix `[R_{i+j+1}]`, `i = 0..=p`, `j = 0..p−1`.
