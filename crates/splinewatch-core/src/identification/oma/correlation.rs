@@ -200,39 +200,71 @@ impl ChunkPlan {
         let (l, r, n, m) = (batch.len(), references.len(), batch[0].len(), self.len);
         let (hop, bins) = (m - self.max_lag, m / 2 + 1);
         let zero = c64::new(0.0, 0.0);
-        // Per pair (a, j), the cross spectrum summed over the chunks.
-        let mut cross = vec![zero; l * r * bins];
+        // Per pair (a, j), the cross spectrum summed over the chunks, real
+        // and imaginary parts apart (so the products vectorise).
+        let (mut cross_re, mut cross_im) = (vec![0.0; l * r * bins], vec![0.0; l * r * bins]);
         let mut buffer = vec![0.0; m];
-        let mut outputs = vec![vec![zero; bins]; l];
-        let mut refs = vec![vec![zero; bins]; r];
-        let mut transform = |samples: &[f64], spectrum: &mut [c64]| {
+        let mut spectrum = vec![zero; bins];
+        let mut scratch = vec![zero; self.forward.get_scratch_len()];
+        let (mut outputs_re, mut outputs_im) = (vec![0.0; l * bins], vec![0.0; l * bins]);
+        let (mut refs_re, mut refs_im) = (vec![0.0; r * bins], vec![0.0; r * bins]);
+        let mut transform = |samples: &[f64], re: &mut [f64], im: &mut [f64]| {
             buffer[..samples.len()].copy_from_slice(samples);
             buffer[samples.len()..].fill(0.0);
-            self.forward.process(&mut buffer, spectrum).expect("sized by the plan");
+            self.forward
+                .process_with_scratch(&mut buffer, &mut spectrum, &mut scratch)
+                .expect("sized by the plan");
+            for ((z, re), im) in spectrum.iter().zip(re).zip(im) {
+                (*re, *im) = (z.re, z.im);
+            }
         };
         for start in (0..n).step_by(hop) {
-            for (y, spectrum) in batch.iter().zip(&mut outputs) {
-                transform(&y[start..n.min(start + m)], spectrum);
+            for (a, y) in batch.iter().enumerate() {
+                let part = a * bins..(a + 1) * bins;
+                transform(
+                    &y[start..n.min(start + m)],
+                    &mut outputs_re[part.clone()],
+                    &mut outputs_im[part],
+                );
             }
-            for (&reference, spectrum) in references.iter().zip(&mut refs) {
-                transform(&batch[reference][start..n.min(start + hop)], spectrum);
+            for (j, &reference) in references.iter().enumerate() {
+                let part = j * bins..(j + 1) * bins;
+                transform(
+                    &batch[reference][start..n.min(start + hop)],
+                    &mut refs_re[part.clone()],
+                    &mut refs_im[part],
+                );
             }
-            for (a, ya) in outputs.iter().enumerate() {
-                for (j, xr) in refs.iter().enumerate() {
-                    let acc = &mut cross[(a * r + j) * bins..(a * r + j + 1) * bins];
-                    for ((s, y), x) in acc.iter_mut().zip(ya).zip(xr) {
-                        *s += y * x.conj();
+            // Y_a X_jᴴ: (yr + i yi)(xr − i xi).
+            for a in 0..l {
+                let (yr, yi) = (
+                    &outputs_re[a * bins..(a + 1) * bins],
+                    &outputs_im[a * bins..(a + 1) * bins],
+                );
+                for j in 0..r {
+                    let (xr, xi) = (&refs_re[j * bins..(j + 1) * bins], &refs_im[j * bins..(j + 1) * bins]);
+                    let pair = (a * r + j) * bins..(a * r + j + 1) * bins;
+                    let (sr, si) = (&mut cross_re[pair.clone()], &mut cross_im[pair]);
+                    for f in 0..bins {
+                        sr[f] += yr[f] * xr[f] + yi[f] * xi[f];
+                        si[f] += yr[f] * -xi[f] + yi[f] * xr[f];
                     }
                 }
             }
         }
         let mut sums = vec![0.0; (self.max_lag + 1) * l * r];
         let mut lagged = vec![0.0; m];
-        for (pair, spectrum) in cross.chunks_exact_mut(bins).enumerate() {
+        let mut scratch = vec![zero; self.inverse.get_scratch_len()];
+        for pair in 0..l * r {
             let (a, j) = (pair / r, pair % r);
+            for (f, z) in spectrum.iter_mut().enumerate() {
+                *z = c64::new(cross_re[pair * bins + f], cross_im[pair * bins + f]);
+            }
             spectrum[0].im = 0.0;
             spectrum[bins - 1].im = 0.0;
-            self.inverse.process(spectrum, &mut lagged).expect("sized by the plan");
+            self.inverse
+                .process_with_scratch(&mut spectrum, &mut lagged, &mut scratch)
+                .expect("sized by the plan");
             for k in 0..=self.max_lag {
                 sums[(k * l + a) * r + j] = lagged[k] / m as f64;
             }
