@@ -532,8 +532,8 @@ mod tests {
     }
 
     /// `n` samples at `fs` of two damped oscillators (2.3 and 7.1 Hz,
-    /// explicit integration) driven by noise, seen by `l = 3` channels with
-    /// 1 % noise.
+    /// explicit integration) driven by noise, seen by `l` channels with
+    /// 1 % noise (the first three with fixed shapes, more on a phase).
     fn two_oscillators(seed: u64, n: usize, l: usize, fs: f64) -> Vec<Vec<f64>> {
         let mut seed = seed;
         let mut noise = move || {
@@ -552,8 +552,13 @@ mod tests {
             x1 += dt * v1;
             v2 += dt * (-w2 * w2 * x2 - 2.0 * 0.03 * w2 * v2 + 40.0 * f2);
             x2 += dt * v2;
-            for (a, shape) in [[1.0, 0.4], [0.6, -1.0], [-0.3, 0.8]].iter().enumerate().take(l) {
-                y[a][t] = shape[0] * x1 + shape[1] * x2 + 0.01 * noise();
+            for (a, channel) in y.iter_mut().enumerate() {
+                let phase = a as f64 * 0.7;
+                let shape = [[1.0, 0.4], [0.6, -1.0], [-0.3, 0.8]]
+                    .get(a)
+                    .copied()
+                    .unwrap_or([phase.cos(), (1.3 * phase).sin()]);
+                channel[t] = shape[0] * x1 + shape[1] * x2 + 0.01 * noise();
             }
         }
         y
@@ -658,23 +663,6 @@ mod tests {
         }
     }
 
-    #[test]
-    fn too_few_lags_and_zero_data_are_errors() {
-        assert!(matches!(
-            SubspaceModel::new(&[0.0; 9], 1, 1, 5, usize::MAX, 10.0),
-            Err(OmaError::TooFewLags { block_rows: 5 })
-        ));
-        assert!(matches!(
-            SubspaceModel::new(&[0.0; 11], 1, 1, 5, usize::MAX, 10.0),
-            Err(OmaError::SingularHankel { order: 1 })
-        ));
-    }
-}
-
-#[cfg(test)]
-mod truncated_svd_tests {
-    use super::*;
-
     /// The truncated SVD of a noisy Hankel matrix (two oscillators seen by
     /// six channels, 1 % noise, 12 block rows: 78 × 72, rank 4 plus noise)
     /// against faer's full SVD: the `cap` leading singular values (`‖H v_i‖`)
@@ -686,7 +674,7 @@ mod truncated_svd_tests {
     #[test]
     fn leading_vectors_are_the_full_svds() {
         let (l, p) = (6, 12);
-        let y = super::tests_support::oscillators(11, 20000, l);
+        let y = two_oscillators(11, 20000, l, 50.0);
         let views: Vec<&[f64]> = y.iter().map(Vec::as_slice).collect();
         let r = super::super::OutputCorrelations::from_samples(&views, &[], 2 * p, 1)
             .unwrap()
@@ -731,37 +719,16 @@ mod truncated_svd_tests {
         }
         assert!(compared >= 4, "only {compared} vectors apart from their neighbours");
     }
-}
 
-#[cfg(test)]
-mod tests_support {
-    use std::f64::consts::PI;
-
-    /// `n` samples at 50 Hz of two damped oscillators (2.3 and 7.1 Hz)
-    /// driven by noise, seen by `l` channels with 1 % noise.
-    pub fn oscillators(seed: u64, n: usize, l: usize) -> Vec<Vec<f64>> {
-        let mut seed = seed;
-        let mut noise = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed as f64 / u64::MAX as f64 - 0.5
-        };
-        let (mut x1, mut v1, mut x2, mut v2) = (0.0, 0.0, 0.0, 0.0);
-        let dt = 1.0 / 50.0;
-        let (w1, w2) = (2.0 * PI * 2.3, 2.0 * PI * 7.1);
-        let mut y = vec![vec![0.0; n]; l];
-        for t in 0..n {
-            let (f1, f2) = (noise(), noise());
-            v1 += dt * (-w1 * w1 * x1 - 2.0 * 0.02 * w1 * v1 + 40.0 * f1);
-            x1 += dt * v1;
-            v2 += dt * (-w2 * w2 * x2 - 2.0 * 0.03 * w2 * v2 + 40.0 * f2);
-            x2 += dt * v2;
-            for (a, channel) in y.iter_mut().enumerate() {
-                let phase = a as f64 * 0.7;
-                channel[t] = phase.cos() * x1 + (1.3 * phase).sin() * x2 + 0.01 * noise();
-            }
-        }
-        y
+    #[test]
+    fn too_few_lags_and_zero_data_are_errors() {
+        assert!(matches!(
+            SubspaceModel::new(&[0.0; 9], 1, 1, 5, usize::MAX, 10.0),
+            Err(OmaError::TooFewLags { block_rows: 5 })
+        ));
+        assert!(matches!(
+            SubspaceModel::new(&[0.0; 11], 1, 1, 5, usize::MAX, 10.0),
+            Err(OmaError::SingularHankel { order: 1 })
+        ));
     }
 }
