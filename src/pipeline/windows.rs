@@ -238,26 +238,18 @@ impl Pipeline {
         if fraction < self.schedule.min_segment_fraction || valid == 0 {
             return Err("too_little_data".into());
         }
-        let fs = self.fs.expect("set with the reference");
-        // In line, the model comes first (no identification without it);
-        // split, the identification runs while the update side may still
-        // apply earlier jobs, and the pairing waits for the model. Either
-        // way a failed model is the reason, then a failed identification.
-        let identified = match self.pairing {
-            None => None,
-            Some(_) => {
-                let identification = self.identification.as_ref().expect("the output-only path");
-                Some(identification.identify_window(samples, report.start_ns, fs))
-            }
+        let (fs, start_ns) = (self.fs.expect("set with the reference"), report.start_ns);
+        let identify = |p: &Self| {
+            let identification = p.identification.as_ref().expect("the output-only path");
+            identification.identify_window(samples, start_ns, fs)
         };
+        // Split, the identification runs first, while the update side may
+        // still apply earlier jobs, and the pairing waits for the model; in
+        // line the model comes first (no identification without it). Either
+        // way a failed model is the reason before a failed identification.
+        let early = self.pairing.is_some().then(|| identify(self));
         let state = self.pairing_state()?;
-        let identified = match identified {
-            Some(identified) => identified,
-            None => {
-                let identification = self.identification.as_ref().expect("the output-only path");
-                identification.identify_window(samples, report.start_ns, fs)
-            }
-        };
+        let identified = early.unwrap_or_else(|| identify(self));
         let identification = self.identification.as_ref().expect("the output-only path");
         identification
             .pair(identified?, &state, &self.setup.sensor_names)
