@@ -86,14 +86,15 @@ fn truncated_svd(hankel: &Mat<f64>, cap: usize) -> Result<(Vec<f64>, Truncated),
     let (values, v) = (eigen.values, eigen.vectors);
     // H V, its columns in two halves on two threads.
     let half = cap / 2;
-    let (first, second) = join(|| hankel * v.subcols(0, half), || hankel * v.subcols(half, cap - half));
-    let hv = Mat::from_fn(hankel.nrows(), cap, |r, c| {
-        if c < half {
-            first[(r, c)]
-        } else {
-            second[(r, c - half)]
-        }
-    });
+    let mut hv = Mat::<f64>::zeros(hankel.nrows(), cap);
+    let (first, second) = hv.as_mut().split_at_col_mut(half);
+    let product = |dst: faer::MatMut<'_, f64>, columns: MatRef<'_, f64>| {
+        faer::linalg::matmul::matmul(dst, Accum::Replace, hankel, columns, 1.0, Par::Seq)
+    };
+    join(
+        || product(first, v.subcols(0, half)),
+        || product(second, v.subcols(half, cap - half)),
+    );
     let norms: Vec<f64> = (0..cap).map(|c| hv.col(c).norm_l2()).collect();
     let mut order: Vec<usize> = (0..cap).collect();
     order.sort_by(|&a, &b| norms[b].total_cmp(&norms[a]));
