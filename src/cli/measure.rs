@@ -21,8 +21,12 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub config: PathBuf,
     /// Length of the recording, seconds.
-    #[arg(long, required_unless_present = "frf_windows")]
+    #[arg(long, required_unless_present_any = ["frf_windows", "ground"])]
     pub duration: Option<f64>,
+    /// The deck's response to a record's ground channels (a station's .zip or .V2 files, or an
+    /// MCAP of ground channels), written with them: --noise, --seed, --encoding and --out apply.
+    #[arg(long, num_args = 1.., conflicts_with_all = ["frf_windows", "publish", "duration", "scenario"])]
+    pub ground: Vec<PathBuf>,
     /// Instead of time series: a compact recording of N windows of
     /// pre-computed FRFs (model FRFs + --noise, at each window's
     /// temperature and damage state from --scenario) with the temperature
@@ -159,8 +163,8 @@ pub enum ImportFormat {
 #[derive(Args)]
 pub struct ImportArgs {
     /// Configuration file (TOML): its [[sensors]] name the channels.
-    #[arg(long)]
-    pub config: PathBuf,
+    #[arg(long, required_unless_present = "list")]
+    pub config: Option<PathBuf>,
     /// File format.
     #[arg(long, value_enum)]
     pub format: ImportFormat,
@@ -168,8 +172,11 @@ pub struct ImportArgs {
     #[arg(required = true, num_args = 1..)]
     pub input: Vec<PathBuf>,
     /// Output recording (MCAP).
+    #[arg(long, required_unless_present = "list")]
+    pub out: Option<PathBuf>,
+    /// List the channels (V2: station channel, direction, location, rate, points, peak) and write nothing.
     #[arg(long)]
-    pub out: PathBuf,
+    pub list: bool,
     /// Sampling rate, Hz (when the file has no time column; overrides the file's).
     #[arg(long)]
     pub fs: Option<f64>,
@@ -200,16 +207,28 @@ pub struct ImportArgs {
 }
 
 pub fn import(a: ImportArgs) -> Result<()> {
-    let cfg = load_config(&a.config)?;
     let mut files = Vec::new();
     for path in &a.input {
         let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
         files.push((bytes, path.display().to_string()));
     }
-    let input = files.iter().map(|(_, n)| n.as_str()).collect::<Vec<_>>().join(", ");
     if files.len() > 1 && !matches!(a.format, ImportFormat::V2) {
+        let input = files.iter().map(|(_, n)| n.as_str()).collect::<Vec<_>>().join(", ");
         bail!("--format {:?} reads one file, got {}: {input}", a.format, files.len());
     }
+    // V2 errors name their own file; one file names itself here.
+    let input = if files.len() == 1 {
+        files[0].1.clone()
+    } else {
+        format!("{} files", files.len())
+    };
+    if a.list {
+        return list_channels(&a, &files);
+    }
+    let (Some(config), Some(out)) = (&a.config, &a.out) else {
+        bail!("import needs --config and --out (or --list)");
+    };
+    let cfg = load_config(config)?;
     let bytes = &files[0].0;
     let series = match a.format {
         ImportFormat::Csv => {
@@ -223,12 +242,11 @@ pub fn import(a: ImportArgs) -> Result<()> {
                 decimal_comma: a.decimal_comma.then_some(true),
                 time_column: a.time_column.clone(),
             };
-            import::read_csv(text, &options)
+            import::read_csv(text, &options).with_context(|| input.clone())
         }
-        ImportFormat::Uff => import::read_uff58(bytes),
-        ImportFormat::V2 => crate::io::cosmos_v2::read_v2(&files),
-    }
-    .with_context(|| input.clone())?;
+        ImportFormat::Uff => import::read_uff58(bytes).with_context(|| input.clone()),
+        ImportFormat::V2 => Ok(crate::io::cosmos_v2::read_v2(&files)?),
+    }?;
     let start_ns = a
         .start
         .as_deref()
@@ -251,12 +269,54 @@ pub fn import(a: ImportArgs) -> Result<()> {
     }
     let blocks = imported.blocks;
     let prefix = cfg.topic_prefix();
-    let mut writer = RecordingWriter::create(&a.out, a.encoding)?;
+    let mut writer = RecordingWriter::create(out, a.encoding)?;
     for b in &blocks {
         writer.write_block(&prefix, b)?;
     }
     writer.finish()?;
-    errln!("{} blocks from {input} written to {}", blocks.len(), a.out.display());
+    errln!("{} blocks from {input} written to {}", blocks.len(), out.display());
+    Ok(())
+}
+
+/// `import --list`: one line per channel (V2), or the columns (CSV, UFF).
+fn list_channels(a: &ImportArgs, files: &[(Vec<u8>, String)]) -> Result<()> {
+    if !matches!(a.format, ImportFormat::V2) {
+        let series = match a.format {
+            ImportFormat::Uff => import::read_uff58(&files[0].0),
+            _ => {
+                let text =
+                    std::str::from_utf8(&files[0].0).with_context(|| format!("{}: not UTF-8 text", files[0].1))?;
+                import::read_csv(text, &CsvOptions::default())
+            }
+        }
+        .with_context(|| files[0].1.clone())?;
+        outln!("column\tunit\tpoints\tpeak");
+        for c in &series.channels {
+            let peak = c.data.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            outln!(
+                "{}\t{}\t{}\t{peak:.6}",
+                c.name,
+                c.unit.as_deref().unwrap_or("-"),
+                c.data.len()
+            );
+        }
+        return Ok(());
+    }
+    let channels = crate::io::cosmos_v2::list_v2(files)?;
+    outln!("column\tdirection\tlocation\trate_hz\tpoints\tpeak\tunit\tfile");
+    for c in &channels {
+        outln!(
+            "ch{}\t{}\t{}\t{}\t{}\t{:.4}\t{}\t{}",
+            c.channel,
+            c.direction,
+            c.location,
+            c.rate_hz,
+            c.points,
+            c.peak,
+            c.unit,
+            c.file
+        );
+    }
     Ok(())
 }
 
@@ -272,6 +332,12 @@ pub fn simulate(a: SimulateArgs) -> Result<()> {
         .transpose()?;
     let start_ns = wire::parse_timestamp(&a.start)
         .with_context(|| format!("--start {:?} is not an RFC 3339 timestamp", a.start))?;
+    if !a.ground.is_empty() {
+        let Some(out) = &a.out else {
+            bail!("simulate --ground needs --out");
+        };
+        return super::ground::simulate_ground(&cfg, &a.ground, a.noise, a.seed, a.encoding, out);
+    }
     if let Some(windows) = a.frf_windows {
         return simulate_frf_windows(&cfg, scenario.unwrap_or_default(), &a, windows, start_ns);
     }

@@ -2,6 +2,7 @@
 //! command, grouped by family; output to the console happens here.
 //! Room: the top. May import: `service`, `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
+mod ground;
 mod measure;
 mod model;
 mod monitor;
@@ -42,6 +43,8 @@ enum Command {
     /// Convert a logger's time series (CSV/TSV or UFF 58) into a raw-input
     /// MCAP recording, one channel per column, named after the config's sensors.
     Import(measure::ImportArgs),
+    /// Drive the model with a record's ground channels and compare the predicted and measured deck accelerations.
+    Predict(ground::PredictArgs),
     /// One update of a results file as a universal file for modal-testing
     /// software: the sensors' geometry (datasets 15, 82), the window's
     /// measured or model FRFs (58), the model's modes at its updated
@@ -90,6 +93,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Frf(args) => measure::frf(args),
         Command::Oma(args) => measure::oma(args),
         Command::Import(args) => measure::import(args),
+        Command::Predict(args) => ground::predict(args),
         Command::Export(args) => measure::export(args),
         Command::Replay(args) => monitor::replay(args),
         Command::Run(args) => monitor::run(args),

@@ -255,8 +255,17 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     let (_, tls) = cfg.zenoh.to_zenoh_with_tls()?;
     outln!("{}: configuration is valid", cfg.structure.name);
     if cfg.has_model() {
-        for line in studies::modes::describe_patches(&cfg.build_model()?) {
+        let model = cfg.build_model()?;
+        for line in studies::modes::describe_patches(&model) {
             outln!("{line}");
+        }
+        if cfg.has_ground_sensors() {
+            let groups = cfg.support_groups(&model)?;
+            outln!("support groups: {}", groups.names().join(", "));
+            outln!("ground inputs (support motion):");
+            for input in cfg.ground_plan(&groups)? {
+                outln!("  {}", input.describe(&cfg));
+            }
         }
     } else {
         outln!(

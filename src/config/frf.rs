@@ -131,7 +131,7 @@ impl Config {
     /// sensors measuring acceleration, by index into `[[sensors]]`.
     pub fn channel_roles(&self) -> Result<(usize, Vec<usize>), ConfigError> {
         let has = |i: usize, q: &str| self.sensors[i].quantity.as_slice().iter().any(|x| x == q);
-        let forces: Vec<usize> = (0..self.sensors.len()).filter(|&i| has(i, "force")).collect();
+        let forces: Vec<usize> = (0..self.deck_sensor_count()).filter(|&i| has(i, "force")).collect();
         let force = match forces.as_slice() {
             [one] => *one,
             [] => return Err(err("sensors", "no sensor has quantity \"force\" (the excitation)")),

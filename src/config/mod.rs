@@ -7,6 +7,7 @@
 //! (`[model.discretization]`); see README.md for every key.
 
 mod frf;
+mod ground;
 mod model;
 mod monitoring;
 mod oma;
@@ -19,6 +20,7 @@ mod updating;
 mod zenoh;
 
 pub use frf::FrfConfig;
+pub use ground::{ground_signals, GroundInputPlan};
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,
     ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
@@ -120,6 +122,8 @@ impl Config {
             err(if path == "." { "(document)".into() } else { path }, message)
         })?;
         config.validate_names()?;
+        let mut config = config;
+        config.place_ground_sensors_last()?;
         Ok(config)
     }
 
@@ -199,11 +203,15 @@ impl Config {
         if self.has_model() {
             let model = self.build_model()?;
             self.build_sensors(&model)?;
+            let groups = self.support_groups(&model)?;
+            self.ground_plan(&groups)?;
             self.modal_cutoff_hz()?;
             if self.model.damping.is_some() {
                 self.build_damping()?;
             }
             self.build_parameters()?;
+        } else if self.has_ground_sensors() {
+            return Err(err("sensors", "ground sensors (support = …) need a deck: give [model]"));
         } else if self.sensors.is_empty() {
             return Err(err(
                 "model",

@@ -169,6 +169,11 @@ pub struct SensorConfig {
     /// (dataset 58 response/reference nodes; `update --frf FILE.uff`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uff_node: Option<i64>,
+    /// A ground sensor: the support group whose ground acceleration it
+    /// measures along `direction` (an input; no position). Ground sensors
+    /// are listed after the deck's once loaded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<String>,
 }
 
 fn default_quantity() -> QuantityList {
@@ -252,6 +257,9 @@ pub struct SpringConfig {
     /// Whether the updating identifies these coefficients.
     #[serde(default = "default_true")]
     pub update: bool,
+    /// The support group whose ground the springs connect to (default "ground").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<String>,
 }
 
 /// `[[model.stiffness_fields]]`: a B-spline multiplier θ(ξ, η) of the deck's
@@ -319,6 +327,9 @@ pub struct ConstraintConfig {
     pub kind: SupportConfig,
     /// The patch whose edge is supported (default: the only patch).
     pub patch: Option<String>,
+    /// The support group whose ground the edge follows (default "ground").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<String>,
 }
 
 impl Config {
@@ -771,7 +782,7 @@ impl Config {
     /// The sensors as model points, in config order, with their names.
     pub fn build_sensors(&self, model: &ShellModel) -> Result<Vec<(String, SensorPoint)>, ConfigError> {
         let mut out = Vec::with_capacity(self.sensors.len());
-        for (i, s) in self.sensors.iter().enumerate() {
+        for (i, s) in self.sensors.iter().enumerate().take(self.deck_sensor_count()) {
             let key = |k: &str| format!("sensors[{i}].{k}");
             for q in s.quantity.as_slice() {
                 if !matches!(q.as_str(), "acceleration" | "force" | "displacement" | "velocity") {

@@ -56,7 +56,7 @@ impl Default for OmaConfig {
 impl Config {
     /// The acceleration sensors (indices into `[[sensors]]`): the OMA outputs.
     pub fn output_channels(&self) -> Result<Vec<usize>, ConfigError> {
-        let outputs: Vec<usize> = (0..self.sensors.len())
+        let outputs: Vec<usize> = (0..self.deck_sensor_count())
             .filter(|&i| self.sensors[i].quantity.as_slice().iter().any(|q| q == "acceleration"))
             .collect();
         if outputs.is_empty() {

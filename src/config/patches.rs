@@ -154,6 +154,9 @@ pub struct BearingConfig {
     pub bounds: Option<[f64; 2]>,
     #[serde(default = "default_true")]
     pub update: bool,
+    /// The support group whose ground the bearing stands on (default "ground").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<String>,
 }
 
 fn bottom() -> FaceConfig {

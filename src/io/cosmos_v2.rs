@@ -21,10 +21,32 @@ use std::io::Read;
 #[derive(Debug, Clone, PartialEq)]
 struct V2Channel {
     number: u32,
+    /// The file (and, in a zip, the member) it came from, for messages.
+    file: String,
+    /// What the `Chan N:` line says after the number: `Tran`, `Up`, `360 Deg`.
+    direction: String,
+    /// The line's `Location:` text, e.g. `Deck: Near West Abutment`.
+    location: String,
     time_step: f64,
     unit: String,
     start_ns: Option<i128>,
     values: Vec<f64>,
+}
+
+/// One channel as `import --list` shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct V2Summary {
+    /// The station channel (`Sta Chn: N`, else `Chan N:`): the column `chN`.
+    pub channel: u32,
+    pub direction: String,
+    pub location: String,
+    /// Samples per second.
+    pub rate_hz: f64,
+    pub points: usize,
+    /// The largest absolute acceleration, in the file's unit.
+    pub peak: f64,
+    pub unit: String,
+    pub file: String,
 }
 
 fn error(what: &str, message: impl Into<String>) -> ImportError {
@@ -36,14 +58,44 @@ fn error(what: &str, message: impl Into<String>) -> ImportError {
 
 /// Reads `.V2` files or `.zip` files of them (told by their first bytes),
 /// each given with its name (for messages and, when line 8 gives none, the
-/// channel number), into one series: the channels of all of them.
+/// channel number), into one series: the channels of all of them, on one
+/// grid ([`to_series`]).
 pub fn read_v2(files: &[(Vec<u8>, String)]) -> Result<ImportedSeries, ImportError> {
+    to_series(read_channels(files)?)
+}
+
+/// Every channel of the files, as `import --list` shows them, by channel.
+pub fn list_v2(files: &[(Vec<u8>, String)]) -> Result<Vec<V2Summary>, ImportError> {
+    Ok(read_channels(files)?
+        .into_iter()
+        .map(|c| V2Summary {
+            channel: c.number,
+            rate_hz: 1.0 / c.time_step,
+            points: c.values.len(),
+            peak: c.values.iter().fold(0.0, |a: f64, v| a.max(v.abs())),
+            direction: c.direction,
+            location: c.location,
+            unit: c.unit,
+            file: c.file,
+        })
+        .collect())
+}
+
+/// The channels of all files, by station channel; a channel given twice is
+/// an error naming both files.
+fn read_channels(files: &[(Vec<u8>, String)]) -> Result<Vec<V2Channel>, ImportError> {
     let mut channels = Vec::new();
     for (bytes, name) in files {
         channels.extend(read_file(bytes, name)?);
     }
-    let names: Vec<&str> = files.iter().map(|(_, n)| n.as_str()).collect();
-    to_series(channels, &names.join(", "))
+    channels.sort_by_key(|c| c.number);
+    if let Some(pair) = channels.windows(2).find(|w| w[0].number == w[1].number) {
+        return Err(error(
+            &pair[1].file,
+            format!("channel {} is also in {}", pair[0].number, pair[0].file),
+        ));
+    }
+    Ok(channels)
 }
 
 /// The channels of one `.V2` or `.zip` file.
@@ -99,12 +151,16 @@ fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
         .iter()
         .position(|l| l.contains("points of accel data equally spaced at"))
         .ok_or_else(|| error(name, "a channel without a \"points of accel data\" line"))?;
-    let number = lines
+    let header = &lines[..at];
+    // The station's own number (`Sta Chn: 15`) when the recorder's differs;
+    // several recorders of a station each count their `Chan N:` from 1.
+    let number = header
         .iter()
-        .take(at)
-        .find_map(|l| channel_number(l))
+        .find_map(|l| station_channel(l))
+        .or_else(|| header.iter().find_map(|l| channel_number(l)))
         .or_else(|| file_channel_number(name))
         .ok_or_else(|| error(name, "no \"Chan N:\" line and no channel number in the file name"))?;
+    let (direction, location) = header.iter().find_map(|l| channel_description(l)).unwrap_or_default();
     let what = format!("{name}, channel {number}");
     let descriptor = lines[at];
     let count: usize = descriptor
@@ -145,6 +201,9 @@ fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
     let start_ns = lines.iter().take(at).find_map(|l| record_start(l));
     Ok(V2Channel {
         number,
+        file: name.to_string(),
+        direction,
+        location,
         time_step,
         unit,
         start_ns,
@@ -163,6 +222,31 @@ fn channel_number(line: &str) -> Option<u32> {
             .then(|| digits.parse().ok())
             .flatten()
     })
+}
+
+/// `Chan 12:  Long    (Sta Chn: 15)  Location: …` → 15.
+fn station_channel(line: &str) -> Option<u32> {
+    let lower = line.to_ascii_lowercase();
+    let rest = lower[lower.find("sta chn:")? + 8..].trim_start();
+    let digits: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    digits.parse().ok()
+}
+
+/// `Chan  4:  Tran   Location: Deck: Near West Abutment` → (`Tran`,
+/// `Deck: Near West Abutment`): the words after the number (without a
+/// `(Sta Chn: N)`) and the location text, from the line that has both.
+fn channel_description(line: &str) -> Option<(String, String)> {
+    channel_number(line)?;
+    let lower = line.to_ascii_lowercase();
+    let location_at = lower.find("location:")?;
+    let after_number = lower[..location_at].find(':')? + 1;
+    let mut direction = line[after_number..location_at].to_string();
+    if let Some(open) = direction.to_ascii_lowercase().find("(sta chn") {
+        direction.truncate(open);
+    }
+    let direction = direction.split_whitespace().collect::<Vec<_>>().join(" ");
+    let location = line[location_at + 9..].split_whitespace().collect::<Vec<_>>().join(" ");
+    Some((direction, location))
 }
 
 /// `CHAN005.V2`, `26327_ch5.v2` → 5: the last number in the file's stem.
@@ -245,56 +329,116 @@ fn record_start(line: &str) -> Option<i128> {
     Some(midnight + (seconds * 1e9).round() as i128 - i128::from(offset_hours) * 3_600_000_000_000)
 }
 
-/// The channels on one grid: one time step, one length, one start.
-fn to_series(mut channels: Vec<V2Channel>, name: &str) -> Result<ImportedSeries, ImportError> {
-    channels.sort_by_key(|c| c.number);
+/// The channels on one grid. Channels of several recorders may differ in
+/// rate, start and length: the grid is the lowest rate over the span all
+/// channels cover (from the latest start to the earliest end; channels
+/// without a start time must all lack one and then start together). Each
+/// channel is cut to that span at its own nearest sample (an offset below
+/// half a sample of its own rate stays) and, when its rate differs,
+/// resampled to the grid by Fourier interpolation over the span (the
+/// spectrum truncated at the new Nyquist frequency or padded with zeros, as
+/// `scipy.signal.resample`), which is exact for a band-limited periodic
+/// signal and low-pass filters a channel brought down.
+fn to_series(channels: Vec<V2Channel>) -> Result<ImportedSeries, ImportError> {
     let first = &channels[0];
-    if let Some(pair) = channels.windows(2).find(|w| w[0].number == w[1].number) {
-        return Err(error(name, format!("channel {} appears twice", pair[0].number)));
+    if let Some(c) = channels
+        .iter()
+        .find(|c| c.start_ns.is_some() != first.start_ns.is_some())
+    {
+        let (with, without) = if c.start_ns.is_some() { (c, first) } else { (first, c) };
+        return Err(error(
+            &without.file,
+            format!(
+                "channel {} has no record start time (\"Rcrd of …\" in UTC or PST/PDT) but channel {} of {} has one: the channels cannot be put on one time line",
+                without.number, with.number, with.file
+            ),
+        ));
     }
-    for c in &channels {
-        if (c.time_step - first.time_step).abs() > 1e-9 * first.time_step {
-            return Err(error(
-                name,
-                format!(
-                    "channel {} is sampled every {} s, channel {} every {} s",
-                    c.number, c.time_step, first.number, first.time_step
-                ),
-            ));
-        }
-        if c.values.len() != first.values.len() {
-            return Err(error(
-                name,
-                format!(
-                    "channel {} has {} points, channel {} {}: cut them to one length first",
-                    c.number,
-                    c.values.len(),
-                    first.number,
-                    first.values.len()
-                ),
-            ));
-        }
-        if c.start_ns != first.start_ns {
-            return Err(error(
-                name,
-                format!("channels {} and {} start at different times", first.number, c.number),
-            ));
-        }
+    let dt = channels.iter().map(|c| c.time_step).fold(0.0, f64::max);
+    let span_start = channels.iter().filter_map(|c| c.start_ns).max();
+    let end = |c: &V2Channel| c.start_ns.unwrap_or(0) as f64 * 1e-9 + c.values.len() as f64 * c.time_step;
+    let span_end = channels.iter().map(end).fold(f64::INFINITY, f64::min);
+    let t0 = span_start.unwrap_or(0) as f64 * 1e-9;
+    let points = ((span_end - t0) / dt + 1e-6).floor();
+    if !(points >= 2.0) {
+        let (a, b) = (
+            channels.iter().max_by_key(|c| c.start_ns).unwrap_or(first),
+            channels
+                .iter()
+                .min_by(|a, b| end(a).total_cmp(&end(b)))
+                .unwrap_or(first),
+        );
+        return Err(error(
+            &a.file,
+            format!(
+                "channel {} starts after channel {} of {} ends: the channels share no time span",
+                a.number, b.number, b.file
+            ),
+        ));
     }
-    Ok(ImportedSeries {
-        fs: Some(1.0 / first.time_step),
-        start_ns: first.start_ns,
-        offset_seconds: 0.0,
-        channels: channels
-            .into_iter()
-            .map(|c| ImportedChannel {
+    let points = points as usize;
+    let columns = channels
+        .into_iter()
+        .map(|c| {
+            let skip = ((t0 - c.start_ns.unwrap_or(0) as f64 * 1e-9) / c.time_step)
+                .round()
+                .max(0.0) as usize;
+            let own = ((points as f64 * dt / c.time_step).round() as usize).min(c.values.len() - skip);
+            let cut = &c.values[skip..skip + own];
+            let data = if (c.time_step - dt).abs() <= 1e-9 * dt {
+                cut[..points.min(cut.len())].to_vec()
+            } else {
+                fourier_resample(cut, points)
+            };
+            ImportedChannel {
                 name: format!("ch{}", c.number),
                 unit: Some(c.unit),
                 quantity: Some(ChannelQuantity::Acceleration),
-                data: c.values,
-            })
-            .collect(),
+                data,
+            }
+        })
+        .collect();
+    Ok(ImportedSeries {
+        fs: Some(1.0 / dt),
+        start_ns: span_start,
+        offset_seconds: 0.0,
+        channels: columns,
     })
+}
+
+/// `x` (one span) resampled to `n` points over the same span: the discrete
+/// Fourier series truncated or zero-padded (the Nyquist line of an even
+/// length halved), as `scipy.signal.resample`.
+fn fourier_resample(x: &[f64], n: usize) -> Vec<f64> {
+    let m = x.len();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let forward = planner.plan_fft_forward(m);
+    let mut input = x.to_vec();
+    let mut spectrum = forward.make_output_vec();
+    forward
+        .process(&mut input, &mut spectrum)
+        .expect("lengths from the plan");
+    let inverse = planner.plan_fft_inverse(n);
+    let mut target = inverse.make_input_vec();
+    let keep = target.len().min(spectrum.len());
+    target[..keep].copy_from_slice(&spectrum[..keep]);
+    // A Nyquist line present in only one of the two lengths is split or summed
+    // so that the real signal stays real (its imaginary part is dropped).
+    if m.is_multiple_of(2) && keep == spectrum.len() && n > m {
+        target[m / 2] *= 0.5;
+    }
+    if n.is_multiple_of(2) && keep == target.len() {
+        let nyquist = target.len() - 1;
+        target[nyquist].im = 0.0;
+        if n < m {
+            target[nyquist] *= 2.0;
+        }
+    }
+    target[0].im = 0.0;
+    let mut out = inverse.make_output_vec();
+    inverse.process(&mut target, &mut out).expect("lengths from the plan");
+    let scale = 1.0 / m as f64;
+    out.iter().map(|v| v * scale).collect()
 }
 
 #[cfg(test)]

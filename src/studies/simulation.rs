@@ -286,7 +286,7 @@ impl Forcing {
         let layout = excitation::source_points(&sources, config, &surfaces, rng)?;
         let points = &layout.points;
         let setup = frf_setup_with_points(config, points)?;
-        let first = config.sensors.len();
+        let first = config.deck_sensor_count();
         let forcing = Self {
             inputs: (first..first + points.len()).collect(),
             measured_at: None,

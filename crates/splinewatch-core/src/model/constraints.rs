@@ -54,19 +54,27 @@ pub struct DofReduction {
     columns: Vec<Vec<(usize, f64)>>,
 }
 
+impl EdgeConstraint {
+    /// The control points of the edge, by their index in `shell`'s net
+    /// (clamped knots: the edge curve depends on these only).
+    pub fn control_points(&self, shell: &Shell) -> Vec<usize> {
+        let (m, n) = shell.surface().net_size();
+        match self.edge {
+            Edge::Xi0 => (0..n).collect(),
+            Edge::Xi1 => (0..n).map(|j| (m - 1) * n + j).collect(),
+            Edge::Eta0 => (0..m).map(|i| i * n).collect(),
+            Edge::Eta1 => (0..m).map(|i| i * n + n - 1).collect(),
+        }
+    }
+}
+
 impl DofReduction {
     pub fn new(shell: &Shell, constraints: &[EdgeConstraint]) -> Self {
-        let (m, n) = shell.surface().net_size();
         let cps = shell.control_point_count();
         let mut fixed_translations: Vec<Vec<Vec3>> = vec![Vec::new(); cps];
         let mut fixed_rotations = vec![[false; 2]; cps];
         for c in constraints {
-            let on_edge: Vec<usize> = match c.edge {
-                Edge::Xi0 => (0..n).collect(),
-                Edge::Xi1 => (0..n).map(|j| (m - 1) * n + j).collect(),
-                Edge::Eta0 => (0..m).map(|i| i * n).collect(),
-                Edge::Eta1 => (0..m).map(|i| i * n + n - 1).collect(),
-            };
+            let on_edge = c.control_points(shell);
             let xi_edge = matches!(c.edge, Edge::Xi0 | Edge::Xi1);
             for cp in on_edge {
                 let f = shell.frames()[cp];

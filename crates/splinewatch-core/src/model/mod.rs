@@ -12,7 +12,8 @@
 //! - [`patch`]: a shell with its material and added mass, and the global dof
 //!   numbering of several patches;
 //! - [`joints`]: rigid joints between patches by penalty coupling;
-//! - [`bearings`]: discrete elastic bearings and point masses.
+//! - [`bearings`]: discrete elastic bearings and point masses;
+//! - [`supports`]: the support groups, which ground each support moves with.
 //!
 //! [`ShellModel`] gathers them; the solvers assemble it
 //! ([`crate::solvers::dense_model`], [`crate::solvers::sparse_model`]).
@@ -27,6 +28,7 @@ pub mod shell;
 pub mod sparse;
 pub mod springs;
 pub mod stiffness_field;
+pub mod supports;
 
 use bearings::{Bearing, PointMass};
 use constraints::EdgeConstraint;

@@ -5,8 +5,10 @@
 //!
 //! - [`frf`]: `FrfModel`, modal superposition at the sensors, `∂H/∂κ`, `∂H/∂γ`, the direct `Z(ω)` check;
 //! - [`modal_sensitivity`]: eigenvalue and eigenvector derivatives at the sensors (Fox & Kapoor 1968);
-//! - [`simulate`]: `ModalSimulator`, the exact first-order-hold modal recursion.
+//! - [`simulate`]: `ModalSimulator`, the exact first-order-hold modal recursion;
+//! - [`support_motion`]: the deck driven by its grounds (influence, transmissibilities, recursion inputs).
 
 pub mod frf;
 pub mod modal_sensitivity;
 pub mod simulate;
+pub mod support_motion;

@@ -18,6 +18,7 @@
 //! application) so the error is negligible.
 
 use crate::response::frf::ModalState;
+use faer::Mat;
 use std::f64::consts::PI;
 
 #[derive(Debug, Clone)]
@@ -43,6 +44,9 @@ pub struct ModalSimulator {
     dt: f64,
     sensors: usize,
     last_forces: Vec<f64>,
+    /// Inputs straight to the outputs (`sensors × inputs`; ground motion's
+    /// quasi-static part), none for forces.
+    feedthrough: Option<Mat<f64>>,
 }
 
 impl ModalSimulator {
@@ -57,16 +61,42 @@ impl ModalSimulator {
     /// 1e-12 of the largest) are skipped.
     #[track_caller]
     pub fn with_inputs(state: &ModalState, sensors: usize, inputs: &[usize], dt: f64) -> Self {
-        assert!(dt > 0.0 && dt.is_finite(), "time step must be positive");
         assert!(!inputs.is_empty(), "at least one input");
+        let gains = Mat::from_fn(state.modes.len(), inputs.len(), |i, j| state.amplitude(inputs[j], i));
+        Self::with_gains(state, sensors, &gains, None, dt)
+    }
+
+    /// Inputs of any kind: `gains[(i, j)]` multiplies input `j` in mode `i`'s
+    /// equation (`q̈_i + 2ζω q̇_i + ω² q_i = Σ_j gains_ij u_j`), and the
+    /// accelerations at the first `sensors` sensors are `feedthrough u + Σ_i a_{r,i} q̈_i`
+    /// (ground inputs: [`crate::response::support_motion`]). Modes with every
+    /// gain below 1e-12 of the largest are skipped.
+    #[track_caller]
+    pub fn with_gains(
+        state: &ModalState,
+        sensors: usize,
+        gains: &Mat<f64>,
+        feedthrough: Option<Mat<f64>>,
+        dt: f64,
+    ) -> Self {
+        assert!(dt > 0.0 && dt.is_finite(), "time step must be positive");
+        assert!(gains.ncols() > 0, "at least one input");
+        assert_eq!(gains.nrows(), state.modes.len(), "a gain row per mode");
+        if let Some(f) = &feedthrough {
+            assert_eq!(
+                (f.nrows(), f.ncols()),
+                (sensors, gains.ncols()),
+                "feedthrough: sensors × inputs"
+            );
+        }
         let nm = state.modes.len();
         let largest = (0..nm)
-            .flat_map(|i| inputs.iter().map(move |&j| state.amplitude(j, i).abs()))
+            .flat_map(|i| (0..gains.ncols()).map(move |j| gains[(i, j)].abs()))
             .fold(0.0, f64::max);
         let mut modes = Vec::new();
         let mut kept = Vec::new();
         for i in 0..nm {
-            let input_gains: Vec<f64> = inputs.iter().map(|&j| state.amplitude(j, i)).collect();
+            let input_gains: Vec<f64> = (0..gains.ncols()).map(|j| gains[(i, j)]).collect();
             if input_gains.iter().all(|a| a.abs() <= 1e-12 * largest) {
                 continue;
             }
@@ -91,7 +121,8 @@ impl ModalSimulator {
             kept,
             dt,
             sensors,
-            last_forces: vec![0.0; inputs.len()],
+            last_forces: vec![0.0; gains.ncols()],
+            feedthrough,
         }
     }
 
@@ -136,6 +167,11 @@ impl ModalSimulator {
             let acc = u1 - m.two_zeta_omega * v1 - m.omega2 * q1;
             for (o, g) in out.iter_mut().zip(&m.output_gains) {
                 *o += g * acc;
+            }
+        }
+        if let Some(f) = &self.feedthrough {
+            for (r, o) in out.iter_mut().enumerate() {
+                *o += (0..f_next.len()).map(|j| f[(r, j)] * f_next[j]).sum::<f64>();
             }
         }
         self.last_forces.copy_from_slice(f_next);

@@ -11,6 +11,7 @@ mod patches;
 mod shell;
 mod simulate;
 mod stiffness_field;
+mod support_motion;
 mod truncation;
 mod updating;
 mod welch;

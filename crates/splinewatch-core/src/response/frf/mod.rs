@@ -318,6 +318,11 @@ impl FrfModel {
         self.sensor_rows.len()
     }
 
+    /// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32).
+    pub fn sensor_rows(&self) -> &[Vec<(usize, f64)>] {
+        &self.sensor_rows
+    }
+
     /// Positions of each `∂K/∂κ_j` block's dofs in the union of spring dofs
     /// (the rows of [`ModalState::spring_shapes`]), blocks flattened over fields.
     pub fn spring_block_positions(&self) -> &[Vec<usize>] {

@@ -1,0 +1,129 @@
+//! Support groups: which ground each support moves with.
+//!
+//! A bridge stands on several supports (two abutments, a bent) whose grounds
+//! may move differently in an earthquake. Every spring field, bearing and
+//! edge constraint belongs to one group; the ground of group `g` translates
+//! rigidly by `u_g = (u_gx, u_gy, u_gz)`. A spring or bearing of the group acts
+//! on the relative displacement `u − R u_g` (`R`: the rigid translation of
+//! the deck's generalised dofs), a constrained edge of the group follows
+//! `R u_g` ([`crate::response::support_motion`] derives the motion). One
+//! group is uniform excitation.
+
+use crate::model::ShellModel;
+use thiserror::Error;
+
+/// The group every support belongs to unless told otherwise.
+pub const DEFAULT_GROUP: &str = "ground";
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum SupportError {
+    #[error("support groups: {found} groups given for {expected} {what}")]
+    Count {
+        what: &'static str,
+        found: usize,
+        expected: usize,
+    },
+    #[error("support groups: {what} {index} names group {group}, but there are {count} groups")]
+    UnknownGroup {
+        what: &'static str,
+        index: usize,
+        group: usize,
+        count: usize,
+    },
+    #[error("support groups: group names must be distinct and not empty (found {0:?})")]
+    Name(String),
+    #[error(
+        "control point {control_point} lies on constrained edges of two support groups ({first:?} and {second:?})"
+    )]
+    TwoGrounds {
+        control_point: usize,
+        first: String,
+        second: String,
+    },
+    #[error("ground motion needs every mode of the model (the dense path); this model is truncated at {0} Hz")]
+    Truncated(f64),
+    #[error("ground input {index}: group {group} does not exist (there are {count}), or axis {axis} is not 0, 1 or 2")]
+    Input {
+        index: usize,
+        group: usize,
+        axis: usize,
+        count: usize,
+    },
+}
+
+/// The support group of every spring field, bearing and edge constraint of
+/// a [`ShellModel`], validated against it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SupportGroups {
+    names: Vec<String>,
+    /// Per spring field, then per bearing (the assembled model's order of
+    /// `∂K/∂κ` fields).
+    of_springs: Vec<usize>,
+    of_constraints: Vec<usize>,
+}
+
+impl SupportGroups {
+    /// `of_springs`: a group per spring field then per bearing;
+    /// `of_constraints`: a group per edge constraint.
+    pub fn new(
+        names: Vec<String>,
+        of_springs: Vec<usize>,
+        of_constraints: Vec<usize>,
+        model: &ShellModel,
+    ) -> Result<Self, SupportError> {
+        for (k, name) in names.iter().enumerate() {
+            if name.is_empty() || names[..k].contains(name) {
+                return Err(SupportError::Name(name.clone()));
+            }
+        }
+        let springs = model.springs.len() + model.bearings.len();
+        for (what, given, expected) in [
+            ("spring fields and bearings", &of_springs, springs),
+            ("edge constraints", &of_constraints, model.constraints.len()),
+        ] {
+            if given.len() != expected {
+                return Err(SupportError::Count {
+                    what,
+                    found: given.len(),
+                    expected,
+                });
+            }
+            if let Some(index) = given.iter().position(|&g| g >= names.len()) {
+                return Err(SupportError::UnknownGroup {
+                    what,
+                    index,
+                    group: given[index],
+                    count: names.len(),
+                });
+            }
+        }
+        Ok(Self {
+            names,
+            of_springs,
+            of_constraints,
+        })
+    }
+
+    /// Every support on one ground named [`DEFAULT_GROUP`].
+    pub fn uniform(model: &ShellModel) -> Self {
+        Self {
+            names: vec![DEFAULT_GROUP.to_string()],
+            of_springs: vec![0; model.springs.len() + model.bearings.len()],
+            of_constraints: vec![0; model.constraints.len()],
+        }
+    }
+
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// The group of spring field or bearing `k` (assembled order).
+    pub fn of_spring(&self, k: usize) -> usize {
+        self.of_springs[k]
+    }
+
+    /// The group of edge constraint `k`.
+    pub fn of_constraint(&self, k: usize) -> usize {
+        self.of_constraints[k]
+    }
+}

@@ -1,0 +1,255 @@
+//! The deck driven by its grounds: quasi-static influence, transmissibilities
+//! from ground to deck acceleration, and the inputs of the time recursion.
+//!
+//! Absolute coordinates `u` (the generalised dofs of eq. 4). The supports of
+//! group `g` ([`crate::model::supports`]) connect to a ground translating by
+//! `u_g`; its springs and bearings act on `u − R u_g` (`R_d`: unit
+//! translation along axis `d` of every control point, rotations zero), its
+//! constrained edges follow `R u_g`. With `ΔK_g = Σ_{j∈g} κ_j ∂K/∂κ_j` (eq. 22)
+//! the equations of motion are
+//!
+//! `M ü + C (u̇ − Γ u̇_g) + K u = Σ_g ΔK_g R u_g`, `u = ℓ_g u_g` on group `g`'s
+//! constrained dofs.
+//!
+//! The quasi-static influence `Γ_{g,d}` (the deck's static displacement for a
+//! unit ground displacement of `g` along `d`) lifts the constraints with
+//! `ℓ_{g,d}` (`e_d` at every control point on `g`'s constrained edges) and
+//! solves the rest on the free coordinates (`δ = T q`):
+//! `Γ = ℓ + T (TᵀKT)⁻¹ Tᵀ f`, `f = ΔK_g R_d − K ℓ`; by the mass-normalised
+//! modes of the whole model (every mode: the dense path)
+//! `Γ = ℓ + Σ_i φ_i P_i / λ_i`, `P_i = φ_iᵀ f`. One group holding every
+//! support gives `Γ = R_d` (a deck moving with its ground).
+//!
+//! With `u = Γ u_g + y`, `y = T q`, the relative motion obeys
+//! `M ÿ + C ẏ + K y = −M Γ ü_g`: the classical relative formulation
+//! (Clough & Penzien 2003, §26-2), with the damping acting on the motion
+//! relative to the quasi-static one. This is the damping term kept for the
+//! support velocity: `C Γ u̇_g`, so that a rigid body on a damped spring has
+//! the textbook transmissibility `(ω_n² + 2jζω_nω)/(ω_n² − ω² + 2jζω_nω)`.
+//! Modal damping is eq. (28)'s ζ(f). Per mode, with the participation
+//! `L_i = φ_iᵀ M Γ = φ_iᵀ M ℓ + P_i/λ_i`:
+//!
+//! `q̈_i + 2ζ_iω_i q̇_i + ω_i² q_i = −L_i ü_g`, and the absolute acceleration
+//! at sensor `r` is `N_r Γ ü_g + Σ_i a_{r,i} q̈_i`, so the transmissibility
+//! (deck acceleration per ground acceleration) is
+//!
+//! `T_r(ω) = N_r Γ + ω² Σ_i a_{r,i} L_i / D_i(ω)`, `D_i` of eq. (31).
+
+use crate::model::supports::{SupportError, SupportGroups};
+use crate::model::ShellModel;
+use crate::response::frf::{FrfModel, ModalState};
+use crate::response::simulate::ModalSimulator;
+use crate::solvers::modal::ModeKind;
+use faer::{c64, Mat};
+use std::f64::consts::PI;
+
+/// A measured ground input: group `group`'s ground acceleration along global
+/// axis `axis` (0 = x, 1 = y, 2 = z).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GroundInput {
+    pub group: usize,
+    pub axis: usize,
+}
+
+/// The support motion of a modal state: per ground input its quasi-static
+/// response at the sensors and its modal participations.
+#[derive(Debug, Clone)]
+pub struct SupportMotion {
+    inputs: Vec<GroundInput>,
+    /// `N Γ`: sensors × inputs.
+    quasi_static: Mat<f64>,
+    /// `L = Φᵀ M Γ`: modes × inputs.
+    participation: Mat<f64>,
+}
+
+impl SupportMotion {
+    /// The motion for `inputs` of the model `frf` (dense) with spring
+    /// coefficients `kappa` and stiffness-field coefficients `theta` at which
+    /// `state` was solved.
+    pub fn new(
+        frf: &FrfModel,
+        model: &ShellModel,
+        groups: &SupportGroups,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        state: &ModalState,
+        inputs: &[GroundInput],
+    ) -> Result<Self, SupportError> {
+        let Some(assembled) = frf.dense() else {
+            return Err(SupportError::Truncated(frf.cutoff_hz().unwrap_or(f64::NAN)));
+        };
+        for (index, i) in inputs.iter().enumerate() {
+            if i.group >= groups.names().len() || i.axis > 2 {
+                return Err(SupportError::Input {
+                    index,
+                    group: i.group,
+                    axis: i.axis,
+                    count: groups.names().len(),
+                });
+            }
+        }
+        let lifts = constraint_lifts(model, groups)?;
+        let n = assembled.free_stiffness.nrows();
+        let shapes = &state.modes.shapes;
+        let nm = state.modes.len();
+        let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+        let mut quasi_static = Mat::<f64>::zeros(frf.sensor_count(), inputs.len());
+        let mut participation = Mat::<f64>::zeros(nm, inputs.len());
+        for (c, input) in inputs.iter().enumerate() {
+            let lift: Vec<f64> = lifts[input.group]
+                .iter()
+                .map(|&on| if on { 1.0 } else { 0.0 })
+                .enumerate()
+                .map(|(dof, on)| if dof % 5 == input.axis { on } else { 0.0 })
+                .collect();
+            let force = ground_force(assembled, groups, kappa, theta, input, &lift);
+            let mass_lift = frf.mass_times(&lift);
+            for (r, row) in frf.sensor_rows().iter().enumerate() {
+                quasi_static[(r, c)] = row.iter().map(|&(d, v)| v * lift[d]).sum();
+            }
+            for i in 0..nm {
+                let p: f64 = (0..n).map(|d| shapes[(d, i)] * force[d]).sum();
+                let l_lift: f64 = (0..n).map(|d| shapes[(d, i)] * mass_lift[d]).sum();
+                let lambda = state.modes.omega2[i];
+                let rigid = state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest;
+                // A rigid mode `φ` has `Kφ = 0`, so `ΔK_g φ = 0` (every part of `K` is
+                // positive semi-definite) and `P_i = φᵀ(ΔK_g R − K ℓ) = 0`: only the lift
+                // moves it.
+                if rigid {
+                    participation[(i, c)] = l_lift;
+                    continue;
+                }
+                participation[(i, c)] = l_lift + p / lambda;
+                for r in 0..frf.sensor_count() {
+                    quasi_static[(r, c)] += state.amplitude(r, i) * p / lambda;
+                }
+            }
+        }
+        Ok(Self {
+            inputs: inputs.to_vec(),
+            quasi_static,
+            participation,
+        })
+    }
+
+    pub fn inputs(&self) -> &[GroundInput] {
+        &self.inputs
+    }
+
+    /// `N_r Γ` of input `c` at sensor `r`: the deck's quasi-static
+    /// displacement per unit ground displacement.
+    pub fn quasi_static(&self, sensor: usize, input: usize) -> f64 {
+        self.quasi_static[(sensor, input)]
+    }
+
+    /// `L_i` of input `c`.
+    pub fn participation(&self, mode: usize, input: usize) -> f64 {
+        self.participation[(mode, input)]
+    }
+
+    /// `T_r(ω)` of every `(sensor, input)` pair at `frequencies_hz`,
+    /// pair-major (`[pair * n_f + line]`), as the FRFs are stored.
+    #[track_caller]
+    pub fn transmissibility(&self, state: &ModalState, pairs: &[(usize, usize)], frequencies_hz: &[f64]) -> Vec<c64> {
+        assert_eq!(
+            state.modes.len(),
+            self.participation.nrows(),
+            "the modal state of this motion"
+        );
+        let mut out = Vec::with_capacity(pairs.len() * frequencies_hz.len());
+        for &(r, c) in pairs {
+            for &f in frequencies_hz {
+                let w = 2.0 * PI * f;
+                let mut sum = c64::new(0.0, 0.0);
+                for i in 0..state.modes.len() {
+                    let lambda = state.modes.omega2[i].max(0.0);
+                    let d = c64::new(lambda - w * w, 2.0 * state.zeta[i] * lambda.sqrt() * w);
+                    sum += c64::new(state.amplitude(r, i) * self.participation[(i, c)], 0.0) / d;
+                }
+                out.push(c64::new(self.quasi_static[(r, c)], 0.0) + sum * (w * w));
+            }
+        }
+        out
+    }
+
+    /// The exact recursion of [`ModalSimulator`] driven by the ground
+    /// accelerations of every input (its "forces", m/s²), giving the absolute
+    /// accelerations at every sensor.
+    pub fn simulator(&self, state: &ModalState, dt: f64) -> ModalSimulator {
+        let gains = Mat::from_fn(self.participation.nrows(), self.participation.ncols(), |i, c| {
+            -self.participation[(i, c)]
+        });
+        ModalSimulator::with_gains(
+            state,
+            self.quasi_static.nrows(),
+            &gains,
+            Some(self.quasi_static.clone()),
+            dt,
+        )
+    }
+}
+
+/// Per group, whether each generalised dof's control point lies on one of
+/// the group's constrained edges (all five dofs of the point flagged).
+fn constraint_lifts(model: &ShellModel, groups: &SupportGroups) -> Result<Vec<Vec<bool>>, SupportError> {
+    let offsets = model.dof_offsets();
+    let n = model.dof_count();
+    let mut owner: Vec<Option<usize>> = vec![None; n / 5];
+    let mut lifts = vec![vec![false; n]; groups.names().len()];
+    for (k, c) in model.constraints.iter().enumerate() {
+        let g = groups.of_constraint(k);
+        let base = offsets[c.patch] / 5;
+        for cp in c.control_points(&model.patches[c.patch].shell) {
+            let cp = base + cp;
+            match owner[cp] {
+                Some(other) if other != g => {
+                    return Err(SupportError::TwoGrounds {
+                        control_point: cp,
+                        first: groups.names()[other].clone(),
+                        second: groups.names()[g].clone(),
+                    })
+                }
+                _ => owner[cp] = Some(g),
+            }
+            lifts[g][5 * cp..5 * cp + 5].fill(true);
+        }
+    }
+    Ok(lifts)
+}
+
+/// `f = ΔK_g R_d − K ℓ` at the coefficients `kappa`, `theta` (full dofs).
+fn ground_force(
+    assembled: &crate::solvers::dense_model::AssembledModel,
+    groups: &SupportGroups,
+    kappa: &[Vec<f64>],
+    theta: &[Vec<f64>],
+    input: &GroundInput,
+    lift: &[f64],
+) -> Vec<f64> {
+    let n = lift.len();
+    let lifted: Vec<usize> = (0..n).filter(|&d| lift[d] != 0.0).collect();
+    let mut force = vec![0.0; n];
+    let mut k_lift = |matrix: &Mat<f64>, scale: f64| {
+        for (r, f) in force.iter_mut().enumerate() {
+            *f -= scale * lifted.iter().map(|&d| matrix[(r, d)] * lift[d]).sum::<f64>();
+        }
+    };
+    k_lift(&assembled.free_stiffness, 1.0);
+    for (matrices, coefficients) in assembled.field_matrices.iter().zip(theta) {
+        for (m, &t) in matrices.iter().zip(coefficients) {
+            k_lift(m, t - 1.0);
+        }
+    }
+    for (field, (blocks, coefficients)) in assembled.spring_blocks.iter().zip(kappa).enumerate() {
+        let own = groups.of_spring(field) == input.group;
+        for (b, &k) in blocks.iter().zip(coefficients) {
+            for (a, &ra) in b.dofs.iter().enumerate() {
+                for (c, &rc) in b.dofs.iter().enumerate() {
+                    let rigid = if own && rc % 5 == input.axis { 1.0 } else { 0.0 };
+                    force[ra] += k * b.values[(a, c)] * (rigid - lift[rc]);
+                }
+            }
+        }
+    }
+    force
+}

@@ -1,0 +1,355 @@
+//! `predict` and `simulate --ground`: the deck driven by recorded ground
+//! motion (issue 44).
+
+use crate::config::{load_config, Config};
+use crate::io::console::{errln, outln};
+use crate::io::recording::{read_recording, RecordedBlock, RecordingWriter};
+use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
+use crate::pipeline::estimate::aligned_span;
+use crate::studies::ground_motion::GroundModel;
+use crate::studies::import::{to_blocks, ImportOptions};
+use crate::studies::predict::{predict as predict_event, Prediction};
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use std::path::{Path, PathBuf};
+
+#[derive(Args)]
+pub struct PredictArgs {
+    /// Configuration file (TOML) with ground sensors (`support = "<group>"`).
+    #[arg(long)]
+    pub config: PathBuf,
+    /// The record: a station's .zip or .V2 files (one event), or raw-input MCAP recordings.
+    #[arg(required = true, num_args = 1..)]
+    pub record: Vec<PathBuf>,
+    /// Parameters of an update (`update --json` output): the model at those values.
+    #[arg(long, conflicts_with = "state")]
+    pub parameters: Option<PathBuf>,
+    /// The daemon's state file: the model at its last accepted parameters.
+    #[arg(long)]
+    pub state: Option<PathBuf>,
+    /// Write the predicted deck accelerations (channels `<sensor>_predicted`) and the record as MCAP.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write an SVG per deck channel (measured, predicted and the "deck = nearest ground" baseline).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Print the figures as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The updating parameters named in an `update --json` result or a state file.
+fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
+    #[derive(serde::Deserialize)]
+    struct Named {
+        name: String,
+        value: f64,
+    }
+    #[derive(serde::Deserialize)]
+    struct File {
+        parameters: Vec<Named>,
+    }
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let file: File = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a result with a \"parameters\" list of {{name, value}}",
+            path.display()
+        )
+    })?;
+    Ok(file.parameters.into_iter().map(|p| (p.name, p.value)).collect())
+}
+
+/// Every channel block of the records: V2 files and station zips are
+/// imported (together: one event), MCAP recordings read.
+pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBlock>> {
+    let limits = crate::pipeline::block_limits(config);
+    let prefix = config.topic_prefix();
+    let mut v2 = Vec::new();
+    let mut blocks = Vec::new();
+    for path in paths {
+        let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        if bytes.starts_with(b"\x89MCAP") {
+            let (mut read, rejected) =
+                read_recording(&bytes, &limits).with_context(|| format!("reading {}", path.display()))?;
+            for r in &rejected {
+                errln!("{}: skipped a message on {}: {}", path.display(), r.topic, r.error);
+            }
+            blocks.append(&mut read);
+        } else {
+            v2.push((bytes, path.display().to_string()));
+        }
+    }
+    if !v2.is_empty() {
+        let series = crate::io::cosmos_v2::read_v2(&v2)?;
+        let options = ImportOptions {
+            fs: None,
+            start_ns: None,
+            block_seconds: 10.0,
+            strict: false,
+            units: None,
+        };
+        let imported = to_blocks(config, series, &options)?;
+        blocks.extend(imported.blocks.into_iter().map(|block| RecordedBlock {
+            topic: block.topic(&prefix),
+            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
+            block,
+        }));
+    }
+    Ok(blocks)
+}
+
+/// The record's channels on one grid: the ground sensors the model reads
+/// (all required) and the deck's acceleration sensors it holds.
+struct Event {
+    fs: f64,
+    start_ns: i128,
+    /// Per config sensor, its samples when recorded.
+    channels: Vec<Option<Vec<f64>>>,
+    deck: Vec<usize>,
+}
+
+fn align_event(config: &Config, model: &GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
+    let recorded = |i: usize| {
+        let name = &config.sensors[i].name;
+        blocks
+            .iter()
+            .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
+    };
+    let ground = model.ground_sensors();
+    if let Some(&missing) = ground.iter().find(|&&i| !recorded(i)) {
+        bail!(
+            "the record has no channel {:?} (ground sensor of support group {:?}): the model's ground input needs it",
+            config.sensors[missing].name,
+            config.sensors[missing].support.as_deref().unwrap_or_default()
+        );
+    }
+    let deck: Vec<usize> = (0..config.deck_sensor_count()).filter(|&i| recorded(i)).collect();
+    let wanted: Vec<(usize, ChannelQuantity)> = ground
+        .iter()
+        .chain(&deck)
+        .map(|&i| (i, ChannelQuantity::Acceleration))
+        .collect();
+    let span = aligned_span(config, blocks, None, None, &wanted)?;
+    let mut channels = vec![None; config.sensors.len()];
+    for ((i, _), data) in wanted.iter().zip(span.channels) {
+        channels[*i] = Some(data);
+    }
+    Ok(Event {
+        fs: span.fs,
+        start_ns: span.start_ns,
+        channels,
+        deck,
+    })
+}
+
+pub fn predict(a: PredictArgs) -> Result<()> {
+    let cfg = load_config(&a.config)?;
+    let named = match (&a.parameters, &a.state) {
+        (Some(p), _) | (None, Some(p)) => named_parameters(p)?,
+        (None, None) => Vec::new(),
+    };
+    let model = GroundModel::new(&cfg, &named)?;
+    let blocks = read_records(&cfg, &a.record)?;
+    let event = align_event(&cfg, &model, &blocks)?;
+    if event.deck.is_empty() {
+        bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
+    }
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
+    let prediction = predict_event(&cfg, &model, &event.deck, channel, event.fs);
+    if let Some(dir) = &a.plot {
+        plot(&cfg, &prediction, event.fs, dir)?;
+    }
+    if let Some(out) = &a.out {
+        write_prediction(&cfg, &event, &prediction, out)?;
+    }
+    let r = &prediction.report;
+    if a.json {
+        outln!("{}", serde_json::to_string(r)?);
+        return Ok(());
+    }
+    outln!(
+        "{:.1} s at {} Hz; strong motion (5–95 % of the ground's energy) {:.2}–{:.2} s",
+        r.record_seconds,
+        r.fs,
+        r.strong_span_s[0],
+        r.strong_span_s[1]
+    );
+    outln!("sensor\tnrmse\tnrmse_strong\tcorrelation\tpeak_ratio\t| baseline (deck = nearest ground): nrmse_strong\tground");
+    for (c, b) in r.channels.iter().zip(&r.baseline) {
+        outln!(
+            "{}\t{:.3}\t{:.3}\t{:.3}\t{:.3}\t| {:.3}\t{}",
+            c.sensor,
+            c.nrmse,
+            c.nrmse_strong,
+            c.correlation,
+            c.peak_ratio,
+            b.score.nrmse_strong,
+            b.ground
+        );
+    }
+    Ok(())
+}
+
+/// The predicted deck channels (`<sensor>_predicted`) and the record's
+/// aligned channels, in 10-s blocks.
+fn write_prediction(cfg: &Config, event: &Event, prediction: &Prediction, out: &Path) -> Result<()> {
+    let mut series: Vec<(String, &[f64])> = Vec::new();
+    for (i, c) in event.channels.iter().enumerate() {
+        if let Some(c) = c {
+            series.push((cfg.sensors[i].name.clone(), c));
+        }
+    }
+    for (k, &s) in prediction.sensors.iter().enumerate() {
+        series.push((format!("{}_predicted", cfg.sensors[s].name), &prediction.predicted[k]));
+    }
+    write_series(cfg, &series, event.fs, event.start_ns, Encoding::Cbor, out)
+}
+
+/// Series written as acceleration blocks of 10 s, in time order.
+fn write_series(
+    cfg: &Config,
+    series: &[(String, &[f64])],
+    fs: f64,
+    start_ns: i128,
+    encoding: Encoding,
+    out: &Path,
+) -> Result<()> {
+    let prefix = cfg.topic_prefix();
+    let mut writer = RecordingWriter::create(out, encoding)?;
+    let samples = series.first().map_or(0, |s| s.1.len());
+    let block = (10.0 * fs).round().max(1.0) as usize;
+    for from in (0..samples).step_by(block) {
+        let to = (from + block).min(samples);
+        for (name, data) in series {
+            writer.write_block(
+                &prefix,
+                &ChannelBlock {
+                    name: name.clone(),
+                    quantity: ChannelQuantity::Acceleration,
+                    unit: "m/s^2".into(),
+                    fs,
+                    start_ns: start_ns + (from as f64 * 1e9 / fs).round() as i128,
+                    data: data[from..to].to_vec(),
+                },
+            )?;
+        }
+    }
+    writer.finish()?;
+    Ok(())
+}
+
+/// `simulate --ground RECORD…`: the deck's response to the record's ground
+/// channels at the config's values, with noise, written with the ground
+/// channels as a raw-input recording.
+pub fn simulate_ground(
+    cfg: &Config,
+    record: &[PathBuf],
+    noise: f64,
+    seed: u64,
+    encoding: Encoding,
+    out: &Path,
+) -> Result<()> {
+    if !(noise.is_finite() && noise >= 0.0) {
+        bail!("--noise must be >= 0, got {noise}");
+    }
+    let model = GroundModel::new(cfg, &[])?;
+    let blocks = read_records(cfg, record)?;
+    let event = align_event(cfg, &model, &blocks)?;
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
+    let mut deck = model.respond(channel, event.fs);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for series in &mut deck {
+        let rms = (series.iter().map(|v| v * v).sum::<f64>() / series.len().max(1) as f64).sqrt();
+        if noise > 0.0 && rms > 0.0 {
+            let normal = Normal::new(0.0, noise * rms).context("noise level")?;
+            for v in series.iter_mut() {
+                *v += normal.sample(&mut rng);
+            }
+        }
+    }
+    let mut series: Vec<(String, &[f64])> = model
+        .ground_sensors()
+        .into_iter()
+        .map(|i| (cfg.sensors[i].name.clone(), channel(i)))
+        .collect();
+    for (name, data) in model.outputs.iter().zip(&deck) {
+        series.push((name.clone(), data));
+    }
+    write_series(cfg, &series, event.fs, event.start_ns, encoding, out)?;
+    errln!(
+        "{:.1} s of {} deck channels driven by {} ground inputs written to {}",
+        deck.first().map_or(0, Vec::len) as f64 / event.fs,
+        deck.len(),
+        model.plan.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+/// One SVG per deck channel: measured, predicted and the baseline over time.
+fn plot(cfg: &Config, prediction: &Prediction, fs: f64, dir: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    for (k, &s) in prediction.sensors.iter().enumerate() {
+        let name = &cfg.sensors[s].name;
+        let path = dir.join(format!("{name}.svg"));
+        let root = SVGBackend::new(&path, (1100, 420)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let m = &prediction.measured[k];
+        let p = &prediction.predicted[k];
+        let peak = m.iter().chain(p).fold(0.0f64, |a, v| a.max(v.abs())).max(1e-12);
+        let seconds = m.len() as f64 / fs;
+        let score = &prediction.report.channels[k];
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "{name}: NRMSE {:.2} (strong motion {:.2}), baseline {:.2}",
+                    score.nrmse, score.nrmse_strong, prediction.report.baseline[k].score.nrmse_strong
+                ),
+                ("sans-serif", 18),
+            )
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..seconds, -1.1 * peak..1.1 * peak)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("time (s)")
+            .y_desc("acceleration (m/s²)")
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let series = |x: &[f64]| {
+            x.iter()
+                .enumerate()
+                .map(|(i, v)| (i as f64 / fs, *v))
+                .collect::<Vec<_>>()
+        };
+        for (data, colour, label) in [
+            (
+                &prediction.baseline[k],
+                RGBColor(170, 170, 170),
+                "deck = nearest ground",
+            ),
+            (m, BLACK, "measured"),
+            (p, RED, "predicted"),
+        ] {
+            chart
+                .draw_series(LineSeries::new(series(data), colour))
+                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .label(label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
+    }
+    Ok(())
+}

@@ -1,0 +1,199 @@
+//! Support groups and ground sensors (issue 44): `support = "<group>"` on
+//! `[[model.springs]]`, `[[model.bearings]]` and `[[model.constraints]]`
+//! (default `"ground"`), and `[[sensors]]` entries with `support` that measure
+//! a group's ground acceleration along `x`, `y` or `z`.
+//!
+//! The model's ground inputs are every group along every axis some ground
+//! sensor measures: a group's own sensors along that axis averaged, or, when
+//! it has none, the mean of the groups measured along it. An axis no ground
+//! sensor measures is no input (that ground does not move).
+
+use super::{err, Config, ConfigError, DirectionConfig};
+use splinewatch_core::model::supports::{SupportGroups, DEFAULT_GROUP};
+use splinewatch_core::model::ShellModel;
+use splinewatch_core::response::support_motion::GroundInput;
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+/// One ground input of the model and the ground sensors it is made of.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundInputPlan {
+    pub input: GroundInput,
+    /// `<group>.<axis>`, e.g. `bent.y`.
+    pub name: String,
+    /// Indices into `[[sensors]]` averaged for this input.
+    pub sensors: Vec<usize>,
+    /// The groups whose mean it takes when it has no sensor of its own
+    /// (empty when it has).
+    pub borrowed_from: Vec<String>,
+}
+
+impl GroundInputPlan {
+    /// What `check-config` prints: `bent.y ← ch3` or `west.x ← mean of east.x, bent.x`.
+    pub fn describe(&self, config: &Config) -> String {
+        if self.borrowed_from.is_empty() {
+            let names: Vec<&str> = self.sensors.iter().map(|&i| config.sensors[i].name.as_str()).collect();
+            let how = if names.len() > 1 { "mean of " } else { "" };
+            format!("{} ← {how}{}", self.name, names.join(", "))
+        } else {
+            let axis = AXES[self.input.axis];
+            let from: Vec<String> = self.borrowed_from.iter().map(|g| format!("{g}.{axis}")).collect();
+            format!("{} ← mean of {} (no sensor of its own)", self.name, from.join(", "))
+        }
+    }
+}
+
+impl Config {
+    /// The number of deck sensors: they come first in `sensors`.
+    pub fn deck_sensor_count(&self) -> usize {
+        self.sensors.iter().take_while(|s| s.support.is_none()).count()
+    }
+
+    /// Whether any `[[sensors]]` entry measures a ground (support motion).
+    pub fn has_ground_sensors(&self) -> bool {
+        self.deck_sensor_count() < self.sensors.len()
+    }
+
+    /// Checks the ground sensors (keys as written) and moves them after the
+    /// deck's, keeping both orders.
+    pub(super) fn place_ground_sensors_last(&mut self) -> Result<(), ConfigError> {
+        for (i, s) in self.sensors.iter().enumerate() {
+            let Some(group) = &s.support else { continue };
+            let key = |k: &str| format!("sensors[{i}].{k}");
+            if group.trim().is_empty() {
+                return Err(err(key("support"), "must name a support group"));
+            }
+            if s.patch.is_some() || s.xi.is_some() || s.eta.is_some() || s.x.is_some() || s.y.is_some() || s.z.is_some()
+            {
+                return Err(err(
+                    key("support"),
+                    "a ground sensor has no position on the deck: remove patch, xi, eta, x, y and z",
+                ));
+            }
+            if !matches!(&s.direction, DirectionConfig::Named(n) if AXES.contains(&n.as_str())) {
+                return Err(err(
+                    key("direction"),
+                    "a ground sensor measures along \"x\", \"y\" or \"z\"",
+                ));
+            }
+            if s.quantity.as_slice() != ["acceleration"] {
+                return Err(err(key("quantity"), "a ground sensor measures acceleration only"));
+            }
+        }
+        let (deck, ground): (Vec<_>, Vec<_>) = std::mem::take(&mut self.sensors)
+            .into_iter()
+            .partition(|s| s.support.is_none());
+        self.sensors = deck.into_iter().chain(ground).collect();
+        Ok(())
+    }
+
+    /// The support group of every spring field, bearing and constraint of
+    /// `model` (built from this config), groups in order of first mention.
+    pub fn support_groups(&self, model: &ShellModel) -> Result<SupportGroups, ConfigError> {
+        let m = &self.model;
+        let named = |s: &Option<String>| s.clone().unwrap_or_else(|| DEFAULT_GROUP.to_string());
+        let springs: Vec<String> = m
+            .springs
+            .iter()
+            .map(|s| named(&s.support))
+            .chain(m.bearings.iter().map(|b| named(&b.support)))
+            .collect();
+        let constraints: Vec<String> = m.constraints.iter().map(|c| named(&c.support)).collect();
+        let mut names: Vec<String> = Vec::new();
+        for n in springs.iter().chain(&constraints) {
+            if !names.contains(n) {
+                names.push(n.clone());
+            }
+        }
+        let index = |n: &String| names.iter().position(|g| g == n).expect("listed above");
+        let of_springs = springs.iter().map(index).collect();
+        let of_constraints = constraints.iter().map(index).collect();
+        SupportGroups::new(names.clone(), of_springs, of_constraints, model).map_err(|e| err("model", e))
+    }
+
+    /// The ground inputs and the sensors behind each (empty without ground
+    /// sensors).
+    pub fn ground_plan(&self, groups: &SupportGroups) -> Result<Vec<GroundInputPlan>, ConfigError> {
+        let first = self.deck_sensor_count();
+        let mut own: Vec<[Vec<usize>; 3]> = vec![Default::default(); groups.names().len()];
+        for (i, s) in self.sensors.iter().enumerate().skip(first) {
+            let group = s.support.as_deref().unwrap_or_default();
+            let Some(g) = groups.names().iter().position(|n| n == group) else {
+                return Err(err(
+                    format!("sensors[{i}].support"),
+                    format!(
+                        "{group:?} is no support group of the model (its springs, bearings and constraints name {})",
+                        groups.names().join(", ")
+                    ),
+                ));
+            };
+            let DirectionConfig::Named(axis) = &s.direction else {
+                unreachable!("checked on load")
+            };
+            let axis = AXES.iter().position(|a| a == axis).expect("checked on load");
+            own[g][axis].push(i);
+        }
+        let mut plan = Vec::new();
+        for axis in 0..3 {
+            let measured: Vec<String> = (0..own.len())
+                .filter(|&g| !own[g][axis].is_empty())
+                .map(|g| groups.names()[g].clone())
+                .collect();
+            if measured.is_empty() {
+                continue;
+            }
+            for (g, name) in groups.names().iter().enumerate() {
+                let sensors = own[g][axis].clone();
+                let borrowed_from = if sensors.is_empty() {
+                    measured.clone()
+                } else {
+                    Vec::new()
+                };
+                plan.push(GroundInputPlan {
+                    input: GroundInput { group: g, axis },
+                    name: format!("{name}.{}", AXES[axis]),
+                    sensors,
+                    borrowed_from,
+                });
+            }
+        }
+        Ok(plan)
+    }
+}
+
+/// The input signals of `plan` from the ground sensors' samples
+/// (`channel(i)` the samples of `[[sensors]]` entry `i`, all of one length).
+pub fn ground_signals<'a>(plan: &[GroundInputPlan], channel: impl Fn(usize) -> &'a [f64]) -> Vec<Vec<f64>> {
+    let mean = |indices: &[usize]| -> Vec<f64> {
+        let n = channel(indices[0]).len();
+        let mut out = vec![0.0; n];
+        for &i in indices {
+            for (o, v) in out.iter_mut().zip(channel(i)) {
+                *o += v / indices.len() as f64;
+            }
+        }
+        out
+    };
+    let own: Vec<Option<Vec<f64>>> = plan
+        .iter()
+        .map(|p| (!p.sensors.is_empty()).then(|| mean(&p.sensors)))
+        .collect();
+    plan.iter()
+        .enumerate()
+        .map(|(k, p)| match &own[k] {
+            Some(signal) => signal.clone(),
+            None => {
+                let donors: Vec<&Vec<f64>> = plan
+                    .iter()
+                    .zip(&own)
+                    .filter(|(q, s)| q.input.axis == p.input.axis && s.is_some())
+                    .filter_map(|(_, s)| s.as_ref())
+                    .collect();
+                let n = donors[0].len();
+                (0..n)
+                    .map(|t| donors.iter().map(|d| d[t]).sum::<f64>() / donors.len() as f64)
+                    .collect()
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,122 @@
+//! The configured deck driven by recorded ground accelerations (issue 44):
+//! `simulate --ground` and `predict`.
+//!
+//! The model's ground inputs come from the config's ground sensors
+//! ([`crate::config::GroundInputPlan`]); the deck's absolute accelerations at
+//! its sensors follow from the exact modal recursion of
+//! [`splinewatch_core::response::support_motion`], run at the record's own
+//! rate with the ground acceleration linear between samples (first-order
+//! hold: exact for that input; a strong-motion record's corrected
+//! acceleration is band-limited well below its Nyquist frequency).
+
+use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan};
+use anyhow::{bail, Context, Result};
+use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::response::frf::ModalState;
+use splinewatch_core::response::support_motion::SupportMotion;
+use splinewatch_core::updating::ParameterKind;
+
+/// The model at one parameter point, ready to be driven by its grounds.
+pub struct GroundModel {
+    pub setup: FrfSetup,
+    pub plan: Vec<GroundInputPlan>,
+    pub state: ModalState,
+    pub motion: SupportMotion,
+    /// The deck sensors' names (the outputs, in config order).
+    pub outputs: Vec<String>,
+}
+
+impl GroundModel {
+    /// At the config's values, with the `named` updating parameters set
+    /// (an update's result).
+    pub fn new(config: &Config, named: &[(String, f64)]) -> Result<Self> {
+        if !config.has_ground_sensors() {
+            bail!("config: sensors: no ground sensor (a [[sensors]] entry with support = \"<group>\"): nothing drives the deck");
+        }
+        let model = config.build_model()?;
+        let groups = config.support_groups(&model)?;
+        let plan = config.ground_plan(&groups)?;
+        let setup = frf_setup(config)?;
+        if setup.model.dense().is_none() {
+            bail!(
+                "support motion needs every mode of the model (the dense path); [model.solver] truncates it: set modes = \"all\""
+            );
+        }
+        let parameters = config.build_parameters()?;
+        let mut kappa = setup.kappa.clone();
+        let mut theta = setup.model.field_coefficients().to_vec();
+        let mut gamma = setup.damping.coefficients().to_vec();
+        for (name, value) in named {
+            let p = parameters
+                .iter()
+                .find(|p| &p.name == name)
+                .with_context(|| format!("parameter {name:?} is not an updating parameter of this config"))?;
+            if !value.is_finite() {
+                bail!("parameter {name:?} is not finite");
+            }
+            match p.kind {
+                ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = *value,
+                ParameterKind::Stiffness { field, coefficient } => theta[field][coefficient] = *value,
+                ParameterKind::Damping { coefficient } => gamma[coefficient] = *value,
+            }
+        }
+        let damping: DampingCurve = setup.damping.with_coefficients(gamma).context("damping coefficients")?;
+        let state = setup
+            .model
+            .modal_state_with_fields(&kappa, &theta, &damping)
+            .context("the model's modes")?;
+        let inputs: Vec<_> = plan.iter().map(|p| p.input).collect();
+        let motion = SupportMotion::new(&setup.model, &model, &groups, &kappa, &theta, &state, &inputs)
+            .map_err(|e| anyhow::anyhow!("support motion: {e}"))?;
+        let outputs = setup.sensor_names.clone();
+        Ok(Self {
+            setup,
+            plan,
+            state,
+            motion,
+            outputs,
+        })
+    }
+
+    /// The config indices of the ground sensors the plan reads.
+    pub fn ground_sensors(&self) -> Vec<usize> {
+        let mut all: Vec<usize> = self.plan.iter().flat_map(|p| p.sensors.iter().copied()).collect();
+        all.sort_unstable();
+        all.dedup();
+        all
+    }
+
+    /// The deck's absolute accelerations (one series per deck sensor) for
+    /// the ground sensors' accelerations `ground(i)` of `[[sensors]]` entry
+    /// `i`, sampled at `fs`, from rest.
+    pub fn respond<'a>(&self, ground: impl Fn(usize) -> &'a [f64], fs: f64) -> Vec<Vec<f64>> {
+        let inputs = ground_signals(&self.plan, ground);
+        let samples = inputs.first().map_or(0, Vec::len);
+        let mut sim = self.motion.simulator(&self.state, 1.0 / fs);
+        let sensors = self.outputs.len();
+        let mut out = vec![Vec::with_capacity(samples); sensors];
+        let mut now = vec![0.0; self.state.sensor_count()];
+        let mut u = vec![0.0; inputs.len()];
+        // The recursion starts at rest with the ground at its first sample.
+        let first: Vec<f64> = inputs.iter().map(|x| x[0]).collect();
+        sim.set_last_forces(&first);
+        for t in 0..samples {
+            for (v, x) in u.iter_mut().zip(&inputs) {
+                *v = x[t];
+            }
+            if t == 0 {
+                // At rest: the absolute acceleration is the quasi-static part.
+                for r in 0..sensors {
+                    let qs: f64 = (0..u.len()).map(|c| self.motion.quasi_static(r, c) * u[c]).sum();
+                    out[r].push(qs);
+                }
+                continue;
+            }
+            sim.step_forces(&u, &mut now);
+            for r in 0..sensors {
+                out[r].push(now[r]);
+            }
+        }
+        out
+    }
+}
