@@ -296,11 +296,15 @@ fn si_spelling(unit: &str) -> String {
     }
 }
 
-/// `Rcrd of Mon Nov 23, 2026 10:00:00.0 UTC` → its instant, when the zone is
+/// `Rcrd of Mon Nov 23, 2026 10:00:00.0 UTC` (or `Record of …`, as some
+/// processing versions spell it) → its instant, when the zone is
 /// UTC/GMT or a US Pacific one (CGS records are stamped in PST/PDT);
 /// another zone gives `None` (`--start` then says when).
 fn record_start(line: &str) -> Option<i128> {
-    let rest = line.trim_start().strip_prefix("Rcrd of ")?;
+    let line = line.trim_start();
+    let rest = line
+        .strip_prefix("Rcrd of ")
+        .or_else(|| line.strip_prefix("Record of "))?;
     let words: Vec<&str> = rest.split_whitespace().collect();
     let [_, month, day, year, clock, zone, ..] = words.as_slice() else {
         return None;
