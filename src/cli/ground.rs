@@ -111,20 +111,19 @@ struct Event {
     deck: Vec<usize>,
 }
 
-fn align_event(config: &Config, model: &GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
+fn align_event(config: &Config, model: &mut GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
     let recorded = |i: usize| {
         let name = &config.sensors[i].name;
         blocks
             .iter()
             .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
     };
+    for note in model.restrict_to(config, recorded) {
+        errln!("ground input {note}");
+    }
     let ground = model.ground_sensors();
-    if let Some(&missing) = ground.iter().find(|&&i| !recorded(i)) {
-        bail!(
-            "the record has no channel {:?} (ground sensor of support group {:?}): the model's ground input needs it",
-            config.sensors[missing].name,
-            config.sensors[missing].support.as_deref().unwrap_or_default()
-        );
+    if ground.is_empty() {
+        bail!("the record holds none of the config's ground sensors: nothing drives the deck");
     }
     let deck: Vec<usize> = (0..config.deck_sensor_count()).filter(|&i| recorded(i)).collect();
     let wanted: Vec<(usize, ChannelQuantity)> = ground
@@ -151,9 +150,9 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         (Some(p), _) | (None, Some(p)) => named_parameters(p)?,
         (None, None) => Vec::new(),
     };
-    let model = GroundModel::new(&cfg, &named)?;
+    let mut model = GroundModel::new(&cfg, &named)?;
     let blocks = read_records(&cfg, &a.record)?;
-    let event = align_event(&cfg, &model, &blocks)?;
+    let event = align_event(&cfg, &mut model, &blocks)?;
     if event.deck.is_empty() {
         bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
     }
@@ -255,9 +254,9 @@ pub fn simulate_ground(
     if !(noise.is_finite() && noise >= 0.0) {
         bail!("--noise must be >= 0, got {noise}");
     }
-    let model = GroundModel::new(cfg, &[])?;
+    let mut model = GroundModel::new(cfg, &[])?;
     let blocks = read_records(cfg, record)?;
-    let event = align_event(cfg, &model, &blocks)?;
+    let event = align_event(cfg, &mut model, &blocks)?;
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
     let mut deck = model.respond(channel, event.fs);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -161,6 +161,50 @@ impl Config {
     }
 }
 
+/// `plan` with only the ground sensors `available` (a record may lack a
+/// channel): an input that loses all its sensors takes the mean of the groups
+/// still measured along its axis, or none (zero ground motion) when no group
+/// is; each change is said in the returned notes.
+pub fn restrict_plan(
+    plan: &[GroundInputPlan],
+    available: impl Fn(usize) -> bool,
+    names: impl Fn(usize) -> String,
+) -> (Vec<GroundInputPlan>, Vec<String>) {
+    let mut notes = Vec::new();
+    let mut out: Vec<GroundInputPlan> = plan.to_vec();
+    for p in &mut out {
+        let missing: Vec<usize> = p.sensors.iter().copied().filter(|&i| !available(i)).collect();
+        if !missing.is_empty() {
+            let list: Vec<String> = missing.iter().map(|&i| names(i)).collect();
+            notes.push(format!("{}: the record has no {}", p.name, list.join(", ")));
+            p.sensors.retain(|&i| available(i));
+        }
+    }
+    for k in 0..out.len() {
+        if !out[k].sensors.is_empty() {
+            continue;
+        }
+        let axis = out[k].input.axis;
+        let measured: Vec<String> = out
+            .iter()
+            .filter(|q| q.input.axis == axis && !q.sensors.is_empty())
+            .map(|q| q.name.rsplit_once('.').map_or(q.name.clone(), |(g, _)| g.to_string()))
+            .collect();
+        if measured != out[k].borrowed_from {
+            notes.push(if measured.is_empty() {
+                format!(
+                    "{}: no ground sensor along this axis in the record: taken as still",
+                    out[k].name
+                )
+            } else {
+                format!("{}: takes the mean of {}", out[k].name, measured.join(", "))
+            });
+        }
+        out[k].borrowed_from = measured;
+    }
+    (out, notes)
+}
+
 /// The input signals of `plan` from the ground sensors' samples
 /// (`channel(i)` the samples of `[[sensors]]` entry `i`, all of one length).
 pub fn ground_signals<'a>(plan: &[GroundInputPlan], channel: impl Fn(usize) -> &'a [f64]) -> Vec<Vec<f64>> {
@@ -189,7 +233,12 @@ pub fn ground_signals<'a>(plan: &[GroundInputPlan], channel: impl Fn(usize) -> &
                     .filter(|(q, s)| q.input.axis == p.input.axis && s.is_some())
                     .filter_map(|(_, s)| s.as_ref())
                     .collect();
-                let n = donors[0].len();
+                let Some(first) = donors.first() else {
+                    // No ground sensor along this axis: the ground is still.
+                    let n = own.iter().flatten().next().map_or(0, Vec::len);
+                    return vec![0.0; n];
+                };
+                let n = first.len();
                 (0..n)
                     .map(|t| donors.iter().map(|d| d[t]).sum::<f64>() / donors.len() as f64)
                     .collect()

@@ -20,7 +20,7 @@ mod updating;
 mod zenoh;
 
 pub use frf::FrfConfig;
-pub use ground::{ground_signals, GroundInputPlan};
+pub use ground::{ground_signals, restrict_plan, GroundInputPlan};
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,
     ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,

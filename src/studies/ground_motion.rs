@@ -78,6 +78,14 @@ impl GroundModel {
         })
     }
 
+    /// Keeps to the ground sensors `available` in a record (see
+    /// [`crate::config::restrict_plan`]); returns what changed.
+    pub fn restrict_to(&mut self, config: &Config, available: impl Fn(usize) -> bool) -> Vec<String> {
+        let (plan, notes) = crate::config::restrict_plan(&self.plan, available, |i| config.sensors[i].name.clone());
+        self.plan = plan;
+        notes
+    }
+
     /// The config indices of the ground sensors the plan reads.
     pub fn ground_sensors(&self) -> Vec<usize> {
         let mut all: Vec<usize> = self.plan.iter().flat_map(|p| p.sensors.iter().copied()).collect();

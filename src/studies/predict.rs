@@ -36,6 +36,10 @@ pub struct PredictionReport {
     pub baseline: Vec<BaselineScore>,
     pub record_seconds: f64,
     pub fs: f64,
+    /// The largest absolute ground acceleration over every ground sensor, m/s².
+    pub pga_ground: f64,
+    /// The largest absolute deck acceleration over the deck channels scored, m/s².
+    pub peak_deck: f64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -77,6 +81,8 @@ pub fn predict<'a>(
         baseline: Vec::new(),
         record_seconds: samples as f64 / fs,
         fs,
+        pga_ground: ground_sensors.iter().map(|&i| peak(channel(i))).fold(0.0, f64::max),
+        peak_deck: deck.iter().map(|&i| peak(channel(i))).fold(0.0, f64::max),
     };
     let (mut measured, mut predicted, mut baseline) = (Vec::new(), Vec::new(), Vec::new());
     for &s in deck {
@@ -102,6 +108,10 @@ pub fn predict<'a>(
     }
 }
 
+fn peak(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |a, v| a.max(v.abs()))
+}
+
 /// The figures of `p` against `m`, the NRMSE also over `strong` samples.
 pub fn score(sensor: &str, m: &[f64], p: &[f64], strong: (usize, usize)) -> ChannelScore {
     let rms = |x: &[f64]| (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt();
@@ -109,7 +119,6 @@ pub fn score(sensor: &str, m: &[f64], p: &[f64], strong: (usize, usize)) -> Chan
         let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
         rms(&d) / rms(b)
     };
-    let peak = |x: &[f64]| x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     let (s0, s1) = strong;
     ChannelScore {
         sensor: sensor.to_string(),
