@@ -241,10 +241,15 @@ fn channel_description(line: &str) -> Option<(String, String)> {
     let location_at = lower.find("location:")?;
     let after_number = lower[..location_at].find(':')? + 1;
     let mut direction = line[after_number..location_at].to_string();
-    if let Some(open) = direction.to_ascii_lowercase().find("(sta chn") {
-        direction.truncate(open);
+    if let Some(at) = direction.to_ascii_lowercase().find("sta chn") {
+        direction.truncate(at);
     }
-    let direction = direction.split_whitespace().collect::<Vec<_>>().join(" ");
+    let direction = direction
+        .trim_end()
+        .trim_end_matches('(')
+        .split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ");
     let location = line[location_at + 9..].split_whitespace().collect::<Vec<_>>().join(" ");
     Some((direction, location))
 }
@@ -487,5 +492,74 @@ mod tests {
         assert!(e.contains("is not a number"), "{e}");
         let e = read("just text\n", "b.V2").unwrap_err().to_string();
         assert!(e.contains("not a Volume 2 file"), "{e}");
+    }
+
+    /// Two channels of two recorders (station channels 7 and 15, 100 and
+    /// 200 Hz, started a sample apart), for the damaged-input properties.
+    fn two_recorders() -> String {
+        let channel = |k: u32, station: u32, dt: f64, start: &str, n: usize| {
+            let values: String = (0..n)
+                .map(|i| format!("{:10.5}", (i as f64 * 0.7).sin()))
+                .collect::<Vec<_>>()
+                .chunks(8)
+                .map(|c| c.concat() + "\n")
+                .collect();
+            format!(
+                "Chan  {k}:  Tran    (Sta Chn: {station})     Location: Deck\nRcrd of Mon Nov 23, 2026 {start} UTC\n  {n} points of accel data equally spaced at   {dt} sec, in cm/sec2. (8f10.5)\n{values}/&  ---------- End of data for channel  {k} ----------\n"
+            )
+        };
+        channel(1, 7, 0.01, "10:00:00.0", 40) + &channel(1, 15, 0.005, "10:00:00.01", 80)
+    }
+
+    #[test]
+    fn two_recorders_come_on_one_grid_by_station_channel() {
+        let s = read_v2(&[(two_recorders().into_bytes(), "station.V2".into())]).unwrap();
+        let names: Vec<&str> = s.channels.iter().map(|c| c.name.as_str()).collect();
+        assert_eq!(names, ["ch7", "ch15"]);
+        assert_eq!(s.fs, Some(100.0));
+        // 0.39 s in common at 100 Hz, from the later start.
+        assert!(s.channels.iter().all(|c| c.data.len() == 39));
+        assert_eq!(s.start_ns, crate::io::wire::parse_timestamp("2026-11-23T10:00:00.01Z"));
+        // ch7 cut at its second sample (the file's five decimals of sin 0.7).
+        assert_eq!(s.channels[0].data[0], 0.64422);
+    }
+
+    #[test]
+    fn fourier_resampling_keeps_a_band_limited_periodic_signal() {
+        // A sum of harmonics below both Nyquist lines of a periodic span.
+        let signal = |n: usize| -> Vec<f64> {
+            (0..n)
+                .map(|i| {
+                    let t = i as f64 / n as f64;
+                    (2.0 * std::f64::consts::PI * 3.0 * t).sin() + 0.5 * (2.0 * std::f64::consts::PI * 7.0 * t).cos()
+                })
+                .collect()
+        };
+        for (from, to) in [(64, 40), (40, 64), (63, 41), (41, 63), (50, 50)] {
+            let got = fourier_resample(&signal(from), to);
+            let want = signal(to);
+            let err = got.iter().zip(&want).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(err < 1e-12, "{from} -> {to}: {err:.2e}");
+        }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn damaged_stations_are_errors_never_panics(
+            flips in proptest::collection::vec((proptest::prelude::any::<proptest::sample::Index>(), proptest::prelude::any::<u8>()), 0..8),
+            cut in proptest::prelude::any::<proptest::sample::Index>(),
+        ) {
+            let mut bytes = two_recorders().into_bytes();
+            for (i, b) in &flips {
+                let k = i.index(bytes.len());
+                bytes[k] = *b;
+            }
+            bytes.truncate(cut.index(bytes.len() + 1));
+            let files = [(bytes, "station.V2".to_string())];
+            if let Ok(s) = read_v2(&files) {
+                proptest::prop_assert!(s.channels.iter().all(|c| c.data.len() >= 2));
+            }
+            let _ = list_v2(&files);
+        }
     }
 }

@@ -7,6 +7,7 @@ mod cli;
 mod common;
 mod corpus;
 mod fleet;
+mod ground;
 mod import;
 mod live;
 mod matrices;
