@@ -35,9 +35,10 @@
 //!
 //! `T_r(ω) = N_r Γ + ω² Σ_i a_{r,i} L_i / D_i(ω)`, `D_i` of eq. (31).
 
+use crate::model::damping::DampingCurve;
 use crate::model::supports::{SupportError, SupportGroups};
 use crate::model::ShellModel;
-use crate::response::frf::{FrfModel, ModalState};
+use crate::response::frf::{FrfModel, FrfRequest, ModalState, Quantity};
 use crate::response::simulate::ModalSimulator;
 use crate::solvers::modal::ModeKind;
 use faer::{c64, Mat};
@@ -60,6 +61,19 @@ pub struct SupportMotion {
     quasi_static: Mat<f64>,
     /// `L = Φᵀ M Γ`: modes × inputs.
     participation: Mat<f64>,
+    /// `Γ` of every input on the generalised dofs: dofs × inputs.
+    influence: Mat<f64>,
+}
+
+/// `∂T/∂p` of every `(sensor, input)` pair, pair-major as the FRFs.
+#[derive(Debug, Clone)]
+pub struct TransmissibilitySensitivities {
+    /// One vector per spring coefficient (spring fields, then bearings).
+    pub dkappa: Vec<Vec<c64>>,
+    /// One vector per stiffness-field coefficient.
+    pub dtheta: Vec<Vec<c64>>,
+    /// One vector per damping coefficient.
+    pub dgamma: Vec<Vec<c64>>,
 }
 
 impl SupportMotion {
@@ -95,6 +109,7 @@ impl SupportMotion {
         let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
         let mut quasi_static = Mat::<f64>::zeros(frf.sensor_count(), inputs.len());
         let mut participation = Mat::<f64>::zeros(nm, inputs.len());
+        let mut influence = Mat::<f64>::zeros(n, inputs.len());
         for (c, input) in inputs.iter().enumerate() {
             let lift: Vec<f64> = lifts[input.group]
                 .iter()
@@ -103,6 +118,9 @@ impl SupportMotion {
                 .map(|(dof, on)| if dof % 5 == input.axis { on } else { 0.0 })
                 .collect();
             let force = ground_force(assembled, groups, kappa, theta, input, &lift);
+            for (d, &v) in lift.iter().enumerate() {
+                influence[(d, c)] = v;
+            }
             let mass_lift = frf.mass_times(&lift);
             for (r, row) in frf.sensor_rows().iter().enumerate() {
                 quasi_static[(r, c)] = row.iter().map(|&(d, v)| v * lift[d]).sum();
@@ -120,6 +138,9 @@ impl SupportMotion {
                     continue;
                 }
                 participation[(i, c)] = l_lift + p / lambda;
+                for d in 0..n {
+                    influence[(d, c)] += shapes[(d, i)] * p / lambda;
+                }
                 for r in 0..frf.sensor_count() {
                     quasi_static[(r, c)] += state.amplitude(r, i) * p / lambda;
                 }
@@ -129,6 +150,7 @@ impl SupportMotion {
             inputs: inputs.to_vec(),
             quasi_static,
             participation,
+            influence,
         })
     }
 
@@ -186,6 +208,148 @@ impl SupportMotion {
             Some(self.quasi_static.clone()),
             dt,
         )
+    }
+
+    /// The inertial loads `(M Γ_c)ᵀ` of every input as dense rows, to append
+    /// to the model's sensors ([`FrfModel::with_extra_rows`]): the
+    /// transmissibility's dynamic part is `ω²` times the receptance from that
+    /// row to the deck sensors.
+    pub fn load_rows(&self, frf: &FrfModel) -> Vec<Vec<(usize, f64)>> {
+        (0..self.inputs.len())
+            .map(|c| {
+                let gamma: Vec<f64> = (0..self.influence.nrows()).map(|d| self.influence[(d, c)]).collect();
+                frf.mass_times(&gamma)
+                    .into_iter()
+                    .enumerate()
+                    .filter(|(_, v)| *v != 0.0)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// `∂T_r/∂p` for every spring coefficient, stiffness-field coefficient
+    /// and damping coefficient, exact on the dense path. With
+    /// `T = N Γ + ω² N Z⁻¹ M Γ`:
+    ///
+    /// `∂T = ω² ∂(N Z⁻¹ v)|_{v = MΓ fixed} + N ∂Γ + ω² N Z⁻¹ M ∂Γ`.
+    ///
+    /// The first term is the receptance sensitivity of the shared FRF
+    /// evaluation (eq. 33 with the modal damping's exact share,
+    /// [`FrfModel::evaluate`], [`FrfModel::field_frf_sensitivities`]) from the
+    /// load row `v` (`loads`: `frf` with [`Self::load_rows`] appended). The
+    /// others follow from `∂Γ = K⁻¹ w`, `w = ∂(ΔK_g) R − (∂K) Γ` (zero for
+    /// damping), by the modes: `Σ_i a_ri (φ_iᵀ w / λ_i)(1 + ω²/D_i)`.
+    /// Uniform excitation has `∂Γ = 0` (Γ = R).
+    #[allow(clippy::too_many_arguments)] // the model, its loads, the groups, the state and the request
+    pub fn sensitivities(
+        &self,
+        frf: &FrfModel,
+        loads: &FrfModel,
+        groups: &SupportGroups,
+        state: &ModalState,
+        damping: &DampingCurve,
+        pairs: &[(usize, usize)],
+        frequencies_hz: &[f64],
+    ) -> TransmissibilitySensitivities {
+        let sensors = frf.sensor_count();
+        let load_state = loads.modal_state_from(state.modes.clone(), damping);
+        let load_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(r, c)| (r, sensors + c)).collect();
+        let request = FrfRequest {
+            frequencies_hz,
+            pairs: &load_pairs,
+            quantity: Quantity::Receptance,
+        };
+        let evaluation = loads.evaluate(&load_state, request, true);
+        let nf = frequencies_hz.len();
+        let scaled = |v: Vec<c64>| -> Vec<c64> {
+            v.into_iter()
+                .enumerate()
+                .map(|(k, x)| x * (2.0 * PI * frequencies_hz[k % nf]).powi(2))
+                .collect()
+        };
+        let mut dkappa: Vec<Vec<c64>> = evaluation.dh_dkappa.into_iter().map(scaled).collect();
+        let dgamma: Vec<Vec<c64>> = evaluation.dh_dgamma.into_iter().map(scaled).collect();
+        let mut dtheta: Vec<Vec<c64>> = if frf.field_coefficient_count() > 0 {
+            loads
+                .field_frf_sensitivities(&load_state, damping, request)
+                .into_iter()
+                .map(scaled)
+                .collect()
+        } else {
+            Vec::new()
+        };
+        // The influence's own change: w = B_j (δ_{j∈g} R − Γ) for a spring
+        // coefficient, −(∂K/∂θ_k) Γ for a field coefficient.
+        let mut flat = 0;
+        for (field, blocks) in frf.spring_blocks().iter().enumerate() {
+            for b in blocks {
+                let w = |c: usize| -> Vec<(usize, f64)> {
+                    let input = self.inputs[c];
+                    let own = groups.of_spring(field) == input.group;
+                    b.dofs
+                        .iter()
+                        .enumerate()
+                        .map(|(a, &ra)| {
+                            let v = b.dofs.iter().enumerate().map(|(e, &re)| {
+                                let rigid = if own && re % 5 == input.axis { 1.0 } else { 0.0 };
+                                b.values[(a, e)] * (rigid - self.influence[(re, c)])
+                            });
+                            (ra, v.sum())
+                        })
+                        .collect()
+                };
+                self.add_influence_change(state, pairs, frequencies_hz, w, &mut dkappa[flat]);
+                flat += 1;
+            }
+        }
+        for (k, dt) in dtheta.iter_mut().enumerate() {
+            let product = frf.field_times(k, &self.influence);
+            let w = |c: usize| -> Vec<(usize, f64)> { (0..product.nrows()).map(|d| (d, -product[(d, c)])).collect() };
+            self.add_influence_change(state, pairs, frequencies_hz, w, dt);
+        }
+        TransmissibilitySensitivities { dkappa, dtheta, dgamma }
+    }
+
+    /// Adds `Σ_i a_ri (φ_iᵀ w_c / λ_i)(1 + ω²/D_i)` to `out` for every pair
+    /// `(r, c)`, `w_c` given sparse per input.
+    fn add_influence_change(
+        &self,
+        state: &ModalState,
+        pairs: &[(usize, usize)],
+        frequencies_hz: &[f64],
+        w: impl Fn(usize) -> Vec<(usize, f64)>,
+        out: &mut [c64],
+    ) {
+        let nm = state.modes.len();
+        let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+        let weights: Vec<Vec<f64>> = (0..self.inputs.len())
+            .map(|c| {
+                let w = w(c);
+                (0..nm)
+                    .map(|i| {
+                        let lambda = state.modes.omega2[i];
+                        if state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest {
+                            return 0.0;
+                        }
+                        w.iter().map(|&(d, v)| state.modes.shapes[(d, i)] * v).sum::<f64>() / lambda
+                    })
+                    .collect()
+            })
+            .collect();
+        let nf = frequencies_hz.len();
+        for (p, &(r, c)) in pairs.iter().enumerate() {
+            for (k, &f) in frequencies_hz.iter().enumerate() {
+                let w2 = (2.0 * PI * f).powi(2);
+                let mut sum = c64::new(0.0, 0.0);
+                for i in 0..nm {
+                    let lambda = state.modes.omega2[i].max(0.0);
+                    let d = c64::new(lambda - w2, 2.0 * state.zeta[i] * lambda.sqrt() * w2.sqrt());
+                    let weight = state.amplitude(r, i) * weights[c][i];
+                    sum += c64::new(weight, 0.0) * (c64::new(1.0, 0.0) + c64::new(w2, 0.0) / d);
+                }
+                out[p * nf + k] += sum;
+            }
+        }
     }
 }
 

@@ -323,6 +323,16 @@ impl FrfModel {
         &self.sensor_rows
     }
 
+    /// This model with `extra` rows after its sensors': loads that are not
+    /// at a point (support motion's inertial loads `M Γ`,
+    /// [`crate::response::support_motion`]), so that FRFs and their
+    /// sensitivities to them come from the same evaluation.
+    pub fn with_extra_rows(&self, extra: Vec<Vec<(usize, f64)>>) -> Self {
+        let mut rows = self.sensor_rows.clone();
+        rows.extend(extra);
+        Self::with_source(self.source.clone(), rows)
+    }
+
     /// Positions of each `∂K/∂κ_j` block's dofs in the union of spring dofs
     /// (the rows of [`ModalState::spring_shapes`]), blocks flattened over fields.
     pub fn spring_block_positions(&self) -> &[Vec<usize>] {
