@@ -369,7 +369,7 @@ fn to_series(channels: Vec<V2Channel>) -> Result<ImportedSeries, ImportError> {
     let span_end = channels.iter().map(end).fold(f64::INFINITY, f64::min);
     let t0 = span_start.unwrap_or(0) as f64 * 1e-9;
     let points = ((span_end - t0) / dt + 1e-6).floor();
-    if !(points >= 2.0) {
+    if points.is_nan() || points < 2.0 {
         let (a, b) = (
             channels.iter().max_by_key(|c| c.start_ns).unwrap_or(first),
             channels
@@ -433,10 +433,10 @@ fn fourier_resample(x: &[f64], n: usize) -> Vec<f64> {
     target[..keep].copy_from_slice(&spectrum[..keep]);
     // A Nyquist line present in only one of the two lengths is split or summed
     // so that the real signal stays real (its imaginary part is dropped).
-    if m.is_multiple_of(2) && keep == spectrum.len() && n > m {
+    if m % 2 == 0 && keep == spectrum.len() && n > m {
         target[m / 2] *= 0.5;
     }
-    if n.is_multiple_of(2) && keep == target.len() {
+    if n % 2 == 0 && keep == target.len() {
         let nyquist = target.len() - 1;
         target[nyquist].im = 0.0;
         if n < m {

@@ -114,15 +114,15 @@ impl GroundModel {
             }
             if t == 0 {
                 // At rest: the absolute acceleration is the quasi-static part.
-                for r in 0..sensors {
+                for (r, series) in out.iter_mut().enumerate() {
                     let qs: f64 = (0..u.len()).map(|c| self.motion.quasi_static(r, c) * u[c]).sum();
-                    out[r].push(qs);
+                    series.push(qs);
                 }
                 continue;
             }
             sim.step_forces(&u, &mut now);
-            for r in 0..sensors {
-                out[r].push(now[r]);
+            for (series, v) in out.iter_mut().zip(&now) {
+                series.push(*v);
             }
         }
         out

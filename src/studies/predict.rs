@@ -151,7 +151,7 @@ pub fn significant_span<'a>(channels: impl Iterator<Item = &'a [f64]>, samples: 
         }
     }
     let total: f64 = energy.iter().sum();
-    if !(total > 0.0) {
+    if total.is_nan() || total <= 0.0 {
         return (0, samples);
     }
     let (mut acc, mut i0, mut i1) = (0.0, 0, samples);
