@@ -8,7 +8,7 @@
 set -euo pipefail
 dir="$1"
 bin="${2:-target/release/splinewatch}"
-printf "%-52s %8s %8s %8s %8s %8s\n" event pga_m/s2 tr_model tr_base all_model all_base
+printf "%-52s %-20s %8s %8s %8s %8s %8s\n" event start pga_m/s2 tr_model tr_base all_model all_base
 for zip in "$dir"/*.zip; do
   json=$("$bin" predict --config config/painter-street.toml "$zip" --json 2>/dev/null) || { echo "$(basename "$zip"): failed"; continue; }
   python3 - "$zip" "$json" <<'PY'
@@ -19,6 +19,6 @@ model = {c["sensor"]: c["nrmse_strong"] for c in d["channels"]}
 base = {c["sensor"]: c["nrmse_strong"] for c in d["baseline"]}
 tr = [s for s in ("ch7", "ch9", "ch4") if s in model]
 med = lambda xs: statistics.median(xs) if xs else float("nan")
-print(f"{os.path.basename(zip_path):52s} {d.get('pga_ground', float('nan')):8.3f} {med([model[s] for s in tr]):8.3f} {med([base[s] for s in tr]):8.3f} {med(list(model.values())):8.3f} {med(list(base.values())):8.3f}")
+print(f"{os.path.basename(zip_path):52s} {(d.get('start') or '?')[:19]:20s} {d.get('pga_ground', float('nan')):8.3f} {med([model[s] for s in tr]):8.3f} {med([base[s] for s in tr]):8.3f} {med(list(model.values())):8.3f} {med(list(base.values())):8.3f}")
 PY
 done

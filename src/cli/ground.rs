@@ -21,7 +21,7 @@ pub struct PredictArgs {
     /// Configuration file (TOML) with ground sensors (`support = "<group>"`).
     #[arg(long)]
     pub config: PathBuf,
-    /// The record: a station's .zip or .V2 files (one event), or raw-input MCAP recordings.
+    /// The record: a station's .zip or .V2 files (one event), raw-input MCAP recordings, or a logger's CSV/UFF 58 file.
     #[arg(required = true, num_args = 1..)]
     pub record: Vec<PathBuf>,
     /// Parameters of an update (`update --json` output): the model at those values.
@@ -71,6 +71,7 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
     let mut blocks = Vec::new();
     for path in paths {
         let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
         if bytes.starts_with(b"\x89MCAP") {
             let (mut read, rejected) =
                 read_recording(&bytes, &limits).with_context(|| format!("reading {}", path.display()))?;
@@ -78,27 +79,53 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
                 errln!("{}: skipped a message on {}: {}", path.display(), r.topic, r.error);
             }
             blocks.append(&mut read);
+        } else if crate::io::uff::looks_like_uff(&bytes) || matches!(extension.as_str(), "csv" | "tsv" | "txt") {
+            // A logger's file: read as `import` reads it (the file's own time
+            // and rate; `import` first when they must be given).
+            let series = if crate::io::uff::looks_like_uff(&bytes) {
+                crate::io::import::read_uff58(&bytes)
+            } else {
+                let text = std::str::from_utf8(&bytes).with_context(|| format!("{}: not UTF-8 text", path.display()))?;
+                crate::io::import::read_csv(text, &Default::default())
+            }
+            .with_context(|| path.display().to_string())?;
+            blocks.extend(imported_blocks(config, series, &prefix).with_context(|| {
+                format!("{}: convert it with `splinewatch import` (--fs, --start) first", path.display())
+            })?);
         } else {
             v2.push((bytes, path.display().to_string()));
         }
     }
     if !v2.is_empty() {
         let series = crate::io::cosmos_v2::read_v2(&v2)?;
-        let options = ImportOptions {
-            fs: None,
-            start_ns: None,
-            block_seconds: 10.0,
-            strict: false,
-            units: None,
-        };
-        let imported = to_blocks(config, series, &options)?;
-        blocks.extend(imported.blocks.into_iter().map(|block| RecordedBlock {
-            topic: block.topic(&prefix),
-            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
-            block,
-        }));
+        blocks.extend(imported_blocks(config, series, &prefix)?);
     }
     Ok(blocks)
+}
+
+/// A file's columns as the config's channel blocks (as `import` makes them).
+fn imported_blocks(
+    config: &Config,
+    series: crate::io::import::ImportedSeries,
+    prefix: &str,
+) -> Result<Vec<RecordedBlock>> {
+    let options = ImportOptions {
+        fs: None,
+        start_ns: None,
+        block_seconds: 10.0,
+        strict: false,
+        units: None,
+    };
+    let imported = to_blocks(config, series, &options)?;
+    Ok(imported
+        .blocks
+        .into_iter()
+        .map(|block| RecordedBlock {
+            topic: block.topic(prefix),
+            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
+            block,
+        })
+        .collect())
 }
 
 /// The record's channels on one grid: the ground sensors the model reads
@@ -157,7 +184,8 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
     }
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
-    let prediction = predict_event(&cfg, &model, &event.deck, channel, event.fs);
+    let mut prediction = predict_event(&cfg, &model, &event.deck, channel, event.fs);
+    prediction.report.start = Some(crate::io::wire::format_timestamp(event.start_ns));
     if let Some(dir) = &a.plot {
         plot(&cfg, &prediction, event.fs, dir)?;
     }
@@ -170,7 +198,8 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         return Ok(());
     }
     outln!(
-        "{:.1} s at {} Hz; strong motion (5–95 % of the ground's energy) {:.2}–{:.2} s",
+        "{} +{:.1} s at {} Hz; strong motion (5–95 % of the ground's energy) {:.2}–{:.2} s",
+        r.start.as_deref().unwrap_or("?"),
         r.record_seconds,
         r.fs,
         r.strong_span_s[0],
@@ -288,21 +317,29 @@ pub fn simulate_ground(
     Ok(())
 }
 
-/// One SVG per deck channel: measured, predicted and the baseline over time.
+/// One SVG per deck channel: measured, predicted and the baseline over time
+/// (top) and their amplitude spectra up to 25 Hz (bottom, logarithmic).
 fn plot(cfg: &Config, prediction: &Prediction, fs: f64, dir: &Path) -> Result<()> {
     use plotters::prelude::*;
+    let fail = |e: &dyn std::fmt::Display| anyhow::anyhow!("plotting: {e}");
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     for (k, &s) in prediction.sensors.iter().enumerate() {
         let name = &cfg.sensors[s].name;
         let path = dir.join(format!("{name}.svg"));
-        let root = SVGBackend::new(&path, (1100, 420)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e}"))?;
+        let root = SVGBackend::new(&path, (1100, 760)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| fail(&e))?;
+        let (upper, lower) = root.split_vertically(420);
         let m = &prediction.measured[k];
         let p = &prediction.predicted[k];
+        let b = &prediction.baseline[k];
+        let curves = [
+            (b, RGBColor(170, 170, 170), "deck = nearest ground"),
+            (m, BLACK, "measured"),
+            (p, RED, "predicted"),
+        ];
         let peak = m.iter().chain(p).fold(0.0f64, |a, v| a.max(v.abs())).max(1e-12);
-        let seconds = m.len() as f64 / fs;
         let score = &prediction.report.channels[k];
-        let mut chart = ChartBuilder::on(&root)
+        let mut chart = ChartBuilder::on(&upper)
             .caption(
                 format!(
                     "{name}: NRMSE {:.2} (strong motion {:.2}), baseline {:.2}",
@@ -313,32 +350,19 @@ fn plot(cfg: &Config, prediction: &Prediction, fs: f64, dir: &Path) -> Result<()
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(60)
-            .build_cartesian_2d(0.0..seconds, -1.1 * peak..1.1 * peak)
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            .build_cartesian_2d(0.0..m.len() as f64 / fs, -1.1 * peak..1.1 * peak)
+            .map_err(|e| fail(&e))?;
         chart
             .configure_mesh()
             .x_desc("time (s)")
             .y_desc("acceleration (m/s²)")
             .draw()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        let series = |x: &[f64]| {
-            x.iter()
-                .enumerate()
-                .map(|(i, v)| (i as f64 / fs, *v))
-                .collect::<Vec<_>>()
-        };
-        for (data, colour, label) in [
-            (
-                &prediction.baseline[k],
-                RGBColor(170, 170, 170),
-                "deck = nearest ground",
-            ),
-            (m, BLACK, "measured"),
-            (p, RED, "predicted"),
-        ] {
+            .map_err(|e| fail(&e))?;
+        for (data, colour, label) in curves {
+            let points = data.iter().enumerate().map(|(i, v)| (i as f64 / fs, *v));
             chart
-                .draw_series(LineSeries::new(series(data), colour))
-                .map_err(|e| anyhow::anyhow!("{e}"))?
+                .draw_series(LineSeries::new(points, colour))
+                .map_err(|e| fail(&e))?
                 .label(label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour));
         }
@@ -347,8 +371,42 @@ fn plot(cfg: &Config, prediction: &Prediction, fs: f64, dir: &Path) -> Result<()
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
             .draw()
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-        root.present().map_err(|e| anyhow::anyhow!("{e}"))?;
+            .map_err(|e| fail(&e))?;
+        let spectra: Vec<Vec<(f64, f64)>> = curves.iter().map(|(x, _, _)| amplitude_spectrum(x, fs, 25.0)).collect();
+        let top = spectra.iter().flatten().map(|&(_, a)| a).fold(1e-12, f64::max);
+        let mut spectrum = ChartBuilder::on(&lower)
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..25.0, (top * 1e-4..top * 2.0).log_scale())
+            .map_err(|e| fail(&e))?;
+        spectrum
+            .configure_mesh()
+            .x_desc("frequency (Hz)")
+            .y_desc("|FFT| (m/s²·s)")
+            .draw()
+            .map_err(|e| fail(&e))?;
+        for (points, (_, colour, _)) in spectra.into_iter().zip(curves) {
+            let points = points.into_iter().map(|(f, a)| (f, a.max(top * 1e-4)));
+            spectrum.draw_series(LineSeries::new(points, colour)).map_err(|e| fail(&e))?;
+        }
+        root.present().map_err(|e| fail(&e))?;
     }
     Ok(())
+}
+
+/// `|X(f)| / fs` of `x` (its Fourier transform's amplitude, m/s²·s) up to `f_max` Hz.
+fn amplitude_spectrum(x: &[f64], fs: f64, f_max: f64) -> Vec<(f64, f64)> {
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(x.len());
+    let mut input = x.to_vec();
+    let mut out = fft.make_output_vec();
+    if fft.process(&mut input, &mut out).is_err() {
+        return Vec::new();
+    }
+    out.iter()
+        .enumerate()
+        .map(|(k, v)| (k as f64 * fs / x.len() as f64, v.norm() / fs))
+        .take_while(|(f, _)| *f <= f_max)
+        .collect()
 }

@@ -29,6 +29,8 @@ pub struct ChannelScore {
 /// What `predict --json` prints.
 #[derive(Debug, Clone, Serialize)]
 pub struct PredictionReport {
+    /// The record's first sample (RFC 3339), set by the caller that knows it.
+    pub start: Option<String>,
     pub channels: Vec<ChannelScore>,
     pub strong_span_s: [f64; 2],
     /// "deck = nearest ground": the same figures of the baseline, with the
@@ -76,6 +78,7 @@ pub fn predict<'a>(
     let (i0, i1) = significant_span(ground_sensors.iter().map(|&i| channel(i)), samples);
     let inputs = crate::config::ground_signals(&model.plan, channel);
     let mut report = PredictionReport {
+        start: None,
         channels: Vec::new(),
         strong_span_s: [i0 as f64 / fs, i1 as f64 / fs],
         baseline: Vec::new(),
