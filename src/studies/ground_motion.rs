@@ -7,7 +7,10 @@
 //! [`splinewatch_core::response::support_motion`], run at the record's own
 //! rate with the ground acceleration linear between samples (first-order
 //! hold: exact for that input; a strong-motion record's corrected
-//! acceleration is band-limited well below its Nyquist frequency).
+//! acceleration is band-limited well below its Nyquist frequency). On a
+//! truncated model (`[model.solver]`) the recursion runs over the kept modes
+//! and the quasi-static part `N Γ ü_g` is exact (the static solve of every
+//! mode); the discarded modes' dynamic share is left out.
 
 use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan};
 use anyhow::{bail, Context, Result};
@@ -37,11 +40,6 @@ impl GroundModel {
         let groups = config.support_groups(&model)?;
         let plan = config.ground_plan(&groups)?;
         let setup = frf_setup(config)?;
-        if setup.model.dense().is_none() {
-            bail!(
-                "support motion needs every mode of the model (the dense path); [model.solver] truncates it: set modes = \"all\""
-            );
-        }
         let parameters = config.build_parameters()?;
         let mut kappa = setup.kappa.clone();
         let mut theta = setup.model.field_coefficients().to_vec();

@@ -40,8 +40,10 @@ pub enum SupportError {
         first: String,
         second: String,
     },
-    #[error("ground motion needs every mode of the model (the dense path); this model is truncated at {0} Hz")]
-    Truncated(f64),
+    #[error("support group {0:?} moves constrained edges: on a truncated model (the sparse path) only springs and bearings may move with the ground; use [model.solver] modes = \"all\"")]
+    TruncatedConstraint(String),
+    #[error("support motion: the static solve failed: {0}")]
+    Solve(String),
     #[error("ground input {index}: group {group} does not exist (there are {count}), or axis {axis} is not 0, 1 or 2")]
     Input {
         index: usize,

@@ -89,9 +89,6 @@ impl SupportMotion {
         state: &ModalState,
         inputs: &[GroundInput],
     ) -> Result<Self, SupportError> {
-        let Some(assembled) = frf.dense() else {
-            return Err(SupportError::Truncated(frf.cutoff_hz().unwrap_or(f64::NAN)));
-        };
         for (index, i) in inputs.iter().enumerate() {
             if i.group >= groups.names().len() || i.axis > 2 {
                 return Err(SupportError::Input {
@@ -103,47 +100,41 @@ impl SupportMotion {
             }
         }
         let lifts = constraint_lifts(model, groups)?;
-        let n = assembled.free_stiffness.nrows();
+        let lift = |input: &GroundInput| -> Vec<f64> {
+            lifts[input.group]
+                .iter()
+                .enumerate()
+                .map(|(dof, &on)| if on && dof % 5 == input.axis { 1.0 } else { 0.0 })
+                .collect()
+        };
+        let influence = match frf.dense() {
+            Some(assembled) => {
+                let mut influence = Mat::<f64>::zeros(assembled.free_stiffness.nrows(), inputs.len());
+                for (c, input) in inputs.iter().enumerate() {
+                    let lift = lift(input);
+                    let force = ground_force(assembled, groups, kappa, theta, input, &lift);
+                    let solved = static_by_modes(state, &force);
+                    for (d, (l, x)) in lift.iter().zip(solved).enumerate() {
+                        influence[(d, c)] = l + x;
+                    }
+                }
+                influence
+            }
+            None => truncated_influence(frf, groups, kappa, theta, state, inputs, &lift)?,
+        };
+        let n = influence.nrows();
         let shapes = &state.modes.shapes;
         let nm = state.modes.len();
-        let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
         let mut quasi_static = Mat::<f64>::zeros(frf.sensor_count(), inputs.len());
         let mut participation = Mat::<f64>::zeros(nm, inputs.len());
-        let mut influence = Mat::<f64>::zeros(n, inputs.len());
-        for (c, input) in inputs.iter().enumerate() {
-            let lift: Vec<f64> = lifts[input.group]
-                .iter()
-                .map(|&on| if on { 1.0 } else { 0.0 })
-                .enumerate()
-                .map(|(dof, on)| if dof % 5 == input.axis { on } else { 0.0 })
-                .collect();
-            let force = ground_force(assembled, groups, kappa, theta, input, &lift);
-            for (d, &v) in lift.iter().enumerate() {
-                influence[(d, c)] = v;
-            }
-            let mass_lift = frf.mass_times(&lift);
+        for c in 0..inputs.len() {
+            let gamma: Vec<f64> = (0..n).map(|d| influence[(d, c)]).collect();
             for (r, row) in frf.sensor_rows().iter().enumerate() {
-                quasi_static[(r, c)] = row.iter().map(|&(d, v)| v * lift[d]).sum();
+                quasi_static[(r, c)] = row.iter().map(|&(d, v)| v * gamma[d]).sum();
             }
+            let mass_gamma = frf.mass_times(&gamma);
             for i in 0..nm {
-                let p: f64 = (0..n).map(|d| shapes[(d, i)] * force[d]).sum();
-                let l_lift: f64 = (0..n).map(|d| shapes[(d, i)] * mass_lift[d]).sum();
-                let lambda = state.modes.omega2[i];
-                let rigid = state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest;
-                // A rigid mode `φ` has `Kφ = 0`, so `ΔK_g φ = 0` (every part of `K` is
-                // positive semi-definite) and `P_i = φᵀ(ΔK_g R − K ℓ) = 0`: only the lift
-                // moves it.
-                if rigid {
-                    participation[(i, c)] = l_lift;
-                    continue;
-                }
-                participation[(i, c)] = l_lift + p / lambda;
-                for d in 0..n {
-                    influence[(d, c)] += shapes[(d, i)] * p / lambda;
-                }
-                for r in 0..frf.sensor_count() {
-                    quasi_static[(r, c)] += state.amplitude(r, i) * p / lambda;
-                }
+                participation[(i, c)] = (0..n).map(|d| shapes[(d, i)] * mass_gamma[d]).sum();
             }
         }
         Ok(Self {
@@ -192,6 +183,40 @@ impl SupportMotion {
             }
         }
         out
+    }
+
+    /// `T_r(ω) = N_r Γ + ω² H_r,v(ω)` with `H_r,v` the receptance from the
+    /// inertial load row `v = M Γ` to sensor `r` by the shared FRF evaluation
+    /// of `loads` (`frf` with [`Self::load_rows`] appended): on a truncated
+    /// model the discarded modes' residual (flexibility, first dynamic
+    /// correction and damping, [`crate::solvers::truncation`]) is included;
+    /// on the dense path it equals [`Self::transmissibility`].
+    #[track_caller]
+    pub fn transmissibility_with_residual(
+        &self,
+        frf: &FrfModel,
+        loads: &FrfModel,
+        load_state: &ModalState,
+        pairs: &[(usize, usize)],
+        frequencies_hz: &[f64],
+    ) -> Vec<c64> {
+        let sensors = frf.sensor_count();
+        let load_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(r, c)| (r, sensors + c)).collect();
+        let request = FrfRequest {
+            frequencies_hz,
+            pairs: &load_pairs,
+            quantity: Quantity::Receptance,
+        };
+        let h = loads.evaluate(load_state, request, false).h;
+        let nf = frequencies_hz.len();
+        h.into_iter()
+            .enumerate()
+            .map(|(k, x)| {
+                let (r, c) = pairs[k / nf];
+                let w = 2.0 * PI * frequencies_hz[k % nf];
+                c64::new(self.quasi_static[(r, c)], 0.0) + x * (w * w)
+            })
+            .collect()
     }
 
     /// The exact recursion of [`ModalSimulator`] driven by the ground
@@ -351,6 +376,94 @@ impl SupportMotion {
             }
         }
     }
+}
+
+/// `T (TᵀKT)⁻¹ Tᵀ f` by every mode of the state (the dense path): the
+/// static response `Σ_i φ_i (φ_iᵀ f) / λ_i`. A rigid mode `φ` has `Kφ = 0`,
+/// so `ΔK_g φ = 0` (every part of `K` is positive semi-definite) and
+/// `φᵀ(ΔK_g R − K ℓ) = 0`: it takes no part.
+fn static_by_modes(state: &ModalState, force: &[f64]) -> Vec<f64> {
+    let shapes = &state.modes.shapes;
+    let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+    let mut x = vec![0.0; force.len()];
+    for i in 0..state.modes.len() {
+        let lambda = state.modes.omega2[i];
+        if state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest {
+            continue;
+        }
+        let p: f64 = force.iter().enumerate().map(|(d, f)| shapes[(d, i)] * f).sum();
+        for (d, xd) in x.iter_mut().enumerate() {
+            *xd += shapes[(d, i)] * p / lambda;
+        }
+    }
+    x
+}
+
+/// `Γ` on a truncated model: the static response `K⁻¹ f` from the
+/// eigen-solve's factorisation at its shift `σ` (`X = (K − σM)⁻¹`, with
+/// `X M X`, [`crate::solvers::sparse_model::SparseModel::modes_and_responses`]),
+/// brought to `σ = 0` by `1/λ = 1/(λ−σ) − σ/(λ−σ)² + σ²/(λ(λ−σ)²)`:
+/// `K⁻¹ f = X f − σ X M X f + Σ φ_i P_i σ²/(λ_i (λ_i−σ)²)`, the last sum
+/// over the kept modes (for a discarded one it is `(σ/λ)² ≤ 1/2500²` of its
+/// share). The constrained edges of a
+/// moving group would need the unreduced stiffness, which the sparse model
+/// does not keep: refused.
+fn truncated_influence(
+    frf: &FrfModel,
+    groups: &SupportGroups,
+    kappa: &[Vec<f64>],
+    theta: &[Vec<f64>],
+    state: &ModalState,
+    inputs: &[GroundInput],
+    lift: &dyn Fn(&GroundInput) -> Vec<f64>,
+) -> Result<Mat<f64>, SupportError> {
+    let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
+    if let Some(input) = inputs.iter().find(|i| lift(i).iter().any(|&v| v != 0.0)) {
+        return Err(SupportError::TruncatedConstraint(groups.names()[input.group].clone()));
+    }
+    let n = model.dof_count();
+    let forces: Vec<Vec<(usize, f64)>> = inputs
+        .iter()
+        .map(|input| {
+            let mut force = vec![0.0; n];
+            for (field, (blocks, coefficients)) in frf.spring_blocks().iter().zip(kappa).enumerate() {
+                if groups.of_spring(field) != input.group {
+                    continue;
+                }
+                for (b, &k) in blocks.iter().zip(coefficients) {
+                    for (a, &ra) in b.dofs.iter().enumerate() {
+                        for (e, &re) in b.dofs.iter().enumerate() {
+                            if re % 5 == input.axis {
+                                force[ra] += k * b.values[(a, e)];
+                            }
+                        }
+                    }
+                }
+            }
+            force.into_iter().enumerate().filter(|(_, v)| *v != 0.0).collect()
+        })
+        .collect();
+    let (_, (x, xmx)) = model
+        .modes_and_responses(kappa, theta, cutoff_hz, &forces)
+        .map_err(|e| SupportError::Solve(e.to_string()))?;
+    let sigma = crate::solvers::sparse_model::SparseModel::shift_for(cutoff_hz);
+    let shapes = &state.modes.shapes;
+    let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+    let mut influence = Mat::from_fn(n, inputs.len(), |d, c| x[(d, c)] - sigma * xmx[(d, c)]);
+    for (c, force) in forces.iter().enumerate() {
+        for i in 0..state.modes.len() {
+            let lambda = state.modes.omega2[i];
+            if state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest {
+                continue;
+            }
+            let p: f64 = force.iter().map(|&(d, f)| shapes[(d, i)] * f).sum();
+            let weight = p * (1.0 / lambda - 1.0 / (lambda - sigma) + sigma / (lambda - sigma).powi(2));
+            for d in 0..n {
+                influence[(d, c)] += shapes[(d, i)] * weight;
+            }
+        }
+    }
+    Ok(influence)
 }
 
 /// Per group, whether each generalised dof's control point lies on one of

@@ -290,6 +290,14 @@ impl FrfModel {
         }
     }
 
+    /// The sparse model and the cut-off of a truncated model.
+    pub fn sparse(&self) -> Option<(&SparseModel, f64)> {
+        match &self.source {
+            Source::Dense(_) => None,
+            Source::Truncated { model, cutoff_hz } => Some((model, *cutoff_hz)),
+        }
+    }
+
     /// The cut-off of a truncated model.
     pub fn cutoff_hz(&self) -> Option<f64> {
         match &self.source {
