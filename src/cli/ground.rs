@@ -71,7 +71,11 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
     let mut blocks = Vec::new();
     for path in paths {
         let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or_default().to_ascii_lowercase();
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or_default()
+            .to_ascii_lowercase();
         if bytes.starts_with(b"\x89MCAP") {
             let (mut read, rejected) =
                 read_recording(&bytes, &limits).with_context(|| format!("reading {}", path.display()))?;
@@ -85,12 +89,16 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
             let series = if crate::io::uff::looks_like_uff(&bytes) {
                 crate::io::import::read_uff58(&bytes)
             } else {
-                let text = std::str::from_utf8(&bytes).with_context(|| format!("{}: not UTF-8 text", path.display()))?;
+                let text =
+                    std::str::from_utf8(&bytes).with_context(|| format!("{}: not UTF-8 text", path.display()))?;
                 crate::io::import::read_csv(text, &Default::default())
             }
             .with_context(|| path.display().to_string())?;
             blocks.extend(imported_blocks(config, series, &prefix).with_context(|| {
-                format!("{}: convert it with `splinewatch import` (--fs, --start) first", path.display())
+                format!(
+                    "{}: convert it with `splinewatch import` (--fs, --start) first",
+                    path.display()
+                )
             })?);
         } else {
             v2.push((bytes, path.display().to_string()));
@@ -388,7 +396,9 @@ fn plot(cfg: &Config, prediction: &Prediction, fs: f64, dir: &Path) -> Result<()
             .map_err(|e| fail(&e))?;
         for (points, (_, colour, _)) in spectra.into_iter().zip(curves) {
             let points = points.into_iter().map(|(f, a)| (f, a.max(top * 1e-4)));
-            spectrum.draw_series(LineSeries::new(points, colour)).map_err(|e| fail(&e))?;
+            spectrum
+                .draw_series(LineSeries::new(points, colour))
+                .map_err(|e| fail(&e))?;
         }
         root.present().map_err(|e| fail(&e))?;
     }

@@ -75,11 +75,20 @@ fn issue_44_simulate_from_a_record_then_predict_gives_the_simulation_back() {
     let dense = dir.join("dense.toml");
     let text = std::fs::read_to_string(CONFIG).unwrap();
     std::fs::write(&dense, text.replace("modes = \"truncated\"", "modes = \"all\"")).unwrap();
-    let o = splinewatch(&["predict", "--config", dense.to_str().unwrap(), "--json", clean.to_str().unwrap()]);
+    let o = splinewatch(&[
+        "predict",
+        "--config",
+        dense.to_str().unwrap(),
+        "--json",
+        clean.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for (sensor, e) in nrmse(&report) {
-        assert!(e < 0.01, "{sensor}: NRMSE {e} of every mode against the truncated model");
+        assert!(
+            e < 0.01,
+            "{sensor}: NRMSE {e} of every mode against the truncated model"
+        );
     }
     let noisy = dir.join("noisy.mcap");
     simulate("0.02", &noisy);

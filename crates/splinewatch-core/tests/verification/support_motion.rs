@@ -448,7 +448,11 @@ fn the_truncated_path_agrees_with_every_mode() {
     let (t_trunc, s_trunc, kept) = run(&truncated);
     assert!(kept < all / 4, "{kept} of {all} modes kept");
     for (k, (a, b)) in s_trunc.iter().zip(&s_dense).enumerate() {
-        assert!((a - b).abs() <= 1e-6 * b.abs().max(1.0), "pair {:?}: NΓ {a} vs {b}", pairs[k]);
+        assert!(
+            (a - b).abs() <= 1e-6 * b.abs().max(1.0),
+            "pair {:?}: NΓ {a} vs {b}",
+            pairs[k]
+        );
     }
     let nf = lines.len();
     // The dense path's two evaluations are the same sum.
@@ -466,5 +470,8 @@ fn the_truncated_path_agrees_with_every_mode() {
         worst.1 = worst.1.max(e);
         assert!(e <= 2e-3, "pair {:?}: truncated vs dense {e:.1e}", pairs[p]);
     }
-    eprintln!("truncated vs dense: NΓ {:.1e}, T {:.1e} ({kept} of {all} modes)", worst.0, worst.1);
+    eprintln!(
+        "truncated vs dense: NΓ {:.1e}, T {:.1e} ({kept} of {all} modes)",
+        worst.0, worst.1
+    );
 }
