@@ -5,6 +5,7 @@ use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
 use crate::io::recording::{read_recording, RecordedBlock, RecordingWriter};
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
+use crate::outputs::rerun::prediction::PredictedChannel;
 use crate::pipeline::estimate::aligned_span;
 use crate::studies::ground_motion::GroundModel;
 use crate::studies::import::{to_blocks, ImportOptions};
@@ -39,6 +40,9 @@ pub struct PredictArgs {
     /// Print the figures as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Save the measured, predicted and baseline series of every deck channel as a Rerun recording (.rrd).
+    #[arg(long)]
+    pub rerun_save: Option<PathBuf>,
 }
 
 /// The updating parameters named in an `update --json` result or a state file.
@@ -199,6 +203,26 @@ pub fn predict(a: PredictArgs) -> Result<()> {
     }
     if let Some(out) = &a.out {
         write_prediction(&cfg, &event, &prediction, out)?;
+    }
+    if let Some(path) = &a.rerun_save {
+        let targets = crate::outputs::rerun::RerunTargets {
+            save: Some(path.clone()),
+            connect: None,
+        };
+        let mut rerun = crate::outputs::rerun::RerunOutput::open(&cfg, &targets)?;
+        let channels: Vec<PredictedChannel<'_>> = prediction
+            .sensors
+            .iter()
+            .enumerate()
+            .map(|(k, &s)| PredictedChannel {
+                sensor: &cfg.sensors[s].name,
+                measured: &prediction.measured[k],
+                predicted: &prediction.predicted[k],
+                baseline: &prediction.baseline[k],
+            })
+            .collect();
+        rerun.log_prediction(event.start_ns, event.fs, &channels)?;
+        rerun.finish()?;
     }
     let r = &prediction.report;
     if a.json {

@@ -59,7 +59,7 @@ fn error(what: &str, message: impl Into<String>) -> ImportError {
 /// Reads `.V2` files or `.zip` files of them (told by their first bytes),
 /// each given with its name (for messages and, when line 8 gives none, the
 /// channel number), into one series: the channels of all of them, on one
-/// grid ([`to_series`]).
+/// grid (see `to_series`: the lowest rate over the common span).
 pub fn read_v2(files: &[(Vec<u8>, String)]) -> Result<ImportedSeries, ImportError> {
     to_series(read_channels(files)?)
 }

@@ -101,8 +101,8 @@ fn issue_44_simulate_from_a_record_then_predict_gives_the_simulation_back() {
 }
 
 /// A real event the config was not set on (28 Jan 2015): every deck channel
-/// scored over the whole record and its strong motion, the SVGs and the
-/// recording written, and on the transverse channels (7, 9, 4 as
+/// scored over the whole record and its strong motion, the SVGs, the
+/// recording and the Rerun series written, and on the transverse channels (7, 9, 4 as
 /// `channel_conf.py` names them) the model's median NRMSE over the strong
 /// motion below the "deck = nearest ground" baseline's (README: 0.58
 /// against 0.80).
@@ -111,13 +111,24 @@ fn issue_44_the_painter_street_model_predicts_a_real_event_better_than_its_groun
     let dir = fresh_dir("ground-real");
     let plots = dir.join("plots");
     let out = dir.join("predicted.mcap");
+    let rrd = dir.join("predicted.rrd");
     let report = predict_json(&[
         &record(EVENT_2015),
         "--plot",
         plots.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--rerun-save",
+        rrd.to_str().unwrap(),
     ]);
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
+    for what in ["measured", "predicted", "baseline"] {
+        assert!(
+            summary.entities.contains(&format!("/predict/ch7/{what}")),
+            "{:?}",
+            summary.entities
+        );
+    }
     let [t0, t1] = [0, 1].map(|k| report["strong_span_s"][k].as_f64().unwrap());
     let seconds = report["record_seconds"].as_f64().unwrap();
     assert!(0.0 <= t0 && t0 < t1 && t1 <= seconds, "{report}");

@@ -34,6 +34,7 @@ mod blueprint;
 mod deck;
 mod monitoring;
 mod oma;
+pub mod prediction;
 mod rrd;
 mod update;
 

@@ -464,11 +464,11 @@ fn the_truncated_path_agrees_with_every_mode() {
     for (a, b) in s_trunc.iter().zip(&s_dense) {
         worst.0 = worst.0.max((a - b).abs() / b.abs().max(1.0));
     }
-    for p in 0..pairs.len() {
+    for (p, pair) in pairs.iter().enumerate() {
         let range = p * nf..(p + 1) * nf;
         let e = max_relative_error(&t_trunc[range.clone()], &t_dense[range]);
         worst.1 = worst.1.max(e);
-        assert!(e <= 2e-3, "pair {:?}: truncated vs dense {e:.1e}", pairs[p]);
+        assert!(e <= 2e-3, "pair {pair:?}: truncated vs dense {e:.1e}");
     }
     eprintln!(
         "truncated vs dense: NΓ {:.1e}, T {:.1e} ({kept} of {all} modes)",
