@@ -1,0 +1,89 @@
+"""Painter Street, event by event, side by side with mdof (issue 45's scale).
+
+For every record of CSMIP station 89324 in DIR (the station zips of github
+chrystalchern/mdof, notebooks/uploads/CE89324), in time order:
+
+- mdof (`pip install mdof`) reads it (quakeio, as its notebook
+  06_MIMO_History does) and identifies a SRIM realization from the
+  transverse channels of `channel_conf.py` (inputs 3, 17, 20; outputs 7, 9,
+  4) with the notebook's settings (order 12, horizon 190), and reports its
+  modes (`modal.system_modes`);
+- the realization of the *previous* event is driven by this event's ground
+  channels (`mdof.simulate.simulate`): mdof's forecast of this event;
+- `splinewatch predict` forecasts the same event with
+  config/painter-street.toml at its (hand-set) values;
+
+and both forecasts are scored the same way: NRMSE over the strong motion
+(5-95 % of the energy of the ground channels), median over channels 7, 9, 4.
+Usage: .venv/bin/python benches/painter_street_mdof.py DIR [splinewatch]
+"""
+
+import json
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+import mdof
+import quakeio
+from mdof import modal
+from mdof.simulate import simulate
+from mdof.utilities import extract_channels
+
+INPUTS, OUTPUTS = [3, 17, 20], [7, 9, 4]
+SETTINGS = dict(order=12, horizon=190, nc=190)
+
+
+def strong_span(ground):
+    energy = np.cumsum(np.sum(ground**2, axis=0))
+    total = energy[-1]
+    return int(np.searchsorted(energy, 0.05 * total)), int(np.searchsorted(energy, 0.95 * total)) + 1
+
+
+def nrmse(pred, meas):
+    return float(np.sqrt(np.mean((pred - meas) ** 2)) / np.sqrt(np.mean(meas**2)))
+
+
+def main():
+    directory = Path(sys.argv[1])
+    binary = sys.argv[2] if len(sys.argv) > 2 else "target/release/splinewatch"
+    events = []
+    for path in sorted(directory.glob("*.zip")):
+        event = quakeio.read(path, exclusions=["*filter*"])
+        inputs, dt = extract_channels(event, INPUTS)
+        outputs, _ = extract_channels(event, OUTPUTS)
+        sw = json.loads(
+            subprocess.run(
+                [binary, "predict", "--config", "config/painter-street.toml", str(path), "--json"],
+                capture_output=True,
+                check=True,
+                text=True,
+            ).stdout
+        )
+        events.append((sw["start"], path.name, inputs, outputs, dt, sw))
+    events.sort()
+    previous = None
+    print(f"{'start':20s} {'event':44s} {'mdof s':>7s} {'modes (Hz, damping %) by mdof SRIM':40s} {'mdof prev':>9s} {'sw':>6s}")
+    for start, name, inputs, outputs, dt, sw in events:
+        t0 = time.perf_counter()
+        realization = mdof.sysid(inputs, outputs, dt=dt, method="srim", **SETTINGS)
+        seconds = time.perf_counter() - t0
+        modes = modal.system_modes(realization, dt)
+        listed = sorted((m["freq"], 100 * m["damp"]) for m in modes.values() if 0.5 < m["freq"] < 12)
+        text = ", ".join(f"{f:.2f} ({z:.1f})" for f, z in listed[:4])
+        s0, s1 = strong_span(inputs)
+        forecast = float("nan")
+        if previous is not None:
+            predicted = simulate(previous, inputs)
+            forecast = statistics.median(nrmse(predicted[k, s0:s1], outputs[k, s0:s1]) for k in range(len(OUTPUTS)))
+        ours = {c["sensor"]: c["nrmse_strong"] for c in sw["channels"]}
+        sw_median = statistics.median(ours[f"ch{c}"] for c in OUTPUTS)
+        print(f"{start[:19]:20s} {name:44s} {seconds:7.2f} {text:40s} {forecast:9.3f} {sw_median:6.3f}")
+        previous = realization
+
+
+if __name__ == "__main__":
+    main()
