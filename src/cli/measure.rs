@@ -573,21 +573,33 @@ pub fn oma(a: OmaArgs) -> Result<()> {
         stable,
         report.result.modes.len()
     );
-    if let Some(path) = &a.rerun_save {
+    write_identified(&cfg, &report, a.rerun_save.as_deref(), a.out.as_deref(), a.json)
+}
+
+/// The outputs of an identification (`oma`, `identify`): the Rerun file,
+/// the modes file, and the modes as JSON or a table on stdout.
+pub(super) fn write_identified(
+    cfg: &Config,
+    report: &crate::pipeline::oma::OmaReport,
+    rerun_save: Option<&std::path::Path>,
+    out: Option<&std::path::Path>,
+    json: bool,
+) -> Result<()> {
+    if let Some(path) = rerun_save {
         let targets = crate::outputs::rerun::RerunTargets {
-            save: Some(path.clone()),
+            save: Some(path.to_path_buf()),
             connect: None,
         };
-        let mut rerun = crate::outputs::rerun::RerunOutput::open(&cfg, &targets)?;
-        rerun.log_oma(&report)?;
+        let mut rerun = crate::outputs::rerun::RerunOutput::open(cfg, &targets)?;
+        rerun.log_oma(report)?;
         rerun.finish()?;
     }
     let file = report.modes_file();
-    if let Some(path) = &a.out {
+    if let Some(path) = out {
         std::fs::write(path, serde_json::to_string_pretty(&file)?)
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    if a.json {
+    if json {
         outln!("{}", serde_json::to_string(&file)?);
         return Ok(());
     }

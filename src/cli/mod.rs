@@ -45,6 +45,8 @@ enum Command {
     Import(measure::ImportArgs),
     /// Drive the model with a record's ground channels and compare the predicted and measured deck accelerations.
     Predict(ground::PredictArgs),
+    /// Input–output modal identification (SRIM) of a record with measured inputs (ground channels or a force).
+    Identify(ground::IdentifyArgs),
     /// One update of a results file as a universal file for modal-testing
     /// software: the sensors' geometry (datasets 15, 82), the window's
     /// measured or model FRFs (58), the model's modes at its updated
@@ -94,6 +96,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Oma(args) => measure::oma(args),
         Command::Import(args) => measure::import(args),
         Command::Predict(args) => ground::predict(args),
+        Command::Identify(args) => ground::identify(args),
         Command::Export(args) => measure::export(args),
         Command::Replay(args) => monitor::replay(args),
         Command::Run(args) => monitor::run(args),

@@ -100,7 +100,7 @@ impl GroundModel {
         let samples = inputs.first().map_or(0, Vec::len);
         let mut sim = self.motion.simulator(&self.state, 1.0 / fs);
         let sensors = self.outputs.len();
-        let mut out = vec![Vec::with_capacity(samples); sensors];
+        let mut out: Vec<Vec<f64>> = (0..sensors).map(|_| Vec::with_capacity(samples)).collect();
         let mut now = vec![0.0; self.state.sensor_count()];
         let mut u = vec![0.0; inputs.len()];
         // The recursion starts at rest with the ground at its first sample.

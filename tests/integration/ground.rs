@@ -205,3 +205,46 @@ fn issue_44_ground_inputs_are_listed_and_missing_ones_refused() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && e.contains("\"pier\" is no support group"), "{e}");
 }
+
+/// Issue 45 (in progress): `identify` (SRIM, input–output) on the bundled
+/// recording of the Sinello deck (a measured random force at P1, twelve
+/// accelerometers): the model's first five bending modes, each within 1 %
+/// and with a standard deviation, in the modes file `oma --json` writes,
+/// which `update --modes` takes.
+#[test]
+fn issue_45_identify_finds_the_modes_of_a_recording_with_a_measured_input() {
+    let dir = fresh_dir("identify");
+    let modes_file = dir.join("modes.json");
+    let o = splinewatch(&[
+        "identify",
+        "--config",
+        "config/sinello.toml",
+        "recordings/sinello-demo.mcap",
+        "--json",
+        "--out",
+        modes_file.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let modes = file["modes"].as_array().unwrap();
+    for f in [6.68, 8.97, 21.63, 22.52, 23.82] {
+        let m = modes
+            .iter()
+            .find(|m| (m["frequency_hz"].as_f64().unwrap() - f).abs() <= 0.01 * f)
+            .unwrap_or_else(|| panic!("{f} Hz not identified: {file}"));
+        assert!(
+            m["frequency_std_hz"].as_f64().is_some_and(|s| s > 0.0 && s < 0.01 * f),
+            "{m}"
+        );
+        assert_eq!(m["shape"].as_array().unwrap().len(), 12);
+    }
+    let o = splinewatch(&[
+        "update",
+        "--config",
+        "config/sinello.toml",
+        "--modes",
+        modes_file.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -4,7 +4,9 @@
 //! May import: `linalg` (identification needs no model).
 //!
 //! - [`welch`]: streaming cross spectra, H1/H2/Hv and coherence;
-//! - [`oma`]: SSI-cov with stabilisation, clustering and uncertainty.
+//! - [`oma`]: SSI-cov with stabilisation, clustering and uncertainty;
+//! - [`srim`]: input–output identification (SRIM) on the same subspace model, stabilisation and uncertainty.
 
 pub mod oma;
+pub mod srim;
 pub mod welch;

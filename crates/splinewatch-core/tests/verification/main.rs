@@ -10,6 +10,7 @@ mod oma;
 mod patches;
 mod shell;
 mod simulate;
+mod srim;
 mod stiffness_field;
 mod support_motion;
 mod truncation;

@@ -251,6 +251,23 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
         settings.max_order,
         fs,
     )?;
+    let source = uncertainty::HankelReplicates {
+        correlations,
+        block_rows: settings.block_rows,
+    };
+    identify_model(&model, &source, fs, settings)
+}
+
+/// The steps after the subspace model, shared by every subspace method
+/// (SSI-cov above; SRIM in the `srim` module beside this one): poles at every
+/// order of `settings`, stable and physical poles, modes by clustering, their
+/// medians and spreads over the replicates of `source`, the diagram.
+pub fn identify_model(
+    model: &SubspaceModel,
+    source: &dyn uncertainty::ReplicateSource,
+    fs: f64,
+    settings: &OmaSettings,
+) -> Result<OmaResult, OmaError> {
     let mut orders = settings.orders(model.max_order());
     let (mut by_order, mut eigens) = (Vec::new(), Vec::new());
     // One eigenvalue problem per order, independent: on both cores. The
@@ -282,8 +299,8 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
         });
     }
     let modes = summarise(
-        correlations,
-        (&model, &eigens),
+        source,
+        (model, &eigens),
         fs,
         settings,
         &orders,
@@ -321,7 +338,7 @@ pub fn identify(correlations: &OutputCorrelations, fs: f64, settings: &OmaSettin
 /// (about 15 orders), so a jackknife replicate recomputes poles at about 15
 /// orders rather than all (the eigenvalue problems dominate its cost).
 fn summarise(
-    correlations: &OutputCorrelations,
+    source: &dyn uncertainty::ReplicateSource,
     (model, eigens): (&SubspaceModel, &[ssi::OrderEigen]),
     fs: f64,
     settings: &OmaSettings,
@@ -347,9 +364,8 @@ fn summarise(
         .collect();
     let spreads = uncertainty::spreads(
         settings.uncertainty,
-        correlations,
+        source,
         (model, eigens),
-        settings.block_rows,
         fs,
         &poles_of,
         settings.clustering.distance,

@@ -151,7 +151,7 @@ fn lower_gram(hankel: MatRef<'_, f64>) -> Mat<f64> {
 }
 
 /// The block Hankel matrix `[R_{i+j+1}]`, `i = 0..=p`, `j = 0..p−1`.
-fn block_hankel(correlations: &[f64], l: usize, r: usize, p: usize) -> Result<Mat<f64>, OmaError> {
+pub(crate) fn block_hankel(correlations: &[f64], l: usize, r: usize, p: usize) -> Result<Mat<f64>, OmaError> {
     if p == 0 || correlations.len() < (2 * p + 1) * l * r {
         return Err(OmaError::TooFewLags { block_rows: p });
     }
@@ -192,8 +192,19 @@ impl SubspaceModel {
         fs: f64,
     ) -> Result<Self, OmaError> {
         let hankel = block_hankel(correlations, channels, references, block_rows)?;
-        let cap = (channels * block_rows).min(hankel.ncols()).min(max_order.max(1));
-        let (singular_values, right_vectors) = truncated_svd(&hankel, cap)?;
+        Self::from_matrix(&hankel, channels, max_order, fs)
+    }
+
+    /// The model of any matrix `H` whose column space is the range of the
+    /// observability matrix, stacked by `channels` rows per block (SSI's
+    /// block Hankel matrix; SRIM's information matrix, in the `srim`
+    /// module beside this one).
+    pub fn from_matrix(hankel: &Mat<f64>, channels: usize, max_order: usize, fs: f64) -> Result<Self, OmaError> {
+        // `O↑` has all rows but the last block's: at most that many orders.
+        let cap = (hankel.nrows().saturating_sub(channels))
+            .min(hankel.ncols())
+            .min(max_order.max(1));
+        let (singular_values, right_vectors) = truncated_svd(hankel, cap)?;
         let sigma_1 = singular_values[0];
         let kept = |col: usize| singular_values[col] > SVD_FLOOR * sigma_1;
         let left = Mat::from_fn(hankel.nrows(), cap, |row, col| {
@@ -228,7 +239,15 @@ impl SubspaceModel {
         if hankel.ncols() != self.right.nrows() {
             return Err(OmaError::TooFewLags { block_rows });
         }
-        let left = &hankel * &self.right;
+        self.replicate_matrix(&hankel)
+    }
+
+    /// [`Self::replicate`] for a perturbed matrix of any kind
+    /// ([`Self::from_matrix`]), of this model's shape.
+    #[track_caller]
+    pub fn replicate_matrix(&self, hankel: &Mat<f64>) -> Result<Self, OmaError> {
+        assert_eq!(hankel.ncols(), self.right.nrows(), "a replicate of the model's matrix");
+        let left = hankel * &self.right;
         Ok(Self::from_left(
             left.as_ref(),
             self.singular_values.clone(),
@@ -263,6 +282,17 @@ impl SubspaceModel {
             channels: l,
             fs,
         }
+    }
+
+    /// Columns of the matrix the model was identified from (a replicate's
+    /// must have as many, [`Self::replicate_matrix`]).
+    pub fn right_rows(&self) -> usize {
+        self.right.nrows()
+    }
+
+    /// Rows per block (the channels of the shapes).
+    pub fn channels(&self) -> usize {
+        self.channels
     }
 
     /// Singular values of `H`, non-increasing.

@@ -27,9 +27,10 @@
 //!   the scatter over independent records.
 
 use super::correlation::OutputCorrelations;
-use super::ssi::{Continuation, OrderEigen, Pole, SubspaceModel};
+use super::ssi::{block_hankel, Continuation, OrderEigen, Pole, SubspaceModel};
 use super::stabilisation::{median, pole_distance};
-use faer::c64;
+use super::OmaError;
+use faer::{c64, Mat};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -44,21 +45,55 @@ pub enum UncertaintyMethod {
     Jackknife,
 }
 
-/// Standard deviations of `modes` (identified by `full` from
-/// `correlations` at `fs`, with the eigendecompositions `eigens` of its
-/// orders) by `method`; see the module documentation.
+/// Where the delete-one-batch replicates come from: the matrix the model
+/// was identified from ([`SubspaceModel::from_matrix`]), made again from
+/// every batch but one. The block Hankel matrix of the output correlations
+/// (SSI-cov, [`HankelReplicates`]) and SRIM's information matrix (the
+/// `srim` module beside `oma`) are two.
+pub trait ReplicateSource: Sync {
+    /// Batches (replicates); fewer than two give no spread.
+    fn batches(&self) -> usize;
+    /// The matrix of every batch but `left_out`.
+    fn matrix_without(&self, left_out: usize) -> Result<Mat<f64>, OmaError>;
+}
+
+/// SSI-cov's replicates: the block Hankel matrix of the correlations of all
+/// batches but one.
+pub struct HankelReplicates<'a> {
+    pub correlations: &'a OutputCorrelations,
+    pub block_rows: usize,
+}
+
+impl ReplicateSource for HankelReplicates<'_> {
+    fn batches(&self) -> usize {
+        self.correlations.batches()
+    }
+
+    fn matrix_without(&self, left_out: usize) -> Result<Mat<f64>, OmaError> {
+        let c = self.correlations;
+        block_hankel(
+            &c.estimate_without(Some(left_out)),
+            c.channels(),
+            c.references().len(),
+            self.block_rows,
+        )
+    }
+}
+
+/// Standard deviations of `modes` (identified by `full`, with the
+/// eigendecompositions `eigens` of its orders, at `fs`) by `method` over the
+/// replicates of `source`; see the module documentation.
 pub fn spreads(
     method: UncertaintyMethod,
-    correlations: &OutputCorrelations,
+    source: &dyn ReplicateSource,
     (full, eigens): (&SubspaceModel, &[OrderEigen]),
-    block_rows: usize,
     fs: f64,
     modes: &[ModePoles<'_>],
     max_distance: f64,
 ) -> Vec<Option<Spread>> {
     match method {
-        UncertaintyMethod::FirstOrder => first_order(correlations, full, eigens, block_rows, modes),
-        UncertaintyMethod::Jackknife => jackknife(correlations, block_rows, fs, modes, max_distance),
+        UncertaintyMethod::FirstOrder => first_order(source, full, eigens, modes),
+        UncertaintyMethod::Jackknife => jackknife(source, full.channels(), fs, modes, max_distance),
     }
 }
 
@@ -98,13 +133,13 @@ impl ModePoles<'_> {
 /// [`pole_distance`]) and the same medians, so the spread is that of
 /// exactly what is reported.
 pub fn jackknife(
-    correlations: &OutputCorrelations,
-    block_rows: usize,
+    source: &dyn ReplicateSource,
+    channels: usize,
     fs: f64,
     modes: &[ModePoles<'_>],
     max_distance: f64,
 ) -> Vec<Option<Spread>> {
-    let batches = correlations.batches();
+    let batches = source.batches();
     if batches < 2 {
         return vec![None; modes.len()];
     }
@@ -118,7 +153,7 @@ pub fn jackknife(
     let left_out: Vec<usize> = (0..batches).collect();
     gather(
         super::ordered_map(&left_out, |&b| {
-            replicate_modes(correlations, b, block_rows, fs, max_order, modes, max_distance)
+            replicate_modes(source, b, channels, fs, max_order, modes, max_distance)
         }),
         modes.len(),
     )
@@ -130,13 +165,12 @@ pub fn jackknife(
 /// replicate continues exactly the members' eigenvalues and the medoids'
 /// shapes.
 pub fn first_order(
-    correlations: &OutputCorrelations,
+    source: &dyn ReplicateSource,
     full: &SubspaceModel,
     eigens: &[OrderEigen],
-    block_rows: usize,
     modes: &[ModePoles<'_>],
 ) -> Vec<Option<Spread>> {
-    let batches = correlations.batches();
+    let batches = source.batches();
     if batches < 2 {
         return vec![None; modes.len()];
     }
@@ -169,11 +203,15 @@ pub fn first_order(
         }
         needed.entry(medoid.0).or_default().1.insert(medoid.1);
     }
-    let references = correlations.references().len();
     let left_out: Vec<usize> = (0..batches).collect();
     let per_batch = super::ordered_map(&left_out, |&b| {
-        let r = correlations.estimate_without(Some(b));
-        let Ok(model) = full.replicate(&r, references, block_rows) else {
+        let Ok(model) = source.matrix_without(b).and_then(|h| {
+            if h.ncols() == full.right_rows() {
+                full.replicate_matrix(&h)
+            } else {
+                Err(OmaError::SvdFailed)
+            }
+        }) else {
             return vec![None; modes.len()];
         };
         let mut values: BTreeMap<PoleAt, (f64, f64)> = BTreeMap::new();
@@ -234,23 +272,18 @@ type Replicate = (f64, f64, Vec<c64>);
 /// medians of its poles' nearest replicate poles and the medoid's shape,
 /// or `None` when the replicate lost the mode (or its SVD failed).
 fn replicate_modes(
-    correlations: &OutputCorrelations,
+    source: &dyn ReplicateSource,
     left_out: usize,
-    block_rows: usize,
+    channels: usize,
     fs: f64,
     max_order: usize,
     modes: &[ModePoles<'_>],
     max_distance: f64,
 ) -> Vec<Option<Replicate>> {
-    let r = correlations.estimate_without(Some(left_out));
-    let Ok(model) = SubspaceModel::new(
-        &r,
-        correlations.channels(),
-        correlations.references().len(),
-        block_rows,
-        max_order,
-        fs,
-    ) else {
+    let Ok(model) = source
+        .matrix_without(left_out)
+        .and_then(|h| SubspaceModel::from_matrix(&h, channels, max_order, fs))
+    else {
         return vec![None; modes.len()];
     };
     let mut by_order: BTreeMap<usize, Vec<Pole>> = BTreeMap::new();
