@@ -455,15 +455,8 @@ pub struct IdentifyArgs {
     /// The record: a station's .zip or .V2 files (one event), raw-input MCAP recordings, or a logger's CSV/UFF 58 file.
     #[arg(required = true, num_args = 1..)]
     pub record: Vec<PathBuf>,
-    /// Print the modes as JSON (`{"modes":[…]}`, the file `oma --json` writes) instead of a table.
-    #[arg(long)]
-    pub json: bool,
-    /// Also write the modes JSON to this file (for `update --modes`).
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Write the stabilisation diagram and the modes with ±1σ to a Rerun `.rrd` file.
-    #[arg(long)]
-    pub rerun_save: Option<PathBuf>,
+    #[command(flatten)]
+    pub output: super::measure::ModesOutput,
 }
 
 /// `splinewatch identify`: input–output identification (SRIM) of a record
@@ -539,5 +532,5 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         report.result.modes.len(),
         settings.block_rows
     );
-    super::measure::write_identified(&cfg, &report, a.rerun_save.as_deref(), a.out.as_deref(), a.json)
+    super::measure::write_identified(&cfg, &report, &a.output)
 }

@@ -544,6 +544,13 @@ pub struct OmaArgs {
     /// End of the analysed span: seconds from the recordings' start, or RFC 3339.
     #[arg(long)]
     pub to: Option<String>,
+    #[command(flatten)]
+    pub output: ModesOutput,
+}
+
+/// Where an identification's modes go (`oma`, `identify`).
+#[derive(Args)]
+pub struct ModesOutput {
     /// Print the modes as JSON (`{"modes":[…]}`) instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -560,7 +567,7 @@ pub fn oma(a: OmaArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
     let blocks = read_recordings(&cfg, &a.inputs)?;
     let (from, to) = span_bounds(&blocks, &a.from, &a.to)?;
-    let report = crate::pipeline::oma::identify_span(&cfg, &blocks, from, to, a.rerun_save.is_some())?;
+    let report = crate::pipeline::oma::identify_span(&cfg, &blocks, from, to, a.output.rerun_save.is_some())?;
     let stable = report.result.diagram.iter().filter(|p| p.stable).count();
     errln!(
         "{} samples ({:.1} s at {} Hz) of {} channels from {}: {} poles, {} stable, {} modes",
@@ -573,7 +580,7 @@ pub fn oma(a: OmaArgs) -> Result<()> {
         stable,
         report.result.modes.len()
     );
-    write_identified(&cfg, &report, a.rerun_save.as_deref(), a.out.as_deref(), a.json)
+    write_identified(&cfg, &report, &a.output)
 }
 
 /// The outputs of an identification (`oma`, `identify`): the Rerun file,
@@ -581,10 +588,9 @@ pub fn oma(a: OmaArgs) -> Result<()> {
 pub(super) fn write_identified(
     cfg: &Config,
     report: &crate::pipeline::oma::OmaReport,
-    rerun_save: Option<&std::path::Path>,
-    out: Option<&std::path::Path>,
-    json: bool,
+    output: &ModesOutput,
 ) -> Result<()> {
+    let (rerun_save, out, json) = (output.rerun_save.as_deref(), output.out.as_deref(), output.json);
     if let Some(path) = rerun_save {
         let targets = crate::outputs::rerun::RerunTargets {
             save: Some(path.to_path_buf()),
