@@ -107,9 +107,11 @@ fn srim_finds_the_modes_of_a_deck_shaken_by_two_grounds() {
 /// The reported standard deviations (exact delete-one-batch replicates)
 /// against the scatter of the estimates over independent records (different
 /// grounds and noise, 12 seeds), for the three most driven modes: within a
-/// factor 3 either way (measured: 2.3×, 1.3× and 0.8× the scatter; the
-/// scatter of 12 records is itself uncertain by about 20 %; the first-order
-/// replicates gave 1.8×, 2.1× and 5.2×, so `identify` uses the exact ones).
+/// factor 2 either way (measured: 1.6×, 1.3× and 1.3× the scatter; the
+/// scatter of 12 records is itself uncertain by about 20 %; with the
+/// first-order replicates and the `HᵀH` SVD it was 1.8×, 2.1× and 5.2×, so
+/// `identify` uses the exact replicates and SRIM the symmetric
+/// eigendecomposition).
 #[test]
 fn srim_spreads_match_the_scatter_over_records() {
     let settings = OmaSettings {

@@ -224,6 +224,40 @@ impl SubspaceModel {
         Ok(Self::from_left(left.as_ref(), singular_values, right, channels, fs))
     }
 
+    /// [`Self::from_matrix`] for a symmetric positive semi-definite `H`
+    /// (SRIM's information matrix): its SVD is its eigendecomposition
+    /// `H = U Λ Uᵀ`, taken directly, so the small singular values keep their
+    /// accuracy (the `HᵀH` route squares their range).
+    pub fn from_symmetric(matrix: &Mat<f64>, channels: usize, max_order: usize, fs: f64) -> Result<Self, OmaError> {
+        let n = matrix.nrows();
+        let cap = n.saturating_sub(channels).min(max_order.max(1));
+        let eigen = matrix
+            .self_adjoint_eigen(faer::Side::Lower)
+            .map_err(|_| OmaError::SvdFailed)?;
+        let values = eigen.S().column_vector();
+        // Descending (faer returns them ascending).
+        let order: Vec<usize> = (0..n).rev().take(cap).collect();
+        let singular_values: Vec<f64> = order.iter().map(|&k| values[k].max(0.0)).collect();
+        let sigma_1 = singular_values.first().copied().unwrap_or(0.0);
+        if sigma_1.is_nan() || sigma_1 <= 0.0 {
+            return Err(OmaError::SingularHankel { order: 1 });
+        }
+        let kept = |col: usize| singular_values[col] > SVD_FLOOR * sigma_1;
+        let left = Mat::from_fn(
+            n,
+            cap,
+            |row, col| if kept(col) { eigen.U()[(row, order[col])] } else { 0.0 },
+        );
+        let right = Mat::from_fn(n, cap, |row, col| {
+            if kept(col) {
+                eigen.U()[(row, order[col])] / singular_values[col]
+            } else {
+                0.0
+            }
+        });
+        Ok(Self::from_left(left.as_ref(), singular_values, right, channels, fs))
+    }
+
     /// The model of a perturbed Hankel matrix `H_b` (a jackknife replicate's
     /// `correlations`) on this model's right singular vectors:
     /// `U_b = H_b V Σ⁻¹`, which is `U` for `H_b = H`. Its poles differ from
