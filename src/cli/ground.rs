@@ -456,7 +456,7 @@ pub struct IdentifyArgs {
     #[arg(required = true, num_args = 1..)]
     pub record: Vec<PathBuf>,
     #[command(flatten)]
-    pub output: super::measure::ModesOutput,
+    pub output: super::identified::ModesOutput,
 }
 
 /// `splinewatch identify`: input–output identification (SRIM) of a record
@@ -532,5 +532,5 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         report.result.modes.len(),
         settings.block_rows
     );
-    super::measure::write_identified(&cfg, &report, &a.output)
+    super::identified::write_identified(&cfg, &report, &a.output)
 }

@@ -3,6 +3,7 @@
 //! Room: the top. May import: `service`, `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
 mod ground;
+mod identified;
 mod measure;
 mod model;
 mod monitor;
