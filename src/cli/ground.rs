@@ -457,6 +457,10 @@ pub struct IdentifyArgs {
     pub record: Vec<PathBuf>,
     #[command(flatten)]
     pub output: super::identified::ModesOutput,
+    /// Also write the multi-input H1 transmissibilities (inputs to every output, with the multiple
+    /// coherence and the inputs' condition number per line; `[frf] segment_seconds` and `overlap`) as JSON.
+    #[arg(long)]
+    pub transmissibility: Option<PathBuf>,
 }
 
 /// `splinewatch identify`: input–output identification (SRIM) of a record
@@ -505,6 +509,9 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
     settings.uncertainty = UncertaintyMethod::Jackknife;
     let views: Vec<&[f64]> = span.channels.iter().map(Vec::as_slice).collect();
     let (input_views, output_views) = views.split_at(inputs.len());
+    if let Some(path) = &a.transmissibility {
+        write_transmissibility(&cfg, (&inputs, input_views), (&outputs, output_views), span.fs, path)?;
+    }
     let result = splinewatch_core::identification::srim::identify_io(input_views, output_views, span.fs, &settings)
         .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
     let report = crate::pipeline::oma::OmaReport {
@@ -533,4 +540,69 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         settings.block_rows
     );
     super::identified::write_identified(&cfg, &report, &a.output)
+}
+
+/// The multi-input H1 estimates of `identify --transmissibility` as JSON:
+/// `{"quantity": "transmissibility", "frequency_hz", "inputs", "frfs": [{"input",
+/// "output", "re", "im", "coherence"}], "condition", "n_averages"}`; a group of
+/// inputs too coherent to separate is one input named `a+b` (and said so).
+fn write_transmissibility(
+    cfg: &Config,
+    (inputs, input_views): (&[usize], &[&[f64]]),
+    (outputs, output_views): (&[usize], &[&[f64]]),
+    fs: f64,
+    path: &Path,
+) -> Result<()> {
+    let (welch, _) = cfg.welch_settings(fs)?;
+    let segment = welch.segment.min(input_views[0].len());
+    let overlap = welch.overlap.min(segment / 2);
+    let est =
+        splinewatch_core::identification::transmissibility::estimate(input_views, output_views, fs, segment, overlap)
+            .map_err(|e| anyhow::anyhow!("transmissibility: {e}"))?;
+    let names: Vec<String> = est
+        .combined
+        .iter()
+        .map(|g| {
+            g.iter()
+                .map(|&i| cfg.sensors[inputs[i]].name.as_str())
+                .collect::<Vec<_>>()
+                .join("+")
+        })
+        .collect();
+    for (g, name) in est.combined.iter().zip(&names) {
+        if g.len() > 1 {
+            errln!(
+                "inputs {name} are coherent above {} over the band: combined into one (their mean)",
+                splinewatch_core::identification::transmissibility::COMBINE_COHERENCE
+            );
+        }
+    }
+    let mut frfs = Vec::new();
+    for (o, &sensor) in outputs.iter().enumerate() {
+        for (i, name) in names.iter().enumerate() {
+            frfs.push(serde_json::json!({
+                "input": name,
+                "output": cfg.sensors[sensor].name,
+                "re": est.h[o][i].iter().map(|v| v.re).collect::<Vec<_>>(),
+                "im": est.h[o][i].iter().map(|v| v.im).collect::<Vec<_>>(),
+                "coherence": est.coherence[o],
+            }));
+        }
+    }
+    let finite = |v: &f64| {
+        if v.is_finite() {
+            serde_json::json!(v)
+        } else {
+            serde_json::Value::Null
+        }
+    };
+    let json = serde_json::json!({
+        "quantity": "transmissibility",
+        "frequency_hz": est.frequencies_hz,
+        "inputs": names,
+        "frfs": frfs,
+        "condition": est.condition.iter().map(finite).collect::<Vec<_>>(),
+        "n_averages": est.averages,
+    });
+    std::fs::write(path, serde_json::to_string(&json)?).with_context(|| format!("cannot write {}", path.display()))
 }

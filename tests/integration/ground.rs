@@ -210,7 +210,7 @@ fn issue_44_ground_inputs_are_listed_and_missing_ones_refused() {
 /// recording of the Sinello deck (a measured random force at P1, twelve
 /// accelerometers): the model's first five bending modes, each within 1 %
 /// and with a standard deviation, in the modes file `oma --json` writes,
-/// which `update --modes` takes.
+/// which `update --modes` takes; and the H1 transmissibilities beside.
 #[test]
 fn issue_45_identify_finds_the_modes_of_a_recording_with_a_measured_input() {
     let dir = fresh_dir("identify");
@@ -223,9 +223,42 @@ fn issue_45_identify_finds_the_modes_of_a_recording_with_a_measured_input() {
         "--json",
         "--out",
         modes_file.to_str().unwrap(),
+        "--transmissibility",
+        dir.join("h1.json").to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let file: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The H1 estimates: one input (the force), twelve outputs, the first
+    // mode's peak, and a median coherence over 2–30 Hz above 0.9 (0.93: the
+    // recording's bearing loss midway makes it less than one).
+    let h1: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("h1.json")).unwrap()).unwrap();
+    assert_eq!(h1["inputs"], serde_json::json!(["P1"]));
+    let frfs = h1["frfs"].as_array().unwrap();
+    assert_eq!(frfs.len(), 12);
+    let f: Vec<f64> = h1["frequency_hz"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let peak = f.iter().position(|&x| x > 6.0).unwrap()..f.iter().position(|&x| x > 7.5).unwrap();
+    let magnitude = |k: usize| {
+        frfs[0]["re"][k]
+            .as_f64()
+            .unwrap()
+            .hypot(frfs[0]["im"][k].as_f64().unwrap())
+    };
+    let top = peak
+        .clone()
+        .max_by(|&a, &b| magnitude(a).total_cmp(&magnitude(b)))
+        .unwrap();
+    assert!((f[top] - 6.68).abs() < 0.2, "H1 peak at {} Hz", f[top]);
+    let mut band: Vec<f64> = (0..f.len())
+        .filter(|&k| f[k] > 2.0 && f[k] < 30.0)
+        .map(|k| frfs[0]["coherence"][k].as_f64().unwrap())
+        .collect();
+    band.sort_by(f64::total_cmp);
+    assert!(band[band.len() / 2] > 0.9, "median coherence {}", band[band.len() / 2]);
     let modes = file["modes"].as_array().unwrap();
     for f in [6.68, 8.97, 21.63, 22.52, 23.82] {
         let m = modes

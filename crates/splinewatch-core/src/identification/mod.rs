@@ -5,8 +5,10 @@
 //!
 //! - [`welch`]: streaming cross spectra, H1/H2/Hv and coherence;
 //! - [`oma`]: SSI-cov with stabilisation, clustering and uncertainty;
-//! - [`srim`]: input–output identification (SRIM) on the same subspace model, stabilisation and uncertainty.
+//! - [`srim`]: input–output identification (SRIM) on the same subspace model, stabilisation and uncertainty;
+//! - [`transmissibility`]: multi-input H1 estimates with multiple coherence and the inputs' conditioning.
 
 pub mod oma;
 pub mod srim;
+pub mod transmissibility;
 pub mod welch;
