@@ -47,23 +47,16 @@ pub struct PredictArgs {
 
 /// The updating parameters named in an `update --json` result or a state file.
 fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
-    #[derive(serde::Deserialize)]
-    struct Named {
-        name: String,
-        value: f64,
-    }
-    #[derive(serde::Deserialize)]
-    struct File {
-        parameters: Vec<Named>,
-    }
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let file: File = serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: not a result with a \"parameters\" list of {{name, value}}",
-            path.display()
-        )
-    })?;
-    Ok(file.parameters.into_iter().map(|p| (p.name, p.value)).collect())
+    crate::studies::update::named_values(&text).with_context(|| path.display().to_string())
+}
+
+/// Whether the record holds config sensor `i`'s acceleration.
+fn recorded(config: &Config, blocks: &[RecordedBlock], i: usize) -> bool {
+    let name = &config.sensors[i].name;
+    blocks
+        .iter()
+        .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
 }
 
 /// Every channel block of the records: V2 files and station zips are
@@ -151,12 +144,7 @@ struct Event {
 }
 
 fn align_event(config: &Config, model: &mut GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
-    let recorded = |i: usize| {
-        let name = &config.sensors[i].name;
-        blocks
-            .iter()
-            .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
-    };
+    let recorded = |i: usize| recorded(config, blocks, i);
     for note in model.restrict_to(config, recorded) {
         errln!("ground input {note}");
     }
@@ -470,12 +458,7 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
     use splinewatch_core::identification::oma::UncertaintyMethod;
     let cfg = load_config(&a.config)?;
     let blocks = read_records(&cfg, &a.record)?;
-    let recorded = |i: usize| {
-        let name = &cfg.sensors[i].name;
-        blocks
-            .iter()
-            .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
-    };
+    let recorded = |i: usize| recorded(&cfg, &blocks, i);
     let (force, inputs): (Option<usize>, Vec<usize>) = if cfg.has_ground_sensors() {
         let ground: Vec<usize> = (cfg.deck_sensor_count()..cfg.sensors.len())
             .filter(|&i| recorded(i))

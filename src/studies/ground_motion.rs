@@ -12,12 +12,12 @@
 //! and the quasi-static part `N Γ ü_g` is exact (the static solve of every
 //! mode); the discarded modes' dynamic share is left out.
 
+use super::parameters::values_by_name;
 use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan};
 use anyhow::{bail, Context, Result};
-use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::response::support_motion::SupportMotion;
-use splinewatch_core::updating::ParameterKind;
+use splinewatch_core::updating::{base_values, fields_at, model_at};
 
 /// The model at one parameter point, ready to be driven by its grounds.
 pub struct GroundModel {
@@ -41,24 +41,11 @@ impl GroundModel {
         let plan = config.ground_plan(&groups)?;
         let setup = frf_setup(config)?;
         let parameters = config.build_parameters()?;
-        let mut kappa = setup.kappa.clone();
-        let mut theta = setup.model.field_coefficients().to_vec();
-        let mut gamma = setup.damping.coefficients().to_vec();
-        for (name, value) in named {
-            let p = parameters
-                .iter()
-                .find(|p| &p.name == name)
-                .with_context(|| format!("parameter {name:?} is not an updating parameter of this config"))?;
-            if !value.is_finite() {
-                bail!("parameter {name:?} is not finite");
-            }
-            match p.kind {
-                ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = *value,
-                ParameterKind::Stiffness { field, coefficient } => theta[field][coefficient] = *value,
-                ParameterKind::Damping { coefficient } => gamma[coefficient] = *value,
-            }
-        }
-        let damping: DampingCurve = setup.damping.with_coefficients(gamma).context("damping coefficients")?;
+        let theta0 = setup.model.field_coefficients().to_vec();
+        let base = base_values(&parameters, &setup.kappa, &theta0, &setup.damping);
+        let values = values_by_name(&parameters, &base, named, "parameter")?;
+        let (kappa, damping) = model_at(&parameters, &setup.kappa, &setup.damping, &values)?;
+        let theta = fields_at(&parameters, &theta0, &values);
         let state = setup
             .model
             .modal_state_with_fields(&kappa, &theta, &damping)

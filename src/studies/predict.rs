@@ -184,17 +184,13 @@ fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<
         }
         _ => [0.0, 0.0, 1.0],
     };
-    let names: Vec<&String> = {
-        let mut seen = Vec::new();
-        for p in &model.plan {
-            let group = p.name.rsplit_once('.').map_or(p.name.as_str(), |(g, _)| g);
-            if !seen.iter().any(|g: &&String| g.as_str() == group) {
-                seen.push(&p.name);
-            }
-        }
-        seen
-    };
     let group_of = |name: &str| name.rsplit_once('.').map_or(name, |(g, _)| g).to_string();
+    let mut groups: Vec<String> = Vec::new();
+    for g in model.plan.iter().map(|p| group_of(&p.name)) {
+        if !groups.contains(&g) {
+            groups.push(g);
+        }
+    }
     let position = match (sensor.x, sensor.y, sensor.z) {
         (Some(x), Some(y), z) => Some([x, y, z.unwrap_or(0.0)]),
         _ => None,
@@ -217,7 +213,6 @@ fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<
             [0, 1, 2].map(|d| at.iter().map(|p| p[d]).sum::<f64>() / n)
         })
     };
-    let groups: Vec<String> = names.iter().map(|n| group_of(n)).collect();
     let nearest = position.and_then(|p| {
         groups
             .iter()

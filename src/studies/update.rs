@@ -29,9 +29,14 @@ struct StartParameter {
 /// Parses a previous result (`update --json` output or the daemon state) into
 /// start values for `parameters`; parameters it does not name keep `base`.
 pub fn start_values(text: &str, parameters: &[Parameter], base: &[f64]) -> Result<Vec<f64>> {
+    super::parameters::values_by_name(parameters, base, &named_values(text)?, "start parameter")
+}
+
+/// The `{name, value}` pairs of a result's `"parameters"` list (`update
+/// --json` output, the daemon's state file).
+pub fn named_values(text: &str) -> Result<Vec<(String, f64)>> {
     let start: StartFile = serde_json::from_str(text).context("not a result JSON with a \"parameters\" list")?;
-    let named: Vec<(String, f64)> = start.parameters.into_iter().map(|p| (p.name, p.value)).collect();
-    super::parameters::values_by_name(parameters, base, &named, "start parameter")
+    Ok(start.parameters.into_iter().map(|p| (p.name, p.value)).collect())
 }
 
 /// The FRFs of an FRF file's `bytes`: a universal file (dataset 58/58b,

@@ -14,16 +14,16 @@
 //!   well the inputs separate at that line.
 //!
 //! Inputs too coherent to separate (one ground motion recorded at several
-//! supports: their ordinary coherence averaged over the band above
-//! `COMBINE_COHERENCE`) are combined: each group of them becomes its mean
-//! before the estimate, and [`Transmissibility::combined`] says which.
+//! supports: their band coherence above `COMBINE_COHERENCE`) are combined:
+//! each group of them becomes its mean before the estimate, and
+//! [`Transmissibility::combined`] says which.
 
 use faer::{c64, Mat};
 use realfft::RealFftPlanner;
-use std::f64::consts::PI;
 use thiserror::Error;
 
-/// Above this ordinary coherence (averaged over the lines) two inputs are one.
+/// Above this band coherence (`Σ|G_ab|² / Σ G_aa G_bb` over the lines) two
+/// inputs are one.
 pub const COMBINE_COHERENCE: f64 = 0.98;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -94,18 +94,18 @@ pub fn estimate(
     }
     let raw = spectra(inputs, outputs, segment, overlap);
     let groups = coherent_groups(&raw, inputs.len());
-    let merged: Vec<Vec<f64>> = groups
-        .iter()
-        .map(|g| {
-            (0..n)
-                .map(|t| g.iter().map(|&i| inputs[i][t]).sum::<f64>() / g.len() as f64)
-                .collect()
-        })
-        .collect();
-    let merged_views: Vec<&[f64]> = merged.iter().map(Vec::as_slice).collect();
     let s = if groups.len() == inputs.len() {
         raw
     } else {
+        let merged: Vec<Vec<f64>> = groups
+            .iter()
+            .map(|g| {
+                (0..n)
+                    .map(|t| g.iter().map(|&i| inputs[i][t]).sum::<f64>() / g.len() as f64)
+                    .collect()
+            })
+            .collect();
+        let merged_views: Vec<&[f64]> = merged.iter().map(Vec::as_slice).collect();
         spectra(&merged_views, outputs, segment, overlap)
     };
     let r = groups.len();
@@ -210,9 +210,7 @@ fn spectra(inputs: &[&[f64]], outputs: &[&[f64]], segment: usize, overlap: usize
     let n = inputs[0].len();
     let lines = segment / 2 + 1;
     let (r, m) = (inputs.len(), outputs.len());
-    let window: Vec<f64> = (0..segment)
-        .map(|t| 0.5 - 0.5 * (2.0 * PI * t as f64 / segment as f64).cos())
-        .collect();
+    let window = super::welch::Window::Hann.samples(segment);
     let mut planner = RealFftPlanner::<f64>::new();
     let fft = planner.plan_fft_forward(segment);
     let mut buffer = fft.make_input_vec();
@@ -297,6 +295,7 @@ fn coherent_groups(s: &Spectra, r: usize) -> Vec<Vec<usize>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f64::consts::PI;
 
     /// Deterministic uniform noise in [-0.5, 0.5) (64-bit LCG, high bits).
     fn noise(n: usize, mut seed: u64) -> Vec<f64> {

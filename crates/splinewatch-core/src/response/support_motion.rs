@@ -77,9 +77,9 @@ pub struct TransmissibilitySensitivities {
 }
 
 impl SupportMotion {
-    /// The motion for `inputs` of the model `frf` (dense) with spring
-    /// coefficients `kappa` and stiffness-field coefficients `theta` at which
-    /// `state` was solved.
+    /// The motion for `inputs` of the model `frf` (dense, or truncated: see
+    /// `truncated_influence`) with spring coefficients `kappa` and
+    /// stiffness-field coefficients `theta` at which `state` was solved.
     pub fn new(
         frf: &FrfModel,
         model: &ShellModel,
@@ -175,8 +175,7 @@ impl SupportMotion {
                 let w = 2.0 * PI * f;
                 let mut sum = c64::new(0.0, 0.0);
                 for i in 0..state.modes.len() {
-                    let lambda = state.modes.omega2[i].max(0.0);
-                    let d = c64::new(lambda - w * w, 2.0 * state.zeta[i] * lambda.sqrt() * w);
+                    let d = denominator(state, i, w);
                     sum += c64::new(state.amplitude(r, i) * self.participation[(i, c)], 0.0) / d;
                 }
                 out.push(c64::new(self.quasi_static[(r, c)], 0.0) + sum * (w * w));
@@ -346,19 +345,16 @@ impl SupportMotion {
         out: &mut [c64],
     ) {
         let nm = state.modes.len();
-        let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+        let flexible = flexible_modes(state);
         let weights: Vec<Vec<f64>> = (0..self.inputs.len())
             .map(|c| {
                 let w = w(c);
-                (0..nm)
-                    .map(|i| {
-                        let lambda = state.modes.omega2[i];
-                        if state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest {
-                            return 0.0;
-                        }
-                        w.iter().map(|&(d, v)| state.modes.shapes[(d, i)] * v).sum::<f64>() / lambda
-                    })
-                    .collect()
+                let mut weights = vec![0.0; nm];
+                for &i in &flexible {
+                    let p: f64 = w.iter().map(|&(d, v)| state.modes.shapes[(d, i)] * v).sum();
+                    weights[i] = p / state.modes.omega2[i];
+                }
+                weights
             })
             .collect();
         let nf = frequencies_hz.len();
@@ -367,8 +363,7 @@ impl SupportMotion {
                 let w2 = (2.0 * PI * f).powi(2);
                 let mut sum = c64::new(0.0, 0.0);
                 for i in 0..nm {
-                    let lambda = state.modes.omega2[i].max(0.0);
-                    let d = c64::new(lambda - w2, 2.0 * state.zeta[i] * lambda.sqrt() * w2.sqrt());
+                    let d = denominator(state, i, 2.0 * PI * f);
                     let weight = state.amplitude(r, i) * weights[c][i];
                     sum += c64::new(weight, 0.0) * (c64::new(1.0, 0.0) + c64::new(w2, 0.0) / d);
                 }
@@ -378,19 +373,31 @@ impl SupportMotion {
     }
 }
 
+/// The modes that carry static load: all but the rigid ones (classified
+/// rigid, or `|λ|` below 1e-12 of the largest). A rigid mode `φ` has
+/// `Kφ = 0`, so `ΔK_g φ = 0` (every part of `K` is positive semi-definite)
+/// and `φᵀ(ΔK_g R − K ℓ) = 0`, as for any change of stiffness: it takes no
+/// part in a static response or its change.
+fn flexible_modes(state: &ModalState) -> Vec<usize> {
+    let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid && state.modes.omega2[i].abs() > 1e-12 * largest)
+        .collect()
+}
+
+/// `D_i(ω) = ω_i² − ω² + 2j ζ_i ω_i ω` of mode `i` (eq. 31).
+fn denominator(state: &ModalState, i: usize, omega: f64) -> c64 {
+    let lambda = state.modes.omega2[i].max(0.0);
+    c64::new(lambda - omega * omega, 2.0 * state.zeta[i] * lambda.sqrt() * omega)
+}
+
 /// `T (TᵀKT)⁻¹ Tᵀ f` by every mode of the state (the dense path): the
-/// static response `Σ_i φ_i (φ_iᵀ f) / λ_i`. A rigid mode `φ` has `Kφ = 0`,
-/// so `ΔK_g φ = 0` (every part of `K` is positive semi-definite) and
-/// `φᵀ(ΔK_g R − K ℓ) = 0`: it takes no part.
+/// static response `Σ_i φ_i (φ_iᵀ f) / λ_i` over the flexible modes.
 fn static_by_modes(state: &ModalState, force: &[f64]) -> Vec<f64> {
     let shapes = &state.modes.shapes;
-    let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
     let mut x = vec![0.0; force.len()];
-    for i in 0..state.modes.len() {
+    for i in flexible_modes(state) {
         let lambda = state.modes.omega2[i];
-        if state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest {
-            continue;
-        }
         let p: f64 = force.iter().enumerate().map(|(d, f)| shapes[(d, i)] * f).sum();
         for (d, xd) in x.iter_mut().enumerate() {
             *xd += shapes[(d, i)] * p / lambda;
@@ -448,14 +455,11 @@ fn truncated_influence(
         .map_err(|e| SupportError::Solve(e.to_string()))?;
     let sigma = crate::solvers::sparse_model::SparseModel::shift_for(cutoff_hz);
     let shapes = &state.modes.shapes;
-    let largest = state.modes.omega2.iter().fold(0.0f64, |a, &l| a.max(l.abs()));
+    let flexible = flexible_modes(state);
     let mut influence = Mat::from_fn(n, inputs.len(), |d, c| x[(d, c)] - sigma * xmx[(d, c)]);
     for (c, force) in forces.iter().enumerate() {
-        for i in 0..state.modes.len() {
+        for &i in &flexible {
             let lambda = state.modes.omega2[i];
-            if state.modes.kinds[i] == ModeKind::Rigid || lambda.abs() <= 1e-12 * largest {
-                continue;
-            }
             let p: f64 = force.iter().map(|&(d, f)| shapes[(d, i)] * f).sum();
             let weight = p * (1.0 / lambda - 1.0 / (lambda - sigma) + sigma / (lambda - sigma).powi(2));
             for d in 0..n {

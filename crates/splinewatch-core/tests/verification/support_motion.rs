@@ -3,16 +3,15 @@
 //! and the time recursion.
 
 use super::common::{clamped_curved_panel, sinello_model, sinello_sensors, true_kappa};
-use faer::{c64, Mat};
+use faer::c64;
 use splinewatch_core::geometry::knots::KnotVector;
-use splinewatch_core::linalg::complex_solve;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
 use splinewatch_core::model::supports::{SupportError, SupportGroups};
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::response::frf::{FrfModel, ModalState, SensorPoint};
+use splinewatch_core::response::frf::{FrfModel, ModalState, Quantity, SensorPoint};
 use splinewatch_core::response::support_motion::{GroundInput, SupportMotion};
 use splinewatch_core::solvers::modal::ModeKind;
 use std::f64::consts::PI;
@@ -24,38 +23,22 @@ fn damping() -> DampingCurve {
 }
 
 /// The relative formulation solved directly, independent of the modal sums:
-/// `T = N R + ω² N T_r (T_rᵀ Z T_r)⁻¹ T_rᵀ M R` with `R` the rigid
-/// translation (uniform excitation), `Z = K − ω² M + jω C` and `C` the modal
-/// damping of the state.
+/// `T = N R + ω² N (TᵀZT)⁻¹ Tᵀ M R` with `R` the rigid translation (uniform
+/// excitation): the model's direct `Z(ω)` solve ([`FrfModel::direct`]) from
+/// the load row `M R` appended to the sensors.
 fn direct_uniform(model: &FrfModel, kappa: &[Vec<f64>], state: &ModalState, axis: usize, f: f64) -> Vec<c64> {
-    let dense = model.dense().unwrap();
-    let k = dense.stiffness_with(kappa).unwrap();
-    let m = &dense.mass;
-    let n = m.nrows();
-    let phi = &state.modes.shapes;
-    let rate = Mat::from_fn(phi.ncols(), phi.ncols(), |i, j| {
-        if i == j {
-            2.0 * state.zeta[i] * state.modes.omega2[i].max(0.0).sqrt()
-        } else {
-            0.0
-        }
-    });
-    let mphi = m * phi;
-    let c = &mphi * &rate * mphi.transpose();
+    let n = state.modes.shapes.nrows();
+    let rigid: Vec<f64> = (0..n).map(|d| if d % 5 == axis { 1.0 } else { 0.0 }).collect();
+    let load: Vec<(usize, f64)> = model.mass_times(&rigid).into_iter().enumerate().collect();
+    let loads = model.with_extra_rows(vec![load]);
     let w = 2.0 * PI * f;
-    let red = &dense.reduction;
-    let z_re = red.reduce(&Mat::from_fn(n, n, |i, j| k[(i, j)] - w * w * m[(i, j)]));
-    let z_im = red.reduce(&Mat::from_fn(n, n, |i, j| w * c[(i, j)]));
-    let rigid = Mat::from_fn(n, 1, |d, _| if d % 5 == axis { 1.0 } else { 0.0 });
-    let rhs = red.reduce_vector(&(m * &rigid));
-    let (x_re, x_im) = complex_solve(&z_re, &z_im, &rhs).unwrap();
-    let (x_re, x_im) = (red.expand(&x_re), red.expand(&x_im));
-    model
-        .sensor_rows()
-        .iter()
-        .map(|row| {
-            let at = |x: &Mat<f64>| row.iter().map(|&(d, v)| v * x[(d, 0)]).sum::<f64>();
-            c64::new(at(&rigid), 0.0) + c64::new(at(&x_re), at(&x_im)) * (w * w)
+    (0..model.sensor_count())
+        .map(|r| {
+            let quasi_static: f64 = model.sensor_rows()[r].iter().map(|&(d, v)| v * rigid[d]).sum();
+            let h = loads
+                .direct(kappa, state, f, (r, model.sensor_count()), Quantity::Receptance)
+                .unwrap();
+            c64::new(quasi_static, 0.0) + h * (w * w)
         })
         .collect()
 }
