@@ -213,28 +213,7 @@ impl<'a> UpdateProblem<'a> {
         }
         let frequencies = lines.iter().map(|&i| measured.frequencies_hz()[i]).collect();
         let pairs = measured.frfs().iter().map(|f| (f.output, f.input)).collect();
-        let mut sqrt_weights = Vec::with_capacity(lines.len() * measured.frfs().len());
-        for (b, frf) in measured.frfs().iter().enumerate() {
-            for &i in &lines {
-                let w = match settings.weighting {
-                    Weighting::Uniform => 1.0,
-                    Weighting::H1Variance => {
-                        let (Some(c), Some(na)) = (&frf.coherence, frf.n_averages) else {
-                            return Err(UpdateError::Data(format!(
-                                "frfs[{b}]: h1_variance weighting needs coherence and n_averages"
-                            )));
-                        };
-                        // Var(H1) = (1 - γ²)/(γ² n) |H|²; the coherence is floored and
-                        // capped so a line with γ² → 1 cannot take all the weight.
-                        let g2 = c[i].clamp(1e-3, 1.0 - 1e-6);
-                        let magnitude = frf.values[i].norm().max(f64::MIN_POSITIVE);
-                        let variance = (1.0 - g2) / (g2 * na) * magnitude * magnitude;
-                        1.0 / variance
-                    }
-                };
-                sqrt_weights.push(w.sqrt());
-            }
-        }
+        let sqrt_weights = sqrt_weights(measured, &lines, settings.weighting)?;
         Ok(Self {
             model,
             kappa,
@@ -281,10 +260,6 @@ impl<'a> UpdateProblem<'a> {
     /// Index of each selected line on the measured frequency axis.
     pub fn line_indices(&self) -> &[usize] {
         &self.lines
-    }
-
-    fn measured_value(&self, frf: usize, line: usize) -> c64 {
-        self.measured.frfs()[frf].values[self.lines[line]]
     }
 
     /// The modal model at parameter values `p`.
@@ -339,43 +314,31 @@ impl<'a> UpdateProblem<'a> {
 
     /// Residual and, if asked, Jacobian from model FRFs (and sensitivities) at `p`.
     pub(super) fn weighted(&self, p: &[f64], frfs: FrfEvaluation, jacobian: bool) -> Result<Evaluation, UpdateError> {
-        let nl = self.lines.len();
-        let nb = self.pairs.len();
-        let mut residual = Vec::with_capacity(2 * nl * nb);
-        for b in 0..nb {
-            for l in 0..nl {
-                let k = b * nl + l;
-                let d = (self.measured_value(b, l) - frfs.h[k]) * self.sqrt_weights[k];
-                residual.push(d.re);
-                residual.push(d.im);
-            }
-        }
-        if residual.iter().any(|r| !r.is_finite()) {
-            return Err(UpdateError::NonFinite(p.to_vec()));
-        }
-        let mut jac = Mat::<f64>::zeros(0, 0);
-        if jacobian {
-            jac = Mat::zeros(residual.len(), self.parameters.len());
-            for (c, par) in self.parameters.iter().enumerate() {
-                let column = match par.kind {
+        let columns: Option<Vec<&[c64]>> = jacobian.then(|| {
+            self.parameters
+                .iter()
+                .map(|par| match par.kind {
                     ParameterKind::Spring { field, coefficient } => {
-                        &frfs.dh_dkappa[self.model.flat_spring_index(field, coefficient)]
+                        frfs.dh_dkappa[self.model.flat_spring_index(field, coefficient)].as_slice()
                     }
                     ParameterKind::Stiffness { field, coefficient } => {
-                        &frfs.dh_dtheta[self.model.flat_field_index(field, coefficient)]
+                        frfs.dh_dtheta[self.model.flat_field_index(field, coefficient)].as_slice()
                     }
-                    ParameterKind::Damping { coefficient } => &frfs.dh_dgamma[coefficient],
-                };
-                for k in 0..nl * nb {
-                    let d = -column[k] * self.sqrt_weights[k];
-                    jac[(2 * k, c)] = d.re;
-                    jac[(2 * k + 1, c)] = d.im;
-                }
-            }
-        }
+                    ParameterKind::Damping { coefficient } => frfs.dh_dgamma[coefficient].as_slice(),
+                })
+                .collect()
+        });
+        let (residual, jacobian) = weighted_residues(
+            self.measured,
+            &self.lines,
+            &self.sqrt_weights,
+            &frfs.h,
+            columns.as_deref(),
+            p,
+        )?;
         Ok(Evaluation {
             residual,
-            jacobian: jac,
+            jacobian,
             extra: frfs,
         })
     }
@@ -419,21 +382,7 @@ impl<'a> UpdateProblem<'a> {
     }
 
     pub(super) fn relative_residuals(&self, h: &[c64]) -> (f64, Vec<f64>) {
-        let nl = self.lines.len();
-        let (mut num, mut den) = (0.0, 0.0);
-        let mut per = Vec::with_capacity(self.pairs.len());
-        for b in 0..self.pairs.len() {
-            let (mut n, mut d) = (0.0, 0.0);
-            for l in 0..nl {
-                let x = self.measured_value(b, l);
-                n += (x - h[b * nl + l]).norm_sqr();
-                d += x.norm_sqr();
-            }
-            per.push((n / d).sqrt());
-            num += n;
-            den += d;
-        }
-        ((num / den).sqrt(), per)
+        relative_residuals(self.measured, &self.lines, h)
     }
 
     /// Runs the updating from parameter values `start` (warm start: the
@@ -480,6 +429,96 @@ impl<'a> UpdateProblem<'a> {
         let point = self.point(&p, state, frfs)?;
         Ok(Solution { result, point })
     }
+}
+
+/// The weighted residues `√w (h_x − h)` of `measured` on `lines` stacked as
+/// real and imaginary parts (eq. 36–39) and, with `columns` (`∂h/∂p_k` per
+/// parameter, laid out as `h`), the Jacobian `−√w ∂h/∂p`.
+pub(super) fn weighted_residues(
+    measured: &MeasuredSet,
+    lines: &[usize],
+    sqrt_weights: &[f64],
+    h: &[c64],
+    columns: Option<&[&[c64]]>,
+    p: &[f64],
+) -> Result<(Vec<f64>, Mat<f64>), UpdateError> {
+    let nl = lines.len();
+    let nb = measured.frfs().len();
+    let mut residual = Vec::with_capacity(2 * nl * nb);
+    for (b, frf) in measured.frfs().iter().enumerate() {
+        for (l, &line) in lines.iter().enumerate() {
+            let k = b * nl + l;
+            let d = (frf.values[line] - h[k]) * sqrt_weights[k];
+            residual.push(d.re);
+            residual.push(d.im);
+        }
+    }
+    if residual.iter().any(|r| !r.is_finite()) {
+        return Err(UpdateError::NonFinite(p.to_vec()));
+    }
+    let mut jac = Mat::<f64>::zeros(0, 0);
+    if let Some(columns) = columns {
+        jac = Mat::zeros(residual.len(), columns.len());
+        for (c, column) in columns.iter().enumerate() {
+            for k in 0..nl * nb {
+                let d = -column[k] * sqrt_weights[k];
+                jac[(2 * k, c)] = d.re;
+                jac[(2 * k + 1, c)] = d.im;
+            }
+        }
+    }
+    Ok((residual, jac))
+}
+
+/// `√w` per complex residue of `measured` on `lines`, `[frf * n_lines + line]`.
+pub(super) fn sqrt_weights(
+    measured: &MeasuredSet,
+    lines: &[usize],
+    weighting: Weighting,
+) -> Result<Vec<f64>, UpdateError> {
+    let mut sqrt_weights = Vec::with_capacity(lines.len() * measured.frfs().len());
+    for (b, frf) in measured.frfs().iter().enumerate() {
+        for &i in lines {
+            let w = match weighting {
+                Weighting::Uniform => 1.0,
+                Weighting::H1Variance => {
+                    let (Some(c), Some(na)) = (&frf.coherence, frf.n_averages) else {
+                        return Err(UpdateError::Data(format!(
+                            "frfs[{b}]: h1_variance weighting needs coherence and n_averages"
+                        )));
+                    };
+                    // Var(H1) = (1 - γ²)/(γ² n) |H|²; the coherence is floored and
+                    // capped so a line with γ² → 1 cannot take all the weight.
+                    let g2 = c[i].clamp(1e-3, 1.0 - 1e-6);
+                    let magnitude = frf.values[i].norm().max(f64::MIN_POSITIVE);
+                    let variance = (1.0 - g2) / (g2 * na) * magnitude * magnitude;
+                    1.0 / variance
+                }
+            };
+            sqrt_weights.push(w.sqrt());
+        }
+    }
+    Ok(sqrt_weights)
+}
+
+/// `‖h_x − h‖ / ‖h_x‖` over every FRF of `measured` on `lines` (model
+/// values `h`, `[frf * n_lines + line]`), and per FRF.
+pub(super) fn relative_residuals(measured: &MeasuredSet, lines: &[usize], h: &[c64]) -> (f64, Vec<f64>) {
+    let nl = lines.len();
+    let (mut num, mut den) = (0.0, 0.0);
+    let mut per = Vec::with_capacity(measured.frfs().len());
+    for (b, frf) in measured.frfs().iter().enumerate() {
+        let (mut n, mut d) = (0.0, 0.0);
+        for (l, &line) in lines.iter().enumerate() {
+            let x = frf.values[line];
+            n += (x - h[b * nl + l]).norm_sqr();
+            d += x.norm_sqr();
+        }
+        per.push((n / d).sqrt());
+        num += n;
+        den += d;
+    }
+    ((num / den).sqrt(), per)
 }
 
 /// The FRF residues of eq. (36)–(39) as the shared solver's residual model.

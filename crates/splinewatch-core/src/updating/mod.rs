@@ -38,6 +38,7 @@ pub mod joint;
 mod modal;
 pub mod modal_residual;
 mod solver;
+pub mod transmissibility_residual;
 pub use modal::{ModalSolution, ModalUpdateProblem};
 
 pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved, REPORTED_CORRELATIONS};

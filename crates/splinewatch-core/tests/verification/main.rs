@@ -1,6 +1,7 @@
 //! Verification ladder of splinewatch-core: one test binary, shared fixtures.
 
 mod common;
+mod event_updating;
 mod frf;
 mod joint;
 mod modal;
