@@ -6,6 +6,7 @@
 //! Room: below the services, beside the pipeline. May import: `config`, `io`, the core crate.
 
 pub mod environment;
+pub mod event_update;
 pub mod exchange;
 pub mod excitation;
 pub mod frf_windows;

@@ -36,6 +36,7 @@
 //! missing residual replaced by its conditional mean given them, so its T²
 //! is exactly the observed features' own (flagged).
 
+pub mod amplitude;
 pub mod chart;
 pub mod compensation;
 pub mod covariance;
