@@ -135,15 +135,15 @@ fn imported_blocks(
 
 /// The record's channels on one grid: the ground sensors the model reads
 /// (all required) and the deck's acceleration sensors it holds.
-struct Event {
-    fs: f64,
-    start_ns: i128,
+pub(super) struct Event {
+    pub(super) fs: f64,
+    pub(super) start_ns: i128,
     /// Per config sensor, its samples when recorded.
-    channels: Vec<Option<Vec<f64>>>,
-    deck: Vec<usize>,
+    pub(super) channels: Vec<Option<Vec<f64>>>,
+    pub(super) deck: Vec<usize>,
 }
 
-fn align_event(config: &Config, model: &mut GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
+pub(super) fn align_event(config: &Config, model: &mut GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
     let recorded = |i: usize| recorded(config, blocks, i);
     for note in model.restrict_to(config, recorded) {
         errln!("ground input {note}");
@@ -455,7 +455,6 @@ pub struct IdentifyArgs {
 /// with measured inputs: every ground sensor the record holds (or the force
 /// sensor) against every deck acceleration sensor it holds.
 pub fn identify(a: IdentifyArgs) -> Result<()> {
-    use splinewatch_core::identification::oma::UncertaintyMethod;
     let cfg = load_config(&a.config)?;
     let blocks = read_records(&cfg, &a.record)?;
     let recorded = |i: usize| recorded(&cfg, &blocks, i);
@@ -486,17 +485,12 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         .chain(outputs.iter().map(|&i| (i, ChannelQuantity::Acceleration)))
         .collect();
     let span = aligned_span(&cfg, &blocks, None, None, &wanted)?;
-    let (mut settings, _) = cfg.oma_settings()?;
-    // The exact replicates: their first-order continuation overstated SRIM's
-    // spreads up to fivefold on simulated records (the core's verification).
-    settings.uncertainty = UncertaintyMethod::Jackknife;
     let views: Vec<&[f64]> = span.channels.iter().map(Vec::as_slice).collect();
     let (input_views, output_views) = views.split_at(inputs.len());
     if let Some(path) = &a.transmissibility {
         write_transmissibility(&cfg, (&inputs, input_views), (&outputs, output_views), span.fs, path)?;
     }
-    let result = splinewatch_core::identification::srim::identify_io(input_views, output_views, span.fs, &settings)
-        .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
+    let (result, settings) = identify_io(&cfg, input_views, output_views, span.fs)?;
     let report = crate::pipeline::oma::OmaReport {
         start_ns: span.start_ns,
         samples: span.samples,
@@ -523,6 +517,26 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         settings.block_rows
     );
     super::identified::write_identified(&cfg, &report, &a.output)
+}
+
+/// SRIM of `inputs` to `outputs` with the config's `[oma]` settings and
+/// delete-one-batch (jackknife) uncertainty; returns the settings used.
+pub(super) fn identify_io(
+    cfg: &Config,
+    inputs: &[&[f64]],
+    outputs: &[&[f64]],
+    fs: f64,
+) -> Result<(
+    splinewatch_core::identification::oma::OmaResult,
+    splinewatch_core::identification::oma::OmaSettings,
+)> {
+    let (mut settings, _) = cfg.oma_settings()?;
+    // The exact replicates: their first-order continuation overstated SRIM's
+    // spreads up to fivefold on simulated records (the core's verification).
+    settings.uncertainty = splinewatch_core::identification::oma::UncertaintyMethod::Jackknife;
+    let result = splinewatch_core::identification::srim::identify_io(inputs, outputs, fs, &settings)
+        .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
+    Ok((result, settings))
 }
 
 /// The multi-input H1 estimates of `identify --transmissibility` as JSON:

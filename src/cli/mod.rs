@@ -2,6 +2,8 @@
 //! command, grouped by family; output to the console happens here.
 //! Room: the top. May import: `service`, `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
+mod events;
+mod events_plot;
 mod ground;
 mod identified;
 mod measure;
@@ -48,6 +50,9 @@ enum Command {
     Predict(ground::PredictArgs),
     /// Input–output modal identification (SRIM) of a record with measured inputs (ground channels or a force).
     Identify(ground::IdentifyArgs),
+    /// Earthquake by earthquake: each record identified, forecast by the model of the events before it,
+    /// updated on its transmissibilities and judged against the earlier events at its amplitude.
+    Events(events::EventsArgs),
     /// One update of a results file as a universal file for modal-testing
     /// software: the sensors' geometry (datasets 15, 82), the window's
     /// measured or model FRFs (58), the model's modes at its updated
@@ -98,6 +103,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Import(args) => measure::import(args),
         Command::Predict(args) => ground::predict(args),
         Command::Identify(args) => ground::identify(args),
+        Command::Events(args) => events::events(args),
         Command::Export(args) => measure::export(args),
         Command::Replay(args) => monitor::replay(args),
         Command::Run(args) => monitor::run(args),

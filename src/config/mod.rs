@@ -6,6 +6,7 @@
 //! `[[model.constraints]]`) is kept apart from discretisation
 //! (`[model.discretization]`); see README.md for every key.
 
+mod events;
 mod frf;
 mod ground;
 mod model;
@@ -19,6 +20,7 @@ mod tls;
 mod updating;
 mod zenoh;
 
+pub use events::{EventInputs, EventsConfig};
 pub use frf::FrfConfig;
 pub use ground::{ground_signals, restrict_plan, GroundInputPlan};
 pub use model::{
@@ -85,6 +87,9 @@ pub struct Config {
     /// `[monitoring]`: compensation and alarms; absent: none.
     #[serde(default)]
     pub monitoring: Option<MonitoringConfig>,
+    /// `[events]`: earthquake records one event at a time (`events`).
+    #[serde(default)]
+    pub events: EventsConfig,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -230,6 +235,11 @@ impl Config {
             self.residues()?;
         }
         self.validate_monitoring()?;
+        let deck: Vec<&str> = self.sensors[..self.deck_sensor_count()]
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect();
+        self.events.check(&deck)?;
         for (key, hours) in [
             ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
             ("output.results_rotate_hours", self.output.results_rotate_hours),

@@ -152,11 +152,53 @@ pub struct BearingConfig {
     pub stiffness: [f64; 3],
     /// `[lower, upper]` for each of k_x, k_y, k_z when updating.
     pub bounds: Option<[f64; 2]>,
-    #[serde(default = "default_true")]
-    pub update: bool,
+    /// `true` (default): `kx`, `ky` and `kz` are updated; `false`: none; a
+    /// list (`["ky"]`): those axes only.
+    #[serde(default)]
+    pub update: BearingUpdate,
     /// The support group whose ground the bearing stands on (default "ground").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
+}
+
+/// `[[model.bearings]] update`: every axis, none, or the axes listed.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(untagged)]
+pub enum BearingUpdate {
+    Every(bool),
+    Axes(Vec<String>),
+}
+
+impl Default for BearingUpdate {
+    fn default() -> Self {
+        Self::Every(true)
+    }
+}
+
+/// The stiffness names of a bearing's axes, in `stiffness` order.
+pub const BEARING_AXES: [&str; 3] = ["kx", "ky", "kz"];
+
+impl BearingUpdate {
+    /// Whether axis `a` (0 = x) is updated; an unknown name is refused by
+    /// [`Self::check`].
+    pub fn axis(&self, a: usize) -> bool {
+        match self {
+            Self::Every(on) => *on,
+            Self::Axes(list) => list.iter().any(|n| n == BEARING_AXES[a]),
+        }
+    }
+
+    pub fn check(&self, key: &str) -> Result<(), super::ConfigError> {
+        if let Self::Axes(list) = self {
+            if let Some(bad) = list.iter().find(|n| !BEARING_AXES.contains(&n.as_str())) {
+                return Err(super::err(
+                    key,
+                    format!("{bad:?} is not an axis: give true, false or a list of \"kx\", \"ky\", \"kz\""),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 fn bottom() -> FaceConfig {

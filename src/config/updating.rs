@@ -165,7 +165,7 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
 impl Config {
     /// The updating parameters: `<spring>.k<j>` for spring fields with
     /// `update = true` (j from 1, η fastest), `<bearing>.kx`, `.ky`, `.kz`
-    /// for bearings with `update = true`, `<field>.s<j>` for stiffness
+    /// for bearings with `update = true` (those listed with `update = ["ky"]`), `<field>.s<j>` for stiffness
     /// fields with `update = true`, and `damping.g<z>`.
     pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
         let mut out = Vec::new();
@@ -180,14 +180,19 @@ impl Config {
         }
         // Bearings follow the spring fields among κ (`ShellModel::spring_coefficients`).
         let springs = self.model.springs.len();
-        for (b, bearing) in self.model.bearings.iter().enumerate().filter(|(_, b)| b.update) {
+        for (b, bearing) in self.model.bearings.iter().enumerate() {
+            bearing.update.check(&format!("model.bearings[{b}].update"))?;
+            if !(0..3).any(|a| bearing.update.axis(a)) {
+                continue;
+            }
             let [lower, upper] = bearing
                 .bounds
-                .ok_or_else(|| err(format!("model.bearings[{b}].bounds"), "required when update = true"))?;
+                .ok_or_else(|| err(format!("model.bearings[{b}].bounds"), "required when it is updated"))?;
             out.extend(
-                ["kx", "ky", "kz"]
+                super::patches::BEARING_AXES
                     .into_iter()
                     .enumerate()
+                    .filter(|&(a, _)| bearing.update.axis(a))
                     .map(|(coefficient, axis)| Parameter {
                         name: format!("{}.{axis}", bearing.name),
                         kind: ParameterKind::Spring {

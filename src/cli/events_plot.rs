@@ -1,0 +1,66 @@
+//! `events --plot DIR`: each tracked mode's identified frequency against the
+//! event's ground peak acceleration (log axis), with its ±1σ bar; alarmed
+//! events in red.
+
+use super::events::EventLine;
+use anyhow::{Context, Result};
+use std::path::Path;
+
+pub fn frequency_vs_amplitude(lines: &[EventLine], tracked_hz: &[f64], dir: &Path) -> Result<()> {
+    use plotters::prelude::*;
+    let fail = |e: &dyn std::fmt::Display| anyhow::anyhow!("plotting: {e}");
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let path = dir.join("frequency_vs_amplitude.svg");
+    // (pga, frequency, std, alarmed) of every identified mode near a tracked one.
+    let mut points: Vec<(f64, f64, f64, bool)> = Vec::new();
+    for line in lines.iter().filter(|l| l.skipped.is_none()) {
+        let Some(pga) = line.pga_ground.filter(|p| *p > 0.0) else {
+            continue;
+        };
+        let alarmed = line.verdict.as_ref().is_some_and(|v| v.state == "alarm");
+        for m in &line.modes {
+            let near = tracked_hz.iter().any(|f| (m.frequency_hz - f).abs() <= 0.25 * f);
+            if near {
+                points.push((pga, m.frequency_hz, m.frequency_std_hz.unwrap_or(0.0), alarmed));
+            }
+        }
+    }
+    let (mut x0, mut x1) = points
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
+    let (mut y0, mut y1) = points.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+        (a.min(p.1 - p.2), b.max(p.1 + p.2))
+    });
+    if points.is_empty() {
+        (x0, x1, y0, y1) = (0.01, 1.0, 0.0, 10.0);
+    }
+    let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| fail(&e))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "identified frequency against the ground's peak acceleration (±1σ; red: alarm)",
+            ("sans-serif", 18),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 * 0.95)..(y1 * 1.05))
+        .map_err(|e| fail(&e))?;
+    chart
+        .configure_mesh()
+        .x_desc("ground peak acceleration (m/s²)")
+        .y_desc("frequency (Hz)")
+        .draw()
+        .map_err(|e| fail(&e))?;
+    for &(x, f, s, alarmed) in &points {
+        let colour = if alarmed { RED } else { BLACK };
+        chart
+            .draw_series(std::iter::once(PathElement::new(vec![(x, f - s), (x, f + s)], colour)))
+            .map_err(|e| fail(&e))?;
+        chart
+            .draw_series(std::iter::once(Circle::new((x, f), 4, colour.filled())))
+            .map_err(|e| fail(&e))?;
+    }
+    root.present().map_err(|e| fail(&e))?;
+    Ok(())
+}

@@ -1,0 +1,101 @@
+//! `[events]`: earthquake records processed one event at a time (issue 45):
+//! `splinewatch events` and the daemon on a triggered logger.
+
+use super::{err, ConfigError};
+use serde::{Deserialize, Serialize};
+
+/// `[events]`: how events are told apart and judged.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct EventsConfig {
+    /// A triggered logger's burst of channel blocks ends when this many
+    /// seconds pass without one (the daemon).
+    #[serde(default = "default_gap_seconds")]
+    pub gap_seconds: f64,
+    /// Earlier events an event's verdict needs (its amplitude bands are
+    /// fitted on them); fewer: "insufficient history".
+    #[serde(default = "default_min_events")]
+    pub min_events: usize,
+    /// Probability that an event of an unchanged bridge raises an alarm,
+    /// shared by the features judged.
+    #[serde(default = "default_false_alarm_rate")]
+    pub false_alarm_rate: f64,
+    /// The deck sensors whose transmissibilities an event's update fits
+    /// (default: every deck acceleration sensor the record holds).
+    #[serde(default)]
+    pub outputs: Vec<String>,
+    /// `"combined"` (default): an event's update fits the transmissibility
+    /// from the mean of the ground inputs along the fitted sensors' axes;
+    /// `"separate"`: a multi-input H1 from each.
+    #[serde(default)]
+    pub inputs: EventInputs,
+}
+
+/// `[events] inputs`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EventInputs {
+    #[default]
+    Combined,
+    Separate,
+}
+
+impl Default for EventsConfig {
+    fn default() -> Self {
+        Self {
+            gap_seconds: default_gap_seconds(),
+            min_events: default_min_events(),
+            false_alarm_rate: default_false_alarm_rate(),
+            outputs: Vec::new(),
+            inputs: EventInputs::default(),
+        }
+    }
+}
+
+fn default_gap_seconds() -> f64 {
+    10.0
+}
+
+fn default_min_events() -> usize {
+    5
+}
+
+fn default_false_alarm_rate() -> f64 {
+    0.01
+}
+
+impl EventsConfig {
+    /// `deck`: the deck sensors' names, which `outputs` must name.
+    pub fn check(&self, deck: &[&str]) -> Result<(), ConfigError> {
+        if let Some((k, bad)) = self
+            .outputs
+            .iter()
+            .enumerate()
+            .find(|(_, n)| !deck.contains(&n.as_str()))
+        {
+            return Err(err(
+                format!("events.outputs[{k}]"),
+                format!("{bad:?} is not a deck sensor (one of {})", deck.join(", ")),
+            ));
+        }
+        if !(self.gap_seconds.is_finite() && self.gap_seconds > 0.0) {
+            return Err(err(
+                "events.gap_seconds",
+                format!("must be positive, got {}", self.gap_seconds),
+            ));
+        }
+        if self.min_events < 2 {
+            return Err(err(
+                "events.min_events",
+                format!("must be at least 2, got {}", self.min_events),
+            ));
+        }
+        if !(self.false_alarm_rate > 0.0 && self.false_alarm_rate < 0.5) {
+            return Err(err(
+                "events.false_alarm_rate",
+                format!("must be in (0, 0.5), got {}", self.false_alarm_rate),
+            ));
+        }
+        Ok(())
+    }
+}
