@@ -66,6 +66,20 @@ pub const MONITORING_TOPICS: [(&str, &str); 2] = [
     ),
 ];
 
+/// Topics of `splinewatch events` (registered when first written, as the
+/// monitoring ones): one `events/summary` per event (the `events --json`
+/// line) and one `events/verdict` per judged event.
+pub const EVENT_TOPICS: [(&str, &str); 2] = [
+    (
+        "events/summary",
+        r#"{"type":"object","required":["event","start","pga_ground","peak_deck","modes","parameters","forecast","verdict","skipped"],"properties":{"event":{"type":"string"},"start":{"type":["string","null"],"format":"date-time"},"pga_ground":{"type":["number","null"]},"peak_deck":{"type":["number","null"]},"modes":{"type":"array","items":{"type":"object","properties":{"frequency_hz":{"type":"number"},"damping_ratio":{"type":"number"},"frequency_std_hz":{"type":["number","null"]},"damping_std":{"type":["number","null"]},"shape":{"type":"array"}}}},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"forecast":{"type":["object","null"]},"verdict":{"type":["object","null"]},"skipped":{"type":["string","null"]},"update":{"type":["object","null"],"properties":{"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"converged":{"type":"boolean"},"combined_inputs":{"type":"array","items":{"type":"string"}}}},"notes":{"type":"array","items":{"type":"string"}}}}"#,
+    ),
+    (
+        "events/verdict",
+        r#"{"type":"object","required":["state","outside","bands"],"properties":{"state":{"type":"string","enum":["insufficient history","normal","alarm"]},"outside":{"type":"array","items":{"type":"string"}},"bands":{"type":"array","items":{"type":"object","properties":{"feature":{"type":"string"},"value":{"type":["number","null"]},"band":{"type":["object","null"],"properties":{"predicted":{"type":"number"},"lower":{"type":"number"},"upper":{"type":"number"},"events":{"type":"integer"}}}}}}}}"#,
+    ),
+];
+
 /// The messages of a scored update: `monitoring/status`, and
 /// `monitoring/alarm` when the state entered or left alarm.
 pub fn monitoring_messages(m: &MonitoringOutcome) -> Vec<(&'static str, Value)> {
@@ -320,7 +334,11 @@ impl<W: Write + Seek> ResultsWriter<W> {
     /// Writes a message already serialised to JSON.
     pub fn write_json(&mut self, suffix: &str, time_ns: i128, json: &[u8]) -> Result<()> {
         if !self.channels.contains_key(suffix) {
-            if let Some((name, schema)) = MONITORING_TOPICS.iter().find(|(n, _)| *n == suffix) {
+            if let Some((name, schema)) = MONITORING_TOPICS
+                .iter()
+                .chain(&EVENT_TOPICS)
+                .find(|(n, _)| *n == suffix)
+            {
                 let id = register(&mut self.writer, &self.prefix, name, schema)?;
                 self.channels.insert(name, id);
             }

@@ -6,6 +6,7 @@ mod architecture;
 mod cli;
 mod common;
 mod corpus;
+mod events;
 mod fleet;
 mod ground;
 mod import;

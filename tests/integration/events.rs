@@ -1,0 +1,184 @@
+//! Issue 45: `splinewatch events` on the two committed Painter Street
+//! records (given out of time order) and on records that cannot be used (a
+//! dead channel, a clipped one, one too short, one without a ground channel,
+//! a missing file): the real events identified, forecast and updated in time
+//! order, the bad ones skipped with their reasons, the rest processed; the
+//! results file, the state and the figure written.
+
+use crate::common::{fresh_dir, results_by_topic, splinewatch};
+use std::path::Path;
+
+const CONFIG: &str = "config/painter-street.toml";
+
+fn record(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/painter-street")
+        .join(name)
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+const CHANNELS: [u32; 17] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 15, 16, 17, 18, 19, 20];
+
+/// A logger's CSV of the station's 17 channels at 100 Hz (RFC 3339 times):
+/// pseudo-random accelerations, `edit(channel, samples)` applied to each.
+fn csv(path: &Path, seconds: f64, channels: &[u32], edit: impl Fn(u32, &mut [f64])) {
+    let n = (seconds * 100.0) as usize;
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut columns: Vec<Vec<f64>> = channels
+        .iter()
+        .map(|&c| {
+            let mut x: Vec<f64> = (0..n)
+                .map(|_| {
+                    state ^= state << 13;
+                    state ^= state >> 7;
+                    state ^= state << 17;
+                    0.1 * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
+                })
+                .collect();
+            edit(c, &mut x);
+            x
+        })
+        .collect();
+    let mut text = String::from("time");
+    for c in channels {
+        text += &format!(",ch{c}");
+    }
+    text.push('\n');
+    for k in 0..n {
+        let ms = k * 10;
+        text += &format!(
+            "2020-01-01T00:{:02}:{:02}.{:03}Z",
+            ms / 60_000,
+            (ms / 1000) % 60,
+            ms % 1000
+        );
+        for col in &mut columns {
+            text += &format!(",{:.6}", col[k]);
+        }
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_their_reasons() {
+    let dir = fresh_dir("events");
+    let path = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    csv(&dir.join("dead.csv"), 60.0, &CHANNELS, |c, x| {
+        if c == 9 {
+            x.fill(0.0);
+        }
+    });
+    csv(&dir.join("clipped.csv"), 60.0, &CHANNELS, |c, x| {
+        if c == 4 {
+            x[1000..1010].fill(0.2);
+        }
+    });
+    csv(&dir.join("short.csv"), 5.0, &CHANNELS, |_, _| {});
+    csv(&dir.join("no-ground.csv"), 60.0, &CHANNELS[3..11], |_, _| {});
+    let (out, state, plot) = (path("events.mcap"), path("state.json"), path("plots"));
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        CONFIG,
+        "--json",
+        "--out",
+        &out,
+        "--state",
+        &state,
+        "--plot",
+        &plot,
+        &record("ferndale_28jan2015_72387946_ce89324p.zip"),
+        &path("dead.csv"),
+        &record("RioDell_14Sep2012_71842255_ce89324p.zip"),
+        &path("clipped.csv"),
+        &path("short.csv"),
+        &path("no-ground.csv"),
+        &path("missing.zip"),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 7, "{lines:?}");
+    let used: Vec<&serde_json::Value> = lines.iter().filter(|l| l["skipped"].is_null()).collect();
+    let names: Vec<&str> = used.iter().map(|l| l["event"].as_str().unwrap()).collect();
+    assert_eq!(
+        names,
+        [
+            "RioDell_14Sep2012_71842255_ce89324p.zip",
+            "ferndale_28jan2015_72387946_ce89324p.zip"
+        ],
+        "in time order"
+    );
+    for reason in [
+        ("dead.csv", "ch9: a dead channel"),
+        ("clipped.csv", "ch4: clipped (10 samples in a row"),
+        ("short.csv", "500 samples (5.0 s), fewer than"),
+        ("no-ground.csv", "none of the config's ground sensors"),
+        ("missing.zip", "cannot read"),
+    ] {
+        let line = lines.iter().find(|l| l["event"] == reason.0).unwrap();
+        let skipped = line["skipped"].as_str().unwrap_or_default();
+        assert!(skipped.contains(reason.1), "{}: {skipped}", reason.0);
+    }
+    let (first, second) = (used[0], used[1]);
+    // The first event has no earlier model to forecast it; the second is
+    // forecast by the first's update, with predict's figures and baseline.
+    assert!(first["forecast"].is_null());
+    let forecast = &second["forecast"];
+    assert_eq!(forecast["channels"].as_array().unwrap().len(), 8, "{forecast}");
+    assert_eq!(forecast["baseline"].as_array().unwrap().len(), 8);
+    for l in [first, second] {
+        assert!(l["pga_ground"].as_f64().unwrap() > 0.1, "{l}");
+        assert!(l["peak_deck"].as_f64().unwrap() > 0.1, "{l}");
+        let parameters = l["parameters"].as_array().unwrap();
+        assert_eq!(parameters.len(), 9, "the nine lateral bearing stiffnesses");
+        assert!(parameters.iter().all(|p| p["value"].as_f64().unwrap() > 0.0));
+        assert_eq!(l["verdict"]["state"], "insufficient history", "{l}");
+        assert!(l["update"]["relative_residual"].as_f64().unwrap().is_finite());
+    }
+    // The 2015 event's transverse mode, with its standard deviation.
+    let modes = second["modes"].as_array().unwrap();
+    assert!(
+        modes
+            .iter()
+            .any(|m| (3.0..6.0).contains(&m["frequency_hz"].as_f64().unwrap())),
+        "{modes:?}"
+    );
+    // The forecast is `predict`'s with the model of the events before: the
+    // first event's parameters reproduce it.
+    let earlier = dir.join("earlier.json");
+    std::fs::write(
+        &earlier,
+        serde_json::json!({"parameters": first["parameters"]}).to_string(),
+    )
+    .unwrap();
+    let o = splinewatch(&[
+        "predict",
+        "--config",
+        CONFIG,
+        "--json",
+        "--parameters",
+        earlier.to_str().unwrap(),
+        &record("ferndale_28jan2015_72387946_ce89324p.zip"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let predicted: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(predicted["channels"], forecast["channels"]);
+    // Every event on events/summary, the judged ones on events/verdict.
+    let topics = results_by_topic(&std::fs::read(&out).unwrap());
+    assert_eq!(topics["events/summary"].len(), 7);
+    assert_eq!(topics["events/verdict"].len(), 2);
+    // The state carries the chain: the last parameters (which `predict
+    // --state` reads) and the two events' amplitudes.
+    let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
+    assert_eq!(saved["parameters"].as_array().unwrap().len(), 9);
+    assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 2);
+    let svg = std::fs::read_to_string(dir.join("plots/frequency_vs_amplitude.svg")).unwrap();
+    assert!(svg.contains("<svg"));
+}
