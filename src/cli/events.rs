@@ -173,9 +173,31 @@ pub fn events(a: EventsArgs) -> Result<()> {
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
     if let Some(dir) = &a.plot {
-        super::events_plot::frequency_vs_amplitude(&lines, &chain.tracked_hz, dir)?;
+        super::events_plot::frequency_vs_amplitude(&mode_points(&lines, &chain.tracked_hz), dir)?;
     }
     Ok(())
+}
+
+/// Every identified mode within 25 % of a tracked one, per used event.
+fn mode_points(lines: &[EventLine], tracked_hz: &[f64]) -> Vec<super::events_plot::ModePoint> {
+    let mut points = Vec::new();
+    for line in lines.iter().filter(|l| l.skipped.is_none()) {
+        let Some(pga) = line.pga_ground.filter(|p| *p > 0.0) else {
+            continue;
+        };
+        let alarmed = line.verdict.as_ref().is_some_and(|v| v.state == "alarm");
+        for m in &line.modes {
+            if tracked_hz.iter().any(|f| (m.frequency_hz - f).abs() <= 0.25 * f) {
+                points.push(super::events_plot::ModePoint {
+                    pga,
+                    frequency_hz: m.frequency_hz,
+                    std_hz: m.frequency_std_hz.unwrap_or(0.0),
+                    alarmed,
+                });
+            }
+        }
+    }
+    points
 }
 
 /// The files of one event: a folder's files (sorted), or the path itself.

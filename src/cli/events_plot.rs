@@ -2,29 +2,28 @@
 //! event's ground peak acceleration (log axis), with its ±1σ bar; alarmed
 //! events in red.
 
-use super::events::EventLine;
 use anyhow::{Context, Result};
 use std::path::Path;
 
-pub fn frequency_vs_amplitude(lines: &[EventLine], tracked_hz: &[f64], dir: &Path) -> Result<()> {
+/// One identified mode of an event: the ground's peak acceleration (m/s²),
+/// the frequency and its standard deviation (Hz), and whether the event
+/// raised an alarm.
+pub struct ModePoint {
+    pub pga: f64,
+    pub frequency_hz: f64,
+    pub std_hz: f64,
+    pub alarmed: bool,
+}
+
+pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
     use plotters::prelude::*;
     let fail = |e: &dyn std::fmt::Display| anyhow::anyhow!("plotting: {e}");
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let path = dir.join("frequency_vs_amplitude.svg");
-    // (pga, frequency, std, alarmed) of every identified mode near a tracked one.
-    let mut points: Vec<(f64, f64, f64, bool)> = Vec::new();
-    for line in lines.iter().filter(|l| l.skipped.is_none()) {
-        let Some(pga) = line.pga_ground.filter(|p| *p > 0.0) else {
-            continue;
-        };
-        let alarmed = line.verdict.as_ref().is_some_and(|v| v.state == "alarm");
-        for m in &line.modes {
-            let near = tracked_hz.iter().any(|f| (m.frequency_hz - f).abs() <= 0.25 * f);
-            if near {
-                points.push((pga, m.frequency_hz, m.frequency_std_hz.unwrap_or(0.0), alarmed));
-            }
-        }
-    }
+    let points: Vec<(f64, f64, f64, bool)> = modes
+        .iter()
+        .map(|m| (m.pga, m.frequency_hz, m.std_hz, m.alarmed))
+        .collect();
     let (mut x0, mut x1) = points
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
