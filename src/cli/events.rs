@@ -19,7 +19,7 @@ use crate::io::wire::format_timestamp;
 use crate::outputs::notify::Notifier;
 use crate::outputs::results::ResultsWriter;
 use crate::pipeline::oma::OmaReport;
-use crate::studies::event_update::update_on_event;
+use crate::studies::event_update::{update_on_event, EventSignals};
 use crate::studies::ground_motion::GroundModel;
 use crate::studies::predict::{predict as predict_event, PredictionReport};
 use anyhow::{bail, Context, Result};
@@ -363,32 +363,14 @@ fn update_event(
         .filter(|&i| cfg.events.outputs.is_empty() || cfg.events.outputs.contains(&cfg.sensors[i].name))
         .collect();
     let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
-    // The ground inputs along the fitted sensors' axes: the others drive
-    // them little, and a multi-input H1 of a minute-long record has too few
-    // averages for many inputs (each input costs one of them).
-    let axes: Vec<usize> = fitted
-        .iter()
-        .map(|&i| dominant_axis(&cfg.sensors[i].direction))
-        .collect();
-    let (plan, signals): (Vec<_>, Vec<_>) = model
-        .plan
-        .iter()
-        .cloned()
-        .zip(signals)
-        .filter(|(p, _)| axes.contains(&p.input.axis))
-        .unzip();
-    if plan.is_empty() {
-        bail!("no ground input acts along the fitted deck sensors' axes");
-    }
-    let updated = update_on_event(
-        cfg,
-        &plan,
-        &signals,
-        (&fitted, &deck_series),
-        event.fs,
-        &chain.named(),
-        &mut |_| {},
-    )?;
+    let record = EventSignals {
+        plan: &model.plan,
+        inputs: &signals,
+        deck: &fitted,
+        outputs: &deck_series,
+        fs: event.fs,
+    };
+    let updated = update_on_event(cfg, &record, &chain.named(), &mut |_| {})?;
     line.update = Some(UpdateLine {
         relative_residual: updated.result.relative_residual,
         iterations: updated.result.iterations.len().saturating_sub(1),
@@ -405,17 +387,6 @@ fn update_event(
         })
         .collect();
     Ok(())
-}
-
-/// The global axis (0 = x) a sensor's direction is nearest to.
-fn dominant_axis(direction: &crate::config::DirectionConfig) -> usize {
-    use crate::config::DirectionConfig;
-    match direction {
-        DirectionConfig::Named(n) if n == "x" => 0,
-        DirectionConfig::Named(n) if n == "y" => 1,
-        DirectionConfig::Vector(v) => (0..3).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(2),
-        _ => 2,
-    }
 }
 
 /// The features judged: each tracked mode's identified frequency, then

@@ -24,9 +24,11 @@ pub struct EventsConfig {
     /// (default: every deck acceleration sensor the record holds).
     #[serde(default)]
     pub outputs: Vec<String>,
-    /// `"combined"` (default): an event's update fits the transmissibility
-    /// from the mean of the ground inputs along the fitted sensors' axes;
-    /// `"separate"`: a multi-input H1 from each.
+    /// What an event's update fits: `"spectra"` (default; the record's
+    /// output spectra against every ground input's), `"combined"` (the H1
+    /// transmissibility from the mean of the ground inputs along the fitted
+    /// sensors' axes) or `"separate"` (a multi-input H1 from each); see
+    /// `studies::event_update`.
     #[serde(default)]
     pub inputs: EventInputs,
 }
@@ -36,6 +38,7 @@ pub struct EventsConfig {
 #[serde(rename_all = "lowercase")]
 pub enum EventInputs {
     #[default]
+    Spectra,
     Combined,
     Separate,
 }

@@ -238,6 +238,18 @@ pub enum DirectionConfig {
     Vector([f64; 3]),
 }
 
+impl DirectionConfig {
+    /// The global axis (0 = x) the direction is nearest to.
+    pub fn dominant_axis(&self) -> usize {
+        match self {
+            Self::Named(n) if n == "x" => 0,
+            Self::Named(n) if n == "y" => 1,
+            Self::Vector(v) => (0..3).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(2),
+            _ => 2,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpringConfig {

@@ -159,6 +159,11 @@ pub struct BearingConfig {
     /// The support group whose ground the bearing stands on (default "ground").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
+    /// Tied to the bearing of this name, which comes just before it (or
+    /// before bearings tied to it): its updated stiffnesses are that
+    /// bearing's parameters (one value for a support line's bearings).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tie: Option<String>,
 }
 
 /// `[[model.bearings]] update`: every axis, none, or the axes listed.

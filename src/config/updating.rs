@@ -180,11 +180,9 @@ impl Config {
         }
         // Bearings follow the spring fields among κ (`ShellModel::spring_coefficients`).
         let springs = self.model.springs.len();
-        for (b, bearing) in self.model.bearings.iter().enumerate() {
-            bearing.update.check(&format!("model.bearings[{b}].update"))?;
-            if !(0..3).any(|a| bearing.update.axis(a)) {
-                continue;
-            }
+        let runs = self.bearing_runs()?;
+        for (b, count) in runs {
+            let bearing = &self.model.bearings[b];
             let [lower, upper] = bearing
                 .bounds
                 .ok_or_else(|| err(format!("model.bearings[{b}].bounds"), "required when it is updated"))?;
@@ -195,9 +193,17 @@ impl Config {
                     .filter(|&(a, _)| bearing.update.axis(a))
                     .map(|(coefficient, axis)| Parameter {
                         name: format!("{}.{axis}", bearing.name),
-                        kind: ParameterKind::Spring {
-                            field: springs + b,
-                            coefficient,
+                        kind: if count == 1 {
+                            ParameterKind::Spring {
+                                field: springs + b,
+                                coefficient,
+                            }
+                        } else {
+                            ParameterKind::SpringRun {
+                                field: springs + b,
+                                count,
+                                coefficient,
+                            }
                         },
                         lower,
                         upper,
@@ -223,6 +229,51 @@ impl Config {
             )?);
         }
         Ok(out)
+    }
+
+    /// The updated bearings that lead a run (`tie`), with the run's length
+    /// (1: no bearing tied to it). A tied bearing follows its leader or
+    /// another bearing tied to it, updates the same axes and has the same
+    /// stiffness along them.
+    fn bearing_runs(&self) -> Result<Vec<(usize, usize)>, ConfigError> {
+        let bearings = &self.model.bearings;
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        for (b, bearing) in bearings.iter().enumerate() {
+            bearing.update.check(&format!("model.bearings[{b}].update"))?;
+            let Some(leader) = &bearing.tie else {
+                if (0..3).any(|a| bearing.update.axis(a)) {
+                    runs.push((b, 1));
+                }
+                continue;
+            };
+            let key = format!("model.bearings[{b}].tie");
+            let run = runs
+                .last_mut()
+                .filter(|(l, count)| bearings[*l].name == *leader && l + *count == b)
+                .ok_or_else(|| {
+                    err(
+                        &key,
+                        format!(
+                            "{leader:?} must be an updated bearing just before this one (or before bearings tied to it)"
+                        ),
+                    )
+                })?;
+            let first = &bearings[run.0];
+            if let Some(a) = (0..3).find(|&a| {
+                first.update.axis(a) != bearing.update.axis(a)
+                    || (first.update.axis(a) && first.stiffness[a] != bearing.stiffness[a])
+            }) {
+                return Err(err(
+                    &key,
+                    format!(
+                        "a tied bearing updates the same axes with the same stiffness as {leader:?}: {} differs",
+                        super::patches::BEARING_AXES[a]
+                    ),
+                ));
+            }
+            run.1 += 1;
+        }
+        Ok(runs)
     }
 
     /// `[updating]` as solver settings.

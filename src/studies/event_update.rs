@@ -1,55 +1,74 @@
-//! Updating on an earthquake record (issue 45, item 2): the record's
-//! multi-input H1 transmissibilities from the model's ground inputs (the
-//! plan's group means, [`crate::config::ground_signals`]) to the deck
-//! sensors, fitted by the FRF residues of eq. (36)–(39)
-//! ([`splinewatch_core::updating::transmissibility_residual`]).
+//! Updating on an earthquake record (issue 45, item 2), by the residues of
+//! [`splinewatch_core::updating::transmissibility_residual`] between the
+//! model's ground inputs (the plan's group means,
+//! [`crate::config::ground_signals`]) and the deck sensors, as `[events]
+//! inputs` says:
 //!
-//! A strong-motion record gives a handful of Welch segments, so the residues
-//! are weighted by the H1 estimator's variance from the multiple coherence
-//! and the number of averages, whatever `[updating] weighting` says; the
-//! lines are `[updating] band` (default: `[frf] band`), decimated and
-//! excluded as `[updating]` says. With `[events] inputs = "combined"` (the
-//! default) the ground inputs are one input, their mean, whose model
-//! transmissibility is the sum of theirs (exact when the grounds move
-//! together); with `"separate"` each is its own input of the multi-input H1,
-//! and only those too coherent to separate are combined. A minute-long
-//! record gives some fourteen 8-s segments: three inputs whose mutual
-//! coherence is 0.6–0.7 (the Painter Street grounds, 1–12 Hz) leave the
-//! separated estimates too noisy to fit (measured in the README).
+//! - `"spectra"` (default): the record's own spectra, the deck's `Y_o(ω)`
+//!   against `Σ_c T_oc(ω) U_c(ω)` of every ground input (the frequency-domain
+//!   output error: no averaging, every input at once; the relative residual
+//!   is the deck response's NRMSE over the band);
+//! - `"combined"`: the H1 transmissibility from the mean of the ground inputs
+//!   along the fitted sensors' axes (their transmissibilities summed in the
+//!   model: exact when the grounds move together);
+//! - `"separate"`: a multi-input H1 from each ground input along those axes,
+//!   only those too coherent to separate combined.
+//!
+//! The H1 estimates are weighted by their variance from the multiple
+//! coherence and the number of averages, whatever `[updating] weighting`
+//! says: a minute-long record gives some fourteen 8-s segments, and each
+//! input costs one. The lines are `[updating] band` (default: `[frf]
+//! band`), decimated and excluded as `[updating]` says.
 
 use super::parameters::values_by_name;
 use crate::config::{frf_setup, Config, EventInputs, GroundInputPlan};
 use anyhow::{anyhow, bail, Context, Result};
+use splinewatch_core::c64;
 use splinewatch_core::identification::transmissibility;
 use splinewatch_core::response::frf::Quantity;
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet};
-use splinewatch_core::updating::transmissibility_residual::TransmissibilityProblem;
-use splinewatch_core::updating::{base_values, IterationRecord, UpdateResult, Weighting};
+use splinewatch_core::updating::transmissibility_residual::{Combination, TransmissibilityProblem};
+use splinewatch_core::updating::{base_values, IterationRecord, UpdateResult, UpdateSettings, Weighting};
 
 /// What an update on one event gives.
 pub struct EventUpdate {
     pub result: UpdateResult,
-    /// Ground inputs combined because they were too coherent to separate
-    /// (names joined by `+`).
+    /// Ground inputs combined into one (names joined by `+`).
     pub combined: Vec<String>,
 }
 
-/// Updates the config's parameters on the transmissibilities of one record:
-/// `inputs` the plan's ground signals ([`crate::config::ground_signals`]),
-/// `deck` the config indices of the deck sensors and `outputs` their series,
-/// sampled at `fs`; started from `start` (named values of the previous
-/// event's update; the config's values for the others).
+/// One record's ground inputs and deck outputs, sampled at `fs`.
+pub struct EventSignals<'a> {
+    /// The ground inputs of `plan` ([`crate::config::ground_signals`]).
+    pub plan: &'a [GroundInputPlan],
+    pub inputs: &'a [Vec<f64>],
+    /// The config indices of the deck sensors fitted, and their series.
+    pub deck: &'a [usize],
+    pub outputs: &'a [Vec<f64>],
+    pub fs: f64,
+}
+
+/// The measured data of one record and how the model makes them.
+struct Measured {
+    set: MeasuredSet,
+    combination: Combination,
+    /// The plan entries the measured inputs stand for.
+    plan: Vec<GroundInputPlan>,
+    combined: Vec<String>,
+    weighting: Weighting,
+}
+
+/// Updates the config's parameters on one record, started from `start`
+/// (named values of the previous event's update; the config's values for
+/// the others).
 pub fn update_on_event(
     config: &Config,
-    plan: &[GroundInputPlan],
-    inputs: &[Vec<f64>],
-    (deck, outputs): (&[usize], &[Vec<f64>]),
-    fs: f64,
+    signals: &EventSignals<'_>,
     start: &[(String, f64)],
     progress: &mut dyn FnMut(&IterationRecord),
 ) -> Result<EventUpdate> {
-    if deck.is_empty() {
-        bail!("no deck channel to update on");
+    if signals.deck.is_empty() || signals.inputs.is_empty() {
+        bail!("no deck channel or no ground input to update on");
     }
     let setup = frf_setup(config)?;
     let shell = config.build_model()?;
@@ -58,18 +77,109 @@ pub fn update_on_event(
     if parameters.is_empty() {
         bail!("no parameter has update = true: nothing to update");
     }
-    let mut settings = config.update_settings()?;
-    settings.weighting = Weighting::H1Variance;
+    let mut settings: UpdateSettings = config.update_settings()?;
     if settings.lines.band.is_none() {
         let [lo, hi] = config.frf.band;
         settings.lines.band = Some((lo, hi));
     }
-    let (welch, _) = config.welch_settings(fs)?;
-    let samples = inputs.first().map_or(0, Vec::len);
-    let segment = welch.segment.min(samples);
-    let overlap = welch.overlap.min(segment / 2);
-    // `[events] inputs = "combined"`: one input, the mean of the ground
-    // inputs, whose model transmissibility is the sum of theirs.
+    let measured = match config.events.inputs {
+        EventInputs::Spectra => record_spectra(signals)?,
+        EventInputs::Combined | EventInputs::Separate => transmissibilities(config, signals)?,
+    };
+    settings.weighting = measured.weighting;
+    let theta0 = setup.model.field_coefficients().to_vec();
+    let base = base_values(&parameters, &setup.kappa, &theta0, &setup.damping);
+    let start = values_by_name(&parameters, &base, start, "start parameter")?;
+    let problem = TransmissibilityProblem::new(
+        (&setup.model, &shell, &groups),
+        measured.plan.iter().map(|p| p.input).collect(),
+        measured.combination,
+        setup.kappa.clone(),
+        setup.damping.clone(),
+        parameters,
+        &measured.set,
+        settings,
+    )
+    .context("updating on the record")?;
+    let solution = problem.solve(&start, progress).context("updating on the record")?;
+    Ok(EventUpdate {
+        result: solution.result,
+        combined: measured.combined,
+    })
+}
+
+/// `X(f_k)`, `k ≥ 1`, of every series: the DFT of the whole record, its mean
+/// removed (no window: the record starts and ends near rest).
+fn spectra(series: &[Vec<f64>]) -> Result<Vec<Vec<c64>>> {
+    let n = series[0].len();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(n);
+    series
+        .iter()
+        .map(|x| {
+            let mean = x.iter().sum::<f64>() / n as f64;
+            let mut input: Vec<f64> = x.iter().map(|v| v - mean).collect();
+            let mut out = fft.make_output_vec();
+            fft.process(&mut input, &mut out)
+                .map_err(|e| anyhow!("the record's spectrum: {e}"))?;
+            Ok(out[1..].iter().map(|v| c64::new(v.re, v.im)).collect())
+        })
+        .collect()
+}
+
+/// `"spectra"`: the deck's output spectra against every ground input's.
+fn record_spectra(signals: &EventSignals<'_>) -> Result<Measured> {
+    let n = signals.inputs[0].len();
+    if n < 4 {
+        bail!("{n} samples: too short for a spectrum");
+    }
+    let inputs = spectra(signals.inputs)?;
+    let outputs = spectra(signals.outputs)?;
+    let frequencies: Vec<f64> = (1..=outputs[0].len())
+        .map(|k| k as f64 * signals.fs / n as f64)
+        .collect();
+    let frfs = signals
+        .deck
+        .iter()
+        .zip(outputs)
+        .map(|(&sensor, values)| MeasuredFrf {
+            output: sensor,
+            input: 0,
+            values,
+            coherence: None,
+            n_averages: None,
+        })
+        .collect();
+    // The values are output spectra (m/s²·s): the set's quantity is not read.
+    let set = MeasuredSet::new(Quantity::Accelerance, frequencies, frfs)?;
+    Ok(Measured {
+        set,
+        combination: Combination::Spectra(inputs),
+        plan: signals.plan.to_vec(),
+        combined: Vec::new(),
+        weighting: Weighting::Uniform,
+    })
+}
+
+/// `"combined"` and `"separate"`: H1 transmissibilities from the ground
+/// inputs along the fitted sensors' axes.
+fn transmissibilities(config: &Config, signals: &EventSignals<'_>) -> Result<Measured> {
+    let axes: Vec<usize> = signals
+        .deck
+        .iter()
+        .map(|&i| config.sensors[i].direction.dominant_axis())
+        .collect();
+    let (plan, inputs): (Vec<GroundInputPlan>, Vec<&Vec<f64>>) = signals
+        .plan
+        .iter()
+        .cloned()
+        .zip(signals.inputs)
+        .filter(|(p, _)| axes.contains(&p.input.axis))
+        .unzip();
+    if plan.is_empty() {
+        bail!("no ground input acts along the fitted deck sensors' axes");
+    }
+    let samples = inputs[0].len();
     let mean: Vec<f64> = (0..samples)
         .map(|t| inputs.iter().map(|x| x[t]).sum::<f64>() / inputs.len() as f64)
         .collect();
@@ -77,10 +187,13 @@ pub fn update_on_event(
     let input_views: Vec<&[f64]> = if combine_all {
         vec![mean.as_slice()]
     } else {
-        inputs.iter().map(Vec::as_slice).collect()
+        inputs.iter().map(|x| x.as_slice()).collect()
     };
-    let output_views: Vec<&[f64]> = outputs.iter().map(Vec::as_slice).collect();
-    let mut est = transmissibility::estimate(&input_views, &output_views, fs, segment, overlap)
+    let (welch, _) = config.welch_settings(signals.fs)?;
+    let segment = welch.segment.min(samples);
+    let overlap = welch.overlap.min(segment / 2);
+    let output_views: Vec<&[f64]> = signals.outputs.iter().map(Vec::as_slice).collect();
+    let mut est = transmissibility::estimate(&input_views, &output_views, signals.fs, segment, overlap)
         .map_err(|e| anyhow!("transmissibility: {e}"))?;
     if combine_all {
         est.combined = vec![(0..inputs.len()).collect()];
@@ -88,7 +201,7 @@ pub fn update_on_event(
     // Line 0 (0 Hz) carries no transmissibility a model can fit.
     let first = est.frequencies_hz.iter().position(|&f| f > 0.0).unwrap_or(0);
     let mut frfs = Vec::new();
-    for (o, &sensor) in deck.iter().enumerate() {
+    for (o, &sensor) in signals.deck.iter().enumerate() {
         let coherence: Vec<f64> = est.coherence[o][first..]
             .iter()
             .map(|g| if g.is_finite() { g.clamp(0.0, 1.0) } else { 0.0 })
@@ -105,32 +218,18 @@ pub fn update_on_event(
     }
     // Transmissibilities are acceleration per acceleration: the set's
     // quantity is not read by the transmissibility residues.
-    let measured = MeasuredSet::new(Quantity::Accelerance, est.frequencies_hz[first..].to_vec(), frfs)?;
-    let theta0 = setup.model.field_coefficients().to_vec();
-    let base = base_values(&parameters, &setup.kappa, &theta0, &setup.damping);
-    let start = values_by_name(&parameters, &base, start, "start parameter")?;
-    let combined_names = est
+    let set = MeasuredSet::new(Quantity::Accelerance, est.frequencies_hz[first..].to_vec(), frfs)?;
+    let combined = est
         .combined
         .iter()
         .filter(|g| g.len() > 1)
         .map(|g| g.iter().map(|&i| plan[i].name.as_str()).collect::<Vec<_>>().join("+"))
         .collect();
-    let problem = TransmissibilityProblem::new(
-        (&setup.model, &shell, &groups),
-        plan.iter().map(|p| p.input).collect(),
-        est.combined,
-        setup.kappa.clone(),
-        setup.damping.clone(),
-        parameters,
-        &measured,
-        settings,
-    )
-    .context("updating on the transmissibilities")?;
-    let solution = problem
-        .solve(&start, progress)
-        .context("updating on the transmissibilities")?;
-    Ok(EventUpdate {
-        result: solution.result,
-        combined: combined_names,
+    Ok(Measured {
+        set,
+        combination: Combination::Sum(est.combined),
+        plan,
+        combined,
+        weighting: Weighting::H1Variance,
     })
 }

@@ -375,8 +375,10 @@ impl Scenario {
                 .find(|p| p.name == c.parameter)
                 .expect("checked by Scenario::check");
             match p.kind {
-                ParameterKind::Spring { field, coefficient } => {
-                    k[field][coefficient] = setup.kappa[field][coefficient] * c.factor_at(t);
+                ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => {
+                    for (field, coefficient) in p.kind.springs() {
+                        k[field][coefficient] = setup.kappa[field][coefficient] * c.factor_at(t);
+                    }
                 }
                 ParameterKind::Stiffness { field, coefficient } => {
                     theta[field][coefficient] = base_theta[field][coefficient] * c.factor_at(t);

@@ -314,20 +314,24 @@ impl<'a> UpdateProblem<'a> {
 
     /// Residual and, if asked, Jacobian from model FRFs (and sensitivities) at `p`.
     pub(super) fn weighted(&self, p: &[f64], frfs: FrfEvaluation, jacobian: bool) -> Result<Evaluation, UpdateError> {
-        let columns: Option<Vec<&[c64]>> = jacobian.then(|| {
+        let columns: Option<Vec<Vec<c64>>> = jacobian.then(|| {
             self.parameters
                 .iter()
                 .map(|par| match par.kind {
-                    ParameterKind::Spring { field, coefficient } => {
-                        frfs.dh_dkappa[self.model.flat_spring_index(field, coefficient)].as_slice()
-                    }
+                    ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => summed(
+                        par.kind
+                            .springs()
+                            .into_iter()
+                            .map(|(f, c)| frfs.dh_dkappa[self.model.flat_spring_index(f, c)].as_slice()),
+                    ),
                     ParameterKind::Stiffness { field, coefficient } => {
-                        frfs.dh_dtheta[self.model.flat_field_index(field, coefficient)].as_slice()
+                        frfs.dh_dtheta[self.model.flat_field_index(field, coefficient)].clone()
                     }
-                    ParameterKind::Damping { coefficient } => frfs.dh_dgamma[coefficient].as_slice(),
+                    ParameterKind::Damping { coefficient } => frfs.dh_dgamma[coefficient].clone(),
                 })
                 .collect()
         });
+        let columns: Option<Vec<&[c64]>> = columns.as_ref().map(|c| c.iter().map(Vec::as_slice).collect());
         let (residual, jacobian) = weighted_residues(
             self.measured,
             &self.lines,
@@ -429,6 +433,17 @@ impl<'a> UpdateProblem<'a> {
         let point = self.point(&p, state, frfs)?;
         Ok(Solution { result, point })
     }
+}
+
+/// The element-wise sum of `columns` (the sensitivity of a tied parameter).
+pub(super) fn summed<'c>(mut columns: impl Iterator<Item = &'c [c64]>) -> Vec<c64> {
+    let mut out = columns.next().map(<[c64]>::to_vec).unwrap_or_default();
+    for c in columns {
+        for (o, v) in out.iter_mut().zip(c) {
+            *o += v;
+        }
+    }
+    out
 }
 
 /// The weighted residues `√w (h_x − h)` of `measured` on `lines` stacked as

@@ -70,6 +70,14 @@ pub enum UpdateError {
 pub enum ParameterKind {
     /// Coefficient `coefficient` of spring field `field`.
     Spring { field: usize, coefficient: usize },
+    /// Coefficient `coefficient` of the `count` consecutive spring fields
+    /// from `field`, all set to the parameter's value (the bearings of one
+    /// support line tied together): `∂h/∂p = Σ ∂h/∂κ` over them.
+    SpringRun {
+        field: usize,
+        count: usize,
+        coefficient: usize,
+    },
     /// Coefficient θ `coefficient` of stiffness field `field` of the deck
     /// ([`crate::model::stiffness_field`]).
     Stiffness { field: usize, coefficient: usize },
@@ -120,6 +128,18 @@ pub(crate) fn check_parameters(
                     return bad("a stiffness lower bound must be non-negative".into());
                 }
             }
+            ParameterKind::SpringRun {
+                field,
+                count,
+                coefficient,
+            } => {
+                if count == 0 || (field..field + count).any(|f| kappa.get(f).is_none_or(|k| coefficient >= k.len())) {
+                    return bad("refers to a spring coefficient that does not exist".into());
+                }
+                if p.lower < 0.0 {
+                    return bad("a stiffness lower bound must be non-negative".into());
+                }
+            }
             ParameterKind::Stiffness { field, coefficient } => {
                 if theta.get(field).is_none_or(|t| coefficient >= t.len()) {
                     return bad("refers to a stiffness-field coefficient that does not exist".into());
@@ -141,6 +161,22 @@ pub(crate) fn check_parameters(
     Ok(())
 }
 
+impl ParameterKind {
+    /// The spring coefficients `(field, coefficient)` the parameter sets
+    /// (none for a stiffness field or damping parameter).
+    pub fn springs(self) -> Vec<(usize, usize)> {
+        match self {
+            Self::Spring { field, coefficient } => vec![(field, coefficient)],
+            Self::SpringRun {
+                field,
+                count,
+                coefficient,
+            } => (field..field + count).map(|f| (f, coefficient)).collect(),
+            Self::Stiffness { .. } | Self::Damping { .. } => Vec::new(),
+        }
+    }
+}
+
 /// The base model's spring coefficients and damping curve (`kappa`,
 /// `damping`) with `parameters` set to `p`; stiffness-field parameters are
 /// set by [`fields_at`].
@@ -155,6 +191,15 @@ pub fn model_at(
     for (par, &v) in parameters.iter().zip(p) {
         match par.kind {
             ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
+            ParameterKind::SpringRun {
+                field,
+                count,
+                coefficient,
+            } => {
+                for k in &mut kappa[field..field + count] {
+                    k[coefficient] = v;
+                }
+            }
             ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
             ParameterKind::Stiffness { .. } => {}
         }
@@ -202,7 +247,9 @@ pub fn base_values(
     parameters
         .iter()
         .map(|p| match p.kind {
-            ParameterKind::Spring { field, coefficient } => kappa[field][coefficient],
+            ParameterKind::Spring { field, coefficient } | ParameterKind::SpringRun { field, coefficient, .. } => {
+                kappa[field][coefficient]
+            }
             ParameterKind::Stiffness { field, coefficient } => theta[field][coefficient],
             ParameterKind::Damping { coefficient } => damping.coefficients()[coefficient],
         })

@@ -162,19 +162,22 @@ pub fn modal_residue(
             // the mode's ∂λ and ∂a at the sensors in column j of `s`.
             let mut stiffness_rows = |s: &crate::response::modal_sensitivity::ModalSensitivities, j: usize| {
                 let df = s.eigenvalue[(k, j)] / (8.0 * PI * PI * f);
-                jac[(row0, c)] = df / x.frequency_std_hz;
+                jac[(row0, c)] += df / x.frequency_std_hz;
                 let da: Vec<f64> = x.shape.iter().map(|&(sensor, _)| s.amplitude[k][(sensor, j)]).collect();
                 let phi_da: f64 = phi.iter().zip(&da).map(|(p, d)| p * d).sum();
                 let a_da: f64 = a.iter().zip(&da).map(|(a, d)| a * d).sum();
                 let dalpha = (phi_da - 2.0 * alpha * a_da) / aa;
                 for r in 0..n {
-                    jac[(row0 + 1 + r, c)] = (alpha * da[r] + a[r] * dalpha) / x.shape_std;
+                    jac[(row0 + 1 + r, c)] += (alpha * da[r] + a[r] * dalpha) / x.shape_std;
                 }
-                jac[(row0 + 1 + n, c)] = slope * df / x.damping_std;
+                jac[(row0 + 1 + n, c)] += slope * df / x.damping_std;
             };
             match par.kind {
-                ParameterKind::Spring { field, coefficient } => {
-                    stiffness_rows(sens, model.flat_spring_index(field, coefficient));
+                ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => {
+                    // A tied parameter's rows add up its springs' (the rows are linear in them).
+                    for (field, coefficient) in par.kind.springs() {
+                        stiffness_rows(sens, model.flat_spring_index(field, coefficient));
+                    }
                 }
                 ParameterKind::Stiffness { field, coefficient } => {
                     let fs = field_sens.as_ref().expect("computed when a field is updated");

@@ -6,13 +6,26 @@
 //! the exact `∂T/∂p` of [`SupportMotion::sensitivities`]; solved by the shared
 //! Levenberg–Marquardt loop with its bounds (eq. 42–43) and uncertainty.
 //!
-//! A measured input may stand for several model inputs: ground channels too
-//! coherent to separate are combined into their mean, whose transmissibility
-//! to a deck sensor is the sum of theirs (the deck responds to `Σ_c T_c u`
-//! with every `u_c` equal). The weighting is the set's own
-//! ([`Weighting::H1Variance`] with the multiple coherence for a short record).
+//! Two kinds of measured data ([`Combination`]):
+//!
+//! - **transmissibilities** (H1 estimates): a measured input may stand for
+//!   several model inputs: ground channels too coherent to separate are
+//!   combined into their mean, whose transmissibility to a deck sensor is the
+//!   sum of theirs (the deck responds to `Σ_c T_c u` with every `u_c` equal);
+//!   weighted as the set says ([`Weighting::H1Variance`] from the multiple
+//!   coherence for a short record);
+//! - **the record's spectra**: the measured values are the deck's output
+//!   spectra `Y_o(ω)` (the DFT of the whole record) and the model's are
+//!   `Σ_c T_oc(ω, p) U_c(ω)` with the ground inputs' spectra `U_c`: the
+//!   frequency-domain output error of a system with known inputs (Pintelon &
+//!   Schoukens, *System Identification: A Frequency Domain Approach*, 2012,
+//!   §7–9), exact for a record that starts and ends at rest, with every input
+//!   at once and no averaging: what a minute-long earthquake record with
+//!   partially coherent grounds allows (a multi-input H1 of it has a few
+//!   averages per input). Its relative residual is the NRMSE of the deck's
+//!   response over the band (Parseval).
 
-use super::frf_residual::{relative_residuals, sqrt_weights, weighted_residues, MeasuredSet};
+use super::frf_residual::{relative_residuals, sqrt_weights, summed, weighted_residues, MeasuredSet};
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{
     check_parameters, fields_at, model_at, IterationRecord, Parameter, ParameterKind, UpdateError, UpdateResult,
@@ -25,15 +38,26 @@ use crate::response::frf::{FrfModel, ModalState};
 use crate::response::support_motion::{GroundInput, SupportMotion};
 use faer::c64;
 
-/// Updating a model against measured transmissibilities.
+/// How the model's transmissibilities make the measured values.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Combination {
+    /// Measured transmissibilities: per measured input, the model inputs
+    /// (indices into the ground inputs) whose transmissibilities it sums.
+    Sum(Vec<Vec<usize>>),
+    /// Measured output spectra (every FRF's `input` is 0): per model input,
+    /// its spectrum on the measured frequency axis; the model's value is
+    /// `Σ_c T_oc U_c`.
+    Spectra(Vec<Vec<c64>>),
+}
+
+/// Updating a model against measured transmissibilities or a record's spectra.
 #[derive(Debug)]
 pub struct TransmissibilityProblem<'a> {
     model: &'a FrfModel,
     shell: &'a ShellModel,
     groups: &'a SupportGroups,
     inputs: Vec<GroundInput>,
-    /// Per measured input, the model inputs (indices into `inputs`) it sums.
-    combined: Vec<Vec<usize>>,
+    combination: Combination,
     kappa: Vec<Vec<f64>>,
     damping: DampingCurve,
     parameters: Vec<Parameter>,
@@ -67,13 +91,13 @@ pub struct Extra {
 
 impl<'a> TransmissibilityProblem<'a> {
     /// The model `model` (built from `shell`) driven by `inputs`; the
-    /// measured FRFs' `input` indexes `combined` (the model inputs each
-    /// measured input sums, see the module), `output` the model's sensors.
+    /// measured FRFs' `output` indexes the model's sensors, their `input`
+    /// the measured inputs of `combination` (see [`Combination`]).
     #[allow(clippy::too_many_arguments)] // the model, its supports and inputs, the start and the data
     pub fn new(
         (model, shell, groups): (&'a FrfModel, &'a ShellModel, &'a SupportGroups),
         inputs: Vec<GroundInput>,
-        combined: Vec<Vec<usize>>,
+        combination: Combination,
         kappa: Vec<Vec<f64>>,
         damping: DampingCurve,
         parameters: Vec<Parameter>,
@@ -81,17 +105,32 @@ impl<'a> TransmissibilityProblem<'a> {
         settings: UpdateSettings,
     ) -> Result<Self, UpdateError> {
         check_parameters(&parameters, &kappa, model, &damping)?;
-        if let Some(c) = combined
-            .iter()
-            .position(|g| g.is_empty() || g.iter().any(|&i| i >= inputs.len()))
-        {
-            return Err(UpdateError::Data(format!(
-                "measured input {c} must name at least one of the {} model inputs",
-                inputs.len()
-            )));
-        }
+        let measured_inputs = match &combination {
+            Combination::Sum(groups) => {
+                if let Some(c) = groups
+                    .iter()
+                    .position(|g| g.is_empty() || g.iter().any(|&i| i >= inputs.len()))
+                {
+                    return Err(UpdateError::Data(format!(
+                        "measured input {c} must name at least one of the {} model inputs",
+                        inputs.len()
+                    )));
+                }
+                groups.len()
+            }
+            Combination::Spectra(spectra) => {
+                let n = measured.frequencies_hz().len();
+                if spectra.len() != inputs.len() || spectra.iter().any(|u| u.len() != n) {
+                    return Err(UpdateError::Data(format!(
+                        "one input spectrum of {n} lines per model input ({}) is needed",
+                        inputs.len()
+                    )));
+                }
+                1
+            }
+        };
         for (b, frf) in measured.frfs().iter().enumerate() {
-            if frf.output >= model.sensor_count() || frf.input >= combined.len() {
+            if frf.output >= model.sensor_count() || frf.input >= measured_inputs {
                 return Err(UpdateError::Data(format!(
                     "frfs[{b}] refers to output {} or input {} the model does not have",
                     frf.output, frf.input
@@ -111,7 +150,7 @@ impl<'a> TransmissibilityProblem<'a> {
         }
         let mut model_pairs = Vec::new();
         for frf in measured.frfs() {
-            for &c in &combined[frf.input] {
+            for c in model_inputs(&combination, frf.input, inputs.len()) {
                 if !model_pairs.contains(&(frf.output, c)) {
                     model_pairs.push((frf.output, c));
                 }
@@ -124,7 +163,7 @@ impl<'a> TransmissibilityProblem<'a> {
             shell,
             groups,
             inputs,
-            combined,
+            combination,
             kappa,
             damping,
             parameters,
@@ -142,20 +181,25 @@ impl<'a> TransmissibilityProblem<'a> {
         &self.frequencies
     }
 
-    /// Sums the model pairs' values `per_pair` (`[pair * n_lines + line]`)
-    /// into the measured FRFs' layout.
+    /// The model pairs' values `per_pair` (`[pair * n_lines + line]`) made
+    /// into the measured FRFs' layout: summed, or weighted by the inputs'
+    /// spectra ([`Combination`]).
     fn combine(&self, per_pair: &[c64]) -> Vec<c64> {
         let nl = self.lines.len();
         let mut out = vec![c64::new(0.0, 0.0); nl * self.measured.frfs().len()];
         for (b, frf) in self.measured.frfs().iter().enumerate() {
-            for &c in &self.combined[frf.input] {
+            for c in model_inputs(&self.combination, frf.input, self.inputs.len()) {
                 let pair = self
                     .model_pairs
                     .iter()
                     .position(|&q| q == (frf.output, c))
                     .expect("listed in new");
-                for l in 0..nl {
-                    out[b * nl + l] += per_pair[pair * nl + l];
+                for (l, &line) in self.lines.iter().enumerate() {
+                    let weight = match &self.combination {
+                        Combination::Sum(_) => c64::new(1.0, 0.0),
+                        Combination::Spectra(u) => u[c][line],
+                    };
+                    out[b * nl + l] += per_pair[pair * nl + l] * weight;
                 }
             }
         }
@@ -205,14 +249,17 @@ impl<'a> TransmissibilityProblem<'a> {
             self.parameters
                 .iter()
                 .map(|par| {
-                    self.combine(match par.kind {
-                        ParameterKind::Spring { field, coefficient } => {
-                            &s.dkappa[self.model.flat_spring_index(field, coefficient)]
-                        }
+                    self.combine(&match par.kind {
+                        ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => summed(
+                            par.kind
+                                .springs()
+                                .into_iter()
+                                .map(|(f, c)| s.dkappa[self.model.flat_spring_index(f, c)].as_slice()),
+                        ),
                         ParameterKind::Stiffness { field, coefficient } => {
-                            &s.dtheta[self.model.flat_field_index(field, coefficient)]
+                            s.dtheta[self.model.flat_field_index(field, coefficient)].clone()
                         }
-                        ParameterKind::Damping { coefficient } => &s.dgamma[coefficient],
+                        ParameterKind::Damping { coefficient } => s.dgamma[coefficient].clone(),
                     })
                 })
                 .collect::<Vec<_>>()
@@ -253,6 +300,14 @@ impl<'a> TransmissibilityProblem<'a> {
             motion: at.extra.motion,
             transmissibilities: at.extra.h,
         })
+    }
+}
+
+/// The model inputs behind measured input `input`.
+fn model_inputs(combination: &Combination, input: usize, count: usize) -> Vec<usize> {
+    match combination {
+        Combination::Sum(groups) => groups[input].clone(),
+        Combination::Spectra(_) => (0..count).collect(),
     }
 }
 
