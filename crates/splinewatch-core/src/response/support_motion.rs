@@ -275,6 +275,26 @@ impl SupportMotion {
         pairs: &[(usize, usize)],
         frequencies_hz: &[f64],
     ) -> TransmissibilitySensitivities {
+        self.sensitivities_for(frf, loads, groups, state, damping, pairs, frequencies_hz, None)
+    }
+
+    /// [`Self::sensitivities`] of the spring coefficients `springs` (flat
+    /// indices, [`FrfModel::flat_spring_index`]) only, every one when
+    /// `None`; the others' vectors are left empty (an update needs its
+    /// parameters', and the influence change of each costs a sum over the
+    /// modes at every line and pair).
+    #[allow(clippy::too_many_arguments)] // as sensitivities, and the selection
+    pub fn sensitivities_for(
+        &self,
+        frf: &FrfModel,
+        loads: &FrfModel,
+        groups: &SupportGroups,
+        state: &ModalState,
+        damping: &DampingCurve,
+        pairs: &[(usize, usize)],
+        frequencies_hz: &[f64],
+        springs: Option<&[usize]>,
+    ) -> TransmissibilitySensitivities {
         let sensors = frf.sensor_count();
         let load_state = loads.modal_state_from(state.modes.clone(), damping);
         let load_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(r, c)| (r, sensors + c)).collect();
@@ -291,7 +311,14 @@ impl SupportMotion {
                 .map(|(k, x)| x * (2.0 * PI * frequencies_hz[k % nf]).powi(2))
                 .collect()
         };
-        let mut dkappa: Vec<Vec<c64>> = evaluation.dh_dkappa.into_iter().map(scaled).collect();
+        let wanted = |flat: usize| springs.is_none_or(|list| list.contains(&flat));
+        let mut dkappa: Vec<Vec<c64>> = evaluation
+            .dh_dkappa
+            .into_iter()
+            .enumerate()
+            .map(|(flat, v)| if wanted(flat) { scaled(v) } else { Vec::new() })
+            .collect();
+        let factors = influence_factors(state, frequencies_hz);
         let dgamma: Vec<Vec<c64>> = evaluation.dh_dgamma.into_iter().map(scaled).collect();
         let mut dtheta: Vec<Vec<c64>> = if frf.field_coefficient_count() > 0 {
             loads
@@ -307,6 +334,10 @@ impl SupportMotion {
         let mut flat = 0;
         for (field, blocks) in frf.spring_blocks().iter().enumerate() {
             for b in blocks {
+                if !wanted(flat) {
+                    flat += 1;
+                    continue;
+                }
                 let w = |c: usize| -> Vec<(usize, f64)> {
                     let input = self.inputs[c];
                     let own = groups.of_spring(field) == input.group;
@@ -322,25 +353,26 @@ impl SupportMotion {
                         })
                         .collect()
                 };
-                self.add_influence_change(state, pairs, frequencies_hz, w, &mut dkappa[flat]);
+                self.add_influence_change(state, pairs, &factors, w, &mut dkappa[flat]);
                 flat += 1;
             }
         }
         for (k, dt) in dtheta.iter_mut().enumerate() {
             let product = frf.field_times(k, &self.influence);
             let w = |c: usize| -> Vec<(usize, f64)> { (0..product.nrows()).map(|d| (d, -product[(d, c)])).collect() };
-            self.add_influence_change(state, pairs, frequencies_hz, w, dt);
+            self.add_influence_change(state, pairs, &factors, w, dt);
         }
         TransmissibilitySensitivities { dkappa, dtheta, dgamma }
     }
 
     /// Adds `Σ_i a_ri (φ_iᵀ w_c / λ_i)(1 + ω²/D_i)` to `out` for every pair
-    /// `(r, c)`, `w_c` given sparse per input.
+    /// `(r, c)`, `w_c` given sparse per input; `factors` are
+    /// [`influence_factors`].
     fn add_influence_change(
         &self,
         state: &ModalState,
         pairs: &[(usize, usize)],
-        frequencies_hz: &[f64],
+        factors: &[Vec<c64>],
         w: impl Fn(usize) -> Vec<(usize, f64)>,
         out: &mut [c64],
     ) {
@@ -357,20 +389,35 @@ impl SupportMotion {
                 weights
             })
             .collect();
-        let nf = frequencies_hz.len();
+        let nf = factors.len();
         for (p, &(r, c)) in pairs.iter().enumerate() {
-            for (k, &f) in frequencies_hz.iter().enumerate() {
-                let w2 = (2.0 * PI * f).powi(2);
+            let coefficients: Vec<(usize, f64)> = (0..nm)
+                .map(|i| (i, state.amplitude(r, i) * weights[c][i]))
+                .filter(|&(_, v)| v != 0.0)
+                .collect();
+            for (k, line) in factors.iter().enumerate() {
                 let mut sum = c64::new(0.0, 0.0);
-                for i in 0..nm {
-                    let d = denominator(state, i, 2.0 * PI * f);
-                    let weight = state.amplitude(r, i) * weights[c][i];
-                    sum += c64::new(weight, 0.0) * (c64::new(1.0, 0.0) + c64::new(w2, 0.0) / d);
+                for &(i, v) in &coefficients {
+                    sum += line[i] * v;
                 }
                 out[p * nf + k] += sum;
             }
         }
     }
+}
+
+/// `1 + ω²/D_i(ω)` per line (rows) and mode: the dynamic amplification of
+/// a static load's change.
+fn influence_factors(state: &ModalState, frequencies_hz: &[f64]) -> Vec<Vec<c64>> {
+    frequencies_hz
+        .iter()
+        .map(|&f| {
+            let w = 2.0 * PI * f;
+            (0..state.modes.len())
+                .map(|i| c64::new(1.0, 0.0) + c64::new(w * w, 0.0) / denominator(state, i, w))
+                .collect()
+        })
+        .collect()
 }
 
 /// The modes that carry static load: all but the rigid ones (classified

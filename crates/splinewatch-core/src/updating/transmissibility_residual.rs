@@ -237,7 +237,13 @@ impl<'a> TransmissibilityProblem<'a> {
         );
         let h = self.combine(&per_pair);
         let derivatives = jacobian.then(|| {
-            let s = motion.sensitivities(
+            let springs: Vec<usize> = self
+                .parameters
+                .iter()
+                .flat_map(|p| p.kind.springs())
+                .map(|(f, c)| self.model.flat_spring_index(f, c))
+                .collect();
+            let s = motion.sensitivities_for(
                 self.model,
                 &loads,
                 self.groups,
@@ -245,6 +251,7 @@ impl<'a> TransmissibilityProblem<'a> {
                 &damping,
                 &self.model_pairs,
                 &self.frequencies,
+                Some(&springs),
             );
             self.parameters
                 .iter()
