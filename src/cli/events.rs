@@ -72,6 +72,8 @@ pub struct EventLine {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct UpdateLine {
+    /// The updated model's dominant mode over the fitted channels (Hz).
+    pub model_mode_hz: Option<f64>,
     pub relative_residual: f64,
     pub iterations: usize,
     pub converged: bool,
@@ -173,13 +175,14 @@ pub fn events(a: EventsArgs) -> Result<()> {
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
     if let Some(dir) = &a.plot {
-        super::events_plot::frequency_vs_amplitude(&mode_points(&lines, &chain.tracked_hz), dir)?;
+        super::events_plot::frequency_vs_amplitude(&mode_points(&lines), dir)?;
     }
     Ok(())
 }
 
-/// Every identified mode within 25 % of a tracked one, per used event.
-fn mode_points(lines: &[EventLine], tracked_hz: &[f64]) -> Vec<super::events_plot::ModePoint> {
+/// Every identified mode of every used event, and the updated model's
+/// dominant mode (with no standard deviation).
+fn mode_points(lines: &[EventLine]) -> Vec<super::events_plot::ModePoint> {
     let mut points = Vec::new();
     for line in lines.iter().filter(|l| l.skipped.is_none()) {
         let Some(pga) = line.pga_ground.filter(|p| *p > 0.0) else {
@@ -187,14 +190,22 @@ fn mode_points(lines: &[EventLine], tracked_hz: &[f64]) -> Vec<super::events_plo
         };
         let alarmed = line.verdict.as_ref().is_some_and(|v| v.state == "alarm");
         for m in &line.modes {
-            if tracked_hz.iter().any(|f| (m.frequency_hz - f).abs() <= 0.25 * f) {
-                points.push(super::events_plot::ModePoint {
-                    pga,
-                    frequency_hz: m.frequency_hz,
-                    std_hz: m.frequency_std_hz.unwrap_or(0.0),
-                    alarmed,
-                });
-            }
+            points.push(super::events_plot::ModePoint {
+                pga,
+                frequency_hz: m.frequency_hz,
+                std_hz: m.frequency_std_hz.unwrap_or(0.0),
+                alarmed,
+                model: false,
+            });
+        }
+        if let Some(f) = line.update.as_ref().and_then(|u| u.model_mode_hz) {
+            points.push(super::events_plot::ModePoint {
+                pga,
+                frequency_hz: f,
+                std_hz: 0.0,
+                alarmed,
+                model: true,
+            });
         }
     }
     points
@@ -372,6 +383,7 @@ fn update_event(
     };
     let updated = update_on_event(cfg, &record, &chain.named(), &mut |_| {})?;
     line.update = Some(UpdateLine {
+        model_mode_hz: updated.dominant_hz,
         relative_residual: updated.result.relative_residual,
         iterations: updated.result.iterations.len().saturating_sub(1),
         converged: updated.result.converged,

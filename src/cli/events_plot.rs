@@ -1,6 +1,6 @@
-//! `events --plot DIR`: each tracked mode's identified frequency against the
-//! event's ground peak acceleration (log axis), with its ±1σ bar; alarmed
-//! events in red.
+//! `events --plot DIR`: every identified mode's frequency against the
+//! event's ground peak acceleration (log axis), with its ±1σ bar (dots),
+//! and the updated model's dominant mode (squares); alarmed events in red.
 
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -13,6 +13,8 @@ pub struct ModePoint {
     pub frequency_hz: f64,
     pub std_hz: f64,
     pub alarmed: bool,
+    /// The updated model's mode, not an identified one.
+    pub model: bool,
 }
 
 pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
@@ -24,6 +26,7 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
         .iter()
         .map(|m| (m.pga, m.frequency_hz, m.std_hz, m.alarmed))
         .collect();
+    let model: Vec<bool> = modes.iter().map(|m| m.model).collect();
     let (mut x0, mut x1) = points
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
@@ -37,7 +40,7 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
     root.fill(&WHITE).map_err(|e| fail(&e))?;
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            "identified frequency against the ground's peak acceleration (±1σ; red: alarm)",
+            "frequency against the ground's peak acceleration: identified (dots, ±1σ), updated model (squares); red: alarm",
             ("sans-serif", 18),
         )
         .margin(12)
@@ -51,8 +54,17 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
         .y_desc("frequency (Hz)")
         .draw()
         .map_err(|e| fail(&e))?;
-    for &(x, f, s, alarmed) in &points {
-        let colour = if alarmed { RED } else { BLACK };
+    for (&(x, f, s, alarmed), &is_model) in points.iter().zip(&model) {
+        let colour = match (alarmed, is_model) {
+            (true, _) => RED,
+            (false, true) => BLUE,
+            (false, false) => BLACK,
+        };
+        if is_model {
+            let square = EmptyElement::at((x, f)) + Rectangle::new([(-4, -4), (4, 4)], colour.stroke_width(2));
+            chart.draw_series(std::iter::once(square)).map_err(|e| fail(&e))?;
+            continue;
+        }
         chart
             .draw_series(std::iter::once(PathElement::new(vec![(x, f - s), (x, f + s)], colour)))
             .map_err(|e| fail(&e))?;

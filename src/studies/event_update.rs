@@ -33,6 +33,10 @@ use splinewatch_core::updating::{base_values, IterationRecord, UpdateResult, Upd
 /// What an update on one event gives.
 pub struct EventUpdate {
     pub result: UpdateResult,
+    /// The updated model's dominant mode in the record's band: the largest
+    /// resonant share `Σ_{o,c} |a_oi L_ic| / ζ_i` over the fitted sensors
+    /// `o` and ground inputs `c` (Hz).
+    pub dominant_hz: Option<f64>,
     /// Ground inputs combined into one (names joined by `+`).
     pub combined: Vec<String>,
 }
@@ -102,8 +106,26 @@ pub fn update_on_event(
     )
     .context("updating on the record")?;
     let solution = problem.solve(&start, progress).context("updating on the record")?;
+    let band = problem.line_frequencies();
+    let (lo, hi) = (band[0], band[band.len() - 1]);
+    let (state, motion) = (&solution.state, &solution.motion);
+    let dominant_hz = (0..state.modes.len())
+        .filter(|&i| (lo..=hi).contains(&state.modes.frequency_hz(i)) && state.zeta[i] > 0.0)
+        .map(|i| {
+            let share: f64 = signals
+                .deck
+                .iter()
+                .flat_map(|&o| {
+                    (0..motion.inputs().len()).map(move |c| (state.amplitude(o, i) * motion.participation(i, c)).abs())
+                })
+                .sum();
+            (i, share / state.zeta[i])
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| state.modes.frequency_hz(i));
     Ok(EventUpdate {
         result: solution.result,
+        dominant_hz,
         combined: measured.combined,
     })
 }

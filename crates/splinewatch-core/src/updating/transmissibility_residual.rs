@@ -12,7 +12,7 @@
 //!   several model inputs: ground channels too coherent to separate are
 //!   combined into their mean, whose transmissibility to a deck sensor is the
 //!   sum of theirs (the deck responds to `Σ_c T_c u` with every `u_c` equal);
-//!   weighted as the set says ([`Weighting::H1Variance`] from the multiple
+//!   weighted as the set says ([`super::Weighting::H1Variance`] from the multiple
 //!   coherence for a short record);
 //! - **the record's spectra**: the measured values are the deck's output
 //!   spectra `Y_o(ω)` (the DFT of the whole record) and the model's are
