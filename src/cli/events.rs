@@ -46,9 +46,12 @@ pub struct EventsArgs {
     /// One JSON object per event and line instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// Write `frequency_vs_amplitude.svg` (each tracked mode's frequency against the event's ground peak) here.
+    /// Write `frequency_vs_amplitude.svg` (identified and updated frequencies against the event's ground peak) here.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Save the events' timeline (peaks, parameters, frequencies, forecast NRMSE, verdict) as a Rerun recording (.rrd).
+    #[arg(long)]
+    pub rerun_save: Option<PathBuf>,
 }
 
 /// One event's line of `events --json` (and its `events/summary` message).
@@ -148,6 +151,17 @@ pub fn events(a: EventsArgs) -> Result<()> {
         .map(|p| ResultsWriter::create(p, &cfg.topic_prefix()))
         .transpose()?;
     let mut notifier = Notifier::for_config(&cfg).context("starting the notifier")?;
+    let mut rerun = a
+        .rerun_save
+        .as_ref()
+        .map(|path| {
+            let targets = crate::outputs::rerun::RerunTargets {
+                save: Some(path.clone()),
+                connect: None,
+            };
+            crate::outputs::rerun::RerunOutput::open_rotating(&cfg, &targets, false)
+        })
+        .transpose()?;
     if !a.json {
         outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tforecast_nrmse\tbaseline_nrmse\tverdict");
     }
@@ -161,8 +175,14 @@ pub fn events(a: EventsArgs) -> Result<()> {
             let status = status_message(k as u64, &line, v);
             n.observe(&status, &serde_json::to_vec(&status)?);
         }
+        if let Some(r) = rerun.as_mut() {
+            log_rerun(r, &line)?;
+        }
         print_line(&line, a.json)?;
         lines.push(line);
+    }
+    if let Some(r) = rerun {
+        r.finish()?;
     }
     if let Some(n) = notifier.as_mut() {
         n.finish();
@@ -510,6 +530,43 @@ fn status_message(k: u64, line: &EventLine, v: &VerdictLine) -> StatusMessage {
     }
 }
 
+/// The median over the scored deck channels of the forecast's and the
+/// baseline's strong-motion NRMSE.
+fn forecast_medians(line: &EventLine) -> Option<(f64, f64)> {
+    let median = |mut v: Vec<f64>| -> f64 {
+        v.retain(|x| x.is_finite());
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    line.forecast.as_ref().map(|f| {
+        (
+            median(f.channels.iter().map(|c| c.nrmse_strong).collect()),
+            median(f.baseline.iter().map(|c| c.score.nrmse_strong).collect()),
+        )
+    })
+}
+
+fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine) -> Result<()> {
+    let (Some(start), Some(pga), Some(peak)) = (line.start.as_deref(), line.pga_ground, line.peak_deck) else {
+        return Ok(());
+    };
+    let Some(time_ns) = crate::io::wire::parse_timestamp(start) else {
+        return Ok(());
+    };
+    let parameters: Vec<(String, f64)> = line.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
+    let identified: Vec<f64> = line.modes.iter().map(|m| m.frequency_hz).collect();
+    r.log_event(&crate::outputs::rerun::events::EventPoint {
+        time_ns,
+        pga_ground: pga,
+        peak_deck: peak,
+        parameters: &parameters,
+        identified_hz: &identified,
+        model_mode_hz: line.update.as_ref().and_then(|u| u.model_mode_hz),
+        forecast: forecast_medians(line),
+        verdict: line.verdict.as_ref().map(|v| v.state.as_str()),
+    })
+}
+
 fn print_line(line: &EventLine, json: bool) -> Result<()> {
     if json {
         outln!("{}", serde_json::to_string(line)?);
@@ -521,19 +578,8 @@ fn print_line(line: &EventLine, json: bool) -> Result<()> {
     for note in &line.notes {
         errln!("{}: {note}", line.event);
     }
-    let median = |v: Vec<f64>| -> String {
-        let mut v: Vec<f64> = v.into_iter().filter(|x| x.is_finite()).collect();
-        if v.is_empty() {
-            return "-".into();
-        }
-        v.sort_by(f64::total_cmp);
-        format!("{:.3}", v[v.len() / 2])
-    };
-    let (forecast, baseline) = match &line.forecast {
-        Some(f) => (
-            median(f.channels.iter().map(|c| c.nrmse_strong).collect()),
-            median(f.baseline.iter().map(|c| c.score.nrmse_strong).collect()),
-        ),
+    let (forecast, baseline) = match forecast_medians(line) {
+        Some((f, b)) => (format!("{f:.3}"), format!("{b:.3}")),
         None => ("-".into(), "-".into()),
     };
     let modes: Vec<String> = line.modes.iter().map(|m| format!("{:.2}", m.frequency_hz)).collect();

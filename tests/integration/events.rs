@@ -78,7 +78,12 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     });
     csv(&dir.join("short.csv"), 5.0, &CHANNELS, |_, _| {});
     csv(&dir.join("no-ground.csv"), 60.0, &CHANNELS[3..11], |_, _| {});
-    let (out, state, plot) = (path("events.mcap"), path("state.json"), path("plots"));
+    let (out, state, plot, rrd) = (
+        path("events.mcap"),
+        path("state.json"),
+        path("plots"),
+        path("events.rrd"),
+    );
     let o = splinewatch(&[
         "events",
         "--config",
@@ -90,6 +95,8 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         &state,
         "--plot",
         &plot,
+        "--rerun-save",
+        &rrd,
         &record("ferndale_28jan2015_72387946_ce89324p.zip"),
         &path("dead.csv"),
         &record("RioDell_14Sep2012_71842255_ce89324p.zip"),
@@ -181,6 +188,18 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 2);
     let svg = std::fs::read_to_string(dir.join("plots/frequency_vs_amplitude.svg")).unwrap();
     assert!(svg.contains("<svg"));
+    // The Rerun timeline, read back with Rerun's own decoder.
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
+    for entity in [
+        "/events/pga_ground",
+        "/events/parameters/bent_south.ky",
+        "/events/forecast/nrmse",
+        "/events/verdict",
+        "/events/frequency/model",
+    ] {
+        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
+    }
+    assert!(summary.footer);
 }
 
 /// Acceptance (simulated): seven events, the real 2015 record's grounds

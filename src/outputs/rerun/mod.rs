@@ -32,6 +32,7 @@
 
 mod blueprint;
 mod deck;
+pub mod events;
 mod monitoring;
 mod oma;
 pub mod prediction;
@@ -103,6 +104,13 @@ pub struct RerunOutput {
 
 impl RerunOutput {
     pub fn open(config: &Config, targets: &RerunTargets) -> Result<Self> {
+        Self::open_rotating(config, targets, true)
+    }
+
+    /// [`Self::open`], with the saved file rotated by measurement time
+    /// (`[output] rerun_rotate_hours`) or not: a run over records years
+    /// apart (`events`) keeps one file.
+    pub fn open_rotating(config: &Config, targets: &RerunTargets, rotate: bool) -> Result<Self> {
         let rec = rerun::RecordingStreamBuilder::new("splinewatch")
             .buffered()
             .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
@@ -119,7 +127,11 @@ impl RerunOutput {
             named: Default::default(),
             targets: targets.clone(),
             sensors,
-            rotate_ns: (config.output.rerun_rotate_hours * 3600e9) as i128,
+            rotate_ns: if rotate {
+                (config.output.rerun_rotate_hours * 3600e9) as i128
+            } else {
+                i128::MAX
+            },
             frf_views: !config.is_output_only(),
             oma_views: config.runs_oma(),
             field_names: config.model.stiffness_fields.iter().map(|f| f.name.clone()).collect(),
