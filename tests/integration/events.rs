@@ -213,10 +213,10 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
 #[test]
 fn issue_45_a_stiffness_drop_at_the_fifth_event_raises_the_alarm_there_and_not_before() {
     let dir = fresh_dir("events-drop");
-    let base = std::fs::read_to_string(CONFIG).unwrap() + "min_events = 3\n";
-    assert!(base
-        .trim_end()
-        .ends_with("outputs = [\"ch4\", \"ch7\", \"ch9\"]\nmin_events = 3"));
+    let outputs = "outputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
+    let text = std::fs::read_to_string(CONFIG).unwrap();
+    assert_eq!(text.matches(outputs).count(), 1, "the [events] outputs line");
+    let base = text.replace(outputs, &format!("{outputs}min_events = 3\n"));
     let config = dir.join("healthy.toml");
     std::fs::write(&config, &base).unwrap();
     // The bent's three bearings: ky 2.5e8 → 1.75e8 N/m.
