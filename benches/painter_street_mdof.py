@@ -12,6 +12,9 @@ chrystalchern/mdof, notebooks/uploads/CE89324), in time order:
   channels (`mdof.simulate.simulate`): mdof's forecast of this event;
 - `splinewatch predict` forecasts the same event with
   config/painter-street.toml at its (hand-set) values;
+- `splinewatch events` (one run over every record) forecasts it with the
+  physical model updated on the events before it (issue 45's honest
+  forecast);
 
 and both forecasts are scored the same way: NRMSE over the strong motion
 (5-95 % of the energy of the ground channels), median over channels 7, 9, 4.
@@ -65,8 +68,20 @@ def main():
         )
         events.append((sw["start"], path.name, inputs, outputs, dt, sw))
     events.sort()
+    chain = {}
+    out = subprocess.run(
+        [binary, "events", "--config", "config/painter-street.toml", "--json", *map(str, sorted(directory.glob("*.zip")))],
+        capture_output=True,
+        check=True,
+        text=True,
+    ).stdout
+    for line in out.splitlines():
+        d = json.loads(line)
+        if d["forecast"]:
+            scores = {c["sensor"]: c["nrmse_strong"] for c in d["forecast"]["channels"]}
+            chain[d["event"]] = statistics.median(scores[f"ch{c}"] for c in OUTPUTS)
     previous = None
-    print(f"{'start':20s} {'event':44s} {'mdof s':>7s} {'modes (Hz, damping %) by mdof SRIM':40s} {'mdof prev':>9s} {'sw':>6s}")
+    print(f"{'start':20s} {'event':44s} {'mdof s':>7s} {'modes (Hz, damping %) by mdof SRIM':40s} {'mdof prev':>9s} {'sw':>6s} {'events':>6s}")
     for start, name, inputs, outputs, dt, sw in events:
         t0 = time.perf_counter()
         realization = mdof.sysid(inputs, outputs, dt=dt, method="srim", **SETTINGS)
@@ -81,7 +96,8 @@ def main():
             forecast = statistics.median(nrmse(predicted[k, s0:s1], outputs[k, s0:s1]) for k in range(len(OUTPUTS)))
         ours = {c["sensor"]: c["nrmse_strong"] for c in sw["channels"]}
         sw_median = statistics.median(ours[f"ch{c}"] for c in OUTPUTS)
-        print(f"{start[:19]:20s} {name:44s} {seconds:7.2f} {text:40s} {forecast:9.3f} {sw_median:6.3f}")
+        updated = chain.get(name, float("nan"))
+        print(f"{start[:19]:20s} {name:44s} {seconds:7.2f} {text:40s} {forecast:9.3f} {sw_median:6.3f} {updated:6.3f}")
         previous = realization
 
 
