@@ -10,7 +10,7 @@
 //! missing ground channel, too short) is reported as skipped with its reason
 //! and the others go on.
 
-use super::ground::{align_event, identify_io, read_records, Event};
+use super::ground::{align_event, identify_io, read_records, recorded, Event};
 use crate::config::{ground_signals, load_config, Config};
 use crate::io::console::{errln, outln};
 use crate::io::modes_json::ModeEntry;
@@ -254,6 +254,22 @@ fn load(cfg: &Config, path: &Path) -> Loaded {
         .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let event = (|| {
         let blocks = read_records(cfg, &event_files(path)?)?;
+        // Every ground channel is needed: an event's inputs are not borrowed
+        // from other supports (as `predict` does) but the event is skipped.
+        let missing: Vec<&str> = (cfg.deck_sensor_count()..cfg.sensors.len())
+            .filter(|&i| !recorded(cfg, &blocks, i))
+            .map(|i| cfg.sensors[i].name.as_str())
+            .collect();
+        let all_ground = cfg.sensors.len() - cfg.deck_sensor_count();
+        if !missing.is_empty() && missing.len() < all_ground {
+            bail!(
+                "ground channel{} {} missing: the motion of {} support{} is not measured",
+                if missing.len() > 1 { "s" } else { "" },
+                missing.join(", "),
+                if missing.len() > 1 { "their" } else { "its" },
+                if missing.len() > 1 { "s" } else { "" }
+            );
+        }
         let mut model = GroundModel::new(cfg, &[])?;
         let event = align_event(cfg, &mut model, &blocks)?;
         if event.deck.is_empty() {

@@ -52,7 +52,7 @@ fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
 }
 
 /// Whether the record holds config sensor `i`'s acceleration.
-fn recorded(config: &Config, blocks: &[RecordedBlock], i: usize) -> bool {
+pub(super) fn recorded(config: &Config, blocks: &[RecordedBlock], i: usize) -> bool {
     let name = &config.sensors[i].name;
     blocks
         .iter()

@@ -1,7 +1,7 @@
 //! Issue 45: `splinewatch events` on the two committed Painter Street
 //! records (given out of time order) and on records that cannot be used (a
-//! dead channel, a clipped one, one too short, one without a ground channel,
-//! a missing file): the real events identified, forecast and updated in time
+//! dead channel, a clipped one, one too short, one without any ground
+//! channel, one without one of them, a missing file): the real events identified, forecast and updated in time
 //! order, the bad ones skipped with their reasons, the rest processed; the
 //! results file, the state and the figure written.
 
@@ -78,6 +78,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     });
     csv(&dir.join("short.csv"), 5.0, &CHANNELS, |_, _| {});
     csv(&dir.join("no-ground.csv"), 60.0, &CHANNELS[3..11], |_, _| {});
+    csv(&dir.join("no-ch20.csv"), 60.0, &CHANNELS[..16], |_, _| {});
     let (out, state, plot, rrd) = (
         path("events.mcap"),
         path("state.json"),
@@ -103,6 +104,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         &path("clipped.csv"),
         &path("short.csv"),
         &path("no-ground.csv"),
+        &path("no-ch20.csv"),
         &path("missing.zip"),
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -111,7 +113,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
-    assert_eq!(lines.len(), 7, "{lines:?}");
+    assert_eq!(lines.len(), 8, "{lines:?}");
     let used: Vec<&serde_json::Value> = lines.iter().filter(|l| l["skipped"].is_null()).collect();
     let names: Vec<&str> = used.iter().map(|l| l["event"].as_str().unwrap()).collect();
     assert_eq!(
@@ -127,6 +129,10 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         ("clipped.csv", "ch4: clipped (10 samples in a row"),
         ("short.csv", "500 samples (5.0 s), fewer than"),
         ("no-ground.csv", "none of the config's ground sensors"),
+        (
+            "no-ch20.csv",
+            "ground channel ch20 missing: the motion of its support is not measured",
+        ),
         ("missing.zip", "cannot read"),
     ] {
         let line = lines.iter().find(|l| l["event"] == reason.0).unwrap();
@@ -179,7 +185,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     assert_eq!(predicted["channels"], forecast["channels"]);
     // Every event on events/summary, the judged ones on events/verdict.
     let topics = results_by_topic(&std::fs::read(&out).unwrap());
-    assert_eq!(topics["events/summary"].len(), 7);
+    assert_eq!(topics["events/summary"].len(), 8);
     assert_eq!(topics["events/verdict"].len(), 2);
     // The state carries the chain: the last parameters (which `predict
     // --state` reads) and the two events' amplitudes.
