@@ -322,3 +322,59 @@ fn issue_45_a_stiffness_drop_at_the_fifth_event_raises_the_alarm_there_and_not_b
     assert!(median(&lines[3]) < 0.03, "{}", median(&lines[3]));
     assert!(median(&lines[4]) > 0.2, "{}", median(&lines[4]));
 }
+
+/// `--state` carries the chain across runs: the 2012 record in one run and
+/// the 2015 record in a second from its state give the 2015 event the same
+/// forecast, update and verdict as one run over both.
+#[test]
+fn issue_45_events_resume_from_their_state() {
+    let dir = fresh_dir("events-state");
+    let state = dir.join("state.json");
+    let run = |records: &[&str], state: Option<&Path>| -> Vec<serde_json::Value> {
+        let mut args = vec!["events", "--config", CONFIG, "--json"];
+        let state_text;
+        if let Some(s) = state {
+            state_text = s.to_str().unwrap().to_string();
+            args.extend(["--state", &state_text]);
+        }
+        let records: Vec<String> = records.iter().map(|r| record(r)).collect();
+        args.extend(records.iter().map(String::as_str));
+        let o = splinewatch(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout)
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect()
+    };
+    let (first, second) = (
+        "RioDell_14Sep2012_71842255_ce89324p.zip",
+        "ferndale_28jan2015_72387946_ce89324p.zip",
+    );
+    let together = run(&[first, second], None);
+    run(&[first], Some(&state));
+    let resumed = run(&[second], Some(&state));
+    let (a, b) = (&together[1], &resumed[0]);
+    let close = |x: &serde_json::Value, y: &serde_json::Value| {
+        let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+        (x - y).abs() <= 1e-9 * x.abs().max(y.abs())
+    };
+    for (p, q) in a["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b["parameters"].as_array().unwrap())
+    {
+        assert!(close(&p["value"], &q["value"]), "{p} vs {q}");
+    }
+    for (c, d) in a["forecast"]["channels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(b["forecast"]["channels"].as_array().unwrap())
+    {
+        assert!(close(&c["nrmse"], &d["nrmse"]), "{c} vs {d}");
+    }
+    assert_eq!(a["verdict"]["state"], b["verdict"]["state"]);
+    let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
+    assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 2);
+}
