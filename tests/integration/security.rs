@@ -373,7 +373,17 @@ fn secured_site(dir: &Path, transport: Transport) {
             .unwrap()
             .into_iter()
             .collect();
-        assert_eq!(replies.len(), 1, "ask {ask} of 50 got {} replies", replies.len());
+        if replies.len() != 1 {
+            // Issue 48: keep what the daemon saw for the missing reply.
+            let log = std::fs::read_to_string(dir.join("daemon.log")).unwrap_or_default();
+            let tail: Vec<&str> = log.lines().rev().take(80).collect();
+            let tail: Vec<&str> = tail.into_iter().rev().collect();
+            panic!(
+                "ask {ask} of 50 got {} replies; the daemon log's last lines:\n{}",
+                replies.len(),
+                tail.join("\n")
+            );
+        }
         let body: serde_json::Value =
             serde_json::from_slice(&replies[0].result().unwrap().payload().to_bytes()).unwrap();
         assert!(body["parameters"].is_array(), "ask {ask}: {body}");
