@@ -5,19 +5,10 @@
 //! order, the bad ones skipped with their reasons, the rest processed; the
 //! results file, the state and the figure written.
 
-use crate::common::{fresh_dir, results_by_topic, splinewatch};
+use crate::common::{fresh_dir, painter_street_record as record, results_by_topic, splinewatch};
 use std::path::Path;
 
 const CONFIG: &str = "config/painter-street.toml";
-
-fn record(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/painter-street")
-        .join(name)
-        .to_str()
-        .unwrap()
-        .to_string()
-}
 
 const CHANNELS: [u32; 17] = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 15, 16, 17, 18, 19, 20];
 

@@ -4,19 +4,10 @@
 //! record (the model against the bridge, beside the "deck = nearest ground"
 //! baseline); ground inputs in `check-config`; bad input.
 
-use crate::common::{fresh_dir, splinewatch};
+use crate::common::{fresh_dir, painter_street_record as record, splinewatch};
 use std::path::Path;
 
 const CONFIG: &str = "config/painter-street.toml";
-
-fn record(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/fixtures/painter-street")
-        .join(name)
-        .to_str()
-        .unwrap()
-        .to_string()
-}
 
 const EVENT_2015: &str = "ferndale_28jan2015_72387946_ce89324p.zip";
 

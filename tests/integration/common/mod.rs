@@ -202,3 +202,13 @@ pub fn loss_scenario(dir: &std::path::Path, start: f64, end: f64, update_seconds
     .unwrap();
     path
 }
+
+/// A committed Painter Street record (`tests/fixtures/painter-street`).
+pub fn painter_street_record(name: &str) -> String {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/painter-street")
+        .join(name)
+        .to_str()
+        .unwrap()
+        .to_string()
+}

@@ -317,18 +317,7 @@ impl<'a> UpdateProblem<'a> {
         let columns: Option<Vec<Vec<c64>>> = jacobian.then(|| {
             self.parameters
                 .iter()
-                .map(|par| match par.kind {
-                    ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => summed(
-                        par.kind
-                            .springs()
-                            .into_iter()
-                            .map(|(f, c)| frfs.dh_dkappa[self.model.flat_spring_index(f, c)].as_slice()),
-                    ),
-                    ParameterKind::Stiffness { field, coefficient } => {
-                        frfs.dh_dtheta[self.model.flat_field_index(field, coefficient)].clone()
-                    }
-                    ParameterKind::Damping { coefficient } => frfs.dh_dgamma[coefficient].clone(),
-                })
+                .map(|par| parameter_column(self.model, par.kind, &frfs.dh_dkappa, &frfs.dh_dtheta, &frfs.dh_dgamma))
                 .collect()
         });
         let columns: Option<Vec<&[c64]>> = columns.as_ref().map(|c| c.iter().map(Vec::as_slice).collect());
@@ -435,8 +424,30 @@ impl<'a> UpdateProblem<'a> {
     }
 }
 
+/// `∂h/∂p` of a parameter of kind `kind` from the sensitivities to every
+/// spring coefficient (`dkappa`, flat order), stiffness-field coefficient
+/// (`dtheta`) and damping coefficient (`dgamma`): a tied parameter's is the
+/// sum of its springs'.
+pub(super) fn parameter_column(
+    model: &FrfModel,
+    kind: ParameterKind,
+    dkappa: &[Vec<c64>],
+    dtheta: &[Vec<c64>],
+    dgamma: &[Vec<c64>],
+) -> Vec<c64> {
+    match kind {
+        ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => summed(
+            kind.springs()
+                .into_iter()
+                .map(|(f, c)| dkappa[model.flat_spring_index(f, c)].as_slice()),
+        ),
+        ParameterKind::Stiffness { field, coefficient } => dtheta[model.flat_field_index(field, coefficient)].clone(),
+        ParameterKind::Damping { coefficient } => dgamma[coefficient].clone(),
+    }
+}
+
 /// The element-wise sum of `columns` (the sensitivity of a tied parameter).
-pub(super) fn summed<'c>(mut columns: impl Iterator<Item = &'c [c64]>) -> Vec<c64> {
+fn summed<'c>(mut columns: impl Iterator<Item = &'c [c64]>) -> Vec<c64> {
     let mut out = columns.next().map(<[c64]>::to_vec).unwrap_or_default();
     for c in columns {
         for (o, v) in out.iter_mut().zip(c) {

@@ -25,10 +25,10 @@
 //!   averages per input). Its relative residual is the NRMSE of the deck's
 //!   response over the band (Parseval).
 
-use super::frf_residual::{relative_residuals, sqrt_weights, summed, weighted_residues, MeasuredSet};
+use super::frf_residual::{parameter_column, relative_residuals, sqrt_weights, weighted_residues, MeasuredSet};
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{
-    check_parameters, fields_at, model_at, IterationRecord, Parameter, ParameterKind, UpdateError, UpdateResult,
+    check_parameters, fields_at, modal_state_at, model_at, IterationRecord, Parameter, UpdateError, UpdateResult,
     UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
@@ -207,9 +207,7 @@ impl<'a> TransmissibilityProblem<'a> {
     }
 
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
-        let (kappa, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
-        let theta = fields_at(&self.parameters, self.model.field_coefficients(), p);
-        let state = self.model.modal_state_with_fields(&kappa, &theta, &damping)?;
+        let (state, _) = modal_state_at(self.model, &self.parameters, &self.kappa, &self.damping, p)?;
         self.evaluate_state(p, state, jacobian)
     }
 
@@ -255,20 +253,7 @@ impl<'a> TransmissibilityProblem<'a> {
             );
             self.parameters
                 .iter()
-                .map(|par| {
-                    self.combine(&match par.kind {
-                        ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => summed(
-                            par.kind
-                                .springs()
-                                .into_iter()
-                                .map(|(f, c)| s.dkappa[self.model.flat_spring_index(f, c)].as_slice()),
-                        ),
-                        ParameterKind::Stiffness { field, coefficient } => {
-                            s.dtheta[self.model.flat_field_index(field, coefficient)].clone()
-                        }
-                        ParameterKind::Damping { coefficient } => s.dgamma[coefficient].clone(),
-                    })
-                })
+                .map(|par| self.combine(&parameter_column(self.model, par.kind, &s.dkappa, &s.dtheta, &s.dgamma)))
                 .collect::<Vec<_>>()
         });
         let columns: Option<Vec<&[c64]>> = derivatives.as_ref().map(|d| d.iter().map(Vec::as_slice).collect());
