@@ -3,12 +3,12 @@
 
 use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
-use crate::io::recording::{read_recording, RecordedBlock, RecordingWriter};
+use crate::io::recording::RecordingWriter;
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
 use crate::outputs::rerun::prediction::PredictedChannel;
 use crate::pipeline::estimate::aligned_span;
+use crate::service::records::{align_event, identify_io, read_records, recorded, Event};
 use crate::studies::ground_motion::GroundModel;
-use crate::studies::import::{to_blocks, ImportOptions};
 use crate::studies::predict::{predict as predict_event, Prediction};
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -49,126 +49,6 @@ pub struct PredictArgs {
 fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     crate::studies::update::named_values(&text).with_context(|| path.display().to_string())
-}
-
-/// Whether the record holds config sensor `i`'s acceleration.
-pub(super) fn recorded(config: &Config, blocks: &[RecordedBlock], i: usize) -> bool {
-    let name = &config.sensors[i].name;
-    blocks
-        .iter()
-        .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
-}
-
-/// Every channel block of the records: V2 files and station zips are
-/// imported (together: one event), MCAP recordings read.
-pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBlock>> {
-    let limits = crate::pipeline::block_limits(config);
-    let prefix = config.topic_prefix();
-    let mut v2 = Vec::new();
-    let mut blocks = Vec::new();
-    for path in paths {
-        let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let extension = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or_default()
-            .to_ascii_lowercase();
-        if bytes.starts_with(b"\x89MCAP") {
-            let (mut read, rejected) =
-                read_recording(&bytes, &limits).with_context(|| format!("reading {}", path.display()))?;
-            for r in &rejected {
-                errln!("{}: skipped a message on {}: {}", path.display(), r.topic, r.error);
-            }
-            blocks.append(&mut read);
-        } else if crate::io::uff::looks_like_uff(&bytes) || matches!(extension.as_str(), "csv" | "tsv" | "txt") {
-            // A logger's file: read as `import` reads it (the file's own time
-            // and rate; `import` first when they must be given).
-            let series = if crate::io::uff::looks_like_uff(&bytes) {
-                crate::io::import::read_uff58(&bytes)
-            } else {
-                let text =
-                    std::str::from_utf8(&bytes).with_context(|| format!("{}: not UTF-8 text", path.display()))?;
-                crate::io::import::read_csv(text, &Default::default())
-            }
-            .with_context(|| path.display().to_string())?;
-            blocks.extend(imported_blocks(config, series, &prefix).with_context(|| {
-                format!(
-                    "{}: convert it with `splinewatch import` (--fs, --start) first",
-                    path.display()
-                )
-            })?);
-        } else {
-            v2.push((bytes, path.display().to_string()));
-        }
-    }
-    if !v2.is_empty() {
-        let series = crate::io::cosmos_v2::read_v2(&v2)?;
-        blocks.extend(imported_blocks(config, series, &prefix)?);
-    }
-    Ok(blocks)
-}
-
-/// A file's columns as the config's channel blocks (as `import` makes them).
-fn imported_blocks(
-    config: &Config,
-    series: crate::io::import::ImportedSeries,
-    prefix: &str,
-) -> Result<Vec<RecordedBlock>> {
-    let options = ImportOptions {
-        fs: None,
-        start_ns: None,
-        block_seconds: 10.0,
-        strict: false,
-        units: None,
-    };
-    let imported = to_blocks(config, series, &options)?;
-    Ok(imported
-        .blocks
-        .into_iter()
-        .map(|block| RecordedBlock {
-            topic: block.topic(prefix),
-            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
-            block,
-        })
-        .collect())
-}
-
-/// The record's channels on one grid: the ground sensors the model reads
-/// (all required) and the deck's acceleration sensors it holds.
-pub(super) struct Event {
-    pub(super) fs: f64,
-    pub(super) start_ns: i128,
-    /// Per config sensor, its samples when recorded.
-    pub(super) channels: Vec<Option<Vec<f64>>>,
-    pub(super) deck: Vec<usize>,
-}
-
-pub(super) fn align_event(config: &Config, model: &mut GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
-    let recorded = |i: usize| recorded(config, blocks, i);
-    for note in model.restrict_to(config, recorded) {
-        errln!("ground input {note}");
-    }
-    let ground = model.ground_sensors();
-    if ground.is_empty() {
-        bail!("the record holds none of the config's ground sensors: nothing drives the deck");
-    }
-    let deck: Vec<usize> = (0..config.deck_sensor_count()).filter(|&i| recorded(i)).collect();
-    let wanted: Vec<(usize, ChannelQuantity)> = ground
-        .iter()
-        .chain(&deck)
-        .map(|&i| (i, ChannelQuantity::Acceleration))
-        .collect();
-    let span = aligned_span(config, blocks, None, None, &wanted)?;
-    let mut channels = vec![None; config.sensors.len()];
-    for ((i, _), data) in wanted.iter().zip(span.channels) {
-        channels[*i] = Some(data);
-    }
-    Ok(Event {
-        fs: span.fs,
-        start_ns: span.start_ns,
-        channels,
-        deck,
-    })
 }
 
 pub fn predict(a: PredictArgs) -> Result<()> {
@@ -517,26 +397,6 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         settings.block_rows
     );
     super::identified::write_identified(&cfg, &report, &a.output)
-}
-
-/// SRIM of `inputs` to `outputs` with the config's `[oma]` settings and
-/// delete-one-batch (jackknife) uncertainty; returns the settings used.
-pub(super) fn identify_io(
-    cfg: &Config,
-    inputs: &[&[f64]],
-    outputs: &[&[f64]],
-    fs: f64,
-) -> Result<(
-    splinewatch_core::identification::oma::OmaResult,
-    splinewatch_core::identification::oma::OmaSettings,
-)> {
-    let (mut settings, _) = cfg.oma_settings()?;
-    // The exact replicates: their first-order continuation overstated SRIM's
-    // spreads up to fivefold on simulated records (the core's verification).
-    settings.uncertainty = splinewatch_core::identification::oma::UncertaintyMethod::Jackknife;
-    let result = splinewatch_core::identification::srim::identify_io(inputs, outputs, fs, &settings)
-        .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
-    Ok((result, settings))
 }
 
 /// The multi-input H1 estimates of `identify --transmissibility` as JSON:

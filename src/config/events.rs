@@ -12,6 +12,10 @@ pub struct EventsConfig {
     /// seconds pass without one (the daemon).
     #[serde(default = "default_gap_seconds")]
     pub gap_seconds: f64,
+    /// The daemon judges a burst longer than this as one event and starts
+    /// the next (a logger that never stops does not grow its memory).
+    #[serde(default = "default_max_seconds")]
+    pub max_seconds: f64,
     /// Earlier events an event's verdict needs (its amplitude bands are
     /// fitted on them); fewer: "insufficient history".
     #[serde(default = "default_min_events")]
@@ -47,6 +51,7 @@ impl Default for EventsConfig {
     fn default() -> Self {
         Self {
             gap_seconds: default_gap_seconds(),
+            max_seconds: default_max_seconds(),
             min_events: default_min_events(),
             false_alarm_rate: default_false_alarm_rate(),
             outputs: Vec::new(),
@@ -57,6 +62,10 @@ impl Default for EventsConfig {
 
 fn default_gap_seconds() -> f64 {
     10.0
+}
+
+fn default_max_seconds() -> f64 {
+    600.0
 }
 
 fn default_min_events() -> usize {
@@ -85,6 +94,15 @@ impl EventsConfig {
             return Err(err(
                 "events.gap_seconds",
                 format!("must be positive, got {}", self.gap_seconds),
+            ));
+        }
+        if !(self.max_seconds.is_finite() && self.max_seconds > self.gap_seconds) {
+            return Err(err(
+                "events.max_seconds",
+                format!(
+                    "must be longer than gap_seconds ({} s), got {}",
+                    self.gap_seconds, self.max_seconds
+                ),
             ));
         }
         if self.min_events < 2 {

@@ -87,9 +87,11 @@ pub struct Config {
     /// `[monitoring]`: compensation and alarms; absent: none.
     #[serde(default)]
     pub monitoring: Option<MonitoringConfig>,
-    /// `[events]`: earthquake records one event at a time (`events`).
-    #[serde(default)]
-    pub events: EventsConfig,
+    /// `[events]`: earthquake records one event at a time (`events`; the
+    /// daemon on a triggered logger when present). Read through
+    /// [`Config::events`].
+    #[serde(default, rename = "events")]
+    pub events_section: Option<EventsConfig>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -185,6 +187,19 @@ impl Config {
             .unwrap_or_else(|| std::path::Path::new("out").join(&self.structure.name))
     }
 
+    /// `[events]`, or its defaults when the section is absent.
+    pub fn events(&self) -> &EventsConfig {
+        static DEFAULTS: std::sync::LazyLock<EventsConfig> = std::sync::LazyLock::new(EventsConfig::default);
+        self.events_section.as_ref().unwrap_or(&DEFAULTS)
+    }
+
+    /// Where the daemon on a triggered logger (`[events]`) keeps its chain
+    /// next to the state file `state_file`: `events.json` beside it.
+    pub fn events_file(&self, state_file: &Path) -> Option<std::path::PathBuf> {
+        self.events_section.as_ref()?;
+        Some(state_file.with_file_name("events.json"))
+    }
+
     /// Where the monitor (`[monitoring]`) persists next to the state file
     /// `state_file`: `[monitoring] state_file`, or `monitoring.json` beside it.
     pub fn monitor_file(&self, state_file: &Path) -> Option<std::path::PathBuf> {
@@ -239,7 +254,7 @@ impl Config {
             .iter()
             .map(|s| s.name.as_str())
             .collect();
-        self.events.check(&deck)?;
+        self.events().check(&deck)?;
         for (key, hours) in [
             ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
             ("output.results_rotate_hours", self.output.results_rotate_hours),

@@ -47,6 +47,12 @@ pub struct Health {
     /// (`temperature_missing:<name>`, `temperature_stuck:<name>`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub temperature_flags: BTreeMap<String, u64>,
+    /// `[events]` (a triggered logger): bursts run through the event
+    /// chain, and those skipped (with the reason on `events/summary`).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub events_processed: u64,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub events_skipped: u64,
     /// `[monitoring.notify]`: command runs (retries included), notifications
     /// delivered, and given up or dropped.
     #[serde(default, skip_serializing_if = "is_zero")]

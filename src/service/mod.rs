@@ -5,8 +5,10 @@
 
 pub mod daemon;
 pub mod demo;
+pub mod events;
 pub mod export;
 pub mod fleet;
+pub mod records;
 pub mod replay;
 pub mod rescore;
 pub mod soak;

@@ -86,7 +86,7 @@ pub fn update_on_event(
         let [lo, hi] = config.frf.band;
         settings.lines.band = Some((lo, hi));
     }
-    let measured = match config.events.inputs {
+    let measured = match config.events().inputs {
         EventInputs::Spectra => record_spectra(signals)?,
         EventInputs::Combined | EventInputs::Separate => transmissibilities(config, signals)?,
     };
@@ -205,7 +205,7 @@ fn transmissibilities(config: &Config, signals: &EventSignals<'_>) -> Result<Mea
     let mean: Vec<f64> = (0..samples)
         .map(|t| inputs.iter().map(|x| x[t]).sum::<f64>() / inputs.len() as f64)
         .collect();
-    let combine_all = config.events.inputs == EventInputs::Combined && inputs.len() > 1;
+    let combine_all = config.events().inputs == EventInputs::Combined && inputs.len() > 1;
     let input_views: Vec<&[f64]> = if combine_all {
         vec![mean.as_slice()]
     } else {

@@ -369,3 +369,83 @@ fn issue_45_events_resume_from_their_state() {
     let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
     assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 2);
 }
+
+/// Item 5: the daemon on a triggered logger. Two real records are
+/// published over zenoh (loopback) as the station's logger would send them,
+/// one burst per trigger, years apart; the daemon cuts them into two events
+/// (the silence between them) and runs the chain on each: its
+/// `events/summary` equals `events --json` on the same records (the second
+/// event closed by the shutdown, not lost), the chain is kept beside the
+/// state and the health counts both events.
+#[test]
+fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_command_does() {
+    let dir = fresh_dir("events-daemon");
+    let records = [
+        "RioDell_14Sep2012_71842255_ce89324p.zip",
+        "ferndale_28jan2015_72387946_ce89324p.zip",
+    ];
+    let cfg = splinewatch::config::load_config(Path::new(CONFIG)).unwrap();
+    assert!(cfg.events_section.is_some(), "the bundled config has [events]");
+    let mut blocks = Vec::new();
+    for r in records {
+        let path = std::path::PathBuf::from(record(r));
+        blocks.push(splinewatch::service::records::read_records(&cfg, &[path]).unwrap());
+    }
+    let summary = splinewatch::service::demo::run_with_source(cfg, &dir, 0.0, usize::MAX, move |_, publisher| {
+        let mut sent = 0;
+        for burst in &blocks {
+            for b in burst {
+                publisher.publish(&b.block)?;
+                sent += 1;
+                // Under the ingest queue's bound (a logger's pace, not a flood).
+                std::thread::sleep(std::time::Duration::from_millis(3));
+            }
+        }
+        Ok(sent)
+    })
+    .unwrap();
+    assert!(summary.messages > 0);
+    // Results rotate by measurement time: the two events, years apart, are in two files.
+    let mut results: std::collections::BTreeMap<String, Vec<serde_json::Value>> = Default::default();
+    for file in ["results.mcap", "results-1.mcap"] {
+        for (topic, mut messages) in results_by_topic(&std::fs::read(dir.join(file)).unwrap()) {
+            results.entry(topic).or_default().append(&mut messages);
+        }
+    }
+    let live = &results["events/summary"];
+    assert_eq!(live.len(), 2, "{live:?}");
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        CONFIG,
+        "--json",
+        &record(records[0]),
+        &record(records[1]),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let offline: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    for (a, b) in live.iter().zip(&offline) {
+        assert!(a["skipped"].is_null(), "{a}");
+        assert_eq!(a["event"], a["start"], "a burst is named by its start");
+        for key in [
+            "start",
+            "pga_ground",
+            "peak_deck",
+            "modes",
+            "parameters",
+            "forecast",
+            "verdict",
+        ] {
+            assert_eq!(a[key], b[key], "{key}");
+        }
+    }
+    assert!(live[0]["forecast"].is_null() && !live[1]["forecast"].is_null());
+    let chain: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("events.json")).unwrap()).unwrap();
+    assert_eq!(chain["amplitudes"].as_array().unwrap().len(), 2);
+    let health = results["health"].last().unwrap();
+    assert_eq!(health["events_processed"], 2, "{health}");
+    assert_eq!(results["events/verdict"].len(), 2);
+}

@@ -17,11 +17,17 @@
 //!   finish, writes the last health message, finalises the MCAP file and
 //!   saves the state.
 //!
-//! The run loop is a `select!` over four events, each handled by a named
+//! - with `[events]` (a triggered logger), blocks are also collected into
+//!   bursts; each closed burst runs the event chain on a blocking worker,
+//!   one at a time, 8 waiting at most (`events.rs`).
+//!
+//! The run loop is a `select!` over six events, each handled by a named
 //! stage of `Daemon` (`stages.rs`): a message (`on_message`), a finished update
-//! (`on_outcome`), the health tick (`on_health_tick`) and
-//! shutdown (`shut_down`).
+//! (`on_outcome`), a finished event (`on_event`), the health tick
+//! (`on_health_tick`), the event tick (`on_event_tick`: a logger silent long
+//! enough closes its burst) and shutdown (`shut_down`).
 
+mod events;
 mod link;
 mod stages;
 mod worker;
@@ -75,6 +81,8 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     tracing::info!(message = "splinewatch running", prefix = %config.topic_prefix(), results = %options.results.display());
     notify_systemd(&[sd_notify::NotifyState::Ready]);
     let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
+    let mut event_timer = tokio::time::interval(std::time::Duration::from_secs(1));
+    let events = daemon.events.is_some();
     tokio::pin!(shutdown);
     loop {
         tokio::select! {
@@ -84,7 +92,10 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
                 daemon.on_message(message, &link);
             }
             outcome = daemon.worker.finished(), if daemon.worker.is_busy() => daemon.on_outcome(outcome, &link)?,
+            finished = async { daemon.events.as_mut().expect("guarded").finished().await },
+                if daemon.events.as_ref().is_some_and(|e| e.is_busy()) => daemon.on_event(finished, &link)?,
             _ = health_timer.tick() => daemon.on_health_tick(&link),
+            _ = event_timer.tick(), if events => daemon.on_event_tick(&link),
         }
     }
     daemon.shut_down(link).await

@@ -1,6 +1,7 @@
 //! The daemon's stages: what happens on a message, a finished update, the
 //! health tick and shutdown. Everything here runs on the main task.
 
+use super::events::EventWorker;
 use super::link::{Latest, RawMessage, ZenohLink};
 use super::worker::UpdateWorker;
 use super::{notify_systemd, RunOptions, RunSummary};
@@ -41,6 +42,8 @@ pub(super) struct Daemon {
     said_waiting: bool,
     /// `[monitoring.notify]`: the owner's command.
     notifier: Option<Notifier>,
+    /// `[events]`: the triggered logger's bursts and their event chain.
+    pub(super) events: Option<EventWorker>,
 }
 
 /// Why a window's update was dropped when the update queue overflowed.
@@ -94,6 +97,7 @@ impl Daemon {
             logged_rejections: BTreeMap::new(),
             said_waiting: false,
             notifier: Notifier::for_config(config).context("starting the notify thread")?,
+            events: EventWorker::start(config, options.state.as_deref())?,
         })
     }
 
@@ -147,6 +151,13 @@ impl Daemon {
                 1000,
                 "raw-input recording",
             );
+        }
+        let dropped = match self.events.as_mut() {
+            Some(e) => e.push(&block, std::time::Instant::now()),
+            None => Vec::new(),
+        };
+        for line in dropped {
+            self.report_event(line, link);
         }
         let (windows, jobs) = self.pipeline.ingest(block);
         for w in &windows {
@@ -224,6 +235,11 @@ impl Daemon {
         }
         for job in &waiting {
             self.skip_update(job, "update skipped: the daemon stopped before it ran", &link);
+        }
+        if let Some(e) = self.events.as_mut() {
+            for line in e.drain().await.context("the event worker panicked")? {
+                self.report_event(line, &link);
+            }
         }
         // Blocks still held for the stream's reference (fewer than two per
         // channel arrived) are decided on and counted; too little data for an
@@ -396,6 +412,81 @@ impl Daemon {
 }
 
 impl Daemon {
+    /// The running event finished: its chain goes back to the worker (which
+    /// saves it and starts the next burst) and its line everywhere.
+    pub(super) fn on_event(
+        &mut self,
+        finished: Result<(crate::service::events::Chain, crate::service::events::EventLine), JoinError>,
+        link: &ZenohLink,
+    ) -> Result<()> {
+        let (chain, line) = finished.context("the event worker panicked")?;
+        if let Some(e) = self.events.as_mut() {
+            e.done(chain);
+        }
+        self.report_event(line, link);
+        Ok(())
+    }
+
+    /// Every second with `[events]`: a burst after which the logger has
+    /// been silent long enough is an event.
+    pub(super) fn on_event_tick(&mut self, link: &ZenohLink) {
+        let dropped = match self.events.as_mut() {
+            Some(e) => e.tick(std::time::Instant::now()),
+            None => return,
+        };
+        for line in dropped {
+            self.report_event(line, link);
+        }
+    }
+
+    /// An event's `events/summary` and `events/verdict` (results file and
+    /// zenoh), the owner's notification, Rerun, the log and the counters.
+    fn report_event(&mut self, line: crate::service::events::EventLine, link: &ZenohLink) {
+        use crate::service::events::{log_rerun, messages, status_message};
+        let health = self.pipeline.health_mut();
+        if line.skipped.is_some() {
+            health.events_skipped += 1;
+        } else {
+            health.events_processed += 1;
+        }
+        match messages(&line) {
+            Ok((time, bodies)) => {
+                for (topic, json) in bodies {
+                    self.results.write_json(topic, time, &json);
+                    link.publish_json(topic, json);
+                }
+                self.last_time = self.last_time.max(time);
+            }
+            Err(e) => {
+                tracing::error!(message = "cannot serialise an event", event = %line.event, error = %format!("{e:#}"))
+            }
+        }
+        self.results.flush();
+        let count = self.events.as_ref().map_or(0, |e| e.count);
+        if let (Some(n), Some(v)) = (self.notifier.as_mut(), &line.verdict) {
+            let status = status_message(count, &line, v);
+            if let Ok(json) = serde_json::to_vec(&status) {
+                n.observe(&status, &json);
+            }
+        }
+        if let Some(v) = self.viewer.as_mut() {
+            count_output_error(
+                log_rerun(v, &line),
+                &mut self.pipeline.health_mut().rerun_errors,
+                100,
+                "Rerun",
+            );
+        }
+        match (&line.skipped, &line.verdict) {
+            (Some(reason), _) => tracing::warn!(message = "event skipped", event = %line.event, reason = %reason),
+            (None, Some(v)) if v.state == "alarm" => {
+                tracing::error!(message = "ALARM: the event changed the structure", event = %line.event, outside = ?v.outside)
+            }
+            (None, v) => {
+                tracing::info!(message = "event judged", event = %line.event, pga_ground = ?line.pga_ground, modes = line.modes.len(), verdict = v.as_ref().map_or("-", |v| v.state.as_str()))
+            }
+        }
+    }
     /// Sends a scored update's monitoring messages (results, zenoh, the
     /// `monitoring/latest` reply, the log, Rerun) and saves the monitor.
     fn report_monitoring(&mut self, m: &MonitoringOutcome, time_ns: i128, link: &ZenohLink) -> Result<()> {

@@ -1,0 +1,494 @@
+//! Earthquake by earthquake (issue 45): the chain every event goes
+//! through, shared by `splinewatch events` (one input file or folder per
+//! event) and the daemon on a triggered logger (one burst of channel blocks
+//! per event, [`burst`]). In time order each event is checked, identified
+//! (SRIM), forecast by the model updated on the events before it
+//! (`predict`'s figures), updated on its record (warm-started from the
+//! previous event), and judged against the bands the earlier events give
+//! at its amplitude ([`splinewatch_core::monitoring::amplitude`]).
+//!
+//! An event that cannot be used (unreadable, a dead or clipped channel, a
+//! missing ground channel, too short) is reported as skipped with its reason
+//! and the others go on.
+//! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
+
+pub mod burst;
+
+use super::records::{align_event, identify_io, recorded, Event};
+use crate::config::{ground_signals, Config};
+use crate::io::modes_json::ModeEntry;
+use crate::io::monitoring_json::{NamedValue, StatusMessage};
+use crate::io::recording::RecordedBlock;
+use crate::io::wire::format_timestamp;
+use crate::pipeline::oma::OmaReport;
+use crate::studies::event_update::{update_on_event, EventSignals};
+use crate::studies::ground_motion::GroundModel;
+use crate::studies::predict::{predict as predict_event, PredictionReport};
+use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
+use splinewatch_core::monitoring::amplitude::{judge, FeatureBand, Verdict};
+use splinewatch_core::updating::ParameterEstimate;
+use std::path::Path;
+
+/// The topics an event writes under the results prefix.
+pub const SUMMARY_TOPIC: &str = "events/summary";
+pub const VERDICT_TOPIC: &str = "events/verdict";
+
+/// One event's line of `events --json` (and its `events/summary` message).
+#[derive(Debug, Clone, Serialize)]
+pub struct EventLine {
+    pub event: String,
+    pub start: Option<String>,
+    pub pga_ground: Option<f64>,
+    pub peak_deck: Option<f64>,
+    pub modes: Vec<ModeEntry>,
+    pub parameters: Vec<ParameterEstimate>,
+    pub forecast: Option<PredictionReport>,
+    pub verdict: Option<VerdictLine>,
+    pub skipped: Option<String>,
+    /// The update's relative residual and iterations; ground inputs combined.
+    pub update: Option<UpdateLine>,
+    /// What a stage could not do without skipping the event (an
+    /// identification that found no mode).
+    pub notes: Vec<String>,
+}
+
+impl EventLine {
+    pub fn new(event: String) -> Self {
+        Self {
+            event,
+            start: None,
+            pga_ground: None,
+            peak_deck: None,
+            modes: Vec::new(),
+            parameters: Vec::new(),
+            forecast: None,
+            verdict: None,
+            skipped: None,
+            update: None,
+            notes: Vec::new(),
+        }
+    }
+
+    /// An event recorded at `start_ns` and not processed, for `reason`.
+    pub fn skipped(event: String, start_ns: i128, reason: String) -> Self {
+        Self {
+            start: Some(format_timestamp(start_ns)),
+            skipped: Some(reason),
+            ..Self::new(event)
+        }
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct UpdateLine {
+    /// The updated model's dominant mode over the fitted channels (Hz).
+    pub model_mode_hz: Option<f64>,
+    pub relative_residual: f64,
+    pub iterations: usize,
+    pub converged: bool,
+    pub combined_inputs: Vec<String>,
+}
+
+/// The verdict: `state` ("insufficient history", "normal", "alarm"), the
+/// features outside their bands and every band.
+#[derive(Debug, Clone, Serialize)]
+pub struct VerdictLine {
+    pub state: String,
+    pub outside: Vec<String>,
+    pub bands: Vec<BandLine>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct BandLine {
+    pub feature: String,
+    pub value: Option<f64>,
+    pub band: Option<FeatureBand>,
+}
+
+/// What carries from one event to the next (and across runs, `--state`).
+#[derive(Debug, Default, Serialize, Deserialize)]
+pub struct Chain {
+    /// The last update's values (`predict --state` reads this list).
+    parameters: Vec<Named>,
+    /// The modes tracked from event to event: the first event's identified frequencies.
+    tracked_hz: Vec<f64>,
+    /// log10 of each earlier (not alarmed) event's ground peak, m/s².
+    amplitudes: Vec<f64>,
+    /// Their features, in the order of [`feature_names`].
+    features: Vec<Vec<Option<f64>>>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct Named {
+    name: String,
+    value: f64,
+}
+
+impl Chain {
+    /// The chain saved at `path` (`--state`, the daemon's events file), or
+    /// a new one when there is no file yet.
+    pub fn resume(path: Option<&Path>) -> Result<Self> {
+        match path {
+            Some(p) if p.exists() => {
+                let text = std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?;
+                serde_json::from_str(&text).with_context(|| format!("{}: not an events state file", p.display()))
+            }
+            _ => Ok(Self::default()),
+        }
+    }
+
+    pub fn save(&self, path: &Path) -> Result<()> {
+        std::fs::write(path, serde_json::to_string_pretty(self)?)
+            .with_context(|| format!("cannot write {}", path.display()))
+    }
+
+    /// Events judged so far (not alarmed): the verdict's history.
+    pub fn history_len(&self) -> usize {
+        self.amplitudes.len()
+    }
+
+    fn named(&self) -> Vec<(String, f64)> {
+        self.parameters.iter().map(|p| (p.name.clone(), p.value)).collect()
+    }
+}
+
+/// An event read and put on one grid, or why it could not be.
+pub struct Loaded {
+    pub name: String,
+    event: Result<(Event, GroundModel)>,
+}
+
+impl Loaded {
+    /// The record's start (ns since the epoch); `None` when it could not be read.
+    pub fn start_ns(&self) -> Option<i128> {
+        self.event.as_ref().ok().map(|(e, _)| e.start_ns)
+    }
+}
+
+/// The event `name` of `blocks` (or the error reading them) checked and
+/// aligned: every ground channel, the deck's, no dead or clipped channel,
+/// long enough.
+pub fn load(cfg: &Config, name: String, blocks: Result<Vec<RecordedBlock>>) -> Loaded {
+    let event = (|| {
+        let blocks = blocks?;
+        // Every ground channel is needed: an event's inputs are not borrowed
+        // from other supports (as `predict` does) but the event is skipped.
+        let missing: Vec<&str> = (cfg.deck_sensor_count()..cfg.sensors.len())
+            .filter(|&i| !recorded(cfg, &blocks, i))
+            .map(|i| cfg.sensors[i].name.as_str())
+            .collect();
+        let all_ground = cfg.sensors.len() - cfg.deck_sensor_count();
+        if !missing.is_empty() && missing.len() < all_ground {
+            bail!(
+                "ground channel{} {} missing: the motion of {} support{} is not measured",
+                if missing.len() > 1 { "s" } else { "" },
+                missing.join(", "),
+                if missing.len() > 1 { "their" } else { "its" },
+                if missing.len() > 1 { "s" } else { "" }
+            );
+        }
+        let mut model = GroundModel::new(cfg, &[])?;
+        let event = align_event(cfg, &mut model, &blocks)?;
+        if event.deck.is_empty() {
+            bail!("the record holds none of the config's deck sensors");
+        }
+        check_channels(cfg, &event, &model)?;
+        Ok((event, model))
+    })();
+    Loaded { name, event }
+}
+
+/// Samples of a clipped channel: this many in a row at its extreme value.
+const CLIPPED_RUN: usize = 5;
+
+/// A dead channel (constant), a clipped one (a run at its extreme) or a
+/// record too short for the identification and the Welch segments.
+fn check_channels(cfg: &Config, event: &Event, model: &GroundModel) -> Result<()> {
+    let (oma, _) = cfg.oma_settings()?;
+    let (welch, _) = cfg.welch_settings(event.fs)?;
+    for i in model.ground_sensors().into_iter().chain(event.deck.iter().copied()) {
+        let x = event.channels[i].as_deref().unwrap_or_default();
+        let name = &cfg.sensors[i].name;
+        let needed = (2 * welch.segment).max(4 * oma.block_rows * oma.batches.max(1));
+        if x.len() < needed {
+            bail!(
+                "{name}: {} samples ({:.1} s), fewer than the {needed} the identification and two Welch segments need",
+                x.len(),
+                x.len() as f64 / event.fs
+            );
+        }
+        let (lo, hi) = x
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+        if hi - lo <= 1e-12 * hi.abs().max(lo.abs()).max(1e-300) {
+            bail!("{name}: a dead channel (every sample {lo})");
+        }
+        for extreme in [lo, hi] {
+            let run = x.split(|v| *v != extreme).map(<[f64]>::len).max().unwrap_or(0);
+            if run >= CLIPPED_RUN {
+                bail!("{name}: clipped ({run} samples in a row at its extreme {extreme})");
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The chain on one event; a failing stage skips the event with its reason.
+pub fn process(cfg: &Config, loaded: Loaded, chain: &mut Chain) -> EventLine {
+    let mut line = EventLine::new(loaded.name);
+    let (event, model) = match loaded.event {
+        Ok(e) => e,
+        Err(e) => {
+            line.skipped = Some(format!("{e:#}"));
+            return line;
+        }
+    };
+    line.start = Some(format_timestamp(event.start_ns));
+    if let Err(e) = run_chain(cfg, &event, &model, chain, &mut line) {
+        line.skipped = Some(format!("{e:#}"));
+    }
+    line
+}
+
+fn run_chain(cfg: &Config, event: &Event, model: &GroundModel, chain: &mut Chain, line: &mut EventLine) -> Result<()> {
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let ground = model.ground_sensors();
+    let pga = ground
+        .iter()
+        .flat_map(|&i| channel(i))
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    line.pga_ground = Some(pga);
+    line.peak_deck = Some(
+        event
+            .deck
+            .iter()
+            .flat_map(|&i| channel(i))
+            .fold(0.0f64, |a, v| a.max(v.abs())),
+    );
+    // Identification: every recorded ground channel to every deck channel.
+    let inputs: Vec<&[f64]> = ground.iter().map(|&i| channel(i)).collect();
+    let outputs: Vec<&[f64]> = event.deck.iter().map(|&i| channel(i)).collect();
+    // A record whose identification finds no mode is still forecast and
+    // updated (neither needs modes): said in `notes`.
+    match identify_io(cfg, &inputs, &outputs, event.fs) {
+        Ok((result, _)) => {
+            let report = OmaReport {
+                start_ns: event.start_ns,
+                samples: outputs[0].len(),
+                fs: event.fs,
+                sensors: event.deck.iter().map(|&i| cfg.sensors[i].name.clone()).collect(),
+                result,
+                spectrum: None,
+            };
+            line.modes = report.modes_file().modes;
+        }
+        Err(e) => line.notes.push(format!("{e:#}")),
+    }
+    // The forecast: the model of the events before this one.
+    if !chain.parameters.is_empty() {
+        let mut forecaster = GroundModel::new(cfg, &chain.named()).context("the forecast's model")?;
+        forecaster.plan = model.plan.clone();
+        let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
+        prediction.report.start = line.start.clone();
+        line.forecast = Some(prediction.report);
+    }
+    update_event(cfg, event, model, chain, line)?;
+    judge_event(cfg, chain, line, pga);
+    Ok(())
+}
+
+/// The update on the event's transmissibilities, warm-started from the
+/// previous event's values.
+fn update_event(
+    cfg: &Config,
+    event: &Event,
+    model: &GroundModel,
+    chain: &mut Chain,
+    line: &mut EventLine,
+) -> Result<()> {
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let signals = ground_signals(&model.plan, channel);
+    let fitted: Vec<usize> = event
+        .deck
+        .iter()
+        .copied()
+        .filter(|&i| cfg.events().outputs.is_empty() || cfg.events().outputs.contains(&cfg.sensors[i].name))
+        .collect();
+    let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
+    let record = EventSignals {
+        plan: &model.plan,
+        inputs: &signals,
+        deck: &fitted,
+        outputs: &deck_series,
+        fs: event.fs,
+    };
+    let updated = update_on_event(cfg, &record, &chain.named(), &mut |_| {})?;
+    line.update = Some(UpdateLine {
+        model_mode_hz: updated.dominant_hz,
+        relative_residual: updated.result.relative_residual,
+        iterations: updated.result.iterations.len().saturating_sub(1),
+        converged: updated.result.converged,
+        combined_inputs: updated.combined,
+    });
+    line.parameters = updated.result.parameters.clone();
+    chain.parameters = line
+        .parameters
+        .iter()
+        .map(|p| Named {
+            name: p.name.clone(),
+            value: p.value,
+        })
+        .collect();
+    Ok(())
+}
+
+/// The features judged: each tracked mode's identified frequency, then
+/// each updated parameter's log10 value (`None`: not identified).
+fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<Option<f64>>) {
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    for (k, &f) in chain.tracked_hz.iter().enumerate() {
+        names.push(format!("mode{}_hz", k + 1));
+        let nearest = line
+            .modes
+            .iter()
+            .map(|m| m.frequency_hz)
+            .min_by(|a, b| (a - f).abs().total_cmp(&(b - f).abs()))
+            .filter(|m| (m - f).abs() <= max_gap * f);
+        values.push(nearest);
+    }
+    for p in &line.parameters {
+        names.push(format!("log10_{}", p.name));
+        values.push(p.std.map(|_| p.value.log10()));
+    }
+    (names, values)
+}
+
+fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, pga: f64) {
+    if chain.tracked_hz.is_empty() {
+        chain.tracked_hz = line.modes.iter().map(|m| m.frequency_hz).collect();
+    }
+    let (names, values) = features(chain, line, cfg.updating.max_frequency_gap);
+    let x = pga.max(1e-12).log10();
+    let as_nan = |v: &[Option<f64>]| v.iter().map(|x| x.unwrap_or(f64::NAN)).collect::<Vec<_>>();
+    let history: Vec<Vec<f64>> = chain.features.iter().map(|r| as_nan(r)).collect();
+    let now = as_nan(&values);
+    let (verdict, bands) = judge(
+        &chain.amplitudes,
+        &history,
+        x,
+        &now,
+        cfg.events().false_alarm_rate,
+        cfg.events().min_events,
+    );
+    let outside = match &verdict {
+        Verdict::Alarm { features } => features.iter().map(|&f| names[f].clone()).collect(),
+        _ => Vec::new(),
+    };
+    line.verdict = Some(VerdictLine {
+        state: verdict.name().to_string(),
+        outside,
+        bands: names
+            .into_iter()
+            .zip(values.iter().zip(bands))
+            .map(|(feature, (value, band))| BandLine {
+                feature,
+                value: *value,
+                band,
+            })
+            .collect(),
+    });
+    // An alarmed event does not teach the bands: a lasting change keeps
+    // alarming until the owner starts a new history.
+    if !matches!(verdict, Verdict::Alarm { .. }) {
+        chain.amplitudes.push(x);
+        chain.features.push(values);
+    }
+}
+
+/// An event's results: the time they are filed at and each topic suffix
+/// with its JSON body.
+pub type EventMessages = (i128, Vec<(&'static str, Vec<u8>)>);
+
+/// `<prefix>/events/summary` (the `--json` line) and, when judged,
+/// `<prefix>/events/verdict`, at the event's start.
+pub fn messages(line: &EventLine) -> Result<EventMessages> {
+    let time = line
+        .start
+        .as_deref()
+        .and_then(crate::io::wire::parse_timestamp)
+        .unwrap_or(0);
+    let mut out = vec![(SUMMARY_TOPIC, serde_json::to_vec(line)?)];
+    if let Some(v) = &line.verdict {
+        out.push((VERDICT_TOPIC, serde_json::to_vec(v)?));
+    }
+    Ok((time, out))
+}
+
+pub fn status_message(k: u64, line: &EventLine, v: &VerdictLine) -> StatusMessage {
+    StatusMessage {
+        window: k,
+        time: line.start.clone().unwrap_or_default(),
+        state: if v.state == "alarm" {
+            "alarm".into()
+        } else {
+            v.state.replace(' ', "_")
+        },
+        t2: None,
+        t2_limit: None,
+        mewma: None,
+        mewma_limit: None,
+        temperature_c: None,
+        residuals: Vec::new(),
+        temperatures: Default::default(),
+        features: v
+            .bands
+            .iter()
+            .map(|b| NamedValue {
+                name: b.feature.clone(),
+                value: b.value.unwrap_or(f64::NAN),
+            })
+            .collect(),
+        flags: v.outside.iter().map(|f| format!("outside band: {f}")).collect(),
+        exceedances: v.outside.len(),
+        scored_by: Some("amplitude_band".into()),
+    }
+}
+
+/// The median over the scored deck channels of the forecast's and the
+/// baseline's strong-motion NRMSE.
+pub fn forecast_medians(line: &EventLine) -> Option<(f64, f64)> {
+    let median = |mut v: Vec<f64>| -> f64 {
+        v.retain(|x| x.is_finite());
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    line.forecast.as_ref().map(|f| {
+        (
+            median(f.channels.iter().map(|c| c.nrmse_strong).collect()),
+            median(f.baseline.iter().map(|c| c.score.nrmse_strong).collect()),
+        )
+    })
+}
+
+pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine) -> Result<()> {
+    let (Some(start), Some(pga), Some(peak)) = (line.start.as_deref(), line.pga_ground, line.peak_deck) else {
+        return Ok(());
+    };
+    let Some(time_ns) = crate::io::wire::parse_timestamp(start) else {
+        return Ok(());
+    };
+    let parameters: Vec<(String, f64)> = line.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
+    let identified: Vec<f64> = line.modes.iter().map(|m| m.frequency_hz).collect();
+    r.log_event(&crate::outputs::rerun::events::EventPoint {
+        time_ns,
+        pga_ground: pga,
+        peak_deck: peak,
+        parameters: &parameters,
+        identified_hz: &identified,
+        model_mode_hz: line.update.as_ref().and_then(|u| u.model_mode_hz),
+        forecast: forecast_medians(line),
+        verdict: line.verdict.as_ref().map(|v| v.state.as_str()),
+    })
+}
