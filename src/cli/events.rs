@@ -10,10 +10,12 @@
 //! missing ground channel, too short) is reported as skipped with its reason
 //! and the others go on.
 
-use crate::config::load_config;
+use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
+use crate::io::wire::format_timestamp;
 use crate::outputs::notify::Notifier;
 use crate::outputs::results::ResultsWriter;
+use crate::service::events::burst::split;
 use crate::service::events::{
     forecast_medians, load, log_rerun, messages, process, status_message, Chain, EventLine, Loaded,
 };
@@ -27,7 +29,8 @@ pub struct EventsArgs {
     /// Configuration file (TOML) with ground sensors (`support = "<group>"`); `[events]` sets the verdict.
     #[arg(long)]
     pub config: PathBuf,
-    /// One event each: a station's .zip, a folder of its .V2 files, or a raw-input MCAP recording.
+    /// One event each: a station's .zip, a folder of its .V2 files, a logger's CSV/UFF, or a raw-input MCAP
+    /// recording (a triggered logger's: each burst, silences longer than `[events] gap_seconds` apart, one event).
     #[arg(required = true, num_args = 1..)]
     pub input: Vec<PathBuf>,
     /// Write every event's results as MCAP (`<prefix>/events/*` topics).
@@ -53,16 +56,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
         bail!("config: sensors: events need ground sensors ([[sensors]] with support = \"<group>\")");
     }
     let mut chain = Chain::resume(a.state.as_deref())?;
-    let mut loaded: Vec<Loaded> = a
-        .input
-        .iter()
-        .map(|p| {
-            let name = p
-                .file_name()
-                .map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned());
-            load(&cfg, name, event_files(p).and_then(|files| read_records(&cfg, &files)))
-        })
-        .collect();
+    let mut loaded: Vec<Loaded> = a.input.iter().flat_map(|p| load_input(&cfg, p)).collect();
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
     let mut writer = a
@@ -151,6 +145,36 @@ fn mode_points(lines: &[EventLine]) -> Vec<super::events_plot::ModePoint> {
         }
     }
     points
+}
+
+/// The events of one input: its record, or each burst of it when it holds
+/// several (a triggered logger's raw-input recording: silences longer than
+/// `[events] gap_seconds`), named `<file>@<start>`.
+fn load_input(cfg: &Config, path: &Path) -> Vec<Loaded> {
+    let name = path
+        .file_name()
+        .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let blocks = match event_files(path).and_then(|files| read_records(cfg, &files)) {
+        Ok(blocks) => blocks,
+        Err(e) => return vec![load(cfg, name, Err(e))],
+    };
+    let bursts = split(blocks, cfg.events().gap_seconds, cfg.events().max_seconds);
+    if bursts.is_empty() {
+        // Said by the check: the record holds none of the config's channels.
+        return vec![load(cfg, name, Ok(Vec::new()))];
+    }
+    let several = bursts.len() > 1;
+    bursts
+        .into_iter()
+        .map(|b| {
+            let event = if several {
+                format!("{name}@{}", format_timestamp(b.start_ns))
+            } else {
+                name.clone()
+            };
+            load(cfg, event, Ok(b.blocks))
+        })
+        .collect()
 }
 
 /// The files of one event: a folder's files (sorted), or the path itself.

@@ -376,7 +376,8 @@ fn issue_45_events_resume_from_their_state() {
 /// (the silence between them) and runs the chain on each: its
 /// `events/summary` equals `events --json` on the same records (the second
 /// event closed by the shutdown, not lost), the chain is kept beside the
-/// state and the health counts both events.
+/// state and the health counts both events. The logger's raw input recorded
+/// in one MCAP file and given to `events` is cut into the same two events.
 #[test]
 fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_command_does() {
     let dir = fresh_dir("events-daemon");
@@ -387,10 +388,22 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
     let cfg = splinewatch::config::load_config(Path::new(CONFIG)).unwrap();
     assert!(cfg.events_section.is_some(), "the bundled config has [events]");
     let mut blocks = Vec::new();
+    // The logger's raw input recorded in one file (as `[output.raw]` does).
+    let recording = dir.join("triggered.mcap");
+    let mut writer = splinewatch::io::recording::RecordingWriter::new(
+        std::fs::File::create(&recording).unwrap(),
+        splinewatch::io::wire::Encoding::Cbor,
+    )
+    .unwrap();
     for r in records {
         let path = std::path::PathBuf::from(record(r));
-        blocks.push(splinewatch::service::records::read_records(&cfg, &[path]).unwrap());
+        let burst = splinewatch::service::records::read_records(&cfg, &[path]).unwrap();
+        for b in &burst {
+            writer.write_block(&cfg.topic_prefix(), &b.block).unwrap();
+        }
+        blocks.push(burst);
     }
+    writer.finish().unwrap();
     let summary = splinewatch::service::demo::run_with_source(cfg, &dir, 0.0, usize::MAX, move |_, publisher| {
         let mut sent = 0;
         for burst in &blocks {
@@ -443,6 +456,20 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
         }
     }
     assert!(live[0]["forecast"].is_null() && !live[1]["forecast"].is_null());
+    // The recording of the logger's raw input, given to `events`, is cut the same way.
+    let o = splinewatch(&["events", "--config", CONFIG, "--json", recording.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let recorded: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(recorded.len(), 2);
+    for (a, b) in recorded.iter().zip(&offline) {
+        assert_eq!(a["event"], format!("triggered.mcap@{}", b["start"].as_str().unwrap()));
+        for key in ["start", "pga_ground", "modes", "parameters", "forecast", "verdict"] {
+            assert_eq!(a[key], b[key], "{key}");
+        }
+    }
     let chain: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("events.json")).unwrap()).unwrap();
     assert_eq!(chain["amplitudes"].as_array().unwrap().len(), 2);
     let health = results["health"].last().unwrap();

@@ -103,6 +103,19 @@ impl Bursts {
     }
 }
 
+/// A recording's blocks cut into bursts by measurement time alone (a
+/// triggered logger's raw-input recording, `splinewatch events`): sorted by
+/// start, split where a silence exceeds `gap_seconds` or a burst would
+/// exceed `max_seconds`.
+pub fn split(mut blocks: Vec<RecordedBlock>, gap_seconds: f64, max_seconds: f64) -> Vec<Burst> {
+    blocks.sort_by_key(|b| b.block.start_ns);
+    let now = Instant::now();
+    let mut bursts = Bursts::new(gap_seconds, max_seconds);
+    let mut out: Vec<Burst> = blocks.into_iter().filter_map(|b| bursts.push(b, now)).collect();
+    out.extend(bursts.take());
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
