@@ -272,3 +272,104 @@ fn issue_45_identify_finds_the_modes_of_a_recording_with_a_measured_input() {
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// The peer (issue 45): SRIM at mdof's settings (order 12, horizon 190,
+/// the transverse channels 3, 17, 20 → 7, 9, 4) on the two committed real
+/// records, against `tests/fixtures/painter-street/mdof_srim.json` (made by
+/// `make_mdof_fixture.py` there): mdof's realization, the same realization
+/// recomputed by the script with mdof's estimator (equal to mdof's: the
+/// script is mdof's method) and with splinewatch's (a block-Toeplitz
+/// correlation of the mean-removed record, `R_uu` inverted on its range).
+/// splinewatch's core must give the latter's poles: frequencies within
+/// 1e-4 relative, damping within 1e-4 (LAPACK against faer on a realization
+/// whose `R_uu` spans 14 decades). Its distance to mdof's own poles is the
+/// two estimator choices', measured in the fixture (README: up to 10 % at
+/// this low order on these records).
+#[test]
+fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator() {
+    use splinewatch::io::wire::ChannelQuantity;
+    use splinewatch_core::identification::oma::SubspaceModel;
+    use splinewatch_core::identification::srim::InformationMatrix;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let fixture: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join("tests/fixtures/painter-street/mdof_srim.json")).unwrap())
+            .unwrap();
+    let cfg = splinewatch::config::load_config(&root.join("config/painter-street.toml")).unwrap();
+    let names = |key: &str| -> Vec<usize> {
+        fixture[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|n| cfg.sensors.iter().position(|s| s.name == n.as_str().unwrap()).unwrap())
+            .collect()
+    };
+    let (inputs, outputs) = (names("inputs"), names("outputs"));
+    let order = fixture["order"].as_u64().unwrap() as usize;
+    let horizon = fixture["horizon"].as_u64().unwrap() as usize;
+    let modes = |list: &serde_json::Value| -> Vec<(f64, f64)> {
+        list.as_array()
+            .unwrap()
+            .iter()
+            .map(|m| (m["frequency_hz"].as_f64().unwrap(), m["damping"].as_f64().unwrap()))
+            .collect()
+    };
+    for peer in fixture["records"].as_array().unwrap() {
+        let (mdof, reproduced) = (modes(&peer["modes"]), modes(&peer["mdof_reproduced"]));
+        assert_eq!(mdof.len(), reproduced.len());
+        for (a, b) in mdof.iter().zip(&reproduced) {
+            assert!(
+                (a.0 - b.0).abs() <= 1e-6 * a.0 && (a.1 - b.1).abs() <= 1e-6,
+                "{a:?} vs {b:?}"
+            );
+        }
+        let path = std::path::PathBuf::from(record(peer["record"].as_str().unwrap()));
+        let blocks = splinewatch::service::records::read_records(&cfg, &[path]).unwrap();
+        let wanted: Vec<(usize, ChannelQuantity)> = inputs
+            .iter()
+            .chain(&outputs)
+            .map(|&i| (i, ChannelQuantity::Acceleration))
+            .collect();
+        let span = splinewatch::pipeline::estimate::aligned_span(&cfg, &blocks, None, None, &wanted).unwrap();
+        // The same record: quakeio keeps one sample more of the 2015 record
+        // (8511) than the span every channel of ours covers (8510).
+        assert_eq!(span.fs, peer["fs"].as_f64().unwrap());
+        assert!(
+            (span.samples as i64 - peer["samples"].as_i64().unwrap()).abs() <= 1,
+            "{}",
+            span.samples
+        );
+        let views: Vec<&[f64]> = span.channels.iter().map(Vec::as_slice).collect();
+        let (u, y) = views.split_at(inputs.len());
+        let information = InformationMatrix::new(y, u, horizon, 1).unwrap();
+        let model = SubspaceModel::from_symmetric(&information.matrix(None).unwrap(), y.len(), order, span.fs).unwrap();
+        let mut ours: Vec<(f64, f64)> = model
+            .poles(order)
+            .unwrap()
+            .iter()
+            .map(|p| (p.frequency_hz, p.damping_ratio))
+            .collect();
+        ours.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let expected = modes(&peer["toeplitz_truncated"]);
+        assert_eq!(ours.len(), expected.len(), "{ours:?} vs {expected:?}");
+        for (a, b) in ours.iter().zip(&expected) {
+            assert!(
+                (a.0 - b.0).abs() <= 1e-4 * b.0 && (a.1 - b.1).abs() <= 1e-4,
+                "{}: {a:?} vs {b:?}",
+                peer["record"]
+            );
+        }
+        let worst = mdof
+            .iter()
+            .map(|m| {
+                ours.iter()
+                    .map(|o| (o.0 - m.0).abs() / m.0)
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(0.0, f64::max);
+        eprintln!(
+            "{}: ours {ours:.3?}; mdof {mdof:.3?}; farthest of mdof's from ours {:.1} %",
+            peer["record"],
+            100.0 * worst
+        );
+    }
+}
