@@ -1,7 +1,7 @@
 //! `replay`, `run`, `demo`, `soak`, `recover`: the monitoring runs and
 //! their files.
 
-use crate::config::load_config;
+use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
 use crate::io::files;
 use crate::io::recording::RecordingSource;
@@ -11,7 +11,7 @@ use crate::outputs::results::ResultsWriter;
 use crate::outputs::state;
 use crate::service::{daemon, demo, fleet, replay, soak};
 use crate::studies;
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::io::Write;
 use std::path::PathBuf;
@@ -41,6 +41,12 @@ pub struct ReplayArgs {
     /// default three-stage pipeline, slower; for comparison).
     #[arg(long)]
     pub single_thread: bool,
+    /// Serve Prometheus metrics at `[metrics] listen` (default 127.0.0.1:9464) while replaying.
+    #[arg(long)]
+    pub metrics: bool,
+    /// With `--metrics`: keep serving this many seconds after the replay ends (a scraper's last look).
+    #[arg(long, default_value_t = 0.0, requires = "metrics")]
+    pub metrics_linger: f64,
 }
 
 #[derive(Args)]
@@ -288,9 +294,27 @@ fn write_monitor_summary(statuses: &[crate::io::monitoring_json::StatusMessage],
     }
 }
 
+/// `replay --metrics`: the endpoint at `[metrics] listen` (or its default).
+fn replay_metrics(cfg: &Config, a: &ReplayArgs) -> Result<Option<crate::outputs::metrics::Metrics>> {
+    if !(0.0..=86_400.0).contains(&a.metrics_linger) {
+        bail!(
+            "--metrics-linger: {} is not a number of seconds in [0, 86400]",
+            a.metrics_linger
+        );
+    }
+    if !a.metrics {
+        return Ok(None);
+    }
+    let listen = cfg.metrics.clone().unwrap_or_default().listen;
+    crate::outputs::metrics::Metrics::serve(&listen, &cfg.structure.name).map(Some)
+}
+
 pub fn replay(a: ReplayArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let out = a.out.unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
+    let out = a
+        .out
+        .clone()
+        .unwrap_or_else(|| cfg.output_dir().join("replay-results.mcap"));
     // Read as the replay goes: memory bounded whatever the files' size.
     let recordings = a
         .inputs
@@ -308,6 +332,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     } else {
         Some(RerunOutput::open(&cfg, &targets)?)
     };
+    let metrics = replay_metrics(&cfg, &a)?;
     let progress = ReplayProgress::new();
     let t0 = std::time::Instant::now();
     let options = replay::ReplayOptions {
@@ -316,6 +341,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         state_path: a.state.as_deref(),
         keep_latest: 1,
         pipelined: !a.single_thread,
+        metrics: metrics.as_ref(),
     };
     let summary = replay::replay_sources(&cfg, recordings, &mut writer, options, &mut |p, note| {
         progress.show(p, note)
@@ -324,6 +350,16 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     writer.finish()?;
     if let Some(v) = viewer {
         v.finish()?;
+    }
+    if let Some(m) = &metrics {
+        if a.metrics_linger > 0.0 {
+            errln!(
+                "serving the final metrics at http://{}/metrics for {} s",
+                m.address(),
+                a.metrics_linger
+            );
+            std::thread::sleep(std::time::Duration::from_secs_f64(a.metrics_linger));
+        }
     }
     let seconds = t0.elapsed().as_secs_f64();
     // Measurement time covered by the closed windows (they may overlap).

@@ -9,6 +9,7 @@
 mod events;
 mod frf;
 mod ground;
+mod metrics;
 mod model;
 mod monitoring;
 mod oma;
@@ -23,6 +24,7 @@ mod zenoh;
 pub use events::{EventInputs, EventsConfig};
 pub use frf::FrfConfig;
 pub use ground::{ground_signals, restrict_plan, GroundInputPlan};
+pub use metrics::MetricsConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,
     ModesChoice, QuantityList, SensorConfig, SolverConfig, SpringConfig, StiffnessFieldConfig, SupportConfig,
@@ -92,6 +94,9 @@ pub struct Config {
     /// [`Config::events`].
     #[serde(default, rename = "events")]
     pub events_section: Option<EventsConfig>,
+    /// `[metrics]`: Prometheus text at `/metrics` (daemon, `replay --metrics`); absent: none.
+    #[serde(default)]
+    pub metrics: Option<MetricsConfig>,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -255,6 +260,9 @@ impl Config {
             .map(|s| s.name.as_str())
             .collect();
         self.events().check(&deck)?;
+        if let Some(m) = &self.metrics {
+            m.check()?;
+        }
         for (key, hours) in [
             ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),
             ("output.results_rotate_hours", self.output.results_rotate_hours),

@@ -2,6 +2,7 @@
 //! and a live viewer), the raw-input recorder and zenoh publishing.
 //! Room: below the services. May import: `pipeline`, `config`, `io`, the core crate.
 
+pub mod metrics;
 pub mod notify;
 pub mod publisher;
 pub mod raw_recorder;

@@ -66,6 +66,8 @@ pub struct UpdateJob {
     /// The model at the last accepted parameters, if known: the solve starts
     /// from it instead of re-evaluating the model there.
     pub(super) previous: Option<Arc<ModelPoint>>,
+    /// When the window's last block was taken (the ingest-to-result latency).
+    pub created: std::time::Instant,
 }
 
 /// What an update produced.
@@ -76,6 +78,10 @@ pub struct UpdateOutcome {
     pub measured: Measured,
     pub environment: Environment,
     pub result: Result<UpdateReport, String>,
+    /// When the job was made (its window's last block taken) and how long
+    /// its run took: the metrics' latency and duration.
+    pub created: std::time::Instant,
+    pub duration: std::time::Duration,
     /// The model at the identified parameters, taken by [`Pipeline::apply`]
     /// for the next warm start (kept outcomes do not hold it: ~2 MB).
     pub(super) point: Option<Arc<ModelPoint>>,
@@ -151,6 +157,7 @@ pub struct UpdateReport {
 
 impl UpdateJob {
     pub fn run(self) -> UpdateOutcome {
+        let started = std::time::Instant::now();
         let computed = match &self.measured {
             Measured::Frf(frf) => self.compute_frf(frf).map(|(r, p)| (r, Some(Arc::new(p)), None)),
             Measured::Modes(modes) => self.compute_modal(modes).map(|(r, s)| (r, None, Some(Arc::new(s)))),
@@ -168,6 +175,8 @@ impl UpdateJob {
             measured: self.measured,
             environment: self.environment,
             result,
+            created: self.created,
+            duration: started.elapsed(),
             point,
             state,
         }

@@ -326,6 +326,7 @@ impl Pipeline {
             settings: self.settings.clone(),
             start: self.updater.start_values(),
             previous: self.updater.last_point(),
+            created: std::time::Instant::now(),
         }
     }
 

@@ -22,6 +22,10 @@ pub struct Health {
     pub windows_skipped: BTreeMap<String, u64>,
     pub update_runs: u64,
     pub update_failures: u64,
+    /// Update jobs never run, by reason (`queue_full`: dropped from the full
+    /// update queue; `shutdown`: still waiting when the daemon stopped).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub updates_skipped: BTreeMap<String, u64>,
     pub queue_drops: u64,
     /// Raw-input recording errors (write failures, full disk); the block
     /// is still analysed.

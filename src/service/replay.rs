@@ -24,6 +24,7 @@ use crate::config::Config;
 use crate::io::monitoring_json::StatusMessage;
 use crate::io::recording::{McapMessage, RecordingSource};
 use crate::io::wire::{self, Encoding, Limits};
+use crate::outputs::metrics::Metrics;
 use crate::outputs::notify::Notifier;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsWriter};
@@ -72,6 +73,9 @@ pub struct ReplayOptions<'a> {
     /// `false` runs every stage in line on the calling thread, with the
     /// same results.
     pub pipelined: bool,
+    /// `[metrics]` (`replay --metrics`): the endpoint the update stage
+    /// keeps current, as the daemon does.
+    pub metrics: Option<&'a Metrics>,
 }
 
 impl Default for ReplayOptions<'_> {
@@ -82,6 +86,7 @@ impl Default for ReplayOptions<'_> {
             state_path: None,
             keep_latest: 64,
             pipelined: true,
+            metrics: None,
         }
     }
 }
@@ -136,6 +141,7 @@ pub fn replay_sources<W: Write + Seek>(
         state_path,
         keep_latest,
         pipelined,
+        metrics,
     } = options;
     let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
     if viewer.is_some() {
@@ -171,6 +177,7 @@ pub fn replay_sources<W: Write + Seek>(
             last_time: 0,
             summary: ReplaySummary::default(),
             notifier: Notifier::for_config(config).context("starting the notify thread")?,
+            metrics,
         };
         let replayed = run_stages(scope, pipeline, limits, messages, pipelined, &mut sink);
         sink.viewer = Viewer::Off; // the Rerun stage's queue ends
@@ -235,6 +242,9 @@ fn run_stages<'scope, W: Write + Seek>(
         }
         sink.out
             .write("health", last_time, &results::health_message(last_time, &health))?;
+        if let Some(m) = sink.metrics {
+            m.record_health(last_time, &health, end.messages);
+        }
         sink.viewer.log(|| ViewerEvent::Health(last_time, Box::new(health)))?;
     }
     let mut summary = std::mem::take(&mut sink.summary);
@@ -487,6 +497,7 @@ struct Outputs<'a, W: Write + Seek> {
     /// `[monitoring.notify]`: replays run the owner's command too (a
     /// notification chain can be tried offline).
     notifier: Option<Notifier>,
+    metrics: Option<&'a Metrics>,
 }
 
 impl<W: Write + Seek> Outputs<'_, W> {
@@ -603,6 +614,13 @@ impl<W: Write + Seek> Outputs<'_, W> {
             outcome.time_ns,
             &results::health_message(outcome.time_ns, &health),
         )?;
+        if let Some(m) = self.metrics {
+            if let Some(status) = scored.as_ref().map(|m| &m.status) {
+                m.record_monitoring(status);
+            }
+            m.record_update(&outcome, updates.accepted());
+            m.record_health(outcome.time_ns, &health, self.summary.messages);
+        }
         self.viewer.log(|| ViewerEvent::Update(Box::new(outcome.clone())))?;
         self.viewer
             .log(|| ViewerEvent::Health(outcome.time_ns, Box::new(health)))?;

@@ -13,6 +13,7 @@ mod import;
 mod live;
 mod matrices;
 mod measurements;
+mod metrics;
 mod monitoring;
 mod notify;
 mod oma;

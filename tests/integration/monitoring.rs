@@ -561,7 +561,7 @@ fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
         .unwrap();
     let results = std::fs::read(out.join("results.mcap")).unwrap();
     let (mut updated, mut skipped) = (Vec::new(), Vec::new());
-    let (mut queue_drops, mut overflow) = (0, 0);
+    let (mut queue_drops, mut overflow, mut health) = (0, 0, serde_json::Value::Null);
     for m in mcap::MessageStream::new(&results).unwrap() {
         let m = m.unwrap();
         let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
@@ -582,7 +582,10 @@ fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
                 overflow += usize::from(reason.contains("the update queue holds 16"));
                 skipped.push(v["window"].as_u64().unwrap());
             }
-            "health" => queue_drops = v["queue_drops"].as_u64().unwrap(),
+            "health" => {
+                queue_drops = v["queue_drops"].as_u64().unwrap();
+                health = v;
+            }
             _ => {}
         }
     }
@@ -596,6 +599,15 @@ fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
     assert_eq!(live.updates.len(), updated.len());
     assert!(!updated.is_empty());
     assert_eq!(queue_drops, overflow as u64, "the overflow skips are the counted drops");
+    // Issue 48: updates add up as messages do, in the last health message.
+    let count = |reason: &str| health["updates_skipped"][reason].as_u64().unwrap_or(0);
+    assert_eq!(count("queue_full"), overflow as u64, "{health}");
+    assert_eq!(count("shutdown"), (skipped.len() - overflow) as u64, "{health}");
+    assert_eq!(
+        health["update_runs"].as_u64().unwrap() + count("queue_full") + count("shutdown"),
+        24,
+        "{health}"
+    );
 }
 
 /// The bundled monitoring config whose notify command (issue 33) appends

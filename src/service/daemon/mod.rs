@@ -94,7 +94,10 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             outcome = daemon.worker.finished(), if daemon.worker.is_busy() => daemon.on_outcome(outcome, &link)?,
             finished = async { daemon.events.as_mut().expect("guarded").finished().await },
                 if daemon.events.as_ref().is_some_and(|e| e.is_busy()) => daemon.on_event(finished, &link)?,
-            _ = health_timer.tick() => daemon.on_health_tick(&link),
+            _ = health_timer.tick() => {
+                daemon.ingest_depth = messages.len();
+                daemon.on_health_tick(&link);
+            }
             _ = event_timer.tick(), if events => daemon.on_event_tick(&link),
         }
     }

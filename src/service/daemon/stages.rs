@@ -8,6 +8,7 @@ use super::{notify_systemd, RunOptions, RunSummary};
 use crate::config::Config;
 use crate::io::wire::{self, ChannelBlock, Encoding, Limits};
 use crate::io::{console, files};
+use crate::outputs::metrics::Metrics;
 use crate::outputs::notify::Notifier;
 use crate::outputs::raw_recorder::RawRecorder;
 use crate::outputs::rerun::RerunOutput;
@@ -44,6 +45,10 @@ pub(super) struct Daemon {
     notifier: Option<Notifier>,
     /// `[events]`: the triggered logger's bursts and their event chain.
     pub(super) events: Option<EventWorker>,
+    /// `[metrics]`: the Prometheus endpoint.
+    metrics: Option<Metrics>,
+    /// Raw messages waiting in the ingest queue at the last health tick.
+    pub(super) ingest_depth: usize,
 }
 
 /// Why a window's update was dropped when the update queue overflowed.
@@ -98,6 +103,12 @@ impl Daemon {
             said_waiting: false,
             notifier: Notifier::for_config(config).context("starting the notify thread")?,
             events: EventWorker::start(config, options.state.as_deref())?,
+            metrics: config
+                .metrics
+                .as_ref()
+                .map(|m| Metrics::serve(&m.listen, &config.structure.name))
+                .transpose()?,
+            ingest_depth: 0,
         })
     }
 
@@ -120,7 +131,7 @@ impl Daemon {
             if let Some(job) = self.pipeline.ingest_frf(&msg.payload, now) {
                 tracing::info!(message = "complete FRF set received", window = job.window);
                 if let Some(dropped) = self.worker.submit(job) {
-                    self.skip_update(&dropped, QUEUE_FULL, link);
+                    self.skip_update(&dropped, ("queue_full", QUEUE_FULL), link);
                 }
             }
             return;
@@ -165,7 +176,7 @@ impl Daemon {
         }
         for job in jobs {
             if let Some(dropped) = self.worker.submit(job) {
-                self.skip_update(&dropped, QUEUE_FULL, link);
+                self.skip_update(&dropped, ("queue_full", QUEUE_FULL), link);
             }
         }
     }
@@ -234,7 +245,11 @@ impl Daemon {
             self.summary.keep(outcome, self.keep_updates);
         }
         for job in &waiting {
-            self.skip_update(job, "update skipped: the daemon stopped before it ran", &link);
+            self.skip_update(
+                job,
+                ("shutdown", "update skipped: the daemon stopped before it ran"),
+                &link,
+            );
         }
         if let Some(e) = self.events.as_mut() {
             for line in e.drain().await.context("the event worker panicked")? {
@@ -280,6 +295,14 @@ impl Daemon {
     /// returned (JSON) for publishing.
     fn record_health(&mut self, time: i128) -> Vec<u8> {
         let h = serde_json::to_vec(&results::health_message(time, self.pipeline.health())).unwrap_or_default();
+        if let Some(m) = &self.metrics {
+            m.record_health(time, self.pipeline.health(), self.summary.messages);
+            m.update(|s| {
+                s.update_queue_depth = self.worker.waiting();
+                s.update_running = self.worker.is_busy();
+                s.ingest_queue_depth = self.ingest_depth;
+            });
+        }
         self.results.write_json("health", time, &h);
         if let Some(v) = self.viewer.as_mut() {
             let r = v.log_health(time, self.pipeline.health());
@@ -318,8 +341,14 @@ impl Daemon {
     /// `updating/failures` (`"skipped": true`) in the results file and on
     /// zenoh, and a warning (the drop itself is counted in
     /// `health.queue_drops` by the worker).
-    fn skip_update(&mut self, job: &UpdateJob, reason: &str, link: &ZenohLink) {
+    fn skip_update(&mut self, job: &UpdateJob, (key, reason): (&str, &str), link: &ZenohLink) {
         tracing::warn!(message = "update skipped", window = job.window, reason);
+        *self
+            .pipeline
+            .health_mut()
+            .updates_skipped
+            .entry(key.to_string())
+            .or_default() += 1;
         self.last_time = self.last_time.max(job.time_ns);
         let time = wire::format_timestamp(job.time_ns);
         let message = serde_json::json!({"time": time, "window": job.window, "error": reason, "skipped": true});
@@ -357,6 +386,7 @@ impl Daemon {
     fn handle_outcome(&mut self, outcome: &mut UpdateOutcome, link: &ZenohLink) -> Result<()> {
         let scored = self.pipeline.apply(outcome);
         let outcome = &*outcome;
+
         // Pre-computed FRF windows close no sample window: their updates
         // date the health messages (else a daemon fed only FRF sets never
         // wrote one).
@@ -406,6 +436,10 @@ impl Daemon {
                 100,
                 "Rerun",
             );
+        }
+        // The latency ends here: every output of the update is written.
+        if let Some(m) = &self.metrics {
+            m.record_update(outcome, self.pipeline.accepted());
         }
         Ok(())
     }
@@ -490,6 +524,9 @@ impl Daemon {
     /// Sends a scored update's monitoring messages (results, zenoh, the
     /// `monitoring/latest` reply, the log, Rerun) and saves the monitor.
     fn report_monitoring(&mut self, m: &MonitoringOutcome, time_ns: i128, link: &ZenohLink) -> Result<()> {
+        if let Some(metrics) = &self.metrics {
+            metrics.record_monitoring(&m.status);
+        }
         for (suffix, msg) in results::monitoring_messages(m) {
             let json = self.send(link, suffix, time_ns, &msg);
             if suffix == "monitoring/status" {

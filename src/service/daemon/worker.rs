@@ -25,6 +25,11 @@ impl UpdateWorker {
         self.running.is_some()
     }
 
+    /// Jobs waiting behind the running one.
+    pub(super) fn waiting(&self) -> usize {
+        self.waiting.len()
+    }
+
     /// The running job's outcome; call only when [`Self::is_busy`], and
     /// then [`Self::next`] once it resolved.
     pub(super) async fn finished(&mut self) -> Result<UpdateOutcome, JoinError> {

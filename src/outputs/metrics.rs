@@ -1,0 +1,508 @@
+//! `[metrics]`: Prometheus/OpenMetrics text at `/metrics` for the
+//! operator's dashboard (issue 48), served by the daemon (and by `replay
+//! --metrics`) from a thread of its own (`tiny_http`), encoded by
+//! `prometheus-client`, never by hand.
+//!
+//! The counters mirror the health message: the daemon hands its [`Health`]
+//! to [`Metrics::record_health`] whenever it writes one (every 10 s and at
+//! shutdown), so a scrape's counters are exactly the latest health
+//! message's (`splinewatch_health_time_seconds` says which) and never go
+//! down while the process runs. Gauges and histograms are set as things
+//! happen: queue depths, the last update's residual and time, the
+//! monitoring state and standardised residuals, the update duration and the
+//! ingest-to-result latency. Every series carries the `bridge` label (the
+//! config's `[bridge] name`).
+
+use crate::io::monitoring_json::StatusMessage;
+use crate::pipeline::{AcceptedParameters, Health, UpdateOutcome};
+use anyhow::{Context, Result};
+use prometheus_client::collector::Collector;
+use prometheus_client::encoding::{DescriptorEncoder, EncodeMetric};
+use prometheus_client::metrics::counter::ConstCounter;
+use prometheus_client::metrics::gauge::ConstGauge;
+use prometheus_client::metrics::histogram::{exponential_buckets, Histogram};
+use prometheus_client::registry::{Registry, Unit};
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, SystemTime};
+
+/// The OpenMetrics text content type `prometheus-client` encodes.
+pub const CONTENT_TYPE: &str = "application/openmetrics-text; version=1.0.0; charset=utf-8";
+
+/// What the collector reads at each scrape.
+#[derive(Debug, Default, Clone)]
+pub struct Snapshot {
+    /// The latest health message's counters and its measurement time.
+    pub health: Health,
+    pub health_time_ns: Option<i128>,
+    /// Messages taken off the ingest queue (the daemon's `RunSummary::messages`).
+    pub messages_received: u64,
+    /// Update jobs waiting behind the running one, and whether one runs.
+    pub update_queue_depth: usize,
+    pub update_running: bool,
+    /// Raw messages waiting in the ingest queue.
+    pub ingest_queue_depth: usize,
+    /// Wall time of the last update result, its outcome and relative residual.
+    pub last_update: Option<SystemTime>,
+    pub last_relative_residual: Option<f64>,
+    /// The last accepted parameters (name, value).
+    pub parameters: Vec<(String, f64)>,
+    /// `[monitoring]`: the latest status and each feature's standardised
+    /// (compensated) residual.
+    pub monitoring_state: Option<String>,
+    pub residuals: Vec<(String, f64)>,
+}
+
+/// The monitoring states a status can be in (one-hot gauge).
+const MONITORING_STATES: [&str; 4] = ["training", "normal", "alarm", "outside_training_range"];
+
+#[derive(Debug)]
+struct SnapshotCollector(Arc<Mutex<Snapshot>>);
+
+/// The metrics of one process: the snapshot the daemon fills, the
+/// histograms it observes into, and the server thread.
+pub struct Metrics {
+    snapshot: Arc<Mutex<Snapshot>>,
+    pub update_duration: Histogram,
+    pub result_latency: Histogram,
+    address: SocketAddr,
+    stop: Arc<AtomicBool>,
+    server: Option<JoinHandle<()>>,
+}
+
+impl Metrics {
+    /// Binds `listen` and serves `/metrics` until dropped.
+    pub fn serve(listen: &str, bridge: &str) -> Result<Self> {
+        let server = tiny_http::Server::http(listen)
+            .map_err(|e| anyhow::anyhow!("{e}"))
+            .with_context(|| format!("metrics: cannot listen on {listen}"))?;
+        let address = server
+            .server_addr()
+            .to_ip()
+            .context("metrics: the listener has no IP address")?;
+        let snapshot = Arc::new(Mutex::new(Snapshot::default()));
+        // Update durations from 10 ms to ~80 s; latencies likewise.
+        let update_duration = Histogram::new(exponential_buckets(0.01, 2.0, 14));
+        let result_latency = Histogram::new(exponential_buckets(0.01, 2.0, 14));
+        let mut registry = Registry::with_prefix_and_labels(
+            "splinewatch",
+            [(
+                std::borrow::Cow::Borrowed("bridge"),
+                std::borrow::Cow::Owned(bridge.to_string()),
+            )]
+            .into_iter(),
+        );
+        registry.register_with_unit(
+            "update_duration",
+            "Wall time of one model update (the solve and its outputs' preparation)",
+            Unit::Seconds,
+            update_duration.clone(),
+        );
+        registry.register_with_unit(
+            "result_latency",
+            "From the moment the window's last block was taken to its update's results written",
+            Unit::Seconds,
+            result_latency.clone(),
+        );
+        registry.register_collector(Box::new(SnapshotCollector(Arc::clone(&snapshot))));
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread_stop = Arc::clone(&stop);
+        let handle = std::thread::Builder::new()
+            .name("metrics".into())
+            .spawn(move || serve_loop(&server, &registry, &thread_stop))
+            .context("metrics: cannot start the server thread")?;
+        tracing::info!(message = "serving metrics", url = %format!("http://{address}/metrics"));
+        Ok(Self {
+            snapshot,
+            update_duration,
+            result_latency,
+            address,
+            stop,
+            server: Some(handle),
+        })
+    }
+
+    /// Where it listens (the port chosen when `listen` gave port 0).
+    pub fn address(&self) -> SocketAddr {
+        self.address
+    }
+
+    /// Changes the snapshot (under its lock, held only for `change`).
+    pub fn update(&self, change: impl FnOnce(&mut Snapshot)) {
+        let mut snapshot = self.snapshot.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        change(&mut snapshot);
+    }
+
+    /// The counters of the health message just written at `time_ns`.
+    pub fn record_health(&self, time_ns: i128, health: &Health, messages_received: u64) {
+        self.update(|s| {
+            s.health = health.clone();
+            s.health_time_ns = Some(time_ns);
+            s.messages_received = messages_received;
+        });
+    }
+
+    /// An update's outcome, its outputs written: the duration and latency
+    /// histograms, the last update's time and residual, the parameters
+    /// accepted so far.
+    pub fn record_update(&self, outcome: &UpdateOutcome, accepted: Option<&AcceptedParameters>) {
+        self.update_duration.observe(outcome.duration.as_secs_f64());
+        self.result_latency.observe(outcome.created.elapsed().as_secs_f64());
+        self.update(|s| {
+            s.last_update = Some(SystemTime::now());
+            if let Ok(r) = &outcome.result {
+                s.last_relative_residual = Some(r.result.relative_residual);
+            }
+            if let Some(a) = accepted {
+                s.parameters = a.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
+            }
+        });
+    }
+
+    /// A monitoring status: its state and standardised residuals.
+    pub fn record_monitoring(&self, status: &StatusMessage) {
+        self.update(|s| {
+            s.monitoring_state = Some(status.state.clone());
+            s.residuals = status
+                .residuals
+                .iter()
+                .map(|r| (r.name.clone(), r.standardised))
+                .collect();
+        });
+    }
+}
+
+impl Drop for Metrics {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(h) = self.server.take() {
+            let _ = h.join();
+        }
+    }
+}
+
+fn serve_loop(server: &tiny_http::Server, registry: &Registry, stop: &AtomicBool) {
+    while !stop.load(Ordering::Relaxed) {
+        let request = match server.recv_timeout(Duration::from_millis(100)) {
+            Ok(Some(r)) => r,
+            Ok(None) => continue,
+            Err(e) => {
+                tracing::warn!(message = "metrics: a request could not be read", error = %e);
+                continue;
+            }
+        };
+        let path = request.url().split('?').next().unwrap_or_default();
+        let response = if request.method() != &tiny_http::Method::Get {
+            tiny_http::Response::from_string("only GET\n").with_status_code(405)
+        } else if path == "/metrics" {
+            let mut body = String::new();
+            match prometheus_client::encoding::text::encode(&mut body, registry) {
+                Ok(()) => tiny_http::Response::from_string(body).with_header(
+                    tiny_http::Header::from_bytes(&b"Content-Type"[..], CONTENT_TYPE.as_bytes())
+                        .expect("a valid header"),
+                ),
+                Err(_) => tiny_http::Response::from_string("encoding failed\n").with_status_code(500),
+            }
+        } else {
+            tiny_http::Response::from_string("splinewatch metrics: GET /metrics\n").with_status_code(404)
+        };
+        if let Err(e) = request.respond(response) {
+            tracing::debug!(message = "metrics: the scraper went away", error = %e);
+        }
+    }
+}
+
+/// One constant metric: a descriptor and its value (or one value per label set).
+fn counter(e: &mut DescriptorEncoder, name: &str, help: &str, value: u64) -> std::fmt::Result {
+    let c = ConstCounter::new(value);
+    c.encode(e.encode_descriptor(name, help, None, c.metric_type())?)
+}
+
+fn counters_by(
+    e: &mut DescriptorEncoder,
+    name: &str,
+    help: &str,
+    label: &str,
+    values: &[(String, u64)],
+) -> std::fmt::Result {
+    if values.is_empty() {
+        return Ok(());
+    }
+    let mut family = e.encode_descriptor(name, help, None, prometheus_client::metrics::MetricType::Counter)?;
+    for (key, value) in values {
+        let labels = [(label, key.as_str())];
+        ConstCounter::new(*value).encode(family.encode_family(&labels)?)?;
+    }
+    Ok(())
+}
+
+fn gauge(e: &mut DescriptorEncoder, name: &str, help: &str, unit: Option<&Unit>, value: f64) -> std::fmt::Result {
+    let g = ConstGauge::new(value);
+    g.encode(e.encode_descriptor(name, help, unit, g.metric_type())?)
+}
+
+fn gauges_by(
+    e: &mut DescriptorEncoder,
+    name: &str,
+    help: &str,
+    label: &str,
+    values: &[(String, f64)],
+) -> std::fmt::Result {
+    if values.is_empty() {
+        return Ok(());
+    }
+    let mut family = e.encode_descriptor(name, help, None, prometheus_client::metrics::MetricType::Gauge)?;
+    for (key, value) in values {
+        let labels = [(label, key.as_str())];
+        ConstGauge::new(*value).encode(family.encode_family(&labels)?)?;
+    }
+    Ok(())
+}
+
+fn listed(map: &std::collections::BTreeMap<String, u64>) -> Vec<(String, u64)> {
+    map.iter().map(|(k, v)| (k.clone(), *v)).collect()
+}
+
+impl Collector for SnapshotCollector {
+    fn encode(&self, mut e: DescriptorEncoder) -> std::fmt::Result {
+        let s = self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone();
+        encode_counters(&s, &mut e)?;
+        encode_labelled_counters(&s.health, &mut e)?;
+        encode_gauges(&s, &mut e)
+    }
+}
+
+/// The health message's plain counters.
+fn encode_counters(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
+    let h = &s.health;
+    counter(
+        e,
+        "messages_received",
+        "Messages taken off the ingest queue",
+        s.messages_received,
+    )?;
+    counter(e, "blocks_accepted", "Channel blocks taken by the pipeline", h.blocks)?;
+    counter(e, "samples_accepted", "Samples of the blocks taken", h.samples)?;
+    counter(
+        e,
+        "temperature_blocks",
+        "Temperature blocks taken ([monitoring])",
+        h.temperature_blocks,
+    )?;
+    counters_by(
+        e,
+        "rejected",
+        "Messages and blocks rejected, by reason",
+        "reason",
+        &listed(&h.rejected),
+    )?;
+    counter(
+        e,
+        "queue_drops",
+        "Messages and update jobs dropped by full queues",
+        h.queue_drops,
+    )?;
+    counter(e, "gaps", "Gaps in a channel's samples", h.gaps)?;
+    counter(e, "gap_samples", "Samples missing in those gaps", h.gap_samples)?;
+    counter(e, "windows_accepted", "Analysis windows accepted", h.windows_accepted)?;
+    counter(
+        e,
+        "update_runs",
+        "Model updates run (failed ones included)",
+        h.update_runs,
+    )?;
+    counter(
+        e,
+        "update_failures",
+        "Model updates that failed (the last parameters kept)",
+        h.update_failures,
+    )
+}
+
+/// The health message's counters by reason or outcome.
+fn encode_labelled_counters(h: &Health, e: &mut DescriptorEncoder) -> std::fmt::Result {
+    counters_by(
+        e,
+        "rejected",
+        "Messages and blocks rejected, by reason",
+        "reason",
+        &listed(&h.rejected),
+    )?;
+    counters_by(
+        e,
+        "segments",
+        "Welch segments, by outcome",
+        "outcome",
+        &[
+            ("accepted".into(), h.segments_accepted),
+            ("rejected".into(), h.segments_rejected),
+        ],
+    )?;
+    counter(e, "windows_accepted", "Analysis windows accepted", h.windows_accepted)?;
+    counters_by(
+        e,
+        "windows_skipped",
+        "Analysis windows skipped, by reason",
+        "reason",
+        &listed(&h.windows_skipped),
+    )?;
+    counter(
+        e,
+        "update_runs",
+        "Model updates run (failed ones included)",
+        h.update_runs,
+    )?;
+    counter(
+        e,
+        "update_failures",
+        "Model updates that failed (the last parameters kept)",
+        h.update_failures,
+    )?;
+    counters_by(
+        e,
+        "updates_skipped",
+        "Update jobs never run, by reason",
+        "reason",
+        &listed(&h.updates_skipped),
+    )?;
+    counters_by(
+        e,
+        "output_errors",
+        "Output failures the daemon went on after, by output",
+        "output",
+        &[
+            ("recording".into(), h.recording_errors),
+            ("results".into(), h.results_errors),
+            ("rerun".into(), h.rerun_errors),
+            ("log".into(), h.log_writes_dropped),
+        ],
+    )?;
+    counters_by(
+        e,
+        "notifications",
+        "[monitoring.notify]: command runs and requests (attempts), deliveries (sent), given up (failed)",
+        "outcome",
+        &[
+            ("attempts".into(), h.notification_attempts),
+            ("sent".into(), h.notifications_sent),
+            ("failed".into(), h.notification_failures),
+        ],
+    )?;
+    counters_by(
+        e,
+        "events",
+        "[events]: bursts run through the event chain, by outcome",
+        "outcome",
+        &[
+            ("processed".into(), h.events_processed),
+            ("skipped".into(), h.events_skipped),
+        ],
+    )
+}
+
+/// The gauges: the health message's time, queues, the last update, the
+/// parameters and the monitoring.
+fn encode_gauges(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
+    if let Some(t) = s.health_time_ns {
+        gauge(
+            e,
+            "health_time",
+            "Measurement time of the health message the counters are from",
+            Some(&Unit::Seconds),
+            t as f64 * 1e-9,
+        )?;
+    }
+    gauge(
+        e,
+        "update_queue_depth",
+        "Update jobs waiting behind the running one",
+        None,
+        s.update_queue_depth as f64,
+    )?;
+    gauge(
+        e,
+        "update_running",
+        "1 while an update runs",
+        None,
+        f64::from(u8::from(s.update_running)),
+    )?;
+    gauge(
+        e,
+        "ingest_queue_depth",
+        "Raw messages waiting in the ingest queue",
+        None,
+        s.ingest_queue_depth as f64,
+    )?;
+    if let Some(at) = s.last_update {
+        let since = |t: SystemTime| {
+            t.duration_since(SystemTime::UNIX_EPOCH)
+                .unwrap_or_default()
+                .as_secs_f64()
+        };
+        gauge(
+            e,
+            "last_update_timestamp",
+            "Wall time of the last update result",
+            Some(&Unit::Seconds),
+            since(at),
+        )?;
+        gauge(
+            e,
+            "last_update_age",
+            "Seconds since the last update result",
+            Some(&Unit::Seconds),
+            SystemTime::now().duration_since(at).unwrap_or_default().as_secs_f64(),
+        )?;
+    }
+    if let Some(r) = s.last_relative_residual {
+        gauge(
+            e,
+            "last_update_relative_residual",
+            "Relative residual of the last accepted update",
+            None,
+            r,
+        )?;
+    }
+    gauges_by(
+        e,
+        "parameter_value",
+        "The last accepted updating parameters",
+        "parameter",
+        &s.parameters,
+    )?;
+    encode_monitoring(s, e)
+}
+
+/// `[monitoring]`: the latest state (one-hot and the alarm flag) and each
+/// feature's standardised residual.
+fn encode_monitoring(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
+    if let Some(state) = &s.monitoring_state {
+        let one_hot: Vec<(String, f64)> = MONITORING_STATES
+            .iter()
+            .map(|m| ((*m).to_string(), f64::from(u8::from(state == m))))
+            .collect();
+        gauges_by(
+            e,
+            "monitoring_state",
+            "1 for the latest monitoring state",
+            "state",
+            &one_hot,
+        )?;
+        gauge(
+            e,
+            "alarm",
+            "1 while the monitoring is in alarm",
+            None,
+            f64::from(u8::from(state == "alarm")),
+        )?;
+    }
+    gauges_by(
+        e,
+        "monitoring_residual",
+        "Each monitored feature's standardised residual after compensation",
+        "feature",
+        &s.residuals,
+    )
+}
