@@ -227,9 +227,6 @@ fn counters_by(
     label: &str,
     values: &[(String, u64)],
 ) -> std::fmt::Result {
-    if values.is_empty() {
-        return Ok(());
-    }
     let mut family = e.encode_descriptor(name, help, None, prometheus_client::metrics::MetricType::Counter)?;
     for (key, value) in values {
         let labels = [(label, key.as_str())];
@@ -238,9 +235,20 @@ fn counters_by(
     Ok(())
 }
 
-fn gauge(e: &mut DescriptorEncoder, name: &str, help: &str, unit: Option<&Unit>, value: f64) -> std::fmt::Result {
-    let g = ConstGauge::new(value);
-    g.encode(e.encode_descriptor(name, help, unit, g.metric_type())?)
+/// A gauge; without a value (nothing to say yet) its family is still
+/// described, so a scrape always lists every metric the process exports.
+fn gauge(
+    e: &mut DescriptorEncoder,
+    name: &str,
+    help: &str,
+    unit: Option<&Unit>,
+    value: impl Into<Option<f64>>,
+) -> std::fmt::Result {
+    let encoder = e.encode_descriptor(name, help, unit, prometheus_client::metrics::MetricType::Gauge)?;
+    match value.into() {
+        Some(v) => ConstGauge::new(v).encode(encoder),
+        None => Ok(()),
+    }
 }
 
 fn gauges_by(
@@ -250,9 +258,6 @@ fn gauges_by(
     label: &str,
     values: &[(String, f64)],
 ) -> std::fmt::Result {
-    if values.is_empty() {
-        return Ok(());
-    }
     let mut family = e.encode_descriptor(name, help, None, prometheus_client::metrics::MetricType::Gauge)?;
     for (key, value) in values {
         let labels = [(label, key.as_str())];
@@ -405,15 +410,13 @@ fn encode_labelled_counters(h: &Health, e: &mut DescriptorEncoder) -> std::fmt::
 /// The gauges: the health message's time, queues, the last update, the
 /// parameters and the monitoring.
 fn encode_gauges(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
-    if let Some(t) = s.health_time_ns {
-        gauge(
-            e,
-            "health_time",
-            "Measurement time of the health message the counters are from",
-            Some(&Unit::Seconds),
-            t as f64 * 1e-9,
-        )?;
-    }
+    gauge(
+        e,
+        "health_time",
+        "Measurement time of the health message the counters are from",
+        Some(&Unit::Seconds),
+        s.health_time_ns.map(|t| t as f64 * 1e-9),
+    )?;
     gauge(
         e,
         "update_queue_depth",
@@ -435,36 +438,33 @@ fn encode_gauges(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
         None,
         s.ingest_queue_depth as f64,
     )?;
-    if let Some(at) = s.last_update {
-        let since = |t: SystemTime| {
-            t.duration_since(SystemTime::UNIX_EPOCH)
-                .unwrap_or_default()
-                .as_secs_f64()
-        };
-        gauge(
-            e,
-            "last_update_timestamp",
-            "Wall time of the last update result",
-            Some(&Unit::Seconds),
-            since(at),
-        )?;
-        gauge(
-            e,
-            "last_update_age",
-            "Seconds since the last update result",
-            Some(&Unit::Seconds),
-            SystemTime::now().duration_since(at).unwrap_or_default().as_secs_f64(),
-        )?;
-    }
-    if let Some(r) = s.last_relative_residual {
-        gauge(
-            e,
-            "last_update_relative_residual",
-            "Relative residual of the last accepted update",
-            None,
-            r,
-        )?;
-    }
+    let since = |t: SystemTime| {
+        t.duration_since(SystemTime::UNIX_EPOCH)
+            .unwrap_or_default()
+            .as_secs_f64()
+    };
+    gauge(
+        e,
+        "last_update_timestamp",
+        "Wall time of the last update result",
+        Some(&Unit::Seconds),
+        s.last_update.map(since),
+    )?;
+    gauge(
+        e,
+        "last_update_age",
+        "Seconds since the last update result",
+        Some(&Unit::Seconds),
+        s.last_update
+            .map(|at| SystemTime::now().duration_since(at).unwrap_or_default().as_secs_f64()),
+    )?;
+    gauge(
+        e,
+        "last_update_relative_residual",
+        "Relative residual of the last accepted update",
+        None,
+        s.last_relative_residual,
+    )?;
     gauges_by(
         e,
         "parameter_value",
@@ -478,26 +478,28 @@ fn encode_gauges(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
 /// `[monitoring]`: the latest state (one-hot and the alarm flag) and each
 /// feature's standardised residual.
 fn encode_monitoring(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
-    if let Some(state) = &s.monitoring_state {
-        let one_hot: Vec<(String, f64)> = MONITORING_STATES
+    let state = s.monitoring_state.as_deref();
+    let one_hot: Vec<(String, f64)> = match state {
+        Some(state) => MONITORING_STATES
             .iter()
-            .map(|m| ((*m).to_string(), f64::from(u8::from(state == m))))
-            .collect();
-        gauges_by(
-            e,
-            "monitoring_state",
-            "1 for the latest monitoring state",
-            "state",
-            &one_hot,
-        )?;
-        gauge(
-            e,
-            "alarm",
-            "1 while the monitoring is in alarm",
-            None,
-            f64::from(u8::from(state == "alarm")),
-        )?;
-    }
+            .map(|m| ((*m).to_string(), f64::from(u8::from(state == *m))))
+            .collect(),
+        None => Vec::new(),
+    };
+    gauges_by(
+        e,
+        "monitoring_state",
+        "1 for the latest monitoring state",
+        "state",
+        &one_hot,
+    )?;
+    gauge(
+        e,
+        "alarm",
+        "1 while the monitoring is in alarm",
+        None,
+        state.map(|s| f64::from(u8::from(s == "alarm"))),
+    )?;
     gauges_by(
         e,
         "monitoring_residual",

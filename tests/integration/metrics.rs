@@ -193,3 +193,79 @@ fn issue_48_replay_serves_the_final_counters_while_it_lingers() {
     assert!(metrics["splinewatch_messages_received_total{}"] >= metrics["splinewatch_blocks_accepted_total{}"]);
     let _ = child.0.as_mut().unwrap().kill();
 }
+
+/// The metric families a scrape describes (`# TYPE` lines), with the
+/// sample names each allows (`_total`, `_bucket`, `_sum`, `_count`).
+fn described_families(text: &str) -> std::collections::BTreeSet<String> {
+    let mut names = std::collections::BTreeSet::new();
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        if let (Some("#"), Some("TYPE"), Some(name), Some(kind)) =
+            (words.next(), words.next(), words.next(), words.next())
+        {
+            match kind {
+                "counter" => {
+                    names.insert(format!("{name}_total"));
+                }
+                "histogram" => {
+                    for suffix in ["_bucket", "_sum", "_count"] {
+                        names.insert(format!("{name}{suffix}"));
+                    }
+                }
+                _ => {
+                    names.insert(name.to_string());
+                }
+            }
+        }
+    }
+    names
+}
+
+/// Every metric the Grafana dashboard (`deploy/grafana/splinewatch.json`,
+/// made by `make_dashboard.py` there) queries is one a daemon describes,
+/// even before it has anything to say (a fresh process, no monitoring).
+#[test]
+fn issue_48_the_grafana_dashboard_queries_only_metrics_the_daemon_serves() {
+    let metrics = splinewatch::outputs::metrics::Metrics::serve("127.0.0.1:0", "test").unwrap();
+    let text = ureq::get(format!("http://{}/metrics", metrics.address()))
+        .call()
+        .unwrap()
+        .body_mut()
+        .read_to_string()
+        .unwrap();
+    let described = described_families(&text);
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dashboard: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join("deploy/grafana/splinewatch.json")).unwrap()).unwrap();
+    let mut queried = Vec::new();
+    let mut exprs: Vec<String> = Vec::new();
+    for panel in dashboard["panels"].as_array().unwrap() {
+        for target in panel["targets"].as_array().into_iter().flatten() {
+            exprs.push(target["expr"].as_str().unwrap().to_string());
+        }
+    }
+    for v in dashboard["templating"]["list"].as_array().unwrap() {
+        if let Some(q) = v["query"].as_str().filter(|q| q.starts_with("label_values")) {
+            exprs.push(q.to_string());
+        }
+    }
+    for expr in &exprs {
+        for (start, _) in expr.match_indices("splinewatch_") {
+            let name: String = expr[start..]
+                .chars()
+                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                .collect();
+            queried.push(name);
+        }
+    }
+    assert!(queried.len() > 20, "{queried:?}");
+    for name in &queried {
+        assert!(
+            described.contains(name),
+            "the dashboard queries {name}, which is not served: {described:?}"
+        );
+    }
+    // And the endpoint answers only GET /metrics.
+    let other = ureq::get(format!("http://{}/other", metrics.address())).call();
+    assert!(matches!(other, Err(ureq::Error::StatusCode(404))), "{other:?}");
+}

@@ -354,9 +354,11 @@ fn secured_site(dir: &Path, transport: Transport) {
     wait_for_file(&state);
     // The dashboard may query the latest result. It waits for the right
     // event, the daemon's liveliness token (declared after its queryables,
-    // on the same ordered link to the router), then asks 50 times in a row:
-    // every ask is answered on its own (issue 33; before, the test asked
-    // up to ten times).
+    // on the same ordered link to the router), then asks once; every ask is
+    // answered on its own (issue 48: a TLS link's concurrent read and write
+    // raced in zenoh-link-tls and closed the link now and then, finalising
+    // an ask in flight with no reply; patched in vendor/zenoh-link-tls).
+    // `benches/tls_asks.sh` asks 10 000 times (SPLINEWATCH_TLS_ASKS).
     let alive = dashboard
         .liveliness()
         .declare_subscriber(format!("{PREFIX}/alive"))
@@ -365,7 +367,12 @@ fn secured_site(dir: &Path, transport: Transport) {
         .unwrap();
     let token = alive.recv_timeout(Duration::from_secs(30)).unwrap();
     assert!(token.is_some(), "the daemon's liveliness token never arrived");
-    for ask in 1..=50 {
+    let asks: u64 = std::env::var("SPLINEWATCH_TLS_ASKS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(1);
+    let started = std::time::Instant::now();
+    for ask in 1..=asks {
         let replies: Vec<_> = dashboard
             .get(format!("{PREFIX}/updating/latest"))
             .timeout(Duration::from_secs(20))
@@ -379,7 +386,7 @@ fn secured_site(dir: &Path, transport: Transport) {
             let tail: Vec<&str> = log.lines().rev().take(80).collect();
             let tail: Vec<&str> = tail.into_iter().rev().collect();
             panic!(
-                "ask {ask} of 50 got {} replies; the daemon log's last lines:\n{}",
+                "ask {ask} of {asks} got {} replies; the daemon log's last lines:\n{}",
                 replies.len(),
                 tail.join("\n")
             );
@@ -388,6 +395,11 @@ fn secured_site(dir: &Path, transport: Transport) {
             serde_json::from_slice(&replies[0].result().unwrap().payload().to_bytes()).unwrap();
         assert!(body["parameters"].is_array(), "ask {ask}: {body}");
     }
+    // The benchmark's figure (`benches/tls_asks.sh`).
+    eprintln!(
+        "{asks} asks, each answered on its first ask, in {:.2} s",
+        started.elapsed().as_secs_f64()
+    );
     // So may `splinewatch fleet` with the dashboard's credentials, asked
     // once: its liveliness and wildcard queries (bridge/*/…) pass the access
     // control, and the expected span answers.
