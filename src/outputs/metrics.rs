@@ -292,6 +292,12 @@ fn encode_counters(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result 
     counter(e, "samples_accepted", "Samples of the blocks taken", h.samples)?;
     counter(
         e,
+        "event_blocks",
+        "Acceleration blocks taken by the event chain ([events])",
+        h.event_blocks,
+    )?;
+    counter(
+        e,
         "temperature_blocks",
         "Temperature blocks taken ([monitoring])",
         h.temperature_blocks,

@@ -55,6 +55,10 @@ pub struct Health {
     /// chain, and those skipped (with the reason on `events/summary`).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub events_processed: u64,
+    /// Acceleration blocks of config sensors taken by the event chain
+    /// (the daemon with `[events]`), not by the ambient pipeline.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub event_blocks: u64,
     #[serde(default, skip_serializing_if = "is_zero")]
     pub events_skipped: u64,
     /// `[monitoring.notify]`: command runs (retries included), notifications

@@ -474,5 +474,9 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
     assert_eq!(chain["amplitudes"].as_array().unwrap().len(), 2);
     let health = results["health"].last().unwrap();
     assert_eq!(health["events_processed"], 2, "{health}");
+    // Every block is the event chain's, none rejected by the ambient
+    // pipeline (ground channels, a 100 Hz record after a 200 Hz one).
+    assert_eq!(health["event_blocks"].as_u64(), Some(summary.messages), "{health}");
+    assert!(health["rejected"].as_object().unwrap().is_empty(), "{health}");
     assert_eq!(results["events/verdict"].len(), 2);
 }

@@ -1,6 +1,8 @@
-//! The daemon on a triggered logger (`[events]`, issue 45 item 5): channel
-//! blocks are collected into bursts ([`Bursts`]) beside the ambient
-//! pipeline, and each closed burst runs the event chain of `splinewatch
+//! The daemon on a triggered logger (`[events]`, issue 45 item 5): the
+//! config sensors' acceleration blocks are the event chain's (collected into
+//! bursts, [`Bursts`], and counted in `health.event_blocks`; the ambient
+//! pipeline gets the rest: temperatures, FRF sets, unknown channels to
+//! reject), and each closed burst runs the event chain of `splinewatch
 //! events` on a blocking thread, one at a time, in the order the bursts
 //! closed. At most [`WAITING_BURSTS`] wait; beyond that the oldest waiting
 //! is reported as a skipped event with the reason (never a silent loss).
@@ -66,21 +68,22 @@ impl EventWorker {
         self.running.is_some()
     }
 
-    /// Collects `block` (an acceleration of a config sensor; others are not
-    /// the chain's); a burst it closes waits or starts. Returns the lines of
-    /// bursts dropped from a full queue (skipped, with the reason).
-    pub(super) fn push(&mut self, block: &ChannelBlock, now: Instant) -> Vec<EventLine> {
+    /// Takes `block` when it is the chain's (an acceleration of a config
+    /// sensor), else hands it back for the ambient pipeline; a burst it
+    /// closes waits or starts. Returns the lines of bursts dropped from a
+    /// full queue (skipped, with the reason).
+    pub(super) fn take(&mut self, block: ChannelBlock, now: Instant) -> Result<Vec<EventLine>, ChannelBlock> {
         if block.quantity != ChannelQuantity::Acceleration || !self.config.sensors.iter().any(|s| s.name == block.name)
         {
-            return Vec::new();
+            return Err(block);
         }
         let recorded = RecordedBlock {
             topic: block.topic(&self.prefix),
             log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
-            block: block.clone(),
+            block,
         };
         let closed = self.bursts.push(recorded, now);
-        self.enqueue(closed)
+        Ok(self.enqueue(closed))
     }
 
     /// The open burst when the logger has been silent long enough.

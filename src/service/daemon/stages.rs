@@ -163,13 +163,19 @@ impl Daemon {
                 "raw-input recording",
             );
         }
-        let dropped = match self.events.as_mut() {
-            Some(e) => e.push(&block, std::time::Instant::now()),
-            None => Vec::new(),
+        let block = match self.events.as_mut() {
+            Some(e) => match e.take(block, std::time::Instant::now()) {
+                Ok(dropped) => {
+                    self.pipeline.health_mut().event_blocks += 1;
+                    for line in dropped {
+                        self.report_event(line, link);
+                    }
+                    return;
+                }
+                Err(block) => block,
+            },
+            None => block,
         };
-        for line in dropped {
-            self.report_event(line, link);
-        }
         let (windows, jobs) = self.pipeline.ingest(block);
         for w in &windows {
             self.report_window(w, link);
