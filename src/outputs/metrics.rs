@@ -274,143 +274,117 @@ impl Collector for SnapshotCollector {
     fn encode(&self, mut e: DescriptorEncoder) -> std::fmt::Result {
         let s = self.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner).clone();
         encode_counters(&s, &mut e)?;
-        encode_labelled_counters(&s.health, &mut e)?;
         encode_gauges(&s, &mut e)
     }
 }
 
-/// The health message's plain counters.
+/// A counter of the health message: name (without `splinewatch_` and
+/// `_total`), help, and its value.
+type PlainCounter = (&'static str, &'static str, fn(&Health) -> u64);
+
+const PLAIN_COUNTERS: &[PlainCounter] = &[
+    ("blocks_accepted", "Channel blocks taken by the pipeline", |h| h.blocks),
+    ("samples_accepted", "Samples of the blocks taken", |h| h.samples),
+    (
+        "event_blocks",
+        "Acceleration blocks taken by the event chain ([events])",
+        |h| h.event_blocks,
+    ),
+    ("temperature_blocks", "Temperature blocks taken ([monitoring])", |h| {
+        h.temperature_blocks
+    }),
+    ("queue_drops", "Messages and update jobs dropped by full queues", |h| {
+        h.queue_drops
+    }),
+    ("gaps", "Gaps in a channel's samples", |h| h.gaps),
+    ("gap_samples", "Samples missing in those gaps", |h| h.gap_samples),
+    ("windows_accepted", "Analysis windows accepted", |h| h.windows_accepted),
+    ("update_runs", "Model updates run (failed ones included)", |h| {
+        h.update_runs
+    }),
+    (
+        "update_failures",
+        "Model updates that failed (the last parameters kept)",
+        |h| h.update_failures,
+    ),
+];
+
+/// A counter by label: name, help, label, and its values by label value.
+type LabelledCounter = (
+    &'static str,
+    &'static str,
+    &'static str,
+    fn(&Health) -> Vec<(String, u64)>,
+);
+
+const LABELLED_COUNTERS: &[LabelledCounter] = &[
+    ("rejected", "Messages and blocks rejected, by reason", "reason", |h| {
+        listed(&h.rejected)
+    }),
+    (
+        "windows_skipped",
+        "Analysis windows skipped, by reason",
+        "reason",
+        |h| listed(&h.windows_skipped),
+    ),
+    ("updates_skipped", "Update jobs never run, by reason", "reason", |h| {
+        listed(&h.updates_skipped)
+    }),
+    ("segments", "Welch segments, by outcome", "outcome", |h| {
+        named(&[("accepted", h.segments_accepted), ("rejected", h.segments_rejected)])
+    }),
+    (
+        "output_errors",
+        "Output failures the daemon went on after, by output",
+        "output",
+        |h| {
+            named(&[
+                ("recording", h.recording_errors),
+                ("results", h.results_errors),
+                ("rerun", h.rerun_errors),
+                ("log", h.log_writes_dropped),
+            ])
+        },
+    ),
+    (
+        "notifications",
+        "[monitoring.notify]: command runs and requests (attempts), deliveries (sent), given up (failed)",
+        "outcome",
+        |h| {
+            named(&[
+                ("attempts", h.notification_attempts),
+                ("sent", h.notifications_sent),
+                ("failed", h.notification_failures),
+            ])
+        },
+    ),
+    (
+        "events",
+        "[events]: bursts run through the event chain, by outcome",
+        "outcome",
+        |h| named(&[("processed", h.events_processed), ("skipped", h.events_skipped)]),
+    ),
+];
+
+fn named(values: &[(&str, u64)]) -> Vec<(String, u64)> {
+    values.iter().map(|(k, v)| ((*k).to_string(), *v)).collect()
+}
+
+/// The health message's counters, and the messages received.
 fn encode_counters(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
-    let h = &s.health;
     counter(
         e,
         "messages_received",
         "Messages taken off the ingest queue",
         s.messages_received,
     )?;
-    counter(e, "blocks_accepted", "Channel blocks taken by the pipeline", h.blocks)?;
-    counter(e, "samples_accepted", "Samples of the blocks taken", h.samples)?;
-    counter(
-        e,
-        "event_blocks",
-        "Acceleration blocks taken by the event chain ([events])",
-        h.event_blocks,
-    )?;
-    counter(
-        e,
-        "temperature_blocks",
-        "Temperature blocks taken ([monitoring])",
-        h.temperature_blocks,
-    )?;
-    counters_by(
-        e,
-        "rejected",
-        "Messages and blocks rejected, by reason",
-        "reason",
-        &listed(&h.rejected),
-    )?;
-    counter(
-        e,
-        "queue_drops",
-        "Messages and update jobs dropped by full queues",
-        h.queue_drops,
-    )?;
-    counter(e, "gaps", "Gaps in a channel's samples", h.gaps)?;
-    counter(e, "gap_samples", "Samples missing in those gaps", h.gap_samples)?;
-    counter(e, "windows_accepted", "Analysis windows accepted", h.windows_accepted)?;
-    counter(
-        e,
-        "update_runs",
-        "Model updates run (failed ones included)",
-        h.update_runs,
-    )?;
-    counter(
-        e,
-        "update_failures",
-        "Model updates that failed (the last parameters kept)",
-        h.update_failures,
-    )
-}
-
-/// The health message's counters by reason or outcome.
-fn encode_labelled_counters(h: &Health, e: &mut DescriptorEncoder) -> std::fmt::Result {
-    counters_by(
-        e,
-        "rejected",
-        "Messages and blocks rejected, by reason",
-        "reason",
-        &listed(&h.rejected),
-    )?;
-    counters_by(
-        e,
-        "segments",
-        "Welch segments, by outcome",
-        "outcome",
-        &[
-            ("accepted".into(), h.segments_accepted),
-            ("rejected".into(), h.segments_rejected),
-        ],
-    )?;
-    counter(e, "windows_accepted", "Analysis windows accepted", h.windows_accepted)?;
-    counters_by(
-        e,
-        "windows_skipped",
-        "Analysis windows skipped, by reason",
-        "reason",
-        &listed(&h.windows_skipped),
-    )?;
-    counter(
-        e,
-        "update_runs",
-        "Model updates run (failed ones included)",
-        h.update_runs,
-    )?;
-    counter(
-        e,
-        "update_failures",
-        "Model updates that failed (the last parameters kept)",
-        h.update_failures,
-    )?;
-    counters_by(
-        e,
-        "updates_skipped",
-        "Update jobs never run, by reason",
-        "reason",
-        &listed(&h.updates_skipped),
-    )?;
-    counters_by(
-        e,
-        "output_errors",
-        "Output failures the daemon went on after, by output",
-        "output",
-        &[
-            ("recording".into(), h.recording_errors),
-            ("results".into(), h.results_errors),
-            ("rerun".into(), h.rerun_errors),
-            ("log".into(), h.log_writes_dropped),
-        ],
-    )?;
-    counters_by(
-        e,
-        "notifications",
-        "[monitoring.notify]: command runs and requests (attempts), deliveries (sent), given up (failed)",
-        "outcome",
-        &[
-            ("attempts".into(), h.notification_attempts),
-            ("sent".into(), h.notifications_sent),
-            ("failed".into(), h.notification_failures),
-        ],
-    )?;
-    counters_by(
-        e,
-        "events",
-        "[events]: bursts run through the event chain, by outcome",
-        "outcome",
-        &[
-            ("processed".into(), h.events_processed),
-            ("skipped".into(), h.events_skipped),
-        ],
-    )
+    for (name, help, value) in PLAIN_COUNTERS {
+        counter(e, name, help, value(&s.health))?;
+    }
+    for (name, help, label, values) in LABELLED_COUNTERS {
+        counters_by(e, name, help, label, &values(&s.health))?;
+    }
+    Ok(())
 }
 
 /// The gauges: the health message's time, queues, the last update, the
