@@ -150,6 +150,18 @@ pub struct RecordedBlock {
     pub block: ChannelBlock,
 }
 
+impl RecordedBlock {
+    /// `block` as if recorded on its topic under `prefix` at its own start
+    /// (imported files, a live daemon's blocks).
+    pub fn at_its_start(block: ChannelBlock, prefix: &str) -> Self {
+        Self {
+            topic: block.topic(prefix),
+            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
+            block,
+        }
+    }
+}
+
 /// A message that could not be used, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RejectedMessage {

@@ -22,6 +22,7 @@ use prometheus_client::metrics::counter::ConstCounter;
 use prometheus_client::metrics::gauge::ConstGauge;
 use prometheus_client::metrics::histogram::{exponential_buckets, Histogram};
 use prometheus_client::registry::{Registry, Unit};
+use splinewatch_core::monitoring::MonitorState;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -44,7 +45,7 @@ pub struct Snapshot {
     pub update_running: bool,
     /// Raw messages waiting in the ingest queue.
     pub ingest_queue_depth: usize,
-    /// Wall time of the last update result, its outcome and relative residual.
+    /// Wall time of the last update result, and the last accepted one's relative residual.
     pub last_update: Option<SystemTime>,
     pub last_relative_residual: Option<f64>,
     /// The last accepted parameters (name, value).
@@ -55,9 +56,6 @@ pub struct Snapshot {
     pub residuals: Vec<(String, f64)>,
 }
 
-/// The monitoring states a status can be in (one-hot gauge).
-const MONITORING_STATES: [&str; 4] = ["training", "normal", "alarm", "outside_training_range"];
-
 #[derive(Debug)]
 struct SnapshotCollector(Arc<Mutex<Snapshot>>);
 
@@ -65,8 +63,8 @@ struct SnapshotCollector(Arc<Mutex<Snapshot>>);
 /// histograms it observes into, and the server thread.
 pub struct Metrics {
     snapshot: Arc<Mutex<Snapshot>>,
-    pub update_duration: Histogram,
-    pub result_latency: Histogram,
+    update_duration: Histogram,
+    result_latency: Histogram,
     address: SocketAddr,
     stop: Arc<AtomicBool>,
     server: Option<JoinHandle<()>>,
@@ -460,9 +458,9 @@ fn encode_gauges(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
 fn encode_monitoring(s: &Snapshot, e: &mut DescriptorEncoder) -> std::fmt::Result {
     let state = s.monitoring_state.as_deref();
     let one_hot: Vec<(String, f64)> = match state {
-        Some(state) => MONITORING_STATES
+        Some(state) => MonitorState::ALL
             .iter()
-            .map(|m| ((*m).to_string(), f64::from(u8::from(state == *m))))
+            .map(|m| (m.name().to_string(), f64::from(u8::from(state == m.name()))))
             .collect(),
         None => Vec::new(),
     };

@@ -88,11 +88,7 @@ fn imported_blocks(
     Ok(imported
         .blocks
         .into_iter()
-        .map(|block| RecordedBlock {
-            topic: block.topic(prefix),
-            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
-            block,
-        })
+        .map(|block| RecordedBlock::at_its_start(block, prefix))
         .collect())
 }
 

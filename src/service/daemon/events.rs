@@ -77,12 +77,7 @@ impl EventWorker {
         {
             return Err(block);
         }
-        let recorded = RecordedBlock {
-            topic: block.topic(&self.prefix),
-            log_time: u64::try_from(block.start_ns.max(0)).unwrap_or(0),
-            block,
-        };
-        let closed = self.bursts.push(recorded, now);
+        let closed = self.bursts.push(RecordedBlock::at_its_start(block, &self.prefix), now);
         Ok(self.enqueue(closed))
     }
 

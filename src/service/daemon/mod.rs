@@ -17,9 +17,10 @@
 //!   finish, writes the last health message, finalises the MCAP file and
 //!   saves the state.
 //!
-//! - with `[events]` (a triggered logger), blocks are also collected into
-//!   bursts; each closed burst runs the event chain on a blocking worker,
-//!   one at a time, 8 waiting at most (`events.rs`).
+//! - with `[events]` (a triggered logger), the config sensors' acceleration
+//!   blocks go to the event chain instead, cut into bursts; each closed
+//!   burst runs the chain on a blocking worker, one at a time, 8 waiting at
+//!   most (`events.rs`).
 //!
 //! The run loop is a `select!` over six events, each handled by a named
 //! stage of `Daemon` (`stages.rs`): a message (`on_message`), a finished update

@@ -338,9 +338,15 @@ impl Daemon {
         message: &impl serde::Serialize,
     ) -> Vec<u8> {
         let json = serde_json::to_vec(message).expect("result messages are plain data");
-        self.results.write_json(suffix, time_ns, &json);
-        link.publish_json(suffix, json.clone());
+        self.send_json(link, suffix, time_ns, json.clone());
         json
+    }
+
+    /// Writes a result message already serialised to the results file and
+    /// publishes it.
+    fn send_json(&mut self, link: &ZenohLink, suffix: &str, time_ns: i128, json: Vec<u8>) {
+        self.results.write_json(suffix, time_ns, &json);
+        link.publish_json(suffix, json);
     }
 
     /// Records that `job`'s window gets no update, and why: a message on
@@ -392,7 +398,6 @@ impl Daemon {
     fn handle_outcome(&mut self, outcome: &mut UpdateOutcome, link: &ZenohLink) -> Result<()> {
         let scored = self.pipeline.apply(outcome);
         let outcome = &*outcome;
-
         // Pre-computed FRF windows close no sample window: their updates
         // date the health messages (else a daemon fed only FRF sets never
         // wrote one).
@@ -492,8 +497,7 @@ impl Daemon {
         match messages(&line) {
             Ok((time, bodies)) => {
                 for (topic, json) in bodies {
-                    self.results.write_json(topic, time, &json);
-                    link.publish_json(topic, json);
+                    self.send_json(link, topic, time, json);
                 }
                 self.last_time = self.last_time.max(time);
             }
@@ -527,6 +531,7 @@ impl Daemon {
             }
         }
     }
+
     /// Sends a scored update's monitoring messages (results, zenoh, the
     /// `monitoring/latest` reply, the log, Rerun) and saves the monitor.
     fn report_monitoring(&mut self, m: &MonitoringOutcome, time_ns: i128, link: &ZenohLink) -> Result<()> {

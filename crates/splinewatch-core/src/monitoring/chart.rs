@@ -18,6 +18,8 @@ pub enum MonitorState {
 }
 
 impl MonitorState {
+    pub const ALL: [Self; 4] = [Self::Training, Self::Normal, Self::OutsideTrainingRange, Self::Alarm];
+
     pub fn name(self) -> &'static str {
         match self {
             Self::Training => "training",
