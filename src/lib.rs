@@ -8,10 +8,13 @@
 // No function longer than clippy.toml's too-many-lines-threshold without a written reason.
 #![warn(clippy::too_many_lines)]
 
+#[cfg(feature = "daemon")]
 pub mod cli;
 pub mod config;
 pub mod io;
+#[cfg(feature = "daemon")]
 pub mod outputs;
 pub mod pipeline;
+#[cfg(feature = "daemon")]
 pub mod service;
 pub mod studies;

@@ -72,7 +72,15 @@ impl Default for FrfConfig {
 impl Config {
     /// `[frf]` as Welch settings for sampling frequency `fs`.
     pub fn welch_settings(&self, fs: f64) -> Result<(WelchSettings, Estimator), ConfigError> {
-        let f = &self.frf;
+        self.frf.welch_settings(fs)
+    }
+}
+
+impl FrfConfig {
+    /// These settings as Welch settings for sampling frequency `fs` (errors
+    /// name the `frf.*` key).
+    pub fn welch_settings(&self, fs: f64) -> Result<(WelchSettings, Estimator), ConfigError> {
+        let f = self;
         if !(f.segment_seconds.is_finite() && f.segment_seconds > 0.0) {
             return Err(err(
                 "frf.segment_seconds",
@@ -126,7 +134,9 @@ impl Config {
         settings.validate().map_err(|e| err("frf", e))?;
         Ok((settings, estimator))
     }
+}
 
+impl Config {
     /// The sensor whose quantity includes "force" (the excitation), and the
     /// sensors measuring acceleration, by index into `[[sensors]]`.
     pub fn channel_roles(&self) -> Result<(usize, Vec<usize>), ConfigError> {

@@ -17,6 +17,7 @@ mod output;
 mod patches;
 mod schedule;
 mod setup;
+#[cfg(feature = "daemon")]
 mod tls;
 mod updating;
 mod zenoh;
@@ -36,6 +37,7 @@ pub use output::{OutputConfig, RawRecordingConfig};
 pub use patches::FaceConfig;
 pub use schedule::ScheduleConfig;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
+#[cfg(feature = "daemon")]
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
 pub use updating::{parameter_family, ParameterFamily, Residues, UpdatingConfig};
 pub use zenoh::ZenohConfig;

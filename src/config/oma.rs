@@ -53,6 +53,25 @@ impl Default for OmaConfig {
     }
 }
 
+impl OmaConfig {
+    /// The core settings, checked; `default_band` when `band` is not given.
+    pub fn settings(&self, default_band: [f64; 2]) -> Result<OmaSettings, ConfigError> {
+        let settings = OmaSettings {
+            block_rows: self.block_rows,
+            min_order: self.min_order,
+            max_order: self.max_order,
+            order_step: self.order_step,
+            band: self.band.unwrap_or(default_band),
+            stability: self.stability,
+            clustering: self.clustering,
+            batches: self.batches,
+            uncertainty: self.uncertainty,
+        };
+        settings.check().map_err(|e| err("oma", e))?;
+        Ok(settings)
+    }
+}
+
 impl Config {
     /// The acceleration sensors (indices into `[[sensors]]`): the OMA outputs.
     pub fn output_channels(&self) -> Result<Vec<usize>, ConfigError> {
@@ -113,18 +132,7 @@ impl Config {
                     .ok_or_else(|| err("oma.references", format!("{name:?} is not an acceleration sensor")))
             })
             .collect::<Result<Vec<usize>, _>>()?;
-        let settings = OmaSettings {
-            block_rows: o.block_rows,
-            min_order: o.min_order,
-            max_order: o.max_order,
-            order_step: o.order_step,
-            band: o.band.unwrap_or(self.frf.band),
-            stability: o.stability,
-            clustering: o.clustering,
-            batches: o.batches,
-            uncertainty: o.uncertainty,
-        };
-        settings.check().map_err(|e| err("oma", e))?;
+        let settings = o.settings(self.frf.band)?;
         if let Some(w) = o.window_seconds {
             if !(w.is_finite() && w > 0.0) {
                 return Err(err("oma.window_seconds", format!("must be positive, got {w}")));

@@ -1,12 +1,13 @@
 //! `[zenoh]`: the session's mode and endpoints, layered over an optional
 //! zenoh JSON5 file.
 
+#[cfg(feature = "daemon")]
 use anyhow::{anyhow, Result};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
-use super::err;
-use super::tls::TlsReport;
+#[cfg(feature = "daemon")]
+use super::{err, tls::TlsReport};
 
 /// `[zenoh]`.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -35,6 +36,8 @@ impl Default for ZenohConfig {
     }
 }
 
+/// The zenoh session (the daemon's build only).
+#[cfg(feature = "daemon")]
 impl ZenohConfig {
     /// The zenoh session configuration: the JSON5 file first, then our keys;
     /// its TLS files read and checked (see [`TlsReport`]).

@@ -41,15 +41,18 @@ pub fn err(args: fmt::Arguments<'_>) {
 }
 
 /// `println!` that never panics: a closed stdout ends the printing.
+#[cfg_attr(not(feature = "daemon"), allow(unused_macros))]
 macro_rules! outln {
     ($($arg:tt)*) => { $crate::io::console::out(format_args!("{}\n", format_args!($($arg)*))) };
 }
 
 /// `eprintln!` that never panics: a closed stderr ends the printing.
+#[cfg_attr(not(feature = "daemon"), allow(unused_macros))]
 macro_rules! errln {
     ($($arg:tt)*) => { $crate::io::console::err(format_args!("{}\n", format_args!($($arg)*))) };
 }
 
+#[cfg_attr(not(feature = "daemon"), allow(unused_imports))]
 pub(crate) use {errln, outln};
 
 /// Standard output as a `Write` for table and JSON writers: every write
@@ -88,6 +91,7 @@ impl Write for LogWriter {
     }
 }
 
+#[cfg(feature = "daemon")]
 impl<'a> tracing_subscriber::fmt::MakeWriter<'a> for LogWriter {
     type Writer = LogWriter;
 
