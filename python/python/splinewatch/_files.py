@@ -82,6 +82,28 @@ def _nan(v: Optional[float]) -> float:
     return np.nan if v is None else float(v)
 
 
+#: The results topics (src/outputs/results.rs), longest first so that
+#: ``oma/modes`` is not taken for ``modes``.
+RESULT_TOPICS = sorted(
+    [
+        "updating/parameters", "updating/residue", "updating/failures", "frf/measured", "frf/model", "modes",
+        "oma/modes", "health", "windows", "monitoring/status", "monitoring/alarm", "events/summary",
+        "events/verdict",
+    ],
+    key=len,
+    reverse=True,
+)
+
+
+def _split_topic(topic: str):
+    """(prefix, suffix) of a results topic; an unknown one splits at its last ``/``."""
+    for suffix in RESULT_TOPICS:
+        if topic.endswith("/" + suffix):
+            return topic[: -len(suffix) - 1], suffix
+    prefix, _, suffix = topic.rpartition("/")
+    return prefix, suffix
+
+
 class Results:
     """A results file (MCAP of JSON messages) as arrays.
 
@@ -109,7 +131,7 @@ class Results:
         by_suffix: Dict[str, List[Any]] = defaultdict(list)
         prefixes = set()
         for topic, log_time, text in messages:
-            prefix, _, suffix = topic.partition("/")
+            prefix, suffix = _split_topic(topic)
             prefixes.add(prefix)
             by_suffix[suffix].append((log_time, json.loads(text)))
         self.prefix = ",".join(sorted(prefixes))
