@@ -427,6 +427,44 @@ fn the_core_crate_does_no_io() {
     }
 }
 
+/// The rooms of the application the Python package (python/, a thin shell
+/// like `cli`) may reach: the daemon's rooms are not in its build.
+const PYTHON_ROOMS: [&str; 4] = ["config", "io", "pipeline", "studies"];
+
+/// The Python package depends on the core and the application built
+/// without its daemon (no zenoh, Rerun or tokio: it builds in minutes),
+/// and names only the rooms of that build.
+#[test]
+fn the_python_package_is_a_thin_shell_without_the_daemon() {
+    let manifest = std::fs::read_to_string(root().join("python/Cargo.toml")).unwrap();
+    let manifest: toml::Table = toml::from_str(&manifest).unwrap();
+    let deps = manifest["dependencies"].as_table().unwrap();
+    assert_eq!(
+        deps["splinewatch"].get("default-features").and_then(|v| v.as_bool()),
+        Some(false),
+        "python/Cargo.toml must take the application without its `daemon` feature"
+    );
+    for forbidden in ["zenoh", "rerun", "tokio"] {
+        assert!(!deps.contains_key(forbidden), "python/Cargo.toml depends on {forbidden}");
+    }
+    let files = sources(&root().join("python/src"));
+    assert!(files.len() >= 4, "found only {} Python-binding sources", files.len());
+    for (path, text) in files {
+        let code = code_only(&text);
+        for (at, _) in code.match_indices("splinewatch::") {
+            let room: String = code[at + "splinewatch::".len()..]
+                .chars()
+                .take_while(|c| c.is_alphanumeric() || *c == '_')
+                .collect();
+            assert!(
+                PYTHON_ROOMS.contains(&room.as_str()),
+                "python/src/{} names splinewatch::{room}: the package reaches only {PYTHON_ROOMS:?}",
+                path.display()
+            );
+        }
+    }
+}
+
 fn core_sources() -> Vec<(PathBuf, String)> {
     sources(&root().join("crates/splinewatch-core/src"))
         .into_iter()
