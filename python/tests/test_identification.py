@@ -75,6 +75,20 @@ def test_frf_is_the_clis_frf_bit_for_bit(cli, forced):
         assert np.clip(coherence[row], 0.0, 1.0).tolist() == entry["coherence"]
 
 
+def test_identify_is_the_clis_identify_bit_for_bit(cli, forced):
+    # The bundled deck's shaker record: the force at P1 in, every accelerometer out;
+    # config/sinello.toml has no [oma]: horizon 40, orders 2-120, 16 batches, band [frf] [0.5, 80],
+    # exact jackknife (identify's).
+    expected = cli("identify", "--config", "config/sinello.toml", forced, "--json").stdout.strip()
+    force = splinewatch.read_recording(forced, quantity="force")["P1"]
+    responses = splinewatch.read_recording(forced)
+    outputs = np.column_stack([responses[n].data for n in SENSORS])
+    modes = splinewatch.identify(force.data, outputs, force.fs, band=(0.5, 80.0), horizon=40, orders=(2, 120, 2),
+                                 batches=16, sensors=SENSORS, start=force.start)
+    assert modes.to_json() == expected
+    assert len(modes) >= 8
+
+
 def test_identify_recovers_a_two_mode_system_driven_by_a_measured_input():
     rng = np.random.default_rng(11)
     fs = 50.0

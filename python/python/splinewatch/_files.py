@@ -230,6 +230,11 @@ class Results:
 def read_results(path: Union[str, "os.PathLike[str]"]) -> Results:
     """Reads a results file the daemon, ``replay`` or ``events`` wrote.
 
+    Parameters
+    ----------
+    path : path
+        The results MCAP (JSON messages under ``<prefix>/…``).
+
     Returns
     -------
     Results
