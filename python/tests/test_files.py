@@ -74,6 +74,12 @@ def test_results_are_the_files_messages_as_arrays(cli, forced, tmp_path):
         assert columns["time"].dtype == np.dtype("datetime64[ns]") and columns["std"].dtype == np.float64
     assert "west.k1" in results.parameters and "windows" in results.topics
     assert len(results.messages("windows")) == sum(1 for t, _ in independent if t.endswith("/windows"))
+    fit = results.frf_fit()
+    last = [m for t, m in independent if t.endswith("/frf/model")][-1]
+    assert fit["window"] == last["window"] and fit["measured"].shape == fit["model"].shape
+    assert fit["model"][0].real.tolist() == last["frfs"][0]["re"] and fit["frequency"].tolist() == last["frequency_hz"]
+    with pytest.raises(ValueError, match="has no measured FRFs"):
+        results.frf_fit(window=10_000)
     frames = results.to_pandas()
     assert len(frames["parameters"]) == sum(len(c["value"]) for c in results.parameters.values())
 

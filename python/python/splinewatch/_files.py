@@ -146,6 +146,46 @@ class Results:
         """Every message of a topic (its suffix, e.g. ``"windows"``), as dicts, in file order."""
         return [m for _, m in self._messages.get(topic, [])]
 
+    def frf_fit(self, window: Optional[int] = None) -> Dict[str, Any]:
+        """The measured and fitted model FRFs of one updated window (default the last).
+
+        Parameters
+        ----------
+        window : int, optional
+            The window number (``updates["window"]``).
+
+        Returns
+        -------
+        dict
+            ``window``, ``frequency`` (n_lines,), ``pairs`` [(input, output)],
+            ``measured`` and ``model`` (complex128, n_pairs × n_lines; ``model``
+            None when the file has no model FRFs for that window), ``coherence``
+            (n_pairs × n_lines, NaN where not given) and ``quantity``.
+        """
+        measured = {m["window"]: m for m in self.messages("frf/measured")}
+        model = {m["window"]: m for m in self.messages("frf/model")}
+        if not measured:
+            raise ValueError("no frf/measured message: this results file holds no FRF fit (an output-only config?)")
+        if window is None:
+            window = max(measured)
+        if window not in measured:
+            raise ValueError(f"window {window} has no measured FRFs (windows with some: {sorted(measured)})")
+
+        def complex_rows(message):
+            return np.array([np.asarray(e["re"]) + 1j * np.asarray(e["im"]) for e in message["frfs"]])
+
+        m = measured[window]
+        coherence = [e.get("coherence") or [np.nan] * len(m["frequency_hz"]) for e in m["frfs"]]
+        return {
+            "window": window,
+            "frequency": np.asarray(m["frequency_hz"], dtype=np.float64),
+            "pairs": [(e["input"], e["output"]) for e in m["frfs"]],
+            "measured": complex_rows(m),
+            "model": complex_rows(model[window]) if window in model else None,
+            "coherence": np.asarray(coherence, dtype=np.float64),
+            "quantity": m.get("quantity"),
+        }
+
     def _parameters(self) -> Dict[str, Dict[str, np.ndarray]]:
         rows: Dict[str, List[Any]] = defaultdict(list)
         for m in self.messages("updating/parameters"):
