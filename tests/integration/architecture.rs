@@ -445,7 +445,10 @@ fn the_python_package_is_a_thin_shell_without_the_daemon() {
         "python/Cargo.toml must take the application without its `daemon` feature"
     );
     for forbidden in ["zenoh", "rerun", "tokio"] {
-        assert!(!deps.contains_key(forbidden), "python/Cargo.toml depends on {forbidden}");
+        assert!(
+            !deps.contains_key(forbidden),
+            "python/Cargo.toml depends on {forbidden}"
+        );
     }
     let files = sources(&root().join("python/src"));
     assert!(files.len() >= 4, "found only {} Python-binding sources", files.len());
