@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The monitoring figures of the README: the two-week scenario
+# The monitoring figures of the guide (tutorials/alarms.md): the two-week scenario
 # (config/scenarios/two-weeks-bearing-loss.toml, 336 hourly windows,
 # training on the first 100, damage from window 200) for three sizes of
 # bearing loss, scored with temperature compensation (held-out limits),

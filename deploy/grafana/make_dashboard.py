@@ -113,7 +113,7 @@ dashboard = {
     "time": {"from": "now-24h", "to": "now"},
     "refresh": "30s",
     "description": "splinewatch daemons: health, throughput, latency, the updated parameters and the alarm state "
-    "(README, [metrics]). Made by deploy/grafana/make_dashboard.py.",
+    "(the guide: docs/guide/src/deployment/metrics.md). Made by deploy/grafana/make_dashboard.py.",
     "templating": {"list": variables},
     "panels": panels,
 }

@@ -95,7 +95,7 @@ pub struct UpdateArgs {
 
 #[derive(Args)]
 pub struct PaperArgs {
-    /// Output folder (outside the source tree by default; `--out docs/paper`
+    /// Output folder (outside the source tree by default; `--out docs/guide/src/paper`
     /// refreshes the committed report).
     #[arg(long, default_value = "out/paper")]
     pub out: PathBuf,
@@ -290,7 +290,7 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
     }
     for file in tls.expiring() {
         errln!(
-            "warning: {} expires within {} days: renew it (README, \"Transport security\")",
+            "warning: {} expires within {} days: renew it (guide: docs/guide/src/deployment/tls.md)",
             file.path.display(),
             crate::config::EXPIRY_WARNING_DAYS
         );

@@ -4,7 +4,7 @@
 //!
 //! Physics (`[model.geometry]`, `[model.material]`, `[[model.springs]]`,
 //! `[[model.constraints]]`) is kept apart from discretisation
-//! (`[model.discretization]`); see README.md for every key.
+//! (`[model.discretization]`); see the guide's configuration reference for every key.
 
 mod events;
 mod frf;
@@ -299,7 +299,7 @@ impl Config {
                     format!("{key}[{i}]"),
                     format!(
                         "{e:?}: this build speaks zenoh over TCP and TLS only (\"tcp/<host>:<port>\", \
-                         \"tls/<host>:<port>\"; README, \"Transport security\")"
+                         \"tls/<host>:<port>\"; guide: docs/guide/src/deployment/tls.md)"
                     ),
                 ));
             }

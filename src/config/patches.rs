@@ -634,7 +634,7 @@ origin = [30.0, 0.0, 0.0]
         }
     }
 
-    /// The README's multi-patch monitoring example stays a valid config:
+    /// The guide's multi-patch monitoring example stays a valid config:
     /// a modulus field on each patch, the bearing updated, `[monitoring]`.
     #[test]
     fn the_monitoring_example_of_several_patches_builds() {

@@ -422,7 +422,7 @@ fn replayed_counts(bytes: &[u8]) -> (u64, u64) {
     (summary.messages, accounted(&last_health(&results)))
 }
 
-/// Messages per damaged stream: `SPLINEWATCH_FUZZ_MESSAGES` (the README's
+/// Messages per damaged stream: `SPLINEWATCH_FUZZ_MESSAGES` (the guide's
 /// long run: 1 000 000), else 3 000.
 fn fuzz_messages() -> usize {
     std::env::var("SPLINEWATCH_FUZZ_MESSAGES")
@@ -448,7 +448,7 @@ proptest::proptest! {
         let count = fuzz_messages();
         let (bytes, expected) = damaged_stream(seed, count);
         // The long run also keeps its stream, for `replay` under
-        // `/usr/bin/time` (README, "Bad input at scale").
+        // `/usr/bin/time` (the guide, "Bad input at scale").
         if let Some(path) = std::env::var_os("SPLINEWATCH_FUZZ_OUT") {
             std::fs::write(path, &bytes).unwrap();
             eprintln!("{count} messages, {expected} blocks and undecodable messages");
@@ -465,7 +465,7 @@ proptest::proptest! {
 /// last health message: its blocks accepted or rejected by reason, an
 /// undecodable message rejected once, and what the bounded ingest queue
 /// dropped in `queue_drops`: received = accepted + rejected + queue_drops.
-/// (10⁵ from a Python peer: `benches/damaged_peer.py`, README.)
+/// (10⁵ from a Python peer: `benches/damaged_peer.py`, the guide.)
 #[test]
 fn issue_34_a_live_daemon_accounts_for_every_damaged_message() {
     let dir = crate::common::fresh_dir("issue_34_live");

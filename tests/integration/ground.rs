@@ -95,7 +95,7 @@ fn issue_44_simulate_from_a_record_then_predict_gives_the_simulation_back() {
 /// scored over the whole record and its strong motion, the SVGs, the
 /// recording and the Rerun series written, and on the transverse channels (7, 9, 4 as
 /// `channel_conf.py` names them) the model's median NRMSE over the strong
-/// motion below the "deck = nearest ground" baseline's (README: 0.58
+/// motion below the "deck = nearest ground" baseline's (the guide: 0.58
 /// against 0.80).
 #[test]
 fn issue_44_the_painter_street_model_predicts_a_real_event_better_than_its_ground() {
@@ -283,7 +283,7 @@ fn issue_45_identify_finds_the_modes_of_a_recording_with_a_measured_input() {
 /// splinewatch's core must give the latter's poles: frequencies within
 /// 1e-4 relative, damping within 1e-4 (LAPACK against faer on a realization
 /// whose `R_uu` spans 14 decades). Its distance to mdof's own poles is the
-/// two estimator choices', measured in the fixture (README: up to 10 % at
+/// two estimator choices', measured in the fixture (the guide: up to 10 % at
 /// this low order on these records).
 #[test]
 fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator() {

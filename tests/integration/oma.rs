@@ -287,7 +287,7 @@ fn bad_oma_input_is_a_clear_error() {
 /// scenario's loss, here from the start) → `oma --out` → `update --modes`:
 /// from the undamaged config values `east.k2` is found within 10 % of its
 /// new value and every other κ within 15 % (the targets; reached:
-/// see README). Traffic's spurious modes (43 and 49 Hz, ζ 4–5 %) stay
+/// see the guide). Traffic's spurious modes (43 and 49 Hz, ζ 4–5 %) stay
 /// unpaired thanks to the frequency gate.
 #[test]
 fn oma_then_update_modes_finds_the_bearing_loss() {
@@ -440,7 +440,7 @@ fn output_only_replay_follows_the_bearing_damage() {
 /// Traffic (12 vehicles a minute, two lanes) needs longer windows than
 /// ambient excitation: one 60-minute window of a deck whose `east.k2` lost
 /// 40 % before the record, updated from the undamaged config values,
-/// finds `east.k2` within 10 % and every other κ within 15 % (the README
+/// finds `east.k2` within 10 % and every other κ within 15 % (the guide
 /// gives the seeds and the 30-minute figures).
 #[test]
 fn output_only_replay_of_traffic_in_an_hour_window_finds_the_loss() {

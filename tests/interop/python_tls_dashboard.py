@@ -8,7 +8,7 @@ dashboard.key, subscribes to bridge/*/updating/parameters for SECONDS
 (default 60), then queries bridge/*/updating/latest and prints what it got.
 Exits non-zero unless it received at least one parameters message and one
 reply. tests/interop/run_tls_interop.sh runs it against a router, the daemon
-and a logger, all over mutual TLS (README, "Transport security").
+and a logger, all over mutual TLS (guide, "Transport security": docs/guide/src/deployment/tls.md).
 """
 
 import json

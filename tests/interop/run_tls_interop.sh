@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Manual interop check over mutual TLS (README, "Transport security"):
+# Manual interop check over mutual TLS (guide, "Transport security": docs/guide/src/deployment/tls.md):
 # a router from config/zenoh/router-tls.json5 (run by eclipse-zenoh in
 # Python: no zenohd needed), the splinewatch daemon and a simulated logger
 # as its clients, and a Python dashboard that must receive the results and
 # a reply to updating/latest. Certificates are made with openssl as the
-# README says.
+# guide says.
 #
 #   tests/interop/run_tls_interop.sh [PYTHON] [SPLINEWATCH]
 #
@@ -20,7 +20,7 @@ cd "$work"
 port=$(( 20000 + RANDOM % 20000 ))
 endpoint="tls/127.0.0.1:$port"
 
-# 1. The site PKI, exactly as the README's step 1 (router for 127.0.0.1).
+# 1. The site PKI, exactly as the guide's step 1 (router for 127.0.0.1).
 key() { openssl genpkey -algorithm EC -pkeyopt ec_paramgen_curve:P-256 -out "$1.key" 2>/dev/null; }
 key ca
 openssl req -x509 -new -key ca.key -days 3650 -subj "/CN=interop site CA" -out ca.pem \

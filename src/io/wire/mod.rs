@@ -1,4 +1,4 @@
-//! The measurement wire format (docs/wire-format.md): one message is one
+//! The measurement wire format (docs/guide/src/reference/wire-format.md): one message is one
 //! block of consecutive samples of one channel, a SEP005-style object
 //! `{"name","quantity","unit_str","fs","start_timestamp","data"}`, or a list
 //! of such objects. JSON and CBOR carry the same keys; CBOR `data` may be a
