@@ -9,6 +9,7 @@ mod identified;
 mod measure;
 mod model;
 mod monitor;
+mod reference;
 
 use crate::io::console::errln;
 use anyhow::Result;
@@ -87,6 +88,12 @@ enum Command {
     Recover(monitor::RecoverArgs),
     /// Validate a configuration file without running anything.
     CheckConfig(model::CheckConfigArgs),
+    /// The JSON Schema of the configuration file, for editors that complete
+    /// and check TOML keys (Taplo / Even Better TOML).
+    ConfigSchema(reference::ConfigSchemaArgs),
+    /// The guide's generated reference pages as Markdown (cli, config, topics).
+    #[command(hide = true)]
+    Reference(reference::ReferenceArgs),
 }
 
 /// The command table: each command is one small function of its arguments.
@@ -113,6 +120,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Monitor(args) => monitor::monitor(args),
         Command::Fleet(args) => monitor::fleet(args),
         Command::CheckConfig(args) => model::check_config(args),
+        Command::ConfigSchema(args) => reference::config_schema(args),
+        Command::Reference(args) => reference::reference(args),
     }
 }
 

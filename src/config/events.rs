@@ -5,7 +5,7 @@ use super::{err, ConfigError};
 use serde::{Deserialize, Serialize};
 
 /// `[events]`: how events are told apart and judged.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EventsConfig {
     /// A triggered logger's burst of channel blocks ends when this many
@@ -38,7 +38,7 @@ pub struct EventsConfig {
 }
 
 /// `[events] inputs`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum EventInputs {
     #[default]

@@ -6,7 +6,7 @@ use splinewatch_core::identification::welch::{Averaging, Detrend, Estimator, Gat
 use splinewatch_core::response::frf::Quantity;
 
 /// `[frf]`: Welch FRF estimation from time series.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct FrfConfig {
     /// Welch segment length, seconds.
@@ -41,6 +41,7 @@ pub struct FrfConfig {
     /// Impact tests: reject segments with a second hit above this fraction of the peak.
     pub double_impact_fraction: Option<f64>,
     /// Quantity written to FRF files: "accelerance", "mobility" or "receptance".
+    #[schemars(with = "super::schema::QuantityDef")]
     pub quantity: Quantity,
     /// Largest accepted block, samples.
     pub max_block_samples: usize,

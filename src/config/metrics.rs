@@ -5,7 +5,7 @@ use super::{err, ConfigError};
 use serde::{Deserialize, Serialize};
 
 /// `[metrics]`: present, the daemon serves `/metrics`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MetricsConfig {
     /// `address:port` to serve on; loopback unless the operator says

@@ -16,6 +16,7 @@ mod oma;
 mod output;
 mod patches;
 mod schedule;
+mod schema;
 mod setup;
 #[cfg(feature = "daemon")]
 mod tls;
@@ -36,6 +37,7 @@ pub use oma::OmaConfig;
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use patches::FaceConfig;
 pub use schedule::ScheduleConfig;
+pub use schema::config_schema;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 #[cfg(feature = "daemon")]
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
@@ -63,7 +65,7 @@ pub(crate) fn err(path: impl Into<String>, message: impl Display) -> ConfigError
     }
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Config {
     pub structure: StructureConfig,
@@ -101,7 +103,7 @@ pub struct Config {
     pub metrics: Option<MetricsConfig>,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StructureConfig {
     /// Identifier of the monitored structure; also the default zenoh/MCAP prefix

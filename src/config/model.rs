@@ -30,19 +30,21 @@ pub const MAX_CONTROL_POINTS: usize = 40_000;
 /// 10 000 dofs already takes minutes.
 pub const MAX_DENSE_CONTROL_POINTS: usize = 2000;
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ModelConfig {
     /// One patch named `"deck"` (with `discretization` and `material`), or
     /// [`ModelConfig::patches`].
     pub geometry: Option<GeometryConfig>,
     pub discretization: Option<DiscretizationConfig>,
+    #[schemars(with = "Option<super::schema::OrthotropicParametersDef>")]
     pub material: Option<OrthotropicParameters>,
     /// `[[model.patches]]`: a deck of many patches.
     #[serde(default)]
     pub patches: Vec<PatchConfig>,
     /// `[model.materials.<name>]`, named by the patches.
     #[serde(default)]
+    #[schemars(with = "BTreeMap<String, super::schema::OrthotropicParametersDef>")]
     pub materials: BTreeMap<String, OrthotropicParameters>,
     /// Patches whose edge lies within this distance (m) of another patch's
     /// mid-surface are joined rigidly there.
@@ -99,7 +101,7 @@ fn default_joint_penalty() -> f64 {
 }
 
 /// `[model.solver] modes`: which eigen-solution the FRFs and updates use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum ModesChoice {
     /// Every mode of the dense model (exact modal sums; small models).
@@ -118,7 +120,7 @@ pub enum ModesChoice {
 pub const AUTO_TRUNCATED_CONTROL_POINTS: usize = 400;
 
 /// `[model.solver]`.
-#[derive(Debug, Clone, Default, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SolverConfig {
     #[serde(default)]
@@ -130,7 +132,7 @@ pub struct SolverConfig {
 }
 
 /// `[model.damping]`: the B-spline ζ(f) of eq. (29).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DampingConfig {
     pub degree: usize,
@@ -146,7 +148,7 @@ pub struct DampingConfig {
 }
 
 /// A measurement point: parametric `xi`/`eta` or physical `x`/`y`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SensorConfig {
     pub name: String,
@@ -184,7 +186,7 @@ fn default_face() -> FaceConfig {
     FaceConfig::Middle
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum QuantityList {
     One(String),
@@ -200,7 +202,7 @@ impl QuantityList {
     }
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum GeometryConfig {
     /// `[0, length] × [0, width]` in the xy plane, x along ξ.
@@ -214,7 +216,7 @@ pub enum GeometryConfig {
     },
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DiscretizationConfig {
     /// B-spline degrees `[p, q]` along ξ and η.
@@ -229,7 +231,7 @@ pub struct DiscretizationConfig {
     pub insert_knots_eta: Vec<f64>,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum DirectionConfig {
     /// `"x"`, `"y"`, `"z"` or `"normal"`.
@@ -250,7 +252,7 @@ impl DirectionConfig {
     }
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SpringConfig {
     pub name: String,
@@ -276,7 +278,7 @@ pub struct SpringConfig {
 
 /// `[[model.stiffness_fields]]`: a B-spline multiplier θ(ξ, η) of the deck's
 /// material stiffness over its own clamped knot vectors (1.0 = nominal).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StiffnessFieldConfig {
     pub name: String,
@@ -315,7 +317,7 @@ fn default_scales() -> String {
     "all".into()
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum EdgeConfig {
     Xi0,
@@ -324,7 +326,7 @@ pub enum EdgeConfig {
     Eta1,
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum SupportConfig {
     SimplySupported,
@@ -332,7 +334,7 @@ pub enum SupportConfig {
     Clamped,
 }
 
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ConstraintConfig {
     pub edge: EdgeConfig,

@@ -7,7 +7,7 @@ use splinewatch_core::monitoring::{LimitMethod, MonitoringError, Settings};
 
 /// `[monitoring]`; present: every accepted update is scored. Every key but
 /// the section itself is optional.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct MonitoringConfig {
     /// Channels on `<prefix>/temperature/<name>` (°C); none: the PCA variant.
@@ -41,6 +41,7 @@ pub struct MonitoringConfig {
     pub state_file: Option<std::path::PathBuf>,
     /// `"held_out"` (default): limits from cross-validated training windows;
     /// `"theoretical"`: the textbook F law (trusts the model).
+    #[schemars(with = "super::schema::LimitMethodDef")]
     pub limits: LimitMethod,
     /// Output-only: an identified frequency is monitored when its mode was
     /// identified in at least this share of the training windows.
@@ -53,7 +54,7 @@ pub struct MonitoringConfig {
 /// its standard input, and/or a webhook it is POSTed to, whenever the alarm
 /// state changes (raised, cleared, outside the training range entered or
 /// left).
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NotifyConfig {
     /// The program and its arguments (no shell unless named); empty: none.

@@ -7,7 +7,7 @@ use splinewatch_core::identification::oma::{ClusterCriteria, OmaSettings, Stabil
 /// Settings of the identification (`[oma]`); every key is optional. The
 /// defaults suit a deck with modes from a few Hz to the band's top at 12
 /// channels: 40 block rows, orders 2–120, KOMA-like stabilisation.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct OmaConfig {
     /// Reference sensors (names); empty: every acceleration sensor.
@@ -28,8 +28,11 @@ pub struct OmaConfig {
     pub batches: usize,
     /// `"first_order"` (default) or `"jackknife"`: how each replicate's
     /// poles are obtained.
+    #[schemars(with = "super::schema::UncertaintyMethodDef")]
     pub uncertainty: UncertaintyMethod,
+    #[schemars(with = "super::schema::StabilityCriteriaDef")]
     pub stability: StabilityCriteria,
+    #[schemars(with = "super::schema::ClusterCriteriaDef")]
     pub clustering: ClusterCriteria,
 }
 

@@ -15,7 +15,7 @@ use splinewatch_core::model::shell::Shell;
 use std::collections::BTreeMap;
 
 /// `[[model.patches]]`: one B-spline patch with its own net and material.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PatchConfig {
     pub name: String,
@@ -40,7 +40,7 @@ pub struct PatchConfig {
 /// A patch's thickness: constant, or `{ knots_xi, degree_xi, knots_eta,
 /// degree_eta, values }` (η fastest), sampled at the analysis net's
 /// Greville abscissae (a linear taper is reproduced exactly).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum ThicknessConfig {
     Constant(f64),
@@ -95,7 +95,7 @@ impl ThicknessConfig {
 }
 
 /// `[model.patches.geometry]`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum PatchGeometryConfig {
     /// Four corners, (ξ=0,η=0), (ξ=1,η=0), (ξ=1,η=1), (ξ=0,η=1), mapped bilinearly.
@@ -137,7 +137,7 @@ pub enum PatchGeometryConfig {
 }
 
 /// `[[model.bearings]]`: a discrete elastic bearing.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BearingConfig {
     pub name: String,
@@ -167,7 +167,7 @@ pub struct BearingConfig {
 }
 
 /// `[[model.bearings]] update`: every axis, none, or the axes listed.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum BearingUpdate {
     Every(bool),
@@ -211,7 +211,7 @@ fn bottom() -> FaceConfig {
 }
 
 /// `[[model.masses]]`: a point mass at the mid-surface.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MassConfig {
     /// m.
@@ -230,7 +230,7 @@ pub fn face_tau(face: FaceConfig) -> f64 {
     }
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum FaceConfig {
     Bottom,

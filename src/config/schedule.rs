@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 /// Scheduling and quality settings (`[schedule]`).
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ScheduleConfig {
     /// Run the updating after this many accepted windows.

@@ -24,7 +24,7 @@ fn default_decimation() -> usize {
 }
 
 /// `[updating]`: solver and data selection.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct UpdatingConfig {
     #[serde(default = "default_max_iterations")]
@@ -43,8 +43,10 @@ pub struct UpdatingConfig {
     /// the available cores, at most 4.
     pub threads: Option<usize>,
     #[serde(default = "default_method")]
+    #[schemars(with = "super::schema::MethodDef")]
     pub method: Method,
     #[serde(default = "default_weighting")]
+    #[schemars(with = "super::schema::WeightingDef")]
     pub weighting: Weighting,
     /// Frequency band [f_min, f_max] in Hz used for the residues.
     pub band: Option<[f64; 2]>,
@@ -70,7 +72,7 @@ pub struct UpdatingConfig {
 }
 
 /// What an update fits (`[updating] residues`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Residues {
     /// The window's FRFs (eq. 36–39), weighted by `weighting`.

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use super::{err, tls::TlsReport};
 
 /// `[zenoh]`.
-#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct ZenohConfig {
     /// "peer" or "client".

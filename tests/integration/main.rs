@@ -9,6 +9,7 @@ mod corpus;
 mod events;
 mod fleet;
 mod ground;
+mod guide;
 mod import;
 mod live;
 mod matrices;

@@ -1,0 +1,257 @@
+//! The guide and the README stay true (issue 47): the generated reference
+//! pages are what the code generates now, every TOML block validates (a
+//! fragment inside the bundled config), every command a shell block names
+//! exists with the flags it is given, and the blocks marked `sh,runnable`
+//! run on the bundled data. A TOML block is a fragment laid over
+//! `config/sinello.toml`, or over the config its fence names
+//! (`toml,config=config/painter-street.toml`), or a whole config when it
+//! names its `[structure]`; a block that names a deployed site's files
+//! (`toml,site-files`: certificates, a token) is checked key by key but not
+//! against this machine's files. `SPLINEWATCH_BLESS=1` rewrites stale generated
+//! pages instead of failing.
+
+use crate::common::splinewatch;
+use splinewatch::config::Config;
+use std::path::{Path, PathBuf};
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// README.md and every page of the guide, with their text.
+fn pages() -> Vec<(PathBuf, String)> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.extension().is_some_and(|e| e == "md") {
+                out.push(path);
+            }
+        }
+    }
+    let mut paths = vec![root().join("README.md")];
+    walk(&root().join("docs/guide/src"), &mut paths);
+    paths.sort();
+    paths
+        .into_iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(&p).unwrap();
+            (p.strip_prefix(root()).unwrap().to_path_buf(), text)
+        })
+        .collect()
+}
+
+/// The fenced code blocks of `text` (also indented ones, in list items):
+/// (info string, body without the fence's indentation, line of the fence).
+fn blocks(text: &str) -> Vec<(String, String, usize)> {
+    let mut out = Vec::new();
+    let mut open: Option<(String, String, usize, usize)> = None;
+    for (n, line) in text.lines().enumerate() {
+        let trimmed = line.trim_start();
+        let indent = line.len() - trimmed.len();
+        match (&mut open, trimmed.strip_prefix("```")) {
+            (None, Some(info)) => open = Some((info.trim().to_string(), String::new(), n + 1, indent)),
+            (Some(_), Some(rest)) if rest.trim().is_empty() => {
+                let (info, body, at, _) = open.take().unwrap();
+                out.push((info, body, at));
+            }
+            (Some((_, body, _, fence)), _) => {
+                body.push_str(line.get(*fence..).unwrap_or(trimmed));
+                body.push('\n');
+            }
+            (None, None) => {}
+        }
+    }
+    out
+}
+
+#[test]
+fn the_generated_reference_pages_are_current() {
+    let bless = std::env::var("SPLINEWATCH_BLESS").is_ok_and(|v| v == "1");
+    let reference = root().join("docs/guide/src/reference");
+    let pages = [
+        (vec!["reference", "cli"], "cli.md"),
+        (vec!["reference", "config"], "config-keys.md"),
+        (vec!["reference", "topics"], "results-topics.md"),
+        (vec!["config-schema"], "splinewatch.schema.json"),
+    ];
+    let mut stale = Vec::new();
+    for (args, file) in pages {
+        let out = splinewatch(&args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let generated = String::from_utf8(out.stdout).unwrap();
+        let path = reference.join(file);
+        if std::fs::read_to_string(&path).ok().as_deref() != Some(generated.as_str()) {
+            if bless {
+                std::fs::write(&path, &generated).unwrap();
+            } else {
+                stale.push(file);
+            }
+        }
+    }
+    assert!(
+        stale.is_empty(),
+        "stale generated pages {stale:?}: run `SPLINEWATCH_BLESS=1 cargo test --test integration guide::`"
+    );
+}
+
+/// `a` with `b`'s keys laid over it (tables merged key by key).
+fn merge(a: &mut toml::Table, b: toml::Table) {
+    for (key, value) in b {
+        match (a.get_mut(&key), value) {
+            (Some(toml::Value::Table(inner)), toml::Value::Table(over)) => merge(inner, over),
+            (_, value) => {
+                a.insert(key, value);
+            }
+        }
+    }
+}
+
+#[test]
+fn every_toml_block_of_the_guide_and_readme_validates() {
+    let read =
+        |file: &str| -> toml::Table { toml::from_str(&std::fs::read_to_string(root().join(file)).unwrap()).unwrap() };
+    let mut checked = 0;
+    for (page, text) in pages() {
+        for (info, body, line) in blocks(&text) {
+            let mut parts = info.split(',');
+            if parts.next() != Some("toml") {
+                continue;
+            }
+            let base = read(
+                parts
+                    .find_map(|p| p.strip_prefix("config="))
+                    .unwrap_or("config/sinello.toml"),
+            );
+            let fragment: toml::Table =
+                toml::from_str(&body).unwrap_or_else(|e| panic!("{}:{line}: not TOML: {e}", page.display()));
+            // A whole config (it names its structure) stands alone; a
+            // fragment is laid over the bundled deck.
+            let mut config = if fragment.contains_key("structure") {
+                toml::Table::new()
+            } else {
+                base.clone()
+            };
+            if fragment.get("model").and_then(|m| m.get("patches")).is_some() {
+                if let Some(toml::Value::Table(model)) = config.get_mut("model") {
+                    for key in ["geometry", "discretization", "material", "springs"] {
+                        model.remove(key);
+                    }
+                }
+            }
+            merge(&mut config, fragment);
+            let text = toml::to_string(&config).unwrap();
+            let site_files = info.split(',').any(|p| p == "site-files");
+            let parsed = Config::from_toml(&text).and_then(|c| if site_files { Ok(()) } else { c.validate() });
+            if let Err(e) = parsed {
+                panic!("{}:{line}: the TOML block does not validate: {e}", page.display());
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 4, "only {checked} TOML blocks found");
+}
+
+/// The command and flags of a shell line that runs splinewatch.
+fn invocation(line: &str) -> Option<(String, Vec<String>)> {
+    let line = line
+        .split(" #")
+        .next()
+        .unwrap_or(line)
+        .trim()
+        .trim_end_matches('\\')
+        .trim();
+    let rest = [
+        "cargo run --release -- ",
+        "cargo run --quiet -- ",
+        "cargo run -- ",
+        "splinewatch ",
+    ]
+    .iter()
+    .find_map(|p| line.strip_prefix(p))?;
+    let mut words = rest.split_whitespace();
+    let command = words.next()?.to_string();
+    let flags = words
+        .filter(|w| w.starts_with("--"))
+        .map(|w| w.split('=').next().unwrap().to_string())
+        .collect();
+    Some((command, flags))
+}
+
+#[test]
+fn every_command_a_shell_block_names_exists_with_its_flags() {
+    let mut checked = Vec::new();
+    for (page, text) in pages() {
+        for (info, body, line) in blocks(&text) {
+            if !matches!(info.split(',').next(), Some("sh" | "console" | "bash")) {
+                continue;
+            }
+            for (command, flags) in body.lines().filter_map(invocation) {
+                let help = splinewatch(&[&command, "--help"]);
+                assert!(
+                    help.status.success(),
+                    "{}:{line}: `splinewatch {command}` no longer exists",
+                    page.display()
+                );
+                let help = String::from_utf8_lossy(&help.stdout).into_owned();
+                for flag in flags {
+                    assert!(
+                        help.contains(&format!("{flag} "))
+                            || help.contains(&format!("{flag}\n"))
+                            || help.contains(&format!("{flag},")),
+                        "{}:{line}: `splinewatch {command}` has no {flag}",
+                        page.display()
+                    );
+                }
+                checked.push(command);
+            }
+        }
+    }
+    for needed in ["demo", "oma", "replay", "simulate"] {
+        assert!(checked.iter().any(|c| c == needed), "no shell block runs `{needed}`");
+    }
+    // The README's quick start: the main job and the test command.
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    assert!(readme.contains("cargo run -- demo") && readme.contains("cargo test --workspace"));
+}
+
+#[test]
+fn the_blocks_marked_runnable_run_on_the_bundled_data() {
+    let mut ran = 0;
+    for (page, text) in pages() {
+        for (info, body, line) in blocks(&text) {
+            if info != "sh,runnable" {
+                continue;
+            }
+            for l in body.lines() {
+                let l = l.split(" #").next().unwrap().trim();
+                let Some(rest) = ["cargo run --release -- ", "cargo run -- ", "splinewatch "]
+                    .iter()
+                    .find_map(|p| l.strip_prefix(p))
+                else {
+                    assert!(
+                        l.is_empty(),
+                        "{}:{line}: a runnable block runs only splinewatch: {l}",
+                        page.display()
+                    );
+                    continue;
+                };
+                let args: Vec<&str> = rest.split_whitespace().collect();
+                let out = splinewatch(&args);
+                assert!(
+                    out.status.success(),
+                    "{}:{line}: `{l}` failed: {}",
+                    page.display(),
+                    String::from_utf8_lossy(&out.stderr)
+                );
+                ran += 1;
+            }
+        }
+    }
+    assert!(ran >= 2, "only {ran} runnable commands in the guide");
+}
