@@ -88,13 +88,28 @@ pub fn cli_page() -> String {
     out
 }
 
-/// `text` on one line, rustdoc links (`` [`X`] ``) as plain code.
+/// `text` on one line, rustdoc links (`` [`X`] ``) as plain code, and
+/// `<` and `>` outside code spans escaped (Markdown would take `<start>`
+/// for an HTML tag).
 fn one_paragraph(text: &str) -> String {
-    text.split_whitespace()
+    let joined = text
+        .split_whitespace()
         .collect::<Vec<_>>()
         .join(" ")
         .replace("[`", "`")
-        .replace("`]", "`")
+        .replace("`]", "`");
+    joined
+        .split('`')
+        .enumerate()
+        .map(|(k, part)| {
+            if k % 2 == 0 {
+                part.replace('<', "&lt;").replace('>', "&gt;")
+            } else {
+                part.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("`")
 }
 
 fn arg_name(arg: &Arg) -> String {
