@@ -5,7 +5,7 @@ MCP control server (`rerun viewer-mcp`, stdio JSON-RPC) selects a tab and
 takes the screenshot.
 
     .venv/bin/python docs/guide/screenshot_rrd.py out/overpass/results.rrd \
-        docs/guide/src/images/overpass-mesh.png --maximize "Deck: patches" --hide-panels
+        /tmp/overpass-mesh.png --maximize "Deck: patches" --hide-panels
 
 Needs rerun-sdk==0.36.3 in the venv (the README's Python set-up). The
 viewer listens on --port (default 9877) of loopback only.
