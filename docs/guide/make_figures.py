@@ -97,6 +97,8 @@ def deck_figure(name):
     for b in bearings:
         sec.plot(b["at"][1], b["at"][2], "^", color="C3", ms=6)
     sec.set(xlabel="y (m)", ylabel="z (m)", title=f"section near x = {mid:.1f} m", aspect="equal")
+    if span[2] < 0.5:  # a flat deck: its thickness is the shell's, not drawn
+        sec.set_ylim(-1.0, 1.0)
     if len(nets) > 1:
         sec.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.subplots_adjust(left=0.06, right=0.85, top=0.97, bottom=0.08, hspace=0.05)

@@ -255,3 +255,31 @@ fn the_blocks_marked_runnable_run_on_the_bundled_data() {
     }
     assert!(ran >= 2, "only {ran} runnable commands in the guide");
 }
+
+#[test]
+fn every_relative_link_and_picture_of_the_guide_and_readme_resolves() {
+    let mut checked = 0;
+    for (page, text) in pages() {
+        let dir = root().join(&page).parent().unwrap().to_path_buf();
+        for (at, _) in text.match_indices("](") {
+            let target: String = text[at + 2..].chars().take_while(|&c| c != ')').collect();
+            let target = target
+                .split('#')
+                .next()
+                .unwrap()
+                .split_whitespace()
+                .next()
+                .unwrap_or("");
+            if target.is_empty() || target.contains("://") || target.starts_with("mailto:") {
+                continue;
+            }
+            assert!(
+                dir.join(target).exists(),
+                "{}: the link {target} leads nowhere",
+                page.display()
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 50, "only {checked} relative links found");
+}
