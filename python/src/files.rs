@@ -11,6 +11,10 @@ use splinewatch::io::wire::Limits;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+/// The longest channel grid `read_recording` builds (2 GiB of samples): a
+/// block time-stamped decades off would otherwise ask for terabytes.
+const MAX_GRID_SAMPLES: usize = 1 << 28;
+
 fn read(path: &PathBuf) -> PyResult<Vec<u8>> {
     std::fs::read(path)
         .with_context(|| format!("cannot read {}", path.display()))
@@ -47,13 +51,17 @@ pub fn read_recording<'py>(py: Python<'py>, path: PathBuf) -> PyResult<(Bound<'p
             )));
         }
         let offset = |b: &RecordedBlock| ((b.block.start_ns - first.start_ns) as f64 * fs / 1e9).round() as usize;
-        let last = run.last().expect("a channel has a block");
-        let samples = run
-            .iter()
-            .map(|b| offset(b) + b.block.data.len())
-            .max()
-            .unwrap_or(0)
-            .max(offset(last) + last.block.data.len());
+        let samples = run.iter().map(|b| offset(b) + b.block.data.len()).max().unwrap_or(0);
+        if samples > MAX_GRID_SAMPLES {
+            let last = run.last().expect("a channel has a block");
+            return Err(bad(format!(
+                "{}: channel {name:?} spans {:.0} s from its first block to its last ({} samples at {fs} Hz, \
+                 more than {MAX_GRID_SAMPLES} on one grid): a block with a wrong time? Split the recording",
+                path.display(),
+                (last.block.start_ns - first.start_ns) as f64 / 1e9,
+                samples
+            )));
+        }
         let mut data = vec![f64::NAN; samples];
         for b in &run {
             let at = offset(b);

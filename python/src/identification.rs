@@ -11,13 +11,21 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splinewatch::config::{FrfConfig, OmaConfig};
 use splinewatch::pipeline::oma::OmaReport;
-use splinewatch_core::identification::oma::{identify as ssi_cov, OutputCorrelations};
+use splinewatch_core::identification::oma::{identify as ssi_cov, OmaSettings, OutputCorrelations};
 use splinewatch_core::identification::srim;
 use splinewatch_core::identification::welch::WelchEstimator;
 
 /// Parses the settings JSON of a section (`what`: "oma" or "frf").
 fn section<T: serde::de::DeserializeOwned>(json: &str, what: &str) -> PyResult<T> {
     serde_json::from_str(json).map_err(|e| bad(format!("{what}: {e}")))
+}
+
+/// The checked `[oma]` settings of `settings_json` for a record sampled at
+/// `fs` (the band defaults to 0 … fs/2).
+fn oma_settings(fs: f64, settings_json: &str) -> PyResult<OmaSettings> {
+    check_rate(fs)?;
+    let config: OmaConfig = section(settings_json, "oma")?;
+    config.settings([0.0, fs / 2.0]).or_py()
 }
 
 /// The default channel names `ch1, ch2, …`, or the given ones (one per channel).
@@ -45,9 +53,7 @@ pub fn oma(
     sensors: Option<Vec<String>>,
     start_ns: Option<i64>,
 ) -> PyResult<RawModes> {
-    check_rate(fs)?;
-    let config: OmaConfig = section(settings_json, "oma")?;
-    let settings = config.settings([0.0, fs / 2.0]).or_py()?;
+    let settings = oma_settings(fs, settings_json)?;
     let channels = Channels::new(&data, "data", 2)?;
     if let Some(&r) = references.iter().find(|&&r| r >= channels.len()) {
         return Err(bad(format!(
@@ -87,9 +93,7 @@ pub fn identify(
     sensors: Option<Vec<String>>,
     start_ns: Option<i64>,
 ) -> PyResult<RawModes> {
-    check_rate(fs)?;
-    let config: OmaConfig = section(settings_json, "oma")?;
-    let settings = config.settings([0.0, fs / 2.0]).or_py()?;
+    let settings = oma_settings(fs, settings_json)?;
     let u = Channels::new(&inputs, "inputs", 2)?;
     let y = Channels::new(&outputs, "outputs", 2)?;
     if u.samples() != y.samples() {

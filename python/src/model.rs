@@ -11,7 +11,7 @@ use pyo3::types::PyDict;
 use splinewatch::config::{frf_setup, load_config, Config, FrfSetup};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch::studies::{self, synth::SynthOptions};
-use splinewatch_core::response::frf::{FrfRequest, Quantity};
+use splinewatch_core::response::frf::{FrfRequest, ModalState, Quantity};
 use splinewatch_core::updating::{modal_state_at, Parameter};
 use std::path::PathBuf;
 
@@ -63,6 +63,18 @@ impl RawModel {
                 self.setup.sensor_names.join(", ")
             ))
         })
+    }
+
+    /// The modal state with the parameters at `values`.
+    fn state_at(&self, values: &[f64]) -> Result<ModalState, splinewatch_core::updating::UpdateError> {
+        let (state, _) = modal_state_at(
+            &self.setup.model,
+            &self.parameters,
+            &self.setup.kappa,
+            &self.setup.damping,
+            values,
+        )?;
+        Ok(state)
     }
 
     /// The parameters at `values` as a start file (`update --start`).
@@ -131,17 +143,7 @@ impl RawModel {
         count: Option<usize>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let values = self.values(&values)?;
-        let (state, _) = py
-            .detach(|| {
-                modal_state_at(
-                    &self.setup.model,
-                    &self.parameters,
-                    &self.setup.kappa,
-                    &self.setup.damping,
-                    &values,
-                )
-            })
-            .or_py()?;
+        let state = py.detach(|| self.state_at(&values)).or_py()?;
         let n = count.unwrap_or(state.modes.len()).min(state.modes.len());
         let d = PyDict::new(py);
         d.set_item(
@@ -184,13 +186,7 @@ impl RawModel {
         let quantity = quantity(quantity_name)?;
         let h = py
             .detach(|| -> anyhow::Result<Vec<_>> {
-                let (state, _) = modal_state_at(
-                    &self.setup.model,
-                    &self.parameters,
-                    &self.setup.kappa,
-                    &self.setup.damping,
-                    &values,
-                )?;
+                let state = self.state_at(&values)?;
                 let request = FrfRequest {
                     frequencies_hz: &lines,
                     pairs: &pairs,

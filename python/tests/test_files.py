@@ -93,3 +93,18 @@ def test_missing_and_foreign_files_raise_with_the_clis_message(tmp_path):
         splinewatch.read_recording(text)
     with pytest.raises(ValueError, match="not an MCAP file"):
         splinewatch.read_results(text)
+
+
+def test_a_block_decades_off_is_an_error_not_a_terabyte_grid(tmp_path):
+    path = tmp_path / "far.mcap"
+    with open(path, "wb") as fh:
+        w = Writer(fh)
+        w.start(profile="", library="splinewatch python test")
+        channel = w.register_channel(topic="bridge/t/accel/A1", message_encoding="cbor", schema_id=0)
+        for t in (START_NS, START_NS + 73 * 365 * 86_400 * 1_000_000_000):  # the corpus's block of 2099
+            block = {"name": "A1", "quantity": "acceleration", "unit_str": "m/s^2", "fs": 256.0,
+                     "start_timestamp": _stamp(t), "data": [0.0] * 4}
+            w.add_message(channel_id=channel, log_time=t, data=cbor2.dumps(block), publish_time=t)
+        w.finish()
+    with pytest.raises(ValueError, match='channel "A1" spans .* a block with a wrong time'):
+        splinewatch.read_recording(path)

@@ -189,11 +189,7 @@ pub fn config_page() -> Result<String> {
             let _ = writeln!(out, "{}\n", one_paragraph(d));
         }
         out.push_str("| key | type | default | description |\n| --- | --- | --- | --- |\n");
-        let required: Vec<&str> = node
-            .get("required")
-            .and_then(Value::as_array)
-            .map(|r| r.iter().filter_map(Value::as_str).collect())
-            .unwrap_or_default();
+        let required = required(&node);
         for (key, prop) in node.get("properties").and_then(Value::as_object).into_iter().flatten() {
             let resolved = resolve(prop, &defs);
             let is_table = resolved.get("properties").is_some();
@@ -219,6 +215,14 @@ pub fn config_page() -> Result<String> {
         out.push('\n');
     }
     Ok(out)
+}
+
+/// The keys a schema object requires.
+fn required(node: &Value) -> Vec<&str> {
+    node.get("required")
+        .and_then(Value::as_array)
+        .map(|r| r.iter().filter_map(Value::as_str).collect())
+        .unwrap_or_default()
 }
 
 /// Every object (table) reachable from `node`, with its TOML path.
@@ -352,11 +356,7 @@ pub fn topics_page() -> Result<String> {
             let schema: Value = serde_json::from_str(schema).with_context(|| format!("the schema of {topic}"))?;
             let _ = writeln!(out, "### `{topic}`\n");
             out.push_str("| field | type | required |\n| --- | --- | --- |\n");
-            let required: Vec<&str> = schema
-                .get("required")
-                .and_then(Value::as_array)
-                .map(|r| r.iter().filter_map(Value::as_str).collect())
-                .unwrap_or_default();
+            let required = required(&schema);
             for (field, prop) in schema
                 .get("properties")
                 .and_then(Value::as_object)
