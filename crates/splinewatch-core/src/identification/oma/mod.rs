@@ -177,9 +177,16 @@ impl OmaSettings {
         }
         let s = &self.stability;
         let c = &self.clustering;
-        if [s.frequency, s.damping, s.mac, s.max_damping, c.distance]
-            .iter()
-            .any(|v| !(v.is_finite() && *v > 0.0))
+        if [
+            s.frequency,
+            s.damping,
+            s.mac,
+            s.max_damping,
+            c.distance,
+            c.replicate_distance(),
+        ]
+        .iter()
+        .any(|v| !(v.is_finite() && *v > 0.0))
             || !(0.0..=1.0).contains(&s.min_mpc)
             || !(0.0..=1.0).contains(&c.min_fraction)
         {
@@ -368,7 +375,7 @@ fn summarise(
         (model, eigens),
         fs,
         &poles_of,
-        settings.clustering.distance,
+        settings.clustering.replicate_distance(),
     );
     poles_of
         .iter()
