@@ -102,7 +102,7 @@ def deck_figure(name):
     if len(nets) > 1:
         sec.legend(fontsize=6, loc="center left", bbox_to_anchor=(1.01, 0.5))
     fig.subplots_adjust(left=0.06, right=0.85, top=0.97, bottom=0.08, hspace=0.05)
-    fig.savefig(OUT / f"deck-{name}.svg")
+    fig.savefig(OUT / f"deck-{pathlib.Path(name).name}.svg")
     plt.close(fig)
 
 
@@ -232,7 +232,7 @@ def main():
     parser.add_argument("--splinewatch", default=str(REPO / "target/debug/splinewatch"))
     args = parser.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
-    for name in ("sinello", "overpass", "painter-street"):
+    for name in ("sinello", "overpass", "painter-street", "examples/slab-on-web"):
         deck_figure(name)
     mode_figure()
     stabilisation_figure()

@@ -10,7 +10,7 @@ import jsonschema
 import pytest
 
 REPO = pathlib.Path(__file__).resolve().parents[2]
-CONFIGS = sorted((REPO / "config").glob("*.toml")) + sorted((REPO / "tests/fixtures").glob("*.toml"))
+CONFIGS = sorted([*(REPO / "config").glob("*.toml"), *(REPO / "config/examples").glob("*.toml"), *(REPO / "tests/fixtures").glob("*.toml")])
 
 
 @pytest.fixture(scope="module")
