@@ -2,7 +2,7 @@
 //! wrong shape, an empty array or a non-finite sample the same way.
 
 use crate::errors::bad;
-use numpy::ndarray::{Array2, ArrayView2, Axis};
+use numpy::ndarray::{Array2, ArrayView1, ArrayView2, Axis};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use splinewatch_core::c64;
@@ -26,23 +26,13 @@ impl<'a> Channels<'a> {
                 "{what} must be samples × channels with at least {min_samples} samples and one channel, got shape ({samples}, {channels})"
             )));
         }
-        let columns: Vec<Cow<'a, [f64]>> = (0..channels)
+        let columns = (0..channels)
             .map(|c| {
-                let column = view.index_axis_move(Axis(1), c);
-                match column.to_slice() {
-                    Some(s) => Cow::Borrowed(s),
-                    None => Cow::Owned(column.to_vec()),
-                }
+                finite_channel(view.index_axis_move(Axis(1), c), |i, v| {
+                    format!("{what}[{i}, {c}] is {v}: every sample must be finite (cut the record around gaps)")
+                })
             })
-            .collect();
-        for (c, column) in columns.iter().enumerate() {
-            if let Some(i) = column.iter().position(|v| !v.is_finite()) {
-                return Err(bad(format!(
-                    "{what}[{i}, {c}] is {}: every sample must be finite (cut the record around gaps)",
-                    column[i]
-                )));
-            }
-        }
+            .collect::<PyResult<Vec<_>>>()?;
         Ok(Self { columns })
     }
 
@@ -61,6 +51,22 @@ impl<'a> Channels<'a> {
     /// Whether every channel was borrowed (no copy made).
     pub fn borrowed(&self) -> bool {
         self.columns.iter().all(|c| matches!(c, Cow::Borrowed(_)))
+    }
+}
+
+/// One channel's samples, borrowed when contiguous, else copied; the first
+/// non-finite sample is an error, worded by `message(index, value)`.
+pub fn finite_channel<'a>(
+    view: ArrayView1<'a, f64>,
+    message: impl Fn(usize, f64) -> String,
+) -> PyResult<Cow<'a, [f64]>> {
+    let samples = match view.to_slice() {
+        Some(s) => Cow::Borrowed(s),
+        None => Cow::Owned(view.to_vec()),
+    };
+    match samples.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(bad(message(i, samples[i]))),
+        None => Ok(samples),
     }
 }
 

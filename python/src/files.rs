@@ -7,6 +7,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use splinewatch::io::recording::{mcap_messages, read_recording as read_blocks, RecordedBlock};
+use splinewatch::io::results_topics::{EVENT_TOPICS, MONITORING_TOPICS, TOPICS};
 use splinewatch::io::wire::Limits;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -105,4 +106,16 @@ pub fn read_results(py: Python<'_>, path: PathBuf) -> PyResult<Vec<(String, u64,
         Ok(out)
     })
     .or_py()
+}
+
+/// Every topic a results file may hold, as suffixes of `<prefix>/` (what
+/// the application writes them under).
+#[pyfunction]
+pub fn result_topics() -> Vec<&'static str> {
+    TOPICS
+        .iter()
+        .chain(&MONITORING_TOPICS)
+        .chain(&EVENT_TOPICS)
+        .map(|(topic, _)| *topic)
+        .collect()
 }

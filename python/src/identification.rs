@@ -4,7 +4,7 @@
 //! arguments arrive as those sections' JSON, so a wrong key or value gets
 //! the config's message).
 
-use crate::arrays::{complex_matrix, matrix, vector, Channels};
+use crate::arrays::{complex_matrix, finite_channel, matrix, vector, Channels};
 use crate::errors::{bad, OrPy};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
@@ -134,24 +134,15 @@ pub fn frf<'py>(
     let config: FrfConfig = section(settings_json, "frf")?;
     let (settings, estimator) = config.welch_settings(fs).or_py()?;
     let x = Channels::new(&responses, "responses", settings.segment)?;
-    let f = force.as_array();
-    let f_slice = f
-        .as_slice()
-        .map(std::borrow::Cow::Borrowed)
-        .unwrap_or_else(|| f.to_vec().into());
-    if f_slice.len() != x.samples() {
+    let force = force.as_array();
+    if force.len() != x.samples() {
         return Err(bad(format!(
             "force has {} samples, responses {}: give both on one time grid",
-            f_slice.len(),
+            force.len(),
             x.samples()
         )));
     }
-    if let Some(i) = f_slice.iter().position(|v| !v.is_finite()) {
-        return Err(bad(format!(
-            "force[{i}] is {}: every sample must be finite",
-            f_slice[i]
-        )));
-    }
+    let f_slice = finite_channel(force, |i, v| format!("force[{i}] is {v}: every sample must be finite"))?;
     let views = x.slices();
     let (estimate, counts) = py
         .detach(|| -> anyhow::Result<_> {

@@ -23,6 +23,7 @@ fn _splinewatch(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(identification::frf, m)?)?;
     m.add_function(wrap_pyfunction!(files::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(files::read_results, m)?)?;
+    m.add_function(wrap_pyfunction!(files::result_topics, m)?)?;
     m.add_class::<identification::RawModes>()?;
     m.add_class::<model::RawModel>()?;
     Ok(())

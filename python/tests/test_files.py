@@ -34,19 +34,27 @@ def _stamp(ns):
     return np.datetime_as_string(np.datetime64(ns, "ns"), unit="ns") + "Z"
 
 
-def test_gaps_are_nan_and_an_undecodable_message_is_reported_not_dropped(tmp_path):
-    path = tmp_path / "gappy.mcap"
+def _write_a1(path, fs, blocks, extra_payload=None):
+    """A recording of channel A1's acceleration: (start ns, samples) blocks as CBOR, and
+    `extra_payload` (raw bytes) as one more message on the same topic."""
     with open(path, "wb") as fh:
         w = Writer(fh)
         w.start(profile="", library="splinewatch python test")
         channel = w.register_channel(topic="bridge/t/accel/A1", message_encoding="cbor", schema_id=0)
-        for k in (0, 2):  # the block of second 1 is missing
-            t = START_NS + k * 1_000_000_000
-            block = {"name": "A1", "quantity": "acceleration", "unit_str": "m/s^2", "fs": 4.0,
-                     "start_timestamp": _stamp(t), "data": [float(k)] * 4}
+        for t, data in blocks:
+            block = {"name": "A1", "quantity": "acceleration", "unit_str": "m/s^2", "fs": fs,
+                     "start_timestamp": _stamp(t), "data": data}
             w.add_message(channel_id=channel, log_time=t, data=cbor2.dumps(block), publish_time=t)
-        w.add_message(channel_id=channel, log_time=START_NS, data=b"\xa1\x64name", publish_time=START_NS)
+        if extra_payload is not None:
+            w.add_message(channel_id=channel, log_time=START_NS, data=extra_payload, publish_time=START_NS)
         w.finish()
+
+
+def test_gaps_are_nan_and_an_undecodable_message_is_reported_not_dropped(tmp_path):
+    path = tmp_path / "gappy.mcap"
+    # The block of second 1 is missing; a truncated CBOR map follows.
+    blocks = [(START_NS + k * 1_000_000_000, [float(k)] * 4) for k in (0, 2)]
+    _write_a1(path, 4.0, blocks, extra_payload=b"\xa1\x64name")
     with pytest.warns(UserWarning, match="skipped a message on bridge/t/accel/A1"):
         channels = splinewatch.read_recording(path)
     a1 = channels["A1"]
@@ -97,14 +105,7 @@ def test_missing_and_foreign_files_raise_with_the_clis_message(tmp_path):
 
 def test_a_block_decades_off_is_an_error_not_a_terabyte_grid(tmp_path):
     path = tmp_path / "far.mcap"
-    with open(path, "wb") as fh:
-        w = Writer(fh)
-        w.start(profile="", library="splinewatch python test")
-        channel = w.register_channel(topic="bridge/t/accel/A1", message_encoding="cbor", schema_id=0)
-        for t in (START_NS, START_NS + 73 * 365 * 86_400 * 1_000_000_000):  # the corpus's block of 2099
-            block = {"name": "A1", "quantity": "acceleration", "unit_str": "m/s^2", "fs": 256.0,
-                     "start_timestamp": _stamp(t), "data": [0.0] * 4}
-            w.add_message(channel_id=channel, log_time=t, data=cbor2.dumps(block), publish_time=t)
-        w.finish()
+    far = START_NS + 73 * 365 * 86_400 * 1_000_000_000  # the corpus's block of 2099
+    _write_a1(path, 256.0, [(START_NS, [0.0] * 4), (far, [0.0] * 4)])
     with pytest.raises(ValueError, match='channel "A1" spans .* a block with a wrong time'):
         splinewatch.read_recording(path)

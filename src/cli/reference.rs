@@ -337,7 +337,7 @@ fn compact(v: &Value) -> String {
 
 /// The results topics and their fields, from the schemas they are written with.
 pub fn topics_page() -> Result<String> {
-    use crate::outputs::results::{EVENT_TOPICS, MONITORING_TOPICS, TOPICS};
+    use crate::io::results_topics::{EVENT_TOPICS, MONITORING_TOPICS, TOPICS};
     let mut out = format!("{GENERATED}# Results topics\n\n");
     out.push_str(
         "Every result is a JSON message on `<prefix>/<topic>` (the prefix is `bridge/<structure name>`), \

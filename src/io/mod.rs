@@ -1,6 +1,6 @@
 //! Bytes in and out: the console (never fatal), the wire format of channel blocks, MCAP recordings, FRF and identified-modes
 //! files, loggers' CSV and UFF 58 files, strong-motion Volume 2 files, output-file creation and numbering,
-//! and salvaging unfinished MCAP.
+//! the results files' topics and schemas, and salvaging unfinished MCAP.
 //! Room: the bottom of the application. May import: the core crate only.
 
 pub mod console;
@@ -13,5 +13,6 @@ pub mod modes_json;
 pub mod monitoring_json;
 pub mod recording;
 pub mod recover;
+pub mod results_topics;
 pub mod uff;
 pub mod wire;

@@ -82,17 +82,9 @@ def _nan(v: Optional[float]) -> float:
     return np.nan if v is None else float(v)
 
 
-#: The results topics (src/outputs/results.rs), longest first so that
+#: The results topics (the application's own list), longest first so that
 #: ``oma/modes`` is not taken for ``modes``.
-RESULT_TOPICS = sorted(
-    [
-        "updating/parameters", "updating/residue", "updating/failures", "frf/measured", "frf/model", "modes",
-        "oma/modes", "health", "windows", "monitoring/status", "monitoring/alarm", "events/summary",
-        "events/verdict",
-    ],
-    key=len,
-    reverse=True,
-)
+RESULT_TOPICS = sorted(_splinewatch.result_topics(), key=len, reverse=True)
 
 
 def _split_topic(topic: str):
