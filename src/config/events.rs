@@ -35,6 +35,22 @@ pub struct EventsConfig {
     /// `studies::event_update`.
     #[serde(default)]
     pub inputs: EventInputs,
+    /// The model an event is forecast by: `"trend"` (default; per updated
+    /// parameter, what the earlier events expect at this event's ground
+    /// peak: the verdict's line of log10 value against log10 peak once
+    /// there are `min_events` of them, their geometric mean before) or
+    /// `"last"` (the previous event's update).
+    #[serde(default)]
+    pub forecast: EventForecast,
+}
+
+/// `[events] forecast`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum EventForecast {
+    #[default]
+    Trend,
+    Last,
 }
 
 /// `[events] inputs`.
@@ -56,6 +72,7 @@ impl Default for EventsConfig {
             false_alarm_rate: default_false_alarm_rate(),
             outputs: Vec::new(),
             inputs: EventInputs::default(),
+            forecast: EventForecast::default(),
         }
     }
 }

@@ -23,7 +23,7 @@ mod tls;
 mod updating;
 mod zenoh;
 
-pub use events::{EventInputs, EventsConfig};
+pub use events::{EventForecast, EventInputs, EventsConfig};
 pub use frf::FrfConfig;
 pub use ground::{ground_signals, restrict_plan, GroundInputPlan};
 pub use metrics::MetricsConfig;

@@ -141,7 +141,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         assert!(l["pga_ground"].as_f64().unwrap() > 0.1, "{l}");
         assert!(l["peak_deck"].as_f64().unwrap() > 0.1, "{l}");
         let parameters = l["parameters"].as_array().unwrap();
-        assert_eq!(parameters.len(), 3, "one lateral stiffness per support line");
+        assert_eq!(parameters.len(), 4, "one lateral stiffness per support line, and ζ");
         assert!(parameters.iter().all(|p| p["value"].as_f64().unwrap() > 0.0));
         assert_eq!(l["verdict"]["state"], "insufficient history", "{l}");
         assert!(l["update"]["relative_residual"].as_f64().unwrap().is_finite());
@@ -154,14 +154,17 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
             .any(|m| (3.0..6.0).contains(&m["frequency_hz"].as_f64().unwrap())),
         "{modes:?}"
     );
-    // The forecast is `predict`'s with the model of the events before: the
-    // first event's parameters reproduce it.
+    // The forecast is `predict`'s with the model of the events before: with
+    // one earlier event, its parameters (their geometric mean, `[events]
+    // forecast = "trend"`); the model it names reproduces it.
+    let model = second["forecast_model"].as_array().unwrap();
+    for (m, p) in model.iter().zip(first["parameters"].as_array().unwrap()) {
+        assert_eq!(m["name"], p["name"]);
+        let (m, p) = (m["value"].as_f64().unwrap(), p["value"].as_f64().unwrap());
+        assert!((m / p - 1.0).abs() < 1e-12, "{m} vs {p}");
+    }
     let earlier = dir.join("earlier.json");
-    std::fs::write(
-        &earlier,
-        serde_json::json!({"parameters": first["parameters"]}).to_string(),
-    )
-    .unwrap();
+    std::fs::write(&earlier, serde_json::json!({"parameters": model}).to_string()).unwrap();
     let o = splinewatch(&[
         "predict",
         "--config",
@@ -181,7 +184,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     // The state carries the chain: the last parameters (which `predict
     // --state` reads) and the two events' amplitudes.
     let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
-    assert_eq!(saved["parameters"].as_array().unwrap().len(), 3);
+    assert_eq!(saved["parameters"].as_array().unwrap().len(), 4);
     assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 2);
     let svg = std::fs::read_to_string(dir.join("plots/frequency_vs_amplitude.svg")).unwrap();
     assert!(svg.contains("<svg"));

@@ -15,7 +15,7 @@
 pub mod burst;
 
 use super::records::{align_event, identify_io, recorded, Event};
-use crate::config::{ground_signals, Config};
+use crate::config::{ground_signals, Config, EventForecast};
 use crate::io::modes_json::ModeEntry;
 use crate::io::monitoring_json::{NamedValue, StatusMessage};
 use crate::io::recording::RecordedBlock;
@@ -26,7 +26,7 @@ use crate::studies::ground_motion::GroundModel;
 use crate::studies::predict::{predict as predict_event, PredictionReport};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
-use splinewatch_core::monitoring::amplitude::{judge, FeatureBand, Verdict};
+use splinewatch_core::monitoring::amplitude::{expected, judge, FeatureBand, Verdict};
 use splinewatch_core::updating::ParameterEstimate;
 use std::path::Path;
 
@@ -44,6 +44,8 @@ pub struct EventLine {
     pub modes: Vec<ModeEntry>,
     pub parameters: Vec<ParameterEstimate>,
     pub forecast: Option<PredictionReport>,
+    /// The parameters the forecast's model had (`[events] forecast`).
+    pub forecast_model: Vec<NamedValue>,
     pub verdict: Option<VerdictLine>,
     pub skipped: Option<String>,
     /// The update's relative residual and iterations; ground inputs combined.
@@ -63,6 +65,7 @@ impl EventLine {
             modes: Vec::new(),
             parameters: Vec::new(),
             forecast: None,
+            forecast_model: Vec::new(),
             verdict: None,
             skipped: None,
             update: None,
@@ -115,7 +118,10 @@ pub struct Chain {
     tracked_hz: Vec<f64>,
     /// log10 of each earlier (not alarmed) event's ground peak, m/s².
     amplitudes: Vec<f64>,
-    /// Their features, in the order of [`feature_names`].
+    /// The features' names: the columns of `features`.
+    #[serde(default)]
+    feature_names: Vec<String>,
+    /// Their features, one row per event, by `feature_names`.
     features: Vec<Vec<Option<f64>>>,
 }
 
@@ -151,6 +157,73 @@ impl Chain {
     fn named(&self) -> Vec<(String, f64)> {
         self.parameters.iter().map(|p| (p.name.clone(), p.value)).collect()
     }
+
+    /// The earlier events' `(log10 peak, value)` of feature `name` (NaN
+    /// where an event did not measure it).
+    fn history_of(&self, name: &str) -> Vec<(f64, f64)> {
+        let column = self.feature_names.iter().position(|n| n == name);
+        self.amplitudes
+            .iter()
+            .zip(&self.features)
+            .map(|(&x, row)| {
+                (
+                    x,
+                    column.and_then(|c| row.get(c).copied().flatten()).unwrap_or(f64::NAN),
+                )
+            })
+            .collect()
+    }
+
+    /// Appends an event's features, the earlier rows put on `names` when
+    /// they are new (the modes tracked once an event first has some).
+    fn push_features(&mut self, x: f64, names: &[String], values: Vec<Option<f64>>) {
+        if self.feature_names != names {
+            // A state file from before the names were kept has rows in the
+            // order of the names then: taken as they are.
+            if !self.feature_names.is_empty() {
+                let old = std::mem::take(&mut self.feature_names);
+                for row in &mut self.features {
+                    *row = names
+                        .iter()
+                        .map(|n| {
+                            old.iter()
+                                .position(|o| o == n)
+                                .and_then(|c| row.get(c).copied().flatten())
+                        })
+                        .collect();
+                }
+            }
+            self.feature_names = names.to_vec();
+        }
+        self.amplitudes.push(x);
+        self.features.push(values);
+    }
+
+    /// The parameters an event with ground peak `pga` is forecast by
+    /// (`[events] forecast`): the last update's, or per parameter the
+    /// value the earlier events expect at `pga` (the line of log10 value
+    /// against log10 peak the verdict fits, once there are `min_events`
+    /// of them; their geometric mean before; the last value when no
+    /// earlier event gave it with a std).
+    fn forecast_parameters(&self, forecast: EventForecast, min_events: usize, pga: f64) -> Vec<(String, f64)> {
+        let last = self.named();
+        if forecast == EventForecast::Last {
+            return last;
+        }
+        let x = pga.max(1e-12).log10();
+        last.into_iter()
+            .map(|(name, value)| {
+                let history = self.history_of(&feature_of_parameter(&name));
+                let value = expected(&history, x, min_events).map_or(value, |y| 10f64.powf(y));
+                (name, value)
+            })
+            .collect()
+    }
+}
+
+/// The feature judged for updated parameter `name`.
+fn feature_of_parameter(name: &str) -> String {
+    format!("log10_{name}")
 }
 
 /// An event read and put on one grid, or why it could not be.
@@ -287,7 +360,12 @@ fn run_chain(cfg: &Config, event: &Event, model: &GroundModel, chain: &mut Chain
     }
     // The forecast: the model of the events before this one.
     if !chain.parameters.is_empty() {
-        let mut forecaster = GroundModel::new(cfg, &chain.named()).context("the forecast's model")?;
+        let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, pga);
+        let mut forecaster = GroundModel::new(cfg, &parameters).context("the forecast's model")?;
+        line.forecast_model = parameters
+            .into_iter()
+            .map(|(name, value)| NamedValue { name, value })
+            .collect();
         forecaster.plan = model.plan.clone();
         let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
         prediction.report.start = line.start.clone();
@@ -359,7 +437,7 @@ fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<
         values.push(nearest);
     }
     for p in &line.parameters {
-        names.push(format!("log10_{}", p.name));
+        names.push(feature_of_parameter(&p.name));
         values.push(p.std.map(|_| p.value.log10()));
     }
     (names, values)
@@ -371,9 +449,11 @@ fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, pga: f64) 
     }
     let (names, values) = features(chain, line, cfg.updating.max_frequency_gap);
     let x = pga.max(1e-12).log10();
-    let as_nan = |v: &[Option<f64>]| v.iter().map(|x| x.unwrap_or(f64::NAN)).collect::<Vec<_>>();
-    let history: Vec<Vec<f64>> = chain.features.iter().map(|r| as_nan(r)).collect();
-    let now = as_nan(&values);
+    let columns: Vec<Vec<(f64, f64)>> = names.iter().map(|n| chain.history_of(n)).collect();
+    let history: Vec<Vec<f64>> = (0..chain.amplitudes.len())
+        .map(|e| columns.iter().map(|c| c[e].1).collect())
+        .collect();
+    let now: Vec<f64> = values.iter().map(|x| x.unwrap_or(f64::NAN)).collect();
     let (verdict, bands) = judge(
         &chain.amplitudes,
         &history,
@@ -390,10 +470,10 @@ fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, pga: f64) 
         state: verdict.name().to_string(),
         outside,
         bands: names
-            .into_iter()
+            .iter()
             .zip(values.iter().zip(bands))
             .map(|(feature, (value, band))| BandLine {
-                feature,
+                feature: feature.clone(),
                 value: *value,
                 band,
             })
@@ -402,8 +482,7 @@ fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, pga: f64) 
     // An alarmed event does not teach the bands: a lasting change keeps
     // alarming until the owner starts a new history.
     if !matches!(verdict, Verdict::Alarm { .. }) {
-        chain.amplitudes.push(x);
-        chain.features.push(values);
+        chain.push_features(x, &names, values);
     }
 }
 
@@ -491,4 +570,63 @@ pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine) -
         forecast: forecast_medians(line),
         verdict: line.verdict.as_ref().map(|v| v.state.as_str()),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn chain_with(parameters: &[(&str, f64)]) -> Chain {
+        Chain {
+            parameters: parameters
+                .iter()
+                .map(|&(name, value)| Named {
+                    name: name.to_string(),
+                    value,
+                })
+                .collect(),
+            ..Chain::default()
+        }
+    }
+
+    /// A feature keeps its column when the modes tracked first appear at a
+    /// later event (the first record had none): the earlier rows are put on
+    /// the new names, not read as the new columns.
+    #[test]
+    fn features_keep_their_names_when_modes_are_first_tracked_later() {
+        let mut chain = chain_with(&[]);
+        let k = feature_of_parameter("bent.ky");
+        chain.push_features(-0.4, std::slice::from_ref(&k), vec![Some(8.2)]);
+        let names = ["mode1_hz".to_string(), k.clone()];
+        chain.push_features(-0.3, &names, vec![Some(4.1), Some(8.1)]);
+        assert_eq!(chain.history_of(&k), [(-0.4, 8.2), (-0.3, 8.1)]);
+        let modes = chain.history_of("mode1_hz");
+        assert!(modes[0].1.is_nan() && modes[1] == (-0.3, 4.1), "{modes:?}");
+    }
+
+    /// `"trend"`: the earlier events' line at this event's peak once there
+    /// are `min_events` of them, their geometric mean before; `"last"`: the
+    /// last update; a parameter no earlier event gave with a std keeps the
+    /// last value.
+    #[test]
+    fn the_forecast_takes_the_trend_of_the_earlier_events() {
+        let mut chain = chain_with(&[("bent.ky", 3.0e8), ("zeta", 0.08)]);
+        let names = [feature_of_parameter("bent.ky"), feature_of_parameter("zeta")];
+        // log10 k = 8.5 − 0.5 log10 A over A = 0.1 … 1.
+        let amplitudes = [-1.0, -0.75, -0.5, -0.25, 0.0];
+        for (e, &x) in amplitudes.iter().enumerate() {
+            chain.push_features(x, &names, vec![Some(8.5 - 0.5 * x), None]);
+            let by = |forecast, min_events, pga: f64| chain.forecast_parameters(forecast, min_events, pga);
+            let trend = by(EventForecast::Trend, 5, 10f64.powf(0.5));
+            let k = trend[0].1.log10();
+            if e + 1 < 5 {
+                let mean = amplitudes[..=e].iter().map(|x| 8.5 - 0.5 * x).sum::<f64>() / (e + 1) as f64;
+                assert!((k - mean).abs() < 1e-12, "event {e}: {k} vs {mean}");
+            } else {
+                assert!((k - (8.5 - 0.25)).abs() < 1e-12, "{k}");
+            }
+            assert_eq!(trend[1], ("zeta".to_string(), 0.08));
+            assert_eq!(by(EventForecast::Last, 5, 1.0), chain.named());
+        }
+    }
 }

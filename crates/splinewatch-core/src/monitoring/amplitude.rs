@@ -60,42 +60,95 @@ impl Verdict {
     }
 }
 
+/// The least-squares line `y = ȳ + b (x − x̄)` of a feature's earlier
+/// `(x, y)` pairs (non-finite ones left out); `b = 0` (a constant) with fewer
+/// than `sloped_from` pairs or when they span too little amplitude.
+struct AmplitudeLine {
+    n: usize,
+    mean_x: f64,
+    mean_y: f64,
+    sxx: f64,
+    slope: f64,
+    sloped: bool,
+    sse: f64,
+}
+
+impl AmplitudeLine {
+    fn fit(history: &[(f64, f64)], sloped_from: usize) -> Option<Self> {
+        let pairs: Vec<(f64, f64)> = history
+            .iter()
+            .copied()
+            .filter(|(a, y)| a.is_finite() && y.is_finite())
+            .collect();
+        let n = pairs.len();
+        if n == 0 {
+            return None;
+        }
+        let nf = n as f64;
+        let mean_x = pairs.iter().map(|p| p.0).sum::<f64>() / nf;
+        let mean_y = pairs.iter().map(|p| p.1).sum::<f64>() / nf;
+        let sxx: f64 = pairs.iter().map(|p| (p.0 - mean_x).powi(2)).sum();
+        let sloped = n >= sloped_from.max(3) && sxx > 1e-6;
+        let slope = if sloped {
+            pairs.iter().map(|p| (p.0 - mean_x) * (p.1 - mean_y)).sum::<f64>() / sxx
+        } else {
+            0.0
+        };
+        let sse = pairs
+            .iter()
+            .map(|p| (p.1 - mean_y - slope * (p.0 - mean_x)).powi(2))
+            .sum();
+        Some(Self {
+            n,
+            mean_x,
+            mean_y,
+            sxx,
+            slope,
+            sloped,
+            sse,
+        })
+    }
+
+    fn at(&self, x: f64) -> f64 {
+        self.mean_y + self.slope * (x - self.mean_x)
+    }
+}
+
 /// The band of a feature at amplitude `x` (log10 of the peak acceleration)
 /// from earlier `(x, y)` pairs (non-finite ones left out), at two-sided
 /// level `alpha`; `None` with fewer than two usable pairs.
 pub fn band(history: &[(f64, f64)], x: f64, alpha: f64) -> Option<FeatureBand> {
-    let pairs: Vec<(f64, f64)> = history
-        .iter()
-        .copied()
-        .filter(|(a, y)| a.is_finite() && y.is_finite())
-        .collect();
-    let n = pairs.len();
-    if n < 2 || !(alpha > 0.0 && alpha < 1.0) || !x.is_finite() {
+    if !(alpha > 0.0 && alpha < 1.0 && x.is_finite()) {
         return None;
     }
-    let nf = n as f64;
-    let mx = pairs.iter().map(|p| p.0).sum::<f64>() / nf;
-    let my = pairs.iter().map(|p| p.1).sum::<f64>() / nf;
-    let sxx: f64 = pairs.iter().map(|p| (p.0 - mx).powi(2)).sum();
-    let sloped = n >= 3 && sxx > 1e-6;
-    let slope = if sloped {
-        pairs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / sxx
+    let line = AmplitudeLine::fit(history, 3).filter(|l| l.n >= 2)?;
+    let nf = line.n as f64;
+    let dof = if line.sloped { nf - 2.0 } else { nf - 1.0 };
+    let s = (line.sse / dof).sqrt();
+    let predicted = line.at(x);
+    let leverage = if line.sloped {
+        (x - line.mean_x).powi(2) / line.sxx
     } else {
         0.0
     };
-    let dof = if sloped { nf - 2.0 } else { nf - 1.0 };
-    let sse: f64 = pairs.iter().map(|p| (p.1 - my - slope * (p.0 - mx)).powi(2)).sum();
-    let s = (sse / dof).sqrt();
-    let predicted = my + slope * (x - mx);
-    let leverage = if sloped { (x - mx).powi(2) / sxx } else { 0.0 };
     let t = StudentsT::new(0.0, 1.0, dof).ok()?.inverse_cdf(1.0 - alpha / 2.0);
     let half = t * s * (1.0 + 1.0 / nf + leverage).sqrt();
     Some(FeatureBand {
         predicted,
         lower: predicted - half,
         upper: predicted + half,
-        events: n,
+        events: line.n,
     })
+}
+
+/// What the earlier `(x, y)` pairs (non-finite ones left out) expect of a
+/// feature at amplitude `x`: their least-squares line once there are
+/// `sloped_from` of them (at least three, spanning some amplitude), their
+/// mean before; `None` without one. The centre of [`band`] when
+/// `sloped_from ≤ 3`.
+pub fn expected(history: &[(f64, f64)], x: f64, sloped_from: usize) -> Option<f64> {
+    let line = AmplitudeLine::fit(history, sloped_from)?;
+    x.is_finite().then(|| line.at(x))
 }
 
 /// The verdict on an event with amplitude `x` and `features` (non-finite:
@@ -191,6 +244,24 @@ mod tests {
         let rate = misses as f64 / trials as f64;
         // Binomial standard error at 20 000 trials: 0.002.
         assert!((rate - alpha).abs() < 0.01, "miss rate {rate}");
+    }
+
+    /// The expectation is the band's centre; before `sloped_from` events
+    /// it is their mean, with one event that event.
+    #[test]
+    fn the_expectation_is_the_mean_until_enough_events_then_the_line() {
+        let history: Vec<(f64, f64)> = (0..6).map(|k| (k as f64 * 0.2, 3.8 - 0.1 * k as f64 * 0.2)).collect();
+        assert_eq!(expected(&[], 0.5, 5), None);
+        assert_eq!(expected(&history[..1], 0.5, 5), Some(3.8));
+        let mean = history[..4].iter().map(|p| p.1).sum::<f64>() / 4.0;
+        assert!((expected(&history[..4], 2.0, 5).unwrap() - mean).abs() < 1e-12);
+        let line = expected(&history, 2.0, 5).unwrap();
+        assert!((line - (3.8 - 0.2)).abs() < 1e-12, "{line}");
+        assert!((line - band(&history, 2.0, 0.01).unwrap().predicted).abs() < 1e-12);
+        // A missing value is left out, not taken as zero.
+        let mut gaps = history.clone();
+        gaps.push((3.0, f64::NAN));
+        assert_eq!(expected(&gaps, 2.0, 5), expected(&history, 2.0, 5));
     }
 
     #[test]
