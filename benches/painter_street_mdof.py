@@ -81,6 +81,7 @@ def main():
             scores = {c["sensor"]: c["nrmse_strong"] for c in d["forecast"]["channels"]}
             chain[d["event"]] = statistics.median(scores[f"ch{c}"] for c in OUTPUTS)
     previous = None
+    tally = {"events": [0, 0], "sw": [0, 0]}
     print(f"{'start':20s} {'event':44s} {'mdof s':>7s} {'modes (Hz, damping %) by mdof SRIM':40s} {'mdof prev':>9s} {'sw':>6s} {'events':>6s}")
     for start, name, inputs, outputs, dt, sw in events:
         t0 = time.perf_counter()
@@ -99,6 +100,13 @@ def main():
         updated = chain.get(name, float("nan"))
         print(f"{start[:19]:20s} {name:44s} {seconds:7.2f} {text:40s} {forecast:9.3f} {sw_median:6.3f} {updated:6.3f}")
         previous = realization
+        if np.isfinite(forecast):
+            for key, ours_here in (("events", updated), ("sw", sw_median)):
+                if np.isfinite(ours_here):
+                    tally[key][0] += ours_here <= forecast
+                    tally[key][1] += 1
+    for key, label in (("events", "the events chain's forecast"), ("sw", "the hand-set model's")):
+        print(f"{label} at or below mdof's (previous event's realization) in {tally[key][0]} of {tally[key][1]} events")
 
 
 if __name__ == "__main__":

@@ -111,7 +111,8 @@ pub fn events(a: EventsArgs) -> Result<()> {
         chain.save(p)?;
     }
     if let Some(dir) = &a.plot {
-        super::events_plot::frequency_vs_amplitude(&mode_points(&lines), dir)?;
+        let band = cfg.updating.band.unwrap_or(cfg.frf.band);
+        super::events_plot::frequency_vs_amplitude(&mode_points(&lines), band, dir)?;
     }
     Ok(())
 }

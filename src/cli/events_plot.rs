@@ -1,6 +1,8 @@
 //! `events --plot DIR`: every identified mode's frequency against the
 //! event's ground peak acceleration (log axis), with its ±1σ bar (dots),
 //! and the updated model's dominant mode (squares); alarmed events in red.
+//! The frequency axis is the band the update fits (`[updating] band`,
+//! else `[frf] band`); the modes outside it are counted in the caption.
 
 use anyhow::{Context, Result};
 use std::path::Path;
@@ -17,36 +19,43 @@ pub struct ModePoint {
     pub model: bool,
 }
 
-pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
+pub fn frequency_vs_amplitude(modes: &[ModePoint], band: [f64; 2], dir: &Path) -> Result<()> {
     use plotters::prelude::*;
     let fail = |e: &dyn std::fmt::Display| anyhow::anyhow!("plotting: {e}");
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let path = dir.join("frequency_vs_amplitude.svg");
-    let points: Vec<(f64, f64, f64, bool)> = modes
+    let inside: Vec<&ModePoint> = modes
+        .iter()
+        .filter(|m| (band[0]..=band[1]).contains(&m.frequency_hz))
+        .collect();
+    let outside = modes.len() - inside.len();
+    let points: Vec<(f64, f64, f64, bool)> = inside
         .iter()
         .map(|m| (m.pga, m.frequency_hz, m.std_hz, m.alarmed))
         .collect();
-    let model: Vec<bool> = modes.iter().map(|m| m.model).collect();
+    let model: Vec<bool> = inside.iter().map(|m| m.model).collect();
     let (mut x0, mut x1) = points
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), p| (a.min(p.0), b.max(p.0)));
-    let (mut y0, mut y1) = points.iter().fold((f64::INFINITY, 0.0f64), |(a, b), p| {
-        (a.min(p.1 - p.2), b.max(p.1 + p.2))
-    });
+    let (y0, y1) = (band[0], band[1]);
     if points.is_empty() {
-        (x0, x1, y0, y1) = (0.01, 1.0, 0.0, 10.0);
+        (x0, x1) = (0.01, 1.0);
     }
+    let caption = format!(
+        "frequency against the ground's peak: identified (dots, ±1σ), updated model (squares); red: alarm{}",
+        match outside {
+            0 => String::new(),
+            n => format!("; {n} outside {}–{} Hz not shown", band[0], band[1]),
+        }
+    );
     let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(&e))?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            "frequency against the ground's peak acceleration: identified (dots, ±1σ), updated model (squares); red: alarm",
-            ("sans-serif", 18),
-        )
+        .caption(caption, ("sans-serif", 16))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), (y0 * 0.95)..(y1 * 1.05))
+        .build_cartesian_2d((x0 / 1.5..x1 * 1.5).log_scale(), y0..y1)
         .map_err(|e| fail(&e))?;
     chart
         .configure_mesh()
@@ -65,8 +74,9 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], dir: &Path) -> Result<()> {
             chart.draw_series(std::iter::once(square)).map_err(|e| fail(&e))?;
             continue;
         }
+        let bar = vec![(x, (f - s).max(y0)), (x, (f + s).min(y1))];
         chart
-            .draw_series(std::iter::once(PathElement::new(vec![(x, f - s), (x, f + s)], colour)))
+            .draw_series(std::iter::once(PathElement::new(bar, colour.stroke_width(2))))
             .map_err(|e| fail(&e))?;
         chart
             .draw_series(std::iter::once(Circle::new((x, f), 4, colour.filled())))

@@ -230,12 +230,18 @@ fn feature_of_parameter(name: &str) -> String {
 pub struct Loaded {
     pub name: String,
     event: Result<(Event, GroundModel)>,
+    /// Its first sample's time when its blocks were read (an event skipped
+    /// for a missing or bad channel keeps its place in time).
+    first_sample_ns: Option<i128>,
 }
 
 impl Loaded {
     /// The record's start (ns since the epoch); `None` when it could not be read.
     pub fn start_ns(&self) -> Option<i128> {
-        self.event.as_ref().ok().map(|(e, _)| e.start_ns)
+        match &self.event {
+            Ok((e, _)) => Some(e.start_ns),
+            Err(_) => self.first_sample_ns,
+        }
     }
 }
 
@@ -243,6 +249,10 @@ impl Loaded {
 /// aligned: every ground channel, the deck's, no dead or clipped channel,
 /// long enough.
 pub fn load(cfg: &Config, name: String, blocks: Result<Vec<RecordedBlock>>) -> Loaded {
+    let first_sample_ns = blocks
+        .as_ref()
+        .ok()
+        .and_then(|b| b.iter().map(|r| r.block.start_ns).min());
     let event = (|| {
         let blocks = blocks?;
         // Every ground channel is needed: an event's inputs are not borrowed
@@ -269,7 +279,11 @@ pub fn load(cfg: &Config, name: String, blocks: Result<Vec<RecordedBlock>>) -> L
         check_channels(cfg, &event, &model)?;
         Ok((event, model))
     })();
-    Loaded { name, event }
+    Loaded {
+        name,
+        event,
+        first_sample_ns,
+    }
 }
 
 /// Samples of a clipped channel: this many in a row at its extreme value.
@@ -309,14 +323,16 @@ fn check_channels(cfg: &Config, event: &Event, model: &GroundModel) -> Result<()
 
 /// The chain on one event; a failing stage skips the event with its reason.
 pub fn process(cfg: &Config, loaded: Loaded, chain: &mut Chain) -> EventLine {
-    let mut line = EventLine::new(loaded.name);
     let (event, model) = match loaded.event {
         Ok(e) => e,
         Err(e) => {
+            let mut line = EventLine::new(loaded.name);
+            line.start = loaded.first_sample_ns.map(format_timestamp);
             line.skipped = Some(format!("{e:#}"));
             return line;
         }
     };
+    let mut line = EventLine::new(loaded.name);
     line.start = Some(format_timestamp(event.start_ns));
     if let Err(e) = run_chain(cfg, &event, &model, chain, &mut line) {
         line.skipped = Some(format!("{e:#}"));
