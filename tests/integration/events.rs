@@ -129,6 +129,8 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         let line = lines.iter().find(|l| l["event"] == reason.0).unwrap();
         let skipped = line["skipped"].as_str().unwrap_or_default();
         assert!(skipped.contains(reason.1), "{}: {skipped}", reason.0);
+        // A record that was read keeps its start; an unreadable one has none.
+        assert_eq!(line["start"].is_null(), reason.0 == "missing.zip", "{line}");
     }
     let (first, second) = (used[0], used[1]);
     // The first event has no earlier model to forecast it; the second is
