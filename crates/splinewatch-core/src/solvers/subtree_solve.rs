@@ -45,15 +45,21 @@ pub struct SubtreeSplit {
 /// Descents tried from the roots towards a balanced split.
 const MAX_DESCENTS: usize = 64;
 
-/// Factors of fewer entries are solved on one thread: a solve of 200 000
-/// entries takes about 0.1 ms, a thread's start some tens of µs.
-const MIN_SPLIT_ENTRIES: usize = 200_000;
+/// Factors of fewer entries are solved on one thread. Two million entries
+/// (16 MB) outgrow the caches, and a solve reads them from memory (about
+/// 1 ms): there a second core's bandwidth pays. A smaller factor stays in
+/// cache, and a thread's start and hand-off cost more than they save:
+/// measured on the Painter Street model (251 775 entries, split at the
+/// earlier 200 000), an event's update took 2.99 s with the split and 2.27 s
+/// on one thread (2026-11-27), and on grid factors of 14 000–1 000 000
+/// entries the split saved at most 8 %.
+const MIN_SPLIT_ENTRIES: usize = 2_000_000;
 
 impl SubtreeSplit {
     /// The split of `symbolic`'s supernodal elimination tree that minimises
     /// the work on the longer path (the common ancestors, then the larger
     /// group), measured in factor entries; none (one thread) for a factor
-    /// of fewer than 200 000 entries (about 0.1 ms a solve).
+    /// of fewer than two million entries ([`MIN_SPLIT_ENTRIES`]).
     pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
         Self::with_threshold(symbolic, MIN_SPLIT_ENTRIES)
     }
