@@ -89,39 +89,64 @@ impl SupportMotion {
         state: &ModalState,
         inputs: &[GroundInput],
     ) -> Result<Self, SupportError> {
-        for (index, i) in inputs.iter().enumerate() {
-            if i.group >= groups.names().len() || i.axis > 2 {
-                return Err(SupportError::Input {
-                    index,
-                    group: i.group,
-                    axis: i.axis,
-                    count: groups.names().len(),
-                });
-            }
-        }
+        check_inputs(groups, inputs)?;
         let lifts = constraint_lifts(model, groups)?;
-        let lift = |input: &GroundInput| -> Vec<f64> {
-            lifts[input.group]
-                .iter()
-                .enumerate()
-                .map(|(dof, &on)| if on && dof % 5 == input.axis { 1.0 } else { 0.0 })
-                .collect()
-        };
+        let lift = |input: &GroundInput| lift_of(&lifts, input);
         let influence = match frf.dense() {
-            Some(assembled) => {
-                let mut influence = Mat::<f64>::zeros(assembled.free_stiffness.nrows(), inputs.len());
-                for (c, input) in inputs.iter().enumerate() {
-                    let lift = lift(input);
-                    let force = ground_force(assembled, groups, kappa, theta, input, &lift);
-                    let solved = static_by_modes(state, &force);
-                    for (d, (l, x)) in lift.iter().zip(solved).enumerate() {
-                        influence[(d, c)] = l + x;
-                    }
-                }
-                influence
+            Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lift),
+            None => {
+                let forces = truncated_forces(frf, groups, kappa, inputs, &lift)?;
+                let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
+                let (_, responses) = model
+                    .modes_and_responses(kappa, theta, cutoff_hz, &forces)
+                    .map_err(|e| SupportError::Solve(e.to_string()))?;
+                truncated_influence(state, &forces, &responses, cutoff_hz)
             }
-            None => truncated_influence(frf, groups, kappa, theta, state, inputs, &lift)?,
         };
+        Ok(Self::from_influence(frf, state, inputs, influence))
+    }
+
+    /// The modal state at `kappa`, `theta` and `damping`
+    /// ([`FrfModel::modal_state_with_fields`]) and the motion for `inputs`
+    /// on it ([`Self::new`]), from one eigen-solve: on a truncated model the
+    /// static responses to the ground forces come from the modes' own
+    /// factorisation instead of a second solve.
+    pub fn with_state(
+        frf: &FrfModel,
+        model: &ShellModel,
+        groups: &SupportGroups,
+        (kappa, theta, damping): (&[Vec<f64>], &[Vec<f64>], &DampingCurve),
+        inputs: &[GroundInput],
+    ) -> Result<(ModalState, Self), SupportError> {
+        check_inputs(groups, inputs)?;
+        let lifts = constraint_lifts(model, groups)?;
+        let lift = |input: &GroundInput| lift_of(&lifts, input);
+        let solve_error = |e: crate::response::frf::FrfError| SupportError::Solve(e.to_string());
+        let (state, influence) = match frf.dense() {
+            Some(assembled) => {
+                let state = frf
+                    .modal_state_with_fields(kappa, theta, damping)
+                    .map_err(solve_error)?;
+                let influence = dense_influence(assembled, groups, kappa, theta, &state, inputs, &lift);
+                (state, influence)
+            }
+            None => {
+                let forces = truncated_forces(frf, groups, kappa, inputs, &lift)?;
+                let (state, responses) = frf
+                    .modal_state_with_loads(kappa, theta, damping, &forces)
+                    .map_err(solve_error)?;
+                let (_, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
+                let responses = responses.expect("a truncated model gives the loads' responses");
+                let influence = truncated_influence(&state, &forces, &responses, cutoff_hz);
+                (state, influence)
+            }
+        };
+        let motion = Self::from_influence(frf, &state, inputs, influence);
+        Ok((state, motion))
+    }
+
+    /// `N Γ` and `L = Φᵀ M Γ` of the influence `Γ` (dofs × inputs).
+    fn from_influence(frf: &FrfModel, state: &ModalState, inputs: &[GroundInput], influence: Mat<f64>) -> Self {
         let n = influence.nrows();
         let shapes = &state.modes.shapes;
         let nm = state.modes.len();
@@ -137,12 +162,12 @@ impl SupportMotion {
                 participation[(i, c)] = (0..n).map(|d| shapes[(d, i)] * mass_gamma[d]).sum();
             }
         }
-        Ok(Self {
+        Self {
             inputs: inputs.to_vec(),
             quasi_static,
             participation,
             influence,
-        })
+        }
     }
 
     pub fn inputs(&self) -> &[GroundInput] {
@@ -453,30 +478,69 @@ fn static_by_modes(state: &ModalState, force: &[f64]) -> Vec<f64> {
     x
 }
 
-/// `Γ` on a truncated model: the static response `K⁻¹ f` from the
-/// eigen-solve's factorisation at its shift `σ` (`X = (K − σM)⁻¹`, with
-/// `X M X`, [`crate::solvers::sparse_model::SparseModel::modes_and_responses`]),
-/// brought to `σ = 0` by `1/λ = 1/(λ−σ) − σ/(λ−σ)² + σ²/(λ(λ−σ)²)`:
-/// `K⁻¹ f = X f − σ X M X f + Σ φ_i P_i σ²/(λ_i (λ_i−σ)²)`, the last sum
-/// over the kept modes (for a discarded one it is `(σ/λ)² ≤ 1/2500²` of its
-/// share). The constrained edges of a
-/// moving group would need the unreduced stiffness, which the sparse model
-/// does not keep: refused.
-fn truncated_influence(
-    frf: &FrfModel,
+/// The inputs name groups and axes that exist.
+fn check_inputs(groups: &SupportGroups, inputs: &[GroundInput]) -> Result<(), SupportError> {
+    for (index, i) in inputs.iter().enumerate() {
+        if i.group >= groups.names().len() || i.axis > 2 {
+            return Err(SupportError::Input {
+                index,
+                group: i.group,
+                axis: i.axis,
+                count: groups.names().len(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// `ℓ` of `input`: 1 on the dofs along its axis of its group's constrained
+/// control points.
+fn lift_of(lifts: &[Vec<bool>], input: &GroundInput) -> Vec<f64> {
+    lifts[input.group]
+        .iter()
+        .enumerate()
+        .map(|(dof, &on)| if on && dof % 5 == input.axis { 1.0 } else { 0.0 })
+        .collect()
+}
+
+/// `Γ` on the dense path: `ℓ + Σ_i φ_i P_i / λ_i` over every mode.
+fn dense_influence(
+    assembled: &crate::solvers::dense_model::AssembledModel,
     groups: &SupportGroups,
     kappa: &[Vec<f64>],
     theta: &[Vec<f64>],
     state: &ModalState,
     inputs: &[GroundInput],
     lift: &dyn Fn(&GroundInput) -> Vec<f64>,
-) -> Result<Mat<f64>, SupportError> {
-    let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
+) -> Mat<f64> {
+    let mut influence = Mat::<f64>::zeros(assembled.free_stiffness.nrows(), inputs.len());
+    for (c, input) in inputs.iter().enumerate() {
+        let lift = lift(input);
+        let force = ground_force(assembled, groups, kappa, theta, input, &lift);
+        let solved = static_by_modes(state, &force);
+        for (d, (l, x)) in lift.iter().zip(solved).enumerate() {
+            influence[(d, c)] = l + x;
+        }
+    }
+    influence
+}
+
+/// The ground forces `f = ΔK_g R_d` of every input on a truncated model
+/// (sparse, full dofs). The constrained edges of a moving group would need
+/// the unreduced stiffness, which the sparse model does not keep: refused.
+fn truncated_forces(
+    frf: &FrfModel,
+    groups: &SupportGroups,
+    kappa: &[Vec<f64>],
+    inputs: &[GroundInput],
+    lift: &dyn Fn(&GroundInput) -> Vec<f64>,
+) -> Result<Vec<Vec<(usize, f64)>>, SupportError> {
+    let (model, _) = frf.sparse().expect("a model is dense or truncated");
     if let Some(input) = inputs.iter().find(|i| lift(i).iter().any(|&v| v != 0.0)) {
         return Err(SupportError::TruncatedConstraint(groups.names()[input.group].clone()));
     }
     let n = model.dof_count();
-    let forces: Vec<Vec<(usize, f64)>> = inputs
+    Ok(inputs
         .iter()
         .map(|input| {
             let mut force = vec![0.0; n];
@@ -496,14 +560,29 @@ fn truncated_influence(
             }
             force.into_iter().enumerate().filter(|(_, v)| *v != 0.0).collect()
         })
-        .collect();
-    let (_, (x, xmx)) = model
-        .modes_and_responses(kappa, theta, cutoff_hz, &forces)
-        .map_err(|e| SupportError::Solve(e.to_string()))?;
+        .collect())
+}
+
+/// `Γ` on a truncated model: the static response `K⁻¹ f` from the
+/// eigen-solve's factorisation at its shift `σ` (`X = (K − σM)⁻¹`, with
+/// `X M X`, the `responses` of
+/// [`crate::solvers::sparse_model::SparseModel::modes_and_responses`] to
+/// the `forces`), brought to `σ = 0` by
+/// `1/λ = 1/(λ−σ) − σ/(λ−σ)² + σ²/(λ(λ−σ)²)`:
+/// `K⁻¹ f = X f − σ X M X f + Σ φ_i P_i σ²/(λ_i (λ_i−σ)²)`, the last sum
+/// over the kept modes (for a discarded one it is `(σ/λ)² ≤ 1/2500²` of its
+/// share).
+fn truncated_influence(
+    state: &ModalState,
+    forces: &[Vec<(usize, f64)>],
+    (x, xmx): &crate::solvers::partial_eigen::Responses,
+    cutoff_hz: f64,
+) -> Mat<f64> {
     let sigma = crate::solvers::sparse_model::SparseModel::shift_for(cutoff_hz);
     let shapes = &state.modes.shapes;
     let flexible = flexible_modes(state);
-    let mut influence = Mat::from_fn(n, inputs.len(), |d, c| x[(d, c)] - sigma * xmx[(d, c)]);
+    let n = x.nrows();
+    let mut influence = Mat::from_fn(n, forces.len(), |d, c| x[(d, c)] - sigma * xmx[(d, c)]);
     for (c, force) in forces.iter().enumerate() {
         for &i in &flexible {
             let lambda = state.modes.omega2[i];
@@ -514,7 +593,7 @@ fn truncated_influence(
             }
         }
     }
-    Ok(influence)
+    influence
 }
 
 /// Per group, whether each generalised dof's control point lies on one of

@@ -28,8 +28,7 @@
 use super::frf_residual::{parameter_column, relative_residuals, sqrt_weights, weighted_residues, MeasuredSet};
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{
-    check_parameters, fields_at, modal_state_at, model_at, IterationRecord, Parameter, UpdateError, UpdateResult,
-    UpdateSettings,
+    check_parameters, fields_at, model_at, IterationRecord, Parameter, UpdateError, UpdateResult, UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
 use crate::model::supports::SupportGroups;
@@ -206,24 +205,31 @@ impl<'a> TransmissibilityProblem<'a> {
         out
     }
 
+    /// The residual (and Jacobian) at `p`: the modal state and the support
+    /// motion from one eigen-solve ([`SupportMotion::with_state`]).
     fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
-        let (state, _) = modal_state_at(self.model, &self.parameters, &self.kappa, &self.damping, p)?;
-        self.evaluate_state(p, state, jacobian)
-    }
-
-    fn evaluate_state(&self, p: &[f64], state: ModalState, jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
         let (kappa, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
         let theta = fields_at(&self.parameters, self.model.field_coefficients(), p);
-        let motion = SupportMotion::new(
+        let (state, motion) = SupportMotion::with_state(
             self.model,
             self.shell,
             self.groups,
-            &kappa,
-            &theta,
-            &state,
+            (&kappa, &theta, &damping),
             &self.inputs,
         )
         .map_err(|e| UpdateError::Data(format!("support motion: {e}")))?;
+        self.evaluate_motion(p, state, motion, jacobian)
+    }
+
+    /// The residual (and Jacobian) at `p` from its modal state and motion.
+    fn evaluate_motion(
+        &self,
+        p: &[f64],
+        state: ModalState,
+        motion: SupportMotion,
+        jacobian: bool,
+    ) -> Result<Evaluated<Extra>, UpdateError> {
+        let (_, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
         let loads = self.model.with_extra_rows(motion.load_rows(self.model));
         let load_state = loads.modal_state_from(state.modes.clone(), &damping);
         let per_pair = motion.transmissibility_with_residual(
@@ -324,7 +330,7 @@ impl ResidualModel for TransmissibilityProblem<'_> {
     }
 
     fn with_jacobian(&self, p: &[f64], trial: Evaluated<Extra>) -> Result<Evaluated<Extra>, UpdateError> {
-        self.evaluate_state(p, trial.extra.state, true)
+        self.evaluate_motion(p, trial.extra.state, trial.extra.motion, true)
     }
 
     fn relative_residual(&self, at: &Evaluated<Extra>) -> f64 {

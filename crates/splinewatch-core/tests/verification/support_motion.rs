@@ -457,4 +457,25 @@ fn the_truncated_path_agrees_with_every_mode() {
         "truncated vs dense: NΓ {:.1e}, T {:.1e} ({kept} of {all} modes)",
         worst.0, worst.1
     );
+    // The state and the motion from one eigen-solve equal the two solves'
+    // (the ground forces' static responses from the modes' factorisation).
+    for frf in [&dense, &truncated] {
+        let state = frf.modal_state(&kappa, &damping()).unwrap();
+        let motion = SupportMotion::new(frf, &shell_model, &groups, &kappa, &[], &state, &inputs).unwrap();
+        let (one_state, one_motion) =
+            SupportMotion::with_state(frf, &shell_model, &groups, (&kappa, &[], &damping()), &inputs).unwrap();
+        assert_eq!(one_state.modes.omega2, state.modes.omega2);
+        for (r, c) in pairs.iter().copied() {
+            assert_eq!(
+                one_motion.quasi_static(r, c),
+                motion.quasi_static(r, c),
+                "pair ({r}, {c})"
+            );
+        }
+        for i in 0..state.modes.len() {
+            for c in 0..inputs.len() {
+                assert_eq!(one_motion.participation(i, c), motion.participation(i, c), "mode {i}");
+            }
+        }
+    }
 }

@@ -26,6 +26,7 @@ use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
 use crate::solvers::modal::{ModalError, ModeKind, Modes};
+use crate::solvers::partial_eigen::Responses;
 use crate::solvers::sparse_model::SparseModel;
 use crate::solvers::truncation::Residual;
 
@@ -431,23 +432,43 @@ impl FrfModel {
                 let modes = assembled.modes_with_fields(kappa, theta)?;
                 Ok(self.modal_state_from(modes, damping))
             }
-            Source::Truncated { model, cutoff_hz, .. } => {
-                let (modes, responses) = model.modes_and_responses(kappa, theta, *cutoff_hz, &self.sensor_rows)?;
-                let shift = SparseModel::shift_for(*cutoff_hz);
-                let mut state = self.modal_state_from(modes, damping);
-                state.residual = Some(Residual::new(
-                    &state.modes,
-                    &state.amplitudes,
-                    &self.sensor_rows,
-                    &self.spring_dofs,
-                    &responses,
-                    shift,
-                    damping,
-                    model.field_products.iter().any(|f| !f.is_empty()),
-                ));
-                Ok(state)
-            }
+            Source::Truncated { .. } => Ok(self.modal_state_with_loads(kappa, theta, damping, &[])?.0),
         }
+    }
+
+    /// [`Self::modal_state_with_fields`] and, on a truncated model, the
+    /// static responses to `loads` (as
+    /// [`SparseModel::modes_and_responses`] gives them) from the same
+    /// eigen-solve; `None` on the dense path, which solves every mode.
+    pub fn modal_state_with_loads(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        damping: &DampingCurve,
+        loads: &[Vec<(usize, f64)>],
+    ) -> Result<(ModalState, Option<Responses>), FrfError> {
+        let Source::Truncated { model, cutoff_hz, .. } = &self.source else {
+            return Ok((self.modal_state_with_fields(kappa, theta, damping)?, None));
+        };
+        let sensors = self.sensor_rows.len();
+        let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
+        let (modes, (x, xmx)) = model.modes_and_responses(kappa, theta, *cutoff_hz, &all)?;
+        let columns = |m: &Mat<f64>, from: usize, count: usize| Mat::from_fn(m.nrows(), count, |r, c| m[(r, from + c)]);
+        let own = (columns(&x, 0, sensors), columns(&xmx, 0, sensors));
+        let theirs = (columns(&x, sensors, loads.len()), columns(&xmx, sensors, loads.len()));
+        let shift = SparseModel::shift_for(*cutoff_hz);
+        let mut state = self.modal_state_from(modes, damping);
+        state.residual = Some(Residual::new(
+            &state.modes,
+            &state.amplitudes,
+            &self.sensor_rows,
+            &self.spring_dofs,
+            &own,
+            shift,
+            damping,
+            model.field_products.iter().any(|f| !f.is_empty()),
+        ));
+        Ok((state, Some(theirs)))
     }
 
     /// Builds the modal state from already computed modes.
