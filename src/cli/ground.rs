@@ -59,7 +59,7 @@ pub fn predict(a: PredictArgs) -> Result<()> {
     };
     let mut model = GroundModel::new(&cfg, &named)?;
     let blocks = read_records(&cfg, &a.record)?;
-    let event = align_event(&cfg, &mut model, &blocks)?;
+    let event = align_event(&cfg, &mut model.plan, &blocks)?;
     if event.deck.is_empty() {
         bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
     }
@@ -185,7 +185,7 @@ pub fn simulate_ground(
     }
     let mut model = GroundModel::new(cfg, &[])?;
     let blocks = read_records(cfg, record)?;
-    let event = align_event(cfg, &mut model, &blocks)?;
+    let event = align_event(cfg, &mut model.plan, &blocks)?;
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
     let mut deck = model.respond(channel, event.fs);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -161,6 +161,14 @@ impl Config {
     }
 }
 
+/// The config indices of the ground sensors `plan` reads, ascending.
+pub fn ground_sensors(plan: &[GroundInputPlan]) -> Vec<usize> {
+    let mut all: Vec<usize> = plan.iter().flat_map(|p| p.sensors.iter().copied()).collect();
+    all.sort_unstable();
+    all.dedup();
+    all
+}
+
 /// `plan` with only the ground sensors `available` (a record may lack a
 /// channel): an input that loses all its sensors takes the mean of the groups
 /// still measured along its axis, or none (zero ground motion) when no group

@@ -25,7 +25,7 @@ mod zenoh;
 
 pub use events::{EventForecast, EventInputs, EventsConfig};
 pub use frf::FrfConfig;
-pub use ground::{ground_signals, restrict_plan, GroundInputPlan};
+pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};
 pub use metrics::MetricsConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,

@@ -4,12 +4,11 @@
 //! identification they share.
 //! Room: a service shell. May import: `outputs`, `pipeline`, `studies`, `config`, `io`, the core crate.
 
-use crate::config::Config;
+use crate::config::{ground_sensors, restrict_plan, Config, GroundInputPlan};
 use crate::io::console::errln;
 use crate::io::recording::{read_recording, RecordedBlock};
 use crate::io::wire::ChannelQuantity;
 use crate::pipeline::estimate::aligned_span;
-use crate::studies::ground_motion::GroundModel;
 use crate::studies::import::{to_blocks, ImportOptions};
 use anyhow::{bail, Context, Result};
 use std::path::PathBuf;
@@ -102,12 +101,16 @@ pub struct Event {
     pub deck: Vec<usize>,
 }
 
-pub fn align_event(config: &Config, model: &mut GroundModel, blocks: &[RecordedBlock]) -> Result<Event> {
+/// The record's channels on one grid for the ground inputs of `plan`
+/// (kept to the ground sensors the record holds, the changes said).
+pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[RecordedBlock]) -> Result<Event> {
     let recorded = |i: usize| recorded(config, blocks, i);
-    for note in model.restrict_to(config, recorded) {
+    let (restricted, notes) = restrict_plan(plan, recorded, |i| config.sensors[i].name.clone());
+    *plan = restricted;
+    for note in notes {
         errln!("ground input {note}");
     }
-    let ground = model.ground_sensors();
+    let ground = ground_sensors(plan);
     if ground.is_empty() {
         bail!("the record holds none of the config's ground sensors: nothing drives the deck");
     }

@@ -14,7 +14,9 @@
 
 use super::parameters::values_by_name;
 use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
+use splinewatch_core::model::supports::SupportGroups;
+use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::response::support_motion::SupportMotion;
 use splinewatch_core::updating::{base_values, fields_at, model_at};
@@ -30,15 +32,16 @@ pub struct GroundModel {
 }
 
 impl GroundModel {
+    /// The config's ground inputs and the sensors that measure them,
+    /// without the model's modes (what a record is aligned by).
+    pub fn plan_of(config: &Config) -> Result<Vec<GroundInputPlan>> {
+        Ok(ground_setup(config)?.2)
+    }
+
     /// At the config's values, with the `named` updating parameters set
     /// (an update's result).
     pub fn new(config: &Config, named: &[(String, f64)]) -> Result<Self> {
-        if !config.has_ground_sensors() {
-            bail!("config: sensors: no ground sensor (a [[sensors]] entry with support = \"<group>\"): nothing drives the deck");
-        }
-        let model = config.build_model()?;
-        let groups = config.support_groups(&model)?;
-        let plan = config.ground_plan(&groups)?;
+        let (model, groups, plan) = ground_setup(config)?;
         let setup = frf_setup(config)?;
         let parameters = config.build_parameters()?;
         let theta0 = setup.model.field_coefficients().to_vec();
@@ -46,13 +49,10 @@ impl GroundModel {
         let values = values_by_name(&parameters, &base, named, "parameter")?;
         let (kappa, damping) = model_at(&parameters, &setup.kappa, &setup.damping, &values)?;
         let theta = fields_at(&parameters, &theta0, &values);
-        let state = setup
-            .model
-            .modal_state_with_fields(&kappa, &theta, &damping)
-            .context("the model's modes")?;
         let inputs: Vec<_> = plan.iter().map(|p| p.input).collect();
-        let motion = SupportMotion::new(&setup.model, &model, &groups, &kappa, &theta, &state, &inputs)
-            .map_err(|e| anyhow::anyhow!("support motion: {e}"))?;
+        let (state, motion) =
+            SupportMotion::with_state(&setup.model, &model, &groups, (&kappa, &theta, &damping), &inputs)
+                .map_err(|e| anyhow::anyhow!("the model's modes and support motion: {e}"))?;
         let outputs = setup.sensor_names.clone();
         Ok(Self {
             setup,
@@ -63,20 +63,9 @@ impl GroundModel {
         })
     }
 
-    /// Keeps to the ground sensors `available` in a record (see
-    /// [`crate::config::restrict_plan`]); returns what changed.
-    pub fn restrict_to(&mut self, config: &Config, available: impl Fn(usize) -> bool) -> Vec<String> {
-        let (plan, notes) = crate::config::restrict_plan(&self.plan, available, |i| config.sensors[i].name.clone());
-        self.plan = plan;
-        notes
-    }
-
     /// The config indices of the ground sensors the plan reads.
     pub fn ground_sensors(&self) -> Vec<usize> {
-        let mut all: Vec<usize> = self.plan.iter().flat_map(|p| p.sensors.iter().copied()).collect();
-        all.sort_unstable();
-        all.dedup();
-        all
+        crate::config::ground_sensors(&self.plan)
     }
 
     /// The deck's absolute accelerations (one series per deck sensor) for
@@ -112,4 +101,15 @@ impl GroundModel {
         }
         out
     }
+}
+
+/// The shell model, its support groups and the config's ground inputs.
+fn ground_setup(config: &Config) -> Result<(ShellModel, SupportGroups, Vec<GroundInputPlan>)> {
+    if !config.has_ground_sensors() {
+        bail!("config: sensors: no ground sensor (a [[sensors]] entry with support = \"<group>\"): nothing drives the deck");
+    }
+    let model = config.build_model()?;
+    let groups = config.support_groups(&model)?;
+    let plan = config.ground_plan(&groups)?;
+    Ok((model, groups, plan))
 }

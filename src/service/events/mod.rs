@@ -15,7 +15,7 @@
 pub mod burst;
 
 use super::records::{align_event, identify_io, recorded, Event};
-use crate::config::{ground_signals, Config, EventForecast};
+use crate::config::{ground_sensors, ground_signals, Config, EventForecast, GroundInputPlan};
 use crate::io::modes_json::ModeEntry;
 use crate::io::monitoring_json::{NamedValue, StatusMessage};
 use crate::io::recording::RecordedBlock;
@@ -229,7 +229,7 @@ fn feature_of_parameter(name: &str) -> String {
 /// An event read and put on one grid, or why it could not be.
 pub struct Loaded {
     pub name: String,
-    event: Result<(Event, GroundModel)>,
+    event: Result<(Event, Vec<GroundInputPlan>)>,
     /// Its first sample's time when its blocks were read (an event skipped
     /// for a missing or bad channel keeps its place in time).
     first_sample_ns: Option<i128>,
@@ -271,13 +271,13 @@ pub fn load(cfg: &Config, name: String, blocks: Result<Vec<RecordedBlock>>) -> L
                 if missing.len() > 1 { "s" } else { "" }
             );
         }
-        let mut model = GroundModel::new(cfg, &[])?;
-        let event = align_event(cfg, &mut model, &blocks)?;
+        let mut plan = GroundModel::plan_of(cfg)?;
+        let event = align_event(cfg, &mut plan, &blocks)?;
         if event.deck.is_empty() {
             bail!("the record holds none of the config's deck sensors");
         }
-        check_channels(cfg, &event, &model)?;
-        Ok((event, model))
+        check_channels(cfg, &event, &plan)?;
+        Ok((event, plan))
     })();
     Loaded {
         name,
@@ -291,10 +291,10 @@ const CLIPPED_RUN: usize = 5;
 
 /// A dead channel (constant), a clipped one (a run at its extreme) or a
 /// record too short for the identification and the Welch segments.
-fn check_channels(cfg: &Config, event: &Event, model: &GroundModel) -> Result<()> {
+fn check_channels(cfg: &Config, event: &Event, plan: &[GroundInputPlan]) -> Result<()> {
     let (oma, _) = cfg.oma_settings()?;
     let (welch, _) = cfg.welch_settings(event.fs)?;
-    for i in model.ground_sensors().into_iter().chain(event.deck.iter().copied()) {
+    for i in ground_sensors(plan).into_iter().chain(event.deck.iter().copied()) {
         let x = event.channels[i].as_deref().unwrap_or_default();
         let name = &cfg.sensors[i].name;
         let needed = (2 * welch.segment).max(4 * oma.block_rows * oma.batches.max(1));
@@ -323,7 +323,7 @@ fn check_channels(cfg: &Config, event: &Event, model: &GroundModel) -> Result<()
 
 /// The chain on one event; a failing stage skips the event with its reason.
 pub fn process(cfg: &Config, loaded: Loaded, chain: &mut Chain) -> EventLine {
-    let (event, model) = match loaded.event {
+    let (event, plan) = match loaded.event {
         Ok(e) => e,
         Err(e) => {
             let mut line = EventLine::new(loaded.name);
@@ -334,15 +334,21 @@ pub fn process(cfg: &Config, loaded: Loaded, chain: &mut Chain) -> EventLine {
     };
     let mut line = EventLine::new(loaded.name);
     line.start = Some(format_timestamp(event.start_ns));
-    if let Err(e) = run_chain(cfg, &event, &model, chain, &mut line) {
+    if let Err(e) = run_chain(cfg, &event, &plan, chain, &mut line) {
         line.skipped = Some(format!("{e:#}"));
     }
     line
 }
 
-fn run_chain(cfg: &Config, event: &Event, model: &GroundModel, chain: &mut Chain, line: &mut EventLine) -> Result<()> {
+fn run_chain(
+    cfg: &Config,
+    event: &Event,
+    plan: &[GroundInputPlan],
+    chain: &mut Chain,
+    line: &mut EventLine,
+) -> Result<()> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
-    let ground = model.ground_sensors();
+    let ground = ground_sensors(plan);
     let pga = ground
         .iter()
         .flat_map(|&i| channel(i))
@@ -382,12 +388,12 @@ fn run_chain(cfg: &Config, event: &Event, model: &GroundModel, chain: &mut Chain
             .into_iter()
             .map(|(name, value)| NamedValue { name, value })
             .collect();
-        forecaster.plan = model.plan.clone();
+        forecaster.plan = plan.to_vec();
         let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
         prediction.report.start = line.start.clone();
         line.forecast = Some(prediction.report);
     }
-    update_event(cfg, event, model, chain, line)?;
+    update_event(cfg, event, plan, chain, line)?;
     judge_event(cfg, chain, line, pga);
     Ok(())
 }
@@ -397,12 +403,12 @@ fn run_chain(cfg: &Config, event: &Event, model: &GroundModel, chain: &mut Chain
 fn update_event(
     cfg: &Config,
     event: &Event,
-    model: &GroundModel,
+    plan: &[GroundInputPlan],
     chain: &mut Chain,
     line: &mut EventLine,
 ) -> Result<()> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
-    let signals = ground_signals(&model.plan, channel);
+    let signals = ground_signals(plan, channel);
     let fitted: Vec<usize> = event
         .deck
         .iter()
@@ -411,7 +417,7 @@ fn update_event(
         .collect();
     let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
     let record = EventSignals {
-        plan: &model.plan,
+        plan,
         inputs: &signals,
         deck: &fitted,
         outputs: &deck_series,
