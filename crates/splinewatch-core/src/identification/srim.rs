@@ -28,6 +28,14 @@
 //! batches give the replicates. `R_uu` is inverted on its range (eigenvalues
 //! below `INPUT_RANGE` of the largest dropped): inputs too coherent to
 //! separate (one ground motion recorded at several supports) then act as one.
+//! A jackknife replicate is inverted on the record's range (a Galerkin
+//! inverse, [`InformationMatrix::matrix`]): with its own threshold a
+//! replicate also differs by which eigenvalues cross it, a jump the
+//! jackknife (valid for smooth statistics, Efron & Tibshirani 1993, §11.6)
+//! reads as spread. On the 2015 Painter Street record the 4.81 Hz mode's
+//! std was 0.18 Hz with each replicate's own range and is 0.009 Hz on the
+//! record's; on the other records the two agree within 30 %, and on
+//! simulated records both match the scatter (verification `srim`).
 //!
 //! Why SRIM: it uses the measured inputs (unlike SSI-cov, which takes an
 //! earthquake for white noise), needs no impulse response to be estimated
@@ -38,6 +46,7 @@
 use super::oma::uncertainty::ReplicateSource;
 use super::oma::{self, OmaError, OmaResult, OmaSettings, OutputCorrelations, SubspaceModel};
 use faer::Mat;
+use std::sync::OnceLock;
 
 /// The smallest eigenvalue of `R_uu`, relative to the largest, whose
 /// direction counts as input: below it the inputs' power is the measurement
@@ -54,6 +63,9 @@ pub struct InformationMatrix {
     outputs: usize,
     inputs: usize,
     horizon: usize,
+    /// The whole record's input range: the eigenvectors of its `R_uu` kept
+    /// by `INPUT_RANGE` (set by the first [`Self::matrix`] of the record).
+    range: OnceLock<Mat<f64>>,
 }
 
 impl InformationMatrix {
@@ -75,11 +87,53 @@ impl InformationMatrix {
             outputs: outputs.len(),
             inputs: inputs.len(),
             horizon,
+            range: OnceLock::new(),
         })
     }
 
     /// `R_hh` of every batch but `left_out` (all of them with `None`).
+    ///
+    /// The record's own `R_uu` is inverted on its range (its eigenvectors
+    /// of eigenvalues above `INPUT_RANGE` of the largest). A replicate's
+    /// is inverted on that same range `V` (`R_uu⁺ ≈ V (Vᵀ R_uu V)⁻¹ Vᵀ`, a
+    /// Galerkin inverse; exactly the record's own on the record): the
+    /// replicates differ by their data, not by which directions count as
+    /// input, and each costs a Cholesky of `Vᵀ R_uu V` instead of an
+    /// eigendecomposition of `R_uu`.
     pub fn matrix(&self, left_out: Option<usize>) -> Result<Mat<f64>, OmaError> {
+        let (r_yy, r_yu, r_uu) = self.blocks(left_out);
+        if left_out.is_none() {
+            let (w, range) = input_range(&r_yu, &r_uu)?;
+            let _ = self.range.set(range);
+            return Ok(r_yy - &w * w.transpose());
+        }
+        let range = match self.range.get() {
+            Some(range) => range,
+            None => {
+                let range = self.record_range()?;
+                self.range.get_or_init(|| range)
+            }
+        };
+        let gram = range.transpose() * &r_uu * range;
+        let Ok(llt) = gram.llt(faer::Side::Lower) else {
+            // The replicate lost a direction the record has: its own range.
+            let (w, _) = input_range(&r_yu, &r_uu)?;
+            return Ok(r_yy - &w * w.transpose());
+        };
+        // R_yu V (VᵀR_uuV)⁻¹ Vᵀ R_yuᵀ = X Xᵀ, X = R_yu V L⁻ᵀ.
+        let mut xt = (&r_yu * range).transpose().to_owned();
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(llt.L(), xt.as_mut(), faer::Par::Seq);
+        Ok(r_yy - xt.transpose() * &xt)
+    }
+
+    /// The whole record's input range.
+    fn record_range(&self) -> Result<Mat<f64>, OmaError> {
+        let (_, r_yu, r_uu) = self.blocks(None);
+        Ok(input_range(&r_yu, &r_uu)?.1)
+    }
+
+    /// `R_yy`, `R_yu`, `R_uu` of every batch but `left_out`.
+    fn blocks(&self, left_out: Option<usize>) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
         let (m, r, p) = (self.outputs, self.inputs, self.horizon);
         let l = m + r;
         let lags = self.correlations.estimate_without(left_out);
@@ -94,26 +148,31 @@ impl InformationMatrix {
         let r_yy = Mat::from_fn(p * m, p * m, |row, col| z(row / m, row % m, col / m, col % m));
         let r_yu = Mat::from_fn(p * m, p * r, |row, col| z(row / m, row % m, col / r, m + col % r));
         let r_uu = Mat::from_fn(p * r, p * r, |row, col| z(row / r, m + row % r, col / r, m + col % r));
-        let eigen = r_uu
-            .self_adjoint_eigen(faer::Side::Lower)
-            .map_err(|_| OmaError::SvdFailed)?;
-        let values = eigen.S().column_vector();
-        let largest = (0..values.nrows()).map(|k| values[k].abs()).fold(0.0, f64::max);
-        if largest.is_nan() || largest <= 0.0 {
-            return Err(OmaError::InvalidSettings("the inputs hold no signal".into()));
-        }
-        // R_yu V Λ⁺^{1/2}: R_yu R_uu⁺ R_yuᵀ = W Wᵀ.
-        let w = &r_yu * eigen.U();
-        let w = Mat::from_fn(w.nrows(), w.ncols(), |i, k| {
-            let lambda = values[k];
-            if lambda > INPUT_RANGE * largest {
-                w[(i, k)] / lambda.sqrt()
-            } else {
-                0.0
-            }
-        });
-        Ok(r_yy - &w * w.transpose())
+        (r_yy, r_yu, r_uu)
     }
+}
+
+/// `R_uu`'s range (eigenvalues above [`INPUT_RANGE`] of the largest: their
+/// eigenvectors `V`) and `W = R_yu V Λ^{-1/2}`, so that the truncated
+/// `R_yu R_uu⁺ R_yuᵀ = W Wᵀ`.
+fn input_range(r_yu: &Mat<f64>, r_uu: &Mat<f64>) -> Result<(Mat<f64>, Mat<f64>), OmaError> {
+    let eigen = r_uu
+        .self_adjoint_eigen(faer::Side::Lower)
+        .map_err(|_| OmaError::SvdFailed)?;
+    let values = eigen.S().column_vector();
+    let largest = (0..values.nrows()).map(|k| values[k].abs()).fold(0.0, f64::max);
+    if largest.is_nan() || largest <= 0.0 {
+        return Err(OmaError::InvalidSettings("the inputs hold no signal".into()));
+    }
+    let kept: Vec<usize> = (0..values.nrows())
+        .filter(|&k| values[k] > INPUT_RANGE * largest)
+        .collect();
+    let range = Mat::from_fn(r_uu.nrows(), kept.len(), |i, c| eigen.U()[(i, kept[c])]);
+    let projected = r_yu * &range;
+    let w = Mat::from_fn(projected.nrows(), kept.len(), |i, c| {
+        projected[(i, c)] / values[kept[c]].sqrt()
+    });
+    Ok((w, range))
 }
 
 impl ReplicateSource for InformationMatrix {
@@ -140,4 +199,61 @@ pub fn identify_io(
     let matrix = information.matrix(None)?;
     let model = SubspaceModel::from_symmetric(&matrix, outputs.len(), settings.max_order, fs)?;
     oma::identify_model(&model, &information, fs, settings)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::linalg::solvers::DenseSolveCore;
+
+    fn noise(seed: u64, n: usize) -> Vec<f64> {
+        let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+        (0..n)
+            .map(|_| {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    /// With inputs that span every direction (white noise: `R_uu` well
+    /// conditioned, every eigenvalue kept), the record's range is the whole
+    /// space and a replicate's Galerkin inverse is its exact inverse:
+    /// `R_hh = R_yy − R_yu R_uu⁻¹ R_yuᵀ` of the replicate's own blocks.
+    #[test]
+    fn a_replicate_on_a_full_range_is_the_exact_information_matrix() {
+        let n = 4000;
+        let u: Vec<Vec<f64>> = (0..2).map(|k| noise(k + 1, n)).collect();
+        // Outputs: lagged mixtures of the inputs and a little noise.
+        let y: Vec<Vec<f64>> = (0..2)
+            .map(|o| {
+                let e = noise(10 + o, n);
+                (0..n)
+                    .map(|t| {
+                        let lag = |c: usize, k: usize| if t >= k { u[c][t - k] } else { 0.0 };
+                        lag(0, 1 + o as usize) + 0.5 * lag(1, 2) + 0.1 * e[t]
+                    })
+                    .collect()
+            })
+            .collect();
+        let (outputs, inputs): (Vec<&[f64]>, Vec<&[f64]>) = (
+            y.iter().map(Vec::as_slice).collect(),
+            u.iter().map(Vec::as_slice).collect(),
+        );
+        let info = InformationMatrix::new(&outputs, &inputs, 4, 4).unwrap();
+        let full = info.matrix(None).unwrap();
+        assert_eq!(info.range.get().unwrap().ncols(), 8, "every direction is input");
+        let replicate = info.matrix(Some(2)).unwrap();
+        let (r_yy, r_yu, r_uu) = info.blocks(Some(2));
+        let inverse = r_uu.llt(faer::Side::Lower).unwrap().inverse();
+        let exact = &r_yy - &r_yu * &inverse * r_yu.transpose();
+        let scale = r_yy.norm_max();
+        assert!((&replicate - &exact).norm_max() <= 1e-10 * scale);
+        assert!(
+            (&full - &replicate).norm_max() > 1e-6 * scale,
+            "a replicate differs from the record"
+        );
+    }
 }

@@ -59,7 +59,7 @@ impl SubtreeSplit {
     /// The split of `symbolic`'s supernodal elimination tree that minimises
     /// the work on the longer path (the common ancestors, then the larger
     /// group), measured in factor entries; none (one thread) for a factor
-    /// of fewer than two million entries ([`MIN_SPLIT_ENTRIES`]).
+    /// of fewer than two million entries (`MIN_SPLIT_ENTRIES`).
     pub fn new(symbolic: &SymbolicSupernodalCholesky<usize>) -> Self {
         Self::with_threshold(symbolic, MIN_SPLIT_ENTRIES)
     }
