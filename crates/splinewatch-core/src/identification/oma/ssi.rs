@@ -231,13 +231,9 @@ impl SubspaceModel {
     pub fn from_symmetric(matrix: &Mat<f64>, channels: usize, max_order: usize, fs: f64) -> Result<Self, OmaError> {
         let n = matrix.nrows();
         let cap = n.saturating_sub(channels).min(max_order.max(1));
-        let eigen = matrix
-            .self_adjoint_eigen(faer::Side::Lower)
-            .map_err(|_| OmaError::SvdFailed)?;
-        let values = eigen.S().column_vector();
-        // Descending (faer returns them ascending).
-        let order: Vec<usize> = (0..n).rev().take(cap).collect();
-        let singular_values: Vec<f64> = order.iter().map(|&k| values[k].max(0.0)).collect();
+        // The `cap` leading eigenpairs only (`leading_eigen`: descending).
+        let eigen = leading_eigen(matrix.as_ref(), cap).map_err(|_| OmaError::SvdFailed)?;
+        let singular_values: Vec<f64> = eigen.values[..cap].iter().map(|v| v.max(0.0)).collect();
         let sigma_1 = singular_values.first().copied().unwrap_or(0.0);
         if sigma_1.is_nan() || sigma_1 <= 0.0 {
             return Err(OmaError::SingularHankel { order: 1 });
@@ -246,11 +242,11 @@ impl SubspaceModel {
         let left = Mat::from_fn(
             n,
             cap,
-            |row, col| if kept(col) { eigen.U()[(row, order[col])] } else { 0.0 },
+            |row, col| if kept(col) { eigen.vectors[(row, col)] } else { 0.0 },
         );
         let right = Mat::from_fn(n, cap, |row, col| {
             if kept(col) {
-                eigen.U()[(row, order[col])] / singular_values[col]
+                eigen.vectors[(row, col)] / singular_values[col]
             } else {
                 0.0
             }
