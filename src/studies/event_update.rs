@@ -20,8 +20,9 @@
 //! input costs one. The lines are `[updating] band` (default: `[frf]
 //! band`), decimated and excluded as `[updating]` says.
 
+use super::ground_motion::GroundParts;
 use super::parameters::values_by_name;
-use crate::config::{frf_setup, Config, EventInputs, GroundInputPlan};
+use crate::config::{Config, EventInputs, GroundInputPlan};
 use anyhow::{anyhow, bail, Context, Result};
 use splinewatch_core::c64;
 use splinewatch_core::identification::transmissibility;
@@ -67,6 +68,7 @@ struct Measured {
 /// the others).
 pub fn update_on_event(
     config: &Config,
+    parts: &GroundParts,
     signals: &EventSignals<'_>,
     start: &[(String, f64)],
     progress: &mut dyn FnMut(&IterationRecord),
@@ -74,10 +76,14 @@ pub fn update_on_event(
     if signals.deck.is_empty() || signals.inputs.is_empty() {
         bail!("no deck channel or no ground input to update on");
     }
-    let setup = frf_setup(config)?;
-    let shell = config.build_model()?;
-    let groups = config.support_groups(&shell)?;
-    let parameters = config.build_parameters()?;
+    let GroundParts {
+        setup,
+        shell,
+        groups,
+        parameters,
+        ..
+    } = parts;
+    let parameters = parameters.clone();
     if parameters.is_empty() {
         bail!("no parameter has update = true: nothing to update");
     }
@@ -95,7 +101,7 @@ pub fn update_on_event(
     let base = base_values(&parameters, &setup.kappa, &theta0, &setup.damping);
     let start = values_by_name(&parameters, &base, start, "start parameter")?;
     let problem = TransmissibilityProblem::new(
-        (&setup.model, &shell, &groups),
+        (&setup.model, shell, groups),
         measured.plan.iter().map(|p| p.input).collect(),
         measured.combination,
         setup.kappa.clone(),

@@ -19,7 +19,7 @@ use splinewatch_core::model::supports::SupportGroups;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::response::support_motion::SupportMotion;
-use splinewatch_core::updating::{base_values, fields_at, model_at};
+use splinewatch_core::updating::{base_values, fields_at, model_at, Parameter};
 
 /// The model at one parameter point, ready to be driven by its grounds.
 pub struct GroundModel {
@@ -41,25 +41,33 @@ impl GroundModel {
     /// At the config's values, with the `named` updating parameters set
     /// (an update's result).
     pub fn new(config: &Config, named: &[(String, f64)]) -> Result<Self> {
-        let (model, groups, plan) = ground_setup(config)?;
-        let setup = frf_setup(config)?;
-        let parameters = config.build_parameters()?;
+        Self::at(&GroundParts::new(config)?, named)
+    }
+
+    /// The model of `parts` with the `named` updating parameters set.
+    pub fn at(parts: &GroundParts, named: &[(String, f64)]) -> Result<Self> {
+        let GroundParts {
+            setup,
+            shell,
+            groups,
+            plan,
+            parameters,
+        } = parts;
         let theta0 = setup.model.field_coefficients().to_vec();
-        let base = base_values(&parameters, &setup.kappa, &theta0, &setup.damping);
-        let values = values_by_name(&parameters, &base, named, "parameter")?;
-        let (kappa, damping) = model_at(&parameters, &setup.kappa, &setup.damping, &values)?;
-        let theta = fields_at(&parameters, &theta0, &values);
+        let base = base_values(parameters, &setup.kappa, &theta0, &setup.damping);
+        let values = values_by_name(parameters, &base, named, "parameter")?;
+        let (kappa, damping) = model_at(parameters, &setup.kappa, &setup.damping, &values)?;
+        let theta = fields_at(parameters, &theta0, &values);
         let inputs: Vec<_> = plan.iter().map(|p| p.input).collect();
         let (state, motion) =
-            SupportMotion::with_state(&setup.model, &model, &groups, (&kappa, &theta, &damping), &inputs)
+            SupportMotion::with_state(&setup.model, shell, groups, (&kappa, &theta, &damping), &inputs)
                 .map_err(|e| anyhow::anyhow!("the model's modes and support motion: {e}"))?;
-        let outputs = setup.sensor_names.clone();
         Ok(Self {
-            setup,
-            plan,
+            setup: setup.clone(),
+            plan: plan.clone(),
             state,
             motion,
-            outputs,
+            outputs: setup.sensor_names.clone(),
         })
     }
 
@@ -100,6 +108,34 @@ impl GroundModel {
             }
         }
         out
+    }
+}
+
+/// What a config's ground-driven model is made of, whatever its
+/// parameters' values: assembled once and shared by every event of a run
+/// (the forecast's model, [`GroundModel::at`], and the update,
+/// [`super::event_update::update_on_event`]).
+#[derive(Debug, Clone)]
+pub struct GroundParts {
+    pub setup: FrfSetup,
+    pub shell: ShellModel,
+    pub groups: SupportGroups,
+    /// The config's ground inputs (every one: a record's own is kept to
+    /// the sensors it holds).
+    pub plan: Vec<GroundInputPlan>,
+    pub parameters: Vec<Parameter>,
+}
+
+impl GroundParts {
+    pub fn new(config: &Config) -> Result<Self> {
+        let (shell, groups, plan) = ground_setup(config)?;
+        Ok(Self {
+            setup: frf_setup(config)?,
+            shell,
+            groups,
+            plan,
+            parameters: config.build_parameters()?,
+        })
     }
 }
 

@@ -22,13 +22,14 @@ use crate::io::recording::RecordedBlock;
 use crate::io::wire::format_timestamp;
 use crate::pipeline::oma::OmaReport;
 use crate::studies::event_update::{update_on_event, EventSignals};
-use crate::studies::ground_motion::GroundModel;
+use crate::studies::ground_motion::{GroundModel, GroundParts};
 use crate::studies::predict::{predict as predict_event, PredictionReport};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::monitoring::amplitude::{expected, judge, FeatureBand, Verdict};
 use splinewatch_core::updating::ParameterEstimate;
 use std::path::Path;
+use std::sync::Arc;
 
 /// The topics an event writes under the results prefix.
 pub const SUMMARY_TOPIC: &str = "events/summary";
@@ -123,6 +124,10 @@ pub struct Chain {
     feature_names: Vec<String>,
     /// Their features, one row per event, by `feature_names`.
     features: Vec<Vec<Option<f64>>>,
+    /// The config's model, assembled for the first event and kept for the
+    /// others (not saved).
+    #[serde(skip)]
+    parts: Option<Arc<GroundParts>>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -152,6 +157,16 @@ impl Chain {
     /// Events judged so far (not alarmed): the verdict's history.
     pub fn history_len(&self) -> usize {
         self.amplitudes.len()
+    }
+
+    /// The config's model parts, assembled on first use.
+    fn parts(&mut self, cfg: &Config) -> Result<Arc<GroundParts>> {
+        if let Some(parts) = &self.parts {
+            return Ok(Arc::clone(parts));
+        }
+        let parts = Arc::new(GroundParts::new(cfg).context("the config's model")?);
+        self.parts = Some(Arc::clone(&parts));
+        Ok(parts)
     }
 
     fn named(&self) -> Vec<(String, f64)> {
@@ -383,7 +398,8 @@ fn run_chain(
     // The forecast: the model of the events before this one.
     if !chain.parameters.is_empty() {
         let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, pga);
-        let mut forecaster = GroundModel::new(cfg, &parameters).context("the forecast's model")?;
+        let parts = chain.parts(cfg)?;
+        let mut forecaster = GroundModel::at(&parts, &parameters).context("the forecast's model")?;
         line.forecast_model = parameters
             .into_iter()
             .map(|(name, value)| NamedValue { name, value })
@@ -423,7 +439,8 @@ fn update_event(
         outputs: &deck_series,
         fs: event.fs,
     };
-    let updated = update_on_event(cfg, &record, &chain.named(), &mut |_| {})?;
+    let parts = chain.parts(cfg)?;
+    let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |_| {})?;
     line.update = Some(UpdateLine {
         model_mode_hz: updated.dominant_hz,
         relative_residual: updated.result.relative_residual,
