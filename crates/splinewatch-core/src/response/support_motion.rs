@@ -392,7 +392,7 @@ impl SupportMotion {
 
     /// Adds `Σ_i a_ri (φ_iᵀ w_c / λ_i)(1 + ω²/D_i)` to `out` for every pair
     /// `(r, c)`, `w_c` given sparse per input; `factors` are
-    /// [`influence_factors`].
+    /// [`influence_factors`] (per mode, per line).
     fn add_influence_change(
         &self,
         state: &ModalState,
@@ -414,32 +414,35 @@ impl SupportMotion {
                 weights
             })
             .collect();
-        let nf = factors.len();
+        let nf = factors.first().map_or(0, Vec::len);
+        // Mode by mode along the lines: a streaming update of the pair's
+        // lines (one product-sum chain per line would wait on each add).
         for (p, &(r, c)) in pairs.iter().enumerate() {
-            let coefficients: Vec<(usize, f64)> = (0..nm)
-                .map(|i| (i, state.amplitude(r, i) * weights[c][i]))
-                .filter(|&(_, v)| v != 0.0)
-                .collect();
-            for (k, line) in factors.iter().enumerate() {
-                let mut sum = c64::new(0.0, 0.0);
-                for &(i, v) in &coefficients {
-                    sum += line[i] * v;
+            let lines = &mut out[p * nf..(p + 1) * nf];
+            for (i, by_line) in factors.iter().enumerate() {
+                let v = state.amplitude(r, i) * weights[c][i];
+                if v == 0.0 {
+                    continue;
                 }
-                out[p * nf + k] += sum;
+                for (o, f) in lines.iter_mut().zip(by_line) {
+                    *o += f * v;
+                }
             }
         }
     }
 }
 
-/// `1 + ω²/D_i(ω)` per line (rows) and mode: the dynamic amplification of
-/// a static load's change.
+/// `1 + ω²/D_i(ω)` per mode (rows) and line: the dynamic amplification
+/// of a static load's change.
 fn influence_factors(state: &ModalState, frequencies_hz: &[f64]) -> Vec<Vec<c64>> {
-    frequencies_hz
-        .iter()
-        .map(|&f| {
-            let w = 2.0 * PI * f;
-            (0..state.modes.len())
-                .map(|i| c64::new(1.0, 0.0) + c64::new(w * w, 0.0) / denominator(state, i, w))
+    (0..state.modes.len())
+        .map(|i| {
+            frequencies_hz
+                .iter()
+                .map(|&f| {
+                    let w = 2.0 * PI * f;
+                    c64::new(1.0, 0.0) + c64::new(w * w, 0.0) / denominator(state, i, w)
+                })
                 .collect()
         })
         .collect()
