@@ -139,6 +139,8 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     let forecast = &second["forecast"];
     assert_eq!(forecast["channels"].as_array().unwrap().len(), 8, "{forecast}");
     assert_eq!(forecast["baseline"].as_array().unwrap().len(), 8);
+    // The headline medians are over the channels the update fits.
+    assert_eq!(second["forecast_channels"], serde_json::json!(["ch4", "ch7", "ch9"]));
     for l in [first, second] {
         assert!(l["pga_ground"].as_f64().unwrap() > 0.1, "{l}");
         assert!(l["peak_deck"].as_f64().unwrap() > 0.1, "{l}");

@@ -47,6 +47,10 @@ pub struct EventLine {
     pub forecast: Option<PredictionReport>,
     /// The parameters the forecast's model had (`[events] forecast`).
     pub forecast_model: Vec<NamedValue>,
+    /// The deck channels the forecast's headline medians (the table, the
+    /// Rerun timeline, the status message) are taken over: `[events]
+    /// outputs`, the channels the update fits, or every deck channel scored.
+    pub forecast_channels: Vec<String>,
     pub verdict: Option<VerdictLine>,
     pub skipped: Option<String>,
     /// The update's relative residual and iterations; ground inputs combined.
@@ -67,6 +71,7 @@ impl EventLine {
             parameters: Vec::new(),
             forecast: None,
             forecast_model: Vec::new(),
+            forecast_channels: Vec::new(),
             verdict: None,
             skipped: None,
             update: None,
@@ -407,6 +412,14 @@ fn run_chain(
         forecaster.plan = plan.to_vec();
         let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
         prediction.report.start = line.start.clone();
+        let fitted = &cfg.events().outputs;
+        line.forecast_channels = prediction
+            .report
+            .channels
+            .iter()
+            .map(|c| c.sensor.clone())
+            .filter(|s| fitted.is_empty() || fitted.contains(s))
+            .collect();
         line.forecast = Some(prediction.report);
     }
     update_event(cfg, event, plan, chain, line)?;
@@ -574,18 +587,32 @@ pub fn status_message(k: u64, line: &EventLine, v: &VerdictLine) -> StatusMessag
     }
 }
 
-/// The median over the scored deck channels of the forecast's and the
-/// baseline's strong-motion NRMSE.
+/// The median over the line's `forecast_channels` (every scored deck
+/// channel when it names none) of the forecast's and the baseline's
+/// strong-motion NRMSE.
 pub fn forecast_medians(line: &EventLine) -> Option<(f64, f64)> {
     let median = |mut v: Vec<f64>| -> f64 {
         v.retain(|x| x.is_finite());
         v.sort_by(f64::total_cmp);
         v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
     };
+    let counted = |sensor: &String| line.forecast_channels.is_empty() || line.forecast_channels.contains(sensor);
     line.forecast.as_ref().map(|f| {
         (
-            median(f.channels.iter().map(|c| c.nrmse_strong).collect()),
-            median(f.baseline.iter().map(|c| c.score.nrmse_strong).collect()),
+            median(
+                f.channels
+                    .iter()
+                    .filter(|c| counted(&c.sensor))
+                    .map(|c| c.nrmse_strong)
+                    .collect(),
+            ),
+            median(
+                f.baseline
+                    .iter()
+                    .filter(|c| counted(&c.score.sensor))
+                    .map(|c| c.score.nrmse_strong)
+                    .collect(),
+            ),
         )
     })
 }
