@@ -8,7 +8,7 @@ use splinewatch_core::response::frf::{FrfModel, FrfRequest, SensorPoint};
 use splinewatch_core::solvers::truncation::TruncationReport;
 
 /// The model, its sensors and damping, ready for FRF work.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct FrfSetup {
     pub model: FrfModel,
     /// A truncated model's every-mode twin, when the model is small enough

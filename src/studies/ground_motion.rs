@@ -23,7 +23,6 @@ use splinewatch_core::updating::{base_values, fields_at, model_at, Parameter};
 
 /// The model at one parameter point, ready to be driven by its grounds.
 pub struct GroundModel {
-    pub setup: FrfSetup,
     pub plan: Vec<GroundInputPlan>,
     pub state: ModalState,
     pub motion: SupportMotion,
@@ -63,7 +62,6 @@ impl GroundModel {
             SupportMotion::with_state(&setup.model, shell, groups, (&kappa, &theta, &damping), &inputs)
                 .map_err(|e| anyhow::anyhow!("the model's modes and support motion: {e}"))?;
         Ok(Self {
-            setup: setup.clone(),
             plan: plan.clone(),
             state,
             motion,
@@ -115,7 +113,7 @@ impl GroundModel {
 /// parameters' values: assembled once and shared by every event of a run
 /// (the forecast's model, [`GroundModel::at`], and the update,
 /// [`super::event_update::update_on_event`]).
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct GroundParts {
     pub setup: FrfSetup,
     pub shell: ShellModel,

@@ -343,17 +343,16 @@ fn check_channels(cfg: &Config, event: &Event, plan: &[GroundInputPlan]) -> Resu
 
 /// The chain on one event; a failing stage skips the event with its reason.
 pub fn process(cfg: &Config, loaded: Loaded, chain: &mut Chain) -> EventLine {
+    let start = loaded.start_ns();
+    let mut line = EventLine::new(loaded.name);
+    line.start = start.map(format_timestamp);
     let (event, plan) = match loaded.event {
         Ok(e) => e,
         Err(e) => {
-            let mut line = EventLine::new(loaded.name);
-            line.start = loaded.first_sample_ns.map(format_timestamp);
             line.skipped = Some(format!("{e:#}"));
             return line;
         }
     };
-    let mut line = EventLine::new(loaded.name);
-    line.start = Some(format_timestamp(event.start_ns));
     if let Err(e) = run_chain(cfg, &event, &plan, chain, &mut line) {
         line.skipped = Some(format!("{e:#}"));
     }
@@ -412,19 +411,25 @@ fn run_chain(
         forecaster.plan = plan.to_vec();
         let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
         prediction.report.start = line.start.clone();
-        let fitted = &cfg.events().outputs;
         line.forecast_channels = prediction
             .report
             .channels
             .iter()
             .map(|c| c.sensor.clone())
-            .filter(|s| fitted.is_empty() || fitted.contains(s))
+            .filter(|s| fitted(cfg, s))
             .collect();
         line.forecast = Some(prediction.report);
     }
     update_event(cfg, event, plan, chain, line)?;
     judge_event(cfg, chain, line, pga);
     Ok(())
+}
+
+/// Whether the update fits deck sensor `name` (`[events] outputs`; every
+/// deck sensor when it names none).
+fn fitted(cfg: &Config, name: &String) -> bool {
+    let outputs = &cfg.events().outputs;
+    outputs.is_empty() || outputs.contains(name)
 }
 
 /// The update on the event's transmissibilities, warm-started from the
@@ -442,7 +447,7 @@ fn update_event(
         .deck
         .iter()
         .copied()
-        .filter(|&i| cfg.events().outputs.is_empty() || cfg.events().outputs.contains(&cfg.sensors[i].name))
+        .filter(|&i| fitted(cfg, &cfg.sensors[i].name))
         .collect();
     let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
     let record = EventSignals {

@@ -450,12 +450,25 @@ impl FrfModel {
         let Source::Truncated { model, cutoff_hz, .. } = &self.source else {
             return Ok((self.modal_state_with_fields(kappa, theta, damping)?, None));
         };
+        // The sensors' responses (the truncation residual) and the loads'
+        // from one solve; without loads, the sensors' as they come.
         let sensors = self.sensor_rows.len();
-        let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
-        let (modes, (x, xmx)) = model.modes_and_responses(kappa, theta, *cutoff_hz, &all)?;
-        let columns = |m: &Mat<f64>, from: usize, count: usize| Mat::from_fn(m.nrows(), count, |r, c| m[(r, from + c)]);
-        let own = (columns(&x, 0, sensors), columns(&xmx, 0, sensors));
-        let theirs = (columns(&x, sensors, loads.len()), columns(&xmx, sensors, loads.len()));
+        let (modes, own, theirs) = if loads.is_empty() {
+            let (modes, own) = model.modes_and_responses(kappa, theta, *cutoff_hz, &self.sensor_rows)?;
+            let none = Mat::<f64>::zeros(own.0.nrows(), 0);
+            (modes, own, (none.clone(), none))
+        } else {
+            let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
+            let (modes, (x, xmx)) = model.modes_and_responses(kappa, theta, *cutoff_hz, &all)?;
+            let split = |m: &Mat<f64>| {
+                (
+                    m.subcols(0, sensors).to_owned(),
+                    m.subcols(sensors, loads.len()).to_owned(),
+                )
+            };
+            let ((x_own, x_loads), (xmx_own, xmx_loads)) = (split(&x), split(&xmx));
+            (modes, (x_own, xmx_own), (x_loads, xmx_loads))
+        };
         let shift = SparseModel::shift_for(*cutoff_hz);
         let mut state = self.modal_state_from(modes, damping);
         state.residual = Some(Residual::new(
