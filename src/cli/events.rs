@@ -17,7 +17,7 @@ use crate::outputs::notify::Notifier;
 use crate::outputs::results::ResultsWriter;
 use crate::service::events::burst::split;
 use crate::service::events::{
-    forecast_medians, load, log_rerun, messages, process, status_message, Chain, EventLine, Loaded,
+    forecast_medians, identify, load, log_rerun, messages, process_identified, status_message, Chain, EventLine, Loaded,
 };
 use crate::service::records::read_records;
 use anyhow::{bail, Context, Result};
@@ -80,24 +80,39 @@ pub fn events(a: EventsArgs) -> Result<()> {
         outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tforecast_nrmse\tbaseline_nrmse\tverdict");
     }
     let mut lines = Vec::new();
-    for (k, l) in loaded.into_iter().enumerate() {
-        let line = process(&cfg, l, &mut chain);
-        if let Some(w) = writer.as_mut() {
-            let (time, bodies) = messages(&line)?;
-            for (topic, json) in bodies {
-                w.write_json(topic, time, &json)?;
+    // The identifications depend on the records alone: a second thread runs
+    // them ahead, in order, while this one forecasts and updates the chain.
+    std::thread::scope(|scope| -> Result<()> {
+        let (sender, identified) = std::sync::mpsc::channel();
+        let (cfg, loaded) = (&cfg, &loaded);
+        scope.spawn(move || {
+            for l in loaded {
+                if sender.send(identify(cfg, l)).is_err() {
+                    break;
+                }
             }
+        });
+        for (k, l) in loaded.iter().enumerate() {
+            let identified = identified.recv().unwrap_or_else(|_| identify(cfg, l));
+            let line = process_identified(cfg, l, identified, &mut chain);
+            if let Some(w) = writer.as_mut() {
+                let (time, bodies) = messages(&line)?;
+                for (topic, json) in bodies {
+                    w.write_json(topic, time, &json)?;
+                }
+            }
+            if let (Some(n), Some(v)) = (notifier.as_mut(), &line.verdict) {
+                let status = status_message(k as u64, &line, v);
+                n.observe(&status, &serde_json::to_vec(&status)?);
+            }
+            if let Some(r) = rerun.as_mut() {
+                log_rerun(r, &line)?;
+            }
+            print_line(&line, a.json)?;
+            lines.push(line);
         }
-        if let (Some(n), Some(v)) = (notifier.as_mut(), &line.verdict) {
-            let status = status_message(k as u64, &line, v);
-            n.observe(&status, &serde_json::to_vec(&status)?);
-        }
-        if let Some(r) = rerun.as_mut() {
-            log_rerun(r, &line)?;
-        }
-        print_line(&line, a.json)?;
-        lines.push(line);
-    }
+        Ok(())
+    })?;
     if let Some(r) = rerun {
         r.finish()?;
     }

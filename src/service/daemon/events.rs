@@ -117,7 +117,7 @@ impl EventWorker {
         let config = Arc::clone(&self.config);
         self.running = Some(tokio::task::spawn_blocking(move || {
             let loaded = load(&config, format_timestamp(burst.start_ns), Ok(burst.blocks));
-            let line = process(&config, loaded, &mut chain);
+            let line = process(&config, &loaded, &mut chain);
             (chain, line)
         }));
     }

@@ -27,7 +27,7 @@ use crate::studies::predict::{predict as predict_event, PredictionReport};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::monitoring::amplitude::{expected, judge, FeatureBand, Verdict};
-use splinewatch_core::updating::ParameterEstimate;
+use splinewatch_core::updating::{ParameterEstimate, StopReason};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -96,6 +96,12 @@ pub struct UpdateLine {
     pub relative_residual: f64,
     pub iterations: usize,
     pub converged: bool,
+    /// Why the solver stopped (as `update --json` says it).
+    pub stop_reason: StopReason,
+    /// Residual evaluations, rejected trial steps included.
+    pub evaluations: usize,
+    /// The Bates–Watts relative offset at the solution.
+    pub relative_offset: Option<f64>,
     pub combined_inputs: Vec<String>,
 }
 
@@ -342,18 +348,53 @@ fn check_channels(cfg: &Config, event: &Event, plan: &[GroundInputPlan]) -> Resu
 }
 
 /// The chain on one event; a failing stage skips the event with its reason.
-pub fn process(cfg: &Config, loaded: Loaded, chain: &mut Chain) -> EventLine {
+pub fn process(cfg: &Config, loaded: &Loaded, chain: &mut Chain) -> EventLine {
+    process_identified(cfg, loaded, identify(cfg, loaded), chain)
+}
+
+/// An event's identified modes (item 1 of the chain), or why there are
+/// none; `None` for an event that could not be read. It depends on the
+/// record alone, not on the chain, so `events` identifies the next records
+/// on a second thread while the chain updates this one.
+pub type Identified = Option<Result<Vec<ModeEntry>, String>>;
+
+/// [`Identified`] of `loaded`: SRIM of every recorded ground channel to
+/// every deck channel.
+pub fn identify(cfg: &Config, loaded: &Loaded) -> Identified {
+    let (event, plan) = loaded.event.as_ref().ok()?;
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let inputs: Vec<&[f64]> = ground_sensors(plan).iter().map(|&i| channel(i)).collect();
+    let outputs: Vec<&[f64]> = event.deck.iter().map(|&i| channel(i)).collect();
+    Some(match identify_io(cfg, &inputs, &outputs, event.fs) {
+        Ok((result, _)) => {
+            let report = OmaReport {
+                start_ns: event.start_ns,
+                samples: outputs[0].len(),
+                fs: event.fs,
+                sensors: event.deck.iter().map(|&i| cfg.sensors[i].name.clone()).collect(),
+                result,
+                spectrum: None,
+            };
+            Ok(report.modes_file().modes)
+        }
+        Err(e) => Err(format!("{e:#}")),
+    })
+}
+
+/// [`process`] with the event's identification done (`identified`, as
+/// [`identify`] gives it).
+pub fn process_identified(cfg: &Config, loaded: &Loaded, identified: Identified, chain: &mut Chain) -> EventLine {
     let start = loaded.start_ns();
-    let mut line = EventLine::new(loaded.name);
+    let mut line = EventLine::new(loaded.name.clone());
     line.start = start.map(format_timestamp);
-    let (event, plan) = match loaded.event {
+    let (event, plan) = match &loaded.event {
         Ok(e) => e,
         Err(e) => {
             line.skipped = Some(format!("{e:#}"));
             return line;
         }
     };
-    if let Err(e) = run_chain(cfg, &event, &plan, chain, &mut line) {
+    if let Err(e) = run_chain(cfg, event, plan, identified, chain, &mut line) {
         line.skipped = Some(format!("{e:#}"));
     }
     line
@@ -363,6 +404,7 @@ fn run_chain(
     cfg: &Config,
     event: &Event,
     plan: &[GroundInputPlan],
+    identified: Identified,
     chain: &mut Chain,
     line: &mut EventLine,
 ) -> Result<()> {
@@ -380,24 +422,12 @@ fn run_chain(
             .flat_map(|&i| channel(i))
             .fold(0.0f64, |a, v| a.max(v.abs())),
     );
-    // Identification: every recorded ground channel to every deck channel.
-    let inputs: Vec<&[f64]> = ground.iter().map(|&i| channel(i)).collect();
-    let outputs: Vec<&[f64]> = event.deck.iter().map(|&i| channel(i)).collect();
     // A record whose identification finds no mode is still forecast and
     // updated (neither needs modes): said in `notes`.
-    match identify_io(cfg, &inputs, &outputs, event.fs) {
-        Ok((result, _)) => {
-            let report = OmaReport {
-                start_ns: event.start_ns,
-                samples: outputs[0].len(),
-                fs: event.fs,
-                sensors: event.deck.iter().map(|&i| cfg.sensors[i].name.clone()).collect(),
-                result,
-                spectrum: None,
-            };
-            line.modes = report.modes_file().modes;
-        }
-        Err(e) => line.notes.push(format!("{e:#}")),
+    match identified {
+        Some(Ok(modes)) => line.modes = modes,
+        Some(Err(e)) => line.notes.push(e),
+        None => bail!("the event was not read"),
     }
     // The forecast: the model of the events before this one.
     if !chain.parameters.is_empty() {
@@ -458,12 +488,26 @@ fn update_event(
         fs: event.fs,
     };
     let parts = chain.parts(cfg)?;
-    let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |_| {})?;
+    let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |it| {
+        tracing::debug!(
+            event = %line.event,
+            iteration = it.iteration,
+            relative_residual = it.relative_residual,
+            step = it.step_norm,
+            damping = it.damping,
+            rejected = it.rejected_steps,
+            parameters = ?it.parameters,
+            "update iteration"
+        )
+    })?;
     line.update = Some(UpdateLine {
         model_mode_hz: updated.dominant_hz,
         relative_residual: updated.result.relative_residual,
         iterations: updated.result.iterations.len().saturating_sub(1),
         converged: updated.result.converged,
+        stop_reason: updated.result.stop_reason,
+        evaluations: updated.result.evaluations,
+        relative_offset: updated.result.relative_offset,
         combined_inputs: updated.combined,
     });
     line.parameters = updated.result.parameters.clone();
