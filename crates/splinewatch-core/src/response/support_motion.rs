@@ -343,7 +343,6 @@ impl SupportMotion {
             .enumerate()
             .map(|(flat, v)| if wanted(flat) { scaled(v) } else { Vec::new() })
             .collect();
-        let factors = influence_factors(state, frequencies_hz);
         let dgamma: Vec<Vec<c64>> = evaluation.dh_dgamma.into_iter().map(scaled).collect();
         let mut dtheta: Vec<Vec<c64>> = if frf.field_coefficient_count() > 0 {
             loads
@@ -355,7 +354,9 @@ impl SupportMotion {
             Vec::new()
         };
         // The influence's own change: w = B_j (δ_{j∈g} R − Γ) for a spring
-        // coefficient, −(∂K/∂θ_k) Γ for a field coefficient.
+        // coefficient, −(∂K/∂θ_k) Γ for a field coefficient; every one's
+        // modal weights first, then one product with the dynamic factors.
+        let mut change = InfluenceChange::new(state, pairs.len());
         let mut flat = 0;
         for (field, blocks) in frf.spring_blocks().iter().enumerate() {
             for b in blocks {
@@ -378,54 +379,105 @@ impl SupportMotion {
                         })
                         .collect()
                 };
-                self.add_influence_change(state, pairs, &factors, w, &mut dkappa[flat]);
+                change.push(state, pairs, self.inputs.len(), w, Target::Spring(flat));
                 flat += 1;
             }
         }
-        for (k, dt) in dtheta.iter_mut().enumerate() {
+        for k in 0..dtheta.len() {
             let product = frf.field_times(k, &self.influence);
             let w = |c: usize| -> Vec<(usize, f64)> { (0..product.nrows()).map(|d| (d, -product[(d, c)])).collect() };
-            self.add_influence_change(state, pairs, &factors, w, dt);
+            change.push(state, pairs, self.inputs.len(), w, Target::Field(k));
         }
+        change.add_to(state, frequencies_hz, &mut dkappa, &mut dtheta);
         TransmissibilitySensitivities { dkappa, dtheta, dgamma }
     }
+}
 
-    /// Adds `Σ_i a_ri (φ_iᵀ w_c / λ_i)(1 + ω²/D_i)` to `out` for every pair
-    /// `(r, c)`, `w_c` given sparse per input; `factors` are
-    /// [`influence_factors`] (per mode, per line).
-    fn add_influence_change(
-        &self,
+/// Which sensitivity an [`InfluenceChange`] row block adds to.
+#[derive(Clone, Copy)]
+enum Target {
+    Spring(usize),
+    Field(usize),
+}
+
+/// The change of the quasi-static influence, `Σ_i a_ri (φ_iᵀ w_c / λ_i)
+/// (1 + ω²/D_i)` for every pair `(r, c)` and line, of several
+/// coefficients at once: per coefficient and pair the modal weights
+/// `a_ri φ_iᵀ w_c / λ_i` (a row), then one real product of all rows with
+/// the real and imaginary parts of the dynamic factors `1 + ω²/D_i(ω)`
+/// (modes × lines): a matrix product where a loop per coefficient, pair,
+/// mode and line waited on its memory.
+struct InfluenceChange {
+    /// The coefficient of each block of `pairs` rows, in row order.
+    targets: Vec<Target>,
+    /// The rows: coefficients × pairs, each `n_modes` long.
+    weights: Vec<f64>,
+    pairs: usize,
+    modes: usize,
+    flexible: Vec<usize>,
+}
+
+impl InfluenceChange {
+    fn new(state: &ModalState, pairs: usize) -> Self {
+        Self {
+            targets: Vec::new(),
+            weights: Vec::new(),
+            pairs,
+            modes: state.modes.len(),
+            flexible: flexible_modes(state),
+        }
+    }
+
+    /// The rows of one coefficient whose load `w_c` is given sparse per
+    /// input.
+    fn push(
+        &mut self,
         state: &ModalState,
         pairs: &[(usize, usize)],
-        factors: &[Vec<c64>],
+        inputs: usize,
         w: impl Fn(usize) -> Vec<(usize, f64)>,
-        out: &mut [c64],
+        target: Target,
     ) {
-        let nm = state.modes.len();
-        let flexible = flexible_modes(state);
-        let weights: Vec<Vec<f64>> = (0..self.inputs.len())
+        let nm = self.modes;
+        let per_input: Vec<Vec<f64>> = (0..inputs)
             .map(|c| {
                 let w = w(c);
                 let mut weights = vec![0.0; nm];
-                for &i in &flexible {
+                for &i in &self.flexible {
                     let p: f64 = w.iter().map(|&(d, v)| state.modes.shapes[(d, i)] * v).sum();
                     weights[i] = p / state.modes.omega2[i];
                 }
                 weights
             })
             .collect();
-        let nf = factors.first().map_or(0, Vec::len);
-        // Mode by mode along the lines: a streaming update of the pair's
-        // lines (one product-sum chain per line would wait on each add).
-        for (p, &(r, c)) in pairs.iter().enumerate() {
-            let lines = &mut out[p * nf..(p + 1) * nf];
-            for (i, by_line) in factors.iter().enumerate() {
-                let v = state.amplitude(r, i) * weights[c][i];
-                if v == 0.0 {
-                    continue;
-                }
-                for (o, f) in lines.iter_mut().zip(by_line) {
-                    *o += f * v;
+        for &(r, c) in pairs {
+            self.weights
+                .extend((0..nm).map(|i| state.amplitude(r, i) * per_input[c][i]));
+        }
+        self.targets.push(target);
+    }
+
+    /// Adds every coefficient's change to its sensitivity (pair-major,
+    /// `[pair * n_lines + line]`).
+    fn add_to(self, state: &ModalState, frequencies_hz: &[f64], dkappa: &mut [Vec<c64>], dtheta: &mut [Vec<c64>]) {
+        let (nm, nf, np) = (self.modes, frequencies_hz.len(), self.pairs);
+        if self.targets.is_empty() || nm == 0 || nf == 0 {
+            return;
+        }
+        let factors = influence_factors(state, frequencies_hz);
+        let re = Mat::from_fn(nm, nf, |i, k| factors[i][k].re);
+        let im = Mat::from_fn(nm, nf, |i, k| factors[i][k].im);
+        let rows = Mat::from_fn(self.targets.len() * np, nm, |row, i| self.weights[row * nm + i]);
+        let (out_re, out_im) = (&rows * &re, &rows * &im);
+        for (t, target) in self.targets.iter().enumerate() {
+            let out = match *target {
+                Target::Spring(flat) => &mut dkappa[flat],
+                Target::Field(k) => &mut dtheta[k],
+            };
+            for p in 0..np {
+                let row = t * np + p;
+                for (k, o) in out[p * nf..(p + 1) * nf].iter_mut().enumerate() {
+                    *o += c64::new(out_re[(row, k)], out_im[(row, k)]);
                 }
             }
         }
