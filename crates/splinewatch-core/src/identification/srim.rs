@@ -99,7 +99,9 @@ impl InformationMatrix {
     /// Galerkin inverse; exactly the record's own on the record): the
     /// replicates differ by their data, not by which directions count as
     /// input, and each costs a Cholesky of `Vᵀ R_uu V` instead of an
-    /// eigendecomposition of `R_uu`.
+    /// eigendecomposition of `R_uu` (of `Vᵀ R_uu V` when a replicate is not
+    /// positive on the whole range: on the 2023-05-21 Painter Street record
+    /// two of eight).
     pub fn matrix(&self, left_out: Option<usize>) -> Result<Mat<f64>, OmaError> {
         let (r_yy, r_yu, r_uu) = self.blocks(left_out);
         if left_out.is_none() {
@@ -116,8 +118,12 @@ impl InformationMatrix {
         };
         let gram = range.transpose() * &r_uu * range;
         let Ok(llt) = gram.llt(faer::Side::Lower) else {
-            // The replicate lost a direction the record has: its own range.
-            let (w, _) = input_range(&r_yu, &r_uu)?;
+            // The replicate lost a direction the record has (its `R_uu`, a
+            // block Toeplitz of estimated correlations, is not positive
+            // there): the record's range less those directions, by the
+            // same rule as the record's (`V U_k`, `U_k` the eigenvectors of
+            // `VᵀR_uuV` above `INPUT_RANGE` of its largest).
+            let (w, _) = input_range(&(&r_yu * range), &gram)?;
             return Ok(r_yy - &w * w.transpose());
         };
         // R_yu V (VᵀR_uuV)⁻¹ Vᵀ R_yuᵀ = X Xᵀ, X = R_yu V L⁻ᵀ.
