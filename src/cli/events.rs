@@ -23,6 +23,7 @@ use crate::service::records::read_records;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
+use thread_priority::{set_current_thread_priority, ThreadPriority};
 
 #[derive(Args)]
 pub struct EventsArgs {
@@ -86,6 +87,13 @@ pub fn events(a: EventsArgs) -> Result<()> {
         let (sender, identified) = std::sync::mpsc::channel();
         let (cfg, loaded) = (&cfg, &loaded);
         scope.spawn(move || {
+            // The chain is the critical path: the identifications take the
+            // cores it leaves (20 Painter Street events 16.2 -> 14.9 s).
+            // Lowering a thread's own priority needs no privilege; where the
+            // platform refuses, they run at the same priority.
+            if let Err(e) = set_current_thread_priority(ThreadPriority::Min) {
+                tracing::debug!("the identification thread keeps its priority: {e}");
+            }
             for l in loaded {
                 if sender.send(identify(cfg, l)).is_err() {
                     break;
