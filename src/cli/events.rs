@@ -10,7 +10,7 @@
 //! missing ground channel, too short) is reported as skipped with its reason
 //! and the others go on.
 
-use crate::config::{load_config, Config};
+use crate::config::{load_config, Config, GroundInputPlan};
 use crate::io::console::{errln, outln};
 use crate::io::wire::format_timestamp;
 use crate::outputs::notify::Notifier;
@@ -57,7 +57,9 @@ pub fn events(a: EventsArgs) -> Result<()> {
         bail!("config: sensors: events need ground sensors ([[sensors]] with support = \"<group>\")");
     }
     let mut chain = Chain::resume(a.state.as_deref())?;
-    let mut loaded: Vec<Loaded> = a.input.iter().flat_map(|p| load_input(&cfg, p)).collect();
+    // The model once, for the records' ground plan and then the chain.
+    let parts = chain.parts(&cfg)?;
+    let mut loaded: Vec<Loaded> = a.input.iter().flat_map(|p| load_input(&cfg, &parts.plan, p)).collect();
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
     let mut writer = a
@@ -174,18 +176,18 @@ fn mode_points(lines: &[EventLine]) -> Vec<super::events_plot::ModePoint> {
 /// The events of one input: its record, or each burst of it when it holds
 /// several (a triggered logger's raw-input recording: silences longer than
 /// `[events] gap_seconds`), named `<file>@<start>`.
-fn load_input(cfg: &Config, path: &Path) -> Vec<Loaded> {
+fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path) -> Vec<Loaded> {
     let name = path
         .file_name()
         .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
     let blocks = match event_files(path).and_then(|files| read_records(cfg, &files)) {
         Ok(blocks) => blocks,
-        Err(e) => return vec![load(cfg, name, Err(e))],
+        Err(e) => return vec![load(cfg, plan, name, Err(e))],
     };
     let bursts = split(blocks, cfg.events().gap_seconds, cfg.events().max_seconds);
     if bursts.is_empty() {
         // Said by the check: the record holds none of the config's channels.
-        return vec![load(cfg, name, Ok(Vec::new()))];
+        return vec![load(cfg, plan, name, Ok(Vec::new()))];
     }
     let several = bursts.len() > 1;
     bursts
@@ -196,7 +198,7 @@ fn load_input(cfg: &Config, path: &Path) -> Vec<Loaded> {
             } else {
                 name.clone()
             };
-            load(cfg, event, Ok(b.blocks))
+            load(cfg, plan, event, Ok(b.blocks))
         })
         .collect()
 }

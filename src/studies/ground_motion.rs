@@ -31,12 +31,6 @@ pub struct GroundModel {
 }
 
 impl GroundModel {
-    /// The config's ground inputs and the sensors that measure them,
-    /// without the model's modes (what a record is aligned by).
-    pub fn plan_of(config: &Config) -> Result<Vec<GroundInputPlan>> {
-        Ok(ground_setup(config)?.2)
-    }
-
     /// At the config's values, with the `named` updating parameters set
     /// (an update's result).
     pub fn new(config: &Config, named: &[(String, f64)]) -> Result<Self> {

@@ -116,7 +116,11 @@ impl EventWorker {
         let burst = self.waiting.pop_front().expect("not empty");
         let config = Arc::clone(&self.config);
         self.running = Some(tokio::task::spawn_blocking(move || {
-            let loaded = load(&config, format_timestamp(burst.start_ns), Ok(burst.blocks));
+            let name = format_timestamp(burst.start_ns);
+            let loaded = match chain.parts(&config) {
+                Ok(parts) => load(&config, &parts.plan, name, Ok(burst.blocks)),
+                Err(e) => load(&config, &[], name, Err(e)),
+            };
             let line = process(&config, &loaded, &mut chain);
             (chain, line)
         }));

@@ -171,7 +171,7 @@ impl Chain {
     }
 
     /// The config's model parts, assembled on first use.
-    fn parts(&mut self, cfg: &Config) -> Result<Arc<GroundParts>> {
+    pub fn parts(&mut self, cfg: &Config) -> Result<Arc<GroundParts>> {
         if let Some(parts) = &self.parts {
             return Ok(Arc::clone(parts));
         }
@@ -272,9 +272,10 @@ impl Loaded {
 }
 
 /// The event `name` of `blocks` (or the error reading them) checked and
-/// aligned: every ground channel, the deck's, no dead or clipped channel,
-/// long enough.
-pub fn load(cfg: &Config, name: String, blocks: Result<Vec<RecordedBlock>>) -> Loaded {
+/// aligned on the config's ground inputs `plan` ([`GroundParts::plan`]):
+/// every ground channel, the deck's, no dead or clipped channel, long
+/// enough.
+pub fn load(cfg: &Config, plan: &[GroundInputPlan], name: String, blocks: Result<Vec<RecordedBlock>>) -> Loaded {
     let first_sample_ns = blocks
         .as_ref()
         .ok()
@@ -297,7 +298,7 @@ pub fn load(cfg: &Config, name: String, blocks: Result<Vec<RecordedBlock>>) -> L
                 if missing.len() > 1 { "s" } else { "" }
             );
         }
-        let mut plan = GroundModel::plan_of(cfg)?;
+        let mut plan = plan.to_vec();
         let event = align_event(cfg, &mut plan, &blocks)?;
         if event.deck.is_empty() {
             bail!("the record holds none of the config's deck sensors");
