@@ -143,18 +143,25 @@ impl InformationMatrix {
         let (m, r, p) = (self.outputs, self.inputs, self.horizon);
         let l = m + r;
         let lags = self.correlations.estimate_without(left_out);
-        // E[z_a(t+i) z_b(t+j)]: R_{i−j}[a][b], or R_{j−i}[b][a] below the diagonal.
-        let z = |i: usize, a: usize, j: usize, b: usize| {
-            if i >= j {
-                lags[(i - j) * l * l + a * l + b]
-            } else {
-                lags[(j - i) * l * l + b * l + a]
+        // Block (i, j) over channels `rows` × `cols` of `z`: E[z_a(t+i) z_b(t+j)],
+        // R_{i−j}[a][b], or R_{j−i}[b][a] above the block diagonal; filled
+        // block by block (an index division per entry cost more than the copy).
+        let blocks = |rows: std::ops::Range<usize>, cols: std::ops::Range<usize>| {
+            let (nr, nc) = (rows.len(), cols.len());
+            let mut out = Mat::<f64>::zeros(p * nr, p * nc);
+            for i in 0..p {
+                for j in 0..p {
+                    let lag = &lags[i.abs_diff(j) * l * l..][..l * l];
+                    for (ar, a) in rows.clone().enumerate() {
+                        for (bc, b) in cols.clone().enumerate() {
+                            out[(i * nr + ar, j * nc + bc)] = if i >= j { lag[a * l + b] } else { lag[b * l + a] };
+                        }
+                    }
+                }
             }
+            out
         };
-        let r_yy = Mat::from_fn(p * m, p * m, |row, col| z(row / m, row % m, col / m, col % m));
-        let r_yu = Mat::from_fn(p * m, p * r, |row, col| z(row / m, row % m, col / r, m + col % r));
-        let r_uu = Mat::from_fn(p * r, p * r, |row, col| z(row / r, m + row % r, col / r, m + col % r));
-        (r_yy, r_yu, r_uu)
+        (blocks(0..m, 0..m), blocks(0..m, m..l), blocks(m..l, m..l))
     }
 }
 
