@@ -464,9 +464,7 @@ impl InfluenceChange {
         if self.targets.is_empty() || nm == 0 || nf == 0 {
             return;
         }
-        let factors = influence_factors(state, frequencies_hz);
-        let re = Mat::from_fn(nm, nf, |i, k| factors[i][k].re);
-        let im = Mat::from_fn(nm, nf, |i, k| factors[i][k].im);
+        let (re, im) = influence_factors(state, frequencies_hz);
         let rows = Mat::from_fn(self.targets.len() * np, nm, |row, i| self.weights[row * nm + i]);
         let (out_re, out_im) = (&rows * &re, &rows * &im);
         for (t, target) in self.targets.iter().enumerate() {
@@ -484,20 +482,19 @@ impl InfluenceChange {
     }
 }
 
-/// `1 + ω²/D_i(ω)` per mode (rows) and line: the dynamic amplification
-/// of a static load's change.
-fn influence_factors(state: &ModalState, frequencies_hz: &[f64]) -> Vec<Vec<c64>> {
-    (0..state.modes.len())
-        .map(|i| {
-            frequencies_hz
-                .iter()
-                .map(|&f| {
-                    let w = 2.0 * PI * f;
-                    c64::new(1.0, 0.0) + c64::new(w * w, 0.0) / denominator(state, i, w)
-                })
-                .collect()
-        })
-        .collect()
+/// `1 + ω²/D_i(ω)` per mode (rows) and line, its real and imaginary
+/// parts: the dynamic amplification of a static load's change.
+fn influence_factors(state: &ModalState, frequencies_hz: &[f64]) -> (Mat<f64>, Mat<f64>) {
+    let (nm, nf) = (state.modes.len(), frequencies_hz.len());
+    let (mut re, mut im) = (Mat::zeros(nm, nf), Mat::zeros(nm, nf));
+    for i in 0..nm {
+        for (k, &f) in frequencies_hz.iter().enumerate() {
+            let w = 2.0 * PI * f;
+            let factor = c64::new(1.0, 0.0) + c64::new(w * w, 0.0) / denominator(state, i, w);
+            (re[(i, k)], im[(i, k)]) = (factor.re, factor.im);
+        }
+    }
+    (re, im)
 }
 
 /// The modes that carry static load: all but the rigid ones (classified
