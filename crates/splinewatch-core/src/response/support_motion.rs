@@ -145,6 +145,30 @@ impl SupportMotion {
         Ok((state, motion))
     }
 
+    /// `frf` with a Ritz basis at `(kappa, theta)` for the ground forces of
+    /// `inputs` and the spring coefficients `varied` (flat indices): the
+    /// model [`Self::with_state`] solves on by projection wherever only those
+    /// springs move ([`FrfModel::with_reanalysis`]); a dense model as it is.
+    pub fn reanalysed(
+        frf: &FrfModel,
+        model: &ShellModel,
+        groups: &SupportGroups,
+        (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
+        inputs: &[GroundInput],
+        varied: &[usize],
+    ) -> Result<FrfModel, SupportError> {
+        if frf.dense().is_some() {
+            return Ok(frf.clone());
+        }
+        check_inputs(groups, inputs)?;
+        let lifts = constraint_lifts(model, groups)?;
+        let forces = truncated_forces(frf, groups, kappa, inputs, &|input: &GroundInput| {
+            lift_of(&lifts, input)
+        })?;
+        frf.with_reanalysis((kappa, theta), &forces, varied)
+            .map_err(|e| SupportError::Solve(e.to_string()))
+    }
+
     /// `N Γ` and `L = Φᵀ M Γ` of the influence `Γ` (dofs × inputs).
     fn from_influence(frf: &FrfModel, state: &ModalState, inputs: &[GroundInput], influence: Mat<f64>) -> Self {
         let n = influence.nrows();

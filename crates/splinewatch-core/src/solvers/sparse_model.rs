@@ -497,6 +497,29 @@ impl SparseModel {
         cutoff_hz: f64,
         loads: Option<&[Vec<(usize, f64)>]>,
     ) -> Result<(Modes, Option<Responses>), ModelError> {
+        Ok(self.finish(self.solve_free(kappa, theta, cutoff_hz, loads)?))
+    }
+
+    /// The loads `F` (sparse rows on the generalised dofs) on the free
+    /// coordinates: `Tᵀ F`, one column per load.
+    pub(crate) fn free_loads(&self, loads: &[Vec<(usize, f64)>]) -> faer::Mat<f64> {
+        let mut full = faer::Mat::<f64>::zeros(self.dof_count(), loads.len());
+        for (s, row) in loads.iter().enumerate() {
+            for &(d, v) in row {
+                full[(d, s)] += v;
+            }
+        }
+        self.reduction.reduce_vector(&full)
+    }
+
+    /// [`Self::solve`] on the free coordinates, block by block.
+    pub(crate) fn solve_free(
+        &self,
+        kappa: &[Vec<f64>],
+        theta: &[Vec<f64>],
+        cutoff_hz: f64,
+        loads: Option<&[Vec<(usize, f64)>]>,
+    ) -> Result<FreeSolve, ModelError> {
         let k = self.stiffness_with_fields(kappa, theta)?;
         let cutoff_omega2 = (2.0 * PI * cutoff_hz).powi(2);
         let settings = PartialSettings {
@@ -504,15 +527,7 @@ impl SparseModel {
             shift: Self::shift_for(cutoff_hz),
             tolerance: RESIDUAL_TOLERANCE,
         };
-        let rhs = loads.map(|loads| {
-            let mut full = faer::Mat::<f64>::zeros(self.dof_count(), loads.len());
-            for (s, row) in loads.iter().enumerate() {
-                for &(d, v) in row {
-                    full[(d, s)] += v;
-                }
-            }
-            self.reduction.reduce_vector(&full)
-        });
+        let rhs = loads.map(|loads| self.free_loads(loads));
         let nl = loads.map_or(0, <[_]>::len);
         let mut x = faer::Mat::<f64>::zeros(self.free_count(), nl);
         let mut xmx = faer::Mat::<f64>::zeros(self.free_count(), nl);
@@ -544,18 +559,46 @@ impl SparseModel {
             .flat_map(|b| (0..found[b].omega2.len()).map(move |i| (b, i)))
             .collect();
         order.sort_by(|&(a, i), &(b, j)| found[a].omega2[i].total_cmp(&found[b].omega2[j]));
-        let mut reduced = faer::Mat::<f64>::zeros(self.free_count(), order.len());
+        let mut shapes = faer::Mat::<f64>::zeros(self.free_count(), order.len());
         for (c, &(b, i)) in order.iter().enumerate() {
             for (r, &d) in self.blocks[b].dofs.iter().enumerate() {
-                reduced[(d, c)] = found[b].shapes[(r, i)];
+                shapes[(d, c)] = found[b].shapes[(r, i)];
             }
         }
         let omega2: Vec<f64> = order.iter().map(|&(b, i)| found[b].omega2[i]).collect();
-        let shapes = self.reduction.expand(&reduced);
-        let kinds = classify_lumped(&omega2, &shapes, &self.lumped, &self.frames);
-        let responses = loads.map(|_| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
-        Ok((Modes { omega2, shapes, kinds }, responses))
+        Ok(FreeSolve {
+            omega2,
+            shapes,
+            responses: loads.map(|_| (x, xmx)),
+        })
     }
+
+    /// The modes and responses of a solve on the free coordinates, expanded
+    /// to the generalised dofs, the modes classified.
+    pub(crate) fn finish(&self, solved: FreeSolve) -> (Modes, Option<Responses>) {
+        let shapes = self.reduction.expand(&solved.shapes);
+        let kinds = classify_lumped(&solved.omega2, &shapes, &self.lumped, &self.frames);
+        let responses = solved
+            .responses
+            .map(|(x, xmx)| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
+        (
+            Modes {
+                omega2: solved.omega2,
+                shapes,
+                kinds,
+            },
+            responses,
+        )
+    }
+}
+
+/// A solve on the free coordinates: the modes (ascending, mass-normalised)
+/// and, for loads, `(X F, X M X F)` at the solve's shift.
+#[derive(Debug, Clone)]
+pub(crate) struct FreeSolve {
+    pub(crate) omega2: Vec<f64>,
+    pub(crate) shapes: faer::Mat<f64>,
+    pub(crate) responses: Option<Responses>,
 }
 
 impl SparseModel {

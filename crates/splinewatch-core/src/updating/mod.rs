@@ -33,6 +33,7 @@ use faer::Mat;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+mod estimates;
 pub mod frf_residual;
 pub mod joint;
 mod modal;
@@ -41,7 +42,8 @@ mod solver;
 pub mod transmissibility_residual;
 pub use modal::{ModalSolution, ModalUpdateProblem};
 
-pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved, REPORTED_CORRELATIONS};
+pub use estimates::REPORTED_CORRELATIONS;
+pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved};
 #[cfg(test)]
 use solver::{norm2, normal_equations, quadratic, relative_offset, solve_damped};
 

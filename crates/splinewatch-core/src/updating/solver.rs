@@ -2,12 +2,13 @@
 //! (FRF residues, modal residues): eq. (40)–(43) with Moré's column scaling,
 //! gain-ratio acceptance, Nielsen's damping update and the stopping rules of
 //! [`UpdateSettings`]. A residual model only says how to evaluate residues
-//! and their Jacobian; the loop, the bounds transform and the covariance
-//! helpers are here, once.
+//! and their Jacobian; the loop and the bounds transform are here, once
+//! (the estimates' uncertainty in [`super::estimates`]).
 
+use super::estimates::estimates;
 use super::{
-    bounded_derivative, bounded_value, unbounded_value, HeldParameter, HoldReason, IterationRecord, Method, Parameter,
-    ParameterCorrelation, ParameterEstimate, StopReason, UpdateError, UpdateResult, UpdateSettings,
+    bounded_derivative, bounded_value, unbounded_value, HoldReason, IterationRecord, Method, Parameter, StopReason,
+    UpdateError, UpdateResult, UpdateSettings,
 };
 use faer::{Mat, Side};
 
@@ -59,6 +60,22 @@ pub struct Solved<E> {
     pub evaluations: usize,
     /// Per parameter, why it was held (`None`: free).
     pub held: Vec<Option<HoldReason>>,
+    /// The search's state where it stopped, to go on from
+    /// ([`levenberg_marquardt_continued`]).
+    pub continuation: Continuation,
+}
+
+/// Where a search stopped and what it learnt that the next one from there
+/// should not learn again: the damping and Moré's column scales (a restart with the
+/// initial damping spends its first evaluations on rejected steps before it
+/// finds the damping again), and the held parameters.
+#[derive(Debug, Clone)]
+pub struct Continuation {
+    p: Vec<f64>,
+    y: Vec<f64>,
+    damping: f64,
+    scale: Vec<f64>,
+    held: Vec<Option<HoldReason>>,
 }
 
 /// How well a residual model fits at a solution, for its [`UpdateResult`].
@@ -72,6 +89,23 @@ pub(super) struct FitMeasures {
 }
 
 impl<E> Solved<E> {
+    /// This solve continued from `earlier`, which ended where this one
+    /// started: `earlier`'s history, then this one's (its start replacing
+    /// `earlier`'s last record: the same point, evaluated again), the
+    /// evaluations of both.
+    #[must_use]
+    pub fn after<F>(mut self, earlier: Solved<F>) -> Self {
+        let mut iterations = earlier.iterations;
+        let done = iterations.pop().map_or(0, |last| last.iteration);
+        for record in &mut self.iterations {
+            record.iteration += done;
+        }
+        iterations.append(&mut self.iterations);
+        self.iterations = iterations;
+        self.evaluations += earlier.evaluations;
+        self
+    }
+
     /// The [`UpdateResult`] of this solve (the estimates at its point, its
     /// history and stop) with the model's `fit`; its point and evaluation
     /// are handed back.
@@ -112,26 +146,40 @@ pub fn levenberg_marquardt<M: ResidualModel>(
     observer: &mut dyn FnMut(&IterationRecord),
 ) -> Result<Solved<M::Extra>, UpdateError> {
     assert_eq!(start.len(), model.parameters().len(), "one start value per parameter");
-    let mut search = Search::start(model, start, previous)?;
-    observer(&search.iterations[0]);
-    let (mut stop, mut converged) = (StopReason::MaxIterations, false);
-    while search.iteration < model.settings().max_iterations {
-        if let Some((reason, done)) = search.step(observer)? {
-            (stop, converged) = (reason, done);
-            break;
+    let search = Search::start(model, start, previous)?;
+    search.run(observer)
+}
+
+/// [`levenberg_marquardt`] from where a search (of this model or another
+/// with the same parameters) stopped, `continuation`: its point, damping,
+/// column scales and held parameters carried over.
+#[track_caller]
+pub fn levenberg_marquardt_continued<M: ResidualModel>(
+    model: &M,
+    continuation: &Continuation,
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<Solved<M::Extra>, UpdateError> {
+    assert_eq!(
+        continuation.y.len(),
+        model.parameters().len(),
+        "a continuation of these parameters"
+    );
+    // Exactly where the search stopped (no margin from the bounds: a
+    // parameter held on its bound stays there).
+    let mut search = Search::begin(model, (continuation.p.clone(), continuation.y.clone()), None)?;
+    if model.settings().method == Method::LevenbergMarquardt {
+        search.lambda = continuation.damping;
+    }
+    for (s, &c) in search.scale.iter_mut().zip(&continuation.scale) {
+        *s = s.max(c);
+    }
+    for (h, c) in search.held.iter_mut().zip(&continuation.held) {
+        if h.is_none() {
+            *h = *c;
         }
     }
-    Ok(Solved {
-        p: search.p,
-        at: search.current,
-        iterations: search.iterations,
-        converged,
-        stop,
-        cost: search.cost,
-        offset: search.offset,
-        evaluations: search.evaluations,
-        held: search.held,
-    })
+    search.hold_uninformed()?;
+    search.run(observer)
 }
 
 /// The state of one Levenberg–Marquardt search: the point in the bounded
@@ -170,7 +218,6 @@ struct Search<'m, M: ResidualModel> {
 impl<'m, M: ResidualModel> Search<'m, M> {
     fn start(model: &'m M, start: &[f64], previous: Option<&M::Previous>) -> Result<Self, UpdateError> {
         let bounds: Vec<(f64, f64)> = model.parameters().iter().map(|p| (p.lower, p.upper)).collect();
-        let settings = model.settings();
         // The model is evaluated at the start values themselves (not at
         // p(y(start)), which differs in the last bits), so that a warm start
         // lands exactly on the point the previous solve ended on.
@@ -187,6 +234,13 @@ impl<'m, M: ResidualModel> Search<'m, M> {
             .zip(&bounds)
             .map(|(&p, &(a, b))| unbounded_value(p, a, b))
             .collect();
+        Self::begin(model, (p, y), previous)
+    }
+
+    /// The search from the point `p` with its unbounded image `y`.
+    fn begin(model: &'m M, (p, y): (Vec<f64>, Vec<f64>), previous: Option<&M::Previous>) -> Result<Self, UpdateError> {
+        let bounds: Vec<(f64, f64)> = model.parameters().iter().map(|p| (p.lower, p.upper)).collect();
+        let settings = model.settings();
         let (current, evaluations) = model.first(&p, previous)?;
         let cost = 0.5 * norm2(&current.residual);
         let iterations = vec![IterationRecord {
@@ -230,6 +284,36 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         };
         search.hold_uninformed()?;
         Ok(search)
+    }
+
+    /// Iterates until a stopping rule holds or the iterations run out.
+    fn run(mut self, observer: &mut dyn FnMut(&IterationRecord)) -> Result<Solved<M::Extra>, UpdateError> {
+        observer(&self.iterations[0]);
+        let (mut stop, mut converged) = (StopReason::MaxIterations, false);
+        while self.iteration < self.model.settings().max_iterations {
+            if let Some((reason, done)) = self.step(observer)? {
+                (stop, converged) = (reason, done);
+                break;
+            }
+        }
+        Ok(Solved {
+            continuation: Continuation {
+                p: self.p.clone(),
+                y: self.y,
+                damping: self.lambda,
+                scale: self.scale,
+                held: self.held.clone(),
+            },
+            p: self.p,
+            at: self.current,
+            iterations: self.iterations,
+            converged,
+            stop,
+            cost: self.cost,
+            offset: self.offset,
+            evaluations: self.evaluations,
+            held: self.held,
+        })
     }
 
     /// `A = JᵀJ`, `g = Jᵀr` of the chained Jacobian (eq. 43) at the current point.
@@ -577,183 +661,4 @@ pub(super) fn solve_damped(a: &Mat<f64>, g: &[f64], scale: &[f64], lambda: f64) 
     let s = faer::prelude::Solve::solve(&llt, &rhs);
     let s: Vec<f64> = (0..n).map(|i| s[(i, 0)]).collect();
     s.iter().all(|v| v.is_finite()).then_some(s)
-}
-
-/// Standard deviations `√diag(σ̂² (JᵀJ)⁻¹)` and the singular values of the
-/// column-normalised `J`. A direction with singular value below `1e-12` of
-/// the largest makes every parameter it involves unidentifiable (`None`).
-/// Standard deviations, singular values of the column-normalised Jacobian
-/// and the parameters' correlation matrix `ρ_kl = C_kl / √(C_kk C_ll)`,
-/// `C = (JᵀJ)⁻¹` from the same SVD (`None` when `JᵀJ` is singular).
-fn covariance(j: &Mat<f64>, variance: f64) -> (Vec<Option<f64>>, Vec<f64>, Option<Mat<f64>>) {
-    let n = j.ncols();
-    let norms: Vec<f64> = (0..n)
-        .map(|c| (0..j.nrows()).map(|r| j[(r, c)].powi(2)).sum::<f64>().sqrt())
-        .collect();
-    if norms.iter().any(|&c| c == 0.0 || !c.is_finite()) {
-        let sv = vec![0.0; n];
-        return (norms.iter().map(|_| None).collect(), sv, None);
-    }
-    let js = Mat::from_fn(j.nrows(), n, |r, c| j[(r, c)] / norms[c]);
-    let Ok(svd) = js.thin_svd() else {
-        return (vec![None; n], vec![f64::NAN; n], None);
-    };
-    let s: Vec<f64> = (0..n).map(|i| svd.S()[i]).collect();
-    let v = svd.V();
-    let smax = s[0];
-    let kept: Vec<usize> = (0..n).filter(|&i| s[i] > 1e-12 * smax).collect();
-    let std = (0..n)
-        .map(|k| {
-            if (0..n).any(|i| s[i] <= 1e-12 * smax && v[(k, i)].abs() > 1e-8) {
-                return None;
-            }
-            let acc: f64 = kept.iter().map(|&i| v[(k, i)] * v[(k, i)] / (s[i] * s[i])).sum();
-            Some((variance * acc).sqrt() / norms[k])
-        })
-        .collect();
-    let correlation = (kept.len() == n).then(|| {
-        let c = Mat::from_fn(n, n, |k, l| {
-            kept.iter().map(|&i| v[(k, i)] * v[(l, i)] / (s[i] * s[i])).sum::<f64>()
-        });
-        Mat::from_fn(n, n, |k, l| c[(k, l)] / (c[(k, k)] * c[(l, l)]).sqrt())
-    });
-    (std, s, correlation)
-}
-
-/// How many of the most correlated parameter pairs a result reports.
-pub const REPORTED_CORRELATIONS: usize = 10;
-
-/// What [`estimates`] gives: the estimates with their standard deviations
-/// (`σ̂² (JᵀJ)⁻¹`, `σ̂² = 2·cost/(m − n)`), the singular values of the
-/// column-normalised Jacobian, its condition number, `σ̂²` and the most
-/// correlated parameter pairs.
-pub(super) struct Estimates {
-    pub(super) parameters: Vec<ParameterEstimate>,
-    pub(super) singular_values: Vec<f64>,
-    pub(super) condition_number: f64,
-    pub(super) residual_variance: f64,
-    pub(super) correlations: Vec<ParameterCorrelation>,
-    pub(super) held: Vec<HeldParameter>,
-}
-
-pub(super) fn estimates(
-    parameters: &[Parameter],
-    p: &[f64],
-    jacobian: &Mat<f64>,
-    cost: f64,
-    held: &[Option<HoldReason>],
-) -> Estimates {
-    // The covariance of the free parameters; a held one has no std.
-    let free: Vec<usize> = (0..p.len())
-        .filter(|&k| held.get(k).is_none_or(Option::is_none))
-        .collect();
-    let (m, n) = (jacobian.nrows(), free.len());
-    let residual_variance = 2.0 * cost / (m - n) as f64;
-    let j_free = Mat::from_fn(m, n, |r, c| jacobian[(r, free[c])]);
-    let (free_std, singular_values, free_correlation) = covariance(&j_free, residual_variance);
-    let mut std = vec![None; p.len()];
-    for (&k, s) in free.iter().zip(free_std) {
-        std[k] = s;
-    }
-    let correlation = free_correlation.map(|rho| {
-        let mut full = Mat::<f64>::zeros(p.len(), p.len());
-        for (a, &k) in free.iter().enumerate() {
-            for (b, &l) in free.iter().enumerate() {
-                full[(k, l)] = rho[(a, b)];
-            }
-        }
-        full
-    });
-    let condition_number = match (singular_values.first(), singular_values.last()) {
-        (Some(&hi), Some(&lo)) if lo > 0.0 => hi / lo,
-        _ => f64::INFINITY,
-    };
-    let estimates = parameters
-        .iter()
-        .zip(p.iter().zip(std))
-        .map(|(par, (&value, std))| ParameterEstimate {
-            name: par.name.clone(),
-            value,
-            std,
-            lower: par.lower,
-            upper: par.upper,
-        })
-        .collect();
-    let mut correlations: Vec<ParameterCorrelation> = match &correlation {
-        Some(rho) => (0..n)
-            .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
-            .map(|(a, b)| (free[a], free[b]))
-            .map(|(k, l)| ParameterCorrelation {
-                a: parameters[k].name.clone(),
-                b: parameters[l].name.clone(),
-                rho: rho[(k, l)],
-            })
-            .collect(),
-        None => Vec::new(),
-    };
-    correlations.sort_by(|x, y| y.rho.abs().total_cmp(&x.rho.abs()));
-    correlations.truncate(REPORTED_CORRELATIONS);
-    let held = parameters
-        .iter()
-        .zip(p.iter().zip(held))
-        .filter_map(|(par, (&value, reason))| {
-            reason.map(|reason| HeldParameter {
-                name: par.name.clone(),
-                reason,
-                value,
-            })
-        })
-        .collect();
-    Estimates {
-        parameters: estimates,
-        singular_values,
-        condition_number,
-        residual_variance,
-        correlations,
-        held,
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use faer::linalg::solvers::DenseSolveCore;
-
-    /// The correlations from the SVD equal those of `(JᵀJ)⁻¹` formed
-    /// directly, and the most correlated pair comes first.
-    #[test]
-    fn correlations_are_those_of_the_inverse_normal_matrix() {
-        // Columns 0 and 2 nearly collinear.
-        let j = Mat::from_fn(12, 3, |r, c| {
-            let x = r as f64;
-            match c {
-                0 => 1.0 + 0.3 * x,
-                1 => (0.7 * x).sin(),
-                _ => 2.0 + 0.61 * x + 0.05 * (1.3 * x).cos(),
-            }
-        });
-        let (_, _, rho) = covariance(&j, 1.0);
-        let rho = rho.unwrap();
-        let jtj = j.transpose() * &j;
-        let inverse = jtj.llt(Side::Lower).unwrap().inverse();
-        for k in 0..3 {
-            for l in 0..3 {
-                let want = inverse[(k, l)] / (inverse[(k, k)] * inverse[(l, l)]).sqrt();
-                assert!((rho[(k, l)] - want).abs() < 1e-9, "{k},{l}: {} vs {want}", rho[(k, l)]);
-            }
-        }
-        let parameters: Vec<Parameter> = ["a", "b", "c"]
-            .iter()
-            .map(|n| Parameter {
-                name: (*n).into(),
-                kind: crate::updating::ParameterKind::Damping { coefficient: 0 },
-                lower: 0.0,
-                upper: 1.0,
-            })
-            .collect();
-        let e = estimates(&parameters, &[0.5; 3], &j, 1.0, &[None; 3]);
-        assert_eq!((e.correlations[0].a.as_str(), e.correlations[0].b.as_str()), ("a", "c"));
-        assert!(e.correlations[0].rho.abs() > 0.9);
-        assert_eq!(e.correlations.len(), 3);
-    }
 }

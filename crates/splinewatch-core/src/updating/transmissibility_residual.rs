@@ -28,7 +28,8 @@
 use super::frf_residual::{parameter_column, relative_residuals, sqrt_weights, weighted_residues, MeasuredSet};
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{
-    check_parameters, fields_at, model_at, IterationRecord, Parameter, UpdateError, UpdateResult, UpdateSettings,
+    check_parameters, fields_at, model_at, IterationRecord, Parameter, ParameterKind, UpdateError, UpdateResult,
+    UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
 use crate::model::supports::SupportGroups;
@@ -50,7 +51,7 @@ pub enum Combination {
 }
 
 /// Updating a model against measured transmissibilities or a record's spectra.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct TransmissibilityProblem<'a> {
     model: &'a FrfModel,
     shell: &'a ShellModel,
@@ -278,13 +279,45 @@ impl<'a> TransmissibilityProblem<'a> {
         })
     }
 
-    /// Runs the updating from `start` (warm start: the previous event's values).
+    /// Runs the updating from `start` (warm start: the previous event's
+    /// values). On a truncated model whose parameters are springs and
+    /// damping, the search runs on a Ritz basis built at `start`
+    /// ([`SupportMotion::reanalysed`]: one complete solve instead of one per
+    /// evaluation), then goes on from where it stopped on the complete model
+    /// until the stopping rules hold there (`max_iterations` bounds both
+    /// stages together): the result, its uncertainty and the state it
+    /// returns are the complete model's.
     pub fn solve(
         &self,
         start: &[f64],
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<TransmissibilitySolution, UpdateError> {
-        let solved = solver::levenberg_marquardt(self, start, None, observer)?;
+        let solved = match self.reanalysed_at(start)? {
+            Some(reduced) => {
+                let coarse = TransmissibilityProblem {
+                    model: &reduced,
+                    ..self.clone()
+                };
+                let first = solver::levenberg_marquardt(&coarse, start, None, observer)?;
+                let done = first.iterations.last().map_or(0, |last| last.iteration);
+                // The iterations left of the one budget both stages share.
+                let complete = Self {
+                    settings: UpdateSettings {
+                        max_iterations: self.settings.max_iterations.saturating_sub(done),
+                        ..self.settings.clone()
+                    },
+                    ..self.clone()
+                };
+                let mut renumbered = |record: &IterationRecord| {
+                    observer(&IterationRecord {
+                        iteration: record.iteration + done,
+                        ..record.clone()
+                    });
+                };
+                solver::levenberg_marquardt_continued(&complete, &first.continuation, &mut renumbered)?.after(first)
+            }
+            None => solver::levenberg_marquardt(self, start, None, observer)?,
+        };
         let (relative_residual, per_block) = relative_residuals(self.measured, &self.lines, &solved.at.extra.h);
         let fit = solver::FitMeasures {
             relative_residual,
@@ -298,6 +331,39 @@ impl<'a> TransmissibilityProblem<'a> {
             motion: at.extra.motion,
             transmissibilities: at.extra.h,
         })
+    }
+
+    /// The model with a Ritz basis at `start` for the springs the
+    /// parameters move, when it is truncated and no parameter is a
+    /// stiffness field (those change the deck everywhere); `None` otherwise.
+    fn reanalysed_at(&self, start: &[f64]) -> Result<Option<FrfModel>, UpdateError> {
+        let fields = self
+            .parameters
+            .iter()
+            .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
+        if self.model.sparse().is_none() || fields {
+            return Ok(None);
+        }
+        let (kappa, _) = model_at(&self.parameters, &self.kappa, &self.damping, start)?;
+        let theta = fields_at(&self.parameters, self.model.field_coefficients(), start);
+        let mut varied: Vec<usize> = self
+            .parameters
+            .iter()
+            .flat_map(|p| p.kind.springs())
+            .map(|(f, c)| self.model.flat_spring_index(f, c))
+            .collect();
+        varied.sort_unstable();
+        varied.dedup();
+        SupportMotion::reanalysed(
+            self.model,
+            self.shell,
+            self.groups,
+            (&kappa, &theta),
+            &self.inputs,
+            &varied,
+        )
+        .map(Some)
+        .map_err(|e| UpdateError::Data(format!("support motion: {e}")))
     }
 }
 

@@ -27,6 +27,7 @@ use crate::model::ShellModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
 use crate::solvers::modal::{ModalError, ModeKind, Modes};
 use crate::solvers::partial_eigen::Responses;
+use crate::solvers::reanalysis::Reanalysis;
 use crate::solvers::sparse_model::SparseModel;
 use crate::solvers::truncation::Residual;
 
@@ -208,7 +209,13 @@ enum Source {
     Dense(Box<AssembledModel>),
     /// The modes below `cutoff_hz` of the sparse model, the rest as a
     /// residual ([`crate::solvers::truncation`]).
-    Truncated { model: Box<SparseModel>, cutoff_hz: f64 },
+    Truncated {
+        model: Box<SparseModel>,
+        cutoff_hz: f64,
+        /// A Ritz basis answering the solves it was built for
+        /// ([`FrfModel::with_reanalysis`]).
+        reanalysis: Option<Box<Reanalysis>>,
+    },
 }
 
 /// An assembled model with sensors: evaluates FRFs and sensitivities.
@@ -246,6 +253,7 @@ impl FrfModel {
         let source = Source::Truncated {
             model: Box::new(SparseModel::assemble(model)?),
             cutoff_hz,
+            reanalysis: None,
         };
         Ok(Self::with_source(source, sensor_rows))
     }
@@ -295,7 +303,7 @@ impl FrfModel {
     pub fn sparse(&self) -> Option<(&SparseModel, f64)> {
         match &self.source {
             Source::Dense(_) => None,
-            Source::Truncated { model, cutoff_hz } => Some((model, *cutoff_hz)),
+            Source::Truncated { model, cutoff_hz, .. } => Some((model, *cutoff_hz)),
         }
     }
 
@@ -454,12 +462,12 @@ impl FrfModel {
         // from one solve; without loads, the sensors' as they come.
         let sensors = self.sensor_rows.len();
         let (modes, own, theirs) = if loads.is_empty() {
-            let (modes, own) = model.modes_and_responses(kappa, theta, *cutoff_hz, &self.sensor_rows)?;
+            let (modes, own) = self.truncated_solve((kappa, theta), &self.sensor_rows)?;
             let none = Mat::<f64>::zeros(own.0.nrows(), 0);
             (modes, own, (none.clone(), none))
         } else {
             let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
-            let (modes, (x, xmx)) = model.modes_and_responses(kappa, theta, *cutoff_hz, &all)?;
+            let (modes, (x, xmx)) = self.truncated_solve((kappa, theta), &all)?;
             let split = |m: &Mat<f64>| {
                 (
                     m.subcols(0, sensors).to_owned(),
@@ -482,6 +490,58 @@ impl FrfModel {
             model.field_products.iter().any(|f| !f.is_empty()),
         ));
         Ok((state, Some(theirs)))
+    }
+
+    /// The modes below the cut-off and the static responses to `loads` of
+    /// a truncated model: from its Ritz basis where that answers them
+    /// exactly ([`Reanalysis::modes_and_responses`]), else the complete solve.
+    fn truncated_solve(
+        &self,
+        (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
+        loads: &[Vec<(usize, f64)>],
+    ) -> Result<(Modes, Responses), FrfError> {
+        let Source::Truncated {
+            model,
+            cutoff_hz,
+            reanalysis,
+        } = &self.source
+        else {
+            unreachable!("called on truncated models only");
+        };
+        if let Some(found) = reanalysis
+            .as_ref()
+            .and_then(|r| r.modes_and_responses(model, (kappa, theta), *cutoff_hz, loads))
+        {
+            return Ok(found);
+        }
+        Ok(model.modes_and_responses(kappa, theta, *cutoff_hz, loads)?)
+    }
+
+    /// This model with a Ritz basis at `(kappa0, theta0)` for the sensors
+    /// and `loads` (sparse rows on the generalised dofs) and the spring
+    /// coefficients `varied` (flat indices): its modal states at spring
+    /// values differing from `kappa0` in those alone come from the
+    /// projection ([`Reanalysis`]: static responses exact, modes Ritz
+    /// approximations), at a dense eigen-solve of the basis' size instead
+    /// of a factorisation and Lanczos. A dense model is returned as it is.
+    /// The copy is a model of its own ([`Self::id`]).
+    pub fn with_reanalysis(
+        &self,
+        (kappa0, theta0): (&[Vec<f64>], &[Vec<f64>]),
+        loads: &[Vec<(usize, f64)>],
+        varied: &[usize],
+    ) -> Result<Self, FrfError> {
+        let Source::Truncated { model, cutoff_hz, .. } = &self.source else {
+            return Ok(self.clone());
+        };
+        let rows: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
+        let basis = Reanalysis::new(model, (kappa0, theta0), *cutoff_hz, &rows, varied)?;
+        let source = Source::Truncated {
+            model: model.clone(),
+            cutoff_hz: *cutoff_hz,
+            reanalysis: Some(Box::new(basis)),
+        };
+        Ok(Self::with_source(source, self.sensor_rows.clone()))
     }
 
     /// Builds the modal state from already computed modes.
