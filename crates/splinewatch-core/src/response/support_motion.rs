@@ -324,10 +324,21 @@ impl SupportMotion {
         pairs: &[(usize, usize)],
         frequencies_hz: &[f64],
     ) -> TransmissibilitySensitivities {
-        self.sensitivities_for(frf, loads, groups, state, damping, pairs, frequencies_hz, None)
+        let load_state = loads.modal_state_from(state.modes.clone(), damping);
+        self.sensitivities_for(
+            frf,
+            (loads, &load_state),
+            groups,
+            state,
+            damping,
+            pairs,
+            frequencies_hz,
+            None,
+        )
     }
 
-    /// [`Self::sensitivities`] of the spring coefficients `springs` (flat
+    /// [`Self::sensitivities`], the loads' modal state given, of the spring
+    /// coefficients `springs` (flat
     /// indices, [`FrfModel::flat_spring_index`]) only, every one when
     /// `None`; the others' vectors are left empty (an update needs its
     /// parameters', and the influence change of each costs a sum over the
@@ -336,7 +347,7 @@ impl SupportMotion {
     pub fn sensitivities_for(
         &self,
         frf: &FrfModel,
-        loads: &FrfModel,
+        (loads, load_state): (&FrfModel, &ModalState),
         groups: &SupportGroups,
         state: &ModalState,
         damping: &DampingCurve,
@@ -345,14 +356,16 @@ impl SupportMotion {
         springs: Option<&[usize]>,
     ) -> TransmissibilitySensitivities {
         let sensors = frf.sensor_count();
-        let load_state = loads.modal_state_from(state.modes.clone(), damping);
         let load_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(r, c)| (r, sensors + c)).collect();
         let request = FrfRequest {
             frequencies_hz,
             pairs: &load_pairs,
             quantity: Quantity::Receptance,
         };
-        let evaluation = loads.evaluate(&load_state, request, true);
+        let evaluation = match springs {
+            Some(springs) => loads.evaluate_springs(load_state, request, springs),
+            None => loads.evaluate(load_state, request, true),
+        };
         let nf = frequencies_hz.len();
         let scaled = |v: Vec<c64>| -> Vec<c64> {
             v.into_iter()
@@ -370,7 +383,7 @@ impl SupportMotion {
         let dgamma: Vec<Vec<c64>> = evaluation.dh_dgamma.into_iter().map(scaled).collect();
         let mut dtheta: Vec<Vec<c64>> = if frf.field_coefficient_count() > 0 {
             loads
-                .field_frf_sensitivities(&load_state, damping, request)
+                .field_frf_sensitivities(load_state, damping, request)
                 .into_iter()
                 .map(scaled)
                 .collect()

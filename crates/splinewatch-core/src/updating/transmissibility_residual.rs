@@ -250,7 +250,7 @@ impl<'a> TransmissibilityProblem<'a> {
                 .collect();
             let s = motion.sensitivities_for(
                 self.model,
-                &loads,
+                (&loads, &load_state),
                 self.groups,
                 &state,
                 &damping,

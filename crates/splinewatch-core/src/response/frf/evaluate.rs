@@ -35,11 +35,59 @@ impl FrfModel {
         sensitivities: bool,
         threads: usize,
     ) -> FrfEvaluation {
-        let mut evaluation = self.modal_sum(state, request, sensitivities, threads);
+        let wanted = if sensitivities { Wanted::All } else { Wanted::Nothing };
+        self.evaluate_wanted(state, request, wanted, threads)
+    }
+
+    /// [`Self::evaluate`] with the damping sensitivities and those of the
+    /// spring coefficients `springs` (flat indices) alone: the others'
+    /// vectors in `dh_dkappa` are left empty, at none of their cost (an
+    /// update of a few bearings of many).
+    #[track_caller]
+    pub fn evaluate_springs(&self, state: &ModalState, request: FrfRequest<'_>, springs: &[usize]) -> FrfEvaluation {
+        self.evaluate_wanted(state, request, Wanted::Springs(springs), 1)
+    }
+
+    #[track_caller]
+    fn evaluate_wanted(
+        &self,
+        state: &ModalState,
+        request: FrfRequest<'_>,
+        wanted: Wanted<'_>,
+        threads: usize,
+    ) -> FrfEvaluation {
+        let blocks = self.wanted_blocks(wanted);
+        let mut evaluation = self.modal_sum(state, request, (wanted, &blocks), threads);
         if let Some(residual) = &state.residual {
-            self.add_residual(state, residual, request, sensitivities, &mut evaluation);
+            self.add_residual(state, residual, request, (wanted, &blocks), &mut evaluation);
+        }
+        if let Wanted::Springs(_) = wanted {
+            let mut all = vec![Vec::new(); self.spring_coefficient_count()];
+            for (&j, dh) in blocks.iter().zip(std::mem::take(&mut evaluation.dh_dkappa)) {
+                all[j] = dh;
+            }
+            evaluation.dh_dkappa = all;
         }
         evaluation
+    }
+
+    /// The flat indices of the spring coefficients whose sensitivities are
+    /// `wanted`, ascending.
+    fn wanted_blocks(&self, wanted: Wanted<'_>) -> Vec<usize> {
+        match wanted {
+            Wanted::Nothing => Vec::new(),
+            Wanted::All => (0..self.spring_coefficient_count()).collect(),
+            Wanted::Springs(springs) => {
+                let mut blocks: Vec<usize> = springs
+                    .iter()
+                    .copied()
+                    .filter(|&j| j < self.spring_coefficient_count())
+                    .collect();
+                blocks.sort_unstable();
+                blocks.dedup();
+                blocks
+            }
+        }
     }
 
     /// The modal superposition over the state's modes (eq. 31–33).
@@ -48,13 +96,13 @@ impl FrfModel {
         &self,
         state: &ModalState,
         request: FrfRequest<'_>,
-        sensitivities: bool,
+        wanted: (Wanted<'_>, &[usize]),
         threads: usize,
     ) -> FrfEvaluation {
         let nf = request.frequencies_hz.len();
         let blocks = nf.div_ceil(FREQUENCY_BLOCK);
         let threads = threads.clamp(1, blocks.max(1));
-        let prepared = self.prepare(state, request, sensitivities);
+        let prepared = self.prepare(state, request, wanted);
         if threads == 1 {
             return self.evaluate_lines(&prepared, request);
         }
@@ -108,8 +156,8 @@ impl FrfModel {
     /// The frequency-independent factors of an evaluation, computed once and
     /// shared by the threads.
     #[track_caller]
-    fn prepare(&self, state: &ModalState, request: FrfRequest<'_>, sensitivities: bool) -> Prepared {
-        self.prepare_with(state, request, sensitivities, NEAR_EIGENVALUES)
+    fn prepare(&self, state: &ModalState, request: FrfRequest<'_>, wanted: (Wanted<'_>, &[usize])) -> Prepared {
+        self.prepare_with(state, request, wanted, NEAR_EIGENVALUES)
     }
 
     /// [`Self::prepare`] with pairs of modes closer than `near_fraction`
@@ -123,9 +171,10 @@ impl FrfModel {
         &self,
         state: &ModalState,
         request: FrfRequest<'_>,
-        sensitivities: bool,
+        (wanted, blocks): (Wanted<'_>, &[usize]),
         near_fraction: f64,
     ) -> Prepared {
+        let sensitivities = !matches!(wanted, Wanted::Nothing);
         let np = request.pairs.len();
         for &(r, s) in request.pairs {
             assert!(
@@ -175,7 +224,7 @@ impl FrfModel {
             })
             .collect();
         let springs = if sensitivities {
-            self.spring_terms(state, request, &active, near_fraction)
+            self.spring_terms(state, request, &active, near_fraction, blocks)
         } else {
             SpringTerms {
                 count: 0,
@@ -217,6 +266,7 @@ impl FrfModel {
         request: FrfRequest<'_>,
         active: &[usize],
         near_fraction: f64,
+        wanted: &[usize],
     ) -> SpringTerms {
         let (np, nm) = (request.pairs.len(), active.len());
         let amplitude = |sensor: usize, i: usize| state.amplitudes[(sensor, active[i])];
@@ -250,7 +300,9 @@ impl FrfModel {
         let sensors = request.involved_sensors();
         let slot = |sensor: usize| sensors.binary_search(&sensor).expect("an involved sensor");
         let a = Mat::from_fn(nm, sensors.len(), |i, t| amplitude(sensors[t], i));
-        let blocks: Vec<&LowRankBlock> = self.spring_blocks().iter().flatten().collect();
+        let all: Vec<&LowRankBlock> = self.spring_blocks().iter().flatten().collect();
+        let blocks: Vec<&LowRankBlock> = wanted.iter().map(|&j| all[j]).collect();
+        let positions: Vec<&Vec<usize>> = wanted.iter().map(|&j| &self.block_positions[j]).collect();
         let count = blocks.len();
         let mut terms = SpringTerms {
             count,
@@ -259,7 +311,7 @@ impl FrfModel {
             diagonal_rate: (0..nm).map(|i| e[(i, i)]).collect(),
             near_pairs: Vec::new(),
         };
-        for (j, (block, pos)) in blocks.iter().zip(&self.block_positions).enumerate() {
+        for (j, (block, pos)) in blocks.iter().zip(positions).enumerate() {
             let shapes = Mat::from_fn(pos.len(), nm, |b, i| state.phi_springs[(pos[b], active[i])]);
             let m = shapes.transpose() * (&block.values * &shapes);
             let mut f = m.clone();
@@ -408,6 +460,16 @@ fn spring_lines(prepared: &Prepared, s: &mut Scratch, lines: &Lines<'_>, dh_dkap
             }
         }
     }
+}
+
+/// Which sensitivities an evaluation computes.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Wanted<'a> {
+    Nothing,
+    /// The damping and every spring coefficient.
+    All,
+    /// The damping and these spring coefficients (flat indices).
+    Springs(&'a [usize]),
 }
 
 /// Pairs of modes whose eigenvalues differ by less than this fraction of
@@ -582,6 +644,13 @@ mod tests {
     /// A square isotropic plate on four equal edge strips of springs:
     /// symmetric under `x ↔ y`, so its modes come in exactly repeated pairs.
     fn square_plate_on_springs() -> (FrfModel, Vec<Vec<f64>>) {
+        let (model, sensors) = square_plate();
+        let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
+        (frf, vec![vec![2.0e8]; 4])
+    }
+
+    /// The plate of [`square_plate_on_springs`] and its three sensors.
+    fn square_plate() -> (ShellModel, Vec<SensorPoint>) {
         let material = OrthotropicMaterial::new(OrthotropicParameters {
             e1: 3.0e10,
             e2: 3.0e10,
@@ -622,8 +691,42 @@ mod tests {
                 direction: [0.0, 0.0, 1.0],
             })
             .collect();
-        let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
-        (frf, vec![vec![2.0e8]; 4])
+        (model, sensors)
+    }
+
+    /// The sensitivities of a few spring coefficients are those of the
+    /// complete evaluation, bit for bit, on the dense and the truncated
+    /// model (its residual's share too); the others are left empty.
+    #[test]
+    fn a_subset_of_springs_gives_their_sensitivities_alone() {
+        let (shell, sensors) = square_plate();
+        let kappa = vec![vec![2.0e8]; 4];
+        let curve = DampingCurve::new(1, vec![0.02, 0.04], 0.0, 200.0).unwrap();
+        let freqs: Vec<f64> = (1..=40).map(|k| 3.1 * k as f64).collect();
+        let pairs = [(0, 0), (2, 1)];
+        let request = FrfRequest {
+            frequencies_hz: &freqs,
+            pairs: &pairs,
+            quantity: Quantity::Accelerance,
+        };
+        let dense = FrfModel::new(shell.assemble().unwrap(), &sensors).unwrap();
+        let truncated = FrfModel::truncated(&shell, &sensors, 150.0).unwrap();
+        for model in [dense, truncated] {
+            let state = model.modal_state(&kappa, &curve).unwrap();
+            let all = model.evaluate(&state, request, true);
+            let some = model.evaluate_springs(&state, request, &[3, 1]);
+            assert_eq!(some.h, all.h);
+            assert_eq!(some.dh_dgamma, all.dh_dgamma);
+            assert_eq!(some.dh_dkappa.len(), 4);
+            for j in 0..4 {
+                if j % 2 == 1 {
+                    assert!(!all.dh_dkappa[j].is_empty());
+                    assert_eq!(some.dh_dkappa[j], all.dh_dkappa[j], "κ_{j}");
+                } else {
+                    assert!(some.dh_dkappa[j].is_empty(), "κ_{j}");
+                }
+            }
+        }
     }
 
     /// The far pairs' difference quotient (linear in `q`) and the product
@@ -642,8 +745,9 @@ mod tests {
             pairs: &pairs,
             quantity: Quantity::Accelerance,
         };
-        let split = model.prepare_with(&state, request, true, NEAR_EIGENVALUES);
-        let product = model.prepare_with(&state, request, true, f64::INFINITY);
+        let all = model.wanted_blocks(Wanted::All);
+        let split = model.prepare_with(&state, request, (Wanted::All, &all), NEAR_EIGENVALUES);
+        let product = model.prepare_with(&state, request, (Wanted::All, &all), f64::INFINITY);
         let repeated = split.springs.near_pairs.len();
         assert!(repeated > 0, "the square plate has repeated modes");
         assert_eq!(product.springs.far.norm_l2(), 0.0);

@@ -34,6 +34,7 @@ use crate::solvers::truncation::Residual;
 use faer::{c64, Mat};
 use std::f64::consts::PI;
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use thiserror::Error;
 
 mod direct;
@@ -206,15 +207,15 @@ pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec
 #[derive(Debug, Clone)]
 enum Source {
     /// Every mode of the dense model (the reference; eq. 31 exact).
-    Dense(Box<AssembledModel>),
+    Dense(Arc<AssembledModel>),
     /// The modes below `cutoff_hz` of the sparse model, the rest as a
     /// residual ([`crate::solvers::truncation`]).
     Truncated {
-        model: Box<SparseModel>,
+        model: Arc<SparseModel>,
         cutoff_hz: f64,
         /// A Ritz basis answering the solves it was built for
         /// ([`FrfModel::with_reanalysis`]).
-        reanalysis: Option<Box<Reanalysis>>,
+        reanalysis: Option<Arc<Reanalysis>>,
     },
 }
 
@@ -239,7 +240,7 @@ impl FrfModel {
     /// Every mode of the dense model.
     pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
         let sensor_rows = sensor_rows(&assembled.patches, sensors)?;
-        Ok(Self::with_source(Source::Dense(Box::new(assembled)), sensor_rows))
+        Ok(Self::with_source(Source::Dense(Arc::new(assembled)), sensor_rows))
     }
 
     /// The modes below `cutoff_hz` of the sparse model of `model`, the
@@ -251,7 +252,7 @@ impl FrfModel {
         }
         let sensor_rows = sensor_rows(&model.patches, sensors)?;
         let source = Source::Truncated {
-            model: Box::new(SparseModel::assemble(model)?),
+            model: Arc::new(SparseModel::assemble(model)?),
             cutoff_hz,
             reanalysis: None,
         };
@@ -539,7 +540,7 @@ impl FrfModel {
         let source = Source::Truncated {
             model: model.clone(),
             cutoff_hz: *cutoff_hz,
-            reanalysis: Some(Box::new(basis)),
+            reanalysis: Some(Arc::new(basis)),
         };
         Ok(Self::with_source(source, self.sensor_rows.clone()))
     }

@@ -3,6 +3,7 @@
 //! complete responses ([`crate::solvers::truncation`]); the truncation error
 //! against a model that keeps every mode.
 
+use super::evaluate::Wanted;
 use super::{FrfError, FrfEvaluation, FrfModel, FrfRequest, ModalState};
 use crate::model::damping::DampingCurve;
 use crate::solvers::truncation::Residual;
@@ -21,7 +22,7 @@ impl FrfModel {
         state: &ModalState,
         residual: &Residual,
         request: FrfRequest<'_>,
-        sensitivities: bool,
+        (wanted, blocks): (Wanted<'_>, &[usize]),
         evaluation: &mut FrfEvaluation,
     ) {
         let nf = request.frequencies_hz.len();
@@ -31,7 +32,7 @@ impl FrfModel {
                 evaluation.h[p * nf + f] += request.quantity.factor(w) * residual.at_sensors(r, s, w);
             }
         }
-        if !sensitivities {
+        if matches!(wanted, Wanted::Nothing) {
             return;
         }
         for (z, dz) in evaluation.dh_dgamma.iter_mut().enumerate() {
@@ -53,7 +54,7 @@ impl FrfModel {
         // factor frequency-independent. The modal sum holds the x_rᵀ P x_s
         // part (and the kept modes' damping share); the rest costs O(modes)
         // a line per block.
-        let prepared = self.block_residuals(state, residual, &sensors);
+        let prepared = self.block_residuals(state, residual, &sensors, blocks);
         let mut inputs: Vec<usize> = request.pairs.iter().map(|&(_, s)| slot(s)).collect();
         inputs.sort_unstable();
         inputs.dedup();
@@ -91,15 +92,21 @@ impl FrfModel {
         }
     }
 
-    /// The [`BlockResidual`] factors of every spring block for the
-    /// involved `sensors` (ascending).
-    fn block_residuals(&self, state: &ModalState, residual: &Residual, sensors: &[usize]) -> Vec<BlockResidual> {
+    /// The [`BlockResidual`] factors of the spring blocks `wanted` (flat
+    /// indices) for the involved `sensors` (ascending).
+    fn block_residuals(
+        &self,
+        state: &ModalState,
+        residual: &Residual,
+        sensors: &[usize],
+        wanted: &[usize],
+    ) -> Vec<BlockResidual> {
         let nm = state.modes.len();
         let (rho0, rho1) = residual.spring_terms();
-        self.spring_blocks()
+        let blocks: Vec<_> = self.spring_blocks().iter().flatten().collect();
+        wanted
             .iter()
-            .flatten()
-            .zip(&self.block_positions)
+            .map(|&j| (blocks[j], &self.block_positions[j]))
             .map(|(block, positions)| {
                 let phi_b = Mat::from_fn(positions.len(), nm, |a, i| state.phi_springs[(positions[a], i)]);
                 let rho = |terms: &Mat<f64>| {
