@@ -523,6 +523,10 @@ fn update_event(
     Ok(())
 }
 
+/// A parameter this close to a bound (share of its range) is held there by
+/// its bound, not by the data: not a feature.
+const AT_BOUND: f64 = 1e-4;
+
 /// The features judged: each tracked mode's identified frequency, then
 /// each updated parameter's log10 value (`None`: not identified).
 fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<Option<f64>>) {
@@ -540,7 +544,9 @@ fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<
     }
     for p in &line.parameters {
         names.push(feature_of_parameter(&p.name));
-        values.push(p.std.map(|_| p.value.log10()));
+        let margin = AT_BOUND * (p.upper - p.lower);
+        let bounded = p.value <= p.lower + margin || p.value >= p.upper - margin;
+        values.push(p.std.filter(|_| !bounded).map(|_| p.value.log10()));
     }
     (names, values)
 }
@@ -744,5 +750,31 @@ mod tests {
             assert_eq!(trend[1], ("zeta".to_string(), 0.08));
             assert_eq!(by(EventForecast::Last, 5, 1.0), chain.named());
         }
+    }
+
+    /// A parameter on its bound (within 1e-4 of its range) is set by the
+    /// bound, not by the record: not a feature, whether or not the solver
+    /// held it there (the two differ by how far the search crept).
+    #[test]
+    fn a_parameter_on_its_bound_is_not_judged() {
+        let chain = chain_with(&[]);
+        let mut line = EventLine::new("e".into());
+        let estimate = |name: &str, value: f64| splinewatch_core::updating::ParameterEstimate {
+            name: name.into(),
+            value,
+            std: Some(0.006),
+            lower: 0.001,
+            upper: 0.3,
+        };
+        line.parameters = vec![
+            estimate("zeta", 0.299_999_88),
+            estimate("low", 0.001_000_1),
+            estimate("free", 0.299),
+        ];
+        let (names, values) = features(&chain, &line, 0.1);
+        assert_eq!(names.len(), 3);
+        assert_eq!(values[0], None);
+        assert_eq!(values[1], None);
+        assert_eq!(values[2], Some(0.299f64.log10()));
     }
 }
