@@ -41,6 +41,8 @@ pub enum ModelError {
     Modal(#[from] ModalError),
     #[error("partial modes: {0}")]
     PartialEigen(crate::solvers::partial_eigen::PartialEigenError),
+    #[error("spring coefficient {index} does not exist (the model has {count})")]
+    UnknownSpringCoefficient { index: usize, count: usize },
     #[error("spring field {field}: {found} coefficients given, {expected} expected")]
     CoefficientCount {
         field: usize,

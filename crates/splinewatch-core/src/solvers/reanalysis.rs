@@ -60,7 +60,7 @@ pub struct Reanalysis {
 impl Reanalysis {
     /// The basis at `(kappa0, theta0)` for the `loads` (sparse rows on the
     /// generalised dofs) and the spring coefficients `varied` (flat
-    /// indices, fields in order) that may change.
+    /// indices, fields in order; each once) that may change.
     pub fn new(
         model: &SparseModel,
         (kappa0, theta0): (&[Vec<f64>], &[Vec<f64>]),
@@ -69,14 +69,18 @@ impl Reanalysis {
         varied: &[usize],
     ) -> Result<Self, ModelError> {
         let blocks: Vec<_> = model.spring_blocks.iter().flatten().collect();
+        let mut varied = varied.to_vec();
+        varied.sort_unstable();
+        varied.dedup();
+        if let Some(&index) = varied.iter().find(|&&j| j >= blocks.len()) {
+            return Err(ModelError::UnknownSpringCoefficient {
+                index,
+                count: blocks.len(),
+            });
+        }
         let mut rows = loads.to_vec();
-        for &j in varied {
-            let block = blocks.get(j).ok_or(ModelError::CoefficientCount {
-                field: 0,
-                found: j + 1,
-                expected: blocks.len(),
-            })?;
-            rows.extend(block_range(&block.dofs, &block.values));
+        for &j in &varied {
+            rows.extend(block_range(&blocks[j].dofs, &blocks[j].values));
         }
         let start = model.solve_free(kappa0, theta0, cutoff_hz, Some(&rows))?;
         let (x, xmx) = start.responses.as_ref().expect("loads given");
@@ -86,7 +90,7 @@ impl Reanalysis {
         let project = |a: &Mat<f64>| symmetric(basis.transpose() * a);
         let stiffness = project(&model.stiffness_with_fields(kappa0, theta0)?.nonzeros().mul(&basis));
         let terms = model.spring_terms.iter().flatten().collect::<Vec<_>>();
-        let terms = varied
+        let terms: Vec<Mat<f64>> = varied
             .iter()
             .map(|&j| project(&terms[j].to_matrix(&model.pattern).mul(&basis)))
             .collect();
@@ -95,7 +99,7 @@ impl Reanalysis {
             kappa0: kappa0.to_vec(),
             theta0: theta0.to_vec(),
             cutoff_hz,
-            varied: varied.to_vec(),
+            varied,
             basis,
             stiffness,
             terms,
@@ -344,5 +348,10 @@ mod tests {
             .is_none());
         assert!(ritz.modes_and_responses(&model, (&kappa0, &[]), 40.0, &loads).is_none());
         assert!(ritz.modes_and_responses(&model, (&kappa0, &[]), 30.0, &loads).is_some());
+        let unknown = Reanalysis::new(&model, (&kappa0, &[]), 30.0, &loads, &[8]).unwrap_err();
+        assert_eq!(
+            unknown.to_string(),
+            "spring coefficient 8 does not exist (the model has 8)"
+        );
     }
 }

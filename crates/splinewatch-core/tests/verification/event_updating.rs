@@ -82,37 +82,7 @@ fn lines() -> Vec<f64> {
 /// stopping tolerances; each spring moves both Γ and the modes).
 #[test]
 fn transmissibilities_of_two_grounds_recover_the_springs() {
-    let d = deck();
-    let lines = lines();
-    let combined = vec![vec![0], vec![1]];
-    let set = measured_set(transmissibilities(&d, &true_kappa(), &combined, &lines), &lines, None);
-    let start_kappa: Vec<Vec<f64>> = true_kappa()
-        .iter()
-        .map(|k| k.iter().map(|v| 0.6 * v).collect())
-        .collect();
-    let problem = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
-        INPUTS.to_vec(),
-        Combination::Sum(combined),
-        start_kappa.clone(),
-        damping(),
-        spring_parameters(),
-        &set,
-        UpdateSettings::default(),
-    )
-    .unwrap();
-    let start: Vec<f64> = start_kappa.concat();
-    let solution = problem.solve(&start, &mut |_| {}).unwrap();
-    assert!(solution.result.converged, "{:?}", solution.result.stop_reason);
-    for (p, truth) in solution.result.parameters.iter().zip(true_kappa().concat()) {
-        let error = (p.value - truth).abs() / truth;
-        assert!(error < 1e-5, "{}: {} vs {truth} ({error:.1e})", p.name, p.value);
-    }
-    assert!(
-        solution.result.relative_residual < 1e-6,
-        "{}",
-        solution.result.relative_residual
-    );
+    recovers_the_springs_from_40_percent_low(&deck());
 }
 
 /// The same on the truncated model (the modes below 150 Hz, the rest by
@@ -124,13 +94,18 @@ fn transmissibilities_of_two_grounds_recover_the_springs() {
 fn the_truncated_model_recovers_the_springs_through_its_ritz_basis() {
     let dense = deck();
     let sensors: Vec<SensorPoint> = sinello_sensors()[..4].to_vec();
-    let d = Deck {
+    recovers_the_springs_from_40_percent_low(&Deck {
         frf: FrfModel::truncated(&dense.shell, &sensors, 150.0).unwrap(),
         ..dense
-    };
+    });
+}
+
+/// The update of `d` on its own noise-free transmissibilities at the true
+/// springs, started 40 % low: converged, each coefficient within 1e-5.
+fn recovers_the_springs_from_40_percent_low(d: &Deck) {
     let lines = lines();
     let combined = vec![vec![0], vec![1]];
-    let set = measured_set(transmissibilities(&d, &true_kappa(), &combined, &lines), &lines, None);
+    let set = measured_set(transmissibilities(d, &true_kappa(), &combined, &lines), &lines, None);
     let start_kappa: Vec<Vec<f64>> = true_kappa()
         .iter()
         .map(|k| k.iter().map(|v| 0.6 * v).collect())
