@@ -59,7 +59,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
     let mut chain = Chain::resume(a.state.as_deref())?;
     // The model once, for the records' ground plan and then the chain.
     let parts = chain.parts(&cfg)?;
-    let mut loaded: Vec<Loaded> = a.input.iter().flat_map(|p| load_input(&cfg, &parts.plan, p)).collect();
+    let mut loaded = load_inputs(&cfg, &parts.plan, &a.input);
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
     let mut writer = a
@@ -176,6 +176,24 @@ fn mode_points(lines: &[EventLine]) -> Vec<super::events_plot::ModePoint> {
 /// The events of one input: its record, or each burst of it when it holds
 /// several (a triggered logger's raw-input recording: silences longer than
 /// `[events] gap_seconds`), named `<file>@<start>`.
+/// Every input's events, in the inputs' order: read on as many threads as
+/// there are cores (each record is decompressed, parsed and checked on its
+/// own: 20 Painter Street zips 0.5 s on one).
+fn load_inputs(cfg: &Config, plan: &[GroundInputPlan], inputs: &[PathBuf]) -> Vec<Loaded> {
+    let threads = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
+    let chunk = inputs.len().div_ceil(threads).max(1);
+    std::thread::scope(|scope| {
+        let handles: Vec<_> = inputs
+            .chunks(chunk)
+            .map(|part| scope.spawn(move || part.iter().flat_map(|p| load_input(cfg, plan, p)).collect::<Vec<_>>()))
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
+            .collect()
+    })
+}
+
 fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path) -> Vec<Loaded> {
     let name = path
         .file_name()
