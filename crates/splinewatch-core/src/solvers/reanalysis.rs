@@ -35,6 +35,11 @@ use std::f64::consts::PI;
 /// (M-norm) adds nothing the basis lacks.
 const DEPENDENT: f64 = 1e-10;
 
+/// The most vectors besides the modes a basis takes (a dense eigen-problem
+/// of this size costs about what a shift-invert solve of a mid-sized model
+/// does).
+pub const MAX_BASIS: usize = 400;
+
 /// A load whose part outside the basis's load span exceeds this share of
 /// its norm is not one the basis answers exactly.
 const OUTSIDE_SPAN: f64 = 1e-9;
@@ -60,14 +65,17 @@ pub struct Reanalysis {
 impl Reanalysis {
     /// The basis at `(kappa0, theta0)` for the `loads` (sparse rows on the
     /// generalised dofs) and the spring coefficients `varied` (flat
-    /// indices, fields in order; each once) that may change.
+    /// indices, fields in order; each once) that may change; `None` when
+    /// the loads and springs are too many for a basis much smaller than the
+    /// model (more than [`MAX_BASIS`] vectors or half its free coordinates
+    /// besides the modes).
     pub fn new(
         model: &SparseModel,
         (kappa0, theta0): (&[Vec<f64>], &[Vec<f64>]),
         cutoff_hz: f64,
         loads: &[Vec<(usize, f64)>],
         varied: &[usize],
-    ) -> Result<Self, ModelError> {
+    ) -> Result<Option<Self>, ModelError> {
         let blocks: Vec<_> = model.spring_blocks.iter().flatten().collect();
         let mut varied = varied.to_vec();
         varied.sort_unstable();
@@ -82,6 +90,12 @@ impl Reanalysis {
         for &j in &varied {
             rows.extend(block_range(&blocks[j].dofs, &blocks[j].values));
         }
+        // Two vectors a load or spring direction besides the modes: past
+        // half the model (spring fields of a fine net), a Ritz solve would
+        // cost what the complete one does.
+        if 2 * rows.len() > (model.free_count() / 2).min(MAX_BASIS) {
+            return Ok(None);
+        }
         let start = model.solve_free(kappa0, theta0, cutoff_hz, Some(&rows))?;
         let (x, xmx) = start.responses.as_ref().expect("loads given");
         let raw = concat_columns(&[&start.shapes, x, xmx]);
@@ -95,7 +109,7 @@ impl Reanalysis {
             .map(|&j| project(&terms[j].to_matrix(&model.pattern).mul(&basis)))
             .collect();
         let load_span = orthonormalize(&model.free_loads(&rows), |v| v.clone());
-        Ok(Self {
+        Ok(Some(Self {
             kappa0: kappa0.to_vec(),
             theta0: theta0.to_vec(),
             cutoff_hz,
@@ -104,7 +118,7 @@ impl Reanalysis {
             stiffness,
             terms,
             load_span,
-        })
+        }))
     }
 
     /// The number of basis vectors.
@@ -299,7 +313,9 @@ mod tests {
         // A sensor-like load: a vertical unit force at one control point.
         let loads = vec![vec![(5 * 40 + 2, 1.0)], vec![(5 * 17 + 2, 1.0), (5 * 18 + 2, 0.5)]];
         let varied = [0, 1, 2, 3];
-        let ritz = Reanalysis::new(&model, (&kappa0, &[]), 30.0, &loads, &varied).unwrap();
+        let ritz = Reanalysis::new(&model, (&kappa0, &[]), 30.0, &loads, &varied)
+            .unwrap()
+            .unwrap();
         assert!(ritz.size() < model.free_count() / 4, "basis {}", ritz.size());
         let gram = ritz.basis.transpose() * model.mass.mul(&ritz.basis);
         let identity = Mat::<f64>::identity(ritz.size(), ritz.size());
@@ -337,7 +353,9 @@ mod tests {
         let model = plate();
         let kappa0 = vec![vec![1e9; 4], vec![3e9; 4]];
         let loads = vec![vec![(5 * 40 + 2, 1.0)]];
-        let ritz = Reanalysis::new(&model, (&kappa0, &[]), 30.0, &loads, &[0]).unwrap();
+        let ritz = Reanalysis::new(&model, (&kappa0, &[]), 30.0, &loads, &[0])
+            .unwrap()
+            .unwrap();
         let other_spring = vec![vec![1e9; 4], vec![3e9, 3e9, 1e9, 3e9]];
         assert!(ritz
             .modes_and_responses(&model, (&other_spring, &[]), 30.0, &loads)

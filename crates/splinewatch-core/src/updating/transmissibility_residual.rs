@@ -334,8 +334,9 @@ impl<'a> TransmissibilityProblem<'a> {
     }
 
     /// The model with a Ritz basis at `start` for the springs the
-    /// parameters move, when it is truncated and no parameter is a
-    /// stiffness field (those change the deck everywhere); `None` otherwise.
+    /// parameters move, when it is truncated, no parameter is a stiffness
+    /// field (those change the deck everywhere) and the basis is much
+    /// smaller than the model; `None` otherwise.
     fn reanalysed_at(&self, start: &[f64]) -> Result<Option<FrfModel>, UpdateError> {
         let fields = self
             .parameters
@@ -362,7 +363,7 @@ impl<'a> TransmissibilityProblem<'a> {
             &self.inputs,
             &varied,
         )
-        .map(Some)
+        .map(|reduced| reduced.reanalysis().is_some().then_some(reduced))
         .map_err(|e| UpdateError::Data(format!("support motion: {e}")))
     }
 }

@@ -456,19 +456,28 @@ impl FrfModel {
         damping: &DampingCurve,
         loads: &[Vec<(usize, f64)>],
     ) -> Result<(ModalState, Option<Responses>), FrfError> {
-        let Source::Truncated { model, cutoff_hz, .. } = &self.source else {
+        let Source::Truncated {
+            model,
+            cutoff_hz,
+            reanalysis,
+        } = &self.source
+        else {
             return Ok((self.modal_state_with_fields(kappa, theta, damping)?, None));
         };
         // The sensors' responses (the truncation residual) and the loads'
         // from one solve; without loads, the sensors' as they come.
         let sensors = self.sensor_rows.len();
         let (modes, own, theirs) = if loads.is_empty() {
-            let (modes, own) = self.truncated_solve((kappa, theta), &self.sensor_rows)?;
+            let (modes, own) = truncated_solve(
+                (model, *cutoff_hz, reanalysis.as_deref()),
+                (kappa, theta),
+                &self.sensor_rows,
+            )?;
             let none = Mat::<f64>::zeros(own.0.nrows(), 0);
             (modes, own, (none.clone(), none))
         } else {
             let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
-            let (modes, (x, xmx)) = self.truncated_solve((kappa, theta), &all)?;
+            let (modes, (x, xmx)) = truncated_solve((model, *cutoff_hz, reanalysis.as_deref()), (kappa, theta), &all)?;
             let split = |m: &Mat<f64>| {
                 (
                     m.subcols(0, sensors).to_owned(),
@@ -493,29 +502,13 @@ impl FrfModel {
         Ok((state, Some(theirs)))
     }
 
-    /// The modes below the cut-off and the static responses to `loads` of
-    /// a truncated model: from its Ritz basis where that answers them
-    /// exactly ([`Reanalysis::modes_and_responses`]), else the complete solve.
-    fn truncated_solve(
-        &self,
-        (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
-        loads: &[Vec<(usize, f64)>],
-    ) -> Result<(Modes, Responses), FrfError> {
-        let Source::Truncated {
-            model,
-            cutoff_hz,
-            reanalysis,
-        } = &self.source
-        else {
-            unreachable!("called on truncated models only");
-        };
-        if let Some(found) = reanalysis
-            .as_ref()
-            .and_then(|r| r.modes_and_responses(model, (kappa, theta), *cutoff_hz, loads))
-        {
-            return Ok(found);
+    /// The Ritz basis its truncated solves use, if any
+    /// ([`Self::with_reanalysis`]).
+    pub fn reanalysis(&self) -> Option<&Reanalysis> {
+        match &self.source {
+            Source::Truncated { reanalysis, .. } => reanalysis.as_deref(),
+            Source::Dense(_) => None,
         }
-        Ok(model.modes_and_responses(kappa, theta, *cutoff_hz, loads)?)
     }
 
     /// This model with a Ritz basis at `(kappa0, theta0)` for the sensors
@@ -524,7 +517,9 @@ impl FrfModel {
     /// values differing from `kappa0` in those alone come from the
     /// projection ([`Reanalysis`]: static responses exact, modes Ritz
     /// approximations), at a dense eigen-solve of the basis' size instead
-    /// of a factorisation and Lanczos. A dense model is returned as it is.
+    /// of a factorisation and Lanczos. A dense model, or one whose basis
+    /// would not be much smaller than it ([`Reanalysis::new`]), is returned
+    /// as it is.
     /// The copy is a model of its own ([`Self::id`]).
     pub fn with_reanalysis(
         &self,
@@ -536,7 +531,9 @@ impl FrfModel {
             return Ok(self.clone());
         };
         let rows: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
-        let basis = Reanalysis::new(model, (kappa0, theta0), *cutoff_hz, &rows, varied)?;
+        let Some(basis) = Reanalysis::new(model, (kappa0, theta0), *cutoff_hz, &rows, varied)? else {
+            return Ok(self.clone());
+        };
         let source = Source::Truncated {
             model: model.clone(),
             cutoff_hz: *cutoff_hz,
@@ -582,6 +579,20 @@ impl FrfModel {
             residual: None,
         }
     }
+}
+
+/// The modes below the cut-off and the static responses to `loads` of a
+/// truncated model: from its Ritz basis where that answers them exactly
+/// ([`Reanalysis::modes_and_responses`]), else the complete solve.
+fn truncated_solve(
+    (model, cutoff_hz, reanalysis): (&SparseModel, f64, Option<&Reanalysis>),
+    (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
+    loads: &[Vec<(usize, f64)>],
+) -> Result<(Modes, Responses), FrfError> {
+    if let Some(found) = reanalysis.and_then(|r| r.modes_and_responses(model, (kappa, theta), cutoff_hz, loads)) {
+        return Ok(found);
+    }
+    Ok(model.modes_and_responses(kappa, theta, cutoff_hz, loads)?)
 }
 
 /// Frequency lines per block in [`FrfModel::evaluate`]: every intermediate
