@@ -96,6 +96,28 @@ pub struct Parameter {
     pub upper: f64,
 }
 
+/// The spring coefficients (flat indices, each once) `parameters` move,
+/// when a Ritz basis of the start point can serve their search on `model`
+/// ([`FrfModel::with_reanalysis`]): the model is truncated and no parameter
+/// is a stiffness field (those change the deck everywhere); `None`
+/// otherwise.
+pub(crate) fn reanalysed_springs(parameters: &[Parameter], model: &FrfModel) -> Option<Vec<usize>> {
+    let fields = parameters
+        .iter()
+        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
+    if model.sparse().is_none() || fields {
+        return None;
+    }
+    let mut varied: Vec<usize> = parameters
+        .iter()
+        .flat_map(|p| p.kind.springs())
+        .map(|(f, c)| model.flat_spring_index(f, c))
+        .collect();
+    varied.sort_unstable();
+    varied.dedup();
+    Some(varied)
+}
+
 /// Every parameter names an existing coefficient of `model` and has
 /// finite, ordered, non-negative bounds; at least one is updated.
 pub(crate) fn check_parameters(

@@ -11,7 +11,7 @@ use crate::response::frf::{FrfModel, ModalState};
 use crate::updating::modal_residual::{modal_residue, pair_modes, ModalResidue, ModePair, ObservedMode};
 
 /// Updating a model against identified modes.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct ModalUpdateProblem<'a> {
     model: &'a FrfModel,
     kappa: Vec<Vec<f64>>,
@@ -96,6 +96,20 @@ impl<'a> ModalUpdateProblem<'a> {
         super::fields_at(&self.parameters, self.model.field_coefficients(), p)
     }
 
+    /// The model with a Ritz basis at `start` for the springs the
+    /// parameters move, where one serves ([`super::reanalysed_springs`]
+    /// and a basis much smaller than the model); `None` otherwise.
+    fn reanalysed_at(&self, start: &[f64]) -> Result<Option<FrfModel>, UpdateError> {
+        let Some(varied) = super::reanalysed_springs(&self.parameters, self.model) else {
+            return Ok(None);
+        };
+        let (kappa, _) = self.model_at(start)?;
+        let reduced = self
+            .model
+            .with_reanalysis((&kappa, &self.fields_at(start)), &[], &varied)?;
+        Ok(reduced.reanalysis().is_some().then_some(reduced))
+    }
+
     /// The identified modes paired with `state`'s ([`pair_modes`]).
     pub(super) fn pairs_at(&self, state: &ModalState) -> Vec<ModePair> {
         pair_modes(state, self.observed, self.min_mac, self.max_gap)
@@ -148,13 +162,25 @@ impl<'a> ModalUpdateProblem<'a> {
         })
     }
 
-    /// Runs the updating from `start` (warm start: the last accepted values).
+    /// Runs the updating from `start` (warm start: the last accepted
+    /// values). On a truncated model whose parameters are springs and
+    /// damping, the search runs on a Ritz basis of `start` and finishes on
+    /// the complete model ([`solver::levenberg_marquardt_staged`]).
     pub fn solve(
         &self,
         start: &[f64],
         observer: &mut dyn FnMut(&IterationRecord),
     ) -> Result<ModalSolution, UpdateError> {
-        let solved = solver::levenberg_marquardt(self, start, None, observer)?;
+        let solved = match self.reanalysed_at(start)? {
+            Some(reduced) => {
+                let coarse = ModalUpdateProblem {
+                    model: &reduced,
+                    ..self.clone()
+                };
+                solver::levenberg_marquardt_staged(&coarse, self, start, observer)?
+            }
+            None => solver::levenberg_marquardt(self, start, None, observer)?,
+        };
         let relative_residual = self.relative_residual(&solved.at);
         let Extra { state, pairs, .. } = &solved.at.extra;
         let fit = solver::FitMeasures {

@@ -71,6 +71,9 @@ pub struct Solved<E> {
 /// finds the damping again), and the held parameters.
 #[derive(Debug, Clone)]
 pub struct Continuation {
+    /// The iterations done: the next search numbers on from here and has
+    /// what is left of `max_iterations`.
+    iteration: usize,
     p: Vec<f64>,
     y: Vec<f64>,
     damping: f64,
@@ -90,16 +93,13 @@ pub(super) struct FitMeasures {
 
 impl<E> Solved<E> {
     /// This solve continued from `earlier`, which ended where this one
-    /// started: `earlier`'s history, then this one's (its start replacing
-    /// `earlier`'s last record: the same point, evaluated again), the
-    /// evaluations of both.
+    /// started ([`levenberg_marquardt_continued`]): `earlier`'s history, then
+    /// this one's (its start replacing `earlier`'s last record: the same
+    /// point, evaluated again), the evaluations of both.
     #[must_use]
     pub fn after<F>(mut self, earlier: Solved<F>) -> Self {
         let mut iterations = earlier.iterations;
-        let done = iterations.pop().map_or(0, |last| last.iteration);
-        for record in &mut self.iterations {
-            record.iteration += done;
-        }
+        iterations.pop();
         iterations.append(&mut self.iterations);
         self.iterations = iterations;
         self.evaluations += earlier.evaluations;
@@ -152,7 +152,8 @@ pub fn levenberg_marquardt<M: ResidualModel>(
 
 /// [`levenberg_marquardt`] from where a search (of this model or another
 /// with the same parameters) stopped, `continuation`: its point, damping,
-/// column scales and held parameters carried over.
+/// column scales and held parameters carried over, its iterations counted
+/// (the two share `max_iterations`, and this one's records number on).
 #[track_caller]
 pub fn levenberg_marquardt_continued<M: ResidualModel>(
     model: &M,
@@ -167,6 +168,8 @@ pub fn levenberg_marquardt_continued<M: ResidualModel>(
     // Exactly where the search stopped (no margin from the bounds: a
     // parameter held on its bound stays there).
     let mut search = Search::begin(model, (continuation.p.clone(), continuation.y.clone()), None)?;
+    search.iteration = continuation.iteration;
+    search.iterations[0].iteration = continuation.iteration;
     if model.settings().method == Method::LevenbergMarquardt {
         search.lambda = continuation.damping;
     }
@@ -180,6 +183,22 @@ pub fn levenberg_marquardt_continued<M: ResidualModel>(
     }
     search.hold_uninformed()?;
     search.run(observer)
+}
+
+/// The search on `coarse`, a cheaper approximation of `complete` with the
+/// same parameters (a Ritz basis of the start point,
+/// [`crate::solvers::reanalysis`]), from `start`, then on `complete` from
+/// where it stopped ([`levenberg_marquardt_continued`]) until the stopping
+/// rules hold there: the point, its evaluation and the uncertainty are
+/// `complete`'s; the history and the evaluations both stages'.
+pub fn levenberg_marquardt_staged<C: ResidualModel, M: ResidualModel>(
+    coarse: &C,
+    complete: &M,
+    start: &[f64],
+    observer: &mut dyn FnMut(&IterationRecord),
+) -> Result<Solved<M::Extra>, UpdateError> {
+    let first = levenberg_marquardt(coarse, start, None, observer)?;
+    Ok(levenberg_marquardt_continued(complete, &first.continuation, observer)?.after(first))
 }
 
 /// The state of one Levenberg–Marquardt search: the point in the bounded
@@ -298,6 +317,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
         }
         Ok(Solved {
             continuation: Continuation {
+                iteration: self.iteration,
                 p: self.p.clone(),
                 y: self.y,
                 damping: self.lambda,

@@ -28,7 +28,7 @@
 use super::frf_residual::{parameter_column, relative_residuals, sqrt_weights, weighted_residues, MeasuredSet};
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{
-    check_parameters, fields_at, model_at, IterationRecord, Parameter, ParameterKind, UpdateError, UpdateResult,
+    check_parameters, fields_at, model_at, reanalysed_springs, IterationRecord, Parameter, UpdateError, UpdateResult,
     UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
@@ -298,23 +298,7 @@ impl<'a> TransmissibilityProblem<'a> {
                     model: &reduced,
                     ..self.clone()
                 };
-                let first = solver::levenberg_marquardt(&coarse, start, None, observer)?;
-                let done = first.iterations.last().map_or(0, |last| last.iteration);
-                // The iterations left of the one budget both stages share.
-                let complete = Self {
-                    settings: UpdateSettings {
-                        max_iterations: self.settings.max_iterations.saturating_sub(done),
-                        ..self.settings.clone()
-                    },
-                    ..self.clone()
-                };
-                let mut renumbered = |record: &IterationRecord| {
-                    observer(&IterationRecord {
-                        iteration: record.iteration + done,
-                        ..record.clone()
-                    });
-                };
-                solver::levenberg_marquardt_continued(&complete, &first.continuation, &mut renumbered)?.after(first)
+                solver::levenberg_marquardt_staged(&coarse, self, start, observer)?
             }
             None => solver::levenberg_marquardt(self, start, None, observer)?,
         };
@@ -338,23 +322,11 @@ impl<'a> TransmissibilityProblem<'a> {
     /// field (those change the deck everywhere) and the basis is much
     /// smaller than the model; `None` otherwise.
     fn reanalysed_at(&self, start: &[f64]) -> Result<Option<FrfModel>, UpdateError> {
-        let fields = self
-            .parameters
-            .iter()
-            .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
-        if self.model.sparse().is_none() || fields {
+        let Some(varied) = reanalysed_springs(&self.parameters, self.model) else {
             return Ok(None);
-        }
+        };
         let (kappa, _) = model_at(&self.parameters, &self.kappa, &self.damping, start)?;
         let theta = fields_at(&self.parameters, self.model.field_coefficients(), start);
-        let mut varied: Vec<usize> = self
-            .parameters
-            .iter()
-            .flat_map(|p| p.kind.springs())
-            .map(|(f, c)| self.model.flat_spring_index(f, c))
-            .collect();
-        varied.sort_unstable();
-        varied.dedup();
         SupportMotion::reanalysed(
             self.model,
             self.shell,
