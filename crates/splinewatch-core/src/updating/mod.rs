@@ -43,7 +43,10 @@ pub mod transmissibility_residual;
 pub use modal::{ModalSolution, ModalUpdateProblem};
 
 pub use estimates::REPORTED_CORRELATIONS;
-pub use solver::{levenberg_marquardt, Evaluated, ResidualModel, Solved};
+pub use solver::{
+    levenberg_marquardt, levenberg_marquardt_continued, levenberg_marquardt_staged, Continuation, Evaluated,
+    ResidualModel, Solved,
+};
 #[cfg(test)]
 use solver::{norm2, normal_equations, quadratic, relative_offset, solve_damped};
 
