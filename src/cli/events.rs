@@ -103,7 +103,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
             }
         });
         for (k, l) in loaded.iter().enumerate() {
-            let identified = identified.recv().unwrap_or_else(|_| identify(cfg, l));
+            let identified = || identified.recv().unwrap_or_else(|_| identify(cfg, l));
             let line = process_identified(cfg, l, identified, &mut chain);
             if let Some(w) = writer.as_mut() {
                 let (time, bodies) = messages(&line)?;

@@ -350,7 +350,7 @@ fn check_channels(cfg: &Config, event: &Event, plan: &[GroundInputPlan]) -> Resu
 
 /// The chain on one event; a failing stage skips the event with its reason.
 pub fn process(cfg: &Config, loaded: &Loaded, chain: &mut Chain) -> EventLine {
-    process_identified(cfg, loaded, identify(cfg, loaded), chain)
+    process_identified(cfg, loaded, || identify(cfg, loaded), chain)
 }
 
 /// An event's identified modes (item 1 of the chain), or why there are
@@ -382,21 +382,31 @@ pub fn identify(cfg: &Config, loaded: &Loaded) -> Identified {
     })
 }
 
-/// [`process`] with the event's identification done (`identified`, as
-/// [`identify`] gives it).
-pub fn process_identified(cfg: &Config, loaded: &Loaded, identified: Identified, chain: &mut Chain) -> EventLine {
+/// [`process`] with the event's identification from `identified` (as
+/// [`identify`] gives it), taken once the forecast and the update are done:
+/// neither needs it, so an identification running on another thread
+/// overlaps them. It is taken for every event, read or not (one per record,
+/// in order).
+pub fn process_identified(
+    cfg: &Config,
+    loaded: &Loaded,
+    identified: impl FnOnce() -> Identified,
+    chain: &mut Chain,
+) -> EventLine {
+    let mut identified = Some(identified);
     let start = loaded.start_ns();
     let mut line = EventLine::new(loaded.name.clone());
     line.start = start.map(format_timestamp);
-    let (event, plan) = match &loaded.event {
-        Ok(e) => e,
-        Err(e) => {
-            line.skipped = Some(format!("{e:#}"));
-            return line;
+    match &loaded.event {
+        Ok((event, plan)) => {
+            if let Err(e) = run_chain(cfg, event, plan, &mut identified, chain, &mut line) {
+                line.skipped = Some(format!("{e:#}"));
+            }
         }
-    };
-    if let Err(e) = run_chain(cfg, event, plan, identified, chain, &mut line) {
-        line.skipped = Some(format!("{e:#}"));
+        Err(e) => line.skipped = Some(format!("{e:#}")),
+    }
+    if let Some(pending) = identified.take() {
+        pending();
     }
     line
 }
@@ -405,7 +415,7 @@ fn run_chain(
     cfg: &Config,
     event: &Event,
     plan: &[GroundInputPlan],
-    identified: Identified,
+    identified: &mut Option<impl FnOnce() -> Identified>,
     chain: &mut Chain,
     line: &mut EventLine,
 ) -> Result<()> {
@@ -423,13 +433,29 @@ fn run_chain(
             .flat_map(|&i| channel(i))
             .fold(0.0f64, |a, v| a.max(v.abs())),
     );
+    let updated = forecast_and_update(cfg, (event, plan), chain, line, pga);
     // A record whose identification finds no mode is still forecast and
-    // updated (neither needs modes): said in `notes`.
-    match identified {
+    // updated (neither needs modes): said first in `notes`.
+    match identified.take().and_then(|identify| identify()) {
         Some(Ok(modes)) => line.modes = modes,
-        Some(Err(e)) => line.notes.push(e),
+        Some(Err(e)) => line.notes.insert(0, e),
         None => bail!("the event was not read"),
     }
+    updated?;
+    judge_event(cfg, chain, line, pga);
+    Ok(())
+}
+
+/// The event forecast by the model of the events before it (none for the
+/// first), then the update on its own record.
+fn forecast_and_update(
+    cfg: &Config,
+    (event, plan): (&Event, &[GroundInputPlan]),
+    chain: &mut Chain,
+    line: &mut EventLine,
+    pga: f64,
+) -> Result<()> {
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
     // The forecast: the model of the events before this one.
     if !chain.parameters.is_empty() {
         let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, pga);
@@ -451,9 +477,7 @@ fn run_chain(
             .collect();
         line.forecast = Some(prediction.report);
     }
-    update_event(cfg, event, plan, chain, line)?;
-    judge_event(cfg, chain, line, pga);
-    Ok(())
+    update_event(cfg, event, plan, chain, line)
 }
 
 /// Whether the update fits deck sensor `name` (`[events] outputs`; every
