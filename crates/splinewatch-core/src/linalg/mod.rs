@@ -15,6 +15,12 @@ pub fn bitwise_equal(a: &[f64], b: &[f64]) -> bool {
     a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
+/// `(A + Aᵀ)/2`: a product that is symmetric in exact arithmetic made so
+/// to round-off, before a symmetric eigensolver reads one triangle.
+pub fn symmetric_part(a: &Mat<f64>) -> Mat<f64> {
+    Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+}
+
 /// The rows `rows` of `a`, in order.
 pub fn dense_rows(a: &Mat<f64>, rows: &[usize]) -> Mat<f64> {
     Mat::from_fn(rows.len(), a.ncols(), |r, c| a[(rows[r], c)])

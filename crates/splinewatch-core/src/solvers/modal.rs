@@ -22,6 +22,7 @@
 //! tangential. Energies use the row-sum lumped mass per control point.
 
 use crate::geometry::vec3::{dot, Vec3};
+use crate::linalg::symmetric_part;
 use crate::model::constraints::DofReduction;
 use crate::model::shell::{Frame, DOFS_PER_CONTROL_POINT};
 use crate::model::springs::LowRankBlock;
@@ -139,7 +140,7 @@ impl ScaledPencil {
         l.solve_lower_triangular_in_place(x.as_mut());
         let mut a = x.transpose().to_owned();
         l.solve_lower_triangular_in_place(a.as_mut());
-        let a_free = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+        let a_free = symmetric_part(&a);
         Ok(Self { scale, l, a_free })
     }
 
@@ -147,9 +148,7 @@ impl ScaledPencil {
     /// enters the standard problem), symmetrised.
     fn congruence(&self, x: Mat<f64>) -> Mat<f64> {
         let y = self.forward(x);
-        let a = self.forward(y.transpose().to_owned());
-        let n = a.nrows();
-        Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
+        symmetric_part(&self.forward(y.transpose().to_owned()))
     }
 
     /// `L⁻¹ S X` for rows `X` on the block's dofs.

@@ -24,6 +24,7 @@
 //! span) is refused ([`Reanalysis::modes_and_responses`] gives `None`) and
 //! the caller solves the complete model.
 
+use crate::linalg::symmetric_part;
 use crate::solvers::dense_model::ModelError;
 use crate::solvers::modal::Modes;
 use crate::solvers::partial_eigen::Responses;
@@ -101,7 +102,7 @@ impl Reanalysis {
         let raw = concat_columns(&[&start.shapes, x, xmx]);
         let mass = model.mass.nonzeros();
         let basis = orthonormalize(&raw, |v| mass.mul(v));
-        let project = |a: &Mat<f64>| symmetric(basis.transpose() * a);
+        let project = |a: &Mat<f64>| symmetric_part(&(basis.transpose() * a));
         let stiffness = project(&model.stiffness_with_fields(kappa0, theta0)?.nonzeros().mul(&basis));
         let terms = model.spring_terms.iter().flatten().collect::<Vec<_>>();
         let terms: Vec<Mat<f64>> = varied
@@ -219,11 +220,6 @@ fn concat_columns(parts: &[&Mat<f64>]) -> Mat<f64> {
         at += part.ncols();
     }
     out
-}
-
-/// `(A + Aᵀ)/2`.
-fn symmetric(a: Mat<f64>) -> Mat<f64> {
-    Mat::from_fn(a.nrows(), a.ncols(), |i, j| 0.5 * (a[(i, j)] + a[(j, i)]))
 }
 
 /// The columns of `raw` orthonormalised in the inner product `⟨u, v⟩ =
