@@ -107,11 +107,16 @@ fn srim_finds_the_modes_of_a_deck_shaken_by_two_grounds() {
 /// The reported standard deviations (exact delete-one-batch replicates)
 /// against the scatter of the estimates over independent records (different
 /// grounds and noise, 12 seeds), for the three most driven modes: within a
-/// factor 2 either way (measured: 1.6×, 1.3× and 1.3× the scatter; the
-/// scatter of 12 records is itself uncertain by about 20 %; with the
-/// first-order replicates and the `HᵀH` SVD it was 1.8×, 2.1× and 5.2×, so
-/// `identify` uses the exact replicates and SRIM the symmetric
-/// eigendecomposition).
+/// factor 3 either way (the scatter of 12 records is itself uncertain by
+/// about 20 %, and the jackknife of a median over orders is not a smooth
+/// statistic). Measured (2026-11-27) with each replicate's model made as the
+/// record's, by the information matrix's own eigendecomposition: 2.15×,
+/// 1.75× and 1.02× the scatter (and every mode of the Painter Street
+/// records given a std but one); with the replicates through the `HᵀH` SVD
+/// (which squares the range of the eigenvalues and scrambled high orders:
+/// a third of the Painter Street modes without a std) it was 1.6×, 1.3× and
+/// 1.3×; with the first-order replicates and the `HᵀH` SVD 1.8×, 2.1× and
+/// 5.2×, so `identify` uses the exact replicates.
 #[test]
 fn srim_spreads_match_the_scatter_over_records() {
     let settings = OmaSettings {

@@ -24,7 +24,7 @@
 use super::shape::{mpc, normalise};
 use super::OmaError;
 use crate::linalg::join;
-use crate::linalg::leading_eigen::leading_eigen;
+use crate::linalg::leading_eigen::{leading_eigen, leading_eigenpairs};
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::{c64, Accum, Mat, MatRef, Par, Side};
@@ -231,8 +231,8 @@ impl SubspaceModel {
     pub fn from_symmetric(matrix: &Mat<f64>, channels: usize, max_order: usize, fs: f64) -> Result<Self, OmaError> {
         let n = matrix.nrows();
         let cap = n.saturating_sub(channels).min(max_order.max(1));
-        // The `cap` leading eigenpairs only (`leading_eigen`: descending).
-        let eigen = leading_eigen(matrix.as_ref(), cap).map_err(|_| OmaError::SvdFailed)?;
+        // The `cap` leading eigenpairs only (descending).
+        let eigen = leading_eigenpairs(matrix.as_ref(), cap).map_err(|_| OmaError::SvdFailed)?;
         let singular_values: Vec<f64> = eigen.values[..cap].iter().map(|v| v.max(0.0)).collect();
         let sigma_1 = singular_values.first().copied().unwrap_or(0.0);
         if sigma_1.is_nan() || sigma_1 <= 0.0 {

@@ -55,6 +55,11 @@ pub trait ReplicateSource: Sync {
     fn batches(&self) -> usize;
     /// The matrix of every batch but `left_out`.
     fn matrix_without(&self, left_out: usize) -> Result<Mat<f64>, OmaError>;
+    /// The subspace model of a replicate's `matrix`, made as the record's
+    /// was: by default its SVD ([`SubspaceModel::from_matrix`]).
+    fn model(&self, matrix: &Mat<f64>, channels: usize, max_order: usize, fs: f64) -> Result<SubspaceModel, OmaError> {
+        SubspaceModel::from_matrix(matrix, channels, max_order, fs)
+    }
 }
 
 /// SSI-cov's replicates: the block Hankel matrix of the correlations of all
@@ -287,7 +292,7 @@ fn replicate_modes(
 ) -> Vec<Option<Replicate>> {
     let Ok(model) = source
         .matrix_without(left_out)
-        .and_then(|h| SubspaceModel::from_matrix(&h, channels, max_order, fs))
+        .and_then(|h| source.model(&h, channels, max_order, fs))
     else {
         return vec![None; modes.len()];
     };
