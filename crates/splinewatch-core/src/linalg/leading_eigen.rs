@@ -123,30 +123,7 @@ fn eigen_of(a: MatRef<'_, f64>, wanted: Values) -> Result<LeadingEigen, EigenNot
     let diagonal: Vec<f64> = (0..n).map(|i| reduced[(i, i)]).collect();
     let off: Vec<f64> = (0..n.saturating_sub(1)).map(|i| reduced[(i + 1, i)]).collect();
 
-    let (values, k) = match wanted {
-        Values::All(k) => {
-            let mut ascending = Diag::<f64>::zeros(n);
-            let (mut d, mut e) = (Diag::<f64>::zeros(n), Diag::<f64>::zeros(n));
-            for i in 0..n {
-                d[i] = diagonal[i];
-                e[i] = off.get(i).copied().unwrap_or(0.0);
-            }
-            evd::tridiagonal_self_adjoint_evd(d.as_ref(), e.as_ref(), ascending.as_mut(), None, par, stack, params)
-                .map_err(|_| EigenNotConverged)?;
-            ((0..n).rev().map(|i| ascending[i]).collect(), k.min(n))
-        }
-        Values::Leading(k) => (largest_by_bisection(&diagonal, &off, k.min(n)), k.min(n)),
-        Values::Above(relative) => {
-            let largest = largest_by_bisection(&diagonal, &off, 1)[0];
-            let k = if largest > 0.0 {
-                n - eigenvalues_below(&diagonal, &off, relative * largest)
-            } else {
-                0
-            };
-            (largest_by_bisection(&diagonal, &off, k), k)
-        }
-    };
-
+    let (values, k) = tridiagonal_values(&diagonal, &off, wanted, stack)?;
     if k == 0 {
         return Ok(LeadingEigen {
             values,
@@ -176,6 +153,42 @@ fn eigen_of(a: MatRef<'_, f64>, wanted: Values) -> Result<LeadingEigen, EigenNot
         super::join(|| back_transform(left), || back_transform(right));
     }
     Ok(LeadingEigen { values, vectors })
+}
+
+/// The eigenvalues `wanted` of the tridiagonal (`diagonal`, `off`),
+/// non-increasing, and how many vectors are wanted.
+fn tridiagonal_values(
+    diagonal: &[f64],
+    off: &[f64],
+    wanted: Values,
+    stack: &mut MemStack,
+) -> Result<(Vec<f64>, usize), EigenNotConverged> {
+    let n = diagonal.len();
+    let par = Par::Seq;
+    let params: Spec<SelfAdjointEvdParams, f64> = <SelfAdjointEvdParams as Auto<f64>>::auto().into();
+    Ok(match wanted {
+        Values::All(k) => {
+            let mut ascending = Diag::<f64>::zeros(n);
+            let (mut d, mut e) = (Diag::<f64>::zeros(n), Diag::<f64>::zeros(n));
+            for i in 0..n {
+                d[i] = diagonal[i];
+                e[i] = off.get(i).copied().unwrap_or(0.0);
+            }
+            evd::tridiagonal_self_adjoint_evd(d.as_ref(), e.as_ref(), ascending.as_mut(), None, par, stack, params)
+                .map_err(|_| EigenNotConverged)?;
+            ((0..n).rev().map(|i| ascending[i]).collect(), k.min(n))
+        }
+        Values::Leading(k) => (largest_by_bisection(diagonal, off, k.min(n)), k.min(n)),
+        Values::Above(relative) => {
+            let largest = largest_by_bisection(diagonal, off, 1)[0];
+            let k = if largest > 0.0 {
+                n - eigenvalues_below(diagonal, off, relative * largest)
+            } else {
+                0
+            };
+            (largest_by_bisection(diagonal, off, k), k)
+        }
+    })
 }
 
 /// The `k` largest eigenvalues of the tridiagonal (`d`, `e`), non-increasing,
