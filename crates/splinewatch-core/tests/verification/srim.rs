@@ -106,17 +106,16 @@ fn srim_finds_the_modes_of_a_deck_shaken_by_two_grounds() {
 
 /// The reported standard deviations (exact delete-one-batch replicates)
 /// against the scatter of the estimates over independent records (different
-/// grounds and noise, 12 seeds), for the three most driven modes: within a
-/// factor 3 either way (the scatter of 12 records is itself uncertain by
-/// about 20 %, and the jackknife of a median over orders is not a smooth
-/// statistic). Measured (2026-11-27) with each replicate's model made as the
-/// record's, by the information matrix's own eigendecomposition: 2.15×,
-/// 1.75× and 1.02× the scatter (and every mode of the Painter Street
-/// records given a std but one); with the replicates through the `HᵀH` SVD
+/// grounds and noise, 50 seeds: the acceptance), for the three most
+/// driven modes: within a factor 2 either way (the scatter of 50 records is
+/// itself uncertain by about 10 %). Measured (2026-11-27): 1.77×, 1.54× and
+/// 1.48× the scatter, each replicate's model made as the record's, by the
+/// information matrix's own eigendecomposition (over the first 12 seeds
+/// 2.15×, 1.75×, 1.02×). With the replicates' models through the `HᵀH` SVD
 /// (which squares the range of the eigenvalues and scrambled high orders:
-/// a third of the Painter Street modes without a std) it was 1.6×, 1.3× and
-/// 1.3×; with the first-order replicates and the `HᵀH` SVD 1.8×, 2.1× and
-/// 5.2×, so `identify` uses the exact replicates.
+/// 13 of the 22 Painter Street modes without a std) it was 1.6×, 1.3× and
+/// 1.3× over 12 seeds; with the first-order replicates and the `HᵀH` SVD
+/// 1.8×, 2.1× and 5.2×, so `identify` uses the exact replicates.
 #[test]
 fn srim_spreads_match_the_scatter_over_records() {
     let settings = OmaSettings {
@@ -130,7 +129,8 @@ fn srim_spreads_match_the_scatter_over_records() {
     let targets = [6.681, 21.627, 39.276];
     let mut estimates: Vec<Vec<f64>> = vec![Vec::new(); 3];
     let mut reported: Vec<Vec<f64>> = vec![Vec::new(); 3];
-    for seed in 10..22 {
+    const RECORDS: usize = 50;
+    for seed in 10..10 + RECORDS as u64 {
         let (ground, deck, _) = shaken_deck(60.0, seed);
         let inputs: Vec<&[f64]> = ground.iter().map(Vec::as_slice).collect();
         let outputs: Vec<&[f64]> = deck.iter().map(Vec::as_slice).collect();
@@ -148,13 +148,13 @@ fn srim_spreads_match_the_scatter_over_records() {
         let scatter = (estimates[k].iter().map(|e| (e - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
         let rms_reported = (reported[k].iter().map(|s| s * s).sum::<f64>() / n).sqrt();
         eprintln!(
-            "{} Hz: found in {n} of 12, scatter {scatter:.4}, reported {rms_reported:.4}",
+            "{} Hz: found in {n} of {RECORDS}, scatter {scatter:.4}, reported {rms_reported:.4}",
             targets[k]
         );
-        assert_eq!(n, 12.0, "{} Hz found in every record", targets[k]);
+        assert_eq!(n, RECORDS as f64, "{} Hz found in every record", targets[k]);
         let ratio = rms_reported / scatter;
         assert!(
-            (1.0 / 3.0..=3.0).contains(&ratio),
+            (0.5..=2.0).contains(&ratio),
             "{} Hz: reported {rms_reported} vs scatter {scatter}",
             targets[k]
         );
