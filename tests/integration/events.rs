@@ -150,12 +150,22 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
         assert_eq!(l["verdict"]["state"], "insufficient history", "{l}");
         assert!(l["update"]["relative_residual"].as_f64().unwrap().is_finite());
     }
-    // The 2015 event's transverse mode, with its standard deviation.
-    let modes = second["modes"].as_array().unwrap();
+    // The 2012 event's transverse mode (3.49 Hz) with its standard
+    // deviation; the 2015 event's modes (7.17 Hz) with theirs.
+    let modes = first["modes"].as_array().unwrap();
     assert!(
         modes
             .iter()
-            .any(|m| (3.0..6.0).contains(&m["frequency_hz"].as_f64().unwrap())),
+            .any(|m| (3.0..6.0).contains(&m["frequency_hz"].as_f64().unwrap())
+                && m["frequency_std_hz"].as_f64().is_some_and(|s| s > 0.0)),
+        "{modes:?}"
+    );
+    let modes = second["modes"].as_array().unwrap();
+    assert!(
+        !modes.is_empty()
+            && modes
+                .iter()
+                .all(|m| m["frequency_std_hz"].as_f64().is_some_and(|s| s > 0.0)),
         "{modes:?}"
     );
     // The forecast is `predict`'s with the model of the events before: with

@@ -349,7 +349,7 @@ fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator()
             .map(|p| (p.frequency_hz, p.damping_ratio))
             .collect();
         ours.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let expected = modes(&peer["toeplitz_truncated"]);
+        let expected = modes(&peer["hankel_centred_truncated"]);
         assert_eq!(ours.len(), expected.len(), "{ours:?} vs {expected:?}");
         for (a, b) in ours.iter().zip(&expected) {
             assert!(

@@ -80,23 +80,8 @@ impl OutputCorrelations {
                 needed: 4 * (max_lag + 1) * batches,
             });
         }
-        // Channel by channel on the workers (a 10-minute window's mask and
-        // means took ~6 ms on one thread); without a NaN the mask is all set.
-        let gappy = super::ordered_map(channels, |c| c.iter().any(|v| v.is_nan()));
-        let valid: Vec<bool> = if gappy.iter().any(|&g| g) {
-            (0..n).map(|t| channels.iter().all(|c| !c[t].is_nan())).collect()
-        } else {
-            vec![true; n]
-        };
+        let (centred, valid) = centred_channels(channels);
         let valid_count = valid.iter().filter(|&&v| v).count();
-        let centred: Vec<Vec<f64>> = super::ordered_map(channels, |c| {
-            let mean =
-                c.iter().zip(&valid).filter(|(_, &v)| v).map(|(x, _)| x).sum::<f64>() / valid_count.max(1) as f64;
-            c.iter()
-                .zip(&valid)
-                .map(|(x, &v)| if v { x - mean } else { 0.0 })
-                .collect()
-        });
         let mut out = Self {
             channels: l,
             references,
@@ -115,7 +100,7 @@ impl OutputCorrelations {
         let references = &out.references;
         out.sums = super::ordered_map(&bounds, |&(start, end)| {
             let slices: Vec<&[f64]> = centred.iter().map(|c| &c[start..end]).collect();
-            plan.batch_sums(&slices, references)
+            plan.batch_sums(&slices, references, end - start)
         });
         out.counts = bounds
             .iter()
@@ -173,8 +158,31 @@ impl OutputCorrelations {
     }
 }
 
+/// The channels less their means over the valid instants (every channel
+/// finite there), zero at the others, and the validity mask. Channel by
+/// channel on the workers (a 10-minute window's mask and means took ~6 ms on
+/// one thread); without a NaN the mask is all set.
+pub(crate) fn centred_channels(channels: &[&[f64]]) -> (Vec<Vec<f64>>, Vec<bool>) {
+    let n = channels.first().map_or(0, |c| c.len());
+    let gappy = super::ordered_map(channels, |c| c.iter().any(|v| v.is_nan()));
+    let valid: Vec<bool> = if gappy.iter().any(|&g| g) {
+        (0..n).map(|t| channels.iter().all(|c| !c[t].is_nan())).collect()
+    } else {
+        vec![true; n]
+    };
+    let valid_count = valid.iter().filter(|&&v| v).count();
+    let centred = super::ordered_map(channels, |c| {
+        let mean = c.iter().zip(&valid).filter(|(_, &v)| v).map(|(x, _)| x).sum::<f64>() / valid_count.max(1) as f64;
+        c.iter()
+            .zip(&valid)
+            .map(|(x, &v)| if v { x - mean } else { 0.0 })
+            .collect()
+    });
+    (centred, valid)
+}
+
 /// The FFTs of the chunked sums (see the module documentation).
-struct ChunkPlan {
+pub(crate) struct ChunkPlan {
     max_lag: usize,
     /// FFT length `m`; chunks start every `m − max_lag` samples.
     len: usize,
@@ -183,7 +191,7 @@ struct ChunkPlan {
 }
 
 impl ChunkPlan {
-    fn new(max_lag: usize) -> Self {
+    pub(crate) fn new(max_lag: usize) -> Self {
         let len = (8 * (max_lag + 1)).next_power_of_two();
         let mut planner = RealFftPlanner::<f64>::new();
         Self {
@@ -194,9 +202,11 @@ impl ChunkPlan {
         }
     }
 
-    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` of one batch, lag-major then row-major
-    /// (missing samples are zeros, so they add nothing).
-    fn batch_sums(&self, batch: &[&[f64]], references: &[usize]) -> Vec<f64> {
+    /// `S_k = Σ_t y_{t+k} y_ref,tᵀ` over the reference instants
+    /// `t < reference_len` of `batch` (its later samples only lagged into),
+    /// lag-major then row-major (missing samples are zeros, so they add
+    /// nothing).
+    pub(crate) fn batch_sums(&self, batch: &[&[f64]], references: &[usize], reference_len: usize) -> Vec<f64> {
         let (l, r, n, m) = (batch.len(), references.len(), batch[0].len(), self.len);
         let (hop, bins) = (m - self.max_lag, m / 2 + 1);
         let zero = c64::new(0.0, 0.0);
@@ -218,7 +228,7 @@ impl ChunkPlan {
                 (*re, *im) = (z.re, z.im);
             }
         };
-        for start in (0..n).step_by(hop) {
+        for start in (0..reference_len).step_by(hop) {
             for (a, y) in batch.iter().enumerate() {
                 let part = a * bins..(a + 1) * bins;
                 transform(
@@ -230,7 +240,7 @@ impl ChunkPlan {
             for (j, &reference) in references.iter().enumerate() {
                 let part = j * bins..(j + 1) * bins;
                 transform(
-                    &batch[reference][start..n.min(start + hop)],
+                    &batch[reference][start..reference_len.min(start + hop)],
                     &mut refs_re[part.clone()],
                     &mut refs_im[part],
                 );
