@@ -242,61 +242,36 @@ impl InformationMatrix {
         Ok(input_range(&r_yu, &r_uu)?.1)
     }
 
-    /// `R_yy`, `R_yu`, `R_uu` of every batch but `left_out`.
+    /// `R_yy`, `R_yu`, `R_uu` of every batch but `left_out`: the Gram
+    /// matrix's lower blocks (`i ≥ j`) routed by channel into the three and
+    /// into `R_uy`'s lower blocks, which are `R_yu`'s upper ones transposed.
     fn blocks(&self, left_out: Option<usize>) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
         let (m, r, p) = (self.outputs, self.inputs, self.horizon);
         let l = m + r;
-        let n = p * l;
-        let gram = self.gram_columns(left_out);
-        // Row `i l + a` of the Gram is channel `a` at block `i`; the three
-        // matrices stack their own channels block by block, column by column.
-        let part = |rows: std::ops::Range<usize>, cols: std::ops::Range<usize>| {
-            let (nr, nc) = (rows.len(), cols.len());
-            let mut out = Mat::<f64>::zeros(p * nr, p * nc);
-            for j in 0..p {
-                for (c, channel) in cols.clone().enumerate() {
-                    let source = &gram[(j * l + channel) * n..][..n];
-                    let column = out.col_as_slice_mut(j * nc + c);
-                    for i in 0..p {
-                        column[i * nr..(i + 1) * nr].copy_from_slice(&source[i * l + rows.start..][..nr]);
-                    }
-                }
-            }
-            out
-        };
-        (part(0..m, 0..m), part(0..m, m..l), part(m..l, m..l))
-    }
-
-    /// The Gram matrix `(1/K) Σ_t z_p(t) z_p(t)ᵀ` of every batch's columns
-    /// but `left_out`'s (see the type's documentation), both triangles.
-    #[cfg(test)]
-    fn gram(&self, left_out: Option<usize>) -> Mat<f64> {
-        let n = self.horizon * (self.outputs + self.inputs);
-        let columns = self.gram_columns(left_out);
-        Mat::from_fn(n, n, |row, col| columns[col * n + row])
-    }
-
-    /// [`Self::gram`], column-major in one vector.
-    fn gram_columns(&self, left_out: Option<usize>) -> Vec<f64> {
-        let (l, p) = (self.outputs + self.inputs, self.horizon);
-        let n = p * l;
         let batches = self.lagged.len();
+        let counts = self.pair_counts(left_out);
         let mut lags = vec![0.0; p * l * l];
         for (b, sums) in self.lagged.iter().enumerate() {
             if Some(b) != left_out {
                 lags.iter_mut().zip(sums).for_each(|(t, v)| *t += v);
             }
         }
-        // The lower triangle's blocks (i ≥ j): Φ_{i−j}, later channel `a` down.
-        let mut gram = vec![0.0; n * n];
+        let mut parts = GramParts::zeros(m, r, p);
+        // Φ_{i−j} / K, later channel `a` down each column.
         for j in 0..p {
             for c in 0..l {
-                let column = &mut gram[(j * l + c) * n..][..n];
+                let (outputs, inputs) = parts.column(j, c);
                 for i in j..p {
+                    let scale = 1.0 / counts[i * p + j];
                     let lag = &lags[(i - j) * l * l..][..l * l];
-                    for a in 0..l {
-                        column[i * l + a] = lag[a * l + c];
-                    }
+                    outputs[i * m..][..m]
+                        .iter_mut()
+                        .enumerate()
+                        .for_each(|(a, t)| *t = lag[a * l + c] * scale);
+                    inputs[i * r..][..r]
+                        .iter_mut()
+                        .enumerate()
+                        .for_each(|(a, t)| *t = lag[(m + a) * l + c] * scale);
                 }
             }
         }
@@ -307,57 +282,140 @@ impl InformationMatrix {
             edges.extend([(b, 1.0), (b + 1, -1.0)]);
         }
         for (k, sign) in edges {
-            self.add_edge_sums(&mut gram, self.bounds[k], sign);
+            self.add_edge_sums(&mut parts, self.bounds[k], sign, &counts);
         }
-        let counts = self.pair_counts(left_out);
-        for j in 0..p {
-            for c in 0..l {
-                let column = &mut gram[(j * l + c) * n..][..n];
-                for i in j..p {
-                    let scale = 1.0 / counts[i * p + j];
-                    column[i * l..][..l].iter_mut().for_each(|v| *v *= scale);
-                }
-            }
-        }
-        mirror_lower(&mut gram, n);
-        gram
+        parts.finish()
     }
 
-    /// Lower block `(j + d, j)` of `gram` (column-major) += `sign · E_d(j)`,
-    /// `E_d(j) = Σ_{u=c}^{c+j−1} z(u+d) z(u)ᵀ`, accumulated along `j` for
-    /// each lag `d`.
-    fn add_edge_sums(&self, gram: &mut [f64], c: usize, sign: f64) {
-        let (l, p) = (self.outputs + self.inputs, self.horizon);
-        let n = p * l;
+    /// The Gram matrix `(1/K) Σ_t z_p(t) z_p(t)ᵀ` of every batch's columns
+    /// but `left_out`'s (see the type's documentation), assembled from
+    /// [`Self::blocks`]: row `i l + a` is channel `a` (outputs first) at
+    /// block `i`.
+    #[cfg(test)]
+    fn gram(&self, left_out: Option<usize>) -> Mat<f64> {
+        let (m, r, p) = (self.outputs, self.inputs, self.horizon);
+        let l = m + r;
+        let (r_yy, r_yu, r_uu) = self.blocks(left_out);
+        Mat::from_fn(p * l, p * l, |row, col| {
+            let (i, a, j, c) = (row / l, row % l, col / l, col % l);
+            match (a < m, c < m) {
+                (true, true) => r_yy[(i * m + a, j * m + c)],
+                (true, false) => r_yu[(i * m + a, j * r + c - m)],
+                (false, true) => r_yu[(j * m + c, i * r + a - m)],
+                (false, false) => r_uu[(i * r + a - m, j * r + c - m)],
+            }
+        })
+    }
+
+    /// Lower block `(j + d, j)` += `sign · E_d(j) / K`, `E_d(j) =
+    /// Σ_{u=c}^{c+j−1} z(u+d) z(u)ᵀ`: one running sum per lag, advanced
+    /// along `j`, so that each of the Gram's columns is written in order.
+    fn add_edge_sums(&self, parts: &mut GramParts, c: usize, sign: f64, counts: &[f64]) {
+        let (m, r, p) = (self.outputs, self.inputs, self.horizon);
+        let l = m + r;
         let z = |t: usize| &self.samples[t * l..][..l];
-        // `sum[b * l + a]`: later channel `a`, earlier channel `b`.
-        let mut sum = vec![0.0; l * l];
-        for d in 0..p {
-            sum.fill(0.0);
-            for j in 1..p - d {
-                let (later, earlier) = (z(c + j - 1 + d), z(c + j - 1));
+        // `sums[d][b * l + a]`: later channel `a`, earlier channel `b`.
+        let mut sums = vec![0.0; p * l * l];
+        for j in 1..p {
+            let earlier = z(c + j - 1);
+            for d in 0..p - j {
+                let later = z(c + j - 1 + d);
+                let sum = &mut sums[d * l * l..][..l * l];
                 for (column, &zb) in sum.chunks_exact_mut(l).zip(earlier) {
                     column.iter_mut().zip(later).for_each(|(s, za)| *s += za * zb);
                 }
-                for (b, column) in sum.chunks_exact(l).enumerate() {
-                    let target = &mut gram[(j * l + b) * n + (j + d) * l..][..l];
-                    target.iter_mut().zip(column).for_each(|(t, s)| *t += sign * s);
+            }
+            for b in 0..l {
+                let (outputs, inputs) = parts.column(j, b);
+                for d in 0..p - j {
+                    let scale = sign / counts[(j + d) * p + j];
+                    let column = &sums[d * l * l + b * l..][..l];
+                    let (later_outputs, later_inputs) = column.split_at(m);
+                    outputs[(j + d) * m..][..m]
+                        .iter_mut()
+                        .zip(later_outputs)
+                        .for_each(|(t, s)| *t += scale * s);
+                    inputs[(j + d) * r..][..r]
+                        .iter_mut()
+                        .zip(later_inputs)
+                        .for_each(|(t, s)| *t += scale * s);
                 }
             }
         }
     }
 }
 
-/// The upper triangle of the `n × n` column-major `matrix` set to its
-/// lower's transpose, tile by tile (a column-by-column copy strides the
-/// whole matrix at every entry).
-fn mirror_lower(matrix: &mut [f64], n: usize) {
+/// The Gram matrix's lower blocks, by channel: `R_yy`, `R_yu`, `R_uy`, `R_uu`
+/// (rows `i m + a` or `i r + a` of block `i`).
+struct GramParts {
+    outputs: usize,
+    inputs: usize,
+    r_yy: Mat<f64>,
+    r_yu: Mat<f64>,
+    r_uy: Mat<f64>,
+    r_uu: Mat<f64>,
+}
+
+impl GramParts {
+    fn zeros(m: usize, r: usize, p: usize) -> Self {
+        Self {
+            outputs: m,
+            inputs: r,
+            r_yy: Mat::zeros(p * m, p * m),
+            r_yu: Mat::zeros(p * m, p * r),
+            r_uy: Mat::zeros(p * r, p * m),
+            r_uu: Mat::zeros(p * r, p * r),
+        }
+    }
+
+    /// The Gram's column of channel `c` at block `j`: its output rows and
+    /// its input rows.
+    fn column(&mut self, j: usize, c: usize) -> (&mut [f64], &mut [f64]) {
+        let (m, r) = (self.outputs, self.inputs);
+        if c < m {
+            (
+                self.r_yy.col_as_slice_mut(j * m + c),
+                self.r_uy.col_as_slice_mut(j * m + c),
+            )
+        } else {
+            (
+                self.r_yu.col_as_slice_mut(j * r + c - m),
+                self.r_uu.col_as_slice_mut(j * r + c - m),
+            )
+        }
+    }
+
+    /// `R_yy`, `R_yu`, `R_uu` whole: the symmetric two's upper triangles
+    /// mirrored, `R_yu`'s upper blocks from `R_uy`.
+    fn finish(mut self) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
+        let (m, r) = (self.outputs, self.inputs);
+        mirror_lower(&mut self.r_yy);
+        mirror_lower(&mut self.r_uu);
+        let p = self.r_yy.nrows() / m;
+        for i in 0..p {
+            for a in 0..m {
+                let row = i * m + a;
+                let source = self.r_uy.col_as_slice(row);
+                for col in (i + 1) * r..p * r {
+                    self.r_yu[(row, col)] = source[col];
+                }
+            }
+        }
+        (self.r_yy, self.r_yu, self.r_uu)
+    }
+}
+
+/// The upper triangle of the square `matrix` set to its lower's transpose,
+/// tile by tile (a column-by-column copy strides the whole matrix at every
+/// entry).
+fn mirror_lower(matrix: &mut Mat<f64>) {
     const TILE: usize = 32;
+    let n = matrix.nrows();
     for col_tile in (0..n).step_by(TILE) {
         for row_tile in (0..=col_tile).step_by(TILE) {
             for col in col_tile..n.min(col_tile + TILE) {
                 for row in row_tile..col.min(row_tile + TILE) {
-                    matrix[col * n + row] = matrix[row * n + col];
+                    matrix[(row, col)] = matrix[(col, row)];
                 }
             }
         }
