@@ -1,8 +1,7 @@
 //! Input–output subspace identification of records with measured inputs
 //! (ground channels in an earthquake, or a force): SRIM, the System
 //! Realization using Information Matrix (Juang 1997, "System realization
-//! using information matrix", J. Guidance, Control, and Dynamics 20(3)), in
-//! its correlation form.
+//! using information matrix", J. Guidance, Control, and Dynamics 20(3)).
 //!
 //! With `z(t) = [y(t); u(t)]` (`m` outputs, `r` inputs) and the stacked
 //! vectors `y_p(t) = [y(t); …; y(t+p−1)]`, `u_p(t)` likewise over the horizon
@@ -21,11 +20,12 @@
 //! poles and the shapes at the outputs follow by the shift invariance of
 //! SSI, through the same [`SubspaceModel`], stabilisation, clustering and
 //! delete-one-batch uncertainty as [`crate::identification::oma`]
-//! ([`oma::identify_model`]). Every block of `R_yy`, `R_yu`, `R_uu` is a
-//! lagged correlation `R_k = E[z(t+k) z(t)ᵀ]` (block Toeplitz), so the
-//! matrices come from one batched FFT pass ([`OutputCorrelations`] of `z`
-//! against itself, lags `0..p−1`) instead of a `p(m+r) × n` product; the
-//! batches give the replicates. `R_uu` is inverted on its range (eigenvalues
+//! ([`oma::identify_model`]). The expectations are the products of the
+//! block Hankel data matrices over their columns, exact for a transient
+//! record (a block Toeplitz matrix of lagged correlations assumes a
+//! stationary one), from one batched FFT pass and sums at the batches'
+//! edges instead of a `p(m+r) × n` product ([`InformationMatrix`]); the
+//! batches of columns give the replicates. `R_uu` is inverted on its range (eigenvalues
 //! below `INPUT_RANGE` of the largest dropped): inputs too coherent to
 //! separate (one ground motion recorded at several supports) then act as one.
 //! A jackknife replicate is inverted on the record's range (a Galerkin
@@ -34,13 +34,15 @@
 //! jackknife (valid for smooth statistics, Efron & Tibshirani 1993, §11.6)
 //! reads as spread. On the 2015 Painter Street record the 4.81 Hz mode's
 //! std was 0.18 Hz with each replicate's own range and 0.009 Hz on the
-//! record's (both with the replicates' models through `HᵀH`); on the other
-//! records the two agreed within 30 %. Each replicate's model is made as the
-//! record's, from its own eigendecomposition ([`SubspaceModel::from_symmetric`]):
-//! through `HᵀH` the replicates lost the high orders' poles, and with them
-//! the std of 13 of the 22 modes of the Painter Street records (now 1); the
-//! 2015 mode's std is 0.030 Hz (2026-11-27). On simulated records the
-//! reported stds match the scatter (verification `srim`).
+//! record's (both with the block Toeplitz estimate and the replicates'
+//! models through `HᵀH`); on the other records the two agreed within 30 %.
+//! Each replicate's model is made as the record's, from its own
+//! eigendecomposition ([`SubspaceModel::from_symmetric`]): through `HᵀH`
+//! the replicates lost the high orders' poles, and with them the std of 13
+//! of the 22 modes the Toeplitz estimate found on the Painter Street
+//! records. With the data matrices every one of the 27 modes found there
+//! has its std, and on simulated records the reported stds are within 2× of
+//! the scatter over 50 records (verification `srim`; 2026-11-27).
 //!
 //! Why SRIM: it uses the measured inputs (unlike SSI-cov, which takes an
 //! earthquake for white noise), needs no impulse response to be estimated
