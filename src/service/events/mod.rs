@@ -549,7 +549,7 @@ fn update_event(
 
 /// A parameter this close to a bound (share of its range) is held there by
 /// its bound, not by the data: not a feature.
-const AT_BOUND: f64 = 1e-4;
+const BOUND_SHARE: f64 = 1e-4;
 
 /// The features judged: each tracked mode's identified frequency, then
 /// each updated parameter's log10 value (`None`: not identified).
@@ -568,7 +568,7 @@ fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<
     }
     for p in &line.parameters {
         names.push(feature_of_parameter(&p.name));
-        let margin = AT_BOUND * (p.upper - p.lower);
+        let margin = BOUND_SHARE * (p.upper - p.lower);
         let bounded = p.value <= p.lower + margin || p.value >= p.upper - margin;
         values.push(p.std.filter(|_| !bounded).map(|_| p.value.log10()));
     }

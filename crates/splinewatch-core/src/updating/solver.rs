@@ -418,7 +418,7 @@ impl<'m, M: ResidualModel> Search<'m, M> {
                 if self.p[k] != self.start_p[k] {
                     reset.push(k);
                 }
-            } else if bounded_derivative(self.y[k], lo, hi).abs() <= AT_BOUND * 0.5 * (hi - lo) {
+            } else if bounded_derivative(self.y[k], lo, hi).abs() <= BOUND_SLOPE * 0.5 * (hi - lo) {
                 self.held[k] = Some(HoldReason::AtBound);
             }
         }
@@ -610,7 +610,7 @@ const NO_GRADIENT: f64 = 1e-8;
 
 /// `|dp/dy| / ½(p_max − p_min) = |cos y|` below this: the parameter sits on
 /// its bound (within 5e-7 of its range), where eq. (42) gives it no gradient.
-const AT_BOUND: f64 = 1e-3;
+const BOUND_SLOPE: f64 = 1e-3;
 
 /// A direction of the column-normalised Jacobian with a singular value below
 /// this fraction of the largest is not determined by the data (a condition
