@@ -36,7 +36,9 @@ pub struct EigenNotConverged;
 /// Every eigenvalue and the leading eigenvectors of a symmetric matrix.
 #[derive(Debug, Clone)]
 pub struct LeadingEigen {
-    /// All `n` eigenvalues, non-increasing.
+    /// All `n` eigenvalues ([`leading_eigen`]), or those whose vectors are
+    /// computed ([`leading_eigenpairs`], [`eigenpairs_above`]),
+    /// non-increasing.
     pub values: Vec<f64>,
     /// `n × k`: column `j` belongs to `values[j]`, unit length, its largest
     /// component positive.
