@@ -146,7 +146,10 @@ pub fn identify_io(
 )> {
     let (mut settings, _) = cfg.oma_settings()?;
     // The exact replicates: their first-order continuation overstated SRIM's
-    // spreads up to fivefold on simulated records (the core's verification).
+    // spreads up to fivefold on simulated records (the core's verification),
+    // and 8-165x on the overpass simulated from the 20 Painter Street grounds
+    // (measured 2026-11-27, the data matrices' estimate; it would have taken
+    // identify from 0.42 to 0.28 s).
     settings.uncertainty = splinewatch_core::identification::oma::UncertaintyMethod::Jackknife;
     let result = splinewatch_core::identification::srim::identify_io(inputs, outputs, fs, &settings)
         .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
