@@ -115,10 +115,7 @@ impl InformationMatrix {
             ));
         }
         let channels: Vec<&[f64]> = outputs.iter().chain(inputs).copied().collect();
-        let n = oma::channel_length(&channels)?;
-        if let Some(bad) = channels.iter().position(|c| c.iter().any(|v| v.is_infinite())) {
-            return Err(OmaError::NonFinite { channel: bad });
-        }
+        let n = oma::sample_length(&channels)?;
         let batches = batches.max(1);
         let columns = (n + 1).saturating_sub(horizon);
         let batch_len = columns / batches;

@@ -194,9 +194,8 @@ fn tridiagonal_values(
 }
 
 /// The `k` largest eigenvalues of the tridiagonal (`d`, `e`), non-increasing,
-/// each bisected to `2ε‖T‖` on the count of eigenvalues below a shift (the
-/// negative pivots of `T − x I = L D Lᵀ`, Sylvester's law of inertia), as
-/// `dstebz` does: the absolute accuracy of QR's. The pivots' recurrence is a
+/// each bisected to `2ε‖T‖` on the count of eigenvalues below a shift
+/// ([`Sturm`]), as `dstebz` does: the absolute accuracy of QR's. The pivots' recurrence is a
 /// chain of divisions; [`BISECTION_LANES`] eigenvalues are bisected side by
 /// side so that their chains overlap (one at a time took longer than the
 /// QR of all `n`).
@@ -207,9 +206,7 @@ fn largest_by_bisection(d: &[f64], e: &[f64], k: usize) -> Vec<f64> {
     let low = (0..n).map(|i| d[i] - radius(i)).fold(f64::INFINITY, f64::min);
     let high = (0..n).map(|i| d[i] + radius(i)).fold(f64::NEG_INFINITY, f64::max);
     let tolerance = 2.0 * f64::EPSILON * low.abs().max(high.abs());
-    let squares: Vec<f64> = e.iter().map(|v| v * v).collect();
-    // A pivot is kept at least this far from zero (`dstebz`'s `pivmin`).
-    let pivot_floor = f64::MIN_POSITIVE * squares.iter().copied().fold(1.0, f64::max);
+    let sturm = Sturm::new(d, e);
     let (low, high) = (low - tolerance, high + tolerance);
     let halvings = if tolerance > 0.0 {
         ((high - low) / tolerance).log2().ceil().clamp(0.0, 2100.0) as usize
@@ -226,16 +223,7 @@ fn largest_by_bisection(d: &[f64], e: &[f64], k: usize) -> Vec<f64> {
         for _ in 0..halvings {
             let mut mid = [0.0; BISECTION_LANES];
             (0..BISECTION_LANES).for_each(|l| mid[l] = 0.5 * (lo[l] + hi[l]));
-            let mut below = [0usize; BISECTION_LANES];
-            let mut q = [1.0; BISECTION_LANES];
-            for i in 0..n {
-                let square = if i > 0 { squares[i - 1] } else { 0.0 };
-                for l in 0..BISECTION_LANES {
-                    let pivot = d[i] - mid[l] - square / q[l];
-                    q[l] = if pivot.abs() < pivot_floor { -pivot_floor } else { pivot };
-                    below[l] += usize::from(q[l] < 0.0);
-                }
-            }
+            let below = sturm.below(mid);
             for l in 0..BISECTION_LANES {
                 if below[l] > targets[l] {
                     hi[l] = mid[l];
@@ -249,19 +237,51 @@ fn largest_by_bisection(d: &[f64], e: &[f64], k: usize) -> Vec<f64> {
     values
 }
 
-/// How many eigenvalues of the tridiagonal (`d`, `e`) lie below `x`: the
-/// negative pivots of `T − x I = L D Lᵀ`.
+/// How many eigenvalues of the tridiagonal (`d`, `e`) lie below `x`.
 fn eigenvalues_below(d: &[f64], e: &[f64], x: f64) -> usize {
-    let pivot_floor = f64::MIN_POSITIVE * e.iter().map(|v| v * v).fold(1.0, f64::max);
-    let mut q = 1.0;
-    let mut below = 0;
-    for i in 0..d.len() {
-        let square = if i > 0 { e[i - 1] * e[i - 1] } else { 0.0 };
-        let pivot = d[i] - x - square / q;
-        q = if pivot.abs() < pivot_floor { -pivot_floor } else { pivot };
-        below += usize::from(q < 0.0);
+    Sturm::new(d, e).below([x])[0]
+}
+
+/// The Sturm count of a tridiagonal: the negative pivots of
+/// `T − x I = L D Lᵀ` (Sylvester's law of inertia), as `dstebz` forms them.
+struct Sturm<'a> {
+    d: &'a [f64],
+    /// `e_i²`.
+    squares: Vec<f64>,
+    /// A pivot is kept at least this far from zero (`dstebz`'s `pivmin`).
+    pivot_floor: f64,
+}
+
+impl<'a> Sturm<'a> {
+    fn new(d: &'a [f64], e: &[f64]) -> Self {
+        let squares: Vec<f64> = e.iter().map(|v| v * v).collect();
+        let pivot_floor = f64::MIN_POSITIVE * squares.iter().copied().fold(1.0, f64::max);
+        Self {
+            d,
+            squares,
+            pivot_floor,
+        }
     }
-    below
+
+    /// The eigenvalues below each of `shifts`, their recurrences side by
+    /// side (a chain of divisions each).
+    fn below<const L: usize>(&self, shifts: [f64; L]) -> [usize; L] {
+        let mut below = [0usize; L];
+        let mut q = [1.0; L];
+        for (i, &d) in self.d.iter().enumerate() {
+            let square = if i > 0 { self.squares[i - 1] } else { 0.0 };
+            for l in 0..L {
+                let pivot = d - shifts[l] - square / q[l];
+                q[l] = if pivot.abs() < self.pivot_floor {
+                    -self.pivot_floor
+                } else {
+                    pivot
+                };
+                below[l] += usize::from(q[l] < 0.0);
+            }
+        }
+        below
+    }
 }
 
 /// Eigenvalues bisected side by side (see [`largest_by_bisection`]).

@@ -56,11 +56,8 @@ impl OutputCorrelations {
         max_lag: usize,
         batches: usize,
     ) -> Result<Self, OmaError> {
-        let n = super::channel_length(channels)?;
+        let n = super::sample_length(channels)?;
         let l = channels.len();
-        if let Some(bad) = channels.iter().position(|c| c.iter().any(|v| v.is_infinite())) {
-            return Err(OmaError::NonFinite { channel: bad });
-        }
         let references: Vec<usize> = if references.is_empty() {
             (0..l).collect()
         } else {

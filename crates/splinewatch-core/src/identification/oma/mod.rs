@@ -122,6 +122,16 @@ pub(crate) fn channel_length(channels: &[&[f64]]) -> Result<usize, OmaError> {
     }
 }
 
+/// [`channel_length`], and no sample infinite (a NaN marks a missing one):
+/// the records the correlations and SRIM's data matrices are made of.
+pub(crate) fn sample_length(channels: &[&[f64]]) -> Result<usize, OmaError> {
+    let n = channel_length(channels)?;
+    match channels.iter().position(|c| c.iter().any(|v| v.is_infinite())) {
+        Some(bad) => Err(OmaError::NonFinite { channel: bad }),
+        None => Ok(n),
+    }
+}
+
 /// Settings of one identification (the `[oma]` config section).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
