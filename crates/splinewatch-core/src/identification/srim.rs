@@ -203,8 +203,10 @@ impl InformationMatrix {
     /// replicates differ by their data, not by which directions count as
     /// input, and each costs a Cholesky of `Vᵀ R_uu V` instead of an
     /// eigendecomposition of `R_uu` (of `Vᵀ R_uu V` when a replicate is not
-    /// positive on the whole range: on the 2023-05-21 Painter Street record
-    /// two of eight).
+    /// positive on the whole range: two of eight on the 2023-05-21 Painter
+    /// Street record with the block Toeplitz estimate of before; none on the
+    /// 20 records with the data matrices, whose products are positive
+    /// semi-definite, measured 2026-11-27).
     pub fn matrix(&self, left_out: Option<usize>) -> Result<Mat<f64>, OmaError> {
         let (r_yy, r_yu, r_uu) = self.blocks(left_out);
         if left_out.is_none() {
@@ -221,8 +223,8 @@ impl InformationMatrix {
         };
         let gram = range.transpose() * &r_uu * range;
         let Ok(llt) = gram.llt(faer::Side::Lower) else {
-            // The replicate lost a direction the record has (its `R_uu`, a
-            // block Toeplitz of estimated correlations, is not positive
+            // The replicate lost a direction the record has (the batch left
+            // out held its power, and `VᵀR_uuV` is singular to round-off
             // there): the record's range less those directions, by the
             // same rule as the record's (`V U_k`, `U_k` the eigenvectors of
             // `VᵀR_uuV` above `INPUT_RANGE` of its largest).
