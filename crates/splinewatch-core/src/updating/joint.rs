@@ -1,6 +1,9 @@
-//! FRF and modal residues fitted together: where a force is measured and a
-//! window's modes are also identified output-only, one update can fit both
-//! (`[updating] residues = "both"`).
+//! Residues of a measured response and modal residues fitted together:
+//! where a force is measured and a window's modes are also identified
+//! output-only, one update can fit both (`[updating] residues = "both"`,
+//! [`JointUpdateProblem`]); on an earthquake, the record's transmissibilities
+//! or spectra and the modes identified from it (`[events] residues =
+//! "both"`, [`JointTransmissibilityProblem`]).
 //!
 //! Each block is weighted by its own uncertainty, so that every residue is
 //! a standard normal variable when the model is right and the blocks add up
@@ -9,17 +12,24 @@
 //!   random error: the H1 estimator's complex variance
 //!   `(1 − γ²)/(γ² n_d) |H|²` (Bendat & Piersol, *Random Data*, §9.2,
 //!   the [`Weighting::H1Variance`] weighting) splits evenly between the two
-//!   parts, so the block is the H1-weighted residual times √2;
+//!   parts, so the block is the H1-weighted residual times √2; the same
+//!   holds for H1 transmissibilities. A record's spectra have no estimator
+//!   variance: their block is divided by the prediction-error standard
+//!   deviation `σ̂` of a fit of the spectra alone, the maximum-likelihood
+//!   estimate `‖r‖²/(m − n)` (Beck & Katafygiotis, "Updating models and
+//!   their uncertainties. I: Bayesian statistical framework", *J. Eng.
+//!   Mech.* 124(4), 1998), which the caller passes as the block's scale;
 //! - modal residues of [`crate::updating::modal_residual`], already divided
 //!   by the identification's standard deviations.
 //!
-//! The model is solved once per evaluation; the FRFs and the paired modes
-//! come from the same modal state. Pairs are redone at every evaluation and
-//! held within one Jacobian, as in [`super::ModalUpdateProblem`].
+//! The model is solved once per evaluation; the response and the paired
+//! modes come from the same modal state. Pairs are redone at every
+//! evaluation and held within one Jacobian, as in [`super::ModalUpdateProblem`].
 
 use super::frf_residual::{MeasuredSet, ModelPoint, UpdateProblem};
-use super::modal_residual::{ModePair, ObservedMode};
+use super::modal_residual::{ModalResidue, ModePair, ObservedMode};
 use super::solver::{self, Evaluated, ResidualModel};
+use super::transmissibility_residual::{self as transmissibility, TransmissibilityProblem, TransmissibilitySolution};
 use super::{IterationRecord, ModalUpdateProblem, Parameter, UpdateError, UpdateResult, UpdateSettings, Weighting};
 use crate::model::damping::DampingCurve;
 use crate::response::frf::{FrfEvaluation, FrfModel, ModalState};
@@ -131,20 +141,8 @@ impl<'a> JointUpdateProblem<'a> {
             return Err(UpdateError::NonFinite(p.to_vec()));
         }
         let frf_rows = frf.residual.len();
-        let mut residual: Vec<f64> = frf.residual.iter().map(|r| SQRT_2 * r).collect();
-        residual.extend_from_slice(&modal.residual);
         let n = self.frf.parameters().len();
-        let jac = if jacobian {
-            Mat::from_fn(residual.len(), n, |i, c| {
-                if i < frf_rows {
-                    SQRT_2 * frf.jacobian[(i, c)]
-                } else {
-                    modal.jacobian[(i - frf_rows, c)]
-                }
-            })
-        } else {
-            Mat::zeros(0, 0)
-        };
+        let (residual, jac) = stack_blocks(SQRT_2, (&frf.residual, &frf.jacobian), &modal, jacobian, n);
         Ok(Evaluated {
             residual,
             jacobian: jac,
@@ -176,18 +174,7 @@ impl<'a> JointUpdateProblem<'a> {
             lines_used: self.frf.line_frequencies().len(),
         };
         let (result, p, at) = solved.into_result(self.frf.parameters(), fit);
-        let chi_square = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
-        let (frf_block, modal_block) = at.residual.split_at(at.extra.frf_rows);
-        let blocks = [
-            BlockFit {
-                residues: frf_block.len(),
-                chi_square: chi_square(frf_block),
-            },
-            BlockFit {
-                residues: modal_block.len(),
-                chi_square: chi_square(modal_block),
-            },
-        ];
+        let blocks = block_fits(&at.residual, at.extra.frf_rows);
         let Extra { state, frfs, pairs, .. } = at.extra;
         let point = self.frf.point(&p, state, frfs)?;
         Ok(JointSolution {
@@ -242,5 +229,196 @@ impl ResidualModel for JointUpdateProblem<'_> {
     /// is reported per pair).
     fn relative_residual(&self, at: &Evaluated<Extra>) -> f64 {
         self.frf.relative_residuals(&at.extra.frfs.h).0
+    }
+}
+
+/// `[scale · r; r_modal]` and, when `jacobian`, `[scale · J; J_modal]`
+/// (`n` parameters).
+fn stack_blocks(
+    scale: f64,
+    (response, response_jacobian): (&[f64], &Mat<f64>),
+    modal: &ModalResidue,
+    jacobian: bool,
+    n: usize,
+) -> (Vec<f64>, Mat<f64>) {
+    let rows = response.len();
+    let mut residual: Vec<f64> = response.iter().map(|r| scale * r).collect();
+    residual.extend_from_slice(&modal.residual);
+    let jac = if jacobian {
+        Mat::from_fn(residual.len(), n, |i, c| {
+            if i < rows {
+                scale * response_jacobian[(i, c)]
+            } else {
+                modal.jacobian[(i - rows, c)]
+            }
+        })
+    } else {
+        Mat::zeros(0, 0)
+    };
+    (residual, jac)
+}
+
+/// Each block's size and chi-square, the response block the first `rows`.
+fn block_fits(residual: &[f64], rows: usize) -> [BlockFit; 2] {
+    let (response, modal) = residual.split_at(rows);
+    [response, modal].map(|r| BlockFit {
+        residues: r.len(),
+        chi_square: r.iter().map(|v| v * v).sum(),
+    })
+}
+
+/// An earthquake record's transmissibilities (or spectra) and the modes
+/// identified from it, fitted together.
+#[derive(Debug, Clone)]
+pub struct JointTransmissibilityProblem<'a> {
+    response: TransmissibilityProblem<'a>,
+    modal: ModalUpdateProblem<'a>,
+    /// The factor that makes the response block's residues standard normal.
+    scale: f64,
+}
+
+/// The response block's solution, the mode pairs and the blocks' fits.
+#[derive(Debug, Clone)]
+pub struct JointTransmissibilitySolution {
+    pub response: TransmissibilitySolution,
+    pub pairs: Vec<ModePair>,
+    /// The response block (`2 × lines × FRFs` rows) and the modal block.
+    pub blocks: [BlockFit; 2],
+}
+
+/// What a joint evaluation of a record keeps.
+#[derive(Debug, Clone)]
+pub struct RecordExtra {
+    response: transmissibility::Extra,
+    pairs: Vec<ModePair>,
+    rows: usize,
+}
+
+impl<'a> JointTransmissibilityProblem<'a> {
+    /// `response`'s residues times `scale` (√2 for H1-weighted
+    /// transmissibilities, `1/σ̂` for a record's spectra: see the module
+    /// doc) with the modal residues of `observed`, paired as
+    /// [`ModalUpdateProblem::new`] says.
+    pub fn new(
+        response: TransmissibilityProblem<'a>,
+        observed: &'a [ObservedMode],
+        pairing: (f64, f64),
+        scale: f64,
+    ) -> Result<Self, UpdateError> {
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(UpdateError::Data(format!(
+                "the response block's scale must be positive and finite, got {scale}"
+            )));
+        }
+        let modal = response.modal_problem(observed, pairing)?;
+        Ok(Self { response, modal, scale })
+    }
+
+    /// The stacked residues of the response evaluation `at` at `p` and the
+    /// modal residues of `pairs` (found at its state when `None`).
+    fn stack(
+        &self,
+        p: &[f64],
+        at: Evaluated<transmissibility::Extra>,
+        pairs: Option<Vec<ModePair>>,
+        jacobian: bool,
+    ) -> Result<Evaluated<RecordExtra>, UpdateError> {
+        let (_, damping) = self.modal.model_at(p)?;
+        let pairs = pairs.unwrap_or_else(|| self.modal.pairs_at(&at.extra.state));
+        let modal = self.modal.residue_at(&at.extra.state, &damping, &pairs, jacobian);
+        if modal.residual.iter().any(|r| !r.is_finite()) {
+            return Err(UpdateError::NonFinite(p.to_vec()));
+        }
+        let n = self.updated().len();
+        let (residual, jacobian) = stack_blocks(self.scale, (&at.residual, &at.jacobian), &modal, jacobian, n);
+        Ok(Evaluated {
+            residual,
+            jacobian,
+            extra: RecordExtra {
+                rows: at.residual.len(),
+                response: at.extra,
+                pairs,
+            },
+        })
+    }
+
+    fn updated(&self) -> &[Parameter] {
+        ResidualModel::parameters(&self.response)
+    }
+
+    /// The parameters updated (the response block's).
+    /// Runs the updating from `start` (the previous event's values); on a
+    /// truncated model whose parameters are springs and damping, on a Ritz
+    /// basis of `start` first, as [`TransmissibilityProblem::solve`] does.
+    pub fn solve(
+        &self,
+        start: &[f64],
+        observer: &mut dyn FnMut(&IterationRecord),
+    ) -> Result<JointTransmissibilitySolution, UpdateError> {
+        let solved = match self.response.reanalysed_at(start)? {
+            Some(reduced) => {
+                let coarse = JointTransmissibilityProblem {
+                    response: self.response.on_model(&reduced),
+                    modal: self.modal.on_model(&reduced),
+                    scale: self.scale,
+                };
+                solver::levenberg_marquardt_staged(&coarse, self, start, observer)?
+            }
+            None => solver::levenberg_marquardt(self, start, None, observer)?,
+        };
+        let (relative_residual, per_block) = self.response.fit_of(&solved.at.extra.response.h);
+        let fit = solver::FitMeasures {
+            relative_residual,
+            per_block,
+            lines_used: self.response.line_frequencies().len(),
+        };
+        let (result, _, at) = solved.into_result(self.updated(), fit);
+        let blocks = block_fits(&at.residual, at.extra.rows);
+        let RecordExtra { response, pairs, .. } = at.extra;
+        Ok(JointTransmissibilitySolution {
+            response: TransmissibilitySolution {
+                result,
+                state: response.state,
+                motion: response.motion,
+                transmissibilities: response.h,
+            },
+            pairs,
+            blocks,
+        })
+    }
+}
+
+impl ResidualModel for JointTransmissibilityProblem<'_> {
+    type Extra = RecordExtra;
+    type Previous = ();
+
+    fn parameters(&self) -> &[Parameter] {
+        self.updated()
+    }
+
+    fn settings(&self) -> &UpdateSettings {
+        ResidualModel::settings(&self.response)
+    }
+
+    fn first(&self, p: &[f64], _previous: Option<&()>) -> Result<(Evaluated<RecordExtra>, usize), UpdateError> {
+        Ok((self.stack(p, self.response.evaluate(p, true)?, None, true)?, 1))
+    }
+
+    fn residual(&self, p: &[f64]) -> Result<Evaluated<RecordExtra>, UpdateError> {
+        self.stack(p, self.response.evaluate(p, false)?, None, false)
+    }
+
+    fn with_jacobian(&self, p: &[f64], trial: Evaluated<RecordExtra>) -> Result<Evaluated<RecordExtra>, UpdateError> {
+        let RecordExtra { response, pairs, .. } = trial.extra;
+        let at = self
+            .response
+            .evaluate_motion(p, response.state, response.motion, true)?;
+        self.stack(p, at, Some(pairs), true)
+    }
+
+    /// The response block's unweighted relative residual (the modal
+    /// block's fit is reported per pair).
+    fn relative_residual(&self, at: &Evaluated<RecordExtra>) -> f64 {
+        self.response.fit_of(&at.extra.response.h).0
     }
 }

@@ -110,6 +110,14 @@ impl<'a> ModalUpdateProblem<'a> {
         Ok(reduced.reanalysis().is_some().then_some(reduced))
     }
 
+    /// The same problem on `model` (a Ritz basis of this one's).
+    pub(super) fn on_model<'b>(&self, model: &'b FrfModel) -> ModalUpdateProblem<'b>
+    where
+        'a: 'b,
+    {
+        ModalUpdateProblem { model, ..self.clone() }
+    }
+
     /// The identified modes paired with `state`'s ([`pair_modes`]).
     pub(super) fn pairs_at(&self, state: &ModalState) -> Vec<ModePair> {
         pair_modes(state, self.observed, self.min_mac, self.max_gap)
@@ -173,10 +181,7 @@ impl<'a> ModalUpdateProblem<'a> {
     ) -> Result<ModalSolution, UpdateError> {
         let solved = match self.reanalysed_at(start)? {
             Some(reduced) => {
-                let coarse = ModalUpdateProblem {
-                    model: &reduced,
-                    ..self.clone()
-                };
+                let coarse = self.on_model(&reduced);
                 solver::levenberg_marquardt_staged(&coarse, self, start, observer)?
             }
             None => solver::levenberg_marquardt(self, start, None, observer)?,

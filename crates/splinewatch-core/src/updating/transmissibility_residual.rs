@@ -26,10 +26,11 @@
 //!   response over the band (Parseval).
 
 use super::frf_residual::{parameter_column, relative_residuals, sqrt_weights, weighted_residues, MeasuredSet};
+use super::modal_residual::ObservedMode;
 use super::solver::{self, Evaluated, ResidualModel};
 use super::{
-    check_parameters, fields_at, model_at, reanalysed_springs, IterationRecord, Parameter, UpdateError, UpdateResult,
-    UpdateSettings,
+    check_parameters, fields_at, model_at, reanalysed_springs, IterationRecord, ModalUpdateProblem, Parameter,
+    UpdateError, UpdateResult, UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
 use crate::model::supports::SupportGroups;
@@ -84,9 +85,9 @@ pub struct TransmissibilitySolution {
 /// What an evaluation keeps.
 #[derive(Debug, Clone)]
 pub struct Extra {
-    state: ModalState,
-    motion: SupportMotion,
-    h: Vec<c64>,
+    pub(super) state: ModalState,
+    pub(super) motion: SupportMotion,
+    pub(super) h: Vec<c64>,
 }
 
 impl<'a> TransmissibilityProblem<'a> {
@@ -181,6 +182,38 @@ impl<'a> TransmissibilityProblem<'a> {
         &self.frequencies
     }
 
+    /// The same problem on `model` (a Ritz basis of this one's).
+    pub(super) fn on_model<'b>(&self, model: &'b FrfModel) -> TransmissibilityProblem<'b>
+    where
+        'a: 'b,
+    {
+        TransmissibilityProblem { model, ..self.clone() }
+    }
+
+    /// The modal residues of `observed` on this problem's model and
+    /// parameters, paired as [`ModalUpdateProblem::new`] says.
+    pub(super) fn modal_problem(
+        &self,
+        observed: &'a [ObservedMode],
+        pairing: (f64, f64),
+    ) -> Result<ModalUpdateProblem<'a>, UpdateError> {
+        ModalUpdateProblem::new(
+            self.model,
+            self.kappa.clone(),
+            self.damping.clone(),
+            self.parameters.clone(),
+            observed,
+            self.settings.clone(),
+            pairing,
+        )
+    }
+
+    /// The unweighted relative residual of the model values `h` on the
+    /// selected lines, over all and per measured FRF.
+    pub(super) fn fit_of(&self, h: &[c64]) -> (f64, Vec<f64>) {
+        relative_residuals(self.measured, &self.lines, h)
+    }
+
     /// The model pairs' values `per_pair` (`[pair * n_lines + line]`) made
     /// into the measured FRFs' layout: summed, or weighted by the inputs'
     /// spectra ([`Combination`]).
@@ -208,7 +241,7 @@ impl<'a> TransmissibilityProblem<'a> {
 
     /// The residual (and Jacobian) at `p`: the modal state and the support
     /// motion from one eigen-solve ([`SupportMotion::with_state`]).
-    fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
+    pub(super) fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
         let (kappa, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
         let theta = fields_at(&self.parameters, self.model.field_coefficients(), p);
         let (state, motion) = SupportMotion::with_state(
@@ -223,7 +256,7 @@ impl<'a> TransmissibilityProblem<'a> {
     }
 
     /// The residual (and Jacobian) at `p` from its modal state and motion.
-    fn evaluate_motion(
+    pub(super) fn evaluate_motion(
         &self,
         p: &[f64],
         state: ModalState,
@@ -294,15 +327,12 @@ impl<'a> TransmissibilityProblem<'a> {
     ) -> Result<TransmissibilitySolution, UpdateError> {
         let solved = match self.reanalysed_at(start)? {
             Some(reduced) => {
-                let coarse = TransmissibilityProblem {
-                    model: &reduced,
-                    ..self.clone()
-                };
+                let coarse = self.on_model(&reduced);
                 solver::levenberg_marquardt_staged(&coarse, self, start, observer)?
             }
             None => solver::levenberg_marquardt(self, start, None, observer)?,
         };
-        let (relative_residual, per_block) = relative_residuals(self.measured, &self.lines, &solved.at.extra.h);
+        let (relative_residual, per_block) = self.fit_of(&solved.at.extra.h);
         let fit = solver::FitMeasures {
             relative_residual,
             per_block,
@@ -321,7 +351,7 @@ impl<'a> TransmissibilityProblem<'a> {
     /// parameters move, when it is truncated, no parameter is a stiffness
     /// field (those change the deck everywhere) and the basis is much
     /// smaller than the model; `None` otherwise.
-    fn reanalysed_at(&self, start: &[f64]) -> Result<Option<FrfModel>, UpdateError> {
+    pub(super) fn reanalysed_at(&self, start: &[f64]) -> Result<Option<FrfModel>, UpdateError> {
         let Some(varied) = reanalysed_springs(&self.parameters, self.model) else {
             return Ok(None);
         };
@@ -373,6 +403,6 @@ impl ResidualModel for TransmissibilityProblem<'_> {
     }
 
     fn relative_residual(&self, at: &Evaluated<Extra>) -> f64 {
-        relative_residuals(self.measured, &self.lines, &at.extra.h).0
+        self.fit_of(&at.extra.h).0
     }
 }
