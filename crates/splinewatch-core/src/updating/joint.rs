@@ -342,11 +342,11 @@ impl<'a> JointTransmissibilityProblem<'a> {
         })
     }
 
+    /// The parameters updated (the response block's).
     fn updated(&self) -> &[Parameter] {
         ResidualModel::parameters(&self.response)
     }
 
-    /// The parameters updated (the response block's).
     /// Runs the updating from `start` (the previous event's values); on a
     /// truncated model whose parameters are springs and damping, on a Ritz
     /// basis of `start` first, as [`TransmissibilityProblem::solve`] does.
