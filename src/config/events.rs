@@ -1,7 +1,7 @@
 //! `[events]`: earthquake records processed one event at a time (issue 45):
 //! `splinewatch events` and the daemon on a triggered logger.
 
-use super::{err, ConfigError};
+use super::{err, ConfigError, Residues};
 use serde::{Deserialize, Serialize};
 
 /// `[events]`: how events are told apart and judged.
@@ -35,6 +35,14 @@ pub struct EventsConfig {
     /// `studies::event_update`.
     #[serde(default)]
     pub inputs: EventInputs,
+    /// What an event's update fits: `"frf"` (default; the seed's FRF
+    /// residues on the record's transmissibilities or spectra, as `inputs`
+    /// says), `"modes"` (the modes identified from the record, in their
+    /// std) or `"both"` (each block in its own std: `[updating] residues`'
+    /// values, with this key of its own because `[updating] residues`
+    /// follows a force sensor an earthquake record has not).
+    #[serde(default = "default_residues")]
+    pub residues: Residues,
     /// The model an event is forecast by: `"trend"` (default; per updated
     /// parameter, what the earlier events expect at this event's ground
     /// peak: the verdict's line of log10 value against log10 peak once
@@ -72,9 +80,14 @@ impl Default for EventsConfig {
             false_alarm_rate: default_false_alarm_rate(),
             outputs: Vec::new(),
             inputs: EventInputs::default(),
+            residues: default_residues(),
             forecast: EventForecast::default(),
         }
     }
+}
+
+fn default_residues() -> Residues {
+    Residues::Frf
 }
 
 fn default_gap_seconds() -> f64 {

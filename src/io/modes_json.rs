@@ -57,6 +57,16 @@ pub struct ShapeEntry {
 }
 
 impl ModesFile {
+    /// A file of `modes` alone.
+    pub fn of(modes: Vec<ModeEntry>) -> Self {
+        Self {
+            modes,
+            start: None,
+            duration_s: None,
+            fs_hz: None,
+        }
+    }
+
     /// Reads and checks a modes file: finite positive frequencies, damping
     /// in (−1, 1), finite shapes with at least one sensor.
     pub fn read(path: &Path) -> Result<Self> {

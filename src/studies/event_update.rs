@@ -19,17 +19,34 @@
 //! says: a minute-long record gives some fourteen 8-s segments, and each
 //! input costs one. The lines are `[updating] band` (default: `[frf]
 //! band`), decimated and excluded as `[updating]` says.
+//!
+//! `[events] residues` says what is fitted: `"frf"` (default) the above;
+//! `"modes"` the modes identified from the record (SRIM), in their std, as
+//! `update --modes` does; `"both"` the above and the modes together, each in
+//! its own std ([`splinewatch_core::updating::joint`]): H1 transmissibilities
+//! in their variance, a record's spectra divided by the residual std of a
+//! fit of the spectra alone (run first; the joint fit starts where it
+//! ends). An event whose identification found no mode is fitted on its
+//! record alone under `"both"` and not updated under `"modes"`.
 
 use super::ground_motion::GroundParts;
 use super::parameters::values_by_name;
-use crate::config::{Config, EventInputs, GroundInputPlan};
+use crate::config::{Config, EventInputs, GroundInputPlan, Residues};
 use anyhow::{anyhow, bail, Context, Result};
+use serde::Serialize;
 use splinewatch_core::c64;
 use splinewatch_core::identification::transmissibility;
-use splinewatch_core::response::frf::Quantity;
+use splinewatch_core::response::frf::{ModalState, Quantity};
+use splinewatch_core::response::support_motion::SupportMotion;
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet};
-use splinewatch_core::updating::transmissibility_residual::{Combination, TransmissibilityProblem};
-use splinewatch_core::updating::{base_values, IterationRecord, UpdateResult, UpdateSettings, Weighting};
+use splinewatch_core::updating::joint::JointTransmissibilityProblem;
+use splinewatch_core::updating::modal_residual::{ModePair, ObservedMode};
+use splinewatch_core::updating::transmissibility_residual::{
+    Combination, TransmissibilityProblem, TransmissibilitySolution,
+};
+use splinewatch_core::updating::{
+    base_values, IterationRecord, ModalUpdateProblem, UpdateResult, UpdateSettings, Weighting,
+};
 
 /// What an update on one event gives.
 pub struct EventUpdate {
@@ -40,6 +57,20 @@ pub struct EventUpdate {
     pub dominant_hz: Option<f64>,
     /// Ground inputs combined into one (names joined by `+`).
     pub combined: Vec<String>,
+    /// The identified modes fitted (`[events] residues` `"modes"` or
+    /// `"both"`) with the model modes they paired with at the solution.
+    pub pairs: Vec<PairedMode>,
+    /// Model evaluations of every stage (a record's spectra fitted with
+    /// modes: the spectra alone first, for their `σ̂`).
+    pub evaluations: usize,
+}
+
+/// An identified mode the update fitted and the model's it paired with.
+#[derive(Debug, Clone, Serialize)]
+pub struct PairedMode {
+    pub identified_hz: f64,
+    pub model_hz: f64,
+    pub mac: f64,
 }
 
 /// One record's ground inputs and deck outputs, sampled at `fs`.
@@ -51,6 +82,8 @@ pub struct EventSignals<'a> {
     pub deck: &'a [usize],
     pub outputs: &'a [Vec<f64>],
     pub fs: f64,
+    /// The modes identified from the record (on the config's sensors).
+    pub modes: &'a [ObservedMode],
 }
 
 /// The measured data of one record and how the model makes them.
@@ -65,7 +98,7 @@ struct Measured {
 
 /// Updates the config's parameters on one record, started from `start`
 /// (named values of the previous event's update; the config's values for
-/// the others).
+/// the others), fitting what `[events] residues` says.
 pub fn update_on_event(
     config: &Config,
     parts: &GroundParts,
@@ -76,14 +109,7 @@ pub fn update_on_event(
     if signals.deck.is_empty() || signals.inputs.is_empty() {
         bail!("no deck channel or no ground input to update on");
     }
-    let GroundParts {
-        setup,
-        shell,
-        groups,
-        parameters,
-        ..
-    } = parts;
-    let parameters = parameters.clone();
+    let GroundParts { setup, parameters, .. } = parts;
     if parameters.is_empty() {
         bail!("no parameter has update = true: nothing to update");
     }
@@ -92,34 +118,133 @@ pub fn update_on_event(
         let [lo, hi] = config.frf.band;
         settings.lines.band = Some((lo, hi));
     }
+    let theta0 = setup.model.field_coefficients().to_vec();
+    let base = base_values(parameters, &setup.kappa, &theta0, &setup.damping);
+    let start = values_by_name(parameters, &base, start, "start parameter")?;
+    let pairing = (config.updating.min_mac, config.updating.max_frequency_gap);
+    let residues = config.events().residues;
+    if residues == Residues::Modes {
+        return fit_modes(parts, signals, settings, &start, pairing, progress);
+    }
     let measured = match config.events().inputs {
         EventInputs::Spectra => record_spectra(signals)?,
         EventInputs::Combined | EventInputs::Separate => transmissibilities(config, signals)?,
     };
     settings.weighting = measured.weighting;
-    let theta0 = setup.model.field_coefficients().to_vec();
-    let base = base_values(&parameters, &setup.kappa, &theta0, &setup.damping);
-    let start = values_by_name(&parameters, &base, start, "start parameter")?;
     let problem = TransmissibilityProblem::new(
-        (&setup.model, shell, groups),
+        (&setup.model, &parts.shell, &parts.groups),
         measured.plan.iter().map(|p| p.input).collect(),
-        measured.combination,
+        measured.combination.clone(),
         setup.kappa.clone(),
         setup.damping.clone(),
-        parameters,
+        parameters.clone(),
         &measured.set,
         settings,
     )
     .context("updating on the record")?;
-    let solution = problem.solve(&start, progress).context("updating on the record")?;
     let band = problem.line_frequencies();
-    let (lo, hi) = (band[0], band[band.len() - 1]);
-    let (state, motion) = (&solution.state, &solution.motion);
-    let dominant_hz = (0..state.modes.len())
+    let band = (band[0], band[band.len() - 1]);
+    let (solution, pairs, evaluations) = if residues == Residues::Both && !signals.modes.is_empty() {
+        fit_record_and_modes(problem, &measured, signals.modes, pairing, &start, progress)?
+    } else {
+        let solution = problem.solve(&start, progress).context("updating on the record")?;
+        let evaluations = solution.result.evaluations;
+        (solution, Vec::new(), evaluations)
+    };
+    let dominant_hz = dominant_mode(&solution.state, &solution.motion, signals.deck, band);
+    Ok(EventUpdate {
+        pairs: paired_modes(&solution.state, signals.modes, &pairs),
+        result: solution.result,
+        dominant_hz,
+        combined: measured.combined,
+        evaluations,
+    })
+}
+
+/// `"both"`: the record's transmissibilities (×√2, their H1 std) or spectra
+/// (÷ `σ̂` of a fit of the spectra alone, which runs first and starts the
+/// joint fit) with the identified modes ([`JointTransmissibilityProblem`]).
+fn fit_record_and_modes(
+    problem: TransmissibilityProblem<'_>,
+    measured: &Measured,
+    modes: &[ObservedMode],
+    pairing: (f64, f64),
+    start: &[f64],
+    progress: &mut dyn FnMut(&IterationRecord),
+) -> Result<(TransmissibilitySolution, Vec<ModePair>, usize)> {
+    let (scale, from, first) = match measured.weighting {
+        Weighting::H1Variance => (std::f64::consts::SQRT_2, start.to_vec(), 0),
+        _ => {
+            let alone = problem.solve(start, progress).context("updating on the record")?;
+            let sigma = alone.result.residual_variance.sqrt();
+            let from = alone.result.parameters.iter().map(|p| p.value).collect();
+            (1.0 / sigma, from, alone.result.evaluations)
+        }
+    };
+    let joint = JointTransmissibilityProblem::new(problem, modes, pairing, scale)
+        .context("updating on the record and its modes")?;
+    let solved = joint
+        .solve(&from, progress)
+        .context("updating on the record and its modes")?;
+    let evaluations = first + solved.response.result.evaluations;
+    Ok((solved.response, solved.pairs, evaluations))
+}
+
+/// `"modes"`: the identified modes alone ([`ModalUpdateProblem`]); the
+/// support motion at the solution gives the dominant mode.
+fn fit_modes(
+    parts: &GroundParts,
+    signals: &EventSignals<'_>,
+    settings: UpdateSettings,
+    start: &[f64],
+    pairing: (f64, f64),
+    progress: &mut dyn FnMut(&IterationRecord),
+) -> Result<EventUpdate> {
+    if signals.modes.is_empty() {
+        bail!("no identified mode to fit ([events] residues = \"modes\")");
+    }
+    let band = settings.lines.band.unwrap_or((0.0, f64::INFINITY));
+    let setup = &parts.setup;
+    let problem = ModalUpdateProblem::new(
+        &setup.model,
+        setup.kappa.clone(),
+        setup.damping.clone(),
+        parts.parameters.clone(),
+        signals.modes,
+        settings,
+        pairing,
+    )
+    .context("updating on the record's modes")?;
+    let solution = problem
+        .solve(start, progress)
+        .context("updating on the record's modes")?;
+    let p: Vec<f64> = solution.result.parameters.iter().map(|e| e.value).collect();
+    let (kappa, damping) = problem.model_at(&p)?;
+    let inputs: Vec<_> = signals.plan.iter().map(|p| p.input).collect();
+    let (state, motion) = SupportMotion::with_state(
+        &setup.model,
+        &parts.shell,
+        &parts.groups,
+        (&kappa, &problem.fields_at(&p), &damping),
+        &inputs,
+    )
+    .map_err(|e| anyhow!("support motion at the updated model: {e}"))?;
+    Ok(EventUpdate {
+        pairs: paired_modes(&state, signals.modes, &solution.pairs),
+        dominant_hz: dominant_mode(&state, &motion, signals.deck, band),
+        evaluations: solution.result.evaluations,
+        result: solution.result,
+        combined: Vec::new(),
+    })
+}
+
+/// The model's dominant mode in `(lo, hi)` Hz over the sensors `deck`
+/// ([`EventUpdate::dominant_hz`]).
+fn dominant_mode(state: &ModalState, motion: &SupportMotion, deck: &[usize], (lo, hi): (f64, f64)) -> Option<f64> {
+    (0..state.modes.len())
         .filter(|&i| (lo..=hi).contains(&state.modes.frequency_hz(i)) && state.zeta[i] > 0.0)
         .map(|i| {
-            let share: f64 = signals
-                .deck
+            let share: f64 = deck
                 .iter()
                 .flat_map(|&o| {
                     (0..motion.inputs().len()).map(move |c| (state.amplitude(o, i) * motion.participation(i, c)).abs())
@@ -128,12 +253,18 @@ pub fn update_on_event(
             (i, share / state.zeta[i])
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(i, _)| state.modes.frequency_hz(i));
-    Ok(EventUpdate {
-        result: solution.result,
-        dominant_hz,
-        combined: measured.combined,
-    })
+        .map(|(i, _)| state.modes.frequency_hz(i))
+}
+
+fn paired_modes(state: &ModalState, modes: &[ObservedMode], pairs: &[ModePair]) -> Vec<PairedMode> {
+    pairs
+        .iter()
+        .map(|p| PairedMode {
+            identified_hz: modes[p.observed].frequency_hz,
+            model_hz: state.modes.frequency_hz(p.model),
+            mac: p.mac,
+        })
+        .collect()
 }
 
 /// `X(f_k)`, `k ≥ 1`, of every series: the DFT of the whole record, its mean

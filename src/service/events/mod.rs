@@ -15,13 +15,13 @@
 pub mod burst;
 
 use super::records::{align_event, identify_io, recorded, Event};
-use crate::config::{ground_sensors, ground_signals, Config, EventForecast, GroundInputPlan};
-use crate::io::modes_json::ModeEntry;
+use crate::config::{ground_sensors, ground_signals, Config, EventForecast, GroundInputPlan, Residues};
+use crate::io::modes_json::{ModeEntry, ModesFile};
 use crate::io::monitoring_json::{NamedValue, StatusMessage};
 use crate::io::recording::RecordedBlock;
 use crate::io::wire::format_timestamp;
 use crate::pipeline::oma::OmaReport;
-use crate::studies::event_update::{update_on_event, EventSignals};
+use crate::studies::event_update::{update_on_event, EventSignals, PairedMode};
 use crate::studies::ground_motion::{GroundModel, GroundParts};
 use crate::studies::predict::{predict as predict_event, PredictionReport};
 use anyhow::{bail, Context, Result};
@@ -103,6 +103,10 @@ pub struct UpdateLine {
     /// The Bates–Watts relative offset at the solution.
     pub relative_offset: Option<f64>,
     pub combined_inputs: Vec<String>,
+    /// What the update fitted (`[events] residues`).
+    pub residues: &'static str,
+    /// The identified modes it fitted, with the model's they paired with.
+    pub paired_modes: Vec<PairedMode>,
 }
 
 /// The verdict: `state` ("insufficient history", "normal", "alarm"), the
@@ -433,16 +437,31 @@ fn run_chain(
             .flat_map(|&i| channel(i))
             .fold(0.0f64, |a, v| a.max(v.abs())),
     );
+    // The update needs the modes when it fits them (`[events] residues`);
+    // otherwise the identification is taken after it, so that one running
+    // on another thread overlaps the forecast and the update.
+    let fits_modes = cfg.events().residues != Residues::Frf;
+    if fits_modes {
+        take_identification(identified, line)?;
+    }
     let updated = forecast_and_update(cfg, (event, plan), chain, line, pga);
-    // A record whose identification finds no mode is still forecast and
-    // updated (neither needs modes): said first in `notes`.
+    if !fits_modes {
+        take_identification(identified, line)?;
+    }
+    updated?;
+    judge_event(cfg, chain, line, pga);
+    Ok(())
+}
+
+/// The event's modes into `line`; a record whose identification finds no
+/// mode is still forecast and updated (on its record alone): said first in
+/// `notes`.
+fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>, line: &mut EventLine) -> Result<()> {
     match identified.take().and_then(|identify| identify()) {
         Some(Ok(modes)) => line.modes = modes,
         Some(Err(e)) => line.notes.insert(0, e),
         None => bail!("the event was not read"),
     }
-    updated?;
-    judge_event(cfg, chain, line, pga);
     Ok(())
 }
 
@@ -505,12 +524,17 @@ fn update_event(
         .filter(|&i| fitted(cfg, &cfg.sensors[i].name))
         .collect();
     let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
+    let names: Vec<String> = cfg.sensors.iter().map(|s| s.name.clone()).collect();
+    let modes = ModesFile::of(line.modes.clone())
+        .to_observed(&names)
+        .context("the identified modes")?;
     let record = EventSignals {
         plan,
         inputs: &signals,
         deck: &fitted,
         outputs: &deck_series,
         fs: event.fs,
+        modes: &modes,
     };
     let parts = chain.parts(cfg)?;
     let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |it| {
@@ -531,9 +555,11 @@ fn update_event(
         iterations: updated.result.iterations.len().saturating_sub(1),
         converged: updated.result.converged,
         stop_reason: updated.result.stop_reason,
-        evaluations: updated.result.evaluations,
+        evaluations: updated.evaluations,
         relative_offset: updated.result.relative_offset,
         combined_inputs: updated.combined,
+        residues: cfg.events().residues.as_str(),
+        paired_modes: updated.pairs,
     });
     line.parameters = updated.result.parameters.clone();
     chain.parameters = line
