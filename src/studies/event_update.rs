@@ -45,7 +45,7 @@ use splinewatch_core::updating::transmissibility_residual::{
     Combination, TransmissibilityProblem, TransmissibilitySolution,
 };
 use splinewatch_core::updating::{
-    base_values, IterationRecord, ModalUpdateProblem, UpdateResult, UpdateSettings, Weighting,
+    base_values, IterationRecord, ModalUpdateProblem, UpdateError, UpdateResult, UpdateSettings, Weighting,
 };
 
 /// What an update on one event gives.
@@ -215,9 +215,22 @@ fn fit_modes(
         pairing,
     )
     .context("updating on the record's modes")?;
-    let solution = problem
-        .solve(start, progress)
-        .context("updating on the record's modes")?;
+    let solution = problem.solve(start, progress).map_err(|e| match e {
+        UpdateError::Underdetermined { residuals: 0, .. } => anyhow!(
+            "none of the {} identified modes ({} Hz) pairs with a model mode (MAC ≥ {} within {} % in frequency): \
+             nothing to fit ([events] residues = \"modes\")",
+            signals.modes.len(),
+            signals
+                .modes
+                .iter()
+                .map(|m| format!("{:.2}", m.frequency_hz))
+                .collect::<Vec<_>>()
+                .join(", "),
+            pairing.0,
+            100.0 * pairing.1
+        ),
+        e => anyhow::Error::new(e).context("updating on the record's modes"),
+    })?;
     let p: Vec<f64> = solution.result.parameters.iter().map(|e| e.value).collect();
     let (kappa, damping) = problem.model_at(&p)?;
     let inputs: Vec<_> = signals.plan.iter().map(|p| p.input).collect();

@@ -573,3 +573,46 @@ fn issue_45_an_event_update_fits_the_identified_modes_with_or_without_the_record
         }
     }
 }
+
+/// On the real 2012 record, SRIM's modes (3.49 and 4.82 Hz, the deck's
+/// vertical modes: their shapes lie on the vertical channels) pair with no
+/// mode of the bundled model, whose first vertical mode is at 2.35 Hz (the
+/// guide, "Earthquake by earthquake"): `"both"` fits the record alone and
+/// says so in `notes`; `"modes"` has nothing to fit and says why, naming
+/// the modes and the pairing rule.
+#[test]
+fn issue_45_identified_modes_that_pair_with_no_model_mode_are_said_so() {
+    let dir = fresh_dir("events-unpaired");
+    let outputs = "outputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
+    let text = std::fs::read_to_string(CONFIG).unwrap();
+    let mut said = Vec::new();
+    for residues in ["both", "modes"] {
+        let config = dir.join(format!("{residues}.toml"));
+        std::fs::write(
+            &config,
+            text.replace(outputs, &format!("{outputs}residues = \"{residues}\"\n")),
+        )
+        .unwrap();
+        let o = splinewatch(&[
+            "events",
+            "--config",
+            config.to_str().unwrap(),
+            "--json",
+            &record("RioDell_14Sep2012_71842255_ce89324p.zip"),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let line: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).unwrap();
+        assert_eq!(line["modes"].as_array().unwrap().len(), 2, "{}", line["modes"]);
+        said.push(line);
+    }
+    let notes = said[0]["notes"].to_string();
+    assert!(said[0]["skipped"].is_null(), "{}", said[0]["skipped"]);
+    assert!(notes.contains("none of the 2 identified modes paired"), "{notes}");
+    assert!(said[0]["update"]["paired_modes"].as_array().unwrap().is_empty());
+    let reason = said[1]["skipped"].as_str().unwrap();
+    assert!(
+        reason
+            .contains("none of the 2 identified modes (3.49, 4.82 Hz) pairs with a model mode (MAC ≥ 0.8 within 10 %"),
+        "{reason}"
+    );
+}

@@ -549,6 +549,15 @@ fn update_event(
             "update iteration"
         )
     })?;
+    if cfg.events().residues == Residues::Both && !modes.is_empty() && updated.pairs.is_empty() {
+        line.notes.push(format!(
+            "none of the {} identified modes paired with a model mode (MAC ≥ {} within {} % in frequency): \
+             the update fitted the record alone",
+            modes.len(),
+            cfg.updating.min_mac,
+            100.0 * cfg.updating.max_frequency_gap
+        ));
+    }
     line.update = Some(UpdateLine {
         model_mode_hz: updated.dominant_hz,
         relative_residual: updated.result.relative_residual,
