@@ -40,7 +40,7 @@ use splinewatch_core::response::frf::{ModalState, Quantity};
 use splinewatch_core::response::support_motion::SupportMotion;
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet};
 use splinewatch_core::updating::joint::JointTransmissibilityProblem;
-use splinewatch_core::updating::modal_residual::{ModePair, ObservedMode};
+use splinewatch_core::updating::modal_residual::{pair_modes, ModePair, ObservedMode};
 use splinewatch_core::updating::transmissibility_residual::{
     Combination, TransmissibilityProblem, TransmissibilitySolution,
 };
@@ -163,7 +163,8 @@ pub fn update_on_event(
 
 /// `"both"`: the record's transmissibilities (×√2, their H1 std) or spectra
 /// (÷ `σ̂` of a fit of the spectra alone, which runs first and starts the
-/// joint fit) with the identified modes ([`JointTransmissibilityProblem`]).
+/// joint fit; where no identified mode pairs at its end, its answer is
+/// returned) with the identified modes ([`JointTransmissibilityProblem`]).
 fn fit_record_and_modes(
     problem: TransmissibilityProblem<'_>,
     measured: &Measured,
@@ -176,6 +177,13 @@ fn fit_record_and_modes(
         Weighting::H1Variance => (std::f64::consts::SQRT_2, start.to_vec(), 0),
         _ => {
             let alone = problem.solve(start, progress).context("updating on the record")?;
+            // No identified mode pairs where the record alone leads: the
+            // joint fit would start with an empty modal block, and its
+            // answer is the record's.
+            if pair_modes(&alone.state, modes, pairing.0, pairing.1).is_empty() {
+                let evaluations = alone.result.evaluations;
+                return Ok((alone, Vec::new(), evaluations));
+            }
             let sigma = alone.result.residual_variance.sqrt();
             let from = alone.result.parameters.iter().map(|p| p.value).collect();
             (1.0 / sigma, from, alone.result.evaluations)
