@@ -18,9 +18,14 @@ pub struct OmaConfig {
     pub window_seconds: Option<f64>,
     /// Hop between window starts (s); default: the window (no overlap).
     pub window_hop_seconds: Option<f64>,
+    /// Horizon: block rows of the Hankel (SSI-cov) or data (SRIM) matrices,
+    /// in samples; the orders computed are capped at the size it gives.
     pub block_rows: usize,
+    /// Lowest model order of the stabilisation diagram.
     pub min_order: usize,
+    /// Highest model order of the stabilisation diagram.
     pub max_order: usize,
+    /// Step between the orders computed.
     pub order_step: usize,
     /// Band of the reported modes (Hz); default: `frf.band`.
     pub band: Option<[f64; 2]>,

@@ -6,6 +6,7 @@
 
 use super::Config;
 use schemars::JsonSchema;
+use splinewatch_core::identification::oma::{ClusterCriteria, StabilityCriteria};
 
 /// The configuration's JSON Schema (draft 2020-12), pretty-printed.
 pub fn config_schema() -> String {
@@ -37,8 +38,12 @@ pub(super) struct OrthotropicParametersDef {
     #[serde(default)]
     angle_deg: f64,
     /// Transverse shear correction factor (default 5/6).
-    #[serde(default)]
+    #[serde(default = "shear_correction")]
     shear_correction: f64,
+}
+
+fn shear_correction() -> f64 {
+    5.0 / 6.0
 }
 
 /// `[oma.stability]`: when a pole is stable and physical.
@@ -48,23 +53,46 @@ pub(super) struct OrthotropicParametersDef {
 #[allow(dead_code)]
 pub(super) struct StabilityCriteriaDef {
     /// Number of consecutive lower orders a pole must recur at.
-    #[serde(default)]
+    #[serde(default = "stability_level")]
     level: usize,
     /// Relative frequency tolerance between orders.
-    #[serde(default)]
+    #[serde(default = "stability_frequency")]
     frequency: f64,
     /// Relative damping tolerance between orders.
-    #[serde(default)]
+    #[serde(default = "stability_damping")]
     damping: f64,
     /// `1 − MAC` tolerance between orders.
-    #[serde(default)]
+    #[serde(default = "stability_mac")]
     mac: f64,
     /// Largest plausible damping ratio.
-    #[serde(default)]
+    #[serde(default = "stability_max_damping")]
     max_damping: f64,
     /// Smallest modal phase collinearity of a structural mode.
-    #[serde(default)]
+    #[serde(default = "stability_min_mpc")]
     min_mpc: f64,
+}
+
+// The schema's defaults are the core's (one source).
+fn stability() -> StabilityCriteria {
+    StabilityCriteria::default()
+}
+fn stability_level() -> usize {
+    stability().level
+}
+fn stability_frequency() -> f64 {
+    stability().frequency
+}
+fn stability_damping() -> f64 {
+    stability().damping
+}
+fn stability_mac() -> f64 {
+    stability().mac
+}
+fn stability_max_damping() -> f64 {
+    stability().max_damping
+}
+fn stability_min_mpc() -> f64 {
+    stability().min_mpc
 }
 
 /// `[oma.clustering]`: how stable poles group into modes.
@@ -74,15 +102,22 @@ pub(super) struct StabilityCriteriaDef {
 #[allow(dead_code)]
 pub(super) struct ClusterCriteriaDef {
     /// Single-linkage threshold on `Δf/f + (1 − MAC)`.
-    #[serde(default)]
+    #[serde(default = "clustering_distance")]
     distance: f64,
     /// Fewest poles (distinct orders) of a physical mode, as a fraction of the orders computed.
-    #[serde(default)]
+    #[serde(default = "clustering_min_fraction")]
     min_fraction: f64,
     /// A jackknife replicate has found a mode when its nearest pole is within this distance of the record's
     /// (`Δf/f + 1 − MAC`); default: `distance`. Wider for SRIM on short earthquake records (0.1 on Painter Street).
     #[serde(default)]
     replicate_distance: Option<f64>,
+}
+
+fn clustering_distance() -> f64 {
+    ClusterCriteria::default().distance
+}
+fn clustering_min_fraction() -> f64 {
+    ClusterCriteria::default().min_fraction
 }
 
 /// How the replicates' poles are obtained.
