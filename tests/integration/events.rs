@@ -528,24 +528,8 @@ fn issue_45_an_event_update_fits_the_identified_modes_with_or_without_the_record
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let outputs = "outputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
-    let text = std::fs::read_to_string(CONFIG).unwrap();
     for residues in ["both", "modes"] {
-        let config = dir.join(format!("{residues}.toml"));
-        std::fs::write(
-            &config,
-            text.replace(outputs, &format!("{outputs}residues = \"{residues}\"\n")),
-        )
-        .unwrap();
-        let o = splinewatch(&[
-            "events",
-            "--config",
-            config.to_str().unwrap(),
-            "--json",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let line: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).unwrap();
+        let line = one_event_fitting(&dir, residues, out.to_str().unwrap());
         assert!(line["skipped"].is_null(), "{}", line["skipped"]);
         let update = &line["update"];
         assert_eq!(update["residues"], residues);
@@ -583,25 +567,9 @@ fn issue_45_an_event_update_fits_the_identified_modes_with_or_without_the_record
 #[test]
 fn issue_45_identified_modes_that_pair_with_no_model_mode_are_said_so() {
     let dir = fresh_dir("events-unpaired");
-    let outputs = "outputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
-    let text = std::fs::read_to_string(CONFIG).unwrap();
     let mut said = Vec::new();
     for residues in ["both", "modes"] {
-        let config = dir.join(format!("{residues}.toml"));
-        std::fs::write(
-            &config,
-            text.replace(outputs, &format!("{outputs}residues = \"{residues}\"\n")),
-        )
-        .unwrap();
-        let o = splinewatch(&[
-            "events",
-            "--config",
-            config.to_str().unwrap(),
-            "--json",
-            &record("RioDell_14Sep2012_71842255_ce89324p.zip"),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let line: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).unwrap();
+        let line = one_event_fitting(&dir, residues, &record("RioDell_14Sep2012_71842255_ce89324p.zip"));
         assert_eq!(line["modes"].as_array().unwrap().len(), 2, "{}", line["modes"]);
         said.push(line);
     }
@@ -615,4 +583,21 @@ fn issue_45_identified_modes_that_pair_with_no_model_mode_are_said_so() {
             .contains("none of the 2 identified modes (3.49, 4.82 Hz) pairs with a model mode (MAC ≥ 0.8 within 10 %"),
         "{reason}"
     );
+}
+
+/// `events --json` on the one event `input` with the bundled config's
+/// `[events] residues` set to `residues` (its config written in `dir`).
+fn one_event_fitting(dir: &Path, residues: &str, input: &str) -> serde_json::Value {
+    let outputs = "outputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
+    let text = std::fs::read_to_string(CONFIG).unwrap();
+    assert_eq!(text.matches(outputs).count(), 1, "the [events] outputs line");
+    let config = dir.join(format!("{residues}.toml"));
+    std::fs::write(
+        &config,
+        text.replace(outputs, &format!("{outputs}residues = \"{residues}\"\n")),
+    )
+    .unwrap();
+    let o = splinewatch(&["events", "--config", config.to_str().unwrap(), "--json", input]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).unwrap()
 }

@@ -439,6 +439,35 @@ fn record_spectra(d: &Deck, kappa: &[Vec<f64>], noise: f64, seed: u64) -> (Measu
     (MeasuredSet::new(Quantity::Accelerance, lines, frfs).unwrap(), spectra)
 }
 
+/// The paper's springs times `factor`.
+fn scaled_kappa(factor: f64) -> Vec<Vec<f64>> {
+    true_kappa()
+        .iter()
+        .map(|k| k.iter().map(|v| factor * v).collect())
+        .collect()
+}
+
+/// The eight springs updated on `d`'s record spectra `set` (inputs'
+/// spectra `spectra`), the others at `start`.
+fn spectra_problem<'a>(
+    d: &'a Deck,
+    set: &'a MeasuredSet,
+    spectra: Vec<Vec<c64>>,
+    start: &[Vec<f64>],
+) -> TransmissibilityProblem<'a> {
+    TransmissibilityProblem::new(
+        (&d.frf, &d.shell, &d.groups),
+        INPUTS.to_vec(),
+        Combination::Spectra(spectra),
+        start.to_vec(),
+        damping(),
+        spring_parameters(),
+        set,
+        UpdateSettings::default(),
+    )
+    .unwrap()
+}
+
 /// A record's spectra and its identified modes fitted together
 /// (`updating::joint`): the stacked residual and Jacobian are the spectra
 /// block's times the scale followed by the modal block (the modal residues
@@ -449,21 +478,8 @@ fn the_joint_record_residual_is_the_scaled_response_and_the_modes() {
     let d = deck();
     let (set, spectra) = record_spectra(&d, &true_kappa(), 0.01, 47);
     let modes = identified(&d, &true_kappa(), Some(48));
-    let start: Vec<Vec<f64>> = true_kappa()
-        .iter()
-        .map(|k| k.iter().map(|v| 1.2 * v).collect())
-        .collect();
-    let response = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
-        INPUTS.to_vec(),
-        Combination::Spectra(spectra),
-        start.clone(),
-        damping(),
-        spring_parameters(),
-        &set,
-        UpdateSettings::default(),
-    )
-    .unwrap();
+    let start = scaled_kappa(1.2);
+    let response = spectra_problem(&d, &set, spectra, &start);
     let modal = ModalUpdateProblem::new(
         &d.frf,
         start.clone(),
@@ -515,21 +531,8 @@ fn a_record_and_its_modes_together_give_the_springs_in_both_blocks_standard_devi
     let d = deck();
     let (set, spectra) = record_spectra(&d, &true_kappa(), 0.01, 49);
     let modes = identified(&d, &true_kappa(), Some(50));
-    let start: Vec<Vec<f64>> = true_kappa()
-        .iter()
-        .map(|k| k.iter().map(|v| 1.3 * v).collect())
-        .collect();
-    let response = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
-        INPUTS.to_vec(),
-        Combination::Spectra(spectra),
-        start.clone(),
-        damping(),
-        spring_parameters(),
-        &set,
-        UpdateSettings::default(),
-    )
-    .unwrap();
+    let start = scaled_kappa(1.3);
+    let response = spectra_problem(&d, &set, spectra, &start);
     let alone = response.solve(&start.concat(), &mut |_| {}).unwrap();
     let sigma = alone.result.residual_variance.sqrt();
     let from: Vec<f64> = alone.result.parameters.iter().map(|p| p.value).collect();
