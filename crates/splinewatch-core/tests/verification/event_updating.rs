@@ -245,55 +245,9 @@ fn inputs_that_name_nothing_are_refused() {
 #[test]
 fn the_record_spectra_of_two_grounds_give_the_springs() {
     let d = deck();
-    let lines = lines();
-    let nl = lines.len();
-    let noise = gaussian(2 * 2 * nl + 2 * 4 * nl, 46);
-    let spectra: Vec<Vec<c64>> = (0..2)
-        .map(|c| {
-            (0..nl)
-                .map(|l| c64::new(noise[2 * (c * nl + l)], noise[2 * (c * nl + l) + 1]))
-                .collect()
-        })
-        .collect();
-    let t = transmissibilities(&d, &true_kappa(), &[vec![0], vec![1]], &lines);
-    let mut k = 4 * nl;
-    let frfs: Vec<MeasuredFrf> = t
-        .iter()
-        .enumerate()
-        .map(|(output, per_input)| {
-            let values = (0..nl)
-                .map(|l| {
-                    let y = per_input[0][l] * spectra[0][l] + per_input[1][l] * spectra[1][l];
-                    let e = c64::new(noise[k], noise[k + 1]) * (0.01 * y.norm() / 2f64.sqrt());
-                    k += 2;
-                    y + e
-                })
-                .collect();
-            MeasuredFrf {
-                output,
-                input: 0,
-                values,
-                coherence: None,
-                n_averages: None,
-            }
-        })
-        .collect();
-    let set = MeasuredSet::new(Quantity::Accelerance, lines.clone(), frfs).unwrap();
-    let start_kappa: Vec<Vec<f64>> = true_kappa()
-        .iter()
-        .map(|k| k.iter().map(|v| 1.3 * v).collect())
-        .collect();
-    let problem = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
-        INPUTS.to_vec(),
-        Combination::Spectra(spectra),
-        start_kappa.clone(),
-        damping(),
-        spring_parameters(),
-        &set,
-        UpdateSettings::default(),
-    )
-    .unwrap();
+    let (set, spectra) = record_spectra(&d, &true_kappa(), 0.01, 46);
+    let start_kappa = scaled_kappa(1.3);
+    let problem = spectra_problem(&d, &set, spectra, &start_kappa);
     let solution = problem.solve(&start_kappa.concat(), &mut |_| {}).unwrap();
     for (p, truth) in solution.result.parameters.iter().zip(true_kappa().concat()) {
         let std = p.std.expect("a standard deviation");
