@@ -1,27 +1,36 @@
 #!/usr/bin/env bash
-# The overpass (config/painter-street.toml) simulated from every Painter Street
-# record's nine ground channels in DIR (the station zips of CSMIP station
-# 89324), 2 % noise, then `identify` on each simulation: per mode of the model
-# below 11 Hz, in how many records it is found within 1 %, the mean bias and
-# the worst error, the scatter of the estimates over the records and the RMS
-# of the standard deviations `identify` reports (issue 45's acceptance: modes
-# within 1 %, stds consistent with the scatter). Each record is a different
-# real earthquake (amplitude, duration, spectrum), so the scatter pools
-# records of unequal information.
+# The overpass (config/painter-street.toml, or $CONFIG) simulated from every
+# Painter Street record's nine ground channels in DIR (the station zips of
+# CSMIP station 89324), 2 % noise, then `identify` on each simulation: per
+# mode of the model below 11 Hz, in how many records it is found within 1 %,
+# the mean bias and the worst error, the scatter of the estimates over the
+# records and the RMS of the standard deviations `identify` reports (issue
+# 45's acceptance: modes within 1 %, stds consistent with the scatter). Each
+# record is a different real earthquake (amplitude, duration, spectrum), so
+# the scatter pools records of unequal information.
+# With ONE=<zip> SEEDS=N: one record's grounds and N noise seeds (1..N)
+# instead, the issue's "scatter over 50 noise seeds".
 # Usage: benches/srim_simulated_overpass.sh DIR [splinewatch binary] [SEED]
 set -euo pipefail
 dir="$1"
 bin="${2:-target/release/splinewatch}"
 seed="${3:-7}"
 out="$(mktemp -d)"
+config="${CONFIG:-config/painter-street.toml}"
 "$bin" modes --config config/painter-street.toml --json --count 12 > "$out/model.json" 2> /dev/null
-for zip in "$dir"/*.zip; do
-  name="$(basename "$zip" .zip)"
-  "$bin" simulate --config config/painter-street.toml --ground "$zip" --noise 0.02 --seed "$seed" \
+if [ -n "${ONE:-}" ]; then
+  runs=$(for s in $(seq 1 "${SEEDS:-50}"); do echo "$ONE $s"; done)
+else
+  runs=$(for zip in "$dir"/*.zip; do echo "$zip $seed"; done)
+fi
+while read -r zip s; do
+  name="$(basename "$zip" .zip)-$s"
+  "$bin" simulate --config config/painter-street.toml --ground "$zip" --noise 0.02 --seed "$s" \
     --out "$out/$name.mcap" > /dev/null 2>&1 || { echo "$name: simulate failed"; continue; }
-  "$bin" identify --config config/painter-street.toml "$out/$name.mcap" --json > "$out/$name.json" 2> /dev/null \
+  "$bin" identify --config "$config" "$out/$name.mcap" --json > "$out/$name.json" 2> /dev/null \
     || echo "$name: nothing identified"
-done
+  rm -f "$out/$name.mcap"
+done <<< "$runs"
 python3 - "$out" <<'PY'
 import glob, json, statistics, sys
 out = sys.argv[1]
