@@ -10,7 +10,7 @@
 //! missing ground channel, too short) is reported as skipped with its reason
 //! and the others go on.
 
-use crate::config::{load_config, Config, GroundInputPlan};
+use crate::config::{load_config, Config, EventAmplitude, GroundInputPlan};
 use crate::io::console::{errln, outln};
 use crate::io::wire::format_timestamp;
 use crate::outputs::notify::Notifier;
@@ -57,6 +57,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
         bail!("config: sensors: events need ground sensors ([[sensors]] with support = \"<group>\")");
     }
     let mut chain = Chain::resume(a.state.as_deref())?;
+    chain.check(&cfg)?;
     // The model once, for the records' ground plan and then the chain.
     let parts = chain.parts(&cfg)?;
     let mut loaded = load_inputs(&cfg, &parts.plan, &a.input);
@@ -68,17 +69,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
         .map(|p| ResultsWriter::create(p, &cfg.topic_prefix()))
         .transpose()?;
     let mut notifier = Notifier::for_config(&cfg).context("starting the notifier")?;
-    let mut rerun = a
-        .rerun_save
-        .as_ref()
-        .map(|path| {
-            let targets = crate::outputs::rerun::RerunTargets {
-                save: Some(path.clone()),
-                connect: None,
-            };
-            crate::outputs::rerun::RerunOutput::open_rotating(&cfg, &targets, false)
-        })
-        .transpose()?;
+    let mut rerun = a.rerun_save.as_ref().map(|path| open_rerun(&cfg, path)).transpose()?;
     if !a.json {
         outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tforecast_nrmse\tbaseline_nrmse\tverdict");
     }
@@ -116,7 +107,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
                 n.observe(&status, &serde_json::to_vec(&status)?);
             }
             if let Some(r) = rerun.as_mut() {
-                log_rerun(r, &line)?;
+                log_rerun(r, &line, cfg.events().amplitude)?;
             }
             print_line(&line, a.json)?;
             lines.push(line);
@@ -137,23 +128,33 @@ pub fn events(a: EventsArgs) -> Result<()> {
     }
     if let Some(dir) = &a.plot {
         let band = cfg.updating.band.unwrap_or(cfg.frf.band);
-        super::events_plot::frequency_vs_amplitude(&mode_points(&lines), band, dir)?;
+        let amplitude = cfg.events().amplitude;
+        super::events_plot::frequency_vs_amplitude(&mode_points(&lines, amplitude), band, amplitude, dir)?;
     }
     Ok(())
 }
 
+/// The Rerun recording `--rerun-save` writes.
+fn open_rerun(cfg: &Config, path: &Path) -> Result<crate::outputs::rerun::RerunOutput> {
+    let targets = crate::outputs::rerun::RerunTargets {
+        save: Some(path.to_path_buf()),
+        connect: None,
+    };
+    crate::outputs::rerun::RerunOutput::open_rotating(cfg, &targets, false)
+}
+
 /// Every identified mode of every used event, and the updated model's
 /// dominant mode (with no standard deviation).
-fn mode_points(lines: &[EventLine]) -> Vec<super::events_plot::ModePoint> {
+fn mode_points(lines: &[EventLine], kind: EventAmplitude) -> Vec<super::events_plot::ModePoint> {
     let mut points = Vec::new();
     for line in lines.iter().filter(|l| l.skipped.is_none()) {
-        let Some(pga) = line.pga_ground.filter(|p| *p > 0.0) else {
+        let Some(amplitude) = line.amplitude(kind).filter(|p| *p > 0.0) else {
             continue;
         };
         let alarmed = line.verdict.as_ref().is_some_and(|v| v.state == "alarm");
         for m in &line.modes {
             points.push(super::events_plot::ModePoint {
-                pga,
+                amplitude,
                 frequency_hz: m.frequency_hz,
                 std_hz: m.frequency_std_hz.unwrap_or(0.0),
                 alarmed,
@@ -162,7 +163,7 @@ fn mode_points(lines: &[EventLine]) -> Vec<super::events_plot::ModePoint> {
         }
         if let Some(f) = line.update.as_ref().and_then(|u| u.model_mode_hz) {
             points.push(super::events_plot::ModePoint {
-                pga,
+                amplitude,
                 frequency_hz: f,
                 std_hz: 0.0,
                 alarmed,

@@ -1,17 +1,19 @@
 //! `events --plot DIR`: every identified mode's frequency against the
-//! event's ground peak acceleration (log axis), with its ±1σ bar (dots),
+//! event's amplitude (`[events] amplitude`: the ground's peak acceleration
+//! or the deck's strong-motion RMS; log axis), with its ±1σ bar (dots),
 //! and the updated model's dominant mode (squares); alarmed events in red.
 //! The frequency axis is the band the update fits (`[updating] band`,
 //! else `[frf] band`); the modes outside it are counted in the caption.
 
+use crate::config::EventAmplitude;
 use anyhow::{Context, Result};
 use std::path::Path;
 
-/// One identified mode of an event: the ground's peak acceleration (m/s²),
-/// the frequency and its standard deviation (Hz), and whether the event
-/// raised an alarm.
+/// One identified mode of an event: the event's amplitude (m/s²), the
+/// frequency and its standard deviation (Hz), and whether the event raised
+/// an alarm.
 pub struct ModePoint {
-    pub pga: f64,
+    pub amplitude: f64,
     pub frequency_hz: f64,
     pub std_hz: f64,
     pub alarmed: bool,
@@ -19,7 +21,7 @@ pub struct ModePoint {
     pub model: bool,
 }
 
-pub fn frequency_vs_amplitude(modes: &[ModePoint], band: [f64; 2], dir: &Path) -> Result<()> {
+pub fn frequency_vs_amplitude(modes: &[ModePoint], band: [f64; 2], kind: EventAmplitude, dir: &Path) -> Result<()> {
     use plotters::prelude::*;
     let fail = |e: &dyn std::fmt::Display| anyhow::anyhow!("plotting: {e}");
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
@@ -31,7 +33,7 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], band: [f64; 2], dir: &Path) -
     let outside = modes.len() - inside.len();
     let points: Vec<(f64, f64, f64, bool)> = inside
         .iter()
-        .map(|m| (m.pga, m.frequency_hz, m.std_hz, m.alarmed))
+        .map(|m| (m.amplitude, m.frequency_hz, m.std_hz, m.alarmed))
         .collect();
     let model: Vec<bool> = inside.iter().map(|m| m.model).collect();
     let (mut x0, mut x1) = points
@@ -59,7 +61,10 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], band: [f64; 2], dir: &Path) -
         .map_err(|e| fail(&e))?;
     chart
         .configure_mesh()
-        .x_desc("ground peak acceleration (m/s²)")
+        .x_desc(match kind {
+            EventAmplitude::PgaGround => "ground peak acceleration (m/s²)",
+            EventAmplitude::RmsDeck => "deck RMS over the strong motion (m/s²)",
+        })
         .y_desc("frequency (Hz)")
         .draw()
         .map_err(|e| fail(&e))?;

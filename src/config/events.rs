@@ -43,6 +43,13 @@ pub struct EventsConfig {
     /// follows a force sensor an earthquake record has not).
     #[serde(default = "default_residues")]
     pub residues: Residues,
+    /// The event's amplitude, the operational variable of its verdict and
+    /// of the `"trend"` forecast: `"pga_ground"` (default; the largest
+    /// absolute ground acceleration of the record) or `"rms_deck"` (the RMS
+    /// of every deck channel over the strong motion, the span holding
+    /// 5–95 % of the ground's energy).
+    #[serde(default)]
+    pub amplitude: EventAmplitude,
     /// The model an event is forecast by: `"trend"` (default; per updated
     /// parameter, what the earlier events expect at this event's ground
     /// peak: the verdict's line of log10 value against log10 peak once
@@ -59,6 +66,24 @@ pub enum EventForecast {
     #[default]
     Trend,
     Last,
+}
+
+/// `[events] amplitude`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum EventAmplitude {
+    #[default]
+    PgaGround,
+    RmsDeck,
+}
+
+impl EventAmplitude {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::PgaGround => "pga_ground",
+            Self::RmsDeck => "rms_deck",
+        }
+    }
 }
 
 /// `[events] inputs`.
@@ -81,6 +106,7 @@ impl Default for EventsConfig {
             outputs: Vec::new(),
             inputs: EventInputs::default(),
             residues: default_residues(),
+            amplitude: EventAmplitude::default(),
             forecast: EventForecast::default(),
         }
     }

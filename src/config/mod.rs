@@ -23,7 +23,7 @@ mod tls;
 mod updating;
 mod zenoh;
 
-pub use events::{EventForecast, EventInputs, EventsConfig};
+pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
 pub use frf::FrfConfig;
 pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};
 pub use metrics::MetricsConfig;

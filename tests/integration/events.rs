@@ -601,3 +601,53 @@ fn one_event_fitting(dir: &Path, residues: &str, input: &str) -> serde_json::Val
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).unwrap()
 }
+
+/// `[events] amplitude = "rms_deck"`: every event reports the deck's RMS
+/// over the strong motion (positive, below the deck's peak), the state says
+/// its amplitudes are deck RMS, and a later run whose config judges on the
+/// ground peak (the default) refuses that state, naming both and what to do.
+#[test]
+fn issue_45_the_verdicts_amplitude_can_be_the_decks_rms_and_a_state_keeps_to_one() {
+    let dir = fresh_dir("events-amplitude");
+    let state = dir.join("state.json");
+    let outputs = "outputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
+    let text = std::fs::read_to_string(CONFIG).unwrap();
+    let config = dir.join("rms.toml");
+    std::fs::write(
+        &config,
+        text.replace(outputs, &format!("{outputs}amplitude = \"rms_deck\"\n")),
+    )
+    .unwrap();
+    let first = record("RioDell_14Sep2012_71842255_ce89324p.zip");
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        config.to_str().unwrap(),
+        "--json",
+        "--state",
+        state.to_str().unwrap(),
+        &first,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let line: serde_json::Value = serde_json::from_str(String::from_utf8_lossy(&o.stdout).trim()).unwrap();
+    let (rms, peak) = (line["rms_deck"].as_f64().unwrap(), line["peak_deck"].as_f64().unwrap());
+    assert!(rms > 0.0 && rms < peak, "rms {rms}, peak {peak}");
+    let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
+    assert_eq!(saved["amplitude"], "rms_deck");
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        CONFIG,
+        "--json",
+        "--state",
+        state.to_str().unwrap(),
+        &record("ferndale_28jan2015_72387946_ce89324p.zip"),
+    ]);
+    assert!(!o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        stderr.contains("1 events judged on rms_deck; [events] amplitude = \"pga_ground\""),
+        "{stderr}"
+    );
+    assert_eq!(stderr.matches("judged on").count(), 1, "said once: {stderr}");
+}

@@ -1,6 +1,6 @@
 //! Earthquakes in the Rerun stream (`events --rerun-save`): one point per
 //! event on the `measurement_time` timeline: the ground's and the deck's
-//! peaks, each updated parameter, the identified frequencies, the updated
+//! peaks, the deck's strong-motion RMS, each updated parameter, the identified frequencies, the updated
 //! model's dominant mode, the forecast's and the baseline's NRMSE and the
 //! verdict (0 insufficient history, 1 normal, 3 alarm, as `monitoring/state`).
 
@@ -12,6 +12,10 @@ pub struct EventPoint<'a> {
     pub time_ns: i128,
     pub pga_ground: f64,
     pub peak_deck: f64,
+    pub rms_deck: Option<f64>,
+    /// The event's amplitude as `[events] amplitude` measures it: the
+    /// identified frequencies' abscissa.
+    pub amplitude: f64,
     /// `(name, value)` of each updated parameter.
     pub parameters: &'a [(String, f64)],
     pub identified_hz: &'a [f64],
@@ -31,6 +35,9 @@ impl RerunOutput {
             |path: &str, v: f64| -> Result<()> { self.rec.log(path, &rerun::Scalars::new([v])).map_err(rerun_error) };
         scalar("events/pga_ground", event.pga_ground)?;
         scalar("events/peak_deck", event.peak_deck)?;
+        if let Some(rms) = event.rms_deck {
+            scalar("events/rms_deck", rms)?;
+        }
         for (name, value) in event.parameters {
             scalar(&format!("events/parameters/{name}"), *value)?;
         }
@@ -53,7 +60,7 @@ impl RerunOutput {
             self.rec
                 .log(
                     "events/frequency/identified",
-                    &rerun::Points2D::new(event.identified_hz.iter().map(|&f| (event.pga_ground as f32, f as f32))),
+                    &rerun::Points2D::new(event.identified_hz.iter().map(|&f| (event.amplitude as f32, f as f32))),
                 )
                 .map_err(rerun_error)?;
         }

@@ -39,6 +39,11 @@ pub(super) struct EventWorker {
 }
 
 impl EventWorker {
+    /// What the events' amplitude is (`[events] amplitude`).
+    pub(super) fn amplitude(&self) -> crate::config::EventAmplitude {
+        self.config.events().amplitude
+    }
+
     /// `None` without an `[events]` section.
     pub(super) fn start(config: &Config, state: Option<&std::path::Path>) -> Result<Option<Self>> {
         let Some(events) = &config.events_section else {
@@ -49,6 +54,7 @@ impl EventWorker {
         }
         let file = state.and_then(|s| config.events_file(s));
         let chain = Chain::resume(file.as_deref())?;
+        chain.check(config)?;
         if let Some(f) = &file {
             tracing::info!(message = "events: triggered-logger mode", chain = %f.display(), events_judged = chain.history_len(), gap_seconds = events.gap_seconds);
         }

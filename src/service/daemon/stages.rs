@@ -515,7 +515,11 @@ impl Daemon {
         }
         if let Some(v) = self.viewer.as_mut() {
             count_output_error(
-                log_rerun(v, &line),
+                log_rerun(
+                    v,
+                    &line,
+                    self.events.as_ref().map(EventWorker::amplitude).unwrap_or_default(),
+                ),
                 &mut self.pipeline.health_mut().rerun_errors,
                 100,
                 "Rerun",

@@ -15,7 +15,7 @@
 pub mod burst;
 
 use super::records::{align_event, identify_io, recorded, Event};
-use crate::config::{ground_sensors, ground_signals, Config, EventForecast, GroundInputPlan, Residues};
+use crate::config::{ground_sensors, ground_signals, Config, EventAmplitude, EventForecast, GroundInputPlan, Residues};
 use crate::io::modes_json::{ModeEntry, ModesFile};
 use crate::io::monitoring_json::{NamedValue, StatusMessage};
 use crate::io::recording::RecordedBlock;
@@ -23,7 +23,7 @@ use crate::io::wire::format_timestamp;
 use crate::pipeline::oma::OmaReport;
 use crate::studies::event_update::{update_on_event, EventSignals, PairedMode};
 use crate::studies::ground_motion::{GroundModel, GroundParts};
-use crate::studies::predict::{predict as predict_event, PredictionReport};
+use crate::studies::predict::{predict as predict_event, significant_span, PredictionReport};
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::monitoring::amplitude::{expected, judge, FeatureBand, Verdict};
@@ -42,6 +42,9 @@ pub struct EventLine {
     pub start: Option<String>,
     pub pga_ground: Option<f64>,
     pub peak_deck: Option<f64>,
+    /// The RMS of every deck channel over the strong motion (5–95 % of the
+    /// ground's energy), m/s².
+    pub rms_deck: Option<f64>,
     pub modes: Vec<ModeEntry>,
     pub parameters: Vec<ParameterEstimate>,
     pub forecast: Option<PredictionReport>,
@@ -61,12 +64,21 @@ pub struct EventLine {
 }
 
 impl EventLine {
+    /// The event's amplitude as `[events] amplitude` measures it.
+    pub fn amplitude(&self, kind: EventAmplitude) -> Option<f64> {
+        match kind {
+            EventAmplitude::PgaGround => self.pga_ground,
+            EventAmplitude::RmsDeck => self.rms_deck,
+        }
+    }
+
     pub fn new(event: String) -> Self {
         Self {
             event,
             start: None,
             pga_ground: None,
             peak_deck: None,
+            rms_deck: None,
             modes: Vec::new(),
             parameters: Vec::new(),
             forecast: None,
@@ -132,8 +144,12 @@ pub struct Chain {
     parameters: Vec<Named>,
     /// The modes tracked from event to event: the first event's identified frequencies.
     tracked_hz: Vec<f64>,
-    /// log10 of each earlier (not alarmed) event's ground peak, m/s².
+    /// log10 of each earlier (not alarmed) event's amplitude, m/s².
     amplitudes: Vec<f64>,
+    /// What `amplitudes` measure (`[events] amplitude`); none in a state
+    /// from before the key, whose amplitudes are ground peaks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    amplitude: Option<EventAmplitude>,
     /// The features' names: the columns of `features`.
     #[serde(default)]
     feature_names: Vec<String>,
@@ -167,6 +183,24 @@ impl Chain {
     pub fn save(&self, path: &Path) -> Result<()> {
         std::fs::write(path, serde_json::to_string_pretty(self)?)
             .with_context(|| format!("cannot write {}", path.display()))
+    }
+
+    /// Refuses a history whose amplitudes are not what `[events]
+    /// amplitude` measures (the bands would mix two variables).
+    pub fn check(&self, cfg: &Config) -> Result<()> {
+        let kept = self.amplitude.unwrap_or(EventAmplitude::PgaGround);
+        let wanted = cfg.events().amplitude;
+        if !self.amplitudes.is_empty() && kept != wanted {
+            bail!(
+                "the events' state holds {} events judged on {}; [events] amplitude = {:?}: \
+                 start a new state (another --state file) or set amplitude = {:?}",
+                self.amplitudes.len(),
+                kept.as_str(),
+                wanted.as_str(),
+                kept.as_str()
+            );
+        }
+        Ok(())
     }
 
     /// Events judged so far (not alarmed): the verdict's history.
@@ -229,7 +263,7 @@ impl Chain {
         self.features.push(values);
     }
 
-    /// The parameters an event with ground peak `pga` is forecast by
+    /// The parameters an event of amplitude `pga` is forecast by
     /// (`[events] forecast`): the last update's, or per parameter the
     /// value the earlier events expect at `pga` (the line of log10 value
     /// against log10 peak the verdict fits, once there are `min_events`
@@ -437,6 +471,15 @@ fn run_chain(
             .flat_map(|&i| channel(i))
             .fold(0.0f64, |a, v| a.max(v.abs())),
     );
+    let samples = channel(event.deck[0]).len();
+    let (i0, i1) = significant_span(ground.iter().map(|&i| channel(i)), samples);
+    let square: f64 = event
+        .deck
+        .iter()
+        .map(|&i| channel(i)[i0..i1].iter().map(|v| v * v).sum::<f64>())
+        .sum();
+    line.rms_deck = Some((square / ((i1 - i0) * event.deck.len()) as f64).sqrt());
+    let amplitude = line.amplitude(cfg.events().amplitude).expect("both measured");
     // The update needs the modes when it fits them (`[events] residues`);
     // otherwise the identification is taken after it, so that one running
     // on another thread overlaps the forecast and the update.
@@ -444,12 +487,12 @@ fn run_chain(
     if fits_modes {
         take_identification(identified, line)?;
     }
-    let updated = forecast_and_update(cfg, (event, plan), chain, line, pga);
+    let updated = forecast_and_update(cfg, (event, plan), chain, line, amplitude);
     if !fits_modes {
         take_identification(identified, line)?;
     }
     updated?;
-    judge_event(cfg, chain, line, pga);
+    judge_event(cfg, chain, line, amplitude);
     Ok(())
 }
 
@@ -472,12 +515,12 @@ fn forecast_and_update(
     (event, plan): (&Event, &[GroundInputPlan]),
     chain: &mut Chain,
     line: &mut EventLine,
-    pga: f64,
+    amplitude: f64,
 ) -> Result<()> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
     // The forecast: the model of the events before this one.
     if !chain.parameters.is_empty() {
-        let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, pga);
+        let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, amplitude);
         let parts = chain.parts(cfg)?;
         let mut forecaster = GroundModel::at(&parts, &parameters).context("the forecast's model")?;
         line.forecast_model = parameters
@@ -610,12 +653,14 @@ fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<
     (names, values)
 }
 
-fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, pga: f64) {
+/// The verdict on `line`'s features against the bands the earlier events
+/// give at its `amplitude` (`[events] amplitude`).
+fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, amplitude: f64) {
     if chain.tracked_hz.is_empty() {
         chain.tracked_hz = line.modes.iter().map(|m| m.frequency_hz).collect();
     }
     let (names, values) = features(chain, line, cfg.updating.max_frequency_gap);
-    let x = pga.max(1e-12).log10();
+    let x = amplitude.max(1e-12).log10();
     let columns: Vec<Vec<(f64, f64)>> = names.iter().map(|n| chain.history_of(n)).collect();
     let history: Vec<Vec<f64>> = (0..chain.amplitudes.len())
         .map(|e| columns.iter().map(|c| c[e].1).collect())
@@ -650,6 +695,7 @@ fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, pga: f64) 
     // alarming until the owner starts a new history.
     if !matches!(verdict, Verdict::Alarm { .. }) {
         chain.push_features(x, &names, values);
+        chain.amplitude = Some(cfg.events().amplitude);
     }
 }
 
@@ -732,7 +778,7 @@ pub fn forecast_medians(line: &EventLine) -> Option<(f64, f64)> {
     })
 }
 
-pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine) -> Result<()> {
+pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine, kind: EventAmplitude) -> Result<()> {
     let (Some(start), Some(pga), Some(peak)) = (line.start.as_deref(), line.pga_ground, line.peak_deck) else {
         return Ok(());
     };
@@ -745,6 +791,8 @@ pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine) -
         time_ns,
         pga_ground: pga,
         peak_deck: peak,
+        rms_deck: line.rms_deck,
+        amplitude: line.amplitude(kind).unwrap_or(pga),
         parameters: &parameters,
         identified_hz: &identified,
         model_mode_hz: line.update.as_ref().and_then(|u| u.model_mode_hz),
