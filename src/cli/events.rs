@@ -144,7 +144,7 @@ fn open_rerun(cfg: &Config, path: &Path) -> Result<crate::outputs::rerun::RerunO
 }
 
 /// Every identified mode of every used event, and the updated model's
-/// dominant mode (with no standard deviation).
+/// dominant mode, each with its standard deviation.
 fn mode_points(lines: &[EventLine], kind: EventAmplitude) -> Vec<super::events_plot::ModePoint> {
     let mut points = Vec::new();
     for line in lines.iter().filter(|l| l.skipped.is_none()) {
@@ -161,11 +161,11 @@ fn mode_points(lines: &[EventLine], kind: EventAmplitude) -> Vec<super::events_p
                 model: false,
             });
         }
-        if let Some(f) = line.update.as_ref().and_then(|u| u.model_mode_hz) {
+        if let Some((update, f)) = line.update.as_ref().and_then(|u| Some((u, u.model_mode_hz?))) {
             points.push(super::events_plot::ModePoint {
                 amplitude,
                 frequency_hz: f,
-                std_hz: 0.0,
+                std_hz: update.model_mode_std_hz.unwrap_or(0.0),
                 alarmed,
                 model: true,
             });

@@ -1,7 +1,8 @@
 //! `events --plot DIR`: every identified mode's frequency against the
 //! event's amplitude (`[events] amplitude`: the ground's peak acceleration
 //! or the deck's strong-motion RMS; log axis), with its ±1σ bar (dots),
-//! and the updated model's dominant mode (squares); alarmed events in red.
+//! and the updated model's dominant mode with its ±1σ (squares); alarmed
+//! events in red.
 //! The frequency axis is the band the update fits (`[updating] band`,
 //! else `[frf] band`); the modes outside it are counted in the caption.
 
@@ -74,15 +75,15 @@ pub fn frequency_vs_amplitude(modes: &[ModePoint], band: [f64; 2], kind: EventAm
             (false, true) => BLUE,
             (false, false) => BLACK,
         };
+        let bar = vec![(x, (f - s).max(y0)), (x, (f + s).min(y1))];
+        chart
+            .draw_series(std::iter::once(PathElement::new(bar, colour.stroke_width(2))))
+            .map_err(|e| fail(&e))?;
         if is_model {
             let square = EmptyElement::at((x, f)) + Rectangle::new([(-4, -4), (4, 4)], colour.stroke_width(2));
             chart.draw_series(std::iter::once(square)).map_err(|e| fail(&e))?;
             continue;
         }
-        let bar = vec![(x, (f - s).max(y0)), (x, (f + s).min(y1))];
-        chart
-            .draw_series(std::iter::once(PathElement::new(bar, colour.stroke_width(2))))
-            .map_err(|e| fail(&e))?;
         chart
             .draw_series(std::iter::once(Circle::new((x, f), 4, colour.filled())))
             .map_err(|e| fail(&e))?;

@@ -445,6 +445,7 @@ mod tests {
             lines_used: 0,
             correlations: Vec::new(),
             held: Vec::new(),
+            covariance: None,
         }
     }
 

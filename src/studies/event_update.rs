@@ -36,16 +36,16 @@ use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use splinewatch_core::c64;
 use splinewatch_core::identification::transmissibility;
-use splinewatch_core::response::frf::{ModalState, Quantity};
+use splinewatch_core::response::frf::{FrfModel, ModalState, Quantity};
 use splinewatch_core::response::support_motion::SupportMotion;
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet};
 use splinewatch_core::updating::joint::JointTransmissibilityProblem;
-use splinewatch_core::updating::modal_residual::{pair_modes, ModePair, ObservedMode};
+use splinewatch_core::updating::modal_residual::{frequency_gradient, pair_modes, ModePair, ObservedMode};
 use splinewatch_core::updating::transmissibility_residual::{
     Combination, TransmissibilityProblem, TransmissibilitySolution,
 };
 use splinewatch_core::updating::{
-    base_values, IterationRecord, ModalUpdateProblem, UpdateError, UpdateResult, UpdateSettings, Weighting,
+    base_values, IterationRecord, ModalUpdateProblem, Parameter, UpdateError, UpdateResult, UpdateSettings, Weighting,
 };
 
 /// What an update on one event gives.
@@ -55,6 +55,10 @@ pub struct EventUpdate {
     /// resonant share `Σ_{o,c} |a_oi L_ic| / ζ_i` over the fitted sensors
     /// `o` and ground inputs `c` (Hz).
     pub dominant_hz: Option<f64>,
+    /// Its standard deviation: `√(gᵀ C g)`, `g = ∂f/∂p` (the mode's
+    /// eigen-derivatives, `modal_residual::frequency_gradient`), `C` the
+    /// parameters' covariance at the solution (delta method).
+    pub dominant_std_hz: Option<f64>,
     /// Ground inputs combined into one (names joined by `+`).
     pub combined: Vec<String>,
     /// The identified modes fitted (`[events] residues` `"modes"` or
@@ -151,11 +155,17 @@ pub fn update_on_event(
         let evaluations = solution.result.evaluations;
         (solution, Vec::new(), evaluations)
     };
-    let dominant_hz = dominant_mode(&solution.state, &solution.motion, signals.deck, band);
+    let (dominant_hz, dominant_std_hz) = dominant_mode(
+        (&setup.model, parameters),
+        (&solution.state, &solution.motion, &solution.result),
+        signals.deck,
+        band,
+    );
     Ok(EventUpdate {
         pairs: paired_modes(&solution.state, signals.modes, &pairs),
         result: solution.result,
         dominant_hz,
+        dominant_std_hz,
         combined: measured.combined,
         evaluations,
     })
@@ -250,18 +260,46 @@ fn fit_modes(
         &inputs,
     )
     .map_err(|e| anyhow!("support motion at the updated model: {e}"))?;
+    let (dominant_hz, dominant_std_hz) = dominant_mode(
+        (&setup.model, &parts.parameters),
+        (&state, &motion, &solution.result),
+        signals.deck,
+        band,
+    );
     Ok(EventUpdate {
         pairs: paired_modes(&state, signals.modes, &solution.pairs),
-        dominant_hz: dominant_mode(&state, &motion, signals.deck, band),
+        dominant_hz,
+        dominant_std_hz,
         evaluations: solution.result.evaluations,
         result: solution.result,
         combined: Vec::new(),
     })
 }
 
-/// The model's dominant mode in `(lo, hi)` Hz over the sensors `deck`
-/// ([`EventUpdate::dominant_hz`]).
-fn dominant_mode(state: &ModalState, motion: &SupportMotion, deck: &[usize], (lo, hi): (f64, f64)) -> Option<f64> {
+/// The updated model's dominant mode in `(lo, hi)` Hz over the sensors
+/// `deck` and its standard deviation ([`EventUpdate::dominant_hz`],
+/// [`EventUpdate::dominant_std_hz`]).
+fn dominant_mode(
+    (model, parameters): (&FrfModel, &[Parameter]),
+    (state, motion, result): (&ModalState, &SupportMotion, &UpdateResult),
+    deck: &[usize],
+    band: (f64, f64),
+) -> (Option<f64>, Option<f64>) {
+    let Some(i) = dominant_index(state, motion, deck, band) else {
+        return (None, None);
+    };
+    let std = result.covariance.as_ref().map(|c| {
+        let g = frequency_gradient(model, state, i, parameters);
+        let variance: f64 = (0..g.len())
+            .map(|k| (0..g.len()).map(|l| g[k] * c[k][l] * g[l]).sum::<f64>())
+            .sum();
+        variance.max(0.0).sqrt()
+    });
+    (Some(state.modes.frequency_hz(i)), std)
+}
+
+/// The index of the mode of largest resonant share in `(lo, hi)` Hz.
+fn dominant_index(state: &ModalState, motion: &SupportMotion, deck: &[usize], (lo, hi): (f64, f64)) -> Option<usize> {
     (0..state.modes.len())
         .filter(|&i| (lo..=hi).contains(&state.modes.frequency_hz(i)) && state.zeta[i] > 0.0)
         .map(|i| {
@@ -274,7 +312,7 @@ fn dominant_mode(state: &ModalState, motion: &SupportMotion, deck: &[usize], (lo
             (i, share / state.zeta[i])
         })
         .max_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(i, _)| state.modes.frequency_hz(i))
+        .map(|(i, _)| i)
 }
 
 fn paired_modes(state: &ModalState, modes: &[ObservedMode], pairs: &[ModePair]) -> Vec<PairedMode> {

@@ -105,6 +105,8 @@ impl EventLine {
 pub struct UpdateLine {
     /// The updated model's dominant mode over the fitted channels (Hz).
     pub model_mode_hz: Option<f64>,
+    /// Its standard deviation from the parameters' covariance (Hz).
+    pub model_mode_std_hz: Option<f64>,
     pub relative_residual: f64,
     pub iterations: usize,
     pub converged: bool,
@@ -603,6 +605,7 @@ fn update_event(
     }
     line.update = Some(UpdateLine {
         model_mode_hz: updated.dominant_hz,
+        model_mode_std_hz: updated.dominant_std_hz,
         relative_residual: updated.result.relative_residual,
         iterations: updated.result.iterations.len().saturating_sub(1),
         converged: updated.result.converged,

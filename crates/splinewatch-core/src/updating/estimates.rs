@@ -61,6 +61,9 @@ pub(super) struct Estimates {
     pub(super) residual_variance: f64,
     pub(super) correlations: Vec<ParameterCorrelation>,
     pub(super) held: Vec<HeldParameter>,
+    /// `σ̂² (JᵀJ)⁻¹`, held parameters' rows and columns zero; `None`
+    /// when `JᵀJ` is singular.
+    pub(super) covariance: Option<Vec<Vec<f64>>>,
 }
 
 pub(super) fn estimates(
@@ -90,6 +93,12 @@ pub(super) fn estimates(
             }
         }
         full
+    });
+    let covariance = correlation.as_ref().map(|rho| {
+        let s = |k: usize| std[k].unwrap_or(0.0);
+        (0..p.len())
+            .map(|k| (0..p.len()).map(|l| rho[(k, l)] * s(k) * s(l)).collect())
+            .collect()
     });
     let condition_number = match (singular_values.first(), singular_values.last()) {
         (Some(&hi), Some(&lo)) if lo > 0.0 => hi / lo,
@@ -138,6 +147,7 @@ pub(super) fn estimates(
         residual_variance,
         correlations,
         held,
+        covariance,
     }
 }
 
@@ -148,7 +158,8 @@ mod tests {
     use faer::Side;
 
     /// The correlations from the SVD equal those of `(JᵀJ)⁻¹` formed
-    /// directly, and the most correlated pair comes first.
+    /// directly, the most correlated pair comes first, and the covariance
+    /// is `σ̂² (JᵀJ)⁻¹`.
     #[test]
     fn correlations_are_those_of_the_inverse_normal_matrix() {
         // Columns 0 and 2 nearly collinear.
@@ -183,5 +194,17 @@ mod tests {
         assert_eq!((e.correlations[0].a.as_str(), e.correlations[0].b.as_str()), ("a", "c"));
         assert!(e.correlations[0].rho.abs() > 0.9);
         assert_eq!(e.correlations.len(), 3);
+        // The covariance is σ̂² (JᵀJ)⁻¹, σ̂² = 2·cost/(m − n) = 2/9.
+        let covariance = e.covariance.unwrap();
+        for k in 0..3 {
+            for l in 0..3 {
+                let want = 2.0 / 9.0 * inverse[(k, l)];
+                assert!(
+                    (covariance[k][l] - want).abs() < 1e-9 * want.abs().max(inverse[(k, k)]),
+                    "{k},{l}: {} vs {want}",
+                    covariance[k][l]
+                );
+            }
+        }
     }
 }

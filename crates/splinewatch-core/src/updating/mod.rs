@@ -505,6 +505,12 @@ pub struct UpdateResult {
     /// and `residual_variance` refer to the others.
     #[serde(default)]
     pub held: Vec<HeldParameter>,
+    /// `σ̂² (JᵀJ)⁻¹` of the parameters, in their order (held ones' rows and
+    /// columns zero); `None` when `JᵀJ` is singular. Not written (the stds
+    /// and the correlations are): for propagating the uncertainty to what
+    /// the model predicts (e.g. [`modal_residual::frequency_gradient`]).
+    #[serde(skip)]
+    pub covariance: Option<Vec<Vec<f64>>>,
 }
 
 #[cfg(test)]

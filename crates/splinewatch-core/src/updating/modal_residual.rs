@@ -172,19 +172,16 @@ pub fn modal_residue(
                 }
                 jac[(row0 + 1 + n, c)] += slope * df / x.damping_std;
             };
-            match par.kind {
-                ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => {
-                    // A tied parameter's rows add up its springs' (the rows are linear in them).
-                    for (field, coefficient) in par.kind.springs() {
-                        stiffness_rows(sens, model.flat_spring_index(field, coefficient));
+            match stiffness_columns(model, par.kind) {
+                // A tied parameter's rows add up its springs' (the rows are linear in them).
+                StiffnessColumns::Springs(columns) => columns.into_iter().for_each(|j| stiffness_rows(sens, j)),
+                StiffnessColumns::Field(j) => {
+                    stiffness_rows(field_sens.as_ref().expect("computed when a field is updated"), j);
+                }
+                StiffnessColumns::None => {
+                    if let ParameterKind::Damping { coefficient } = par.kind {
+                        jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;
                     }
-                }
-                ParameterKind::Stiffness { field, coefficient } => {
-                    let fs = field_sens.as_ref().expect("computed when a field is updated");
-                    stiffness_rows(fs, model.flat_field_index(field, coefficient));
-                }
-                ParameterKind::Damping { coefficient } => {
-                    jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;
                 }
             }
         }
@@ -194,4 +191,52 @@ pub fn modal_residue(
         jacobian: jac,
         pairs: pairs.to_vec(),
     }
+}
+
+/// The sensitivity columns a parameter's derivative sums: its springs'
+/// (flat indices of [`FrfModel::modal_sensitivities`]), its field
+/// coefficient's ([`FrfModel::field_sensitivities`]), or none (damping).
+enum StiffnessColumns {
+    Springs(Vec<usize>),
+    Field(usize),
+    None,
+}
+
+fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns {
+    match kind {
+        ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => StiffnessColumns::Springs(
+            kind.springs()
+                .into_iter()
+                .map(|(field, coefficient)| model.flat_spring_index(field, coefficient))
+                .collect(),
+        ),
+        ParameterKind::Stiffness { field, coefficient } => {
+            StiffnessColumns::Field(model.flat_field_index(field, coefficient))
+        }
+        ParameterKind::Damping { .. } => StiffnessColumns::None,
+    }
+}
+
+/// `∂f/∂p` of `state`'s mode `mode` for each parameter (Hz per unit of the
+/// parameter; 0 for damping): Fox & Kapoor's `∂λ/∂κ` or `∂λ/∂θ` as in
+/// [`modal_residue`], `∂f = ∂λ / (8π² f)`.
+pub fn frequency_gradient(model: &FrfModel, state: &ModalState, mode: usize, parameters: &[Parameter]) -> Vec<f64> {
+    let springs = model.modal_sensitivities(state, &[mode]);
+    let has_fields = parameters
+        .iter()
+        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
+    let fields = has_fields.then(|| model.field_sensitivities(state, &[mode]));
+    let scale = 1.0 / (8.0 * PI * PI * state.modes.frequency_hz(mode));
+    parameters
+        .iter()
+        .map(|par| match stiffness_columns(model, par.kind) {
+            StiffnessColumns::Springs(columns) => {
+                columns.iter().map(|&j| springs.eigenvalue[(0, j)]).sum::<f64>() * scale
+            }
+            StiffnessColumns::Field(j) => {
+                fields.as_ref().expect("computed when a field is updated").eigenvalue[(0, j)] * scale
+            }
+            StiffnessColumns::None => 0.0,
+        })
+        .collect()
 }

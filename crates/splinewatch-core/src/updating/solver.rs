@@ -130,6 +130,7 @@ impl<E> Solved<E> {
             lines_used: fit.lines_used,
             correlations: e.correlations,
             held: e.held,
+            covariance: e.covariance,
         };
         (result, self.p, self.at)
     }
