@@ -148,6 +148,21 @@ pub fn spring_parameters() -> Vec<Parameter> {
         .collect()
 }
 
+/// The second coefficient of both strips as one parameter (`SpringRun`,
+/// bounds 1e7–5e9 N/m³).
+pub fn tied_second_coefficients() -> Parameter {
+    Parameter {
+        name: "k2 of both".into(),
+        kind: ParameterKind::SpringRun {
+            field: 0,
+            count: 2,
+            coefficient: 1,
+        },
+        lower: 1e7,
+        upper: 5e9,
+    }
+}
+
 /// The bending modes of `state` below 80 Hz.
 pub fn bending_modes_below_80_hz(state: &ModalState) -> Vec<usize> {
     (0..state.modes.len())

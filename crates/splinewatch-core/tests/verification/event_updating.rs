@@ -4,7 +4,8 @@
 //! what the model itself gives at known parameters.
 
 use super::common::{
-    bending_modes_below_80_hz, gaussian, sinello_model, sinello_sensors, spring_parameters, true_kappa,
+    bending_modes_below_80_hz, gaussian, sinello_model, sinello_sensors, spring_parameters, tied_second_coefficients,
+    true_kappa,
 };
 use faer::c64;
 use splinewatch_core::model::damping::DampingCurve;
@@ -280,16 +281,7 @@ fn a_tied_pair_of_springs_is_one_parameter() {
         .into_iter()
         .filter(|p| !matches!(p.kind, ParameterKind::Spring { coefficient: 1, .. }))
         .collect();
-    parameters.push(Parameter {
-        name: "k2 of both".into(),
-        kind: ParameterKind::SpringRun {
-            field: 0,
-            count: 2,
-            coefficient: 1,
-        },
-        lower: 1e7,
-        upper: 5e9,
-    });
+    parameters.push(tied_second_coefficients());
     let start_kappa: Vec<Vec<f64>> = truth.iter().map(|k| k.iter().map(|v| 0.7 * v).collect()).collect();
     let problem = TransmissibilityProblem::new(
         (&d.frf, &d.shell, &d.groups),

@@ -2,7 +2,8 @@
 //! pairing, on the Sinello deck.
 
 use super::common::{
-    bending_modes_below_80_hz, gaussian, sinello_model, sinello_sensors, spring_parameters, true_kappa,
+    bending_modes_below_80_hz, gaussian, sinello_model, sinello_sensors, spring_parameters, tied_second_coefficients,
+    true_kappa,
 };
 use splinewatch_core::c64;
 use splinewatch_core::model::damping::DampingCurve;
@@ -333,16 +334,7 @@ fn a_modes_frequency_gradient_matches_central_differences() {
     let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
     let damping = DampingCurve::new(1, vec![0.01, 0.012], 0.0, 80.0).unwrap();
     let mut parameters = spring_parameters();
-    parameters.push(Parameter {
-        name: "k2 of both".into(),
-        kind: ParameterKind::SpringRun {
-            field: 0,
-            count: 2,
-            coefficient: 1,
-        },
-        lower: 1e7,
-        upper: 5e9,
-    });
+    parameters.push(tied_second_coefficients());
     parameters.push(Parameter {
         name: "damping.g1".into(),
         kind: ParameterKind::Damping { coefficient: 0 },
