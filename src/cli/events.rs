@@ -71,7 +71,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
     let mut notifier = Notifier::for_config(&cfg).context("starting the notifier")?;
     let mut rerun = a.rerun_save.as_ref().map(|path| open_rerun(&cfg, path)).transpose()?;
     if !a.json {
-        outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tforecast_nrmse\tbaseline_nrmse\tverdict");
+        outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tmodel_mode_hz\tforecast_nrmse\tbaseline_nrmse\tverdict");
     }
     let mut lines = Vec::new();
     // The identifications depend on the records alone: a second thread runs
@@ -256,8 +256,17 @@ fn print_line(line: &EventLine, json: bool) -> Result<()> {
     };
     let modes: Vec<String> = line.modes.iter().map(|m| format!("{:.2}", m.frequency_hz)).collect();
     let or_dash = |v: Option<f64>| v.map_or("-".into(), |x| format!("{x:.3}"));
+    let model = line
+        .update
+        .as_ref()
+        .and_then(|u| u.model_mode_hz.map(|f| (f, u.model_mode_std_hz)));
+    let model = match model {
+        Some((f, Some(s))) => format!("{f:.3}±{s:.3}"),
+        Some((f, None)) => format!("{f:.3}"),
+        None => "-".into(),
+    };
     outln!(
-        "{}\t{}\t{}\t{}\t{}\t{forecast}\t{baseline}\t{}",
+        "{}\t{}\t{}\t{}\t{}\t{model}\t{forecast}\t{baseline}\t{}",
         line.event,
         line.start.as_deref().unwrap_or("-"),
         or_dash(line.pga_ground),
