@@ -189,12 +189,15 @@ fn fit_record_and_modes(
             let alone = problem.solve(start, progress).context("updating on the record")?;
             // No identified mode pairs where the record alone leads: the
             // joint fit would start with an empty modal block, and its
-            // answer is the record's.
-            if pair_modes(&alone.state, modes, pairing.0, pairing.1).is_empty() {
-                let evaluations = alone.result.evaluations;
-                return Ok((alone, Vec::new(), evaluations));
-            }
+            // answer is the record's. So is it where the record is fitted
+            // exactly (no σ̂ to scale by: noise-free data), its pairs kept.
             let sigma = alone.result.residual_variance.sqrt();
+            let scalable = sigma.is_finite() && sigma > 0.0;
+            let pairs = pair_modes(&alone.state, modes, pairing.0, pairing.1);
+            if pairs.is_empty() || !scalable {
+                let evaluations = alone.result.evaluations;
+                return Ok((alone, pairs, evaluations));
+            }
             let from = alone.result.parameters.iter().map(|p| p.value).collect();
             (1.0 / sigma, from, alone.result.evaluations)
         }
