@@ -301,10 +301,7 @@ impl<'a> UpdateProblem<'a> {
         let mut frfs = self
             .model
             .evaluate_on_threads(state, self.request(), jacobian, self.settings.threads);
-        let fields = self
-            .parameters
-            .iter()
-            .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
+        let fields = super::updates_fields(&self.parameters);
         if jacobian && fields {
             let (_, damping) = self.model_at(p)?;
             frfs.dh_dtheta = self.model.field_frf_sensitivities(state, &damping, self.request());

@@ -99,16 +99,21 @@ pub struct Parameter {
     pub upper: f64,
 }
 
+/// Whether any of `parameters` is a stiffness-field coefficient (whose
+/// derivatives are dense over the deck, formed only then).
+pub(crate) fn updates_fields(parameters: &[Parameter]) -> bool {
+    parameters
+        .iter()
+        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }))
+}
+
 /// The spring coefficients (flat indices, each once) `parameters` move,
 /// when a Ritz basis of the start point can serve their search on `model`
 /// ([`FrfModel::with_reanalysis`]): the model is truncated and no parameter
 /// is a stiffness field (those change the deck everywhere); `None`
 /// otherwise.
 pub(crate) fn reanalysed_springs(parameters: &[Parameter], model: &FrfModel) -> Option<Vec<usize>> {
-    let fields = parameters
-        .iter()
-        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
-    if model.sparse().is_none() || fields {
+    if model.sparse().is_none() || updates_fields(parameters) {
         return None;
     }
     let mut varied: Vec<usize> = parameters

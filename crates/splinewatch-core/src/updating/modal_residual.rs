@@ -24,7 +24,7 @@ use crate::identification::oma::shape::mac_real;
 use crate::model::damping::DampingCurve;
 use crate::response::frf::{FrfModel, ModalState};
 use crate::solvers::modal::ModeKind;
-use crate::updating::{Parameter, ParameterKind};
+use crate::updating::{updates_fields, Parameter, ParameterKind};
 use faer::{c64, Mat};
 use std::f64::consts::PI;
 
@@ -126,10 +126,7 @@ pub fn modal_residue(
 ) -> ModalResidue {
     let modes: Vec<usize> = pairs.iter().map(|p| p.model).collect();
     let sens = jacobian.then(|| model.modal_sensitivities(state, &modes));
-    let has_fields = parameters
-        .iter()
-        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
-    let field_sens = (jacobian && has_fields).then(|| model.field_sensitivities(state, &modes));
+    let field_sens = (jacobian && updates_fields(parameters)).then(|| model.field_sensitivities(state, &modes));
     let rows: usize = pairs.iter().map(|p| 2 + observed[p.observed].shape.len()).sum();
     let mut residual = Vec::with_capacity(rows);
     let mut jac = if jacobian {
@@ -178,10 +175,8 @@ pub fn modal_residue(
                 StiffnessColumns::Field(j) => {
                     stiffness_rows(field_sens.as_ref().expect("computed when a field is updated"), j);
                 }
-                StiffnessColumns::None => {
-                    if let ParameterKind::Damping { coefficient } = par.kind {
-                        jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;
-                    }
+                StiffnessColumns::Damping(coefficient) => {
+                    jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;
                 }
             }
         }
@@ -194,12 +189,13 @@ pub fn modal_residue(
 }
 
 /// The sensitivity columns a parameter's derivative sums: its springs'
-/// (flat indices of [`FrfModel::modal_sensitivities`]), its field
-/// coefficient's ([`FrfModel::field_sensitivities`]), or none (damping).
+/// (flat indices of [`FrfModel::modal_sensitivities`]) or its field
+/// coefficient's ([`FrfModel::field_sensitivities`]); a damping
+/// coefficient moves no mode.
 enum StiffnessColumns {
     Springs(Vec<usize>),
     Field(usize),
-    None,
+    Damping(usize),
 }
 
 fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns {
@@ -213,7 +209,7 @@ fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns 
         ParameterKind::Stiffness { field, coefficient } => {
             StiffnessColumns::Field(model.flat_field_index(field, coefficient))
         }
-        ParameterKind::Damping { .. } => StiffnessColumns::None,
+        ParameterKind::Damping { coefficient } => StiffnessColumns::Damping(coefficient),
     }
 }
 
@@ -222,10 +218,7 @@ fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns 
 /// [`modal_residue`], `∂f = ∂λ / (8π² f)`.
 pub fn frequency_gradient(model: &FrfModel, state: &ModalState, mode: usize, parameters: &[Parameter]) -> Vec<f64> {
     let springs = model.modal_sensitivities(state, &[mode]);
-    let has_fields = parameters
-        .iter()
-        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }));
-    let fields = has_fields.then(|| model.field_sensitivities(state, &[mode]));
+    let fields = updates_fields(parameters).then(|| model.field_sensitivities(state, &[mode]));
     let scale = 1.0 / (8.0 * PI * PI * state.modes.frequency_hz(mode));
     parameters
         .iter()
@@ -236,7 +229,7 @@ pub fn frequency_gradient(model: &FrfModel, state: &ModalState, mode: usize, par
             StiffnessColumns::Field(j) => {
                 fields.as_ref().expect("computed when a field is updated").eigenvalue[(0, j)] * scale
             }
-            StiffnessColumns::None => 0.0,
+            StiffnessColumns::Damping(_) => 0.0,
         })
         .collect()
 }
