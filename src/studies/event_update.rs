@@ -252,25 +252,30 @@ fn fit_modes(
         ),
         e => anyhow::Error::new(e).context("updating on the record's modes"),
     })?;
+    // The support motion at the solution, on its modal state (no second
+    // eigen-solve).
     let p: Vec<f64> = solution.result.parameters.iter().map(|e| e.value).collect();
-    let (kappa, damping) = problem.model_at(&p)?;
+    let (kappa, _) = problem.model_at(&p)?;
     let inputs: Vec<_> = signals.plan.iter().map(|p| p.input).collect();
-    let (state, motion) = SupportMotion::with_state(
+    let state = &solution.state;
+    let motion = SupportMotion::new(
         &setup.model,
         &parts.shell,
         &parts.groups,
-        (&kappa, &problem.fields_at(&p), &damping),
+        &kappa,
+        &problem.fields_at(&p),
+        state,
         &inputs,
     )
     .map_err(|e| anyhow!("support motion at the updated model: {e}"))?;
     let (dominant_hz, dominant_std_hz) = dominant_mode(
         (&setup.model, &parts.parameters),
-        (&state, &motion, &solution.result),
+        (state, &motion, &solution.result),
         signals.deck,
         band,
     );
     Ok(EventUpdate {
-        pairs: paired_modes(&state, signals.modes, &solution.pairs),
+        pairs: paired_modes(state, signals.modes, &solution.pairs),
         dominant_hz,
         dominant_std_hz,
         evaluations: solution.result.evaluations,

@@ -569,9 +569,9 @@ fn update_event(
         .filter(|&i| fitted(cfg, &cfg.sensors[i].name))
         .collect();
     let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
-    let names: Vec<String> = cfg.sensors.iter().map(|s| s.name.clone()).collect();
+    let parts = chain.parts(cfg)?;
     let modes = ModesFile::of(line.modes.clone())
-        .to_observed(&names)
+        .to_observed(&parts.setup.sensor_names)
         .context("the identified modes")?;
     let record = EventSignals {
         plan,
@@ -581,7 +581,6 @@ fn update_event(
         fs: event.fs,
         modes: &modes,
     };
-    let parts = chain.parts(cfg)?;
     let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |it| {
         tracing::debug!(
             event = %line.event,
