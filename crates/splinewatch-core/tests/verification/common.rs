@@ -211,3 +211,28 @@ pub fn check_eigen_derivatives(
     }
     (worst_lambda, worst_shape)
 }
+
+/// `job(0..count)` on every available core, in order of the argument.
+pub fn in_parallel<T: Send>(count: u64, job: impl Fn(u64) -> T + Sync) -> Vec<T> {
+    let threads = std::thread::available_parallelism().map_or(1, usize::from) as u64;
+    let mut slots: Vec<Option<T>> = (0..count).map(|_| None).collect();
+    std::thread::scope(|scope| {
+        let job = &job;
+        let workers: Vec<_> = (0..threads)
+            .map(|t| {
+                scope.spawn(move || {
+                    (t..count)
+                        .step_by(threads as usize)
+                        .map(|i| (i, job(i)))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        for worker in workers {
+            for (i, value) in worker.join().expect("a record's identification panicked") {
+                slots[i as usize] = Some(value);
+            }
+        }
+    });
+    slots.into_iter().map(|v| v.expect("every record identified")).collect()
+}

@@ -2,7 +2,7 @@
 //! the Sinello deck: four uncorrelated band-limited random forces at points
 //! that carry no sensor, twelve vertical accelerometers, 2 % noise.
 
-use super::common::{gaussian, sinello_model, sinello_sensors, true_kappa};
+use super::common::{gaussian, in_parallel, sinello_model, sinello_sensors, true_kappa};
 use faer::c64;
 use splinewatch_core::identification::oma::shape::mac_real;
 use splinewatch_core::identification::oma::{
@@ -168,11 +168,16 @@ fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
     ];
     // The identified shapes (largest component 1 + 0i), per mode.
     let mut shapes: Vec<Vec<Vec<c64>>> = vec![Vec::new(); exact.len()];
-    for seed in 0..RECORDS {
+    // The records are independent: identified on every core (each its own
+    // seed, so the results do not depend on the thread count), then taken
+    // in seed order.
+    let identified = in_parallel(RECORDS, |seed| {
         let record = ambient_record(&model, &state, 300.0, 1000 + seed);
         let views: Vec<&[f64]> = record.iter().map(Vec::as_slice).collect();
         let correlations = OutputCorrelations::from_samples(&views, &[], first_order.max_lag(), 16).unwrap();
-        let results = [&first_order, &jackknife].map(|s| identify(&correlations, FS, s).unwrap());
+        [&first_order, &jackknife].map(|s| identify(&correlations, FS, s).unwrap())
+    });
+    for results in &identified {
         let (a, b) = (paired(&results[0], &exact), paired(&results[1], &exact));
         for (m, ((_, shape), (x, y))) in exact.iter().zip(a.into_iter().zip(b)).enumerate() {
             assert_eq!(x.frequency_hz, y.frequency_hz, "the methods differ in the std only");
