@@ -114,11 +114,67 @@ fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
     writer.finish().unwrap().into_inner()
 }
 
+/// The two-week scenario both acceptance tests below read, simulated and
+/// replayed once (about 70 s of CPU each time): hourly FRF windows, east.k2
+/// 20 % softer from hour 200 and replaced at hour 260 (`repair_minute`),
+/// replayed in two recordings with a restart after window 167, the notify
+/// command appending what it is given to a file.
+struct TwoWeeks {
+    cfg: Config,
+    /// The monitor file's training windows after the first recording.
+    reference_windows: Option<usize>,
+    /// The second run's results file.
+    second: Vec<u8>,
+    statuses: Vec<StatusMessage>,
+    /// What the notify command received, in order.
+    received: Vec<StatusMessage>,
+}
+
+fn two_weeks() -> &'static TwoWeeks {
+    static FIXTURE: std::sync::OnceLock<TwoWeeks> = std::sync::OnceLock::new();
+    FIXTURE.get_or_init(|| {
+        let dir = temp("two-weeks");
+        let (cfg, notified) = notifying_config(&dir);
+        let recordings = simulate(&cfg, &dir, &[168, 168], |t| {
+            t.replace("factor = 0.8", "factor = 0.8\nrepair_minute = 15600.0      # hour 260")
+        });
+        let state = dir.join("state.json");
+        let first = replay_with_state(&cfg, &recordings[0], &state);
+        let saved = splinewatch::outputs::state::load_monitor(&dir.join("monitoring.json"))
+            .unwrap()
+            .unwrap();
+        let reference_windows = saved.reference().map(|r| r.windows);
+        let second = replay_with_state(&cfg, &recordings[1], &state);
+        let statuses = read_statuses(&[&first, &second], &cfg.topic_prefix()).unwrap();
+        let received = std::fs::read_to_string(&notified)
+            .unwrap()
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        TwoWeeks {
+            cfg,
+            reference_windows,
+            second,
+            statuses,
+            received,
+        }
+    })
+}
+
+/// What the notifier must send over the two runs of [`two_weeks`]: each
+/// run's changes ([`notified_changes`]), in order.
+fn notified_per_run(statuses: &[StatusMessage]) -> Vec<StatusMessage> {
+    let mut expected = notified_changes(&statuses[..168]);
+    expected.extend(notified_changes(&statuses[168..]));
+    expected
+}
+
 /// The issue's acceptance scenario: two weeks of hourly windows (daily
 /// ±8 °C, warming 0.6 °C a day, a cold spell to about −11 °C inside the
 /// training span; deck moduli −0.4 %/°C, supports +5 %/°C below 0 °C),
-/// trained on the first 100 updates, east.k2 20 % softer from window 200;
-/// replayed in two recordings with a restart after window 167.
+/// trained on the first 100 updates, east.k2 20 % softer from window 200
+/// (and replaced at 260, which the next test reads); replayed in two
+/// recordings with a restart after window 167 ([`two_weeks`]).
 /// - No alarm in the undamaged windows 100–199; the alarm within 12
 ///   windows of the damage (measured: 2); windows warmer than the training
 ///   range are flagged `outside_training_range`, not scored.
@@ -129,18 +185,15 @@ fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
 ///   windows alarm (why the layer exists).
 #[test]
 fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
-    let dir = temp("two-weeks");
-    let (cfg, notified) = notifying_config(&dir);
-    let recordings = simulate(&cfg, &dir, &[168, 168], |t| t);
-    let state = dir.join("state.json");
-    let first = replay_with_state(&cfg, &recordings[0], &state);
-    let saved = splinewatch::outputs::state::load_monitor(&dir.join("monitoring.json"))
-        .unwrap()
-        .unwrap();
-    assert_eq!(saved.reference().map(|r| r.windows), Some(100));
-    let second = replay_with_state(&cfg, &recordings[1], &state);
-    let prefix = cfg.topic_prefix();
-    let statuses = read_statuses(&[&first, &second], &prefix).unwrap();
+    let TwoWeeks {
+        cfg,
+        reference_windows,
+        second,
+        statuses,
+        received,
+        ..
+    } = two_weeks();
+    assert_eq!(*reference_windows, Some(100));
     assert_eq!(statuses.len(), 336);
     // FRF sets are numbered from 0 in each recording: the second file's
     // windows are 0–167 again; order tells them apart.
@@ -170,19 +223,13 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     // The command got exactly the changes into and out of an alarm or the
     // outside-range state (each run's first status too when it is one),
     // in order, the alarm's raise among them.
-    let mut expected = notified_changes(&statuses[..168]);
-    expected.extend(notified_changes(&statuses[168..]));
-    let received: Vec<StatusMessage> = std::fs::read_to_string(&notified)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let expected = notified_per_run(statuses);
     assert!(expected.iter().any(|s| s.state == "alarm"));
     assert_eq!(
-        serde_json::to_string(&received).unwrap(),
+        serde_json::to_string(received).unwrap(),
         serde_json::to_string(&expected).unwrap()
     );
-    let health = mcap::MessageStream::new(&second)
+    let health = mcap::MessageStream::new(second)
         .unwrap()
         .map(Result::unwrap)
         .filter(|m| m.channel.topic.ends_with("/health"))
@@ -197,18 +244,18 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
     );
     // `monitor` reproduces the statuses bit for bit.
     let settings = cfg.monitoring.clone().unwrap();
-    let again = rescore(&settings, &statuses, Training::FirstWindows(100), false).unwrap();
+    let again = rescore(&settings, statuses, Training::FirstWindows(100), false).unwrap();
     let again: Vec<StatusMessage> = again.into_iter().map(|o| o.status).collect();
     assert_eq!(
         serde_json::to_string(&again).unwrap(),
-        serde_json::to_string(&statuses).unwrap()
+        serde_json::to_string(statuses).unwrap()
     );
     // Raw parameters, textbook limits: false alarms on temperature alone.
     let raw = splinewatch::config::MonitoringConfig {
         limits: splinewatch_core::monitoring::LimitMethod::Theoretical,
         ..settings
     };
-    let raw = rescore(&raw, &statuses, Training::FirstWindows(100), true).unwrap();
+    let raw = rescore(&raw, statuses, Training::FirstWindows(100), true).unwrap();
     let false_alarms = raw[100..200].iter().filter(|o| o.status.state == "alarm").count();
     assert!(
         false_alarms > 20,
@@ -641,19 +688,13 @@ fn notified_changes(run: &[StatusMessage]) -> Vec<StatusMessage> {
 }
 
 /// Issue 33: a notify command receives the raise **and** the clear of an
-/// alarm. The two-week case with the softened bearing replaced at hour 260
-/// (`repair_minute`): the alarm raised after hour 200 clears after the
-/// repair, and the command gets both, in order, with nothing in between but
-/// state changes.
+/// alarm. The two-week case of [`two_weeks`], whose softened bearing is
+/// replaced at hour 260 (`repair_minute`): the alarm raised after hour 200
+/// clears after the repair, and the command gets both, in order, with
+/// nothing in between but state changes.
 #[test]
 fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
-    let dir = temp("notify-clear");
-    let (cfg, notified) = notifying_config(&dir);
-    let recordings = simulate(&cfg, &dir, &[300], |t| {
-        t.replace("factor = 0.8", "factor = 0.8\nrepair_minute = 15600.0      # hour 260")
-    });
-    let results = replay_with_state(&cfg, &recordings[0], &dir.join("state.json"));
-    let statuses = read_statuses(&[&results], &cfg.topic_prefix()).unwrap();
+    let TwoWeeks { statuses, received, .. } = two_weeks();
     let states: Vec<&str> = statuses.iter().map(|s| s.state.as_str()).collect();
     let raised = 200
         + states[200..]
@@ -671,18 +712,11 @@ fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm() {
     // The command got exactly the changes into and out of an alarm or the
     // outside-range state (the days' warm hours leave the training range),
     // in order: the raise and the clear among them.
-    let expected: Vec<(u64, String)> = notified_changes(&statuses)
+    let expected: Vec<(u64, String)> = notified_per_run(statuses)
         .into_iter()
         .map(|s| (s.window, s.state))
         .collect();
-    let received: Vec<(u64, String)> = std::fs::read_to_string(&notified)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            let v: serde_json::Value = serde_json::from_str(l).unwrap();
-            (v["window"].as_u64().unwrap(), v["state"].as_str().unwrap().to_string())
-        })
-        .collect();
+    let received: Vec<(u64, String)> = received.iter().map(|s| (s.window, s.state.clone())).collect();
     assert_eq!(received, expected);
     assert!(
         received.contains(&(statuses[raised].window, "alarm".into())),
