@@ -103,6 +103,7 @@ fn first_frequencies(model: &ShellModel, count: usize) -> Vec<f64> {
         if modes.len() >= count {
             break modes;
         }
+        assert!(cutoff_hz < 1e3, "fewer than {count} modes below {cutoff_hz} Hz");
         cutoff_hz *= 1.25;
     };
     assert!(
