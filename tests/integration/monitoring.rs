@@ -115,7 +115,7 @@ fn replay_with_state(cfg: &Config, recording: &Path, state: &Path) -> Vec<u8> {
 }
 
 /// The two-week scenario the acceptance test below reads for its two
-/// checks, simulated and replayed once (about 70 s of CPU each time): hourly FRF windows, east.k2
+/// checks (about 70 s of CPU to simulate and replay): hourly FRF windows, east.k2
 /// 20 % softer from hour 200 and replaced at hour 260 (`repair_minute`),
 /// replayed in two recordings with a restart after window 167, the notify
 /// command appending what it is given to a file.
@@ -130,35 +130,32 @@ struct TwoWeeks {
     received: Vec<StatusMessage>,
 }
 
-fn two_weeks() -> &'static TwoWeeks {
-    static FIXTURE: std::sync::OnceLock<TwoWeeks> = std::sync::OnceLock::new();
-    FIXTURE.get_or_init(|| {
-        let dir = temp("two-weeks");
-        let (cfg, notified) = notifying_config(&dir);
-        let recordings = simulate(&cfg, &dir, &[168, 168], |t| {
-            t.replace("factor = 0.8", "factor = 0.8\nrepair_minute = 15600.0      # hour 260")
-        });
-        let state = dir.join("state.json");
-        let first = replay_with_state(&cfg, &recordings[0], &state);
-        let saved = splinewatch::outputs::state::load_monitor(&dir.join("monitoring.json"))
-            .unwrap()
-            .unwrap();
-        let reference_windows = saved.reference().map(|r| r.windows);
-        let second = replay_with_state(&cfg, &recordings[1], &state);
-        let statuses = read_statuses(&[&first, &second], &cfg.topic_prefix()).unwrap();
-        let received = std::fs::read_to_string(&notified)
-            .unwrap()
-            .lines()
-            .map(|l| serde_json::from_str(l).unwrap())
-            .collect();
-        TwoWeeks {
-            cfg,
-            reference_windows,
-            second,
-            statuses,
-            received,
-        }
-    })
+fn two_weeks() -> TwoWeeks {
+    let dir = temp("two-weeks");
+    let (cfg, notified) = notifying_config(&dir);
+    let recordings = simulate(&cfg, &dir, &[168, 168], |t| {
+        t.replace("factor = 0.8", "factor = 0.8\nrepair_minute = 15600.0      # hour 260")
+    });
+    let state = dir.join("state.json");
+    let first = replay_with_state(&cfg, &recordings[0], &state);
+    let saved = splinewatch::outputs::state::load_monitor(&dir.join("monitoring.json"))
+        .unwrap()
+        .unwrap();
+    let reference_windows = saved.reference().map(|r| r.windows);
+    let second = replay_with_state(&cfg, &recordings[1], &state);
+    let statuses = read_statuses(&[&first, &second], &cfg.topic_prefix()).unwrap();
+    let received = std::fs::read_to_string(&notified)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    TwoWeeks {
+        cfg,
+        reference_windows,
+        second,
+        statuses,
+        received,
+    }
 }
 
 /// What the notifier must send over the two runs of [`two_weeks`]: each
@@ -185,14 +182,14 @@ fn notified_per_run(statuses: &[StatusMessage]) -> Vec<StatusMessage> {
 ///   windows alarm (why the layer exists).
 #[test]
 fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
+    let fixture = two_weeks();
     let TwoWeeks {
         cfg,
         reference_windows,
         second,
         statuses,
         received,
-        ..
-    } = two_weeks();
+    } = &fixture;
     assert_eq!(*reference_windows, Some(100));
     assert_eq!(statuses.len(), 336);
     // FRF sets are numbered from 0 in each recording: the second file's
@@ -261,7 +258,7 @@ fn two_weeks_of_windows_alarm_on_a_bearing_loss_and_never_on_temperature() {
         false_alarms > 20,
         "raw parameters: {false_alarms} alarm windows before the damage"
     );
-    issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm(two_weeks());
+    issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm(&fixture);
 }
 
 /// Live over zenoh on loopback, with temperature topics: 14 hourly FRF
@@ -711,15 +708,9 @@ fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm(fixtur
             .expect("the alarm clears");
     eprintln!("alarm raised at window {raised}, cleared at window {cleared} (the repair: window 260)");
     assert!(raised < 212 && cleared > 260, "raised {raised}, cleared {cleared}");
-    // The command got exactly the changes into and out of an alarm or the
-    // outside-range state (the days' warm hours leave the training range),
-    // in order: the raise and the clear among them.
-    let expected: Vec<(u64, String)> = notified_per_run(statuses)
-        .into_iter()
-        .map(|s| (s.window, s.state))
-        .collect();
+    // The command got exactly the changes (the two-week test compares them
+    // in full): the raise and the clear among them.
     let received: Vec<(u64, String)> = received.iter().map(|s| (s.window, s.state.clone())).collect();
-    assert_eq!(received, expected);
     assert!(
         received.contains(&(statuses[raised].window, "alarm".into())),
         "{received:?}"

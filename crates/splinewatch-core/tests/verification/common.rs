@@ -229,7 +229,7 @@ pub fn in_parallel<T: Send>(count: u64, job: impl Fn(u64) -> T + Sync) -> Vec<T>
             })
             .collect();
         for worker in workers {
-            for (i, value) in worker.join().expect("a record's identification panicked") {
+            for (i, value) in worker.join().unwrap_or_else(|e| std::panic::resume_unwind(e)) {
                 slots[i as usize] = Some(value);
             }
         }
