@@ -247,6 +247,9 @@ pub fn import(a: ImportArgs) -> Result<()> {
         ImportFormat::Uff => import::read_uff58(bytes).with_context(|| input.clone()),
         ImportFormat::V2 => Ok(crate::io::cosmos_v2::read_v2(&files)?),
     }?;
+    for note in &series.notes {
+        errln!("{input}: {note}");
+    }
     let start_ns = a
         .start
         .as_deref()

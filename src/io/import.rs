@@ -30,6 +30,10 @@ pub struct ImportedSeries {
     pub start_ns: Option<i128>,
     /// Seconds of the first sample after the start (a relative time column).
     pub offset_seconds: f64,
+    /// What the reader decided that changes the data as the files hold it
+    /// (e.g. channels cut to the span they share), one sentence each, for the
+    /// user to read.
+    pub notes: Vec<String>,
 }
 
 #[derive(Debug, Error, PartialEq)]
@@ -124,6 +128,7 @@ pub fn read_csv(text: &str, options: &CsvOptions) -> Result<ImportedSeries, Impo
         fs: None,
         start_ns: None,
         offset_seconds: 0.0,
+        notes: Vec::new(),
     };
     if let Some(t) = time_index {
         time_axis(&names[t], &times, decimal_comma, &mut series)?;
@@ -284,5 +289,6 @@ pub fn read_uff58(bytes: &[u8]) -> Result<ImportedSeries, ImportError> {
         fs: Some(fs),
         start_ns: None,
         offset_seconds,
+        notes: Vec::new(),
     })
 }

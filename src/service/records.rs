@@ -65,6 +65,9 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
     }
     if !v2.is_empty() {
         let series = crate::io::cosmos_v2::read_v2(&v2)?;
+        for note in &series.notes {
+            tracing::info!("{}: {note}", v2[0].1);
+        }
         blocks.extend(imported_blocks(config, series, &prefix)?);
     }
     Ok(blocks)

@@ -521,8 +521,25 @@ fn issue_33_a_v2_file_set_imports() {
     );
     let e = bad("unit", text.replace("in cm/sec2.", "in furlongs."));
     assert!(e.contains("furlongs"), "{e}");
-    let e = bad("twice", std::fs::read_to_string(fixture("CHAN002.V2")).unwrap());
-    assert!(e.contains("twice.V2") && e.contains("channel 2 is also in"), "{e}");
+    // A second copy of channel 2 that differs from CHAN002.V2 (one value).
+    let changed = std::fs::read_to_string(fixture("CHAN002.V2"))
+        .unwrap()
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if i == 46 {
+                format!("{}9{}", &l[..9], &l[10..])
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let e = bad("twice", changed);
+    assert!(
+        e.contains("twice.V2") && e.contains("channel 2 is also in") && e.contains("another record"),
+        "{e}"
+    );
     // The list of files is never printed: each error names its own file.
     assert!(!e.contains("CHAN002.V2, "), "{e}");
 }
@@ -638,4 +655,97 @@ fn issue_44_a_real_station_lists_its_channels() {
         !o.status.success() && e.contains("damaged.zip") && e.lines().count() <= 3,
         "{e}"
     );
+}
+
+/// Station archives as they come (tests/fixtures/make_v2_fixtures.py,
+/// `archives`): a real record of 1980 in the CDMG's upper-case layout (two
+/// recorders of 1100 and 985 points at 50 Hz, one trigger time) imports on
+/// one grid from its trigger time, every value as quakeio reads it and the
+/// longer channels' cut said on stderr; a zip holding the station's combined
+/// file and its per-channel files imports as the combined file alone, and is
+/// refused, naming both files, where a copy differs.
+#[test]
+fn station_archives_as_they_come_import_or_are_refused_by_name() {
+    let dir = fresh_dir("import-v2-archives");
+    let expected: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("tests/fixtures/v2/expected_archives.json")).unwrap(),
+    )
+    .unwrap();
+    let expected = &expected["trinidad_1980"];
+    let names: Vec<String> = expected.as_object().unwrap().keys().cloned().collect();
+    assert_eq!(names.len(), 18);
+    let config = dir.join("painter.toml");
+    let sensors: String = names
+        .iter()
+        .map(|c| format!("[[sensors]]\nname = \"{c}\"\ndirection = \"z\"\n\n"))
+        .collect();
+    std::fs::write(&config, format!("[structure]\nname = \"painter\"\n\n{sensors}")).unwrap();
+    let zip = root().join("tests/fixtures/painter-street/trinidad-offshore_08nov1980_ce89324p.zip");
+    let import = |inputs: &[&Path], out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+            .args(["import", "--config", config.to_str().unwrap(), "--format", "v2"])
+            .args(inputs)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let out = dir.join("trinidad.mcap");
+    let o = import(&[&zip], &out);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    // The 1100-point channels are cut to the 985 points all share, and it is said.
+    assert!(
+        stderr.contains("the channels share 19.70 s") && stderr.contains("ch1 (22.00 s)") && !stderr.contains("ch12 ("),
+        "{stderr}"
+    );
+    let got = channels(&out);
+    assert_eq!(got.len(), 18);
+    let start = parse_timestamp("1980-11-08T10:27:55.4Z").unwrap();
+    for (name, _, fs, start_ns, data) in &got {
+        assert_eq!((*fs, *start_ns, data.len()), (50.0, start, 985), "{name}");
+        assert_eq!(expected[name]["time_step"], 0.02, "{name}");
+        let reference = expected[name]["accel"].as_array().unwrap();
+        for (k, (v, r)) in data.iter().zip(reference).enumerate() {
+            let r = r.as_f64().unwrap() * 0.01;
+            assert!(
+                (v - r).abs() <= 1e-15 * r.abs().max(1e-3),
+                "{name}[{k}]: {v} vs quakeio {r}"
+            );
+        }
+    }
+    let o = Command::new(env!("CARGO_BIN_EXE_splinewatch"))
+        .args(["import", "--format", "v2", "--list"])
+        .arg(&zip)
+        .output()
+        .unwrap();
+    let listing = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        listing.contains("ch11\t270 DEG\tDECK, NEAR EAST ABUTMENT\t50\t1100\t"),
+        "{listing}"
+    );
+
+    // The combined file and the channel files of one station in one zip.
+    let fixture = |f: &str| root().join("tests/fixtures/v2").join(f);
+    let sensors: String = (1..=4)
+        .map(|c| format!("[[sensors]]\nname = \"ch{c}\"\ndirection = \"z\"\n\n"))
+        .collect();
+    std::fs::write(&config, format!("[structure]\nname = \"v2\"\n\n{sensors}")).unwrap();
+    let (both, alone) = (dir.join("both.mcap"), dir.join("alone.mcap"));
+    let o = import(&[&fixture("combined_and_channels.zip")], &both);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = import(&[&fixture("station.V2")], &alone);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(channels(&both), channels(&alone));
+    let o = import(&[&fixture("combined_differs.zip")], &dir.join("differs.mcap"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("combined_differs.zip:CHAN002.V2")
+            && e.contains("channel 2 is also in")
+            && e.contains("combined_differs.zip:26001.V2"),
+        "{e}"
+    );
+    assert_eq!(e.lines().filter(|l| !l.trim().is_empty()).count(), 1, "{e}");
 }
