@@ -6,9 +6,10 @@
 //! against the bands the earlier events give at its amplitude
 //! ([`splinewatch_core::monitoring::amplitude`]).
 //!
-//! An event that cannot be used (unreadable, a dead or clipped channel, a
-//! missing ground channel, too short) is reported as skipped with its reason
-//! and the others go on.
+//! An event that cannot be used (unreadable, a dead or clipped channel, no
+//! ground channel at all, too short) is reported as skipped with its reason
+//! and the others go on; a ground channel the record lacks takes the mean of
+//! the groups measured along its axis, said in the event's notes.
 
 use crate::config::{load_config, Config, EventAmplitude, GroundInputPlan};
 use crate::io::console::{errln, outln};

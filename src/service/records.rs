@@ -102,6 +102,9 @@ pub struct Event {
     /// Per config sensor, its samples when recorded.
     pub channels: Vec<Option<Vec<f64>>>,
     pub deck: Vec<usize>,
+    /// How the ground inputs differ from the config's (a ground channel
+    /// the record lacks, the input that takes the mean of others instead).
+    pub notes: Vec<String>,
 }
 
 /// The record's channels on one grid for the ground inputs of `plan`
@@ -110,8 +113,9 @@ pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[R
     let recorded = |i: usize| recorded(config, blocks, i);
     let (restricted, notes) = restrict_plan(plan, recorded, |i| config.sensors[i].name.clone());
     *plan = restricted;
-    for note in notes {
-        errln!("ground input {note}");
+    let notes: Vec<String> = notes.into_iter().map(|note| format!("ground input {note}")).collect();
+    for note in &notes {
+        errln!("{note}");
     }
     let ground = ground_sensors(plan);
     if ground.is_empty() {
@@ -133,6 +137,7 @@ pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[R
         start_ns: span.start_ns,
         channels,
         deck,
+        notes,
     })
 }
 

@@ -1,0 +1,105 @@
+//! An event's line as results messages, a status message and Rerun series.
+
+use super::*;
+
+/// An event's results: the time they are filed at and each topic suffix
+/// with its JSON body.
+pub type EventMessages = (i128, Vec<(&'static str, Vec<u8>)>);
+
+/// `<prefix>/events/summary` (the `--json` line) and, when judged,
+/// `<prefix>/events/verdict`, at the event's start.
+pub fn messages(line: &EventLine) -> Result<EventMessages> {
+    let time = line
+        .start
+        .as_deref()
+        .and_then(crate::io::wire::parse_timestamp)
+        .unwrap_or(0);
+    let mut out = vec![(SUMMARY_TOPIC, serde_json::to_vec(line)?)];
+    if let Some(v) = &line.verdict {
+        out.push((VERDICT_TOPIC, serde_json::to_vec(v)?));
+    }
+    Ok((time, out))
+}
+
+pub fn status_message(k: u64, line: &EventLine, v: &VerdictLine) -> StatusMessage {
+    StatusMessage {
+        window: k,
+        time: line.start.clone().unwrap_or_default(),
+        state: if v.state == "alarm" {
+            "alarm".into()
+        } else {
+            v.state.replace(' ', "_")
+        },
+        t2: None,
+        t2_limit: None,
+        mewma: None,
+        mewma_limit: None,
+        temperature_c: None,
+        residuals: Vec::new(),
+        temperatures: Default::default(),
+        features: v
+            .bands
+            .iter()
+            .map(|b| NamedValue {
+                name: b.feature.clone(),
+                value: b.value.unwrap_or(f64::NAN),
+            })
+            .collect(),
+        flags: v.outside.iter().map(|f| format!("outside band: {f}")).collect(),
+        exceedances: v.outside.len(),
+        scored_by: Some("amplitude_band".into()),
+    }
+}
+
+/// The median over the line's `forecast_channels` (every scored deck
+/// channel when it names none) of the forecast's and the baseline's
+/// strong-motion NRMSE.
+pub fn forecast_medians(line: &EventLine) -> Option<(f64, f64)> {
+    let median = |mut v: Vec<f64>| -> f64 {
+        v.retain(|x| x.is_finite());
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
+    };
+    let counted = |sensor: &String| line.forecast_channels.is_empty() || line.forecast_channels.contains(sensor);
+    line.forecast.as_ref().map(|f| {
+        (
+            median(
+                f.channels
+                    .iter()
+                    .filter(|c| counted(&c.sensor))
+                    .map(|c| c.nrmse_strong)
+                    .collect(),
+            ),
+            median(
+                f.baseline
+                    .iter()
+                    .filter(|c| counted(&c.score.sensor))
+                    .map(|c| c.score.nrmse_strong)
+                    .collect(),
+            ),
+        )
+    })
+}
+
+pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine, kind: EventAmplitude) -> Result<()> {
+    let (Some(start), Some(pga), Some(peak)) = (line.start.as_deref(), line.pga_ground, line.peak_deck) else {
+        return Ok(());
+    };
+    let Some(time_ns) = crate::io::wire::parse_timestamp(start) else {
+        return Ok(());
+    };
+    let parameters: Vec<(String, f64)> = line.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
+    let identified: Vec<f64> = line.modes.iter().map(|m| m.frequency_hz).collect();
+    r.log_event(&crate::outputs::rerun::events::EventPoint {
+        time_ns,
+        pga_ground: pga,
+        peak_deck: peak,
+        rms_deck: line.rms_deck,
+        amplitude: line.amplitude(kind).unwrap_or(pga),
+        parameters: &parameters,
+        identified_hz: &identified,
+        model_mode_hz: line.update.as_ref().and_then(|u| u.model_mode_hz),
+        forecast: forecast_medians(line),
+        verdict: line.verdict.as_ref().map(|v| v.state.as_str()),
+    })
+}
