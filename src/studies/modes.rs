@@ -15,6 +15,8 @@ pub struct ModeRow {
     pub index: usize,
     pub frequency_hz: f64,
     pub kind: ModeKind,
+    /// Shares of the mode's translational kinetic energy along x, y, z.
+    pub translation_shares: [f64; 3],
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -69,6 +71,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
             index: i + 1,
             frequency_hz: modes.frequency_hz(i),
             kind: modes.kinds[i],
+            translation_shares: modes.translation_shares[i],
         })
         .collect();
     let info = ModalRunInfo {
@@ -118,14 +121,25 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
         writeln!(out)?;
         return Ok(());
     }
-    writeln!(out, "{:>5}  {:>12}  kind", "mode", "frequency Hz")?;
+    // The kind, and where the mode moves: the shares of its translational
+    // kinetic energy along the global axes.
+    writeln!(
+        out,
+        "{:>5}  {:>12}  {:<8}  {:>4}  {:>4}  {:>4}",
+        "mode", "frequency Hz", "kind", "x %", "y %", "z %"
+    )?;
     for r in &report.modes {
         let kind = match r.kind {
             ModeKind::Rigid => "rigid",
             ModeKind::Membrane => "membrane",
             ModeKind::Bending => "bending",
         };
-        writeln!(out, "{:>5}  {:>12.4}  {kind}", r.index, r.frequency_hz)?;
+        let [x, y, z] = r.translation_shares.map(|s| (100.0 * s).round());
+        writeln!(
+            out,
+            "{:>5}  {:>12.4}  {kind:<8}  {x:>4}  {y:>4}  {z:>4}",
+            r.index, r.frequency_hz
+        )?;
     }
     Ok(())
 }

@@ -24,6 +24,20 @@ fn modes_json_on_the_bundled_config() {
     let f: Vec<f64> = modes.iter().map(|m| m["frequency_hz"].as_f64().unwrap()).collect();
     assert!(f.windows(2).all(|w| w[0] <= w[1]));
     assert!(f[29] < 80.0 && f[3] > 1.0);
+    // Where each mode moves: on this flat deck (normal z) a bending mode's
+    // translational energy is along z, a membrane mode's in the plane; the
+    // shares sum to 1.
+    for m in &modes[3..] {
+        let shares: Vec<f64> = m["translation_shares"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|s| s.as_f64().unwrap())
+            .collect();
+        assert!((shares.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{m}");
+        let vertical = shares[2] > 0.5;
+        assert_eq!(vertical, m["kind"] == "bending", "{m}");
+    }
 }
 
 #[test]
@@ -33,8 +47,15 @@ fn modes_table_is_human_readable() {
     let text = String::from_utf8(out.stdout).unwrap();
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 6);
-    assert!(lines[0].contains("frequency Hz"));
-    assert!(lines[4].trim_start().starts_with('4') && lines[4].ends_with("bending"));
+    assert!(
+        lines[0].contains("frequency Hz") && lines[0].ends_with("x %   y %   z %"),
+        "{text}"
+    );
+    // Mode 4, the first bending mode: all of it vertical.
+    assert!(
+        lines[4].trim_start().starts_with('4') && lines[4].contains("bending") && lines[4].ends_with("0     0   100"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -61,6 +61,10 @@ pub struct Modes {
     /// Full generalised mode shapes, one per column (`ndof × nmodes`).
     pub shapes: Mat<f64>,
     pub kinds: Vec<ModeKind>,
+    /// Per mode, the shares of its lumped translational kinetic energy along
+    /// the global x, y and z axes (they sum to 1): a deck's vertical mode is
+    /// mostly z, a transverse one mostly the horizontal axis across the span.
+    pub translation_shares: Vec<[f64; 3]>,
 }
 
 impl Modes {
@@ -100,8 +104,15 @@ pub fn solve(
     let pencil = ScaledPencil::new(&reduction.reduce(stiffness), &reduction.reduce(mass), &all)?;
     let (omega2, y) = symmetric_eigen(&pencil.a_free)?;
     let shapes = reduction.expand(&pencil.back_transform(y));
-    let kinds = classify(&omega2, &shapes, mass, frames);
-    Ok(Modes { omega2, shapes, kinds })
+    let lumped = lumped_mass(mass, frames.len());
+    let kinds = classify_lumped(&omega2, &shapes, &lumped, frames);
+    let translation_shares = translation_shares(&shapes, &lumped);
+    Ok(Modes {
+        omega2,
+        shapes,
+        kinds,
+        translation_shares,
+    })
 }
 
 /// One diagonal block `(K_c, M_c)` of the reduced pencil, transformed to a
@@ -441,8 +452,15 @@ impl ModalSolver {
         };
         let (omega2, y) = self.solve_with_fields(kappa, theta)?;
         let shapes = reduction.expand(&y);
-        let kinds = classify(&omega2, &shapes, mass, frames);
-        Ok(Modes { omega2, shapes, kinds })
+        let lumped = lumped_mass(mass, frames.len());
+        let kinds = classify_lumped(&omega2, &shapes, &lumped, frames);
+        let translation_shares = translation_shares(&shapes, &lumped);
+        Ok(Modes {
+            omega2,
+            shapes,
+            kinds,
+            translation_shares,
+        })
     }
 }
 
@@ -506,16 +524,38 @@ pub fn symmetric_eigen(a: &Mat<f64>) -> Result<(Vec<f64>, Mat<f64>), ModalError>
     Ok(((0..n).map(|i| s[i]).collect(), u))
 }
 
-fn classify(omega2: &[f64], shapes: &Mat<f64>, mass: &Mat<f64>, frames: &[Frame]) -> Vec<ModeKind> {
-    let cps = frames.len();
-    // Row-sum lumped translational mass per control point (x rows).
-    let lumped: Vec<f64> = (0..cps)
+/// Row-sum lumped translational mass of each of `cps` control points (their
+/// x rows of `mass`).
+fn lumped_mass(mass: &Mat<f64>, cps: usize) -> Vec<f64> {
+    (0..cps)
         .map(|cp| {
             let r = DOFS_PER_CONTROL_POINT * cp;
             (0..cps).map(|c| mass[(r, DOFS_PER_CONTROL_POINT * c)]).sum()
         })
-        .collect();
-    classify_lumped(omega2, shapes, &lumped, frames)
+        .collect()
+}
+
+/// [`Modes::translation_shares`]: per mode `Σ_cp m_cp u_d²` along each
+/// global axis `d` over their sum, with `lumped` the control points'
+/// lumped translational mass (zeros for a mode without translation).
+pub(crate) fn translation_shares(shapes: &Mat<f64>, lumped: &[f64]) -> Vec<[f64; 3]> {
+    (0..shapes.ncols())
+        .map(|k| {
+            let mut energy = [0.0; 3];
+            for (cp, m) in lumped.iter().enumerate() {
+                let b = DOFS_PER_CONTROL_POINT * cp;
+                for (d, e) in energy.iter_mut().enumerate() {
+                    *e += m * shapes[(b + d, k)] * shapes[(b + d, k)];
+                }
+            }
+            let total: f64 = energy.iter().sum();
+            if total > 0.0 {
+                energy.map(|e| e / total)
+            } else {
+                [0.0; 3]
+            }
+        })
+        .collect()
 }
 
 /// Rigid (`ω² < 1e-12 ω²_max`), bending (the lumped-mass-weighted normal
@@ -544,4 +584,23 @@ pub(crate) fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64],
             }
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two control points of lumped masses 1 and 3: a shape moving the first
+    /// by 1 along x and the second by 2 along z holds energies 1 and 12; a
+    /// shape of rotations alone holds no translational energy.
+    #[test]
+    fn translation_shares_weigh_each_axis_by_the_lumped_mass() {
+        let mut shapes = Mat::<f64>::zeros(2 * DOFS_PER_CONTROL_POINT, 2);
+        shapes[(0, 0)] = 1.0;
+        shapes[(DOFS_PER_CONTROL_POINT + 2, 0)] = 2.0;
+        shapes[(3, 1)] = 5.0;
+        let shares = translation_shares(&shapes, &[1.0, 3.0]);
+        assert_eq!(shares[0], [1.0 / 13.0, 0.0, 12.0 / 13.0]);
+        assert_eq!(shares[1], [0.0; 3]);
+    }
 }

@@ -16,7 +16,7 @@ use crate::model::sparse::{NonZeros, Pattern, SparseAccumulator, SparseError, Sp
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::ModelError;
-use crate::solvers::modal::{classify_lumped, Modes};
+use crate::solvers::modal::{classify_lumped, translation_shares, Modes};
 use crate::solvers::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -578,6 +578,7 @@ impl SparseModel {
     pub(crate) fn finish(&self, solved: FreeSolve) -> (Modes, Option<Responses>) {
         let shapes = self.reduction.expand(&solved.shapes);
         let kinds = classify_lumped(&solved.omega2, &shapes, &self.lumped, &self.frames);
+        let translation_shares = translation_shares(&shapes, &self.lumped);
         let responses = solved
             .responses
             .map(|(x, xmx)| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
@@ -586,6 +587,7 @@ impl SparseModel {
                 omega2: solved.omega2,
                 shapes,
                 kinds,
+                translation_shares,
             },
             responses,
         )
