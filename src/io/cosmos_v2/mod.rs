@@ -213,9 +213,15 @@ const END_OF_CHANNEL: &str = "end of data for channel";
 /// The line that announces the acceleration series.
 const ACCEL_SERIES: &str = "points of accel data equally spaced at";
 
-/// Whether `line` holds `marker` (lower case), whatever the line's case.
+/// Whether `line` holds `marker` (lower case), whatever the line's case
+/// (ASCII, without allocating: it runs on every line of a record).
 fn has(line: &str, marker: &str) -> bool {
-    line.to_ascii_lowercase().contains(marker)
+    let marker = marker.as_bytes();
+    marker.is_empty()
+        || line
+            .as_bytes()
+            .windows(marker.len())
+            .any(|w| w.eq_ignore_ascii_case(marker))
 }
 
 /// One channel's section of a file.

@@ -127,7 +127,7 @@ impl DeckGrid {
     /// Displacement along the surface normal at each vertex of the shape
     /// with generalised dof values `shape(dof)`.
     pub(super) fn normal_displacement(&self, model: &ShellModel, shape: impl Fn(usize) -> f64) -> Vec<f64> {
-        let offsets = model.dof_offsets();
+        let dofs = model.dof_map();
         self.params
             .iter()
             .zip(&self.normals)
@@ -137,7 +137,7 @@ impl DeckGrid {
                     .shape_functions(x, y, 0.5)
                     .into_iter()
                     .map(|(dof, col)| {
-                        shape(offsets[patch] + dof)
+                        shape(dofs.first_dof(patch) + dof)
                             * (col[0] * f64::from(n[0]) + col[1] * f64::from(n[1]) + col[2] * f64::from(n[2]))
                     })
                     .sum()

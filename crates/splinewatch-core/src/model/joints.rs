@@ -24,6 +24,7 @@ use crate::geometry::knots::KnotVector;
 use crate::geometry::quadrature::GaussLegendre;
 use crate::geometry::vec3::{cross, dot, norm, normalize, sub, Vec3};
 use crate::model::constraints::Edge;
+use crate::model::dofs::DofMap;
 use crate::model::patch::Patch;
 use crate::model::shell::{Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
 use crate::model::springs::LowRankBlock;
@@ -215,10 +216,10 @@ fn side_rows(shell: &Shell, offset: usize, xi: f64, eta: f64, t: Vec3) -> SideRo
 }
 
 impl Joint {
-    /// The penalty stiffness of eq. (above) on global dofs (`offsets` from
-    /// [`crate::model::patch::dof_offsets`]), penalty factor `c`.
-    pub fn penalty(&self, patches: &[Patch], offsets: &[usize], c: f64) -> LowRankBlock {
-        let entries = self.penalty_entries(patches, offsets, c);
+    /// The penalty stiffness of eq. (above) on the global dofs `dofs`,
+    /// penalty factor `c`.
+    pub fn penalty(&self, patches: &[Patch], dofs: &DofMap, c: f64) -> LowRankBlock {
+        let entries = self.penalty_entries(patches, dofs, c);
         let mut dofs: Vec<usize> = entries.keys().map(|&(i, _)| i).collect();
         dofs.dedup();
         let mut values = Mat::zeros(dofs.len(), dofs.len());
@@ -235,7 +236,7 @@ impl Joint {
     /// [`Self::penalty`]'s entries `(row, column) → value` alone: a long
     /// joint couples each point of one edge to a few of the other's, not
     /// all (the sparse path's pattern).
-    pub fn penalty_entries(&self, patches: &[Patch], offsets: &[usize], c: f64) -> BTreeMap<(usize, usize), f64> {
+    pub fn penalty_entries(&self, patches: &[Patch], dofs: &DofMap, c: f64) -> BTreeMap<(usize, usize), f64> {
         let (pa, pb) = (&patches[self.patch], &patches[self.other]);
         let modulus = pa
             .material
@@ -269,8 +270,8 @@ impl Joint {
                 let ds = w * norm(tangent);
                 let t = normalize(tangent).unwrap_or([1.0, 0.0, 0.0]);
                 let (ub, vb, _) = pb.shell.surface().closest_point(e.r);
-                let ra = side_rows(&pa.shell, offsets[self.patch], u, v, t);
-                let rb = side_rows(&pb.shell, offsets[self.other], ub, vb, t);
+                let ra = side_rows(&pa.shell, dofs.first_dof(self.patch), u, v, t);
+                let rb = side_rows(&pb.shell, dofs.first_dof(self.other), ub, vb, t);
                 let thickness = ra.thickness.max(rb.thickness);
                 let alpha_u = c * modulus * thickness / h;
                 let alpha_r = c * modulus * thickness.powi(3) / (12.0 * h);

@@ -9,18 +9,21 @@
 //! - [`springs`]: B-spline spring fields on a face and their `∂K/∂κ_j` (eq. 19–22);
 //! - [`stiffness_field`]: B-spline multipliers of the deck's stiffness and their `∂K/∂θ_k`;
 //! - [`damping`]: the damping curve ζ(f) (eq. 25–29);
-//! - [`patch`]: a shell with its material and added mass, and the global dof
-//!   numbering of several patches;
+//! - [`patch`]: a shell with its material and added mass;
+//! - [`dofs`]: the numbering of the generalised dofs, node by node, and what each dof is;
 //! - [`joints`]: rigid joints between patches by penalty coupling;
+//! - [`beam`]: straight 3-D Timoshenko beam elements (columns, piers), their stiffness and consistent mass;
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.
 //!
 //! [`ShellModel`] gathers them; the solvers assemble it
 //! ([`crate::solvers::dense_model`], [`crate::solvers::sparse_model`]).
 
+pub mod beam;
 pub mod bearings;
 pub mod constraints;
 pub mod damping;
+pub mod dofs;
 pub mod joints;
 pub mod material;
 pub mod patch;
@@ -74,9 +77,9 @@ impl ShellModel {
         }
     }
 
-    /// First global dof of every patch, then the total.
-    pub fn dof_offsets(&self) -> Vec<usize> {
-        patch::dof_offsets(&self.patches)
+    /// The numbering of the model's generalised dofs.
+    pub fn dof_map(&self) -> dofs::DofMap {
+        dofs::DofMap::of_patches(&self.patches)
     }
 
     pub fn dof_count(&self) -> usize {

@@ -1,10 +1,7 @@
 //! One patch of a multi-patch deck: a degenerate shell (eq. 2–3) with its own
 //! material and a non-structural mass per unit area (pavement, ballast,
-//! services), and the global dof numbering of several patches.
-//!
-//! Patches are numbered in the order given; patch `k`'s dofs follow those of
-//! patches `0..k` (its offset is `5 Σ_{j<k} n_cp(j)`), each in its shell's
-//! own order (eq. 4). One patch keeps exactly the single-shell numbering.
+//! services). Several patches are numbered one after the other
+//! ([`crate::model::dofs::DofMap`]).
 
 use crate::geometry::quadrature::GaussLegendre;
 use crate::geometry::vec3::{cross, norm};
@@ -121,18 +118,6 @@ impl Patch {
         }
         Ok(())
     }
-}
-
-/// First global dof of every patch, and the total as the last entry.
-pub fn dof_offsets(patches: &[Patch]) -> Vec<usize> {
-    let mut out = Vec::with_capacity(patches.len() + 1);
-    let mut at = 0;
-    out.push(0);
-    for p in patches {
-        at += p.shell.dof_count();
-        out.push(at);
-    }
-    out
 }
 
 #[cfg(test)]

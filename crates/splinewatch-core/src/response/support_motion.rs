@@ -36,6 +36,7 @@
 //! `T_r(ω) = N_r Γ + ω² Σ_i a_{r,i} L_i / D_i(ω)`, `D_i` of eq. (31).
 
 use crate::model::damping::DampingCurve;
+use crate::model::dofs::DofMap;
 use crate::model::supports::{SupportError, SupportGroups};
 use crate::model::ShellModel;
 use crate::response::frf::{FrfModel, FrfRequest, ModalState, Quantity};
@@ -63,6 +64,8 @@ pub struct SupportMotion {
     participation: Mat<f64>,
     /// `Γ` of every input on the generalised dofs: dofs × inputs.
     influence: Mat<f64>,
+    /// The numbering of those dofs (which are translations along which axis).
+    dofs: DofMap,
 }
 
 /// `∂T/∂p` of every `(sensor, input)` pair, pair-major as the FRFs.
@@ -90,12 +93,11 @@ impl SupportMotion {
         inputs: &[GroundInput],
     ) -> Result<Self, SupportError> {
         check_inputs(groups, inputs)?;
-        let lifts = constraint_lifts(model, groups)?;
-        let lift = |input: &GroundInput| lift_of(&lifts, input);
+        let lifts = GroundLifts::new(model, groups)?;
         let influence = match frf.dense() {
-            Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lift),
+            Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lifts),
             None => {
-                let forces = truncated_forces(frf, groups, kappa, inputs, &lift)?;
+                let forces = truncated_forces(frf, groups, kappa, inputs, &lifts)?;
                 let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
                 let (_, responses) = model
                     .modes_and_responses(kappa, theta, cutoff_hz, &forces)
@@ -103,7 +105,7 @@ impl SupportMotion {
                 truncated_influence(state, &forces, &responses, cutoff_hz)
             }
         };
-        Ok(Self::from_influence(frf, state, inputs, influence))
+        Ok(Self::from_influence(frf, state, inputs, influence, lifts.dofs))
     }
 
     /// The modal state at `kappa`, `theta` and `damping`
@@ -119,19 +121,18 @@ impl SupportMotion {
         inputs: &[GroundInput],
     ) -> Result<(ModalState, Self), SupportError> {
         check_inputs(groups, inputs)?;
-        let lifts = constraint_lifts(model, groups)?;
-        let lift = |input: &GroundInput| lift_of(&lifts, input);
+        let lifts = GroundLifts::new(model, groups)?;
         let solve_error = |e: crate::response::frf::FrfError| SupportError::Solve(e.to_string());
         let (state, influence) = match frf.dense() {
             Some(assembled) => {
                 let state = frf
                     .modal_state_with_fields(kappa, theta, damping)
                     .map_err(solve_error)?;
-                let influence = dense_influence(assembled, groups, kappa, theta, &state, inputs, &lift);
+                let influence = dense_influence(assembled, groups, kappa, theta, &state, inputs, &lifts);
                 (state, influence)
             }
             None => {
-                let forces = truncated_forces(frf, groups, kappa, inputs, &lift)?;
+                let forces = truncated_forces(frf, groups, kappa, inputs, &lifts)?;
                 let (state, responses) = frf
                     .modal_state_with_loads(kappa, theta, damping, &forces)
                     .map_err(solve_error)?;
@@ -141,7 +142,7 @@ impl SupportMotion {
                 (state, influence)
             }
         };
-        let motion = Self::from_influence(frf, &state, inputs, influence);
+        let motion = Self::from_influence(frf, &state, inputs, influence, lifts.dofs);
         Ok((state, motion))
     }
 
@@ -161,16 +162,20 @@ impl SupportMotion {
             return Ok(frf.clone());
         }
         check_inputs(groups, inputs)?;
-        let lifts = constraint_lifts(model, groups)?;
-        let forces = truncated_forces(frf, groups, kappa, inputs, &|input: &GroundInput| {
-            lift_of(&lifts, input)
-        })?;
+        let lifts = GroundLifts::new(model, groups)?;
+        let forces = truncated_forces(frf, groups, kappa, inputs, &lifts)?;
         frf.with_reanalysis((kappa, theta), &forces, varied)
             .map_err(|e| SupportError::Solve(e.to_string()))
     }
 
     /// `N Γ` and `L = Φᵀ M Γ` of the influence `Γ` (dofs × inputs).
-    fn from_influence(frf: &FrfModel, state: &ModalState, inputs: &[GroundInput], influence: Mat<f64>) -> Self {
+    fn from_influence(
+        frf: &FrfModel,
+        state: &ModalState,
+        inputs: &[GroundInput],
+        influence: Mat<f64>,
+        dofs: DofMap,
+    ) -> Self {
         let n = influence.nrows();
         let shapes = &state.modes.shapes;
         let nm = state.modes.len();
@@ -191,6 +196,7 @@ impl SupportMotion {
             quasi_static,
             participation,
             influence,
+            dofs,
         }
     }
 
@@ -409,7 +415,11 @@ impl SupportMotion {
                         .enumerate()
                         .map(|(a, &ra)| {
                             let v = b.dofs.iter().enumerate().map(|(e, &re)| {
-                                let rigid = if own && re % 5 == input.axis { 1.0 } else { 0.0 };
+                                let rigid = if own && self.dofs.is_translation(re, input.axis) {
+                                    1.0
+                                } else {
+                                    0.0
+                                };
                                 b.values[(a, e)] * (rigid - self.influence[(re, c)])
                             });
                             (ra, v.sum())
@@ -582,16 +592,6 @@ fn check_inputs(groups: &SupportGroups, inputs: &[GroundInput]) -> Result<(), Su
     Ok(())
 }
 
-/// `ℓ` of `input`: 1 on the dofs along its axis of its group's constrained
-/// control points.
-fn lift_of(lifts: &[Vec<bool>], input: &GroundInput) -> Vec<f64> {
-    lifts[input.group]
-        .iter()
-        .enumerate()
-        .map(|(dof, &on)| if on && dof % 5 == input.axis { 1.0 } else { 0.0 })
-        .collect()
-}
-
 /// `Γ` on the dense path: `ℓ + Σ_i φ_i P_i / λ_i` over every mode.
 fn dense_influence(
     assembled: &crate::solvers::dense_model::AssembledModel,
@@ -600,12 +600,12 @@ fn dense_influence(
     theta: &[Vec<f64>],
     state: &ModalState,
     inputs: &[GroundInput],
-    lift: &dyn Fn(&GroundInput) -> Vec<f64>,
+    lifts: &GroundLifts,
 ) -> Mat<f64> {
     let mut influence = Mat::<f64>::zeros(assembled.free_stiffness.nrows(), inputs.len());
     for (c, input) in inputs.iter().enumerate() {
-        let lift = lift(input);
-        let force = ground_force(assembled, groups, kappa, theta, input, &lift);
+        let lift = lifts.lift(input);
+        let force = ground_force(assembled, groups, (kappa, theta), input, &lift, &lifts.dofs);
         let solved = static_by_modes(state, &force);
         for (d, (l, x)) in lift.iter().zip(solved).enumerate() {
             influence[(d, c)] = l + x;
@@ -622,10 +622,10 @@ fn truncated_forces(
     groups: &SupportGroups,
     kappa: &[Vec<f64>],
     inputs: &[GroundInput],
-    lift: &dyn Fn(&GroundInput) -> Vec<f64>,
+    lifts: &GroundLifts,
 ) -> Result<Vec<Vec<(usize, f64)>>, SupportError> {
     let (model, _) = frf.sparse().expect("a model is dense or truncated");
-    if let Some(input) = inputs.iter().find(|i| lift(i).iter().any(|&v| v != 0.0)) {
+    if let Some(input) = inputs.iter().find(|i| lifts.moves(i.group)) {
         return Err(SupportError::TruncatedConstraint(groups.names()[input.group].clone()));
     }
     let n = model.dof_count();
@@ -640,7 +640,7 @@ fn truncated_forces(
                 for (b, &k) in blocks.iter().zip(coefficients) {
                     for (a, &ra) in b.dofs.iter().enumerate() {
                         for (e, &re) in b.dofs.iter().enumerate() {
-                            if re % 5 == input.axis {
+                            if lifts.dofs.is_translation(re, input.axis) {
                                 force[ra] += k * b.values[(a, e)];
                             }
                         }
@@ -685,42 +685,68 @@ fn truncated_influence(
     influence
 }
 
-/// Per group, whether each generalised dof's control point lies on one of
-/// the group's constrained edges (all five dofs of the point flagged).
-fn constraint_lifts(model: &ShellModel, groups: &SupportGroups) -> Result<Vec<Vec<bool>>, SupportError> {
-    let offsets = model.dof_offsets();
-    let n = model.dof_count();
-    let mut owner: Vec<Option<usize>> = vec![None; n / 5];
-    let mut lifts = vec![vec![false; n]; groups.names().len()];
-    for (k, c) in model.constraints.iter().enumerate() {
-        let g = groups.of_constraint(k);
-        let base = offsets[c.patch] / 5;
-        for cp in c.control_points(&model.patches[c.patch].shell) {
-            let cp = base + cp;
-            match owner[cp] {
-                Some(other) if other != g => {
-                    return Err(SupportError::TwoGrounds {
-                        control_point: cp,
-                        first: groups.names()[other].clone(),
-                        second: groups.names()[g].clone(),
-                    })
+/// The nodes on constrained edges and the ground each follows (`ℓ`).
+struct GroundLifts {
+    dofs: DofMap,
+    /// Per node, the group whose ground it follows, if it is on a
+    /// constrained edge.
+    owner: Vec<Option<usize>>,
+}
+
+impl GroundLifts {
+    /// The constrained nodes of `model`; a node on the edges of two groups
+    /// is refused (it cannot follow two grounds).
+    fn new(model: &ShellModel, groups: &SupportGroups) -> Result<Self, SupportError> {
+        let dofs = model.dof_map();
+        let mut owner: Vec<Option<usize>> = vec![None; dofs.node_count()];
+        for (k, c) in model.constraints.iter().enumerate() {
+            let g = groups.of_constraint(k);
+            for cp in c.control_points(&model.patches[c.patch].shell) {
+                let node = dofs.node(c.patch, cp);
+                match owner[node] {
+                    Some(other) if other != g => {
+                        return Err(SupportError::TwoGrounds {
+                            control_point: node,
+                            first: groups.names()[other].clone(),
+                            second: groups.names()[g].clone(),
+                        })
+                    }
+                    _ => owner[node] = Some(g),
                 }
-                _ => owner[cp] = Some(g),
             }
-            lifts[g][5 * cp..5 * cp + 5].fill(true);
         }
+        Ok(Self { dofs, owner })
     }
-    Ok(lifts)
+
+    /// Whether group `group` has constrained nodes (its ground lifts some).
+    fn moves(&self, group: usize) -> bool {
+        self.owner.contains(&Some(group))
+    }
+
+    /// `ℓ` of `input`: 1 on the translations along its axis of its group's
+    /// constrained nodes.
+    fn lift(&self, input: &GroundInput) -> Vec<f64> {
+        (0..self.dofs.dof_count())
+            .map(|dof| {
+                let own = self.owner[self.dofs.node_of(dof)] == Some(input.group);
+                if own && self.dofs.is_translation(dof, input.axis) {
+                    1.0
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
 }
 
 /// `f = ΔK_g R_d − K ℓ` at the coefficients `kappa`, `theta` (full dofs).
 fn ground_force(
     assembled: &crate::solvers::dense_model::AssembledModel,
     groups: &SupportGroups,
-    kappa: &[Vec<f64>],
-    theta: &[Vec<f64>],
+    (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
     input: &GroundInput,
     lift: &[f64],
+    dofs: &DofMap,
 ) -> Vec<f64> {
     let n = lift.len();
     let lifted: Vec<usize> = (0..n).filter(|&d| lift[d] != 0.0).collect();
@@ -741,7 +767,11 @@ fn ground_force(
         for (b, &k) in blocks.iter().zip(coefficients) {
             for (a, &ra) in b.dofs.iter().enumerate() {
                 for (c, &rc) in b.dofs.iter().enumerate() {
-                    let rigid = if own && rc % 5 == input.axis { 1.0 } else { 0.0 };
+                    let rigid = if own && dofs.is_translation(rc, input.axis) {
+                        1.0
+                    } else {
+                        0.0
+                    };
                     force[ra] += k * b.values[(a, c)] * (rigid - lift[rc]);
                 }
             }

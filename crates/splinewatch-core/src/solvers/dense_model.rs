@@ -10,6 +10,7 @@
 
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
+use crate::model::dofs::DofMap;
 use crate::model::patch::Patch;
 use crate::model::shell::{self, Frame, Offset, ShellError};
 use crate::model::springs::{LowRankBlock, SpringError, SpringField};
@@ -61,7 +62,7 @@ pub enum ModelError {
 #[derive(Debug, Clone)]
 pub struct AssembledModel {
     /// The patches, for the sensors' rows (global dofs by
-    /// [`crate::model::patch::dof_offsets`]).
+    /// [`crate::model::dofs::DofMap`]).
     pub patches: Vec<Patch>,
     /// Every control point's directors, in global order.
     pub frames: Vec<Frame>,
@@ -90,34 +91,34 @@ impl ShellModel {
     /// fields followed by the bearings (three coefficients each), and the
     /// stiffness fields, each moved to its patch's dofs.
     pub fn assemble(&self) -> Result<AssembledModel, ModelError> {
-        let offsets = self.dof_offsets();
-        let (mut free_stiffness, mut mass) = self.patch_matrices(&offsets)?;
-        for (index, (p, &offset)) in self.patches.iter().zip(&offsets).enumerate() {
-            p.add_surface_mass(&mut Offset::new(&mut mass, offset))
+        let dofs = self.dof_map();
+        let (mut free_stiffness, mut mass) = self.patch_matrices(&dofs)?;
+        for (index, p) in self.patches.iter().enumerate() {
+            p.add_surface_mass(&mut Offset::new(&mut mass, dofs.first_dof(index)))
                 .map_err(|e| ModelError::Patch {
                     index,
                     source: ShellError::Sparse(e),
                 })?;
         }
-        for block in self.point_mass_blocks(&offsets)? {
+        for block in self.point_mass_blocks(&dofs)? {
             block.add_scaled_to(&mut mass, 1.0);
         }
         for joint in &self.joints {
-            self.patch_at(joint.patch, &offsets)?;
-            self.patch_at(joint.other, &offsets)?;
+            self.patch_at(joint.patch, &dofs)?;
+            self.patch_at(joint.other, &dofs)?;
             joint
-                .penalty(&self.patches, &offsets, self.joint_penalty)
+                .penalty(&self.patches, &dofs, self.joint_penalty)
                 .add_scaled_to(&mut free_stiffness, 1.0);
         }
-        let spring_blocks = self.spring_blocks(&offsets)?;
-        let dofs = self.dof_count();
+        let spring_blocks = self.spring_blocks(&dofs)?;
+        let n = dofs.dof_count();
         let mut field_matrices = Vec::with_capacity(self.stiffness_fields.len());
         for (index, f) in self.stiffness_fields.iter().enumerate() {
-            let (p, offset) = self.patch_at(f.patch(), &offsets)?;
+            let (p, offset) = self.patch_at(f.patch(), &dofs)?;
             let own = f
                 .coefficient_matrices(&p.shell, &p.material)
                 .map_err(|source| ModelError::StiffnessField { index, source })?;
-            field_matrices.push(own.into_iter().map(|m| embed(m, offset, dofs)).collect());
+            field_matrices.push(own.into_iter().map(|m| embed(m, offset, n)).collect());
         }
         let spring_stiffness = self.spring_coefficients();
         Ok(AssembledModel {
@@ -139,10 +140,10 @@ impl ShellModel {
     }
 
     /// Patch `patch` and its first global dof.
-    pub(crate) fn patch_at(&self, patch: usize, offsets: &[usize]) -> Result<(&Patch, usize), ModelError> {
+    pub(crate) fn patch_at(&self, patch: usize, dofs: &DofMap) -> Result<(&Patch, usize), ModelError> {
         self.patches
             .get(patch)
-            .map(|p| (p, offsets[patch]))
+            .map(|p| (p, dofs.first_dof(patch)))
             .ok_or(ModelError::UnknownPatch {
                 patch,
                 count: self.patches.len(),
@@ -151,17 +152,17 @@ impl ShellModel {
 
     /// `∂K/∂κ_j` on global dofs: every spring field's coefficients, then
     /// every bearing's `k_x, k_y, k_z`.
-    pub(crate) fn spring_blocks(&self, offsets: &[usize]) -> Result<Vec<Vec<LowRankBlock>>, ModelError> {
+    pub(crate) fn spring_blocks(&self, dofs: &DofMap) -> Result<Vec<Vec<LowRankBlock>>, ModelError> {
         let mut spring_blocks = Vec::with_capacity(self.springs.len() + self.bearings.len());
         for (index, s) in self.springs.iter().enumerate() {
-            let (p, offset) = self.patch_at(s.patch(), offsets)?;
+            let (p, offset) = self.patch_at(s.patch(), dofs)?;
             let blocks = s
                 .coefficient_matrices(&p.shell)
                 .map_err(|source| ModelError::Spring { index, source })?;
             spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
         }
         for (index, b) in self.bearings.iter().enumerate() {
-            let (p, offset) = self.patch_at(b.at().patch, offsets)?;
+            let (p, offset) = self.patch_at(b.at().patch, dofs)?;
             let blocks = b
                 .coefficient_matrices(&p.shell)
                 .map_err(|source| ModelError::Bearing { index, source })?;
@@ -171,12 +172,12 @@ impl ShellModel {
     }
 
     /// Every point mass's block on global dofs.
-    pub(crate) fn point_mass_blocks(&self, offsets: &[usize]) -> Result<Vec<LowRankBlock>, ModelError> {
+    pub(crate) fn point_mass_blocks(&self, dofs: &DofMap) -> Result<Vec<LowRankBlock>, ModelError> {
         self.masses
             .iter()
             .enumerate()
             .map(|(index, m)| {
-                let (p, offset) = self.patch_at(m.at().patch, offsets)?;
+                let (p, offset) = self.patch_at(m.at().patch, dofs)?;
                 let block = m
                     .mass_block(&p.shell)
                     .map_err(|source| ModelError::Mass { index, source })?;
@@ -186,14 +187,15 @@ impl ShellModel {
     }
 
     /// Every patch's eq. (16)–(17), side by side (one patch: its own).
-    fn patch_matrices(&self, offsets: &[usize]) -> Result<(Mat<f64>, Mat<f64>), ModelError> {
+    fn patch_matrices(&self, dofs: &DofMap) -> Result<(Mat<f64>, Mat<f64>), ModelError> {
         if let [p] = self.patches.as_slice() {
             let mats = shell::assemble(&p.shell, &p.material)?;
             return Ok((mats.stiffness, mats.mass));
         }
-        let n = self.dof_count();
+        let n = dofs.dof_count();
         let (mut k, mut m) = (Mat::zeros(n, n), Mat::zeros(n, n));
-        for (index, (p, &offset)) in self.patches.iter().zip(offsets).enumerate() {
+        for (index, p) in self.patches.iter().enumerate() {
+            let offset = dofs.first_dof(index);
             let mats = shell::assemble(&p.shell, &p.material).map_err(|source| ModelError::Patch { index, source })?;
             let own = p.shell.dof_count();
             k.as_mut()

@@ -68,6 +68,21 @@ pub struct Modes {
 }
 
 impl Modes {
+    /// The modes `(ω², Φ)` of a model whose lumped translational masses per
+    /// control point are `lumped` and whose control points sit in `frames`:
+    /// each mode classified ([`ModeKind`]) and its translation shares taken,
+    /// so every solver path finishes its modes the same way.
+    pub(crate) fn classified(omega2: Vec<f64>, shapes: Mat<f64>, lumped: &[f64], frames: &[Frame]) -> Self {
+        let kinds = classify_lumped(&omega2, &shapes, lumped, frames);
+        let translation_shares = translation_shares(&shapes, lumped);
+        Self {
+            omega2,
+            shapes,
+            kinds,
+            translation_shares,
+        }
+    }
+
     /// Natural frequency in Hz of mode `i`: `f_i = ω_i / 2π` (zero for
     /// a rigid mode with a round-off negative eigenvalue).
     pub fn frequency_hz(&self, i: usize) -> f64 {
@@ -104,15 +119,12 @@ pub fn solve(
     let pencil = ScaledPencil::new(&reduction.reduce(stiffness), &reduction.reduce(mass), &all)?;
     let (omega2, y) = symmetric_eigen(&pencil.a_free)?;
     let shapes = reduction.expand(&pencil.back_transform(y));
-    let lumped = lumped_mass(mass, frames.len());
-    let kinds = classify_lumped(&omega2, &shapes, &lumped, frames);
-    let translation_shares = translation_shares(&shapes, &lumped);
-    Ok(Modes {
+    Ok(Modes::classified(
         omega2,
         shapes,
-        kinds,
-        translation_shares,
-    })
+        &lumped_mass(mass, frames.len()),
+        frames,
+    ))
 }
 
 /// One diagonal block `(K_c, M_c)` of the reduced pencil, transformed to a
@@ -452,15 +464,12 @@ impl ModalSolver {
         };
         let (omega2, y) = self.solve_with_fields(kappa, theta)?;
         let shapes = reduction.expand(&y);
-        let lumped = lumped_mass(mass, frames.len());
-        let kinds = classify_lumped(&omega2, &shapes, &lumped, frames);
-        let translation_shares = translation_shares(&shapes, &lumped);
-        Ok(Modes {
+        Ok(Modes::classified(
             omega2,
             shapes,
-            kinds,
-            translation_shares,
-        })
+            &lumped_mass(mass, frames.len()),
+            frames,
+        ))
     }
 }
 
@@ -538,7 +547,7 @@ fn lumped_mass(mass: &Mat<f64>, cps: usize) -> Vec<f64> {
 /// [`Modes::translation_shares`]: per mode `Σ_cp m_cp u_d²` along each
 /// global axis `d` over their sum, with `lumped` the control points'
 /// lumped translational mass (zeros for a mode without translation).
-pub(crate) fn translation_shares(shapes: &Mat<f64>, lumped: &[f64]) -> Vec<[f64; 3]> {
+fn translation_shares(shapes: &Mat<f64>, lumped: &[f64]) -> Vec<[f64; 3]> {
     (0..shapes.ncols())
         .map(|k| {
             let mut energy = [0.0; 3];
@@ -561,7 +570,7 @@ pub(crate) fn translation_shares(shapes: &Mat<f64>, lumped: &[f64]) -> Vec<[f64;
 /// Rigid (`ω² < 1e-12 ω²_max`), bending (the lumped-mass-weighted normal
 /// motion dominates) or membrane, with `lumped` the row-sum translational
 /// mass of every control point.
-pub(crate) fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64], frames: &[Frame]) -> Vec<ModeKind> {
+fn classify_lumped(omega2: &[f64], shapes: &Mat<f64>, lumped: &[f64], frames: &[Frame]) -> Vec<ModeKind> {
     let max = omega2.iter().copied().fold(0.0f64, f64::max);
     let cps = frames.len();
     (0..omega2.len())

@@ -10,13 +10,14 @@
 
 use crate::linalg::bitwise_equal;
 use crate::model::constraints::DofReduction;
+use crate::model::dofs::DofMap;
 use crate::model::patch::Patch;
-use crate::model::shell::{self, Frame, Offset, DOFS_PER_CONTROL_POINT};
+use crate::model::shell::{self, Frame, Offset};
 use crate::model::sparse::{NonZeros, Pattern, SparseAccumulator, SparseError, SparseSymmetric};
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::ModelError;
-use crate::solvers::modal::{classify_lumped, translation_shares, Modes};
+use crate::solvers::modal::Modes;
 use crate::solvers::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -65,7 +66,7 @@ impl SparseTerm {
 #[derive(Debug, Clone)]
 pub struct SparseModel {
     /// The patches, for the sensors' rows and the export (global dofs by
-    /// [`crate::model::patch::dof_offsets`]).
+    /// [`crate::model::dofs::DofMap`]).
     pub patches: Vec<Patch>,
     /// Every control point's directors, in global order.
     pub frames: Vec<Frame>,
@@ -231,7 +232,7 @@ fn decoupled_blocks(pattern: &Arc<Pattern>, coupled: &[bool]) -> Result<Vec<Bloc
 )]
 fn field_matrices(
     model: &ShellModel,
-    offsets: &[usize],
+    dofs: &DofMap,
     full: &Arc<Pattern>,
     reduction: &DofReduction,
     pattern: &Arc<Pattern>,
@@ -241,7 +242,7 @@ fn field_matrices(
         .iter()
         .enumerate()
         .map(|(index, f)| {
-            let (patch, offset) = model.patch_at(f.patch(), offsets)?;
+            let (patch, offset) = model.patch_at(f.patch(), dofs)?;
             // Each coefficient's matrix holds its non-zeros only until it
             // is reduced, one at a time (on the whole pattern, 32
             // coefficients of a 20 000-dof deck took 2.5 GB).
@@ -273,7 +274,7 @@ fn sparse_error(e: SparseError) -> ModelError {
 /// The pattern of a model's generalised dofs: each patch's control net
 /// (one patch: its own, [`crate::model::shell::Shell::pattern`]), and the control points a
 /// joint's penalty couples across patches (`joints`: each joint's entries).
-fn model_pattern(model: &ShellModel, joints: &[BTreeMap<(usize, usize), f64>]) -> Pattern {
+fn model_pattern(model: &ShellModel, dofs: &DofMap, joints: &[BTreeMap<(usize, usize), f64>]) -> Pattern {
     if let [p] = model.patches.as_slice() {
         return p.shell.pattern();
     }
@@ -288,17 +289,13 @@ fn model_pattern(model: &ShellModel, joints: &[BTreeMap<(usize, usize), f64>]) -
         );
     }
     for &(i, j) in joints.iter().flat_map(BTreeMap::keys) {
-        let (a, b) = (i / DOFS_PER_CONTROL_POINT, j / DOFS_PER_CONTROL_POINT);
-        graph[a].push(b);
+        graph[dofs.node_of(i)].push(dofs.node_of(j));
     }
     for neighbours in &mut graph {
         neighbours.sort_unstable();
         neighbours.dedup();
     }
-    Pattern::control_graph(
-        Arc::new(graph),
-        &vec![DOFS_PER_CONTROL_POINT; model.control_point_count()],
-    )
+    Pattern::control_graph(Arc::new(graph), &dofs.dofs_per_node())
 }
 
 /// `target += B` for the non-zero entries of a block on global dofs.
@@ -339,25 +336,25 @@ fn add_entries(
 /// (`joints`: each joint's entries), as [`ShellModel::assemble`] does dense.
 fn assemble_matrices(
     model: &ShellModel,
-    offsets: &[usize],
+    dofs: &DofMap,
     full: &Arc<Pattern>,
     joints: &[BTreeMap<(usize, usize), f64>],
 ) -> Result<(SparseSymmetric, SparseSymmetric), ModelError> {
     let parts: Vec<_> = model
         .patches
         .iter()
-        .zip(offsets)
-        .map(|(p, &offset)| (&p.shell, &p.material, offset))
+        .enumerate()
+        .map(|(index, p)| (&p.shell, &p.material, dofs.first_dof(index)))
         .collect();
     let (mut k, mut m) = shell::assemble_sparse_patches(&parts, full)?;
-    for (index, (p, &offset)) in model.patches.iter().zip(offsets).enumerate() {
-        p.add_surface_mass(&mut Offset::new(&mut m, offset))
+    for (index, p) in model.patches.iter().enumerate() {
+        p.add_surface_mass(&mut Offset::new(&mut m, dofs.first_dof(index)))
             .map_err(|e| ModelError::Patch {
                 index,
                 source: shell::ShellError::Sparse(e),
             })?;
     }
-    for block in model.point_mass_blocks(offsets)? {
+    for block in model.point_mass_blocks(dofs)? {
         add_block(&mut m, &block)?;
     }
     for entries in joints {
@@ -372,19 +369,19 @@ impl SparseModel {
     /// [`ShellModel::assemble`] builds dense.
     pub fn assemble(model: &ShellModel) -> Result<Self, ModelError> {
         model.check_patch_indices()?;
-        let offsets = model.dof_offsets();
+        let dofs = model.dof_map();
         let joints: Vec<_> = model
             .joints
             .iter()
-            .map(|j| j.penalty_entries(&model.patches, &offsets, model.joint_penalty))
+            .map(|j| j.penalty_entries(&model.patches, &dofs, model.joint_penalty))
             .collect();
-        let full = Arc::new(model_pattern(model, &joints));
+        let full = Arc::new(model_pattern(model, &dofs, &joints));
         let reduction = model.reduction()?;
         let pattern = Arc::new(reduction.reduced_pattern(&full));
-        let (k, m) = assemble_matrices(model, &offsets, &full, &joints)?;
-        let lumped = lumped_translational_mass(&full, &m, model.control_point_count());
+        let (k, m) = assemble_matrices(model, &dofs, &full, &joints)?;
+        let lumped = lumped_translational_mass(&full, &m, &dofs);
         let owners = owners(&reduction);
-        let spring_blocks = model.spring_blocks(&offsets)?;
+        let spring_blocks = model.spring_blocks(&dofs)?;
         let spring_terms = spring_blocks
             .iter()
             .map(|blocks| {
@@ -395,7 +392,7 @@ impl SparseModel {
                     .map_err(sparse_error)
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let (field_terms, field_products) = field_matrices(model, &offsets, &full, &reduction, &pattern)?;
+        let (field_terms, field_products) = field_matrices(model, &dofs, &full, &reduction, &pattern)?;
         let free_stiffness = reduction.reduce_sparse(&k, &pattern).map_err(sparse_error)?;
         let mass = reduction.reduce_sparse(&m, &pattern).map_err(sparse_error)?;
         let generalised_mass = m.nonzeros();
@@ -577,18 +574,11 @@ impl SparseModel {
     /// to the generalised dofs, the modes classified.
     pub(crate) fn finish(&self, solved: FreeSolve) -> (Modes, Option<Responses>) {
         let shapes = self.reduction.expand(&solved.shapes);
-        let kinds = classify_lumped(&solved.omega2, &shapes, &self.lumped, &self.frames);
-        let translation_shares = translation_shares(&shapes, &self.lumped);
         let responses = solved
             .responses
             .map(|(x, xmx)| (self.reduction.expand(&x), self.reduction.expand(&xmx)));
         (
-            Modes {
-                omega2: solved.omega2,
-                shapes,
-                kinds,
-                translation_shares,
-            },
+            Modes::classified(solved.omega2, shapes, &self.lumped, &self.frames),
             responses,
         )
     }
@@ -617,13 +607,13 @@ const SHIFT_RATIO: f64 = 2500.0;
 /// Largest relative residual of an accepted mode.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
 
-/// Row-sum translational mass per control point (the `u` rows of `M`).
-fn lumped_translational_mass(pattern: &Pattern, m: &SparseSymmetric, control_points: usize) -> Vec<f64> {
-    (0..control_points)
-        .map(|cp| {
-            let r = DOFS_PER_CONTROL_POINT * cp;
+/// Row-sum translational mass per node (its `x` translation's row of `M`).
+fn lumped_translational_mass(pattern: &Pattern, m: &SparseSymmetric, dofs: &DofMap) -> Vec<f64> {
+    (0..dofs.node_count())
+        .map(|node| {
+            let r = dofs.node_dofs(node).start;
             (pattern.col_ptr()[r]..pattern.col_ptr()[r + 1])
-                .filter(|&e| pattern.row_idx()[e] % DOFS_PER_CONTROL_POINT == 0)
+                .filter(|&e| dofs.is_translation(pattern.row_idx()[e], 0))
                 .map(|e| m.values()[e])
                 .sum()
         })

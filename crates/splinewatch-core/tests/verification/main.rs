@@ -1,5 +1,6 @@
 //! Verification ladder of splinewatch-core: one test binary, shared fixtures.
 
+mod beam;
 mod common;
 mod event_updating;
 mod frf;

@@ -21,7 +21,8 @@
 use crate::geometry::vec3::{dot, normalize, Vec3};
 use crate::linalg::dense_rows;
 use crate::model::damping::DampingCurve;
-use crate::model::patch::{dof_offsets, Patch};
+use crate::model::dofs::DofMap;
+use crate::model::patch::Patch;
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
@@ -172,7 +173,7 @@ impl ModalState {
 
 /// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
 pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
-    let offsets = dof_offsets(patches);
+    let dofs = DofMap::of_patches(patches);
     let mut rows = Vec::with_capacity(sensors.len());
     for (index, s) in sensors.iter().enumerate() {
         let Some(shell) = patches.get(s.patch).map(|p| &p.shell) else {
@@ -195,7 +196,7 @@ pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec
         let row = shell
             .shape_functions(s.xi, s.eta, s.tau)
             .into_iter()
-            .map(|(dof, col)| (offsets[s.patch] + dof, dot(dir, col)))
+            .map(|(dof, col)| (dofs.first_dof(s.patch) + dof, dot(dir, col)))
             .filter(|(_, v)| *v != 0.0)
             .collect();
         rows.push(row);
