@@ -94,7 +94,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
                 }
             }
         });
-        for (k, l) in loaded.iter().enumerate() {
+        for l in loaded {
             let identified = || identified.recv().unwrap_or_else(|_| identify(cfg, l));
             let line = process_identified(cfg, l, identified, &mut chain);
             if let Some(w) = writer.as_mut() {
@@ -104,7 +104,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
                 }
             }
             if let (Some(n), Some(v)) = (notifier.as_mut(), &line.verdict) {
-                let status = status_message(k as u64, &line, v);
+                let status = status_message(&line, v);
                 n.observe(&status, &serde_json::to_vec(&status)?);
             }
             if let Some(r) = rerun.as_mut() {

@@ -401,8 +401,15 @@ fn issue_45_events_resume_from_their_state() {
         assert!(close(&c["nrmse"], &d["nrmse"]), "{c} vs {d}");
     }
     assert_eq!(a["verdict"]["state"], b["verdict"]["state"]);
+    // The events are numbered in their chain: the resumed run goes on.
+    assert_eq!(
+        (together[0]["number"].as_u64(), together[1]["number"].as_u64()),
+        (Some(0), Some(1))
+    );
+    assert_eq!(b["number"].as_u64(), Some(1));
     let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
     assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 2);
+    assert_eq!(saved["events_seen"].as_u64(), Some(2));
 }
 
 /// Item 5: the daemon on a triggered logger. Two real records are

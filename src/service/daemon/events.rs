@@ -34,8 +34,6 @@ pub(super) struct EventWorker {
     running: Option<JoinHandle<(Chain, EventLine)>>,
     waiting: VecDeque<Burst>,
     file: Option<PathBuf>,
-    /// Events finished so far (the status message's counter).
-    pub(super) count: u64,
 }
 
 impl EventWorker {
@@ -66,7 +64,6 @@ impl EventWorker {
             running: None,
             waiting: VecDeque::new(),
             file,
-            count: 0,
         }))
     }
 
@@ -141,7 +138,6 @@ impl EventWorker {
     /// Takes the chain back, saves it and starts the next waiting burst.
     pub(super) fn done(&mut self, chain: Chain) {
         self.running = None;
-        self.count += 1;
         if let Some(f) = &self.file {
             // Like the state: a failed write is logged and retried at the next event.
             if let Err(e) = chain.save(f) {

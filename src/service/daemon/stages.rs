@@ -506,9 +506,8 @@ impl Daemon {
             }
         }
         self.results.flush();
-        let count = self.events.as_ref().map_or(0, |e| e.count);
         if let (Some(n), Some(v)) = (self.notifier.as_mut(), &line.verdict) {
-            let status = status_message(count, &line, v);
+            let status = status_message(&line, v);
             if let Ok(json) = serde_json::to_vec(&status) {
                 n.observe(&status, &json);
             }

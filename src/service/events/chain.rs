@@ -20,6 +20,11 @@ pub struct Chain {
     pub(super) feature_names: Vec<String>,
     /// Their features, one row per event, by `feature_names`.
     pub(super) features: Vec<Vec<Option<f64>>>,
+    /// Events this chain has seen, judged or skipped: the next event's
+    /// [`EventLine::number`]. A state from before the field counts its
+    /// judged events.
+    #[serde(default)]
+    pub(super) events_seen: u64,
     /// The config's model, assembled for the first event and kept for the
     /// others (not saved).
     #[serde(skip)]
@@ -39,7 +44,12 @@ impl Chain {
         match path {
             Some(p) if p.exists() => {
                 let text = std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?;
-                serde_json::from_str(&text).with_context(|| format!("{}: not an events state file", p.display()))
+                let mut chain: Self = serde_json::from_str(&text)
+                    .with_context(|| format!("{}: not an events state file", p.display()))?;
+                if chain.events_seen == 0 {
+                    chain.events_seen = chain.features.len() as u64;
+                }
+                Ok(chain)
             }
             _ => Ok(Self::default()),
         }

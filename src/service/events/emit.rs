@@ -21,9 +21,11 @@ pub fn messages(line: &EventLine) -> Result<EventMessages> {
     Ok((time, out))
 }
 
-pub fn status_message(k: u64, line: &EventLine, v: &VerdictLine) -> StatusMessage {
+/// The owner's status message of a judged event (`[monitoring.notify]`),
+/// numbered by the event's place in its chain.
+pub fn status_message(line: &EventLine, v: &VerdictLine) -> StatusMessage {
     StatusMessage {
-        window: k,
+        window: line.number,
         time: line.start.clone().unwrap_or_default(),
         state: if v.state == "alarm" {
             "alarm".into()

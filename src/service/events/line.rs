@@ -6,6 +6,11 @@ use super::*;
 #[derive(Debug, Clone, Serialize)]
 pub struct EventLine {
     pub event: String,
+    /// The event's number in its chain: 0 for the first event a state has
+    /// seen, skipped events counted; the same from `events` and the daemon,
+    /// and it goes on after a restart or a `--state` resume (the status
+    /// message's `window`).
+    pub number: u64,
     pub start: Option<String>,
     pub pga_ground: Option<f64>,
     pub peak_deck: Option<f64>,
@@ -42,6 +47,7 @@ impl EventLine {
     pub fn new(event: String) -> Self {
         Self {
             event,
+            number: 0,
             start: None,
             pga_ground: None,
             peak_deck: None,

@@ -93,6 +93,8 @@ pub fn process_identified(
     let mut identified = Some(identified);
     let start = loaded.start_ns();
     let mut line = EventLine::new(loaded.name.clone());
+    line.number = chain.events_seen;
+    chain.events_seen += 1;
     line.start = start.map(format_timestamp);
     match &loaded.event {
         Ok((event, plan)) => {
