@@ -83,6 +83,32 @@ fn column(length: f64, count: usize, section: Section, material: BeamMaterial, e
     generalised_eigenvalues(&pick(&local_k), &pick(&local_m))
 }
 
+/// Each closed-form `ω²` of `expected` against its nearest in a coarse and
+/// a twice finer mesh (the torsional mode sits between the bending ones):
+/// the fine mesh within 1e-4 in frequency, both above (a conforming
+/// element gives upper bounds), the error a quarter when the elements
+/// double (convergence as h²).
+fn assert_converges_to(expected: &[f64], coarse: &[f64], fine: &[f64], case: &str) {
+    let errors = |omega2: &[f64]| -> Vec<f64> {
+        expected
+            .iter()
+            .map(|want| {
+                omega2
+                    .iter()
+                    .map(|got| (got.max(0.0).sqrt() - want.sqrt()) / want.sqrt())
+                    .min_by(|a, b| a.abs().total_cmp(&b.abs()))
+                    .unwrap()
+            })
+            .collect()
+    };
+    let (coarse, fine) = (errors(coarse), errors(fine));
+    for (c, f) in coarse.iter().zip(&fine) {
+        assert!(f.abs() <= 1e-4, "{case}: {fine:?}");
+        assert!(*c > 0.0 && *f > 0.0, "{case}: {coarse:?} {fine:?}");
+        assert!((3.6..4.4).contains(&(c / f)), "{case}: {coarse:?} {fine:?}");
+    }
+}
+
 /// A deep column (L/h = 5, where shear and rotary inertia lower the first
 /// ω² by 4 %), along a skewed axis, pinned at both ends: its first two
 /// bending modes in each plane against the closed form. The element's
@@ -115,28 +141,9 @@ fn a_simply_supported_timoshenko_column_has_the_closed_form_frequencies() {
             section.shear_area_z,
         ));
     }
-    // Each closed-form frequency's nearest computed one (the torsional
-    // mode sits between them), relative error in frequency.
-    let errors = |omega2: &[f64]| -> Vec<f64> {
-        expected
-            .iter()
-            .map(|want| {
-                omega2
-                    .iter()
-                    .map(|got| (got.max(0.0).sqrt() - want.sqrt()) / want.sqrt())
-                    .min_by(|a, b| a.abs().total_cmp(&b.abs()))
-                    .unwrap()
-            })
-            .collect()
-    };
-    let coarse = errors(&column(length, 40, section, material, Ends::Pinned));
-    let fine = errors(&column(length, 80, section, material, Ends::Pinned));
-    for (c, f) in coarse.iter().zip(&fine) {
-        assert!(f.abs() <= 1e-4, "{fine:?}");
-        // Upper bounds (a conforming element), converging as h².
-        assert!(*c > 0.0 && *f > 0.0, "{coarse:?} {fine:?}");
-        assert!((3.6..4.4).contains(&(c / f)), "{coarse:?} {fine:?}");
-    }
+    let coarse = column(length, 40, section, material, Ends::Pinned);
+    let fine = column(length, 80, section, material, Ends::Pinned);
+    assert_converges_to(&expected, &coarse, &fine, "pinned");
     // Shear and rotary inertia matter here: Euler–Bernoulli's first ω² is
     // more than 3 % higher.
     let euler =
@@ -253,27 +260,13 @@ fn cantilever_and_clamped_timoshenko_columns_have_the_closed_form_frequencies() 
         let mut expected = plane(section.iz, section.shear_area_y).frequencies(2, clamped_both);
         expected.extend(plane(section.iy, section.shear_area_z).frequencies(2, clamped_both));
         assert_eq!(expected.len(), 4);
-        let errors = |omega2: &[f64]| -> Vec<f64> {
-            expected
-                .iter()
-                .map(|want| {
-                    omega2
-                        .iter()
-                        .map(|got| (got.max(0.0).sqrt() - want.sqrt()) / want.sqrt())
-                        .min_by(|a, b| a.abs().total_cmp(&b.abs()))
-                        .unwrap()
-                })
-                .collect()
-        };
-        let coarse = errors(&column(length, 50, section, material, ends));
-        let fine = errors(&column(length, 100, section, material, ends));
-        for (c, f) in coarse.iter().zip(&fine) {
-            assert!(f.abs() <= 1e-4, "clamped both {clamped_both}: {fine:?}");
-            assert!(*c > 0.0 && *f > 0.0, "clamped both {clamped_both}: {coarse:?} {fine:?}");
-            assert!(
-                (3.6..4.4).contains(&(c / f)),
-                "clamped both {clamped_both}: {coarse:?} {fine:?}"
-            );
-        }
+        let coarse = column(length, 50, section, material, ends);
+        let fine = column(length, 100, section, material, ends);
+        assert_converges_to(
+            &expected,
+            &coarse,
+            &fine,
+            if clamped_both { "clamped" } else { "cantilever" },
+        );
     }
 }
