@@ -53,19 +53,9 @@ impl DofMap {
         *self.first_nodes.last().expect("one entry past the last patch")
     }
 
-    pub fn patch_count(&self) -> usize {
-        self.first_nodes.len() - 1
-    }
-
     /// The first global dof of patch `patch`.
     pub fn first_dof(&self, patch: usize) -> usize {
         DOFS_PER_CONTROL_POINT * self.first_nodes[patch]
-    }
-
-    /// The first global dof of every patch, and the dof count as the last
-    /// entry: where a patch's own matrices go in the assembled ones.
-    pub fn patch_offsets(&self) -> Vec<usize> {
-        self.first_nodes.iter().map(|&n| DOFS_PER_CONTROL_POINT * n).collect()
     }
 
     /// The dof count of every node, in order (a pattern's block sizes).
@@ -118,14 +108,12 @@ mod tests {
     fn patches_are_numbered_one_after_the_other_node_by_node() {
         let patches = [patch([4, 3]), patch([3, 3])];
         let map = DofMap::of_patches(&patches);
-        assert_eq!(map.patch_count(), 2);
         assert_eq!(map.node_count(), 12 + 9);
         assert_eq!(
             map.dof_count(),
             patches.iter().map(|p| p.shell.dof_count()).sum::<usize>()
         );
-        assert_eq!(map.patch_offsets(), vec![0, 60, 105]);
-        assert_eq!(map.first_dof(1), 60);
+        assert_eq!((map.first_dof(0), map.first_dof(1), map.dof_count()), (0, 60, 105));
         let node = map.node(1, 2);
         assert_eq!(node, 14);
         assert_eq!(map.node_dofs(node), 70..75);
