@@ -119,6 +119,7 @@ impl Config {
             constraints,
             bearings,
             masses,
+            beams: Default::default(),
         };
         // Surface the spring/shell compatibility errors here, with their key.
         for (i, s) in model.springs.iter().enumerate() {

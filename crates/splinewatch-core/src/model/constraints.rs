@@ -126,6 +126,18 @@ impl DofReduction {
         Self { full, columns }
     }
 
+    /// `T = I` without the columns of the `held` dofs (ascending): each
+    /// held dof is zero, the others free.
+    pub fn holding(full: usize, held: &[usize]) -> Self {
+        Self {
+            full,
+            columns: (0..full)
+                .filter(|d| held.binary_search(d).is_err())
+                .map(|d| vec![(d, 1.0)])
+                .collect(),
+        }
+    }
+
     /// No constraints: `T = I`.
     pub fn identity(full: usize) -> Self {
         Self {
@@ -180,12 +192,11 @@ impl DofReduction {
     }
 
     /// The pattern of the free coordinates: `full`'s (the generalised
-    /// dofs', five per control point) with each point's free count.
+    /// dofs', node by node) with each node's free count.
     pub fn reduced_pattern(&self, full: &Pattern) -> Pattern {
         let mut dofs = vec![0usize; full.counts().len()];
         for column in &self.columns {
-            let cp = column[0].0 / DOFS_PER_CONTROL_POINT;
-            dofs[cp] += 1;
+            dofs[full.node_of(column[0].0)] += 1;
         }
         full.with_counts(&dofs)
     }

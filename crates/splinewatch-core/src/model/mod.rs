@@ -13,6 +13,7 @@
 //! - [`dofs`]: the numbering of the generalised dofs, node by node, and what each dof is;
 //! - [`joints`]: rigid joints between patches by penalty coupling;
 //! - [`beam`]: straight 3-D Timoshenko beam elements (columns, piers), their stiffness and consistent mass;
+//! - [`members`]: beam members cut into elements, meeting where their nodes coincide, their bases held;
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.
 //!
@@ -26,6 +27,7 @@ pub mod damping;
 pub mod dofs;
 pub mod joints;
 pub mod material;
+pub mod members;
 pub mod patch;
 pub mod shell;
 pub mod sparse;
@@ -37,6 +39,7 @@ use bearings::{Bearing, PointMass};
 use constraints::EdgeConstraint;
 use joints::Joint;
 use material::OrthotropicMaterial;
+use members::BeamNet;
 use patch::Patch;
 use shell::{Frame, Shell};
 use springs::SpringField;
@@ -60,13 +63,16 @@ pub struct ShellModel {
     /// coefficients in the assembled model.
     pub bearings: Vec<Bearing>,
     pub masses: Vec<PointMass>,
+    /// Beam members (columns, piers) and their nodes, numbered after the
+    /// patches' control points.
+    pub beams: BeamNet,
 }
 
-impl ShellModel {
-    /// One patch named `"deck"`, nothing else attached.
-    pub fn new(shell: Shell, material: OrthotropicMaterial) -> Self {
+impl Default for ShellModel {
+    /// Nothing: no patch, no beam (a frame of beams alone starts here).
+    fn default() -> Self {
         Self {
-            patches: vec![Patch::new("deck", shell, material).expect("a non-empty name")],
+            patches: Vec::new(),
             springs: Vec::new(),
             stiffness_fields: Vec::new(),
             constraints: Vec::new(),
@@ -74,20 +80,32 @@ impl ShellModel {
             joint_penalty: joints::DEFAULT_PENALTY,
             bearings: Vec::new(),
             masses: Vec::new(),
+            beams: BeamNet::default(),
+        }
+    }
+}
+
+impl ShellModel {
+    /// One patch named `"deck"`, nothing else attached.
+    pub fn new(shell: Shell, material: OrthotropicMaterial) -> Self {
+        Self {
+            patches: vec![Patch::new("deck", shell, material).expect("a non-empty name")],
+            ..Self::default()
         }
     }
 
     /// The numbering of the model's generalised dofs.
     pub fn dof_map(&self) -> dofs::DofMap {
-        dofs::DofMap::of_patches(&self.patches)
+        dofs::DofMap::of_model(&self.patches, self.beams.node_count())
     }
 
     pub fn dof_count(&self) -> usize {
-        self.patches.iter().map(|p| p.shell.dof_count()).sum()
+        self.dof_map().dof_count()
     }
 
+    /// The shell patches' control points (beam nodes not counted).
     pub fn control_point_count(&self) -> usize {
-        self.patches.iter().map(|p| p.shell.control_point_count()).sum()
+        self.dof_map().control_point_count()
     }
 
     /// The spring coefficients κ of eq. (22): each spring field's, then each

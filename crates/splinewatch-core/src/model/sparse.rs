@@ -114,6 +114,11 @@ impl Pattern {
         &self.graph
     }
 
+    /// The control point (node) dof `dof` belongs to.
+    pub fn node_of(&self, dof: usize) -> usize {
+        self.first.partition_point(|&f| f <= dof) - 1
+    }
+
     /// Dofs per control point.
     pub fn counts(&self) -> Vec<usize> {
         self.first.windows(2).map(|w| w[1] - w[0]).collect()

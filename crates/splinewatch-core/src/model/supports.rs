@@ -6,7 +6,8 @@
 //! rigidly by `u_g = (u_gx, u_gy, u_gz)`. A spring or bearing of the group acts
 //! on the relative displacement `u − R u_g` (`R`: the rigid translation of
 //! the deck's generalised dofs), a constrained edge of the group follows
-//! `R u_g` ([`crate::response::support_motion`] derives the motion). One
+//! `R u_g`, and so does a beam's held base
+//! ([`crate::response::support_motion`] derives the motion). One
 //! group is uniform excitation.
 
 use crate::model::ShellModel;
@@ -33,14 +34,10 @@ pub enum SupportError {
     #[error("support groups: group names must be distinct and not empty (found {0:?})")]
     Name(String),
     #[error(
-        "control point {control_point} lies on constrained edges of two support groups ({first:?} and {second:?})"
+        "node {node} is held by the supports of two groups ({first:?} and {second:?}): it cannot follow two grounds"
     )]
-    TwoGrounds {
-        control_point: usize,
-        first: String,
-        second: String,
-    },
-    #[error("support group {0:?} moves constrained edges: on a truncated model (the sparse path) only springs and bearings may move with the ground; use [model.solver] modes = \"all\"")]
+    TwoGrounds { node: usize, first: String, second: String },
+    #[error("support group {0:?} moves constrained edges or beam bases: on a truncated model (the sparse path) only springs and bearings may move with the ground; use [model.solver] modes = \"all\"")]
     TruncatedConstraint(String),
     #[error("support motion: the static solve failed: {0}")]
     Solve(String),
@@ -62,6 +59,8 @@ pub struct SupportGroups {
     /// `∂K/∂κ` fields).
     of_springs: Vec<usize>,
     of_constraints: Vec<usize>,
+    /// Per beam member, the group its held base follows.
+    of_beam_bases: Vec<usize>,
 }
 
 impl SupportGroups {
@@ -103,7 +102,33 @@ impl SupportGroups {
             names,
             of_springs,
             of_constraints,
+            of_beam_bases: vec![0; model.beams.members().len()],
         })
+    }
+
+    /// The same groups with `of_beam_bases`, a group per beam member (its
+    /// base follows that group's ground; a free base's entry is unused).
+    /// Until given, every base follows group 0.
+    pub fn with_beam_bases(mut self, of_beam_bases: Vec<usize>, model: &ShellModel) -> Result<Self, SupportError> {
+        let what = "beam members";
+        let expected = model.beams.members().len();
+        if of_beam_bases.len() != expected {
+            return Err(SupportError::Count {
+                what,
+                found: of_beam_bases.len(),
+                expected,
+            });
+        }
+        if let Some(index) = of_beam_bases.iter().position(|&g| g >= self.names.len()) {
+            return Err(SupportError::UnknownGroup {
+                what,
+                index,
+                group: of_beam_bases[index],
+                count: self.names.len(),
+            });
+        }
+        self.of_beam_bases = of_beam_bases;
+        Ok(self)
     }
 
     /// Every support on one ground named [`DEFAULT_GROUP`].
@@ -112,6 +137,7 @@ impl SupportGroups {
             names: vec![DEFAULT_GROUP.to_string()],
             of_springs: vec![0; model.springs.len() + model.bearings.len()],
             of_constraints: vec![0; model.constraints.len()],
+            of_beam_bases: vec![0; model.beams.members().len()],
         }
     }
 
@@ -127,5 +153,10 @@ impl SupportGroups {
     /// The group of edge constraint `k`.
     pub fn of_constraint(&self, k: usize) -> usize {
         self.of_constraints[k]
+    }
+
+    /// The group beam member `k`'s base follows.
+    pub fn of_beam_base(&self, k: usize) -> usize {
+        self.of_beam_bases[k]
     }
 }

@@ -685,35 +685,38 @@ fn truncated_influence(
     influence
 }
 
-/// The nodes on constrained edges and the ground each follows (`ℓ`).
+/// The nodes on constrained edges and at held beam bases, and the ground
+/// each follows (`ℓ`).
 struct GroundLifts {
     dofs: DofMap,
-    /// Per node, the group whose ground it follows, if it is on a
-    /// constrained edge.
+    /// Per node, the group whose ground it follows, if a support holds it.
     owner: Vec<Option<usize>>,
 }
 
 impl GroundLifts {
-    /// The constrained nodes of `model`; a node on the edges of two groups
-    /// is refused (it cannot follow two grounds).
+    /// The held nodes of `model`; a node held by two groups' supports is
+    /// refused (it cannot follow two grounds).
     fn new(model: &ShellModel, groups: &SupportGroups) -> Result<Self, SupportError> {
         let dofs = model.dof_map();
         let mut owner: Vec<Option<usize>> = vec![None; dofs.node_count()];
-        for (k, c) in model.constraints.iter().enumerate() {
-            let g = groups.of_constraint(k);
-            for cp in c.control_points(&model.patches[c.patch].shell) {
-                let node = dofs.node(c.patch, cp);
-                match owner[node] {
-                    Some(other) if other != g => {
-                        return Err(SupportError::TwoGrounds {
-                            control_point: node,
-                            first: groups.names()[other].clone(),
-                            second: groups.names()[g].clone(),
-                        })
-                    }
-                    _ => owner[node] = Some(g),
-                }
+        let mut claim = |node: usize, g: usize| match owner[node] {
+            Some(other) if other != g => Err(SupportError::TwoGrounds {
+                node,
+                first: groups.names()[other].clone(),
+                second: groups.names()[g].clone(),
+            }),
+            _ => {
+                owner[node] = Some(g);
+                Ok(())
             }
+        };
+        for (k, c) in model.constraints.iter().enumerate() {
+            for cp in c.control_points(&model.patches[c.patch].shell) {
+                claim(dofs.node(c.patch, cp), groups.of_constraint(k))?;
+            }
+        }
+        for (node, member) in model.beams.base_nodes() {
+            claim(dofs.beam_node(node), groups.of_beam_base(member))?;
         }
         Ok(Self { dofs, owner })
     }

@@ -13,6 +13,7 @@ use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
 use crate::model::patch::Patch;
 use crate::model::shell::{self, Frame, Offset, ShellError};
+use crate::model::sparse::SparseError;
 use crate::model::springs::{LowRankBlock, SpringError, SpringField};
 use crate::model::stiffness_field::StiffnessField;
 use crate::model::stiffness_field::StiffnessFieldError;
@@ -38,6 +39,8 @@ pub enum ModelError {
     Spring { index: usize, source: SpringError },
     #[error("stiffness field {index}: {source}")]
     StiffnessField { index: usize, source: StiffnessFieldError },
+    #[error("beams: {0}")]
+    Beams(SparseError),
     #[error("modes: {0}")]
     Modal(#[from] ModalError),
     #[error("partial modes: {0}")]
@@ -86,13 +89,16 @@ pub struct AssembledModel {
 
 impl ShellModel {
     /// The global `K_f`, `M`, `∂K/∂κ`, `∂K/∂θ` and `T`: each patch's eq.
-    /// (16)–(17) on its own dofs ([`crate::model::patch`]), then the
-    /// non-structural and point masses, the joints' penalty, the spring
+    /// (16)–(17) on its own dofs ([`crate::model::patch`]), the beams'
+    /// elements, then the non-structural and point masses, the joints' penalty, the spring
     /// fields followed by the bearings (three coefficients each), and the
     /// stiffness fields, each moved to its patch's dofs.
     pub fn assemble(&self) -> Result<AssembledModel, ModelError> {
         let dofs = self.dof_map();
         let (mut free_stiffness, mut mass) = self.patch_matrices(&dofs)?;
+        self.beams
+            .add_matrices(&mut free_stiffness, &mut mass, &dofs)
+            .map_err(ModelError::Beams)?;
         for (index, p) in self.patches.iter().enumerate() {
             p.add_surface_mass(&mut Offset::new(&mut mass, dofs.first_dof(index)))
                 .map_err(|e| ModelError::Patch {
@@ -186,9 +192,10 @@ impl ShellModel {
             .collect()
     }
 
-    /// Every patch's eq. (16)–(17), side by side (one patch: its own).
+    /// Every patch's eq. (16)–(17), side by side (one patch and no beams:
+    /// its own), on the model's dofs.
     fn patch_matrices(&self, dofs: &DofMap) -> Result<(Mat<f64>, Mat<f64>), ModelError> {
-        if let [p] = self.patches.as_slice() {
+        if let ([p], true) = (self.patches.as_slice(), self.beams.is_empty()) {
             let mats = shell::assemble(&p.shell, &p.material)?;
             return Ok((mats.stiffness, mats.mass));
         }
@@ -226,7 +233,8 @@ impl ShellModel {
         }
     }
 
-    /// `T = diag(T_k)`, each patch's supported edges eliminated.
+    /// `T = diag(T_k, T_b)`, each patch's supported edges eliminated, and
+    /// the beams' held bases.
     pub fn reduction(&self) -> Result<DofReduction, ModelError> {
         if let Some(c) = self.constraints.iter().find(|c| c.patch >= self.patches.len()) {
             return Err(ModelError::UnknownPatch {
@@ -234,6 +242,14 @@ impl ShellModel {
                 count: self.patches.len(),
             });
         }
+        let dofs = self.dof_map();
+        let beam_dofs = dofs.dof_count() - dofs.first_dof(self.patches.len());
+        let held: Vec<usize> = self
+            .beams
+            .held_dofs(&dofs)
+            .into_iter()
+            .map(|d| d - dofs.first_dof(self.patches.len()))
+            .collect();
         Ok(DofReduction::block_diagonal(
             self.patches
                 .iter()
@@ -242,6 +258,7 @@ impl ShellModel {
                     let own: Vec<_> = self.constraints.iter().filter(|c| c.patch == k).copied().collect();
                     DofReduction::new(&p.shell, &own)
                 })
+                .chain([DofReduction::holding(beam_dofs, &held)])
                 .collect(),
         ))
     }

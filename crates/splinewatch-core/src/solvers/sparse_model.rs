@@ -275,10 +275,10 @@ fn sparse_error(e: SparseError) -> ModelError {
 /// (one patch: its own, [`crate::model::shell::Shell::pattern`]), and the control points a
 /// joint's penalty couples across patches (`joints`: each joint's entries).
 fn model_pattern(model: &ShellModel, dofs: &DofMap, joints: &[BTreeMap<(usize, usize), f64>]) -> Pattern {
-    if let [p] = model.patches.as_slice() {
+    if let ([p], true) = (model.patches.as_slice(), model.beams.is_empty()) {
         return p.shell.pattern();
     }
-    let mut graph: Vec<Vec<usize>> = Vec::with_capacity(model.control_point_count());
+    let mut graph: Vec<Vec<usize>> = Vec::with_capacity(dofs.node_count());
     for p in &model.patches {
         let first = graph.len();
         let own = p.shell.pattern();
@@ -287,6 +287,12 @@ fn model_pattern(model: &ShellModel, dofs: &DofMap, joints: &[BTreeMap<(usize, u
                 .iter()
                 .map(|n| n.iter().map(|c| c + first).collect::<Vec<_>>()),
         );
+    }
+    graph.extend((0..model.beams.node_count()).map(|b| vec![dofs.beam_node(b)]));
+    for (a, b) in model.beams.element_nodes() {
+        let (a, b) = (dofs.beam_node(a), dofs.beam_node(b));
+        graph[a].push(b);
+        graph[b].push(a);
     }
     for &(i, j) in joints.iter().flat_map(BTreeMap::keys) {
         graph[dofs.node_of(i)].push(dofs.node_of(j));
@@ -347,6 +353,10 @@ fn assemble_matrices(
         .map(|(index, p)| (&p.shell, &p.material, dofs.first_dof(index)))
         .collect();
     let (mut k, mut m) = shell::assemble_sparse_patches(&parts, full)?;
+    model
+        .beams
+        .add_matrices(&mut k, &mut m, dofs)
+        .map_err(ModelError::Beams)?;
     for (index, p) in model.patches.iter().enumerate() {
         p.add_surface_mass(&mut Offset::new(&mut m, dofs.first_dof(index)))
             .map_err(|e| ModelError::Patch {
@@ -607,9 +617,10 @@ const SHIFT_RATIO: f64 = 2500.0;
 /// Largest relative residual of an accepted mode.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
 
-/// Row-sum translational mass per node (its `x` translation's row of `M`).
+/// Row-sum translational mass per control point (its `x` translation's row
+/// of `M`): the deck's, which the modes' kinds and shares weigh.
 fn lumped_translational_mass(pattern: &Pattern, m: &SparseSymmetric, dofs: &DofMap) -> Vec<f64> {
-    (0..dofs.node_count())
+    (0..dofs.control_point_count())
         .map(|node| {
             let r = dofs.node_dofs(node).start;
             (pattern.col_ptr()[r]..pattern.col_ptr()[r + 1])
