@@ -120,6 +120,7 @@ impl Config {
             bearings,
             masses,
             beams: Default::default(),
+            rigid_bodies: Vec::new(),
         };
         // Surface the spring/shell compatibility errors here, with their key.
         for (i, s) in model.springs.iter().enumerate() {

@@ -54,17 +54,24 @@ pub struct DofReduction {
     columns: Vec<Vec<(usize, f64)>>,
 }
 
-impl EdgeConstraint {
+impl Edge {
     /// The control points of the edge, by their index in `shell`'s net
     /// (clamped knots: the edge curve depends on these only).
-    pub fn control_points(&self, shell: &Shell) -> Vec<usize> {
+    pub fn control_points(self, shell: &Shell) -> Vec<usize> {
         let (m, n) = shell.surface().net_size();
-        match self.edge {
+        match self {
             Edge::Xi0 => (0..n).collect(),
             Edge::Xi1 => (0..n).map(|j| (m - 1) * n + j).collect(),
             Edge::Eta0 => (0..m).map(|i| i * n).collect(),
             Edge::Eta1 => (0..m).map(|i| i * n + n - 1).collect(),
         }
+    }
+}
+
+impl EdgeConstraint {
+    /// The control points of the supported edge ([`Edge::control_points`]).
+    pub fn control_points(&self, shell: &Shell) -> Vec<usize> {
+        self.edge.control_points(shell)
     }
 }
 
@@ -136,6 +143,36 @@ impl DofReduction {
                 .map(|d| vec![(d, 1.0)])
                 .collect(),
         }
+    }
+
+    /// The same `T` with the `slaves` dofs following `master` rigidly: each
+    /// slave's own column (which must be the identity's: a free dof) is
+    /// removed and `extra[c]`, the slaves' motion under a unit component `c`
+    /// of the master, joins the master's column `c` (after its own entry).
+    /// On conflict, the first slave dof that is held or already tied.
+    pub fn tie(mut self, master: [usize; 6], extra: [Vec<(usize, f64)>; 6], slaves: &[usize]) -> Result<Self, usize> {
+        let mut column_of = vec![None; self.full];
+        for (c, column) in self.columns.iter().enumerate() {
+            if let [(d, w)] = column.as_slice() {
+                if *w == 1.0 {
+                    column_of[*d] = Some(c);
+                }
+            }
+        }
+        let mut drop = vec![false; self.columns.len()];
+        for &s in slaves {
+            match column_of[s] {
+                Some(c) if !drop[c] => drop[c] = true,
+                _ => return Err(s),
+            }
+        }
+        for (m, extra) in master.iter().zip(extra) {
+            let c = column_of[*m].ok_or(*m)?;
+            self.columns[c].extend(extra);
+        }
+        let mut keep = drop.iter().map(|d| !d);
+        self.columns.retain(|_| keep.next().expect("one flag per column"));
+        Ok(self)
     }
 
     /// No constraints: `T = I`.

@@ -5,7 +5,9 @@
 //! A shell control point carries five components (eq. 3): the translations
 //! `u, v, w` of its reference point along the global axes and the rotations
 //! `α, β` of its director. A beam node carries six: three translations and
-//! three rotations about the global axes ([`crate::model::beam`]). The map is
+//! three rotations about the global axes ([`crate::model::beam`]); so does a
+//! rigid body's reference node ([`crate::model::rigid`]), numbered after
+//! the beam nodes. The map is
 //! the one place that knows this layout: a ground's rigid translation, a
 //! support's lifted dofs or a patch's first dof are asked of it, not
 //! computed from a count per node.
@@ -31,24 +33,27 @@ pub enum DofKind {
 /// The numbering of a model's generalised dofs: patch after patch (patch
 /// `k`'s dofs follow those of patches `0..k`), in each patch its control
 /// points in the shell's own order (eq. 4), in each control point
-/// `u, v, w, α, β`; then the beam nodes, each `u_x, u_y, u_z, θ_x, θ_y, θ_z`.
-/// One patch keeps exactly the single-shell numbering.
+/// `u, v, w, α, β`; then the beam nodes and the rigid bodies' reference
+/// nodes, each `u_x, u_y, u_z, θ_x, θ_y, θ_z`. One patch keeps exactly the
+/// single-shell numbering.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DofMap {
     /// The first node of every patch, and the control-point count as the
     /// last entry (the first beam node).
     first_nodes: Vec<usize>,
     beam_nodes: usize,
+    rigid_bodies: usize,
 }
 
 impl DofMap {
     /// The numbering of `patches`, in their order, and no beams.
     pub fn of_patches(patches: &[Patch]) -> Self {
-        Self::of_model(patches, 0)
+        Self::of_model(patches, 0, 0)
     }
 
-    /// The numbering of `patches` followed by `beam_nodes` beam nodes.
-    pub fn of_model(patches: &[Patch], beam_nodes: usize) -> Self {
+    /// The numbering of `patches` followed by `beam_nodes` beam nodes and
+    /// the reference nodes of `rigid_bodies` rigid bodies.
+    pub fn of_model(patches: &[Patch], beam_nodes: usize, rigid_bodies: usize) -> Self {
         let mut first_nodes = Vec::with_capacity(patches.len() + 1);
         let mut at = 0;
         first_nodes.push(0);
@@ -59,15 +64,16 @@ impl DofMap {
         Self {
             first_nodes,
             beam_nodes,
+            rigid_bodies,
         }
     }
 
     pub fn dof_count(&self) -> usize {
-        self.first_beam_dof() + DOFS_PER_BEAM_NODE * self.beam_nodes
+        self.first_beam_dof() + DOFS_PER_BEAM_NODE * (self.beam_nodes + self.rigid_bodies)
     }
 
     pub fn node_count(&self) -> usize {
-        self.control_point_count() + self.beam_nodes
+        self.control_point_count() + self.beam_nodes + self.rigid_bodies
     }
 
     /// The shell control points (nodes `0..` this).
@@ -107,6 +113,12 @@ impl DofMap {
         self.control_point_count() + beam_node
     }
 
+    /// The global node of rigid body `body`'s reference node.
+    pub fn rigid_node(&self, body: usize) -> usize {
+        debug_assert!(body < self.rigid_bodies);
+        self.control_point_count() + self.beam_nodes + body
+    }
+
     /// The global node a dof belongs to.
     pub fn node_of(&self, dof: usize) -> usize {
         let beams = self.first_beam_dof();
@@ -128,7 +140,7 @@ impl DofMap {
         }
     }
 
-    /// Whether `node` is a shell control point (not a beam node).
+    /// Whether `node` is a shell control point (not a six-dof node).
     pub fn is_control_point(&self, node: usize) -> bool {
         node < self.control_point_count()
     }
@@ -198,12 +210,14 @@ mod tests {
     #[test]
     fn beam_nodes_follow_the_control_points_with_six_dofs_each() {
         let patches = [patch([4, 3])];
-        let map = DofMap::of_model(&patches, 3);
+        let map = DofMap::of_model(&patches, 3, 1);
         assert_eq!(
             (map.control_point_count(), map.beam_node_count(), map.node_count()),
-            (12, 3, 15)
+            (12, 3, 16)
         );
-        assert_eq!(map.dof_count(), 60 + 18);
+        assert_eq!(map.dof_count(), 60 + 18 + 6);
+        assert_eq!(map.rigid_node(0), 15);
+        assert_eq!(map.node_dofs(15), 78..84);
         let node = map.beam_node(1);
         assert_eq!(node, 13);
         assert!(!map.is_control_point(node) && map.is_control_point(11));
@@ -221,7 +235,7 @@ mod tests {
                 .chain([0, 1, 2].map(DofKind::Rotation))
                 .collect::<Vec<_>>()
         );
-        assert_eq!(map.dofs_per_node()[11..], [5, 6, 6, 6]);
+        assert_eq!(map.dofs_per_node()[11..], [5, 6, 6, 6, 6]);
         assert!(map.is_translation(68, 2) && !map.is_translation(69, 0));
     }
 }

@@ -116,6 +116,12 @@ impl BeamMember {
         self.base
     }
 
+    /// The same member with its start held as `base` says.
+    pub fn with_base(mut self, base: BeamBase) -> Self {
+        self.base = base;
+        self
+    }
+
     pub fn elements(&self) -> usize {
         self.elements
     }
@@ -257,7 +263,7 @@ impl BeamNet {
     /// `K` and `M` of the net alone (`6 × nodes` square), for checks.
     pub fn matrices(&self) -> (Mat<f64>, Mat<f64>) {
         let n = DOFS_PER_BEAM_NODE * self.node_count();
-        let dofs = DofMap::of_model(&[], self.node_count());
+        let dofs = DofMap::of_model(&[], self.node_count(), 0);
         let (mut k, mut m) = (Mat::zeros(n, n), Mat::zeros(n, n));
         self.add_matrices(&mut k, &mut m, &dofs)
             .expect("a dense matrix takes every entry");
@@ -288,7 +294,7 @@ mod tests {
         assert_eq!(net.member_nodes(2)[0], net.member_nodes(0)[4]);
         assert_eq!(net.member_nodes(2)[6], net.member_nodes(1)[4]);
         assert_eq!(net.element_nodes().count(), 14);
-        let dofs = DofMap::of_model(&[], net.node_count());
+        let dofs = DofMap::of_model(&[], net.node_count(), 0);
         let right = net.member_nodes(1)[0];
         assert_eq!(
             net.held_dofs(&dofs),

@@ -14,6 +14,7 @@
 //! - [`joints`]: rigid joints between patches by penalty coupling;
 //! - [`beam`]: straight 3-D Timoshenko beam elements (columns, piers), their stiffness and consistent mass;
 //! - [`members`]: beam members cut into elements, meeting where their nodes coincide, their bases held;
+//! - [`rigid`]: rigid bodies (bent caps, diaphragms, rigid offsets) that deck edges and beam nodes follow;
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.
 //!
@@ -29,6 +30,7 @@ pub mod joints;
 pub mod material;
 pub mod members;
 pub mod patch;
+pub mod rigid;
 pub mod shell;
 pub mod sparse;
 pub mod springs;
@@ -41,6 +43,7 @@ use joints::Joint;
 use material::OrthotropicMaterial;
 use members::BeamNet;
 use patch::Patch;
+use rigid::RigidBody;
 use shell::{Frame, Shell};
 use springs::SpringField;
 use stiffness_field::StiffnessField;
@@ -66,6 +69,8 @@ pub struct ShellModel {
     /// Beam members (columns, piers) and their nodes, numbered after the
     /// patches' control points.
     pub beams: BeamNet,
+    /// Rigid bodies; their reference nodes follow the beam nodes.
+    pub rigid_bodies: Vec<RigidBody>,
 }
 
 impl Default for ShellModel {
@@ -81,6 +86,7 @@ impl Default for ShellModel {
             bearings: Vec::new(),
             masses: Vec::new(),
             beams: BeamNet::default(),
+            rigid_bodies: Vec::new(),
         }
     }
 }
@@ -96,7 +102,7 @@ impl ShellModel {
 
     /// The numbering of the model's generalised dofs.
     pub fn dof_map(&self) -> dofs::DofMap {
-        dofs::DofMap::of_model(&self.patches, self.beams.node_count())
+        dofs::DofMap::of_model(&self.patches, self.beams.node_count(), self.rigid_bodies.len())
     }
 
     pub fn dof_count(&self) -> usize {

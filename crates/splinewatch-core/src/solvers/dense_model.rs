@@ -12,6 +12,7 @@ use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
 use crate::model::patch::Patch;
+use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
 use crate::model::sparse::SparseError;
 use crate::model::springs::{LowRankBlock, SpringError, SpringField};
@@ -41,6 +42,8 @@ pub enum ModelError {
     StiffnessField { index: usize, source: StiffnessFieldError },
     #[error("beams: {0}")]
     Beams(SparseError),
+    #[error("{0}")]
+    Rigid(#[from] RigidError),
     #[error("modes: {0}")]
     Modal(#[from] ModalError),
     #[error("partial modes: {0}")]
@@ -234,7 +237,8 @@ impl ShellModel {
     }
 
     /// `T = diag(T_k, T_b)`, each patch's supported edges eliminated, and
-    /// the beams' held bases.
+    /// the beams' held bases; then every rigid body's held nodes tied to
+    /// its reference node ([`crate::model::rigid`]).
     pub fn reduction(&self) -> Result<DofReduction, ModelError> {
         if let Some(c) = self.constraints.iter().find(|c| c.patch >= self.patches.len()) {
             return Err(ModelError::UnknownPatch {
@@ -250,7 +254,7 @@ impl ShellModel {
             .into_iter()
             .map(|d| d - dofs.first_dof(self.patches.len()))
             .collect();
-        Ok(DofReduction::block_diagonal(
+        let mut reduction = DofReduction::block_diagonal(
             self.patches
                 .iter()
                 .enumerate()
@@ -260,7 +264,19 @@ impl ShellModel {
                 })
                 .chain([DofReduction::holding(beam_dofs, &held)])
                 .collect(),
-        ))
+        );
+        for (k, body) in self.rigid_bodies.iter().enumerate() {
+            let (slaves, extra) = body.ties(&self.patches, &self.beams, &dofs)?;
+            let master = dofs.node_dofs(dofs.rigid_node(k));
+            let master: [usize; 6] = std::array::from_fn(|c| master.start + c);
+            reduction = reduction
+                .tie(master, extra, &slaves)
+                .map_err(|dof| RigidError::Conflict {
+                    name: body.name().to_string(),
+                    node: dofs.node_of(dof),
+                })?;
+        }
+        Ok(reduction)
     }
 }
 

@@ -272,11 +272,21 @@ fn sparse_error(e: SparseError) -> ModelError {
 }
 
 /// The pattern of a model's generalised dofs: each patch's control net
-/// (one patch: its own, [`crate::model::shell::Shell::pattern`]), and the control points a
-/// joint's penalty couples across patches (`joints`: each joint's entries).
-fn model_pattern(model: &ShellModel, dofs: &DofMap, joints: &[BTreeMap<(usize, usize), f64>]) -> Pattern {
-    if let ([p], true) = (model.patches.as_slice(), model.beams.is_empty()) {
-        return p.shell.pattern();
+/// (one patch alone: its own, [`crate::model::shell::Shell::pattern`]), the
+/// control points a joint's penalty couples across patches (`joints`: each
+/// joint's entries), the beam nodes along their elements, and each rigid
+/// body's reference node with everything its held nodes couple to (the
+/// pattern `Tᵀ A T` needs).
+fn model_pattern(
+    model: &ShellModel,
+    dofs: &DofMap,
+    joints: &[BTreeMap<(usize, usize), f64>],
+) -> Result<Pattern, ModelError> {
+    if let ([p], true) = (
+        model.patches.as_slice(),
+        dofs.node_count() == dofs.control_point_count(),
+    ) {
+        return Ok(p.shell.pattern());
     }
     let mut graph: Vec<Vec<usize>> = Vec::with_capacity(dofs.node_count());
     for p in &model.patches {
@@ -297,11 +307,22 @@ fn model_pattern(model: &ShellModel, dofs: &DofMap, joints: &[BTreeMap<(usize, u
     for &(i, j) in joints.iter().flat_map(BTreeMap::keys) {
         graph[dofs.node_of(i)].push(dofs.node_of(j));
     }
+    // A rigid body's reference node takes over its held nodes' couplings.
+    for (k, body) in model.rigid_bodies.iter().enumerate() {
+        let reference = dofs.rigid_node(k);
+        graph.push(vec![reference]);
+        let held = body.held_nodes(&model.patches, &model.beams, dofs)?;
+        let reached: Vec<usize> = held.iter().flat_map(|&h| graph[h].iter().copied()).collect();
+        for n in reached {
+            graph[reference].push(n);
+            graph[n].push(reference);
+        }
+    }
     for neighbours in &mut graph {
         neighbours.sort_unstable();
         neighbours.dedup();
     }
-    Pattern::control_graph(Arc::new(graph), &dofs.dofs_per_node())
+    Ok(Pattern::control_graph(Arc::new(graph), &dofs.dofs_per_node()))
 }
 
 /// `target += B` for the non-zero entries of a block on global dofs.
@@ -385,7 +406,7 @@ impl SparseModel {
             .iter()
             .map(|j| j.penalty_entries(&model.patches, &dofs, model.joint_penalty))
             .collect();
-        let full = Arc::new(model_pattern(model, &dofs, &joints));
+        let full = Arc::new(model_pattern(model, &dofs, &joints)?);
         let reduction = model.reduction()?;
         let pattern = Arc::new(reduction.reduced_pattern(&full));
         let (k, m) = assemble_matrices(model, &dofs, &full, &joints)?;
