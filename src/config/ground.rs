@@ -87,8 +87,9 @@ impl Config {
         Ok(())
     }
 
-    /// The support group of every spring field, bearing and constraint of
-    /// `model` (built from this config), groups in order of first mention.
+    /// The support group of every spring field, bearing, constraint and
+    /// held beam base of `model` (built from this config), groups in order
+    /// of first mention.
     pub fn support_groups(&self, model: &ShellModel) -> Result<SupportGroups, ConfigError> {
         let m = &self.model;
         let named = |s: &Option<String>| s.clone().unwrap_or_else(|| DEFAULT_GROUP.to_string());
@@ -99,8 +100,14 @@ impl Config {
             .chain(m.bearings.iter().map(|b| named(&b.support)))
             .collect();
         let constraints: Vec<String> = m.constraints.iter().map(|c| named(&c.support)).collect();
+        // A free beam base follows no ground: it names none.
+        let bases: Vec<Option<String>> = m
+            .beams
+            .iter()
+            .map(|b| (b.base != "free").then(|| named(&b.support)))
+            .collect();
         let mut names: Vec<String> = Vec::new();
-        for n in springs.iter().chain(&constraints) {
+        for n in springs.iter().chain(&constraints).chain(bases.iter().flatten()) {
             if !names.contains(n) {
                 names.push(n.clone());
             }
@@ -108,7 +115,10 @@ impl Config {
         let index = |n: &String| names.iter().position(|g| g == n).expect("listed above");
         let of_springs = springs.iter().map(index).collect();
         let of_constraints = constraints.iter().map(index).collect();
-        SupportGroups::new(names.clone(), of_springs, of_constraints, model).map_err(|e| err("model", e))
+        let of_bases = bases.iter().map(|b| b.as_ref().map_or(0, index)).collect();
+        SupportGroups::new(names.clone(), of_springs, of_constraints, model)
+            .and_then(|groups| groups.with_beam_bases(of_bases, model))
+            .map_err(|e| err("model", e))
     }
 
     /// The ground inputs and the sensors behind each (empty without ground
@@ -122,7 +132,7 @@ impl Config {
                 return Err(err(
                     format!("sensors[{i}].support"),
                     format!(
-                        "{group:?} is no support group of the model (its springs, bearings and constraints name {})",
+                        "{group:?} is no support group of the model (its springs, bearings, constraints and beam bases name {})",
                         groups.names().join(", ")
                     ),
                 ));

@@ -9,6 +9,7 @@
 mod events;
 mod frf;
 mod ground;
+mod materials;
 mod metrics;
 mod model;
 mod monitoring;

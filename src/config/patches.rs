@@ -9,7 +9,6 @@ use splinewatch_core::geometry::surface::{BSplineSurface, Direction};
 use splinewatch_core::geometry::swept::{swept_surface, Centreline};
 use splinewatch_core::geometry::vec3::Vec3;
 use splinewatch_core::model::bearings::PatchPoint;
-use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::Shell;
 use std::collections::BTreeMap;
@@ -250,7 +249,7 @@ pub const MAX_DISTANCE: f64 = 0.5;
 /// Builds the patches of `[[model.patches]]`.
 pub fn build_patches(
     patches: &[PatchConfig],
-    materials: &BTreeMap<String, splinewatch_core::model::material::OrthotropicParameters>,
+    materials: &BTreeMap<String, super::materials::MaterialConfig>,
 ) -> Result<Vec<Patch>, ConfigError> {
     let mut out: Vec<Patch> = Vec::with_capacity(patches.len());
     for (i, p) in patches.iter().enumerate() {
@@ -258,18 +257,19 @@ pub fn build_patches(
         if out.iter().any(|q| q.name() == p.name) {
             return Err(err(key("name"), format!("{:?} names two patches", p.name)));
         }
-        let parameters = materials.get(&p.material).ok_or_else(|| {
-            err(
-                key("material"),
-                format!(
-                    "{:?} is not in [model.materials] (known: {:?})",
-                    p.material,
-                    materials.keys().collect::<Vec<_>>()
-                ),
-            )
-        })?;
-        let material =
-            OrthotropicMaterial::new(*parameters).map_err(|e| err(format!("model.materials.{}", p.material), e))?;
+        let material = materials
+            .get(&p.material)
+            .ok_or_else(|| {
+                err(
+                    key("material"),
+                    format!(
+                        "{:?} is not in [model.materials] (known: {:?})",
+                        p.material,
+                        materials.keys().collect::<Vec<_>>()
+                    ),
+                )
+            })?
+            .plate(&format!("model.materials.{}", p.material))?;
         let shell = build_shell(p).map_err(|(k, e)| err(key(k), e))?;
         let patch = Patch::new(&p.name, shell, material)
             .and_then(|patch| patch.with_non_structural_mass(p.non_structural_mass))

@@ -14,7 +14,7 @@ pub fn config_schema() -> String {
     serde_json::to_string_pretty(&schema).expect("a schema serialises")
 }
 
-/// `[model.material]` and `[model.materials.<name>]`: an orthotropic plate.
+/// `[model.material]`: the single-patch deck's orthotropic plate.
 #[derive(JsonSchema)]
 #[schemars(remote = "splinewatch_core::model::material::OrthotropicParameters")]
 #[serde(deny_unknown_fields)]

@@ -4,6 +4,7 @@ use crate::config::Config;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use splinewatch_core::model::constraints::Edge;
+use splinewatch_core::model::members::BeamBase;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::solvers::sparse_model::SparseModel;
@@ -83,10 +84,11 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
     Ok((ModesReport { modes: rows }, info))
 }
 
-/// The patches and joints of a deck of several patches, one line each
-/// (patch, edge, the other patch, length); nothing for one patch.
+/// The patches and joints of a deck of several patches (patch, edge, the
+/// other patch, length), the beams and the rigid bodies, one line each;
+/// nothing for one patch alone.
 pub fn describe_patches(model: &ShellModel) -> Vec<String> {
-    if model.patches.len() < 2 {
+    if model.patches.len() < 2 && model.beams.is_empty() && model.rigid_bodies.is_empty() {
         return Vec::new();
     }
     let mut lines: Vec<String> = model
@@ -110,6 +112,23 @@ pub fn describe_patches(model: &ShellModel) -> Vec<String> {
             model.patches[j.other].name(),
             j.length
         )
+    }));
+    lines.extend(model.beams.members().iter().map(|b| {
+        let base = match b.base() {
+            BeamBase::Fixed => "fixed",
+            BeamBase::Pinned => "pinned",
+            BeamBase::Free => "free",
+        };
+        format!(
+            "beam {}: {:.3} m in {} elements, base {base}",
+            b.name(),
+            b.length(),
+            b.elements()
+        )
+    }));
+    lines.extend(model.rigid_bodies.iter().map(|r| {
+        let (edges, beam_nodes) = r.counts();
+        format!("rigid {}: {edges} edges, {beam_nodes} beam nodes", r.name())
     }));
     lines
 }

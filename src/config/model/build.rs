@@ -78,12 +78,7 @@ impl Config {
             .enumerate()
             .map(|(i, c)| {
                 Ok(EdgeConstraint {
-                    edge: match c.edge {
-                        EdgeConfig::Xi0 => Edge::Xi0,
-                        EdgeConfig::Xi1 => Edge::Xi1,
-                        EdgeConfig::Eta0 => Edge::Eta0,
-                        EdgeConfig::Eta1 => Edge::Eta1,
-                    },
+                    edge: c.edge.into(),
                     kind: match c.kind {
                         SupportConfig::SimplySupported => SupportKind::SimplySupported,
                         SupportConfig::ShearDiaphragm => SupportKind::ShearDiaphragm,
@@ -110,6 +105,8 @@ impl Config {
         if !(m.joint_penalty.is_finite() && m.joint_penalty >= 1.0) {
             return Err(err("model.joint_penalty", "must be a finite factor of at least 1"));
         }
+        let beams = self.build_beams()?;
+        let rigid_bodies = self.build_rigid_bodies(&patches, &beams)?;
         let model = ShellModel {
             joints: find_joints(&patches, m.joint_tolerance),
             joint_penalty: m.joint_penalty,
@@ -119,8 +116,8 @@ impl Config {
             constraints,
             bearings,
             masses,
-            beams: Default::default(),
-            rigid_bodies: Vec::new(),
+            beams,
+            rigid_bodies,
         };
         // Surface the spring/shell compatibility errors here, with their key.
         for (i, s) in model.springs.iter().enumerate() {
@@ -128,6 +125,7 @@ impl Config {
                 .map_err(|e| err(format!("model.springs[{i}]"), e))?;
         }
         self.check_every_patch_held(&model)?;
+        self.check_rigid_bodies(&model)?;
         Ok(model)
     }
 
@@ -218,7 +216,12 @@ impl Config {
             let joined = model.joints.iter().any(|j| j.patch == k || j.other == k);
             let supported = model.constraints.iter().any(|c| c.patch == k)
                 || model.springs.iter().any(|s| s.patch() == k)
-                || model.bearings.iter().any(|b| b.at().patch == k);
+                || model.bearings.iter().any(|b| b.at().patch == k)
+                || self.model.rigid.iter().any(|r| {
+                    r.edges
+                        .iter()
+                        .any(|e| e.patch.as_deref().is_none_or(|name| name == p.name()))
+                });
             if !(joined || supported) {
                 return Err(err(
                     format!("model.patches[{k}]"),

@@ -1,6 +1,7 @@
 //! `[model]` and `[[sensors]]`: the shell, its material, springs,
 //! constraints, damping curve and measurement points, built into core types.
 
+use super::materials::MaterialConfig;
 use super::patches::{
     build_patches, default_true, face_tau, locate, patch_index, BearingConfig, FaceConfig, MassConfig, PatchConfig,
 };
@@ -23,6 +24,7 @@ use std::collections::BTreeMap;
 
 mod build;
 mod sensors;
+mod substructure;
 #[cfg(test)]
 mod tests;
 
@@ -47,10 +49,9 @@ pub struct ModelConfig {
     /// `[[model.patches]]`: a deck of many patches.
     #[serde(default)]
     pub patches: Vec<PatchConfig>,
-    /// `[model.materials.<name>]`, named by the patches.
+    /// `[model.materials.<name>]`, named by the patches and the beams.
     #[serde(default)]
-    #[schemars(with = "BTreeMap<String, super::schema::OrthotropicParametersDef>")]
-    pub materials: BTreeMap<String, OrthotropicParameters>,
+    pub materials: BTreeMap<String, MaterialConfig>,
     /// Patches whose edge lies within this distance (m) of another patch's
     /// mid-surface are joined rigidly there.
     #[serde(default = "default_joint_tolerance")]
@@ -68,6 +69,12 @@ pub struct ModelConfig {
     pub stiffness_fields: Vec<StiffnessFieldConfig>,
     #[serde(default)]
     pub constraints: Vec<ConstraintConfig>,
+    /// `[[model.beams]]`: columns, piers (Timoshenko beam members).
+    #[serde(default)]
+    pub beams: Vec<substructure::BeamConfig>,
+    /// `[[model.rigid]]`: rigid bodies (bent caps, diaphragms).
+    #[serde(default)]
+    pub rigid: Vec<substructure::RigidConfig>,
     pub damping: Option<DampingConfig>,
     /// `[model.solver]`: every mode (dense) or the modes below a cut-off
     /// (sparse, with the residual of the rest).
@@ -91,6 +98,8 @@ impl Default for ModelConfig {
             springs: Vec::new(),
             stiffness_fields: Vec::new(),
             constraints: Vec::new(),
+            beams: Vec::new(),
+            rigid: Vec::new(),
             damping: None,
             solver: SolverConfig::default(),
         }
@@ -329,6 +338,17 @@ pub enum EdgeConfig {
     Xi1,
     Eta0,
     Eta1,
+}
+
+impl From<EdgeConfig> for Edge {
+    fn from(e: EdgeConfig) -> Self {
+        match e {
+            EdgeConfig::Xi0 => Edge::Xi0,
+            EdgeConfig::Xi1 => Edge::Xi1,
+            EdgeConfig::Eta0 => Edge::Eta0,
+            EdgeConfig::Eta1 => Edge::Eta1,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, schemars::JsonSchema)]

@@ -74,3 +74,82 @@ fn bad_fields_name_their_key() {
         .to_string()
         .contains("model.stiffness_fields[0].bounds"));
 }
+
+/// The guide's deck on a bent: beams, a rigid cap and the columns' bases
+/// on their own ground; its modes those of the core's check against
+/// OpenSees (the same structure and nets there: 0.61 %).
+#[test]
+fn a_deck_on_a_bent_builds_from_its_config() {
+    let config = Config::from_toml(include_str!("../../../config/examples/deck-on-bent.toml")).unwrap();
+    let model = config.build_model().unwrap();
+    assert_eq!(model.beams.members().len(), 2);
+    assert_eq!(model.beams.node_count(), 18);
+    assert_eq!(model.rigid_bodies.len(), 1);
+    let groups = config.support_groups(&model).unwrap();
+    assert_eq!(groups.names(), ["west", "east", "bent"]);
+    assert_eq!((groups.of_beam_base(0), groups.of_beam_base(1)), (2, 2));
+    let modes = model.assemble().unwrap().modes().unwrap();
+    let opensees = [1.0027, 1.7953, 2.4695, 2.9603, 3.9738];
+    for (ours, theirs) in modes.frequencies_hz().iter().zip(opensees) {
+        assert!(
+            (ours / theirs - 1.0).abs() < 1e-2,
+            "{ours} Hz against OpenSees's {theirs}"
+        );
+    }
+}
+
+#[test]
+fn bad_beams_and_rigid_bodies_name_their_key() {
+    let text = include_str!("../../../config/examples/deck-on-bent.toml");
+    let message = |from: &str, to: &str| {
+        assert!(text.contains(from), "{from}");
+        let config = Config::from_toml(&text.replacen(from, to, 1));
+        match config {
+            Err(e) => e.to_string(),
+            Ok(c) => c.build_model().unwrap_err().to_string(),
+        }
+    };
+    let zero = message("end = [20.0, 2.0, -0.5]", "end = [20.0, 2.0, -7.0]");
+    assert!(
+        zero.contains("model.beams[0].end") && zero.contains("zero length"),
+        "{zero}"
+    );
+    let empty = message(
+        "edges = [{ patch = \"span1\", edge = \"xi1\" }, { patch = \"span2\", edge = \"xi0\" }]\nbeam_ends = [\"bent.south:end\", \"bent.north:end\"]",
+        "",
+    );
+    assert!(
+        empty.contains("model.rigid[0].edges") && empty.contains("holds nothing"),
+        "{empty}"
+    );
+    let held = message(
+        "edge = \"xi1\" }, { patch = \"span2\"",
+        "edge = \"xi0\" }, { patch = \"span2\"",
+    );
+    assert!(
+        held.contains("model.rigid[0]") && held.contains("already held"),
+        "{held}"
+    );
+    let unknown = message("\"bent.north:end\"]", "\"bent.west:end\"]");
+    assert!(
+        unknown.contains("model.rigid[0].beam_ends[1]") && unknown.contains("not a beam"),
+        "{unknown}"
+    );
+    let orthotropic = message(
+        "young = 3.0e10\npoisson = 0.2",
+        "e1 = 3e10\ne2 = 3e10\ng12 = 1.25e10\ng13 = 1.25e10\ng23 = 1.25e10\nnu12 = 0.2",
+    );
+    assert!(
+        orthotropic.contains("a beam needs an isotropic material"),
+        "{orthotropic}"
+    );
+    let both = message("poisson = 0.2", "poisson = 0.2\ne1 = 3e10");
+    assert!(
+        both.contains("model.materials.concrete") && both.contains("not both"),
+        "{both}"
+    );
+    let base = message("base = \"fixed\"", "base = \"west\"");
+    assert!(base.contains("model.beams[0].base"), "{base}");
+    let section = message("section = { circle = 1.2 }", "section = { circle = 1.2, area = 1.0 }");
+    assert!(section.contains("model.beams[0].section"), "{section}");
+}

@@ -112,6 +112,10 @@ impl BeamMember {
         self.end
     }
 
+    pub fn length(&self) -> f64 {
+        norm(sub(self.end, self.start))
+    }
+
     pub fn base(&self) -> BeamBase {
         self.base
     }

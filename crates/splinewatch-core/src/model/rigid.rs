@@ -73,6 +73,11 @@ impl RigidBody {
         &self.name
     }
 
+    /// How many deck edges and beam nodes it holds, as given.
+    pub fn counts(&self) -> (usize, usize) {
+        (self.edges.len(), self.beam_nodes.len())
+    }
+
     /// The held nodes, each once, in order: the edges' control points,
     /// then the beam nodes.
     fn held(&self, patches: &[Patch], beams: &BeamNet, dofs: &DofMap) -> Result<Vec<HeldNode>, RigidError> {

@@ -4,13 +4,17 @@
 
 use splinewatch_core::model::beam::{BeamMaterial, Section};
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
+use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::joints::find_joints;
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet};
 use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::rigid::{RigidBody, RigidError};
 use splinewatch_core::model::shell::Shell;
+use splinewatch_core::model::supports::SupportGroups;
 use splinewatch_core::model::ShellModel;
+use splinewatch_core::response::frf::{FrfModel, SensorPoint};
+use splinewatch_core::response::support_motion::{GroundInput, SupportMotion};
 use splinewatch_core::solvers::dense_model::ModelError;
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::solvers::sparse_model::SparseModel;
@@ -260,4 +264,50 @@ fn bad_rigid_bodies_are_refused_by_name() {
         model.reduction(),
         Err(ModelError::Rigid(RigidError::UnknownPatch { patch: 7, .. }))
     ));
+}
+
+/// The deck on a bent driven by three grounds (the west and east abutments
+/// and the columns' footings): at every sensor the quasi-static responses
+/// to the three grounds moving together add up to the rigid translation
+/// (the sensor's direction along the axis), for every axis; the footings'
+/// ground alone moves the deck (through the columns and the cap).
+#[test]
+fn the_grounds_of_a_deck_on_a_bent_add_up_to_a_rigid_translation() {
+    let (model, _) = deck_on_bent([6, 4]);
+    let directions = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.6, 0.8, 0.0]];
+    let sensors: Vec<SensorPoint> = [(0, 0.5, 1.0), (1, 0.5, 0.0), (0, 0.9, 0.5), (1, 0.2, 0.7)]
+        .iter()
+        .zip(directions)
+        .map(|(&(patch, xi, eta), direction)| SensorPoint {
+            patch,
+            xi,
+            eta,
+            tau: 0.5,
+            direction,
+        })
+        .collect();
+    let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
+    let damping = DampingCurve::new(1, vec![0.02, 0.02], 0.0, 20.0).unwrap();
+    let state = frf.modal_state(&[], &damping).unwrap();
+    let names = ["west", "east", "bent"].map(String::from).to_vec();
+    let groups = SupportGroups::new(names, vec![], vec![0, 1], &model)
+        .unwrap()
+        .with_beam_bases(vec![2, 2], &model)
+        .unwrap();
+    for axis in 0..3 {
+        let inputs: Vec<GroundInput> = (0..3).map(|group| GroundInput { group, axis }).collect();
+        let motion = SupportMotion::new(&frf, &model, &groups, &[], &[], &state, &inputs).unwrap();
+        for (s, sensor) in sensors.iter().enumerate() {
+            let sum: f64 = (0..3).map(|g| motion.quasi_static(s, g)).sum();
+            let rigid = sensor.direction[axis];
+            assert!(
+                (sum - rigid).abs() < 1e-9,
+                "axis {axis}, sensor {s}: Σ {sum} vs {rigid}"
+            );
+        }
+        let footings = (0..sensors.len())
+            .map(|s| motion.quasi_static(s, 2).abs())
+            .fold(0.0, f64::max);
+        assert!(footings > 1e-3, "axis {axis}: the footings' ground moves no sensor");
+    }
 }

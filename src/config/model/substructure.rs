@@ -1,0 +1,254 @@
+//! `[[model.beams]]` and `[[model.rigid]]`: the columns, piers and caps
+//! under the deck, built into the core's beam members and rigid bodies.
+
+use super::*;
+use splinewatch_core::model::beam::{BeamError, Section};
+use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet, MemberError};
+use splinewatch_core::model::rigid::{RigidBody, RigidError};
+use splinewatch_core::solvers::dense_model::ModelError;
+
+/// `[[model.beams]]`: a straight member from `start` to `end` (a column, a
+/// pier), cut into `elements` Timoshenko elements. Members whose nodes
+/// coincide (within `joint_tolerance`) are joined rigidly there.
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BeamConfig {
+    /// Unique among the beams; `"<name>:start"` and `"<name>:end"` name its
+    /// ends in `[[model.rigid]] beam_ends`.
+    pub name: String,
+    /// The start (the base), metres, global axes.
+    pub start: [f64; 3],
+    pub end: [f64; 3],
+    pub section: SectionConfig,
+    /// The section's local y axis (made normal to the member).
+    pub orientation: [f64; 3],
+    /// A name from `[model.materials]` (isotropic).
+    pub material: String,
+    /// Elements along the member (default 8).
+    #[serde(default = "default_elements")]
+    pub elements: usize,
+    /// How the start is held: `"fixed"`, `"pinned"` (translations) or
+    /// `"free"` (the default: it meets another member or a rigid body).
+    #[serde(default = "default_base")]
+    pub base: String,
+    /// The support group whose ground a held base follows (default
+    /// "ground").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<String>,
+}
+
+fn default_elements() -> usize {
+    8
+}
+
+fn default_base() -> String {
+    "free".into()
+}
+
+/// A beam's section: `{ circle = d }` (a solid circle of diameter `d`),
+/// `{ rectangle = [width, depth] }` (width along the local y axis), or its
+/// properties `{ area, iy, iz, torsion, shear_area_y, shear_area_z }` (m², m⁴).
+#[derive(Debug, Clone, Default, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct SectionConfig {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub circle: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rectangle: Option<[f64; 2]>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area: Option<f64>,
+    /// Second moment for bending in the local x–z plane (m⁴).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iy: Option<f64>,
+    /// Second moment for bending in the local x–y plane (m⁴).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub iz: Option<f64>,
+    /// Saint-Venant torsion constant (m⁴).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torsion: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_area_y: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shear_area_z: Option<f64>,
+}
+
+/// `[[model.rigid]]`: a rigid body (a bent cap, a diaphragm) that deck edges
+/// and beam ends follow exactly.
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RigidConfig {
+    pub name: String,
+    /// Patch edges that move with it.
+    #[serde(default)]
+    pub edges: Vec<EdgeRefConfig>,
+    /// Beam ends that move with it: `"<beam>:start"` or `"<beam>:end"`.
+    #[serde(default)]
+    pub beam_ends: Vec<String>,
+}
+
+/// One edge of a patch: `{ patch = "span1", edge = "xi1" }`.
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct EdgeRefConfig {
+    /// The patch (default: the only patch).
+    pub patch: Option<String>,
+    pub edge: EdgeConfig,
+}
+
+impl SectionConfig {
+    fn build(&self, poisson: f64, key: &str) -> Result<Section, ConfigError> {
+        let properties = [
+            self.area,
+            self.iy,
+            self.iz,
+            self.torsion,
+            self.shear_area_y,
+            self.shear_area_z,
+        ];
+        let given = properties.iter().filter(|p| p.is_some()).count();
+        let section = match (self.circle, self.rectangle, given) {
+            (Some(d), None, 0) => Section::circle(d, poisson),
+            (None, Some([w, d]), 0) => Section::rectangle(w, d, poisson),
+            (None, None, 6) => {
+                let [area, iy, iz, torsion, ay, az] = properties.map(|p| p.expect("all six given"));
+                Section::new(area, iy, iz, torsion, ay, az)
+            }
+            _ => {
+                return Err(err(
+                    key,
+                    "give { circle = d }, { rectangle = [width, depth] }, or all of area, iy, iz, torsion, shear_area_y and shear_area_z",
+                ))
+            }
+        };
+        section.map_err(|e| err(key, e))
+    }
+}
+
+impl Config {
+    /// The beam members of `[[model.beams]]` and their net.
+    pub(super) fn build_beams(&self) -> Result<BeamNet, ConfigError> {
+        let m = &self.model;
+        let mut members = Vec::with_capacity(m.beams.len());
+        for (i, b) in m.beams.iter().enumerate() {
+            let key = |k: &str| format!("model.beams[{i}].{k}");
+            if m.beams[..i].iter().any(|o| o.name == b.name) {
+                return Err(err(key("name"), format!("{:?} names two beams", b.name)));
+            }
+            let material_key = format!("model.materials.{}", b.material);
+            let table = m.materials.get(&b.material).ok_or_else(|| {
+                err(
+                    key("material"),
+                    format!(
+                        "{:?} is not in [model.materials] (known: {:?})",
+                        b.material,
+                        m.materials.keys().collect::<Vec<_>>()
+                    ),
+                )
+            })?;
+            let material = table.beam(&material_key)?;
+            let poisson = table.poisson.expect("a beam's material is isotropic");
+            let section = b.section.build(poisson, &key("section"))?;
+            let base = match b.base.as_str() {
+                "fixed" => BeamBase::Fixed,
+                "pinned" => BeamBase::Pinned,
+                "free" => BeamBase::Free,
+                other => {
+                    return Err(err(
+                        key("base"),
+                        format!("{other:?}: give \"fixed\", \"pinned\" or \"free\" (a base on a six-component support is not available yet)"),
+                    ))
+                }
+            };
+            let member = BeamMember::new(
+                &b.name,
+                (b.start, b.end),
+                b.orientation,
+                section,
+                material,
+                b.elements,
+                base,
+            )
+            .map_err(|e| match &e {
+                MemberError::NoElements { .. } => err(key("elements"), e),
+                MemberError::EmptyName => err(key("name"), e),
+                MemberError::Beam { source, .. } => match source {
+                    BeamError::ZeroLength(_) => err(key("end"), e),
+                    BeamError::Orientation { .. } => err(key("orientation"), e),
+                    _ => err(key("section"), e),
+                },
+            })?;
+            members.push(member);
+        }
+        BeamNet::new(members, m.joint_tolerance).map_err(|e| err("model.beams", e))
+    }
+
+    /// The rigid bodies of `[[model.rigid]]` on `patches` and `beams`.
+    pub(super) fn build_rigid_bodies(&self, patches: &[Patch], beams: &BeamNet) -> Result<Vec<RigidBody>, ConfigError> {
+        let m = &self.model;
+        let mut bodies = Vec::with_capacity(m.rigid.len());
+        for (i, r) in m.rigid.iter().enumerate() {
+            let key = |k: String| format!("model.rigid[{i}].{k}");
+            if m.rigid[..i].iter().any(|o| o.name == r.name) {
+                return Err(err(key("name".into()), format!("{:?} names two rigid bodies", r.name)));
+            }
+            let edges = r
+                .edges
+                .iter()
+                .enumerate()
+                .map(|(j, e)| {
+                    let patch = patch_index(patches, e.patch.as_deref(), &key(format!("edges[{j}].patch")))?;
+                    Ok((patch, e.edge.into()))
+                })
+                .collect::<Result<Vec<_>, ConfigError>>()?;
+            let nodes = r
+                .beam_ends
+                .iter()
+                .enumerate()
+                .map(|(j, end)| beam_end(beams, end).map_err(|why| err(key(format!("beam_ends[{j}]")), why)))
+                .collect::<Result<Vec<_>, ConfigError>>()?;
+            let body = RigidBody::new(&r.name, edges, nodes).map_err(|e| match e {
+                RigidError::Empty(_) => err(key("edges".into()), format!("{e}")),
+                _ => err(key("name".into()), e),
+            })?;
+            bodies.push(body);
+        }
+        Ok(bodies)
+    }
+
+    /// Surfaces a rigid body holding what a support or another body holds,
+    /// with the body's key.
+    pub(super) fn check_rigid_bodies(&self, model: &ShellModel) -> Result<(), ConfigError> {
+        match model.reduction() {
+            Err(ModelError::Rigid(e)) => {
+                let name = match &e {
+                    RigidError::Conflict { name, .. }
+                    | RigidError::UnknownPatch { name, .. }
+                    | RigidError::UnknownBeamNode { name, .. }
+                    | RigidError::Empty(name) => name.clone(),
+                    RigidError::EmptyName => String::new(),
+                };
+                let i = self.model.rigid.iter().position(|r| r.name == name).unwrap_or(0);
+                Err(err(format!("model.rigid[{i}]"), e))
+            }
+            Err(e) => Err(err("model", e)),
+            Ok(_) => Ok(()),
+        }
+    }
+}
+
+/// The beam node `"<beam>:start"` or `"<beam>:end"` names.
+fn beam_end(beams: &BeamNet, end: &str) -> Result<usize, String> {
+    let (name, which) = end
+        .rsplit_once(':')
+        .ok_or_else(|| format!("{end:?}: write \"<beam>:start\" or \"<beam>:end\""))?;
+    let member = beams.members().iter().position(|m| m.name() == name).ok_or_else(|| {
+        let known: Vec<&str> = beams.members().iter().map(BeamMember::name).collect();
+        format!("{name:?} is not a beam (beams: {known:?})")
+    })?;
+    let nodes = beams.member_nodes(member);
+    match which {
+        "start" => Ok(nodes[0]),
+        "end" => Ok(nodes[nodes.len() - 1]),
+        other => Err(format!("{other:?}: a beam end is \"start\" or \"end\"")),
+    }
+}
