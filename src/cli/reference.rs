@@ -253,6 +253,9 @@ fn collect_sections(node: &Value, defs: &Value, path: &str, array: bool, out: &m
                 collect_sections(items, defs, &child, true, out);
             } else if inner.get("properties").is_some() {
                 collect_sections(&inner, defs, &child, false, out);
+            } else if let Some(values) = inner.get("additionalProperties").filter(|v| v.is_object()) {
+                // A table of named tables: `[path.<name>]`.
+                collect_sections(values, defs, &format!("{child}.<name>"), false, out);
             } else if let Some(variants) = inner.get("oneOf").or(inner.get("anyOf")).and_then(Value::as_array) {
                 for v in variants {
                     if resolve(v, defs).get("properties").is_some() {
