@@ -98,6 +98,7 @@ impl Config {
             .iter()
             .map(|s| named(&s.support))
             .chain(m.bearings.iter().map(|b| named(&b.support)))
+            .chain(m.supports.iter().map(|s| named(&s.support)))
             .collect();
         let constraints: Vec<String> = m.constraints.iter().map(|c| named(&c.support)).collect();
         // A free beam base follows no ground: it names none.
@@ -132,7 +133,7 @@ impl Config {
                 return Err(err(
                     format!("sensors[{i}].support"),
                     format!(
-                        "{group:?} is no support group of the model (its springs, bearings, constraints and beam bases name {})",
+                        "{group:?} is no support group of the model (its springs, bearings, line supports, constraints and beam bases name {})",
                         groups.names().join(", ")
                     ),
                 ));

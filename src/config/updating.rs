@@ -144,6 +144,9 @@ pub enum ParameterFamily {
     Spring,
     /// `<bearing>.kx`, `.ky`, `.kz`: a bearing's stiffness, N/m.
     Bearing,
+    /// `<support>.x`, `.y`, `.z` (N/m per metre) and `.rx`, `.ry`, `.rz`
+    /// (N m/rad per metre): a line support's component.
+    LineSupport,
     /// `<field>.s<j>`: a stiffness-field multiplier θ, a ratio.
     StiffnessField,
     /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
@@ -157,6 +160,8 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
         ParameterFamily::Damping
     } else if matches!(last, "kx" | "ky" | "kz") {
         ParameterFamily::Bearing
+    } else if matches!(last, "x" | "y" | "z" | "rx" | "ry" | "rz") {
+        ParameterFamily::LineSupport
     } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
         ParameterFamily::StiffnessField
     } else {
@@ -167,7 +172,8 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
 impl Config {
     /// The updating parameters: `<spring>.k<j>` for spring fields with
     /// `update = true` (j from 1, η fastest), `<bearing>.kx`, `.ky`, `.kz`
-    /// for bearings with `update = true` (those listed with `update = ["ky"]`), `<field>.s<j>` for stiffness
+    /// for bearings with `update = true` (those listed with `update = ["ky"]`),
+    /// `<support>.<component>` for line supports' updated components, `<field>.s<j>` for stiffness
     /// fields with `update = true`, and `damping.g<z>`.
     pub fn build_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
         let mut out = Vec::new();
@@ -211,6 +217,11 @@ impl Config {
                         upper,
                     }),
             );
+        }
+        // Line supports follow the bearings among κ.
+        let first_support = springs + self.model.bearings.len();
+        for (s, support) in self.model.supports.iter().enumerate() {
+            out.extend(support.parameters(s, first_support + s)?);
         }
         for (field, f) in self.model.stiffness_fields.iter().enumerate().filter(|(_, f)| f.update) {
             out.extend(coefficient_parameters(

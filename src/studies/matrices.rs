@@ -49,8 +49,8 @@ pub struct DofEntry {
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct ParameterMatrix {
     pub name: String,
-    /// `"spring"` (κ_j), `"bearing"` (a bearing's `k_x, k_y, k_z`) or
-    /// `"stiffness_field"` (θ_k).
+    /// `"spring"` (κ_j), `"bearing"` (a bearing's `k_x, k_y, k_z`),
+    /// `"support"` (a line support's components) or `"stiffness_field"` (θ_k).
     pub kind: &'static str,
     /// The config's value.
     pub value: f64,
@@ -98,10 +98,11 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
     write("K_f.mtx", &sparse.free_stiffness, "free stiffness K_f (eq. 16)")?;
     write("M.mtx", &sparse.mass, "consistent mass M (eq. 17)")?;
     let mut parameters = Vec::new();
-    // κ holds the spring fields' coefficients, then the bearings'
-    // (`ShellModel::spring_coefficients`).
+    // κ holds the spring fields' coefficients, then the bearings', then
+    // the line supports' (`ShellModel::spring_coefficients`).
     let springs = config.model.springs.iter().map(|s| (s.name.as_str(), "spring"));
     let bearings = config.model.bearings.iter().map(|b| (b.name.as_str(), "bearing"));
+    let supports = config.model.supports.iter().map(|s| (s.name.as_str(), "support"));
     let fields = config
         .model
         .stiffness_fields
@@ -109,6 +110,7 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
         .map(|f| (f.name.as_str(), "stiffness_field"));
     let terms = springs
         .chain(bearings)
+        .chain(supports)
         .chain(fields)
         .zip(sparse.spring_terms.iter().chain(&sparse.field_terms));
     let values = sparse.spring_stiffness.iter().chain(&theta);
@@ -116,6 +118,11 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
         for (j, (term, &value)) in terms.iter().zip(values).enumerate() {
             let parameter = match kind {
                 "bearing" => format!("{field}.{}", ["kx", "ky", "kz"][j]),
+                "support" => {
+                    let support = config.model.supports.iter().find(|s| s.name == field);
+                    let component = support.map_or("", |s| s.component_names()[j]);
+                    format!("{field}.{component}")
+                }
                 "spring" => format!("{field}.k{}", j + 1),
                 _ => format!("{field}.s{}", j + 1),
             };

@@ -124,12 +124,17 @@ pub fn update_from_modes(
 }
 
 /// The unit of a parameter: spring coefficients κ (`<spring>.k<j>`) in
-/// N/m³ (eq. 19); the damping curve's γ (`damping.g<z>`) and stiffness-field
+/// N/m³ (eq. 19), bearings in N/m, line supports per metre (N/m² for a
+/// translation, N m/rad per metre = N/rad for a rotation); the damping curve's γ (`damping.g<z>`) and stiffness-field
 /// multipliers θ (`<field>.s<j>`) are ratios.
 pub fn parameter_unit(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "N/m³",
         crate::config::ParameterFamily::Bearing => "N/m",
+        crate::config::ParameterFamily::LineSupport if name.rsplit('.').next().is_some_and(|c| c.starts_with('r')) => {
+            "N/rad"
+        }
+        crate::config::ParameterFamily::LineSupport => "N/m²",
         _ => "-",
     }
 }

@@ -107,6 +107,7 @@ impl Config {
         }
         let beams = self.build_beams()?;
         let rigid_bodies = self.build_rigid_bodies(&patches, &beams)?;
+        let line_supports = self.build_line_supports(&patches)?;
         let model = ShellModel {
             joints: find_joints(&patches, m.joint_tolerance),
             joint_penalty: m.joint_penalty,
@@ -116,6 +117,7 @@ impl Config {
             constraints,
             bearings,
             masses,
+            line_supports,
             beams,
             rigid_bodies,
         };
@@ -129,8 +131,8 @@ impl Config {
         Ok(model)
     }
 
-    /// Names of springs, stiffness fields and bearings are distinct (they
-    /// prefix the updating parameters).
+    /// Names of springs, stiffness fields, bearings and line supports are
+    /// distinct (they prefix the updating parameters).
     fn check_names(&self) -> Result<(), ConfigError> {
         let m = &self.model;
         let mut names: Vec<&str> = m.springs.iter().map(|s| s.name.as_str()).collect();
@@ -144,13 +146,19 @@ impl Config {
                     .iter()
                     .enumerate()
                     .map(|(i, b)| (format!("model.bearings[{i}].name"), &b.name)),
+            )
+            .chain(
+                m.supports
+                    .iter()
+                    .enumerate()
+                    .map(|(i, s)| (format!("model.supports[{i}].name"), &s.name)),
             );
         for (key, name) in others {
             if names.contains(&name.as_str()) || name == "damping" {
                 return Err(err(
                     key,
                     format!(
-                        "{name:?} is already the name of a spring field, stiffness field, bearing or of the damping"
+                        "{name:?} is already the name of a spring field, stiffness field, bearing, line support or of the damping"
                     ),
                 ));
             }
@@ -217,6 +225,7 @@ impl Config {
             let supported = model.constraints.iter().any(|c| c.patch == k)
                 || model.springs.iter().any(|s| s.patch() == k)
                 || model.bearings.iter().any(|b| b.at().patch == k)
+                || model.line_supports.iter().any(|s| s.patch() == k)
                 || self.model.rigid.iter().any(|r| {
                     r.edges
                         .iter()

@@ -75,6 +75,10 @@ pub struct ModelConfig {
     /// `[[model.rigid]]`: rigid bodies (bent caps, diaphragms).
     #[serde(default)]
     pub rigid: Vec<substructure::RigidConfig>,
+    /// `[[model.supports]]`: springs along patch edges in six components
+    /// (abutments, embankments).
+    #[serde(default)]
+    pub supports: Vec<substructure::LineSupportConfig>,
     pub damping: Option<DampingConfig>,
     /// `[model.solver]`: every mode (dense) or the modes below a cut-off
     /// (sparse, with the residual of the rest).
@@ -100,6 +104,7 @@ impl Default for ModelConfig {
             constraints: Vec::new(),
             beams: Vec::new(),
             rigid: Vec::new(),
+            supports: Vec::new(),
             damping: None,
             solver: SolverConfig::default(),
         }

@@ -1,11 +1,15 @@
-//! `[[model.beams]]` and `[[model.rigid]]`: the columns, piers and caps
-//! under the deck, built into the core's beam members and rigid bodies.
+//! `[[model.beams]]`, `[[model.rigid]]` and `[[model.supports]]`: the
+//! columns, piers, caps and abutments under the deck, built into the core's
+//! beam members, rigid bodies and line supports.
 
+use super::super::patches::BearingUpdate;
 use super::*;
 use splinewatch_core::model::beam::{BeamError, Section};
+use splinewatch_core::model::line_supports::{LineSupport, LineSupportError, SupportComponent};
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet, MemberError};
 use splinewatch_core::model::rigid::{RigidBody, RigidError};
 use splinewatch_core::solvers::dense_model::ModelError;
+use splinewatch_core::updating::{Parameter, ParameterKind};
 
 /// `[[model.beams]]`: a straight member from `start` to `end` (a column, a
 /// pier), cut into `elements` Timoshenko elements. Members whose nodes
@@ -250,5 +254,138 @@ fn beam_end(beams: &BeamNet, end: &str) -> Result<usize, String> {
         "start" => Ok(nodes[0]),
         "end" => Ok(nodes[nodes.len() - 1]),
         other => Err(format!("{other:?}: a beam end is \"start\" or \"end\"")),
+    }
+}
+
+/// `[[model.supports]]`: springs per metre along a patch edge, in up to six
+/// components (an integral abutment's backfill and piles, an embankment).
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct LineSupportConfig {
+    /// Unique among springs, bearings, fields and supports: it prefixes the
+    /// updating parameters `<name>.<component>`.
+    pub name: String,
+    /// The patch edge it acts along.
+    pub edge: EdgeRefConfig,
+    /// The support group whose ground it stands on (default "ground").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub support: Option<String>,
+    /// Components: `x`, `y`, `z` (N/m per metre) and `rx`, `ry`, `rz`
+    /// (N m/rad per metre), along the support's axes.
+    pub stiffness: ComponentsConfig,
+    /// The support's axes as three orthonormal rows, right-handed (a skewed
+    /// abutment's line); default the global axes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<[[f64; 3]; 3]>,
+    /// `[lower, upper]` for each updated component.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<[f64; 2]>,
+    /// `true` (default): every given component is updated; `false`: none;
+    /// a list (`["z", "ry"]`): those.
+    #[serde(default)]
+    pub update: BearingUpdate,
+}
+
+/// A line support's stiffness per component.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct ComponentsConfig {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub z: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rx: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ry: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rz: Option<f64>,
+}
+
+impl ComponentsConfig {
+    /// The given components in the order `x, y, z, rx, ry, rz`.
+    fn given(&self) -> Vec<(SupportComponent, f64)> {
+        let values = [self.x, self.y, self.z, self.rx, self.ry, self.rz];
+        SupportComponent::ALL
+            .into_iter()
+            .zip(values)
+            .filter_map(|(c, v)| v.map(|v| (c, v)))
+            .collect()
+    }
+}
+
+impl LineSupportConfig {
+    /// The names of the given components, in κ order (`x, y, z, rx, ry, rz`).
+    pub fn component_names(&self) -> Vec<&'static str> {
+        self.stiffness.given().iter().map(|(c, _)| c.name()).collect()
+    }
+
+    /// Whether component `c` is updated.
+    fn updates(&self, c: SupportComponent) -> bool {
+        match &self.update {
+            BearingUpdate::Every(on) => *on,
+            BearingUpdate::Axes(list) => list.iter().any(|n| n == c.name()),
+        }
+    }
+
+    /// The updating parameters of support `index`, κ field `field`.
+    pub fn parameters(&self, index: usize, field: usize) -> Result<Vec<Parameter>, ConfigError> {
+        let key = |k: &str| format!("model.supports[{index}].{k}");
+        let given = self.stiffness.given();
+        if let BearingUpdate::Axes(list) = &self.update {
+            if let Some(bad) = list.iter().find(|n| !given.iter().any(|(c, _)| c.name() == n.as_str())) {
+                return Err(err(
+                    key("update"),
+                    format!("{bad:?} is not a component of this support's stiffness"),
+                ));
+            }
+        }
+        let updated: Vec<(usize, SupportComponent)> = given
+            .iter()
+            .enumerate()
+            .filter(|(_, (c, _))| self.updates(*c))
+            .map(|(k, (c, _))| (k, *c))
+            .collect();
+        if updated.is_empty() {
+            return Ok(Vec::new());
+        }
+        let [lower, upper] = self
+            .bounds
+            .ok_or_else(|| err(key("bounds"), "required when it is updated"))?;
+        Ok(updated
+            .into_iter()
+            .map(|(coefficient, c)| Parameter {
+                name: format!("{}.{}", self.name, c.name()),
+                kind: ParameterKind::Spring { field, coefficient },
+                lower,
+                upper,
+            })
+            .collect())
+    }
+}
+
+impl Config {
+    /// The line supports of `[[model.supports]]` on `patches`.
+    pub(super) fn build_line_supports(&self, patches: &[Patch]) -> Result<Vec<LineSupport>, ConfigError> {
+        self.model
+            .supports
+            .iter()
+            .enumerate()
+            .map(|(i, s)| {
+                let key = |k: &str| format!("model.supports[{i}].{k}");
+                let patch = patch_index(patches, s.edge.patch.as_deref(), &key("edge.patch"))?;
+                let axes = s.axes.unwrap_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+                LineSupport::new(&s.name, (patch, s.edge.edge.into()), axes, s.stiffness.given()).map_err(|e| {
+                    let at = match e {
+                        LineSupportError::Axes { .. } => "axes",
+                        LineSupportError::EmptyName => "name",
+                        _ => "stiffness",
+                    };
+                    err(key(at), e)
+                })
+            })
+            .collect()
     }
 }

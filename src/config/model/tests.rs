@@ -153,3 +153,70 @@ fn bad_beams_and_rigid_bodies_name_their_key() {
     let section = message("section = { circle = 1.2 }", "section = { circle = 1.2, area = 1.0 }");
     assert!(section.contains("model.beams[0].section"), "{section}");
 }
+
+const WEST_ABUTMENT: &str = r#"
+[[model.supports]]
+name = "west_abutment"
+edge = { patch = "span1", edge = "xi0" }
+support = "west"
+stiffness = { y = 2e8, ry = 5e8 }
+bounds = [1e5, 1e12]
+update = ["ry"]
+"#;
+
+/// A line support on the west abutment: its components in κ after the
+/// bearings, its updated one a parameter, its ground the abutment's; its
+/// rotational restraint stiffens the first vertical modes.
+#[test]
+fn a_line_support_builds_with_its_parameters_and_ground() {
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let config = Config::from_toml(&format!("{base}\n{WEST_ABUTMENT}")).unwrap();
+    let model = config.build_model().unwrap();
+    assert_eq!(model.line_supports.len(), 1);
+    assert_eq!(model.spring_coefficients(), vec![vec![2e8, 5e8]]);
+    let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
+    assert_eq!(names, ["west_abutment.ry"]);
+    assert_eq!(
+        crate::config::parameter_family(&names[0]),
+        crate::config::ParameterFamily::LineSupport
+    );
+    let groups = config.support_groups(&model).unwrap();
+    assert_eq!(groups.names()[groups.of_spring(0)], "west");
+    let bare = Config::from_toml(base).unwrap().build_model().unwrap();
+    let (with, without) = (
+        model.assemble().unwrap().modes().unwrap().frequencies_hz(),
+        bare.assemble().unwrap().modes().unwrap().frequencies_hz(),
+    );
+    assert!(with.iter().zip(&without).take(6).all(|(a, b)| a >= b));
+    assert!(with.iter().zip(&without).take(6).any(|(a, b)| a > &(b * 1.01)));
+}
+
+#[test]
+fn bad_line_supports_name_their_key() {
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let message = |from: &str, to: &str| {
+        let text = format!("{base}\n{}", WEST_ABUTMENT.replacen(from, to, 1));
+        let config = Config::from_toml(&text).unwrap();
+        config
+            .build_model()
+            .and_then(|_| config.build_parameters())
+            .unwrap_err()
+            .to_string()
+    };
+    let negative = message("ry = 5e8", "ry = -5e8");
+    assert!(
+        negative.contains("model.supports[0].stiffness") && negative.contains("ry"),
+        "{negative}"
+    );
+    let absent = message("update = [\"ry\"]", "update = [\"rx\"]");
+    assert!(absent.contains("model.supports[0].update"), "{absent}");
+    let unbounded = message("bounds = [1e5, 1e12]\n", "");
+    assert!(unbounded.contains("model.supports[0].bounds"), "{unbounded}");
+    let missing = message("patch = \"span1\"", "patch = \"span9\"");
+    assert!(missing.contains("model.supports[0].edge.patch"), "{missing}");
+    let skew = message(
+        "support = \"west\"",
+        "support = \"west\"\naxes = [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
+    );
+    assert!(skew.contains("model.supports[0].axes"), "{skew}");
+}

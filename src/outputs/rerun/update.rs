@@ -228,12 +228,14 @@ impl RerunOutput {
     }
 }
 
-/// The trend group of a parameter: `springs` (`<spring>.k<j>`), `fields`
+/// The trend group of a parameter: `springs` (`<spring>.k<j>`), `bearings`,
+/// `supports` (line supports' components), `fields`
 /// (stiffness multipliers `<field>.s<j>`) or `damping` (`damping.g<z>`).
 pub(super) fn parameter_group(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "springs",
         crate::config::ParameterFamily::Bearing => "bearings",
+        crate::config::ParameterFamily::LineSupport => "supports",
         crate::config::ParameterFamily::StiffnessField => "fields",
         crate::config::ParameterFamily::Damping => "damping",
     }

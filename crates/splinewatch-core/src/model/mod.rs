@@ -14,6 +14,7 @@
 //! - [`joints`]: rigid joints between patches by penalty coupling;
 //! - [`beam`]: straight 3-D Timoshenko beam elements (columns, piers), their stiffness and consistent mass;
 //! - [`members`]: beam members cut into elements, meeting where their nodes coincide, their bases held;
+//! - [`line_supports`]: springs per metre along a patch edge in six components (abutments, embankments);
 //! - [`rigid`]: rigid bodies (bent caps, diaphragms, rigid offsets) that deck edges and beam nodes follow;
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.
@@ -27,6 +28,7 @@ pub mod constraints;
 pub mod damping;
 pub mod dofs;
 pub mod joints;
+pub mod line_supports;
 pub mod material;
 pub mod members;
 pub mod patch;
@@ -40,6 +42,7 @@ pub mod supports;
 use bearings::{Bearing, PointMass};
 use constraints::EdgeConstraint;
 use joints::Joint;
+use line_supports::LineSupport;
 use material::OrthotropicMaterial;
 use members::BeamNet;
 use patch::Patch;
@@ -65,6 +68,9 @@ pub struct ShellModel {
     /// Discrete bearings; their `k_x, k_y, k_z` follow the spring fields'
     /// coefficients in the assembled model.
     pub bearings: Vec<Bearing>,
+    /// Springs along patch edges; their components follow the bearings'
+    /// coefficients in the assembled model.
+    pub line_supports: Vec<LineSupport>,
     pub masses: Vec<PointMass>,
     /// Beam members (columns, piers) and their nodes, numbered after the
     /// patches' control points.
@@ -84,6 +90,7 @@ impl Default for ShellModel {
             joints: Vec::new(),
             joint_penalty: joints::DEFAULT_PENALTY,
             bearings: Vec::new(),
+            line_supports: Vec::new(),
             masses: Vec::new(),
             beams: BeamNet::default(),
             rigid_bodies: Vec::new(),
@@ -115,13 +122,21 @@ impl ShellModel {
     }
 
     /// The spring coefficients κ of eq. (22): each spring field's, then each
-    /// bearing's `[k_x, k_y, k_z]` (the assembled model's order).
+    /// bearing's `[k_x, k_y, k_z]`, then each line support's components
+    /// (the assembled model's order).
     pub fn spring_coefficients(&self) -> Vec<Vec<f64>> {
         self.springs
             .iter()
             .map(|s| s.stiffness().to_vec())
             .chain(self.bearings.iter().map(|b| b.stiffness().to_vec()))
+            .chain(self.line_supports.iter().map(|s| s.stiffness().to_vec()))
             .collect()
+    }
+
+    /// How many vectors [`Self::spring_coefficients`] holds: spring fields,
+    /// bearings and line supports.
+    pub fn spring_field_count(&self) -> usize {
+        self.springs.len() + self.bearings.len() + self.line_supports.len()
     }
 
     /// The director frames of every control point, in global order.

@@ -55,8 +55,8 @@ pub enum SupportError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct SupportGroups {
     names: Vec<String>,
-    /// Per spring field, then per bearing (the assembled model's order of
-    /// `∂K/∂κ` fields).
+    /// Per spring field, then per bearing, then per line support (the
+    /// assembled model's order of `∂K/∂κ` fields).
     of_springs: Vec<usize>,
     of_constraints: Vec<usize>,
     /// Per beam member, the group its held base follows.
@@ -64,7 +64,8 @@ pub struct SupportGroups {
 }
 
 impl SupportGroups {
-    /// `of_springs`: a group per spring field then per bearing;
+    /// `of_springs`: a group per spring field, then per bearing, then per
+    /// line support;
     /// `of_constraints`: a group per edge constraint.
     pub fn new(
         names: Vec<String>,
@@ -77,9 +78,9 @@ impl SupportGroups {
                 return Err(SupportError::Name(name.clone()));
             }
         }
-        let springs = model.springs.len() + model.bearings.len();
+        let springs = model.spring_field_count();
         for (what, given, expected) in [
-            ("spring fields and bearings", &of_springs, springs),
+            ("spring fields, bearings and line supports", &of_springs, springs),
             ("edge constraints", &of_constraints, model.constraints.len()),
         ] {
             if given.len() != expected {
@@ -135,7 +136,7 @@ impl SupportGroups {
     pub fn uniform(model: &ShellModel) -> Self {
         Self {
             names: vec![DEFAULT_GROUP.to_string()],
-            of_springs: vec![0; model.springs.len() + model.bearings.len()],
+            of_springs: vec![0; model.spring_field_count()],
             of_constraints: vec![0; model.constraints.len()],
             of_beam_bases: vec![0; model.beams.members().len()],
         }

@@ -11,6 +11,7 @@
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
+use crate::model::line_supports::LineSupport;
 use crate::model::patch::Patch;
 use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
@@ -160,9 +161,10 @@ impl ShellModel {
     }
 
     /// `∂K/∂κ_j` on global dofs: every spring field's coefficients, then
-    /// every bearing's `k_x, k_y, k_z`.
+    /// every bearing's `k_x, k_y, k_z`, then every line support's
+    /// components.
     pub(crate) fn spring_blocks(&self, dofs: &DofMap) -> Result<Vec<Vec<LowRankBlock>>, ModelError> {
-        let mut spring_blocks = Vec::with_capacity(self.springs.len() + self.bearings.len());
+        let mut spring_blocks = Vec::with_capacity(self.spring_field_count());
         for (index, s) in self.springs.iter().enumerate() {
             let (p, offset) = self.patch_at(s.patch(), dofs)?;
             let blocks = s
@@ -175,6 +177,11 @@ impl ShellModel {
             let blocks = b
                 .coefficient_matrices(&p.shell)
                 .map_err(|source| ModelError::Bearing { index, source })?;
+            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+        }
+        for s in &self.line_supports {
+            let (p, offset) = self.patch_at(s.patch(), dofs)?;
+            let blocks = s.coefficient_matrices(&p.shell);
             spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
         }
         Ok(spring_blocks)
@@ -225,6 +232,7 @@ impl ShellModel {
             .chain(self.stiffness_fields.iter().map(StiffnessField::patch))
             .chain(self.constraints.iter().map(|c| c.patch))
             .chain(self.bearings.iter().map(|b| b.at().patch))
+            .chain(self.line_supports.iter().map(LineSupport::patch))
             .chain(self.masses.iter().map(|m| m.at().patch))
             .chain(self.joints.iter().flat_map(|j| [j.patch, j.other]));
         match used.into_iter().find(|&p| p >= self.patches.len()) {

@@ -6,6 +6,7 @@ mod event_updating;
 mod frames;
 mod frf;
 mod joint;
+mod line_support;
 mod modal;
 mod modal_residual;
 mod modal_sensitivity;
