@@ -10,15 +10,13 @@ use crate::io::files::create_output_file;
 use crate::io::matrix_market::write_symmetric;
 use anyhow::{Context, Result};
 use serde::Serialize;
-use splinewatch_core::model::shell::DOFS_PER_CONTROL_POINT;
+use splinewatch_core::model::dofs::DofKind;
 use splinewatch_core::model::sparse::SparseSymmetric;
+use splinewatch_core::model::ShellModel;
 use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 use std::time::Instant;
-
-/// The generalised dofs of a control point, in order (eq. 4).
-const DOF_NAMES: [&str; DOFS_PER_CONTROL_POINT] = ["u", "v", "w", "alpha", "beta"];
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct Component {
@@ -26,23 +24,38 @@ pub struct Component {
     pub weight: f64,
 }
 
-/// What one row (and column) of the matrices is.
+/// What one row (and column) of the matrices is: a free coordinate on a
+/// shell control point, a beam node or a rigid body's reference node.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct DofEntry {
     /// 1-based, as in the Matrix Market files.
     pub row: usize,
     /// The patch the control point belongs to (`"deck"` for a model of one).
-    pub patch: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub patch: Option<String>,
     /// The control point's number within its patch (η fastest).
-    pub control_point: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub control_point: Option<usize>,
     /// The control point's indices `(i, j)` in its patch's net (ξ, η).
-    pub net_index: [usize; 2],
-    /// The control point's position, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub net_index: Option<[usize; 2]>,
+    /// A beam node: the first member through it, and the node's number
+    /// along that member from its start.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub beam: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub beam_node: Option<usize>,
+    /// A rigid body's reference node: the body's name (its coordinate also
+    /// moves every node the body holds).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rigid_body: Option<String>,
+    /// The node's position, m.
     pub position: [f64; 3],
-    /// The free coordinate as a combination of the point's generalised
-    /// dofs (`u, v, w` global translations, `alpha`, `beta` director
-    /// rotations): a single dof with weight 1 unless a support constrains
-    /// a direction.
+    /// The free coordinate as a combination of the node's generalised dofs
+    /// (`u, v, w` global translations; `alpha`, `beta` a control point's
+    /// director rotations; `rx, ry, rz` a beam or rigid node's rotations
+    /// about the global axes): a single dof with weight 1 unless a support
+    /// constrains a direction.
     pub components: Vec<Component>,
 }
 
@@ -148,7 +161,7 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
         free_stiffness: "K_f.mtx".into(),
         mass: "M.mtx".into(),
         parameters,
-        dofs: dof_entries(&sparse),
+        dofs: dof_entries(&sparse, &model),
     };
     let path = dir.join("index.json");
     let mut out = BufWriter::new(create_output_file(&path)?);
@@ -169,37 +182,73 @@ fn lower_nnz(m: &SparseSymmetric) -> usize {
         .sum()
 }
 
-fn dof_entries(sparse: &SparseModel) -> Vec<DofEntry> {
+fn dof_entries(sparse: &SparseModel, model: &ShellModel) -> Vec<DofEntry> {
+    let dofs = model.dof_map();
     // Per global control point: its patch and its number there.
-    let owners: Vec<(usize, usize)> = sparse
+    let owners: Vec<(usize, usize)> = model
         .patches
         .iter()
         .enumerate()
         .flat_map(|(k, p)| (0..p.shell.control_point_count()).map(move |cp| (k, cp)))
         .collect();
+    let dof_name = |d: usize| match dofs.kind(d) {
+        DofKind::Translation(a) => ["u", "v", "w"][a],
+        DofKind::DirectorRotation(r) => ["alpha", "beta"][r],
+        DofKind::Rotation(a) => ["rx", "ry", "rz"][a],
+    };
     sparse
         .reduction
         .columns()
         .iter()
         .enumerate()
         .map(|(row, column)| {
-            let (k, cp) = owners[column[0].0 / DOFS_PER_CONTROL_POINT];
-            let surface = sparse.patches[k].shell.surface();
-            let n = surface.net_size().1;
-            DofEntry {
+            let node = dofs.node_of(column[0].0);
+            let components = column
+                .iter()
+                .filter(|&&(d, _)| dofs.node_of(d) == node)
+                .map(|&(d, weight)| Component {
+                    dof: dof_name(d),
+                    weight,
+                })
+                .collect();
+            let mut entry = DofEntry {
                 row: row + 1,
-                patch: sparse.patches[k].name().to_owned(),
-                control_point: cp,
-                net_index: [cp / n, cp % n],
-                position: surface.points()[cp],
-                components: column
-                    .iter()
-                    .map(|&(d, weight)| Component {
-                        dof: DOF_NAMES[d % DOFS_PER_CONTROL_POINT],
-                        weight,
-                    })
-                    .collect(),
+                patch: None,
+                control_point: None,
+                net_index: None,
+                beam: None,
+                beam_node: None,
+                rigid_body: None,
+                position: [0.0; 3],
+                components,
+            };
+            if dofs.is_control_point(node) {
+                let (k, cp) = owners[node];
+                let surface = model.patches[k].shell.surface();
+                let n = surface.net_size().1;
+                entry.patch = Some(model.patches[k].name().to_owned());
+                entry.control_point = Some(cp);
+                entry.net_index = Some([cp / n, cp % n]);
+                entry.position = surface.points()[cp];
+            } else if node - dofs.control_point_count() < dofs.beam_node_count() {
+                let b = node - dofs.control_point_count();
+                let beams = &model.beams;
+                if let Some((m, at)) = (0..beams.members().len())
+                    .find_map(|m| beams.member_nodes(m).iter().position(|&n| n == b).map(|at| (m, at)))
+                {
+                    entry.beam = Some(beams.members()[m].name().to_owned());
+                    entry.beam_node = Some(at);
+                }
+                entry.position = beams.position(b);
+            } else {
+                let r = node - dofs.control_point_count() - dofs.beam_node_count();
+                let body = &model.rigid_bodies[r];
+                entry.rigid_body = Some(body.name().to_owned());
+                entry.position = body
+                    .reference(&model.patches, &model.beams, &dofs)
+                    .expect("a model whose reduction was built");
             }
+            entry
         })
         .collect()
 }

@@ -332,3 +332,58 @@ fn assert_equation_23(dir: &Path, parameters: &[serde_json::Value]) -> usize {
     assert!(k.keys().all(|at| sum.contains_key(at)));
     n
 }
+
+/// `matrices` of a deck on a bent with an abutment's line support: the
+/// beam nodes' rows name their member and their number along it (their
+/// rotations `rx, ry, rz`), the cap's rows its rigid body, the line
+/// support's `∂K/∂k` follow as `<name>.<component>`, and equation (23)
+/// holds on the export.
+#[test]
+fn matrices_of_a_deck_on_a_bent_name_beam_nodes_rigid_bodies_and_line_supports() {
+    let dir = fresh_dir("matrices-bent");
+    let base = std::fs::read_to_string("config/examples/deck-on-bent.toml").unwrap();
+    let config = dir.join("deck-on-bent.toml");
+    std::fs::write(
+        &config,
+        format!(
+            "{base}\n[[model.supports]]\nname = \"west_abutment\"\nedge = {{ patch = \"span1\", edge = \"xi0\" }}\nsupport = \"west\"\nstiffness = {{ y = 2e8, ry = 5e8 }}\nbounds = [1e5, 1e12]\n"
+        ),
+    )
+    .unwrap();
+    let o = splinewatch(&[
+        "matrices",
+        "--config",
+        config.to_str().unwrap(),
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let index: serde_json::Value = serde_json::from_slice(&std::fs::read(dir.join("index.json")).unwrap()).unwrap();
+    let dofs = index["dofs"].as_array().unwrap();
+    // Each column: 8 free nodes of 6 (its base is fixed), the top held by the cap.
+    let south: Vec<&serde_json::Value> = dofs.iter().filter(|d| d["beam"] == "bent.south").collect();
+    assert_eq!(south.len(), 7 * 6, "{south:?}");
+    assert_eq!(south[0]["beam_node"], 1);
+    let names: Vec<&str> = south[..6]
+        .iter()
+        .map(|d| d["components"][0]["dof"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["u", "v", "w", "rx", "ry", "rz"]);
+    let cap: Vec<&serde_json::Value> = dofs.iter().filter(|d| d["rigid_body"] == "cap").collect();
+    assert_eq!(cap.len(), 6);
+    assert!(dofs
+        .iter()
+        .filter(|d| d["patch"].is_string())
+        .all(|d| d["beam"].is_null()));
+    let parameters = index["parameters"].as_array().unwrap();
+    let supports: Vec<&str> = parameters
+        .iter()
+        .filter(|p| p["kind"] == "support")
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(supports, ["west_abutment.y", "west_abutment.ry"]);
+    assert_eq!(
+        assert_equation_23(&dir, parameters),
+        index["free_dofs"].as_u64().unwrap() as usize
+    );
+}
