@@ -246,6 +246,23 @@ pub fn default_true() -> bool {
 /// (beyond half the thickness).
 pub const MAX_DISTANCE: f64 = 0.5;
 
+/// The `[model.materials]` table `name`, which `key` names.
+pub fn material_table<'a>(
+    materials: &'a BTreeMap<String, super::materials::MaterialConfig>,
+    name: &str,
+    key: &str,
+) -> Result<&'a super::materials::MaterialConfig, ConfigError> {
+    materials.get(name).ok_or_else(|| {
+        err(
+            key,
+            format!(
+                "{name:?} is not in [model.materials] (known: {:?})",
+                materials.keys().collect::<Vec<_>>()
+            ),
+        )
+    })
+}
+
 /// Builds the patches of `[[model.patches]]`.
 pub fn build_patches(
     patches: &[PatchConfig],
@@ -257,18 +274,7 @@ pub fn build_patches(
         if out.iter().any(|q| q.name() == p.name) {
             return Err(err(key("name"), format!("{:?} names two patches", p.name)));
         }
-        let material = materials
-            .get(&p.material)
-            .ok_or_else(|| {
-                err(
-                    key("material"),
-                    format!(
-                        "{:?} is not in [model.materials] (known: {:?})",
-                        p.material,
-                        materials.keys().collect::<Vec<_>>()
-                    ),
-                )
-            })?
+        let material = material_table(materials, &p.material, &key("material"))?
             .plate(&format!("model.materials.{}", p.material))?;
         let shell = build_shell(p).map_err(|(k, e)| err(key(k), e))?;
         let patch = Patch::new(&p.name, shell, material)

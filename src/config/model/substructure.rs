@@ -2,7 +2,7 @@
 //! columns, piers, caps and abutments under the deck, built into the core's
 //! beam members, rigid bodies and line supports.
 
-use super::super::patches::BearingUpdate;
+use super::super::patches::{material_table, BearingUpdate};
 use super::*;
 use splinewatch_core::model::beam::{BeamError, Section};
 use splinewatch_core::model::line_supports::{LineSupport, LineSupportError, SupportComponent};
@@ -139,16 +139,7 @@ impl Config {
                 return Err(err(key("name"), format!("{:?} names two beams", b.name)));
             }
             let material_key = format!("model.materials.{}", b.material);
-            let table = m.materials.get(&b.material).ok_or_else(|| {
-                err(
-                    key("material"),
-                    format!(
-                        "{:?} is not in [model.materials] (known: {:?})",
-                        b.material,
-                        m.materials.keys().collect::<Vec<_>>()
-                    ),
-                )
-            })?;
+            let table = material_table(&m.materials, &b.material, &key("material"))?;
             let material = table.beam(&material_key)?;
             let poisson = table.poisson.expect("a beam's material is isotropic");
             let section = b.section.build(poisson, &key("section"))?;

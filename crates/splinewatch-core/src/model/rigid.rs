@@ -121,11 +121,7 @@ impl RigidBody {
 
     /// The centroid of the held nodes: the reference node's position.
     pub fn reference(&self, patches: &[Patch], beams: &BeamNet, dofs: &DofMap) -> Result<Vec3, RigidError> {
-        let held = self.held(patches, beams, dofs)?;
-        let count = held.len() as f64;
-        Ok(std::array::from_fn(|d| {
-            held.iter().map(|n| n.position[d]).sum::<f64>() / count
-        }))
+        Ok(centroid(&self.held(patches, beams, dofs)?))
     }
 
     /// The held nodes' global dofs and, per component `c` of the reference
@@ -141,7 +137,7 @@ impl RigidBody {
         dofs: &DofMap,
     ) -> Result<(Vec<usize>, [Vec<(usize, f64)>; 6]), RigidError> {
         let held = self.held(patches, beams, dofs)?;
-        let reference = self.reference(patches, beams, dofs)?;
+        let reference = centroid(&held);
         let mut slaves = Vec::new();
         let mut extra: [Vec<(usize, f64)>; 6] = Default::default();
         for n in &held {
@@ -171,4 +167,10 @@ impl RigidBody {
     pub fn held_nodes(&self, patches: &[Patch], beams: &BeamNet, dofs: &DofMap) -> Result<Vec<usize>, RigidError> {
         Ok(self.held(patches, beams, dofs)?.iter().map(|n| n.node).collect())
     }
+}
+
+/// The centroid of the held nodes (a body holds at least one).
+fn centroid(held: &[HeldNode]) -> Vec3 {
+    let count = held.len() as f64;
+    std::array::from_fn(|d| held.iter().map(|n| n.position[d]).sum::<f64>() / count)
 }

@@ -27,33 +27,50 @@ fn vector(v: &serde_json::Value) -> [f64; 3] {
     std::array::from_fn(|d| v[d].as_f64().unwrap())
 }
 
+/// The largest `|a / b − 1|` over the pairs.
+fn worst_relative_error(ours: &[f64], reference: &[f64]) -> f64 {
+    ours.iter()
+        .zip(reference)
+        .map(|(a, b)| (a / b - 1.0).abs())
+        .fold(0.0, f64::max)
+}
+
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array().unwrap().iter().map(|f| f.as_f64().unwrap()).collect()
+}
+
+/// The fixture's `young, poisson, density`.
+fn material(fixture: &serde_json::Value) -> (f64, f64, f64) {
+    let value = |key: &str| fixture["material"][key].as_f64().unwrap();
+    (value("young"), value("poisson"), value("density"))
+}
+
+/// A section given by its six properties.
+fn section(s: &serde_json::Value) -> Section {
+    let value = |key: &str| s[key].as_f64().unwrap();
+    Section::new(
+        value("area"),
+        value("iy"),
+        value("iz"),
+        value("torsion"),
+        value("shear_area_y"),
+        value("shear_area_z"),
+    )
+    .unwrap()
+}
+
 /// The fixture's frame `case` as beam members, and OpenSees's frequencies.
 fn frame(case: &str) -> (ShellModel, Vec<f64>) {
     let fixture = fixture();
-    let m = &fixture["material"];
-    let material = BeamMaterial::isotropic(
-        m["young"].as_f64().unwrap(),
-        m["poisson"].as_f64().unwrap(),
-        m["density"].as_f64().unwrap(),
-    )
-    .unwrap();
+    let (young, poisson, density) = material(&fixture);
+    let material = BeamMaterial::isotropic(young, poisson, density).unwrap();
     let case = &fixture["cases"][case];
     let members = case["members"]
         .as_array()
         .unwrap()
         .iter()
         .map(|b| {
-            let s = &b["section"];
-            let value = |key: &str| s[key].as_f64().unwrap();
-            let section = Section::new(
-                value("area"),
-                value("iy"),
-                value("iz"),
-                value("torsion"),
-                value("shear_area_y"),
-                value("shear_area_z"),
-            )
-            .unwrap();
+            let section = section(&b["section"]);
             let base = match b["base"].as_str().unwrap() {
                 "fixed" => BeamBase::Fixed,
                 "pinned" => BeamBase::Pinned,
@@ -75,13 +92,7 @@ fn frame(case: &str) -> (ShellModel, Vec<f64>) {
         beams: BeamNet::new(members, 1e-6).unwrap(),
         ..ShellModel::default()
     };
-    let reference = case["frequency_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|f| f.as_f64().unwrap())
-        .collect();
-    (model, reference)
+    (model, numbers(&case["frequency_hz"]))
 }
 
 /// A portal frame (two columns, one fixed and one pinned, and a girder):
@@ -95,11 +106,7 @@ fn a_portal_frame_matches_opensees() {
     let (model, reference) = frame("portal");
     let dense = model.assemble().unwrap().modes().unwrap();
     let ours = &dense.frequencies_hz()[..reference.len()];
-    let worst = ours
-        .iter()
-        .zip(&reference)
-        .map(|(a, b)| (a / b - 1.0).abs())
-        .fold(0.0, f64::max);
+    let worst = worst_relative_error(ours, &reference);
     eprintln!("portal frame: ours {ours:.4?}\n opensees {reference:.4?}\n worst {worst:.2e}");
     assert!(worst < 1e-8, "worst relative error {worst:.2e}");
     let sparse = SparseModel::assemble(&model)
@@ -120,12 +127,7 @@ fn deck_on_bent(net: [usize; 2]) -> (ShellModel, Vec<f64>) {
     let case = &fixture["cases"]["deck_on_bent"];
     let value = |key: &str| case[key].as_f64().unwrap();
     let (length, width, bent) = (value("length"), value("width"), value("bent_x"));
-    let m = &fixture["material"];
-    let (young, poisson, density) = (
-        m["young"].as_f64().unwrap(),
-        m["poisson"].as_f64().unwrap(),
-        m["density"].as_f64().unwrap(),
-    );
+    let (young, poisson, density) = material(&fixture);
     let slab = OrthotropicMaterial::isotropic(young, poisson, density).unwrap();
     let patches = [(0.0, bent), (bent, length)]
         .iter()
@@ -137,17 +139,7 @@ fn deck_on_bent(net: [usize; 2]) -> (ShellModel, Vec<f64>) {
         })
         .collect::<Vec<_>>();
     let concrete = BeamMaterial::isotropic(young, poisson, density).unwrap();
-    let s = &case["column"];
-    let section = |key: &str| s[key].as_f64().unwrap();
-    let section = Section::new(
-        section("area"),
-        section("iy"),
-        section("iz"),
-        section("torsion"),
-        section("shear_area_y"),
-        section("shear_area_z"),
-    )
-    .unwrap();
+    let section = section(&case["column"]);
     let columns = case["columns_y"]
         .as_array()
         .unwrap()
@@ -189,13 +181,7 @@ fn deck_on_bent(net: [usize; 2]) -> (ShellModel, Vec<f64>) {
         rigid_bodies: vec![cap],
         ..ShellModel::default()
     };
-    let reference = case["extrapolated_hz"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|f| f.as_f64().unwrap())
-        .collect();
-    (model, reference)
+    (model, numbers(&case["extrapolated_hz"]))
 }
 
 /// A two-span slab on a two-column bent with a rigid cap and rigid offsets
@@ -214,11 +200,7 @@ fn a_deck_on_a_bent_with_a_rigid_cap_matches_opensees() {
         .modes_below(&[], &[], 1.2 * reference[reference.len() - 1])
         .unwrap();
     let ours = &sparse.frequencies_hz()[..reference.len()];
-    let worst = ours
-        .iter()
-        .zip(&reference)
-        .map(|(a, b)| (a / b - 1.0).abs())
-        .fold(0.0, f64::max);
+    let worst = worst_relative_error(ours, &reference);
     eprintln!("deck on bent: ours {ours:.4?}\n opensees {reference:.4?}\n worst {worst:.2e}");
     assert!(worst < 1e-2, "worst relative error {worst:.2e}");
     let dense = model.assemble().unwrap().modes().unwrap().frequencies_hz();
