@@ -2,12 +2,14 @@
 # Runs every Painter Street record in DIR (the station zips of CSMIP station
 # 89324, e.g. github chrystalchern/mdof notebooks/uploads/CE89324) through
 # one `splinewatch events` run with config/painter-street.toml (or $CONFIG), and prints per
-# event the ground's peak, the identified modes, the updated lateral
-# stiffnesses of the three support lines, the updated model's dominant mode,
+# event the ground's peak, the identified modes, the updated stiffnesses
+# (the support lines' lateral ones), the updated model's dominant mode,
 # the update's fit and the forecast's median NRMSE over the strong motion of
-# the transverse deck channels (7, 9, 4) beside the "deck = nearest ground"
-# baseline; then the wall time of the whole run and the frequency against
-# amplitude figure in OUT (default out/events).
+# all eight deck channels, of the four vertical and of the three transverse
+# ones beside the "deck = nearest ground" baseline's, with the events where
+# the forecast wins in each set and on each channel; then the wall time of
+# the whole run and the frequency against amplitude figure in OUT (default
+# out/events). CONFIG=config/painter-street-bridge.toml runs the whole bridge.
 # Usage: benches/painter_street_events.sh DIR [splinewatch binary] [OUT]
 set -euo pipefail
 dir="$1"
@@ -20,27 +22,39 @@ start=$(date +%s.%N)
 end=$(date +%s.%N)
 python3 - "$out/events.jsonl" <<'PY'
 import json, statistics, sys
-tr = ("ch7", "ch9", "ch4")
-wins = total = 0
-print(f"{'start':10s} {'event':28s} {'pga':>6s} {'modes (Hz)':24s} {'ky west/bent/east (1e8 N/m)':28s} {'zeta':>5s} {'model':>6s} {'fit':>5s} {'fcst':>5s} {'base':>5s}")
+# The deck channels by direction (the station's sensor drawing).
+groups = {"all": ("ch4", "ch5", "ch6", "ch7", "ch8", "ch9", "ch10", "ch11"),
+          "vertical": ("ch5", "ch6", "ch8", "ch10"), "transverse": ("ch4", "ch7", "ch9")}
+wins = {g: 0 for g in groups}
+channel_wins = {c: 0 for c in groups["all"]}
+total = 0
+print(f"{'start':10s} {'event':28s} {'pga':>6s} {'modes (Hz)':24s} {'stiffnesses updated (1e8)':26s} {'zeta':>5s} {'model':>6s} {'fit':>5s}  forecast/baseline: {'  '.join(f'{g:>10s}' for g in groups)}")
 for line in open(sys.argv[1]):
     d = json.loads(line)
     if d["skipped"]:
         print(f"{d['event']}: skipped: {d['skipped']}")
         continue
     f = d["forecast"]
-    fc = base = "-"
+    medians = ""
     if f:
-        a = statistics.median(c["nrmse_strong"] for c in f["channels"] if c["sensor"] in tr)
-        b = statistics.median(c["nrmse_strong"] for c in f["baseline"] if c["sensor"] in tr)
-        fc, base = f"{a:.2f}", f"{b:.2f}"
+        fc = {c["sensor"]: c["nrmse_strong"] for c in f["channels"]}
+        base = {c["sensor"]: c["nrmse_strong"] for c in f["baseline"]}
         total += 1
-        wins += a < b
+        for g, chans in groups.items():
+            present = [c for c in chans if c in fc]
+            a = statistics.median(fc[c] for c in present)
+            b = statistics.median(base[c] for c in present)
+            wins[g] += a < b
+            medians += f"  {a:4.2f}/{b:4.2f}"
+        for c in channel_wins:
+            channel_wins[c] += c in fc and fc[c] < base[c]
     modes = ",".join(f"{m['frequency_hz']:.2f}" for m in d["modes"]) or "-"
-    ky = "/".join(f"{p['value'] / 1e8:.2f}" for p in d["parameters"] if p["name"].endswith(".ky"))
+    k = "/".join(f"{p['value'] / 1e8:.2f}" for p in d["parameters"] if not p["name"].startswith("damping"))
     zeta = next((f"{p['value']:.3f}" for p in d["parameters"] if p["name"].startswith("damping")), "-")
     u = d["update"]
-    print(f"{d['start'][:10]:10s} {d['event'][:28]:28s} {d['pga_ground']:6.2f} {modes:24s} {ky:28s} {zeta:>5s} {u['model_mode_hz'] or float('nan'):6.2f} {u['relative_residual']:5.2f} {fc:>5s} {base:>5s}")
-print(f"forecast better than the baseline in {wins} of {total} events")
+    print(f"{d['start'][:10]:10s} {d['event'][:28]:28s} {d['pga_ground']:6.2f} {modes:24s} {k:26s} {zeta:>5s} {u['model_mode_hz'] or float('nan'):6.2f} {u['relative_residual']:5.2f} {medians}")
+for g in groups:
+    print(f"forecast's median NRMSE below the baseline's, {g} channels: {wins[g]} of {total} events")
+print("per channel: " + ", ".join(f"{c} {n}" for c, n in channel_wins.items()))
 PY
 echo "wall time of the events run: $(python3 -c "print(f'{$end - $start:.1f} s')")"

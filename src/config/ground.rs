@@ -15,6 +15,15 @@ use splinewatch_core::response::support_motion::GroundInput;
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
+/// A ground sensor's axis and polarity from its `direction`: `"x"` or
+/// `"-x"` (a channel whose positive sense points along −x, as a station's
+/// "Long" channels may), likewise y and z.
+fn ground_axis(direction: &DirectionConfig) -> Option<(usize, bool)> {
+    let v = direction.axis_vector()?;
+    let axis = v.iter().position(|c| *c != 0.0)?;
+    Some((axis, v[axis] < 0.0))
+}
+
 /// One ground input of the model and the ground sensors it is made of.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroundInputPlan {
@@ -23,6 +32,9 @@ pub struct GroundInputPlan {
     pub name: String,
     /// Indices into `[[sensors]]` averaged for this input.
     pub sensors: Vec<usize>,
+    /// Those of `sensors` whose positive sense is the axis' negative one
+    /// (`direction = "-x"`): their samples enter with the opposite sign.
+    pub inverted: Vec<usize>,
     /// The groups whose mean it takes when it has no sensor of its own
     /// (empty when it has).
     pub borrowed_from: Vec<String>,
@@ -32,7 +44,14 @@ impl GroundInputPlan {
     /// What `check-config` prints: `bent.y ← ch3` or `west.x ← mean of east.x, bent.x`.
     pub fn describe(&self, config: &Config) -> String {
         if self.borrowed_from.is_empty() {
-            let names: Vec<&str> = self.sensors.iter().map(|&i| config.sensors[i].name.as_str()).collect();
+            let names: Vec<String> = self
+                .sensors
+                .iter()
+                .map(|&i| {
+                    let sign = if self.inverted.contains(&i) { "−" } else { "" };
+                    format!("{sign}{}", config.sensors[i].name)
+                })
+                .collect();
             let how = if names.len() > 1 { "mean of " } else { "" };
             format!("{} ← {how}{}", self.name, names.join(", "))
         } else {
@@ -70,10 +89,10 @@ impl Config {
                     "a ground sensor has no position on the deck: remove patch, xi, eta, x, y and z",
                 ));
             }
-            if !matches!(&s.direction, DirectionConfig::Named(n) if AXES.contains(&n.as_str())) {
+            if ground_axis(&s.direction).is_none() {
                 return Err(err(
                     key("direction"),
-                    "a ground sensor measures along \"x\", \"y\" or \"z\"",
+                    "a ground sensor measures along \"x\", \"y\" or \"z\" (or \"-x\", \"-y\", \"-z\" for a channel pointing the other way)",
                 ));
             }
             if s.quantity.as_slice() != ["acceleration"] {
@@ -127,6 +146,7 @@ impl Config {
     pub fn ground_plan(&self, groups: &SupportGroups) -> Result<Vec<GroundInputPlan>, ConfigError> {
         let first = self.deck_sensor_count();
         let mut own: Vec<[Vec<usize>; 3]> = vec![Default::default(); groups.names().len()];
+        let mut inverted = Vec::new();
         for (i, s) in self.sensors.iter().enumerate().skip(first) {
             let group = s.support.as_deref().unwrap_or_default();
             let Some(g) = groups.names().iter().position(|n| n == group) else {
@@ -138,10 +158,10 @@ impl Config {
                     ),
                 ));
             };
-            let DirectionConfig::Named(axis) = &s.direction else {
-                unreachable!("checked on load")
-            };
-            let axis = AXES.iter().position(|a| a == axis).expect("checked on load");
+            let (axis, flipped) = ground_axis(&s.direction).expect("checked on load");
+            if flipped {
+                inverted.push(i);
+            }
             own[g][axis].push(i);
         }
         let mut plan = Vec::new();
@@ -163,6 +183,7 @@ impl Config {
                 plan.push(GroundInputPlan {
                     input: GroundInput { group: g, axis },
                     name: format!("{name}.{}", AXES[axis]),
+                    inverted: sensors.iter().copied().filter(|i| inverted.contains(i)).collect(),
                     sensors,
                     borrowed_from,
                 });
@@ -227,20 +248,19 @@ pub fn restrict_plan(
 /// The input signals of `plan` from the ground sensors' samples
 /// (`channel(i)` the samples of `[[sensors]]` entry `i`, all of one length).
 pub fn ground_signals<'a>(plan: &[GroundInputPlan], channel: impl Fn(usize) -> &'a [f64]) -> Vec<Vec<f64>> {
-    let mean = |indices: &[usize]| -> Vec<f64> {
+    let mean = |p: &GroundInputPlan| -> Vec<f64> {
+        let indices = &p.sensors;
         let n = channel(indices[0]).len();
         let mut out = vec![0.0; n];
         for &i in indices {
+            let sign = if p.inverted.contains(&i) { -1.0 } else { 1.0 };
             for (o, v) in out.iter_mut().zip(channel(i)) {
-                *o += v / indices.len() as f64;
+                *o += sign * v / indices.len() as f64;
             }
         }
         out
     };
-    let own: Vec<Option<Vec<f64>>> = plan
-        .iter()
-        .map(|p| (!p.sensors.is_empty()).then(|| mean(&p.sensors)))
-        .collect();
+    let own: Vec<Option<Vec<f64>>> = plan.iter().map(|p| (!p.sensors.is_empty()).then(|| mean(p))).collect();
     plan.iter()
         .enumerate()
         .map(|(k, p)| match &own[k] {

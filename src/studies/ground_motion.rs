@@ -28,6 +28,9 @@ pub struct GroundModel {
     pub motion: SupportMotion,
     /// The deck sensors' names (the outputs, in config order).
     pub outputs: Vec<String>,
+    /// Each support group's name and where it holds the model
+    /// ([`SupportGroups::anchors`]).
+    pub anchors: Vec<(String, Option<[f64; 3]>)>,
 }
 
 impl GroundModel {
@@ -60,6 +63,7 @@ impl GroundModel {
             state,
             motion,
             outputs: setup.sensor_names.clone(),
+            anchors: groups.names().iter().cloned().zip(groups.anchors(shell)).collect(),
         })
     }
 

@@ -172,17 +172,16 @@ pub fn significant_span<'a>(channels: impl Iterator<Item = &'a [f64]>, samples: 
 }
 
 /// The baseline series of deck sensor `s`: the ground input (along the
-/// sensor's direction) of the group whose bearings lie nearest.
+/// sensor's direction) of the group whose supports (bearings, line
+/// supports, column bases) lie nearest.
 fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<f64>]) -> (String, Vec<f64>) {
     let sensor = &config.sensors[s];
     let direction = match &sensor.direction {
-        DirectionConfig::Named(n) if n == "x" => [1.0, 0.0, 0.0],
-        DirectionConfig::Named(n) if n == "y" => [0.0, 1.0, 0.0],
         DirectionConfig::Vector(v) => {
             let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
             [v[0] / norm, v[1] / norm, v[2] / norm]
         }
-        _ => [0.0, 0.0, 1.0],
+        named => named.axis_vector().unwrap_or([0.0, 0.0, 1.0]),
     };
     let group_of = |name: &str| name.rsplit_once('.').map_or(name, |(g, _)| g).to_string();
     let mut groups: Vec<String> = Vec::new();
@@ -196,22 +195,11 @@ fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<
         _ => None,
     };
     let centroid = |group: &str| -> Option<[f64; 3]> {
-        let at: Vec<[f64; 3]> = config
-            .model
-            .bearings
+        model
+            .anchors
             .iter()
-            .filter(|b| {
-                b.support
-                    .as_deref()
-                    .unwrap_or(splinewatch_core::model::supports::DEFAULT_GROUP)
-                    == group
-            })
-            .map(|b| b.at)
-            .collect();
-        (!at.is_empty()).then(|| {
-            let n = at.len() as f64;
-            [0, 1, 2].map(|d| at.iter().map(|p| p[d]).sum::<f64>() / n)
-        })
+            .find(|(name, _)| name == group)
+            .and_then(|(_, at)| *at)
     };
     let nearest = position.and_then(|p| {
         groups

@@ -253,21 +253,34 @@ pub struct DiscretizationConfig {
 #[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(untagged)]
 pub enum DirectionConfig {
-    /// `"x"`, `"y"`, `"z"` or `"normal"`.
+    /// `"x"`, `"y"`, `"z"`, `"-x"`, `"-y"`, `"-z"` or `"normal"`.
     Named(String),
     /// A vector in the global frame (normalised on load).
     Vector([f64; 3]),
 }
 
 impl DirectionConfig {
+    /// The unit vector of a named axis, `"x"` … `"-z"` (`None` for
+    /// `"normal"`, a vector or an unknown name).
+    pub fn axis_vector(&self) -> Option<[f64; 3]> {
+        let Self::Named(name) = self else { return None };
+        let (sign, axis) = match name.strip_prefix('-') {
+            Some(axis) => (-1.0, axis),
+            None => (1.0, name.as_str()),
+        };
+        let a = ["x", "y", "z"].iter().position(|n| *n == axis)?;
+        let mut v = [0.0; 3];
+        v[a] = sign;
+        Some(v)
+    }
+
     /// The global axis (0 = x) the direction is nearest to.
     pub fn dominant_axis(&self) -> usize {
-        match self {
-            Self::Named(n) if n == "x" => 0,
-            Self::Named(n) if n == "y" => 1,
-            Self::Vector(v) => (0..3).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(2),
-            _ => 2,
-        }
+        let v = match self {
+            Self::Vector(v) => *v,
+            named => named.axis_vector().unwrap_or([0.0, 0.0, 1.0]),
+        };
+        (0..3).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(2)
     }
 }
 

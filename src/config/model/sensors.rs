@@ -27,10 +27,8 @@ impl Config {
                 ));
             }
             let direction = match &s.direction {
-                DirectionConfig::Named(n) => match n.as_str() {
-                    "x" => [1.0, 0.0, 0.0],
-                    "y" => [0.0, 1.0, 0.0],
-                    "z" => [0.0, 0.0, 1.0],
+                named @ DirectionConfig::Named(n) => match n.as_str() {
+                    _ if named.axis_vector().is_some() => named.axis_vector().expect("matched"),
                     "normal" => {
                         let e = shell.surface().evaluate(xi, eta);
                         splinewatch_core::geometry::vec3::cross(e.r_xi, e.r_eta)
@@ -38,7 +36,7 @@ impl Config {
                     other => {
                         return Err(err(
                             key("direction"),
-                            format!("{other:?} is not one of \"x\", \"y\", \"z\", \"normal\" or a 3-vector"),
+                            format!("{other:?} is not one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\", \"normal\" or a 3-vector"),
                         ))
                     }
                 },

@@ -220,3 +220,54 @@ fn bad_line_supports_name_their_key() {
     );
     assert!(skew.contains("model.supports[0].axes"), "{skew}");
 }
+
+/// A ground channel pointing along −x (a station's "Long" channels on the
+/// Painter Street bridge) enters its ground input with the opposite sign;
+/// its axis and group are those of "x"; a deck channel may point along −x
+/// too. The groups hold the model where their supports are: the bent's
+/// ground at its columns' footings, each abutment's along its line support.
+#[test]
+fn a_channel_pointing_the_other_way_enters_with_the_opposite_sign() {
+    let text = include_str!("../../../config/painter-street-bridge.toml");
+    let config = Config::from_toml(text).unwrap();
+    let model = config.build_model().unwrap();
+    let groups = config.support_groups(&model).unwrap();
+    let plan = config.ground_plan(&groups).unwrap();
+    let index = |name: &str| config.sensors.iter().position(|s| s.name == name).unwrap();
+    let bent_x = plan.iter().find(|p| p.name == "bent.x").unwrap();
+    assert_eq!(
+        (bent_x.sensors.clone(), bent_x.inverted.clone()),
+        (vec![index("ch1")], vec![index("ch1")])
+    );
+    assert!(plan.iter().find(|p| p.name == "bent.y").unwrap().inverted.is_empty());
+    assert_eq!(bent_x.describe(&config), "bent.x ← −ch1");
+    let samples: Vec<Vec<f64>> = (0..config.sensors.len()).map(|i| vec![i as f64 + 1.0; 3]).collect();
+    let signals = crate::config::ground_signals(&plan, |i| &samples[i]);
+    let at = |name: &str| plan.iter().position(|p| p.name == name).unwrap();
+    assert_eq!(signals[at("bent.x")], vec![-(index("ch1") as f64 + 1.0); 3]);
+    assert_eq!(signals[at("bent.y")], vec![index("ch3") as f64 + 1.0; 3]);
+    let sensors = config.build_sensors(&model).unwrap();
+    let (_, ch11) = sensors.iter().find(|(n, _)| n == "ch11").unwrap();
+    assert_eq!(ch11.direction, [-1.0, 0.0, 0.0]);
+    let anchors = groups.anchors(&model);
+    let anchor = |name: &str| anchors[groups.names().iter().position(|g| g == name).unwrap()].unwrap();
+    // The bent's footings straddle x = 44.5 m at 8.97 m below the deck; the
+    // abutments' soffit edges are centred on their support lines.
+    let bent = anchor("bent");
+    assert!(
+        (bent[0] - 44.5).abs() < 1e-9 && bent[1].abs() < 1e-9 && (bent[2] + 8.965).abs() < 1e-9,
+        "{bent:?}"
+    );
+    let (west, east) = (anchor("west"), anchor("east"));
+    assert!(
+        west[0].abs() < 1e-9 && (east[0] - 80.8).abs() < 1e-9,
+        "{west:?} {east:?}"
+    );
+    let bad = text.replacen(
+        "support = \"bent\"\ndirection = \"-x\"",
+        "support = \"bent\"\ndirection = \"-w\"",
+        1,
+    );
+    let message = Config::from_toml(&bad).unwrap_err().to_string();
+    assert!(message.contains("direction") && message.contains("\"-x\""), "{message}");
+}

@@ -10,6 +10,7 @@
 //! ([`crate::response::support_motion`] derives the motion). One
 //! group is uniform excitation.
 
+use crate::geometry::vec3::Vec3;
 use crate::model::ShellModel;
 use thiserror::Error;
 
@@ -37,7 +38,7 @@ pub enum SupportError {
         "node {node} is held by the supports of two groups ({first:?} and {second:?}): it cannot follow two grounds"
     )]
     TwoGrounds { node: usize, first: String, second: String },
-    #[error("support group {0:?} moves constrained edges or beam bases: on a truncated model (the sparse path) only springs and bearings may move with the ground; use [model.solver] modes = \"all\"")]
+    #[error("support group {0:?} moves constrained patch edges: on a truncated model (the sparse path) only springs, bearings, line supports and beam bases may move with the ground; use [model.solver] modes = \"all\"")]
     TruncatedConstraint(String),
     #[error("support motion: the static solve failed: {0}")]
     Solve(String),
@@ -159,5 +160,42 @@ impl SupportGroups {
     /// The group beam member `k`'s base follows.
     pub fn of_beam_base(&self, k: usize) -> usize {
         self.of_beam_bases[k]
+    }
+}
+
+impl SupportGroups {
+    /// Where each group holds `model` (the centroid of its bearings, of its
+    /// line supports' control points and of its held beam bases; `None` for
+    /// a group of spring fields or edge constraints only): the support a
+    /// deck point lies nearest, for a "deck moves with its ground" baseline.
+    pub fn anchors(&self, model: &ShellModel) -> Vec<Option<Vec3>> {
+        let mut points: Vec<Vec<Vec3>> = vec![Vec::new(); self.names.len()];
+        let fields = model.springs.len();
+        for (b, bearing) in model.bearings.iter().enumerate() {
+            let at = bearing.at();
+            let shell = &model.patches[at.patch].shell;
+            points[self.of_springs[fields + b]].push(shell.position(at.xi, at.eta, at.tau));
+        }
+        let first_line = fields + model.bearings.len();
+        for (s, support) in model.line_supports.iter().enumerate() {
+            let shell = &model.patches[support.patch()].shell;
+            let net = shell.surface().points();
+            let edge = support.edge().control_points(shell);
+            let n = edge.len() as f64;
+            let centroid = [0, 1, 2].map(|d| edge.iter().map(|&c| net[c][d]).sum::<f64>() / n);
+            points[self.of_springs[first_line + s]].push(centroid);
+        }
+        for (node, member) in model.beams.base_nodes() {
+            points[self.of_beam_bases[member]].push(model.beams.position(node));
+        }
+        points
+            .into_iter()
+            .map(|p| {
+                (!p.is_empty()).then(|| {
+                    let n = p.len() as f64;
+                    [0, 1, 2].map(|d| p.iter().map(|x| x[d]).sum::<f64>() / n)
+                })
+            })
+            .collect()
     }
 }

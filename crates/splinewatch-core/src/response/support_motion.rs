@@ -37,6 +37,7 @@
 
 use crate::model::damping::DampingCurve;
 use crate::model::dofs::DofMap;
+use crate::model::shell::Assembly;
 use crate::model::supports::{SupportError, SupportGroups};
 use crate::model::ShellModel;
 use crate::response::frf::{FrfModel, FrfRequest, ModalState, Quantity};
@@ -97,12 +98,12 @@ impl SupportMotion {
         let influence = match frf.dense() {
             Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lifts),
             None => {
-                let forces = truncated_forces(frf, groups, kappa, inputs, &lifts)?;
+                let forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
                 let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
                 let (_, responses) = model
                     .modes_and_responses(kappa, theta, cutoff_hz, &forces)
                     .map_err(|e| SupportError::Solve(e.to_string()))?;
-                truncated_influence(state, &forces, &responses, cutoff_hz)
+                truncated_influence(state, &forces, &responses, cutoff_hz, (&lifts, inputs))
             }
         };
         Ok(Self::from_influence(frf, state, inputs, influence, lifts.dofs))
@@ -132,13 +133,13 @@ impl SupportMotion {
                 (state, influence)
             }
             None => {
-                let forces = truncated_forces(frf, groups, kappa, inputs, &lifts)?;
+                let forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
                 let (state, responses) = frf
                     .modal_state_with_loads(kappa, theta, damping, &forces)
                     .map_err(solve_error)?;
                 let (_, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
                 let responses = responses.expect("a truncated model gives the loads' responses");
-                let influence = truncated_influence(&state, &forces, &responses, cutoff_hz);
+                let influence = truncated_influence(&state, &forces, &responses, cutoff_hz, (&lifts, inputs));
                 (state, influence)
             }
         };
@@ -163,7 +164,7 @@ impl SupportMotion {
         }
         check_inputs(groups, inputs)?;
         let lifts = GroundLifts::new(model, groups)?;
-        let forces = truncated_forces(frf, groups, kappa, inputs, &lifts)?;
+        let forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
         frf.with_reanalysis((kappa, theta), &forces, varied)
             .map_err(|e| SupportError::Solve(e.to_string()))
     }
@@ -614,22 +615,26 @@ fn dense_influence(
     influence
 }
 
-/// The ground forces `f = ΔK_g R_d` of every input on a truncated model
-/// (sparse, full dofs). The constrained edges of a moving group would need
-/// the unreduced stiffness, which the sparse model does not keep: refused.
+/// The ground forces `f = ΔK_g R_d − K ℓ` of every input on a truncated
+/// model (sparse, full dofs). `K ℓ` is taken where the sparse model keeps
+/// no unreduced stiffness: a held beam base couples to its neighbours
+/// through its beam elements only, whose matrices are assembled again here
+/// for the lifted columns; a constrained patch edge would need the shell's
+/// (and its stiffness fields'), so a moving group with one is refused.
 fn truncated_forces(
     frf: &FrfModel,
+    model: &ShellModel,
     groups: &SupportGroups,
     kappa: &[Vec<f64>],
     inputs: &[GroundInput],
     lifts: &GroundLifts,
 ) -> Result<Vec<Vec<(usize, f64)>>, SupportError> {
-    let (model, _) = frf.sparse().expect("a model is dense or truncated");
-    if let Some(input) = inputs.iter().find(|i| lifts.moves(i.group)) {
+    let (sparse, _) = frf.sparse().expect("a model is dense or truncated");
+    if let Some(input) = inputs.iter().find(|i| lifts.moves_edges(i.group)) {
         return Err(SupportError::TruncatedConstraint(groups.names()[input.group].clone()));
     }
-    let n = model.dof_count();
-    Ok(inputs
+    let n = sparse.dof_count();
+    inputs
         .iter()
         .map(|input| {
             let mut force = vec![0.0; n];
@@ -647,9 +652,48 @@ fn truncated_forces(
                     }
                 }
             }
-            force.into_iter().enumerate().filter(|(_, v)| *v != 0.0).collect()
+            if lifts.moves(input.group) {
+                let lift = lifts.lift(input);
+                let mut columns = LiftedColumns {
+                    lift: &lift,
+                    force: &mut force,
+                };
+                // The mass goes to a target that lifts nothing.
+                let nothing = vec![0.0; n];
+                let mut unused = LiftedColumns {
+                    lift: &nothing,
+                    force: &mut [],
+                };
+                model
+                    .beams
+                    .add_matrices(&mut columns, &mut unused, &lifts.dofs)
+                    .map_err(|e| SupportError::Solve(e.to_string()))?;
+            }
+            Ok(force.into_iter().enumerate().filter(|(_, v)| *v != 0.0).collect())
         })
-        .collect())
+        .collect()
+}
+
+/// An assembly target that keeps `force −= K ℓ` only (`K` added element by
+/// element): the lifted columns of the matrix, never the matrix.
+struct LiftedColumns<'a> {
+    lift: &'a [f64],
+    force: &'a mut [f64],
+}
+
+impl Assembly for LiftedColumns<'_> {
+    fn add_local(&mut self, local: &Mat<f64>, dofs: &[usize]) -> Result<(), crate::model::sparse::SparseError> {
+        for (b, &column) in dofs.iter().enumerate() {
+            let l = self.lift[column];
+            if l == 0.0 {
+                continue;
+            }
+            for (a, &row) in dofs.iter().enumerate() {
+                self.force[row] -= local[(a, b)] * l;
+            }
+        }
+        Ok(())
+    }
 }
 
 /// `Γ` on a truncated model: the static response `K⁻¹ f` from the
@@ -666,6 +710,7 @@ fn truncated_influence(
     forces: &[Vec<(usize, f64)>],
     (x, xmx): &crate::solvers::partial_eigen::Responses,
     cutoff_hz: f64,
+    (lifts, inputs): (&GroundLifts, &[GroundInput]),
 ) -> Mat<f64> {
     let sigma = crate::solvers::sparse_model::SparseModel::shift_for(cutoff_hz);
     let shapes = &state.modes.shapes;
@@ -679,6 +724,11 @@ fn truncated_influence(
             let weight = p * (1.0 / lambda - 1.0 / (lambda - sigma) + sigma / (lambda - sigma).powi(2));
             for d in 0..n {
                 influence[(d, c)] += shapes[(d, i)] * weight;
+            }
+        }
+        if lifts.moves(inputs[c].group) {
+            for (d, l) in lifts.lift(&inputs[c]).into_iter().enumerate() {
+                influence[(d, c)] += l;
             }
         }
     }
@@ -724,6 +774,11 @@ impl GroundLifts {
     /// Whether group `group` has constrained nodes (its ground lifts some).
     fn moves(&self, group: usize) -> bool {
         self.owner.contains(&Some(group))
+    }
+
+    /// Whether group `group` holds control points of a constrained edge.
+    fn moves_edges(&self, group: usize) -> bool {
+        (0..self.owner.len()).any(|node| self.owner[node] == Some(group) && self.dofs.is_control_point(node))
     }
 
     /// `ℓ` of `input`: 1 on the translations along its axis of its group's
