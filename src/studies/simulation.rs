@@ -316,8 +316,9 @@ impl Forcing {
                     Source::Measured(source) => forces[0] = source.next(rng),
                     Source::Unmeasured(sources) => sources.next(rng, &mut forces),
                 }
-                sim.step_forces(&forces, &mut acc);
+                sim.advance(&forces);
             }
+            sim.accelerations(&mut acc);
             if let Some(f) = f_block.as_mut() {
                 f.push(forces[0]);
             }

@@ -28,22 +28,31 @@ struct ModeRecursion {
     g1: [f64; 2],
     omega2: f64,
     two_zeta_omega: f64,
-    /// `a_{in_j,i}` of every input `j`.
-    input_gains: Vec<f64>,
-    /// Column `i` of the sensor amplitudes.
-    output_gains: Vec<f64>,
     state: [f64; 2],
+    /// `Σ_j a_{in_j,i} f_j` at the current step (the modal force the
+    /// acceleration includes).
+    modal_force: f64,
 }
 
 /// Simulates accelerations at every sensor for forces at some of them.
 #[derive(Debug, Clone)]
 pub struct ModalSimulator {
     modes: Vec<ModeRecursion>,
+    /// `a_{in_j,i}`, input by input (`j · modes + i`): a step sums each
+    /// active input over all modes at once.
+    input_gains: Vec<f64>,
+    /// The sensor amplitudes, mode by mode (`i · sensors + s`).
+    output_gains: Vec<f64>,
+    /// Per mode, the modal force at the step's start, its increment and
+    /// its end (buffers, reused).
+    modal_inputs: [Vec<f64>; 3],
     /// Modes kept (indices into the modal state), for re-basing.
     kept: Vec<usize>,
     dt: f64,
     sensors: usize,
     last_forces: Vec<f64>,
+    /// The inputs active over the last step (a buffer, reused).
+    active: Vec<usize>,
     /// Inputs straight to the outputs (`sensors × inputs`; ground motion's
     /// quasi-static part), none for forces.
     feedthrough: Option<Mat<f64>>,
@@ -96,8 +105,7 @@ impl ModalSimulator {
         let mut modes = Vec::new();
         let mut kept = Vec::new();
         for i in 0..nm {
-            let input_gains: Vec<f64> = (0..gains.ncols()).map(|j| gains[(i, j)]).collect();
-            if input_gains.iter().all(|a| a.abs() <= 1e-12 * largest) {
+            if (0..gains.ncols()).all(|j| gains[(i, j)].abs() <= 1e-12 * largest) {
                 continue;
             }
             let omega2 = state.modes.omega2[i].max(0.0);
@@ -110,18 +118,29 @@ impl ModalSimulator {
                 g1,
                 omega2,
                 two_zeta_omega,
-                input_gains,
-                output_gains: (0..sensors).map(|s| state.amplitude(s, i)).collect(),
                 state: [0.0, 0.0],
+                modal_force: 0.0,
             });
             kept.push(i);
         }
+        let input_gains = (0..gains.ncols())
+            .flat_map(|j| kept.iter().map(move |&i| gains[(i, j)]))
+            .collect();
+        let output_gains = kept
+            .iter()
+            .flat_map(|&i| (0..sensors).map(move |s| state.amplitude(s, i)))
+            .collect();
+        let modal_inputs = std::array::from_fn(|_| vec![0.0; kept.len()]);
         Self {
             modes,
+            input_gains,
+            output_gains,
+            modal_inputs,
             kept,
             dt,
             sensors,
             last_forces: vec![0.0; gains.ncols()],
+            active: Vec::with_capacity(gains.ncols()),
             feedthrough,
         }
     }
@@ -142,39 +161,72 @@ impl ModalSimulator {
         self.step_forces(&[f_next], out);
     }
 
-    /// Advances one step to the forces `f_next` (one per input).
+    /// Advances one step to the forces `f_next` (one per input) and writes
+    /// the accelerations at the new time into `out` (one per sensor).
     #[track_caller]
     pub fn step_forces(&mut self, f_next: &[f64], out: &mut [f64]) {
-        assert_eq!(out.len(), self.sensors);
+        self.advance(f_next);
+        self.accelerations(out);
+    }
+
+    /// Advances one step to the forces `f_next` without forming the
+    /// accelerations: an oversampled simulation keeps one step in several,
+    /// and the outputs (modes × sensors) cost more than the recursion.
+    /// [`Self::accelerations`] then gives exactly what [`Self::step_forces`]
+    /// would have written.
+    #[track_caller]
+    pub fn advance(&mut self, f_next: &[f64]) {
         assert_eq!(f_next.len(), self.last_forces.len());
-        out.fill(0.0);
         // Many inputs are idle at any instant (traffic): sum only the active ones.
-        let active: Vec<usize> = (0..f_next.len())
-            .filter(|&j| f_next[j] != 0.0 || self.last_forces[j] != 0.0)
-            .collect();
-        for m in &mut self.modes {
-            let (mut u0, mut du, mut u1) = (0.0, 0.0, 0.0);
-            for &j in &active {
-                let (g, f0, f1) = (m.input_gains[j], self.last_forces[j], f_next[j]);
-                u0 += g * f0;
-                du += g * (f1 - f0);
-                u1 += g * f1;
+        self.active.clear();
+        self.active
+            .extend((0..f_next.len()).filter(|&j| f_next[j] != 0.0 || self.last_forces[j] != 0.0));
+        let modes = self.modes.len();
+        let [u0, du, u1] = &mut self.modal_inputs;
+        for u in [&mut *u0, &mut *du, &mut *u1] {
+            u.fill(0.0);
+        }
+        for &j in &self.active {
+            let gains = &self.input_gains[j * modes..(j + 1) * modes];
+            let (f0, f1) = (self.last_forces[j], f_next[j]);
+            for (((&g, u0), du), u1) in gains.iter().zip(u0.iter_mut()).zip(du.iter_mut()).zip(u1.iter_mut()) {
+                *u0 += g * f0;
+                *du += g * (f1 - f0);
+                *u1 += g * f1;
             }
+        }
+        for (((m, &u0), &du), &u1) in self.modes.iter_mut().zip(u0.iter()).zip(du.iter()).zip(u1.iter()) {
             let [q, v] = m.state;
             let q1 = m.phi[0][0] * q + m.phi[0][1] * v + m.g0[0] * u0 + m.g1[0] * du;
             let v1 = m.phi[1][0] * q + m.phi[1][1] * v + m.g0[1] * u0 + m.g1[1] * du;
             m.state = [q1, v1];
-            let acc = u1 - m.two_zeta_omega * v1 - m.omega2 * q1;
-            for (o, g) in out.iter_mut().zip(&m.output_gains) {
+            m.modal_force = u1;
+        }
+        self.last_forces.copy_from_slice(f_next);
+    }
+
+    /// The accelerations at the current time, one per sensor, into `out`.
+    #[track_caller]
+    pub fn accelerations(&self, out: &mut [f64]) {
+        assert_eq!(out.len(), self.sensors);
+        out.fill(0.0);
+        for (m, gains) in self
+            .modes
+            .iter()
+            .zip(self.output_gains.chunks_exact(self.sensors.max(1)))
+        {
+            let [q1, v1] = m.state;
+            let acc = m.modal_force - m.two_zeta_omega * v1 - m.omega2 * q1;
+            for (o, g) in out.iter_mut().zip(gains) {
                 *o += g * acc;
             }
         }
         if let Some(f) = &self.feedthrough {
+            let forces = &self.last_forces;
             for (r, o) in out.iter_mut().enumerate() {
-                *o += (0..f_next.len()).map(|j| f[(r, j)] * f_next[j]).sum::<f64>();
+                *o += (0..forces.len()).map(|j| f[(r, j)] * forces[j]).sum::<f64>();
             }
         }
-        self.last_forces.copy_from_slice(f_next);
     }
 
     /// Physical displacement and velocity `Φ q`, `Φ q̇` of the full model.

@@ -54,8 +54,9 @@ fn ambient_record(model: &FrfModel, state: &ModalState, seconds: f64, seed: u64)
         for (f, src) in f_now.iter_mut().zip(&forces) {
             *f = src[k];
         }
-        sim.step_forces(&f_now, &mut acc);
+        sim.advance(&f_now);
         if (k + 1) % OVERSAMPLE == 0 {
+            sim.accelerations(&mut acc);
             for (o, a) in out.iter_mut().zip(&acc) {
                 o.push(*a);
             }
@@ -136,14 +137,15 @@ fn twenty_minutes_of_ambient_data_give_the_bending_modes() {
 /// Monte Carlo check of both uncertainty methods (issue 32): `RECORDS`
 /// independent 5-minute records (shorter than the acceptance's 10–20 min
 /// to keep the suite fast; the estimators are the same), each identified
-/// once and its uncertainty estimated twice, by first-order replicates (the
-/// default) and by the exact jackknife. Per mode, the mean reported std of
-/// frequency and of damping is within a factor of 2 of the scatter over
-/// the records (the Monte Carlo truth), for both methods; and the two
-/// methods' mean stds agree within 25 % (a record's jackknife std carries
-/// ~18 % sampling error of its own with 16 batches, `1/√(2·15)`; averaged
-/// over the records, what is left is the first-order method's own
-/// approximation).
+/// with first-order replicates (the default), every other one also with
+/// the exact jackknife (four times the cost of the first-order method).
+/// Per mode, the mean reported std of frequency, damping and shape is
+/// within a factor of 2 of the scatter over all the records (the Monte
+/// Carlo truth), for both methods; and on the records both identified, the
+/// two methods' mean stds agree within 25 % (a record's jackknife std
+/// carries ~18 % sampling error of its own with 16 batches, `1/√(2·15)`;
+/// averaged over 50 records 2.5 %: what is left is the first-order
+/// method's own approximation).
 #[test]
 fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
     const RECORDS: u64 = 100;
@@ -154,15 +156,16 @@ fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
         uncertainty: UncertaintyMethod::Jackknife,
         ..OmaSettings::default()
     };
-    // Per mode: frequencies, damping ratios, and per method the reported
-    // (frequency std, damping std).
-    // And per method the RMS over sensors of the reported shape std.
+    // Per mode: frequencies, damping ratios, and the reported (frequency
+    // std, damping std) and RMS over sensors of the shape std, each of the
+    // first-order method on every record, of the jackknife, and of the
+    // first-order method on the jackknife's records.
     let mut found = vec![
         (
             Vec::new(),
             Vec::new(),
-            [Vec::new(), Vec::new()],
-            [Vec::new(), Vec::new()]
+            [Vec::new(), Vec::new(), Vec::new()],
+            [Vec::new(), Vec::new(), Vec::new()]
         );
         exact.len()
     ];
@@ -175,19 +178,30 @@ fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
         let record = ambient_record(&model, &state, 300.0, 1000 + seed);
         let views: Vec<&[f64]> = record.iter().map(Vec::as_slice).collect();
         let correlations = OutputCorrelations::from_samples(&views, &[], first_order.max_lag(), 16).unwrap();
-        [&first_order, &jackknife].map(|s| identify(&correlations, FS, s).unwrap())
+        let ours = identify(&correlations, FS, &first_order).unwrap();
+        let jack = (seed % 2 == 0).then(|| identify(&correlations, FS, &jackknife).unwrap());
+        (ours, jack)
     });
-    for results in &identified {
-        let (a, b) = (paired(&results[0], &exact), paired(&results[1], &exact));
+    for (ours, jack) in &identified {
+        let a = paired(ours, &exact);
+        let b: Vec<Option<&IdentifiedMode>> = match jack {
+            Some(jack) => paired(jack, &exact).into_iter().map(Some).collect(),
+            None => vec![None; exact.len()],
+        };
         for (m, ((_, shape), (x, y))) in exact.iter().zip(a.into_iter().zip(b)).enumerate() {
-            assert_eq!(x.frequency_hz, y.frequency_hz, "the methods differ in the std only");
+            if let Some(y) = y {
+                assert_eq!(x.frequency_hz, y.frequency_hz, "the methods differ in the std only");
+            }
             if mac_real(&x.shape, shape) > 0.9 {
                 let entry = &mut found[m];
                 entry.0.push(x.frequency_hz);
                 entry.1.push(x.damping_ratio);
                 shapes[m].push(x.shape.clone());
-                for (k, mode) in [x, y].into_iter().enumerate() {
-                    if let (Some(f), Some(z), Some(d)) = (mode.frequency_std_hz, mode.damping_std, &mode.shape_std) {
+                let reports = [Some(x), y, y.and(Some(x))];
+                for (k, mode) in reports.into_iter().enumerate() {
+                    if let Some((Some(f), Some(z), Some(d))) =
+                        mode.map(|mode| (mode.frequency_std_hz, mode.damping_std, &mode.shape_std))
+                    {
                         entry.2[k].push((f, z));
                         entry.3[k].push((d.iter().map(|v| v * v).sum::<f64>() / d.len() as f64).sqrt());
                     }
@@ -238,8 +252,12 @@ fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
             frequencies.len()
         );
         let (sf, sz) = (std_of(frequencies), std_of(dampings));
-        let [ours, jack] = [0, 1].map(|k| {
-            assert!(reported[k].len() >= needed * 9 / 10, "{f_exact:.3} Hz: std missing");
+        // The jackknife ran on half the records.
+        let [ours, jack, ours_on_jack] = [(0, 1), (1, 2), (2, 2)].map(|(k, share)| {
+            assert!(
+                reported[k].len() >= needed * 9 / 10 / share,
+                "{f_exact:.3} Hz: std missing"
+            );
             (mean_of(&reported[k], |r| r.0), mean_of(&reported[k], |r| r.1))
         });
         eprintln!(
@@ -275,7 +293,10 @@ fn both_uncertainty_methods_match_the_scatter_over_independent_records() {
                 "{f_exact:.3} Hz: {name} std / scatter {ratio:.2}"
             );
         }
-        for (what, a, b) in [("frequency", ours.0, jack.0), ("damping", ours.1, jack.1)] {
+        for (what, a, b) in [
+            ("frequency", ours_on_jack.0, jack.0),
+            ("damping", ours_on_jack.1, jack.1),
+        ] {
             assert!(
                 (a / b - 1.0).abs() < 0.25,
                 "{f_exact:.3} Hz: {what} std {a} (first order) vs {b} (jackknife)"

@@ -41,8 +41,9 @@ fn shaken_deck(seconds: f64, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f6
     let mut deck: Vec<Vec<f64>> = (0..12).map(|_| Vec::with_capacity(n)).collect();
     let mut measured_ground: Vec<Vec<f64>> = (0..2).map(|_| Vec::with_capacity(n)).collect();
     for k in 0..fine {
-        sim.step_forces(&[ground[0][k], ground[1][k]], &mut acc);
+        sim.advance(&[ground[0][k], ground[1][k]]);
         if (k + 1) % OVERSAMPLE == 0 {
+            sim.accelerations(&mut acc);
             deck.iter_mut().zip(&acc).for_each(|(d, a)| d.push(*a));
             measured_ground.iter_mut().zip(&ground).for_each(|(m, g)| m.push(g[k]));
         }
