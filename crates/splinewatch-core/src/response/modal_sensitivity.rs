@@ -229,6 +229,22 @@ impl FrfModel {
                 _ => damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI),
             })
             .collect();
+        // The frequency-independent factors of every (coefficient, pair),
+        // mode by mode: ∂(a_r a_s), ∂λ, the damping term's ζ∂ω + ω ζ' ∂ω,
+        // and a_r a_s (the loop over frequencies then reads them in order).
+        let mut terms = vec![[0.0; 4]; nk * np * nm];
+        for k in 0..nk {
+            for (p, &(r, s)) in request.pairs.iter().enumerate() {
+                let row = &mut terms[(k * np + p) * nm..(k * np + p + 1) * nm];
+                for (i, term) in row.iter_mut().enumerate() {
+                    let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
+                    let da = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
+                    let dw = d_omega[(i, k)];
+                    let damping_term = state.zeta[i] * dw + omega[i] * slope[i] * dw;
+                    *term = [da, sens.eigenvalue[(i, k)], damping_term, ar * as_];
+                }
+            }
+        }
         let mut q = vec![c64::new(0.0, 0.0); nm];
         for (f, &hz) in request.frequencies_hz.iter().enumerate() {
             let w = 2.0 * PI * hz;
@@ -239,15 +255,10 @@ impl FrfModel {
             for (k, dh) in out.iter_mut().enumerate() {
                 for (p, &(r, s)) in request.pairs.iter().enumerate() {
                     let mut sum = c64::new(0.0, 0.0);
-                    for i in 0..nm {
-                        let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
-                        let da = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
-                        let dw = d_omega[(i, k)];
-                        let d_denominator = c64::new(
-                            sens.eigenvalue[(i, k)],
-                            2.0 * w * (state.zeta[i] * dw + omega[i] * slope[i] * dw),
-                        );
-                        sum += q[i] * (c64::new(da, 0.0) - q[i] * d_denominator * (ar * as_));
+                    let row = &terms[(k * np + p) * nm..(k * np + p + 1) * nm];
+                    for (&q, &[da, d_lambda, damping_term, a_rs]) in q.iter().zip(row) {
+                        let d_denominator = c64::new(d_lambda, 2.0 * w * damping_term);
+                        sum += q * (c64::new(da, 0.0) - q * d_denominator * a_rs);
                     }
                     if let (Some(c), Some(residual)) = (&couplings[k].residual, state.residual()) {
                         let gamma = residual.expansion_factor(w);
