@@ -21,30 +21,54 @@ use crate::response::frf::ModalState;
 use faer::Mat;
 use std::f64::consts::PI;
 
-#[derive(Debug, Clone)]
-struct ModeRecursion {
-    phi: [[f64; 2]; 2],
-    g0: [f64; 2],
-    g1: [f64; 2],
-    omega2: f64,
-    two_zeta_omega: f64,
-    state: [f64; 2],
-    /// `Σ_j a_{in_j,i} f_j` at the current step (the modal force the
-    /// acceleration includes).
-    modal_force: f64,
+/// The kept modes' recursions, one array per coefficient (mode `i` at
+/// index `i`): a step runs down each array, which the compiler vectorises.
+#[derive(Debug, Clone, Default)]
+struct Recursions {
+    /// `Φ` row by row: `Φ00, Φ01, Φ10, Φ11`.
+    phi: [Vec<f64>; 4],
+    /// `Γ0` and `Γ1`, the displacement's and the velocity's rows.
+    g0: [Vec<f64>; 2],
+    g1: [Vec<f64>; 2],
+    omega2: Vec<f64>,
+    two_zeta_omega: Vec<f64>,
+    /// The state `(q, q̇)`.
+    q: Vec<f64>,
+    v: Vec<f64>,
+}
+
+impl Recursions {
+    fn push(&mut self, omega2: f64, two_zeta_omega: f64, dt: f64) {
+        let (phi, g0, g1) = discretise(omega2, two_zeta_omega, dt);
+        for (array, value) in self.phi.iter_mut().zip([phi[0][0], phi[0][1], phi[1][0], phi[1][1]]) {
+            array.push(value);
+        }
+        for (array, value) in self.g0.iter_mut().zip(g0).chain(self.g1.iter_mut().zip(g1)) {
+            array.push(value);
+        }
+        self.omega2.push(omega2);
+        self.two_zeta_omega.push(two_zeta_omega);
+        self.q.push(0.0);
+        self.v.push(0.0);
+    }
+
+    fn len(&self) -> usize {
+        self.q.len()
+    }
 }
 
 /// Simulates accelerations at every sensor for forces at some of them.
 #[derive(Debug, Clone)]
 pub struct ModalSimulator {
-    modes: Vec<ModeRecursion>,
+    modes: Recursions,
     /// `a_{in_j,i}`, input by input (`j · modes + i`): a step sums each
     /// active input over all modes at once.
     input_gains: Vec<f64>,
     /// The sensor amplitudes, mode by mode (`i · sensors + s`).
     output_gains: Vec<f64>,
-    /// Per mode, the modal force at the step's start, its increment and
-    /// its end (buffers, reused).
+    /// Per mode, the modal force `Σ_j a_{in_j,i} f_j` at the step's start,
+    /// its increment and its end (the last is the modal force the
+    /// acceleration at the current time includes).
     modal_inputs: [Vec<f64>; 3],
     /// Modes kept (indices into the modal state), for re-basing.
     kept: Vec<usize>,
@@ -102,25 +126,15 @@ impl ModalSimulator {
         let largest = (0..nm)
             .flat_map(|i| (0..gains.ncols()).map(move |j| gains[(i, j)].abs()))
             .fold(0.0, f64::max);
-        let mut modes = Vec::new();
+        let mut modes = Recursions::default();
         let mut kept = Vec::new();
         for i in 0..nm {
             if (0..gains.ncols()).all(|j| gains[(i, j)].abs() <= 1e-12 * largest) {
                 continue;
             }
             let omega2 = state.modes.omega2[i].max(0.0);
-            let omega = omega2.sqrt();
-            let two_zeta_omega = 2.0 * state.zeta[i] * omega;
-            let (phi, g0, g1) = discretise(omega2, two_zeta_omega, dt);
-            modes.push(ModeRecursion {
-                phi,
-                g0,
-                g1,
-                omega2,
-                two_zeta_omega,
-                state: [0.0, 0.0],
-                modal_force: 0.0,
-            });
+            let two_zeta_omega = 2.0 * state.zeta[i] * omega2.sqrt();
+            modes.push(omega2, two_zeta_omega, dt);
             kept.push(i);
         }
         let input_gains = (0..gains.ncols())
@@ -195,12 +209,15 @@ impl ModalSimulator {
                 *u1 += g * f1;
             }
         }
-        for (((m, &u0), &du), &u1) in self.modes.iter_mut().zip(u0.iter()).zip(du.iter()).zip(u1.iter()) {
-            let [q, v] = m.state;
-            let q1 = m.phi[0][0] * q + m.phi[0][1] * v + m.g0[0] * u0 + m.g1[0] * du;
-            let v1 = m.phi[1][0] * q + m.phi[1][1] * v + m.g0[1] * u0 + m.g1[1] * du;
-            m.state = [q1, v1];
-            m.modal_force = u1;
+        let r = &mut self.modes;
+        let n = r.len();
+        let [p00, p01, p10, p11] = r.phi.each_ref().map(|a| &a[..n]);
+        let ([a0, b0], [a1, b1]) = (r.g0.each_ref().map(|a| &a[..n]), r.g1.each_ref().map(|a| &a[..n]));
+        let (q, v, u0, du) = (&mut r.q[..n], &mut r.v[..n], &u0[..n], &du[..n]);
+        for i in 0..n {
+            let (qi, vi) = (q[i], v[i]);
+            q[i] = p00[i] * qi + p01[i] * vi + a0[i] * u0[i] + a1[i] * du[i];
+            v[i] = p10[i] * qi + p11[i] * vi + b0[i] * u0[i] + b1[i] * du[i];
         }
         self.last_forces.copy_from_slice(f_next);
     }
@@ -210,13 +227,10 @@ impl ModalSimulator {
     pub fn accelerations(&self, out: &mut [f64]) {
         assert_eq!(out.len(), self.sensors);
         out.fill(0.0);
-        for (m, gains) in self
-            .modes
-            .iter()
-            .zip(self.output_gains.chunks_exact(self.sensors.max(1)))
-        {
-            let [q1, v1] = m.state;
-            let acc = m.modal_force - m.two_zeta_omega * v1 - m.omega2 * q1;
+        let r = &self.modes;
+        let force = &self.modal_inputs[2];
+        for (i, gains) in self.output_gains.chunks_exact(self.sensors.max(1)).enumerate() {
+            let acc = force[i] - r.two_zeta_omega[i] * r.v[i] - r.omega2[i] * r.q[i];
             for (o, g) in out.iter_mut().zip(gains) {
                 *o += g * acc;
             }
@@ -234,10 +248,11 @@ impl ModalSimulator {
         let shapes = &state.modes.shapes;
         let n = shapes.nrows();
         let (mut x, mut v) = (vec![0.0; n], vec![0.0; n]);
-        for (m, &i) in self.modes.iter().zip(&self.kept) {
+        let r = &self.modes;
+        for (k, &i) in self.kept.iter().enumerate() {
             for d in 0..n {
-                x[d] += shapes[(d, i)] * m.state[0];
-                v[d] += shapes[(d, i)] * m.state[1];
+                x[d] += shapes[(d, i)] * r.q[k];
+                v[d] += shapes[(d, i)] * r.v[k];
             }
         }
         (x, v)
@@ -250,11 +265,10 @@ impl ModalSimulator {
     pub fn set_physical_state(&mut self, state: &ModalState, mass_x: &[f64], mass_v: &[f64]) {
         let shapes = &state.modes.shapes;
         let n = shapes.nrows();
-        for (m, &i) in self.modes.iter_mut().zip(&self.kept) {
-            m.state = [
-                (0..n).map(|d| shapes[(d, i)] * mass_x[d]).sum(),
-                (0..n).map(|d| shapes[(d, i)] * mass_v[d]).sum(),
-            ];
+        let r = &mut self.modes;
+        for (k, &i) in self.kept.iter().enumerate() {
+            r.q[k] = (0..n).map(|d| shapes[(d, i)] * mass_x[d]).sum();
+            r.v[k] = (0..n).map(|d| shapes[(d, i)] * mass_v[d]).sum();
         }
     }
 
