@@ -13,7 +13,7 @@
 //! them).
 
 use super::ground_motion::GroundModel;
-use crate::config::{Config, DirectionConfig};
+use crate::config::Config;
 use serde::Serialize;
 
 /// One deck channel's figures.
@@ -176,13 +176,7 @@ pub fn significant_span<'a>(channels: impl Iterator<Item = &'a [f64]>, samples: 
 /// supports, column bases) lie nearest.
 fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<f64>]) -> (String, Vec<f64>) {
     let sensor = &config.sensors[s];
-    let direction = match &sensor.direction {
-        DirectionConfig::Vector(v) => {
-            let norm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            [v[0] / norm, v[1] / norm, v[2] / norm]
-        }
-        named => named.axis_vector().unwrap_or([0.0, 0.0, 1.0]),
-    };
+    let direction = sensor.direction.unit_vector();
     let group_of = |name: &str| name.rsplit_once('.').map_or(name, |(g, _)| g).to_string();
     let mut groups: Vec<String> = Vec::new();
     for g in model.plan.iter().map(|p| group_of(&p.name)) {

@@ -274,12 +274,20 @@ impl DirectionConfig {
         Some(v)
     }
 
+    /// The direction as a unit vector in the global frame: a named axis,
+    /// or a vector normalised; z for `"normal"` (which depends on where on
+    /// the surface it is taken) and for a zero vector (refused on load).
+    pub fn unit_vector(&self) -> [f64; 3] {
+        let z = [0.0, 0.0, 1.0];
+        match self {
+            Self::Vector(v) => splinewatch_core::geometry::vec3::normalize(*v).unwrap_or(z),
+            named => named.axis_vector().unwrap_or(z),
+        }
+    }
+
     /// The global axis (0 = x) the direction is nearest to.
     pub fn dominant_axis(&self) -> usize {
-        let v = match self {
-            Self::Vector(v) => *v,
-            named => named.axis_vector().unwrap_or([0.0, 0.0, 1.0]),
-        };
+        let v = self.unit_vector();
         (0..3).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(2)
     }
 }

@@ -27,13 +27,13 @@ impl Config {
                 ));
             }
             let direction = match &s.direction {
-                named @ DirectionConfig::Named(n) => match n.as_str() {
-                    _ if named.axis_vector().is_some() => named.axis_vector().expect("matched"),
-                    "normal" => {
+                named @ DirectionConfig::Named(n) => match (named.axis_vector(), n.as_str()) {
+                    (Some(axis), _) => axis,
+                    (None, "normal") => {
                         let e = shell.surface().evaluate(xi, eta);
                         splinewatch_core::geometry::vec3::cross(e.r_xi, e.r_eta)
                     }
-                    other => {
+                    (None, other) => {
                         return Err(err(
                             key("direction"),
                             format!("{other:?} is not one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\", \"normal\" or a 3-vector"),
