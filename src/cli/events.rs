@@ -67,7 +67,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
     let mut writer = a
         .out
         .as_deref()
-        .map(|p| ResultsWriter::create(p, &cfg.topic_prefix()))
+        .map(|p| ResultsWriter::create_for(p, &cfg))
         .transpose()?;
     let mut notifier = Notifier::for_config(&cfg).context("starting the notifier")?;
     let mut rerun = a.rerun_save.as_ref().map(|path| open_rerun(&cfg, path)).transpose()?;

@@ -10,6 +10,7 @@ mod measure;
 mod model;
 mod monitor;
 mod reference;
+mod report;
 
 use crate::io::console::errln;
 use anyhow::Result;
@@ -82,6 +83,10 @@ enum Command {
     /// (name, last update, parameters, monitoring state, health) from the
     /// daemons' `bridge/*/{updating,monitoring,health}/latest` queryables.
     Fleet(monitor::FleetArgs),
+    /// The owner's report of an event or a period from a bridge's results
+    /// files: one self-contained HTML file (verdict and inspection priority
+    /// first, figures inline), for an e-mail or a phone.
+    Report(report::ReportArgs),
     /// Salvage an MCAP file left unfinished by a killed process (results,
     /// raw-input `.part` files): copies every message of every complete chunk
     /// into a new, finalised file.
@@ -117,6 +122,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Demo(args) => monitor::demo(args),
         Command::Soak(args) => monitor::soak(args),
         Command::Recover(args) => monitor::recover(args),
+        Command::Report(args) => report::report(args),
         Command::Monitor(args) => monitor::monitor(args),
         Command::Fleet(args) => monitor::fleet(args),
         Command::CheckConfig(args) => model::check_config(args),

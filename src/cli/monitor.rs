@@ -214,11 +214,7 @@ pub fn monitor(a: MonitorArgs) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     let inputs: Vec<&[u8]> = files.iter().map(Vec::as_slice).collect();
     let t0 = std::time::Instant::now();
-    let mut writer = a
-        .out
-        .as_ref()
-        .map(|p| ResultsWriter::create(p, &cfg.topic_prefix()))
-        .transpose()?;
+    let mut writer = a.out.as_ref().map(|p| ResultsWriter::create_for(p, &cfg)).transpose()?;
     let summary = crate::service::rescore::rescore_results(
         &settings,
         &cfg.topic_prefix(),
@@ -325,7 +321,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         Some(p) => state::load_state(p)?,
         None => None,
     };
-    let mut writer = ResultsWriter::create(&out, &cfg.topic_prefix())?;
+    let mut writer = ResultsWriter::create_for(&out, &cfg)?;
     let targets = rerun::targets(&cfg, a.rerun_save.as_deref(), a.rerun_connect.as_deref());
     let mut viewer = if targets.is_empty() {
         None

@@ -353,6 +353,19 @@ pub fn topics_page() -> Result<String> {
         ("With `[monitoring]`", &MONITORING_TOPICS[..]),
         ("`splinewatch events` and the daemon with `[events]`", &EVENT_TOPICS[..]),
     ];
+    let _ = writeln!(
+        out,
+        "Each file also holds one MCAP metadata record `{}`: what the results rest on, the keys {} \
+         (the software's version, the topic prefix, the structure's name, the config file's path, its SHA-256 \
+         and its text); `splinewatch report` shows them. Files written before it was recorded have none.\n",
+        crate::io::results_topics::PROVENANCE_METADATA,
+        crate::io::results_topics::Provenance::default()
+            .to_metadata()
+            .keys()
+            .map(|k| format!("`{k}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     for (group, topics) in groups {
         let _ = writeln!(out, "## {group}\n");
         for (topic, schema) in topics {

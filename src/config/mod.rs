@@ -102,6 +102,17 @@ pub struct Config {
     /// `[metrics]`: Prometheus text at `/metrics` (daemon, `replay --metrics`); absent: none.
     #[serde(default)]
     pub metrics: Option<MetricsConfig>,
+    /// The file the config was read from and its text ([`load_config`]),
+    /// which the results files record; none for a config made in memory.
+    #[serde(skip)]
+    pub source: Option<ConfigSource>,
+}
+
+/// Where a config came from: its path and its text as read.
+#[derive(Debug, Clone, Default)]
+pub struct ConfigSource {
+    pub path: std::path::PathBuf,
+    pub text: String,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
@@ -115,8 +126,12 @@ pub struct StructureConfig {
 /// Reads and validates a configuration file.
 pub fn load_config(path: &Path) -> anyhow::Result<Config> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read config file {}", path.display()))?;
-    let config = Config::from_toml(&text).with_context(|| path.display().to_string())?;
+    let mut config = Config::from_toml(&text).with_context(|| path.display().to_string())?;
     config.validate().with_context(|| path.display().to_string())?;
+    config.source = Some(ConfigSource {
+        path: path.to_path_buf(),
+        text,
+    });
     Ok(config)
 }
 

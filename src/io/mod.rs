@@ -13,6 +13,7 @@ pub mod modes_json;
 pub mod monitoring_json;
 pub mod recording;
 pub mod recover;
+pub mod results_file;
 pub mod results_topics;
 pub mod uff;
 pub mod wire;

@@ -68,3 +68,51 @@ pub const EVENT_TOPICS: [(&str, &str); 2] = [
         r#"{"type":"object","required":["state","outside","bands"],"properties":{"state":{"type":"string","enum":["insufficient history","normal","alarm"]},"outside":{"type":"array","items":{"type":"string"}},"bands":{"type":"array","items":{"type":"object","properties":{"feature":{"type":"string"},"value":{"type":["number","null"]},"band":{"type":["object","null"],"properties":{"predicted":{"type":"number"},"lower":{"type":"number"},"upper":{"type":"number"},"events":{"type":"integer"}}}}}}}}"#,
     ),
 ];
+
+/// The name of the MCAP metadata record that says what made a results file.
+pub const PROVENANCE_METADATA: &str = "splinewatch";
+
+/// What a results file rests on (its `splinewatch` metadata record): the
+/// software and its version, the topic prefix (the bridge), and the
+/// configuration file's path, SHA-256 and text, so a report can name the
+/// model and config a verdict was reached with. Files written before it was
+/// recorded have none.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Provenance {
+    pub version: String,
+    pub prefix: String,
+    pub structure: String,
+    pub config_path: String,
+    pub config_sha256: String,
+    pub config_toml: String,
+}
+
+impl Provenance {
+    /// The metadata record's key–value pairs.
+    pub fn to_metadata(&self) -> std::collections::BTreeMap<String, String> {
+        [
+            ("version", &self.version),
+            ("prefix", &self.prefix),
+            ("structure", &self.structure),
+            ("config_path", &self.config_path),
+            ("config_sha256", &self.config_sha256),
+            ("config_toml", &self.config_toml),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.clone()))
+        .collect()
+    }
+
+    /// Read back from a metadata record's pairs (keys it does not know ignored).
+    pub fn from_metadata(m: &std::collections::BTreeMap<String, String>) -> Self {
+        let get = |k: &str| m.get(k).cloned().unwrap_or_default();
+        Self {
+            version: get("version"),
+            prefix: get("prefix"),
+            structure: get("structure"),
+            config_path: get("config_path"),
+            config_sha256: get("config_sha256"),
+            config_toml: get("config_toml"),
+        }
+    }
+}

@@ -6,6 +6,7 @@ pub mod metrics;
 pub mod notify;
 pub mod publisher;
 pub mod raw_recorder;
+pub mod report;
 pub mod rerun;
 pub mod results;
 pub mod state;

@@ -1,6 +1,7 @@
 //! Results outputs: an MCAP file of JSON messages with JSON Schemas (read by
 //! Foxglove and the Python `mcap` package), rotated by measurement time.
 
+use crate::config::Config;
 use crate::io::frf_json::FrfFile;
 use crate::io::wire::format_timestamp;
 use crate::pipeline::{Health, MonitoringOutcome, UpdateOutcome, WindowModes, WindowReport};
@@ -13,7 +14,7 @@ use std::fs::File;
 use std::io::{BufWriter, Seek, Write};
 use std::path::Path;
 
-pub use crate::io::results_topics::{EVENT_TOPICS, MONITORING_TOPICS, TOPICS};
+pub use crate::io::results_topics::{Provenance, EVENT_TOPICS, MONITORING_TOPICS, PROVENANCE_METADATA, TOPICS};
 
 /// The messages of a scored update: `monitoring/status`, and
 /// `monitoring/alarm` when the state entered or left alarm.
@@ -238,6 +239,39 @@ impl ResultsWriter<BufWriter<File>> {
     pub fn create(path: &Path, prefix: &str) -> Result<Self> {
         Self::new(create_buffered(path)?, prefix)
     }
+
+    /// A results file at `path` for `config`, its provenance recorded.
+    pub fn create_for(path: &Path, config: &Config) -> Result<Self> {
+        Self::create(path, &config.topic_prefix())?.with_provenance(Some(&provenance(config)))
+    }
+}
+
+/// What a results file made with `config` rests on: this software's
+/// version, the bridge's topic prefix and, when the config was read from a
+/// file, its path, SHA-256 and text.
+pub fn provenance(config: &Config) -> Provenance {
+    use sha2::Digest;
+    let (path, text) = config
+        .source
+        .as_ref()
+        .map(|s| (s.path.display().to_string(), s.text.clone()))
+        .unwrap_or_default();
+    let sha256 = if text.is_empty() {
+        String::new()
+    } else {
+        sha2::Sha256::digest(text.as_bytes())
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
+    };
+    Provenance {
+        version: env!("CARGO_PKG_VERSION").into(),
+        prefix: config.topic_prefix(),
+        structure: config.structure.name.clone(),
+        config_path: path,
+        config_sha256: sha256,
+        config_toml: text,
+    }
 }
 
 impl<W: Write + Seek> ResultsWriter<W> {
@@ -259,6 +293,19 @@ impl<W: Write + Seek> ResultsWriter<W> {
 
     pub fn prefix(&self) -> &str {
         &self.prefix
+    }
+
+    /// Records what made the file (its `splinewatch` metadata record).
+    pub fn with_provenance(mut self, provenance: Option<&Provenance>) -> Result<Self> {
+        if let Some(p) = provenance {
+            self.writer
+                .write_metadata(&mcap::records::Metadata {
+                    name: PROVENANCE_METADATA.into(),
+                    metadata: p.to_metadata(),
+                })
+                .context("cannot write the results file's provenance")?;
+        }
+        Ok(self)
     }
 
     /// Writes `message` on `<prefix>/<suffix>` at `time_ns`.
@@ -324,6 +371,7 @@ impl<W: Write + Seek> ResultsWriter<W> {
 pub struct ResultsSink<W: Write + Seek> {
     open: Box<dyn FnMut(u32) -> Result<W> + Send>,
     prefix: String,
+    provenance: Option<Provenance>,
     writer: Option<ResultsWriter<W>>,
     index: u32,
     /// Measurement time one file may span, ns.
@@ -344,6 +392,7 @@ impl<W: Write + Seek> ResultsSink<W> {
         Ok(Self {
             open,
             prefix: prefix.to_string(),
+            provenance: None,
             writer: Some(writer),
             index: 0,
             rotate_ns: None,
@@ -351,6 +400,15 @@ impl<W: Write + Seek> ResultsSink<W> {
             errors: 0,
             rotations: 0,
         })
+    }
+
+    /// Records `provenance` in the open file and in every later one.
+    pub fn with_provenance(mut self, provenance: Provenance) -> Result<Self> {
+        if let Some(w) = self.writer.take() {
+            self.writer = Some(w.with_provenance(Some(&provenance))?);
+        }
+        self.provenance = Some(provenance);
+        Ok(self)
     }
 
     /// Finalise a file once its messages span `span_ns` of measurement time.
@@ -396,7 +454,10 @@ impl<W: Write + Seek> ResultsSink<W> {
     fn writer(&mut self) -> Option<&mut ResultsWriter<W>> {
         if self.writer.is_none() {
             self.index += 1;
-            match (self.open)(self.index).and_then(|w| ResultsWriter::new(w, &self.prefix)) {
+            let opened = (self.open)(self.index)
+                .and_then(|w| ResultsWriter::new(w, &self.prefix))
+                .and_then(|w| w.with_provenance(self.provenance.as_ref()));
+            match opened {
                 Ok(w) => self.writer = Some(w),
                 Err(e) => {
                     self.fail("open", e);

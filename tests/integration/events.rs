@@ -212,6 +212,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     let saved: serde_json::Value = serde_json::from_slice(&std::fs::read(&state).unwrap()).unwrap();
     assert_eq!(saved["parameters"].as_array().unwrap().len(), 4);
     assert_eq!(saved["amplitudes"].as_array().unwrap().len(), 3);
+    crate::report::painter_street_reports(&dir, &out, &lines);
     let svg = std::fs::read_to_string(dir.join("plots/frequency_vs_amplitude.svg")).unwrap();
     assert!(svg.contains("<svg"));
     // The Rerun timeline, read back with Rerun's own decoder.
@@ -277,7 +278,15 @@ fn issue_45_a_stiffness_drop_at_the_fifth_event_raises_the_alarm_there_and_not_b
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         events.push(out.to_str().unwrap().to_string());
     }
-    let mut args = vec!["events", "--config", config.to_str().unwrap(), "--json"];
+    let results = dir.join("events.mcap");
+    let mut args = vec![
+        "events",
+        "--config",
+        config.to_str().unwrap(),
+        "--json",
+        "--out",
+        results.to_str().unwrap(),
+    ];
     args.extend(events.iter().map(String::as_str));
     let o = splinewatch(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -347,6 +356,7 @@ fn issue_45_a_stiffness_drop_at_the_fifth_event_raises_the_alarm_there_and_not_b
     };
     assert!(median(&lines[3]) < 0.03, "{}", median(&lines[3]));
     assert!(median(&lines[4]) > 0.2, "{}", median(&lines[4]));
+    crate::report::alarm_report(&dir, results.to_str().unwrap(), "event5.mcap");
 }
 
 /// `--state` carries the chain across runs: the 2012 record in one run and

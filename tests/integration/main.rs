@@ -23,6 +23,7 @@ mod pipes;
 #[cfg(unix)]
 mod reliability;
 mod replay;
+mod report;
 mod robust_updating;
 #[cfg(unix)]
 mod security;

@@ -71,6 +71,7 @@ impl Daemon {
         let monitor_file = crate::service::resume_monitor(config, options.state.as_deref(), &mut pipeline)?;
         let prefix = config.topic_prefix();
         let results = ResultsSink::new(&prefix, results::results_files(&options.results))?
+            .with_provenance(results::provenance(config))?
             .rotate_every((config.output.results_rotate_hours * 3600e9) as i128);
         let viewer = if options.rerun.is_empty() {
             None
