@@ -45,12 +45,16 @@ fn events() -> Vec<u8> {
             .zip(values)
             .map(|(name, v)| json!({"feature": name, "value": v, "band": if k >= 5 { json!({"predicted": v, "lower": v - 0.1, "upper": v + 0.1, "events": k}) } else { json!(null) }}))
             .collect();
+        let parameters: Vec<_> = ["west.ky", "bent.ky", "east.ky", "damping.g1"]
+            .iter()
+            .map(|n| json!({"name": n, "value": f(1.0e8), "std": 1.0e6, "lower": 1.0e6, "upper": 1.0e11}))
+            .collect();
         let summary = json!({
             "event": format!("event{k:02}.zip"), "number": k, "start": time(T0 + k * 30 * 24 * HOUR_NS),
             "pga_ground": a, "peak_deck": 2.0 * a, "rms_deck": 0.4 * a,
             "modes": [{"frequency_hz": f(3.4), "damping_ratio": 0.02, "frequency_std_hz": 0.02, "damping_std": 0.004, "shape": []},
                       {"frequency_hz": f(4.8), "damping_ratio": 0.015, "frequency_std_hz": 0.03, "damping_std": 0.005, "shape": []}],
-            "parameters": ["west.ky", "bent.ky", "east.ky", "damping.g1"].iter().map(|n| json!({"name": n, "value": f(1.0e8), "std": 1.0e6, "lower": 1.0e6, "upper": 1.0e11})).collect::<Vec<_>>(),
+            "parameters": parameters,
             "forecast": if k > 0 { json!({"channels": channels, "baseline": baseline, "strong_span_s": [5.0, 25.0]}) } else { json!(null) },
             "forecast_model": [], "forecast_channels": ["ch4", "ch7", "ch9"],
             "verdict": {"state": if k == 19 { "alarm" } else if k >= 5 { "normal" } else { "insufficient history" }, "outside": if k == 19 { json!(["log10_bent.ky"]) } else { json!([]) }, "bands": bands},
