@@ -577,6 +577,11 @@ pub struct FleetArgs {
     /// the exit status 1.
     #[arg(long = "expect")]
     pub expect: Vec<String>,
+    /// Also write the fleet's page here: every span with its last verdict,
+    /// sorted by inspection priority (one self-contained HTML file; written
+    /// also when a span did not answer).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
 }
 
 pub fn fleet(a: FleetArgs) -> Result<()> {
@@ -611,6 +616,35 @@ pub fn fleet(a: FleetArgs) -> Result<()> {
         } else {
             outln!("{}", summary.line(a.parameters));
         }
+    }
+    if let Some(path) = &a.report {
+        let rows: Vec<crate::outputs::report::fleet::FleetSpan> = spans
+            .iter()
+            .map(|s| {
+                let summary = s.summary();
+                crate::outputs::report::fleet::FleetSpan {
+                    name: summary.name,
+                    reachability: summary.reachability,
+                    last_update: summary.last_update,
+                    monitoring: summary.monitoring,
+                    health: summary.health,
+                    parameters: summary.parameters.into_iter().map(|p| (p.name, p.value)).collect(),
+                }
+            })
+            .collect();
+        let now = crate::io::wire::format_timestamp(
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos() as i128),
+        );
+        let report = crate::outputs::report::fleet::render(&rows, &now);
+        super::report::write_whole(path, &report.html)?;
+        errln!(
+            "{} written: {}: {}",
+            path.display(),
+            report.priority.label(),
+            report.verdict
+        );
     }
     let silent: Vec<&str> = spans
         .iter()

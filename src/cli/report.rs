@@ -73,13 +73,7 @@ pub fn report(a: ReportArgs) -> Result<()> {
         .collect();
     let contents = read_results(&files)?;
     let report = report::render(&contents, &selection)?;
-    // Written whole or not at all: a failed run leaves no half report.
-    let partial = a.out.with_extension("html.part");
-    let mut file = crate::io::files::create_output_file(&partial)?;
-    file.write_all(report.html.as_bytes())
-        .and_then(|()| file.sync_all())
-        .with_context(|| format!("cannot write {}", partial.display()))?;
-    std::fs::rename(&partial, &a.out).with_context(|| format!("cannot write {}", a.out.display()))?;
+    write_whole(&a.out, &report.html)?;
     outln!("{}: {}", report.priority.label(), report.verdict);
     outln!(
         "{} written ({} kB): {}",
@@ -88,4 +82,15 @@ pub fn report(a: ReportArgs) -> Result<()> {
         report.title
     );
     Ok(())
+}
+
+/// Writes `html` to `path` whole or not at all (a `.part` file renamed): a
+/// failed run leaves no half report.
+pub(super) fn write_whole(path: &std::path::Path, html: &str) -> Result<()> {
+    let partial = path.with_extension("html.part");
+    let mut file = crate::io::files::create_output_file(&partial)?;
+    file.write_all(html.as_bytes())
+        .and_then(|()| file.sync_all())
+        .with_context(|| format!("cannot write {}", partial.display()))?;
+    std::fs::rename(&partial, path).with_context(|| format!("cannot write {}", path.display()))
 }

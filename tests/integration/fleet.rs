@@ -121,6 +121,8 @@ fn fleet_lists_every_span_behind_one_router() {
             "span-gone",
             "--expect",
             "span-a",
+            "--report",
+            dir.join("fleet.html").to_str().unwrap(),
         ])
         .output()
         .unwrap();
@@ -137,6 +139,23 @@ fn fleet_lists_every_span_behind_one_router() {
         "{stdout}"
     );
     assert!(stderr.contains("span-gone, span-mute did not answer"), "{stderr}");
+    // The fleet's page, written although two spans did not answer: the
+    // silent ones first (to review), then the three answering spans (not
+    // judged: the bundled config has no [monitoring]), by name.
+    let page = std::fs::read_to_string(dir.join("fleet.html")).unwrap();
+    crate::report::check_page(&page);
+    let order: Vec<usize> = ["span-gone", "span-mute", "span-a", "span-b", "span-c"]
+        .iter()
+        .map(|n| {
+            page.find(&format!("<td>{n}</td>"))
+                .unwrap_or_else(|| panic!("{n} in the page"))
+        })
+        .collect();
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "{order:?}");
+    assert!(
+        stderr.contains("Medium: review: 5 spans: 2 to review, 3 not judged."),
+        "{stderr}"
+    );
     token.undeclare().wait().unwrap();
     mute.close().wait().unwrap();
 

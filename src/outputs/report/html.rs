@@ -90,6 +90,8 @@ h1,h2,p,li,td,th{overflow-wrap:anywhere}code{overflow-wrap:anywhere;word-break:b
 #verdict p{margin:.3rem 0;font-size:1.1rem}\
 .priority{display:inline-block;font-weight:700;padding:.1rem .5rem;border-radius:.3rem;color:#fff;background:#777}\
 .high .priority{background:#c81e1e}.medium .priority{background:#c77800}.low .priority{background:#2e7d32}\
+.badge{display:inline-block;white-space:nowrap;font-weight:700;padding:0 .4rem;border-radius:.3rem;color:#fff;background:#777}\
+.badge.high{background:#c81e1e}.badge.medium{background:#c77800}.badge.low{background:#2e7d32}\
 .figures{display:grid;grid-template-columns:repeat(auto-fit,minmax(min(100%,24rem),1fr));gap:1rem}\
 figure{margin:0;min-width:0}figure svg{display:block;width:100%;height:auto}\
 figcaption{font-size:.85rem;color:#444}\

@@ -7,6 +7,7 @@
 
 mod event;
 pub mod figures;
+pub mod fleet;
 pub mod html;
 mod period;
 pub mod words;
