@@ -97,10 +97,13 @@ pub fn events(a: EventsArgs) -> Result<()> {
         for l in loaded {
             let identified = || identified.recv().unwrap_or_else(|_| identify(cfg, l));
             let line = process_identified(cfg, l, identified, &mut chain);
-            if let Some(w) = writer.as_mut() {
-                let (time, bodies) = messages(&line)?;
-                for (topic, json) in bodies {
+            let (time, bodies) = messages(&line)?;
+            for (topic, json) in bodies {
+                if let Some(w) = writer.as_mut() {
                     w.write_json(topic, time, &json)?;
+                }
+                if let Some(n) = notifier.as_mut() {
+                    n.record(topic, &json);
                 }
             }
             if let (Some(n), Some(v)) = (notifier.as_mut(), &line.verdict) {

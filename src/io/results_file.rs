@@ -175,6 +175,36 @@ pub struct ResultsContents {
     pub files: Vec<String>,
 }
 
+impl ResultsContents {
+    /// Adds one message on the result topic `suffix` (the topics a report
+    /// reads; others are ignored).
+    pub fn add(&mut self, suffix: &str, data: &[u8]) -> Result<(), serde_json::Error> {
+        match suffix {
+            "events/summary" => self.events.push(serde_json::from_slice(data)?),
+            "monitoring/status" => self.statuses.push(serde_json::from_slice(data)?),
+            "monitoring/alarm" => self.alarms.push(serde_json::from_slice(data)?),
+            "updating/parameters" => self.updates.push(serde_json::from_slice(data)?),
+            "updating/failures" => self.failures.push(serde_json::from_slice(data)?),
+            "health" => self.health = Some(serde_json::from_slice(data)?),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Whether [`Self::add`] reads messages on `suffix`.
+    pub fn reads(suffix: &str) -> bool {
+        matches!(
+            suffix,
+            "events/summary"
+                | "monitoring/status"
+                | "monitoring/alarm"
+                | "updating/parameters"
+                | "updating/failures"
+                | "health"
+        )
+    }
+}
+
 /// Reads `files` (name and bytes, in order) as the results of one bridge.
 pub fn read_results(files: &[(String, &[u8])]) -> Result<ResultsContents, ResultsFileError> {
     let mut out = ResultsContents::default();
@@ -239,15 +269,10 @@ fn read_one(name: &str, bytes: &[u8], out: &mut ResultsContents) -> Result<Strin
             topic: message.channel.topic.clone(),
             reason: e.to_string(),
         };
-        let data = &message.data[..];
-        match suffix {
-            "events/summary" => out.events.push(serde_json::from_slice(data).map_err(bad)?),
-            "monitoring/status" => out.statuses.push(serde_json::from_slice(data).map_err(bad)?),
-            "monitoring/alarm" => out.alarms.push(serde_json::from_slice(data).map_err(bad)?),
-            "updating/parameters" => out.updates.push(serde_json::from_slice(data).map_err(bad)?),
-            "updating/failures" => out.failures.push(serde_json::from_slice(data).map_err(bad)?),
-            "health" => last_health = Some(serde_json::from_slice(data).map_err(bad)?),
-            _ => {}
+        if suffix == "health" {
+            last_health = Some(serde_json::from_slice(&message.data).map_err(bad)?);
+        } else {
+            out.add(suffix, &message.data).map_err(bad)?;
         }
     }
     if last_health.is_some() {

@@ -5,6 +5,12 @@
 //! whenever the alarm state changes: an alarm raised or cleared, or a
 //! window outside the training range entered or left.
 //!
+//! A notifier made for a config ([`Notifier::for_config`]) also carries
+//! the owner's report (`splinewatch report` of what this run has written,
+//! [`History`]): the command gets its subject line in `SPLINEWATCH_SUBJECT`
+//! and the HTML file's path in `SPLINEWATCH_REPORT` (removed after the
+//! delivery), the webhook's JSON the `subject` and `report_html` keys.
+//!
 //! Deliveries run on a thread of their own behind a bounded queue, so the
 //! pipeline never waits for them; a target that fails (non-zero exit, no
 //! start, a refused connection or certificate, a non-2xx answer, over its
@@ -14,6 +20,7 @@
 
 use crate::config::NotifyConfig;
 use crate::io::monitoring_json::StatusMessage;
+use crate::outputs::report::history::History;
 use crate::pipeline::Health;
 use std::io::Write;
 use std::process::{Command, Stdio};
@@ -42,18 +49,33 @@ pub struct NotifyCounts {
     pub failures: AtomicU64,
 }
 
+/// The owner's report a notification carries: its subject line (the
+/// bridge, the priority and the verdict) and the page.
+#[derive(Debug, Clone)]
+pub struct Attachment {
+    pub subject: String,
+    pub html: String,
+}
+
+/// One notification: the status JSON and, when there is one, the report.
+struct Delivery {
+    status: Vec<u8>,
+    report: Option<Attachment>,
+}
+
 /// Sends status changes to the configured command.
 pub struct Notifier {
-    queue: Option<SyncSender<Vec<u8>>>,
+    queue: Option<SyncSender<Delivery>>,
     worker: Option<std::thread::JoinHandle<()>>,
     counts: Arc<NotifyCounts>,
     previous: Option<String>,
+    history: Option<History>,
 }
 
 impl Notifier {
     /// Starts the delivery thread.
     pub fn start(config: &NotifyConfig) -> std::io::Result<Self> {
-        let (queue, received) = sync_channel::<Vec<u8>>(QUEUE);
+        let (queue, received) = sync_channel::<Delivery>(QUEUE);
         let counts = Arc::new(NotifyCounts::default());
         let (config, shared) = (config.clone(), Arc::clone(&counts));
         let agent = config
@@ -63,8 +85,8 @@ impl Notifier {
             .transpose()
             .map_err(std::io::Error::other)?;
         let worker = std::thread::Builder::new().name("notify".into()).spawn(move || {
-            for status in received {
-                deliver(&config, agent.as_ref(), &status, &shared);
+            for (n, delivery) in received.into_iter().enumerate() {
+                deliver(&config, agent.as_ref(), &delivery, n, &shared);
             }
         })?;
         Ok(Self {
@@ -72,6 +94,7 @@ impl Notifier {
             worker: Some(worker),
             counts,
             previous: None,
+            history: None,
         })
     }
 
@@ -81,8 +104,21 @@ impl Notifier {
             .monitoring
             .as_ref()
             .and_then(|m| m.notify.as_ref())
-            .map(Self::start)
+            .map(|notify| {
+                Self::start(notify).map(|mut n| {
+                    n.history = Some(History::new(config));
+                    n
+                })
+            })
             .transpose()
+    }
+
+    /// Keeps a results message this run wrote, for the report a later
+    /// notification carries.
+    pub fn record(&mut self, suffix: &str, json: &[u8]) {
+        if let Some(h) = self.history.as_mut() {
+            h.record(suffix, json);
+        }
     }
 
     /// Takes a scored window's status (and its JSON): queues it when the
@@ -97,8 +133,16 @@ impl Notifier {
         if !(notified(&status.state) || previous.as_deref().is_some_and(notified)) {
             return;
         }
+        let report = self.history.as_ref().and_then(History::report).map(|r| Attachment {
+            subject: format!("{}: {}: {}", r.bridge, r.priority.label(), r.verdict),
+            html: r.html,
+        });
         let Some(queue) = &self.queue else { return };
-        if let Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) = queue.try_send(json.to_vec()) {
+        let delivery = Delivery {
+            status: json.to_vec(),
+            report,
+        };
+        if let Err(TrySendError::Full(_) | TrySendError::Disconnected(_)) = queue.try_send(delivery) {
             self.counts.failures.fetch_add(1, Ordering::Relaxed);
             tracing::warn!(
                 message = "notification dropped: the notify queue is full",
@@ -136,13 +180,45 @@ impl Drop for Notifier {
     }
 }
 
-/// Delivers `status` to every target: the command, then the webhook.
-fn deliver(config: &NotifyConfig, agent: Option<&ureq::Agent>, status: &[u8], counts: &NotifyCounts) {
+/// Delivers one notification to every target: the command (the report in
+/// a file of its own for the run, removed after), then the webhook (the
+/// report in the JSON). `n` numbers the process's notifications.
+fn deliver(config: &NotifyConfig, agent: Option<&ureq::Agent>, delivery: &Delivery, n: usize, counts: &NotifyCounts) {
     if !config.command.is_empty() {
-        deliver_to(config, "command", counts, || run_once(config, status));
+        let report = delivery.report.as_ref().and_then(|r| {
+            let path = std::env::temp_dir().join(format!("splinewatch-report-{}-{n}.html", std::process::id()));
+            match crate::io::files::create_output_file(&path).and_then(|mut f| Ok(f.write_all(r.html.as_bytes())?)) {
+                Ok(()) => Some((path, r.subject.as_str())),
+                Err(e) => {
+                    tracing::warn!(message = "the report could not be written for the notify command", error = %format!("{e:#}"));
+                    None
+                }
+            }
+        });
+        let env = report.as_ref().map(|(path, subject)| (path.as_path(), *subject));
+        deliver_to(config, "command", counts, || run_once(config, &delivery.status, env));
+        if let Some((path, _)) = report {
+            let _ = std::fs::remove_file(path);
+        }
     }
     if let (Some(url), Some(agent)) = (&config.webhook, agent) {
-        deliver_to(config, "webhook", counts, || post_once(config, agent, url, status));
+        let body = with_report(&delivery.status, delivery.report.as_ref());
+        deliver_to(config, "webhook", counts, || post_once(config, agent, url, &body));
+    }
+}
+
+/// The status JSON with the report's `subject` and `report_html` keys.
+fn with_report(status: &[u8], report: Option<&Attachment>) -> Vec<u8> {
+    let Some(report) = report else {
+        return status.to_vec();
+    };
+    match serde_json::from_slice::<serde_json::Value>(status) {
+        Ok(serde_json::Value::Object(mut fields)) => {
+            fields.insert("subject".into(), report.subject.clone().into());
+            fields.insert("report_html".into(), report.html.clone().into());
+            serde_json::to_vec(&fields).unwrap_or_else(|_| status.to_vec())
+        }
+        _ => status.to_vec(),
     }
 }
 
@@ -213,10 +289,17 @@ fn post_once(config: &NotifyConfig, agent: &ureq::Agent, url: &str, status: &[u8
     }
 }
 
-/// One run of the command: `Err` says why it did not succeed.
-fn run_once(config: &NotifyConfig, status: &[u8]) -> Result<(), String> {
+/// One run of the command, with the report's path and subject in its
+/// environment when there is one: `Err` says why it did not succeed.
+fn run_once(config: &NotifyConfig, status: &[u8], report: Option<(&std::path::Path, &str)>) -> Result<(), String> {
     let (program, args) = config.command.split_first().ok_or("no command")?;
-    let mut child = Command::new(program)
+    let mut command = Command::new(program);
+    if let Some((path, subject)) = report {
+        command
+            .env("SPLINEWATCH_REPORT", path)
+            .env("SPLINEWATCH_SUBJECT", subject);
+    }
+    let mut child = command
         .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::null())
@@ -307,6 +390,9 @@ mod tests {
         let counts = notifier.counts();
         assert_eq!(counts.sent.load(Ordering::Relaxed), 4);
         assert_eq!(counts.attempts.load(Ordering::Relaxed), 4);
+        // Without a config's history (`Notifier::start`), no report: the
+        // command's environment has none.
+        assert!(received.iter().all(|v| v.get("subject").is_none()));
 
         let failing = NotifyConfig {
             command: vec!["sh".into(), "-c".into(), "exit 3".into()],

@@ -550,6 +550,16 @@ impl<W: Write + Seek> Outputs<'_, W> {
         Ok(())
     }
 
+    /// Keeps a results message for the report the notifications carry.
+    fn keep_for_report(&mut self, suffix: &str, msg: &impl serde::Serialize) -> Result<()> {
+        if let Some(n) = self.notifier.as_mut() {
+            if crate::io::results_file::ResultsContents::reads(suffix) {
+                n.record(suffix, &serde_json::to_vec(msg)?);
+            }
+        }
+        Ok(())
+    }
+
     /// Runs one update job (rebased on the last accepted parameters) and
     /// writes its outcome; `health` is the ingest's when its window closed.
     fn update(&mut self, mut job: UpdateJob, mut health: Health, updates: &mut Updates<'_>) -> Result<()> {
@@ -559,10 +569,12 @@ impl<W: Write + Seek> Outputs<'_, W> {
         let time = crate::io::wire::format_timestamp(outcome.time_ns);
         for (suffix, msg) in results::update_messages(&outcome, &time) {
             self.out.write(suffix, outcome.time_ns, &msg)?;
+            self.keep_for_report(suffix, &msg)?;
         }
         if let Some(m) = &scored {
             for (suffix, msg) in results::monitoring_messages(m) {
                 self.out.write(suffix, outcome.time_ns, &msg)?;
+                self.keep_for_report(suffix, &msg)?;
             }
             if let Some(n) = self.notifier.as_mut() {
                 n.observe(&m.status, &serde_json::to_vec(&m.status)?);

@@ -677,7 +677,16 @@ fn notifying_config(dir: &Path) -> (Config, PathBuf) {
     let mut cfg = load_config(&root().join("config/sinello-monitoring.toml")).unwrap();
     let notified = dir.join("notified.jsonl");
     cfg.monitoring.as_mut().unwrap().notify = Some(splinewatch::config::NotifyConfig {
-        command: vec!["sh".into(), "-c".into(), format!("cat >> '{}'", notified.display())],
+        // The status on stdin; the report's subject line and whether its
+        // file is a whole page, one line each, beside.
+        command: vec![
+            "sh".into(),
+            "-c".into(),
+            format!(
+                "cat >> '{0}' && printf '%s\\t%s\\n' \"$SPLINEWATCH_SUBJECT\" \"$(grep -c '</html>' \"$SPLINEWATCH_REPORT\")\" >> '{0}.subjects'",
+                notified.display()
+            ),
+        ],
         retries: 2,
         timeout_seconds: 10.0,
         ..Default::default()
@@ -734,5 +743,28 @@ fn issue_33_a_notify_command_receives_the_raise_and_the_clear_of_an_alarm(fixtur
     assert!(
         received.contains(&(statuses[cleared].window, "normal".into())),
         "{received:?}"
+    );
+    // Each notification carried the owner's report of what the run had
+    // written: the raise says to inspect, naming the softened bearing; the
+    // clear, to review the alarm raised and cleared.
+    let subjects = std::fs::read_to_string(fixture.dir.join("notified.jsonl.subjects")).unwrap();
+    let subjects: Vec<&str> = subjects.lines().collect();
+    assert_eq!(subjects.len(), received.len(), "{subjects:?}");
+    assert!(
+        subjects.iter().all(|s| s.ends_with("\t1")),
+        "a whole page each: {subjects:?}"
+    );
+    let at = |window: u64, state: &str| subjects[received.iter().position(|r| *r == (window, state.into())).unwrap()];
+    let raise = at(statuses[raised].window, "alarm");
+    assert!(
+        raise.starts_with("sinello-span2-monitoring: High: inspect: In alarm since")
+            && raise.contains("east: support stiffness, coefficient 2"),
+        "{raise}"
+    );
+    let clear = at(statuses[cleared].window, "normal");
+    assert!(
+        clear.starts_with("sinello-span2-monitoring: Medium: review: ")
+            && clear.contains("alarm(s) raised in the period"),
+        "{clear}"
     );
 }

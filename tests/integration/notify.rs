@@ -134,7 +134,9 @@ fn status(window: u64, state: &str) -> StatusMessage {
 fn notify_all(notifier: &mut Notifier, states: &[&str]) {
     for (w, state) in states.iter().enumerate() {
         let s = status(w as u64, state);
-        notifier.observe(&s, &serde_json::to_vec(&s).unwrap());
+        let json = serde_json::to_vec(&s).unwrap();
+        notifier.record("monitoring/status", &json);
+        notifier.observe(&s, &json);
     }
     notifier.finish();
 }
@@ -158,7 +160,13 @@ fn a_webhook_receives_the_alarm_state_changes_over_verified_tls() {
         timeout_seconds: 10.0,
         ..NotifyConfig::default()
     };
-    let mut notifier = Notifier::start(&config).unwrap();
+    // The notifier of a config (the bundled monitoring example's, with this
+    // webhook): its notifications carry the owner's report.
+    let mut site =
+        splinewatch::config::load_config(&Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-monitoring.toml"))
+            .unwrap();
+    site.monitoring.as_mut().unwrap().notify = Some(config.clone());
+    let mut notifier = Notifier::for_config(&site).unwrap().unwrap();
     let states = [
         "training",
         "normal",
@@ -181,6 +189,14 @@ fn a_webhook_receives_the_alarm_state_changes_over_verified_tls() {
             assert_eq!(r.authorization.as_deref(), Some("Bearer s3cret-token"));
             assert_eq!(r.content_type.as_deref(), Some("application/json"));
             let body: serde_json::Value = serde_json::from_str(&r.body).unwrap();
+            // The report of what the run wrote, its verdict line the subject.
+            let subject = body["subject"].as_str().unwrap();
+            assert!(subject.starts_with("sinello-span2-monitoring: "), "{subject}");
+            let html = body["report_html"].as_str().unwrap();
+            assert!(html.starts_with("<!DOCTYPE html>") && html.contains("id=\"verdict\""));
+            if body["state"] == "alarm" {
+                assert!(subject.contains("High: inspect: In alarm since"), "{subject}");
+            }
             (
                 body["window"].as_u64().unwrap(),
                 body["state"].as_str().unwrap().to_string(),

@@ -27,6 +27,7 @@ pub(super) fn render(contents: &ResultsContents, index: usize, settings: &Settin
     body.push_str(&skipped(contents, e));
     body.push_str(&provenance_section(contents));
     Report {
+        bridge: super::bridge(contents),
         html: html::page(&title, &body),
         verdict,
         priority,

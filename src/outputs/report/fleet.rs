@@ -113,6 +113,7 @@ pub fn render(spans: &[FleetSpan], asked_at: &str) -> Report {
         )
     );
     Report {
+        bridge: "fleet".into(),
         html: html::page(&title, &body),
         verdict,
         priority: top,

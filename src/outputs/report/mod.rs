@@ -8,6 +8,7 @@
 mod event;
 pub mod figures;
 pub mod fleet;
+pub mod history;
 pub mod html;
 mod period;
 pub mod words;
@@ -59,6 +60,8 @@ pub enum ReportError {
 /// notification's subject).
 #[derive(Debug, Clone)]
 pub struct Report {
+    /// The structure's name (the prefix's when the results do not say).
+    pub bridge: String,
     pub html: String,
     pub verdict: String,
     pub priority: Priority,
@@ -136,18 +139,24 @@ fn time_of(s: Option<&str>) -> Option<i128> {
     s.and_then(parse_timestamp)
 }
 
-/// The page's head: the bridge, the title, the verdict box.
-fn header(contents: &ResultsContents, title: &str, subtitle: &str, verdict: &str, priority: Priority) -> String {
-    let structure = contents
+/// The structure's name the results give (their prefix when they do not).
+fn bridge(contents: &ResultsContents) -> String {
+    contents
         .provenance
         .first()
         .map(|p| p.structure.as_str())
         .filter(|s| !s.is_empty())
-        .unwrap_or(&contents.prefix);
+        .unwrap_or(&contents.prefix)
+        .to_string()
+}
+
+/// The page's head: the bridge, the title, the verdict box.
+fn header(contents: &ResultsContents, title: &str, subtitle: &str, verdict: &str, priority: Priority) -> String {
+    let structure = bridge(contents);
     format!(
         "<header><p class=\"subtitle\">{} · {}</p><h1>{}</h1><p class=\"subtitle\">{}</p></header>\
 <div id=\"verdict\" class=\"{}\" role=\"status\"><span class=\"priority\">{}</span><p id=\"verdict-text\">{}</p></div>",
-        escape(structure),
+        escape(&structure),
         escape(&contents.prefix),
         escape(title),
         escape(subtitle),

@@ -85,6 +85,7 @@ pub(super) fn render(contents: &ResultsContents, from: Option<i128>, to: Option<
     body.push_str(&health(contents, from, to));
     body.push_str(&provenance_section(contents));
     Ok(Report {
+        bridge: super::bridge(contents),
         html: html::page(&title, &body),
         verdict,
         priority,

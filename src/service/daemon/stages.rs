@@ -311,6 +311,9 @@ impl Daemon {
             });
         }
         self.results.write_json("health", time, &h);
+        if let Some(n) = self.notifier.as_mut() {
+            n.record("health", &h);
+        }
         if let Some(v) = self.viewer.as_mut() {
             let r = v.log_health(time, self.pipeline.health());
             count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
@@ -347,6 +350,9 @@ impl Daemon {
     /// publishes it.
     fn send_json(&mut self, link: &ZenohLink, suffix: &str, time_ns: i128, json: Vec<u8>) {
         self.results.write_json(suffix, time_ns, &json);
+        if let Some(n) = self.notifier.as_mut() {
+            n.record(suffix, &json);
+        }
         link.publish_json(suffix, json);
     }
 
