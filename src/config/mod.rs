@@ -22,6 +22,7 @@ mod setup;
 #[cfg(feature = "daemon")]
 mod tls;
 mod updating;
+mod web;
 mod zenoh;
 
 pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
@@ -43,6 +44,7 @@ pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 #[cfg(feature = "daemon")]
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
 pub use updating::{parameter_family, ParameterFamily, Residues, UpdatingConfig};
+pub use web::WebConfig;
 pub use zenoh::ZenohConfig;
 
 use anyhow::Context;
@@ -102,6 +104,9 @@ pub struct Config {
     /// `[metrics]`: Prometheus text at `/metrics` (daemon, `replay --metrics`); absent: none.
     #[serde(default)]
     pub metrics: Option<MetricsConfig>,
+    /// `[web]`: the daemon's read-only status page; absent: none.
+    #[serde(default)]
+    pub web: Option<WebConfig>,
     /// The file the config was read from and its text ([`load_config`]),
     /// which the results files record; none for a config made in memory.
     #[serde(skip)]
@@ -282,6 +287,9 @@ impl Config {
         self.events().check(&deck)?;
         if let Some(m) = &self.metrics {
             m.check()?;
+        }
+        if let Some(w) = &self.web {
+            w.check(self.metrics.as_ref().map(|m| m.listen.as_str()))?;
         }
         for (key, hours) in [
             ("output.rerun_rotate_hours", self.output.rerun_rotate_hours),

@@ -1,5 +1,6 @@
 //! Where results go: the results MCAP, the state file, Rerun (`.rrd` files
-//! and a live viewer), the raw-input recorder and zenoh publishing.
+//! and a live viewer), the raw-input recorder, zenoh publishing, the
+//! owner's report, the metrics and the status page.
 //! Room: below the services. May import: `pipeline`, `config`, `io`, the core crate.
 
 pub mod metrics;
@@ -10,3 +11,4 @@ pub mod report;
 pub mod rerun;
 pub mod results;
 pub mod state;
+pub mod web;

@@ -54,6 +54,20 @@ fn issue_48_metrics_parse_never_go_down_and_equal_the_health_message() {
     cfg.metrics = Some(splinewatch::config::MetricsConfig {
         listen: format!("127.0.0.1:{port}"),
     });
+    // The status page beside the metrics, behind a token (see `web_page`).
+    let web_port = std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    std::fs::write(dir.join("web-token"), "page-t0ken\n").unwrap();
+    cfg.web = Some(splinewatch::config::WebConfig {
+        listen: format!("127.0.0.1:{web_port}"),
+        token_file: Some(dir.join("web-token")),
+        refresh_seconds: 5,
+    });
+    let pages = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let kept_pages = std::sync::Arc::clone(&pages);
     let url = format!("http://127.0.0.1:{port}/metrics");
     let bridge = cfg.structure.name.clone();
     let scrapes = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
@@ -68,6 +82,7 @@ fn issue_48_metrics_parse_never_go_down_and_equal_the_health_message() {
                 kept.lock().unwrap().push(scrape(&url, &bridge));
             }
         }
+        kept_pages.lock().unwrap().push(web_page(web_port));
         // Two more health ticks (every 10 s) after the last block.
         let until = std::time::Instant::now() + std::time::Duration::from_secs(21);
         while std::time::Instant::now() < until {
@@ -79,6 +94,11 @@ fn issue_48_metrics_parse_never_go_down_and_equal_the_health_message() {
     .unwrap();
     let scrapes = scrapes.lock().unwrap();
     assert!(scrapes.len() > 40, "{} scrapes", scrapes.len());
+    assert_eq!(
+        pages.lock().unwrap().len(),
+        1,
+        "the status page was checked while the daemon ran"
+    );
     assert!(
         scrapes[0].0.starts_with("application/openmetrics-text"),
         "{}",
@@ -139,6 +159,53 @@ fn issue_48_metrics_parse_never_go_down_and_equal_the_health_message() {
             count.as_f64().unwrap()
         );
     }
+}
+
+/// One HTTP/1.0 request to the status page on `port`: the status code and
+/// the body.
+fn http(port: u16, request: &str) -> (u16, String) {
+    use std::io::{Read, Write};
+    let mut stream = std::net::TcpStream::connect(("127.0.0.1", port)).unwrap();
+    stream.write_all(request.as_bytes()).unwrap();
+    let mut answer = String::new();
+    stream.read_to_string(&mut answer).unwrap();
+    let status = answer.split(' ').nth(1).and_then(|c| c.parse().ok()).unwrap_or(0);
+    let body = answer.split_once("\r\n\r\n").map_or("", |(_, b)| b).to_string();
+    (status, body)
+}
+
+/// `[web]`, the daemon's status page, while the daemon runs (after the
+/// bundled recording's blocks): nothing without the token; read-only (no
+/// method but GET and HEAD); the page, its JSON (the daemon's last update
+/// and health) and the owner's report with the token, from a header or the
+/// query. Returns the page.
+fn web_page(port: u16) -> String {
+    let (status, body) = http(port, "GET / HTTP/1.0\r\n\r\n");
+    assert_eq!(status, 401, "{body}");
+    assert!(!body.contains("verdict"));
+    let (status, _) = http(port, "GET /status.json?token=wrong HTTP/1.0\r\n\r\n");
+    assert_eq!(status, 401);
+    for method in ["POST", "PUT", "DELETE", "PATCH"] {
+        let (status, _) = http(
+            port,
+            &format!("{method} / HTTP/1.0\r\nAuthorization: Bearer page-t0ken\r\nContent-Length: 0\r\n\r\n"),
+        );
+        assert_eq!(status, 405, "{method}");
+    }
+    let (status, page) = http(port, "GET / HTTP/1.0\r\nAuthorization: Bearer page-t0ken\r\n\r\n");
+    assert_eq!(status, 200, "{page}");
+    crate::report::check_page(&page);
+    assert!(page.contains("<meta http-equiv=\"refresh\" content=\"5\">"));
+    let (status, json) = http(port, "GET /status.json?token=page-t0ken HTTP/1.0\r\n\r\n");
+    assert_eq!(status, 200, "{json}");
+    let json: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(json["bridge"], "sinello-span2");
+    assert!(json["last_update"]["window"].is_u64(), "{json}");
+    assert!(json["priority"].is_string() && json["verdict"].is_string(), "{json}");
+    let (status, report) = http(port, "GET /report?token=page-t0ken HTTP/1.0\r\n\r\n");
+    assert_eq!(status, 200);
+    crate::report::check_self_contained(&report);
+    page
 }
 
 /// `replay --metrics`: the endpoint of a replay, read during its

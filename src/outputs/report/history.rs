@@ -43,6 +43,11 @@ impl History {
         trim(&mut c.events);
     }
 
+    /// What is kept, as a results file's contents.
+    pub fn contents(&self) -> &ResultsContents {
+        &self.contents
+    }
+
     /// The report of the last event when there are events, else of the
     /// period kept.
     pub fn report(&self) -> Option<Report> {

@@ -107,8 +107,16 @@ footer{margin-top:2rem;font-size:.8rem;color:#555}\
 
 /// The whole page: title, body content; nothing fetched from anywhere.
 pub fn page(title: &str, body: &str) -> String {
+    refreshing_page(title, body, None)
+}
+
+/// A page the browser loads again every `refresh` seconds.
+pub fn refreshing_page(title: &str, body: &str, refresh: Option<u32>) -> String {
+    let refresh = refresh.map_or(String::new(), |s| {
+        format!("<meta http-equiv=\"refresh\" content=\"{s}\">")
+    });
     format!(
-        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\
+        "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">{refresh}\
 <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
 <meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'; img-src data:\">\
 <title>{}</title><style>{STYLE}</style></head><body>{body}</body></html>\n",

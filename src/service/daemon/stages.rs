@@ -47,6 +47,8 @@ pub(super) struct Daemon {
     pub(super) events: Option<EventWorker>,
     /// `[metrics]`: the Prometheus endpoint.
     metrics: Option<Metrics>,
+    /// `[web]`: the read-only status page.
+    web: Option<crate::outputs::web::StatusPage>,
     /// Raw messages waiting in the ingest queue at the last health tick.
     pub(super) ingest_depth: usize,
 }
@@ -108,6 +110,11 @@ impl Daemon {
                 .metrics
                 .as_ref()
                 .map(|m| Metrics::serve(&m.listen, &config.structure.name))
+                .transpose()?,
+            web: config
+                .web
+                .as_ref()
+                .map(|w| crate::outputs::web::StatusPage::serve(config, w))
                 .transpose()?,
             ingest_depth: 0,
         })
@@ -311,9 +318,7 @@ impl Daemon {
             });
         }
         self.results.write_json("health", time, &h);
-        if let Some(n) = self.notifier.as_mut() {
-            n.record("health", &h);
-        }
+        self.keep_for_report("health", &h);
         if let Some(v) = self.viewer.as_mut() {
             let r = v.log_health(time, self.pipeline.health());
             count_output_error(r, &mut self.pipeline.health_mut().rerun_errors, 100, "Rerun");
@@ -346,13 +351,22 @@ impl Daemon {
         json
     }
 
+    /// Keeps a results message for the report of the notifications and the
+    /// status page.
+    fn keep_for_report(&mut self, suffix: &str, json: &[u8]) {
+        if let Some(n) = self.notifier.as_mut() {
+            n.record(suffix, json);
+        }
+        if let Some(w) = &self.web {
+            w.record(suffix, json);
+        }
+    }
+
     /// Writes a result message already serialised to the results file and
     /// publishes it.
     fn send_json(&mut self, link: &ZenohLink, suffix: &str, time_ns: i128, json: Vec<u8>) {
         self.results.write_json(suffix, time_ns, &json);
-        if let Some(n) = self.notifier.as_mut() {
-            n.record(suffix, &json);
-        }
+        self.keep_for_report(suffix, &json);
         link.publish_json(suffix, json);
     }
 
