@@ -241,6 +241,7 @@ fn page(state: &mut PageState, settings: &Settings, token: Option<&str>) -> Stri
     let cell = |v: &Value| match v {
         Value::Null => "—".to_string(),
         Value::String(s) => escape(s),
+        Value::Number(n) if n.is_u64() || n.is_i64() => n.to_string(),
         Value::Number(n) => number(n.as_f64(), 4),
         other => escape(&other.to_string()),
     };

@@ -13,8 +13,13 @@ at a desktop width and at a phone's 390 px, and checked:
 With --screenshots DIR, each report's top at 390 px and its full page at
 1000 px are saved there as PNG (the guide's images).
 
+A running daemon's status page is given as status=URL: once its JSON
+shows an update, the page is checked the same way (it has no figure), and
+at 390 px it must show a later update by itself (its refresh) within 6 s.
+
 Usage: python check_reports.py [--chromium PATH] [--screenshots DIR]
            KIND=REPORT.html ...      (KIND: event, period or monitoring)
+           status=http://127.0.0.1:PORT/
 """
 
 import argparse
@@ -27,6 +32,8 @@ REQUIRED = {
     "event": ["verdict", "shaking", "features", "forecast", "modes", "skipped", "provenance"],
     "period": ["verdict", "trends", "alarms", "provenance"],
     "monitoring": ["verdict", "state", "trends", "alarms", "health", "provenance"],
+    # A running daemon's status page (`[web]`), by its URL.
+    "status": ["verdict", "now"],
 }
 
 CHROMIUM_FLAGS = [
@@ -40,9 +47,30 @@ CHROMIUM_FLAGS = [
 ]
 
 
+def wait_for_update(url, timeout=90.0):
+    """Polls a status page's JSON until the daemon has written an update."""
+    import json
+    import time
+    import urllib.request
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            with urllib.request.urlopen(url.rstrip("/") + "/status.json", timeout=5) as r:
+                status = json.load(r)
+            if status.get("last_update"):
+                return status
+        except OSError:
+            pass
+        time.sleep(0.5)
+    sys.exit(f"{url}: no update within {timeout} s")
+
+
 def check(browser, kind, path, screenshots):
     problems = []
-    url = path.resolve().as_uri()
+    url = path if kind == "status" else path.resolve().as_uri()
+    if kind == "status":
+        wait_for_update(url)
     for width in (1000, 390):
         page = browser.new_page(viewport={"width": width, "height": 800})
         console, requests = [], []
@@ -78,7 +106,8 @@ def check(browser, kind, path, screenshots):
                 scripts: document.scripts.length,
             })"""
         )
-        tag = f"{path.name} at {width} px"
+        name = "status" if kind == "status" else path.name
+        tag = f"{name} at {width} px"
         if console:
             problems.append(f"{tag}: console: {console}")
         if requests:
@@ -88,7 +117,7 @@ def check(browser, kind, path, screenshots):
         for section in REQUIRED[kind]:
             if section != "verdict" and section not in dom["sections"]:
                 problems.append(f"{tag}: section {section!r} missing (has {dom['sections']})")
-        if not dom["figures"]:
+        if not dom["figures"] and kind != "status":
             problems.append(f"{tag}: no figure")
         for f in dom["figures"]:
             if not f["svg"] or f["marks"] < 5 or not f["caption"].strip():
@@ -101,8 +130,17 @@ def check(browser, kind, path, screenshots):
             problems.append(f"{tag}: overflows horizontally ({dom['scrollWidth']} > {dom['clientWidth']} px)")
         if dom["scripts"]:
             problems.append(f"{tag}: {dom['scripts']} scripts")
+        if kind == "status" and width == 390:
+            # The browser reloads the page by itself (its refresh): within
+            # a few refreshes it shows a later update than it first did.
+            first = page.inner_text("#status-table")
+            page.wait_for_timeout(6000)
+            if page.inner_text("#status-table") == first:
+                problems.append(f"{tag}: the page did not refresh to a later update within 6 s")
+            if console or requests:
+                problems.append(f"{tag}: after the refreshes: console {console}, requests {requests}")
         if screenshots:
-            stem = path.stem
+            stem = "status" if kind == "status" else path.stem
             if width == 390:
                 page.screenshot(path=str(screenshots / f"{stem}-phone.png"))
             else:
@@ -132,7 +170,7 @@ def main():
             kind, _, name = item.partition("=")
             if kind not in REQUIRED:
                 sys.exit(f"{item}: give KIND=PATH, KIND one of {sorted(REQUIRED)}")
-            problems += check(browser, kind, Path(name), args.screenshots)
+            problems += check(browser, kind, name if kind == "status" else Path(name), args.screenshots)
         browser.close()
     for problem in problems:
         print("FAIL", problem, file=sys.stderr)

@@ -82,7 +82,7 @@ const STYLE: &str = "\
 *{box-sizing:border-box}\
 body{margin:0 auto;padding:1rem;max-width:60rem}\
 h1{font-size:1.45rem;margin:.2rem 0}h2{font-size:1.15rem;margin:1.6rem 0 .5rem;border-bottom:1px solid #ccc}\
-h1,h2,p,li,td,th{overflow-wrap:anywhere}code{overflow-wrap:anywhere;word-break:break-all}\
+h1,h2,p,li,td,th{overflow-wrap:break-word}code{overflow-wrap:anywhere;word-break:break-all}\
 .subtitle{color:#555;margin:0 0 1rem}\
 #verdict{border:2px solid #888;border-radius:.5rem;padding:.8rem 1rem;margin:1rem 0}\
 #verdict.high{border-color:#c81e1e;background:#fdecec}#verdict.medium{border-color:#c77800;background:#fff5e0}\
@@ -117,7 +117,7 @@ pub fn refreshing_page(title: &str, body: &str, refresh: Option<u32>) -> String 
     });
     format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">{refresh}\
-<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\
+<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\"><link rel=\"icon\" href=\"data:,\">\
 <meta http-equiv=\"Content-Security-Policy\" content=\"default-src 'none'; style-src 'unsafe-inline'; img-src data:\">\
 <title>{}</title><style>{STYLE}</style></head><body>{body}</body></html>\n",
         escape(title)
