@@ -38,9 +38,6 @@ pub enum ResultsFileError {
     },
 }
 
-/// An identified or updated parameter's value with its std and bounds.
-pub type ParameterValue = ParameterEstimate;
-
 /// One event's `events/summary` message.
 #[derive(Debug, Clone, Deserialize)]
 pub struct EventSummary {
@@ -55,7 +52,7 @@ pub struct EventSummary {
     #[serde(default)]
     pub modes: Vec<ModeEntry>,
     #[serde(default)]
-    pub parameters: Vec<ParameterValue>,
+    pub parameters: Vec<ParameterEstimate>,
     #[serde(default)]
     pub forecast: Option<ForecastSummary>,
     #[serde(default)]
@@ -143,7 +140,7 @@ pub struct UpdateSummary {
     pub window: u64,
     pub converged: bool,
     pub relative_residual: f64,
-    pub parameters: Vec<ParameterValue>,
+    pub parameters: Vec<ParameterEstimate>,
 }
 
 /// One `updating/failures` message: a window whose update failed or was skipped.

@@ -51,20 +51,27 @@ pub fn scatter(points: &[Marked], x_label: &str, y_label: &str, log_y: bool) -> 
         (x0, x1, y0, y1) = (0.1, 1.0, 0.0, 1.0);
     }
     let (x0, x1) = (x0 / 1.6, x1 * 1.6);
+    canvas(|root| {
+        if log_y && y0 > 0.0 {
+            let (y0, y1) = (y0 / 1.3, y1 * 1.3);
+            let chart = axes(root, (x0..x1).log_scale(), (y0..y1).log_scale(), x_label, y_label);
+            chart.and_then(|mut c| draw_marks(&mut c, &finite))
+        } else {
+            let pad = ((y1 - y0) * 0.15).max(y1.abs() * 0.02).max(1e-12);
+            let chart = axes(root, (x0..x1).log_scale(), (y0 - pad)..(y1 + pad), x_label, y_label);
+            chart.and_then(|mut c| draw_marks(&mut c, &finite))
+        }
+    })
+}
+
+/// A figure drawn by `draw` on a white canvas of [`SIZE`], as SVG scaled
+/// to its container; a note in its place when `draw` could not draw it.
+fn canvas(draw: impl FnOnce(&Root<'_>) -> Option<()>) -> String {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
         let _ = root.fill(&WHITE);
-        let drawn = if log_y && y0 > 0.0 {
-            let (y0, y1) = (y0 / 1.3, y1 * 1.3);
-            let chart = axes(&root, (x0..x1).log_scale(), (y0..y1).log_scale(), x_label, y_label);
-            chart.and_then(|mut c| draw_marks(&mut c, &finite))
-        } else {
-            let pad = ((y1 - y0) * 0.15).max(y1.abs() * 0.02).max(1e-12);
-            let chart = axes(&root, (x0..x1).log_scale(), (y0 - pad)..(y1 + pad), x_label, y_label);
-            chart.and_then(|mut c| draw_marks(&mut c, &finite))
-        };
-        if drawn.is_none() {
+        if draw(&root).is_none() {
             let _ = root.draw(&Text::new(
                 "(figure could not be drawn)",
                 (20, 20),
@@ -76,15 +83,17 @@ pub fn scatter(points: &[Marked], x_label: &str, y_label: &str, log_y: bool) -> 
     responsive(svg)
 }
 
-type Chart<'a, X, Y> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>;
+type Root<'s> = DrawingArea<SVGBackend<'s>, plotters::coord::Shift>;
 
-fn axes<'a, X, Y>(
-    root: &DrawingArea<SVGBackend<'a>, plotters::coord::Shift>,
+type Chart<'r, 's, X, Y> = ChartContext<'r, SVGBackend<'s>, Cartesian2d<X, Y>>;
+
+fn axes<'r, 's, X, Y>(
+    root: &'r Root<'s>,
     x: X,
     y: Y,
     x_label: &str,
     y_label: &str,
-) -> Option<Chart<'a, X::CoordDescType, Y::CoordDescType>>
+) -> Option<Chart<'r, 's, X::CoordDescType, Y::CoordDescType>>
 where
     X: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
     Y: plotters::coord::ranged1d::AsRangedCoord<Value = f64>,
@@ -113,7 +122,7 @@ where
     Some(chart)
 }
 
-fn draw_marks<X, Y>(chart: &mut Chart<'_, X, Y>, points: &[&Marked]) -> Option<()>
+fn draw_marks<X, Y>(chart: &mut Chart<'_, '_, X, Y>, points: &[&Marked]) -> Option<()>
 where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
@@ -195,31 +204,19 @@ pub fn over_time(s: &Series, x_label: &str, y_label: &str) -> String {
     if y0 > y1 {
         (y0, y1) = (0.1, 1.0);
     }
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        let _ = root.fill(&WHITE);
-        let drawn = if s.log_y {
-            axes(&root, 0.0..x1, (y0 / 1.5..y1 * 1.5).log_scale(), x_label, y_label)
+    canvas(|root| {
+        if s.log_y {
+            axes(root, 0.0..x1, (y0 / 1.5..y1 * 1.5).log_scale(), x_label, y_label)
                 .and_then(|mut c| draw_series(&mut c, s, y0 / 1.5, y1 * 1.5))
         } else {
             let pad = ((y1 - y0) * 0.1).max(y1.abs() * 0.01).max(1e-12);
-            axes(&root, 0.0..x1, (y0 - pad)..(y1 + pad), x_label, y_label)
+            axes(root, 0.0..x1, (y0 - pad)..(y1 + pad), x_label, y_label)
                 .and_then(|mut c| draw_series(&mut c, s, y0 - pad, y1 + pad))
-        };
-        if drawn.is_none() {
-            let _ = root.draw(&Text::new(
-                "(figure could not be drawn)",
-                (20, 20),
-                ("sans-serif", FONT),
-            ));
         }
-        let _ = root.present();
-    }
-    responsive(svg)
+    })
 }
 
-fn draw_series<X, Y>(chart: &mut Chart<'_, X, Y>, s: &Series, y0: f64, y1: f64) -> Option<()>
+fn draw_series<X, Y>(chart: &mut Chart<'_, '_, X, Y>, s: &Series, y0: f64, y1: f64) -> Option<()>
 where
     X: Ranged<ValueType = f64>,
     Y: Ranged<ValueType = f64>,
@@ -271,69 +268,54 @@ pub fn paired_bars(categories: &[String], first: &[f64], second: &[f64], y_label
         .max(1e-9)
         * 1.15;
     let n = categories.len().max(1);
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        let _ = root.fill(&WHITE);
-        let labels: Vec<String> = categories.to_vec();
-        let drawn = (|| -> Option<()> {
-            let mut chart = ChartBuilder::on(&root)
-                .margin(14)
-                .x_label_area_size(48)
-                .y_label_area_size(78)
-                .build_cartesian_2d(0.0..n as f64, 0.0..top)
-                .ok()?;
-            chart
-                .configure_mesh()
-                .disable_x_mesh()
-                .light_line_style(WHITE)
-                .x_labels(0)
-                .y_label_formatter(&|v| tick(*v))
-                .y_desc(y_label)
-                .label_style(("sans-serif", FONT))
-                .axis_desc_style(("sans-serif", FONT))
-                .draw()
-                .ok()?;
-            let under = ("sans-serif", FONT)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Center, VPos::Top));
-            chart
-                .draw_series(labels.iter().enumerate().map(|(k, name)| {
-                    EmptyElement::at((k as f64 + 0.5, 0.0)) + Text::new(name.clone(), (0, 8), under.clone())
-                }))
-                .ok()?;
-            for (k, (&a, &b)) in first.iter().zip(second).enumerate() {
-                let x = k as f64;
-                if a.is_finite() {
-                    chart
-                        .draw_series(std::iter::once(Rectangle::new(
-                            [(x + 0.12, 0.0), (x + 0.48, a)],
-                            HIGHLIGHT.filled(),
-                        )))
-                        .ok()?;
-                }
-                if b.is_finite() {
-                    chart
-                        .draw_series(std::iter::once(Rectangle::new(
-                            [(x + 0.52, 0.0), (x + 0.88, b)],
-                            GREY.filled(),
-                        )))
-                        .ok()?;
-                }
+    canvas(|root| {
+        let mut chart = ChartBuilder::on(root)
+            .margin(14)
+            .x_label_area_size(48)
+            .y_label_area_size(78)
+            .build_cartesian_2d(0.0..n as f64, 0.0..top)
+            .ok()?;
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .light_line_style(WHITE)
+            .x_labels(0)
+            .y_label_formatter(&|v| tick(*v))
+            .y_desc(y_label)
+            .label_style(("sans-serif", FONT))
+            .axis_desc_style(("sans-serif", FONT))
+            .draw()
+            .ok()?;
+        let under = ("sans-serif", FONT)
+            .into_font()
+            .color(&BLACK)
+            .pos(Pos::new(HPos::Center, VPos::Top));
+        chart
+            .draw_series(categories.iter().enumerate().map(|(k, name)| {
+                EmptyElement::at((k as f64 + 0.5, 0.0)) + Text::new(name.clone(), (0, 8), under.clone())
+            }))
+            .ok()?;
+        for (k, (&a, &b)) in first.iter().zip(second).enumerate() {
+            let x = k as f64;
+            if a.is_finite() {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x + 0.12, 0.0), (x + 0.48, a)],
+                        HIGHLIGHT.filled(),
+                    )))
+                    .ok()?;
             }
-            Some(())
-        })();
-        if drawn.is_none() {
-            let _ = root.draw(&Text::new(
-                "(figure could not be drawn)",
-                (20, 20),
-                ("sans-serif", FONT),
-            ));
+            if b.is_finite() {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(x + 0.52, 0.0), (x + 0.88, b)],
+                        GREY.filled(),
+                    )))
+                    .ok()?;
+            }
         }
-        let _ = root.present();
-    }
-    responsive(svg)
+        Some(())
+    })
 }
 
 /// An axis tick: short, whatever the magnitude.

@@ -7,8 +7,9 @@ use super::html::{self, escape, number};
 use super::words::{self, describe, Priority};
 use super::{header, provenance_section, time_of, Report, ReportError};
 use crate::io::monitoring_json::{AlarmMessage, StatusMessage};
-use crate::io::results_file::{EventSummary, ParameterValue, ResultsContents, UpdateSummary};
+use crate::io::results_file::{EventSummary, ResultsContents, UpdateSummary};
 use crate::io::wire::format_timestamp;
+use splinewatch_core::updating::ParameterEstimate;
 use std::collections::BTreeMap;
 use std::fmt::Write;
 
@@ -60,7 +61,7 @@ pub(super) fn render(contents: &ResultsContents, from: Option<i128>, to: Option<
     let spans = alarmed_spans(&statuses, &clock);
     body.push_str(&state_section(&statuses, &spans, &clock));
     // The updates' parameters, or where there are none the events'.
-    let estimates: Vec<(i128, &[ParameterValue])> = if updates.is_empty() {
+    let estimates: Vec<(i128, &[ParameterEstimate])> = if updates.is_empty() {
         events
             .iter()
             .filter_map(|e| Some((time_of(e.start.as_deref())?, &e.parameters[..])))
@@ -353,7 +354,7 @@ fn state_section(statuses: &[&StatusMessage], spans: &[(f64, f64)], clock: &Cloc
     html::section("state", "The monitoring state", &out)
 }
 
-fn trends(estimates: &[(i128, &[ParameterValue])], spans: &[(f64, f64)], clock: &Clock) -> String {
+fn trends(estimates: &[(i128, &[ParameterEstimate])], spans: &[(f64, f64)], clock: &Clock) -> String {
     let mut names: Vec<&str> = Vec::new();
     for (_, parameters) in estimates {
         for p in *parameters {
