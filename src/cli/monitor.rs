@@ -77,9 +77,10 @@ pub struct DemoArgs {
     /// Output folder.
     #[arg(long, default_value = "out/demo")]
     pub out: PathBuf,
-    /// Simulated seconds.
-    #[arg(long, default_value_t = 600.0)]
-    pub duration: f64,
+    /// Simulated seconds (default: 600; with `[monitoring]`, its training
+    /// windows and 50 more, the damage halfway through those).
+    #[arg(long)]
+    pub duration: Option<f64>,
     /// Publishing speed, multiples of real time.
     #[arg(long, default_value_t = 40.0)]
     pub speed: f64,
@@ -453,9 +454,12 @@ pub fn run(a: RunArgs) -> Result<()> {
     Ok(())
 }
 
-/// The `demo` command: a fresh run, then a summary and the `east.k2` trace.
+/// The `demo` command: a fresh run, then a summary, the `east.k2` trace and
+/// the owner's report of the run (`report.html` in the output folder).
 pub fn demo(a: DemoArgs) -> Result<()> {
     let out = &a.out;
+    let cfg = load_config(&a.config)?;
+    let plan = demo::demo_plan(&cfg, a.duration)?;
     let removed = demo::clear_previous(out)?;
     if !removed.is_empty() {
         errln!(
@@ -464,7 +468,13 @@ pub fn demo(a: DemoArgs) -> Result<()> {
             removed.join(", ")
         );
     }
-    let summary = demo::run_live(&a.config, out, a.duration, a.speed, 2026)?;
+    let summary = demo::run_live(cfg, &plan, out, a.speed, 2026)?;
+    let report_path = out.join("report.html");
+    let results = out.join("results.mcap");
+    let bytes = std::fs::read(&results).with_context(|| format!("cannot read {}", results.display()))?;
+    let contents = crate::io::results_file::read_results(&[(results.display().to_string(), bytes.as_slice())])?;
+    let report = crate::outputs::report::render(&contents, &crate::outputs::report::Selection::Latest)?;
+    super::report::write_whole(&report_path, &report.html)?;
     errln!(
         "demo: {} messages received, {} windows, {} updates ({} failed); wrote {}",
         summary.messages,
@@ -489,6 +499,12 @@ pub fn demo(a: DemoArgs) -> Result<()> {
             outln!("{:>8} {:>14.4e} {:>12.4}", u.window, k2, r.result.relative_residual);
         }
     }
+    outln!(
+        "report ({}): {}: {}",
+        report_path.display(),
+        report.priority.label(),
+        report.verdict
+    );
     Ok(())
 }
 

@@ -44,7 +44,7 @@ pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 #[cfg(feature = "daemon")]
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
 pub use updating::{parameter_family, ParameterFamily, Residues, UpdatingConfig};
-pub use web::WebConfig;
+pub use web::{WebConfig, WebTlsConfig};
 pub use zenoh::ZenohConfig;
 
 use anyhow::Context;

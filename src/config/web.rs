@@ -21,6 +21,26 @@ pub struct WebConfig {
     /// Seconds between the page's refreshes in the browser.
     #[serde(default = "default_refresh")]
     pub refresh_seconds: u32,
+    /// `[web.tls]`: serve HTTPS; with `client_ca`, mutual TLS.
+    #[serde(default)]
+    pub tls: Option<WebTlsConfig>,
+}
+
+/// `[web.tls]`: the page over HTTPS. With `client_ca` only a browser or
+/// script holding a certificate that CA signed is served (mutual TLS: the
+/// site's CA, the one `root_ca_certificate` names in the zenoh JSON5 file,
+/// admits the same clients as the zenoh links).
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct WebTlsConfig {
+    /// The server's certificate chain (PEM), leaf first.
+    pub certificate: std::path::PathBuf,
+    /// Its private key (PEM: PKCS #8, PKCS #1 or SEC1).
+    pub private_key: std::path::PathBuf,
+    /// The CA (PEM) whose certificates clients must present; none: any
+    /// client may connect (then a `token_file` guards the page).
+    #[serde(default)]
+    pub client_ca: Option<std::path::PathBuf>,
 }
 
 impl Default for WebConfig {
@@ -29,6 +49,7 @@ impl Default for WebConfig {
             listen: default_listen(),
             token_file: None,
             refresh_seconds: default_refresh(),
+            tls: None,
         }
     }
 }
@@ -42,8 +63,10 @@ fn default_refresh() -> u32 {
 }
 
 impl WebConfig {
-    /// An `address:port`, not the metrics' one, a token on any address but
-    /// loopback, a token file that can be read, a refresh of 1 s to a day.
+    /// An `address:port`, not the metrics' one, a token or client
+    /// certificates on any address but loopback, a token file that can be
+    /// read, TLS files that hold a certificate and a key, a refresh of 1 s
+    /// to a day.
     pub fn check(&self, metrics: Option<&str>) -> Result<(), ConfigError> {
         let address: std::net::SocketAddr = self.listen.parse().map_err(|e| {
             err(
@@ -63,11 +86,15 @@ impl WebConfig {
                 ),
             ));
         }
+        let client_certificates = self.tls.as_ref().is_some_and(|t| t.client_ca.is_some());
         match &self.token_file {
-            None if !address.ip().is_loopback() => {
+            None if !address.ip().is_loopback() && !client_certificates => {
                 return Err(err(
                     "web.token_file",
-                    format!("the page listens on {} (not loopback): give a token_file", self.listen),
+                    format!(
+                        "the page listens on {} (not loopback): give a token_file, or [web.tls] client_ca for client certificates",
+                        self.listen
+                    ),
                 ))
             }
             Some(path) => {
@@ -82,11 +109,41 @@ impl WebConfig {
             }
             None => {}
         }
+        if let Some(tls) = &self.tls {
+            tls.check()?;
+        }
         if !(1..=86_400).contains(&self.refresh_seconds) {
             return Err(err(
                 "web.refresh_seconds",
                 format!("must be 1 to 86400, got {}", self.refresh_seconds),
             ));
+        }
+        Ok(())
+    }
+}
+
+impl WebTlsConfig {
+    /// Each file can be read and holds what its key names (a PEM
+    /// certificate, or a PEM private key).
+    fn check(&self) -> Result<(), ConfigError> {
+        let pem = |key: &str, path: &std::path::Path, label: &str| -> Result<(), ConfigError> {
+            let text =
+                std::fs::read_to_string(path).map_err(|e| err(key, format!("cannot read {}: {e}", path.display())))?;
+            let found = text
+                .lines()
+                .any(|l| l.starts_with("-----BEGIN ") && l.contains(label) && l.ends_with("-----"));
+            if !found {
+                return Err(err(
+                    key,
+                    format!("{}: no PEM {label} in it (-----BEGIN … {label}-----)", path.display()),
+                ));
+            }
+            Ok(())
+        };
+        pem("web.tls.certificate", &self.certificate, "CERTIFICATE")?;
+        pem("web.tls.private_key", &self.private_key, "PRIVATE KEY")?;
+        if let Some(ca) = &self.client_ca {
+            pem("web.tls.client_ca", ca, "CERTIFICATE")?;
         }
         Ok(())
     }

@@ -115,10 +115,18 @@ impl Notifier {
 
     /// Keeps a results message this run wrote, for the report a later
     /// notification carries.
-    pub fn record(&mut self, suffix: &str, json: &[u8]) {
-        if let Some(h) = self.history.as_mut() {
+    pub fn record(&self, suffix: &str, json: &[u8]) {
+        if let Some(h) = &self.history {
             h.record(suffix, json);
         }
+    }
+
+    /// Takes its report from `history` (one the caller also records into
+    /// and shares, e.g. with the status page) instead of its own.
+    #[must_use]
+    pub fn sharing(mut self, history: History) -> Self {
+        self.history = Some(history);
+        self
     }
 
     /// Takes a scored window's status (and its JSON): queues it when the

@@ -1,80 +1,108 @@
-//! `[web]`: the daemon's read-only status page, from a thread of its own
-//! (`tiny_http`): `/` the page (the bridge's last verdict and priority, its
-//! last update, monitoring state and event, its health; reloaded by the
-//! browser every `refresh_seconds`), `/status.json` the same as JSON, and
-//! `/report` the owner's report of what the daemon has written
+//! `[web]`: the daemon's read-only status page, served by hyper on a thread
+//! and runtime of its own: `/` the page (the bridge's last verdict and
+//! priority, its last update, monitoring state and event, its health;
+//! reloaded by the browser every `refresh_seconds`), `/status.json` the same
+//! as JSON, and `/report` the owner's report of what the daemon has written
 //! ([`History`]). GET and HEAD only: there is no write path. With a
-//! `token_file`, a request without the token gets 401 and nothing else.
+//! `token_file`, a request without the token gets 401 and nothing else; with
+//! `[web.tls]` the page is HTTPS, and with its `client_ca` a client without a
+//! certificate that CA signed is refused in the handshake (mutual TLS).
 
-use crate::config::{Config, WebConfig};
+use crate::config::{Config, WebConfig, WebTlsConfig};
 use crate::outputs::report::history::History;
 use crate::outputs::report::html::{self, escape, number};
 use crate::outputs::report::Report;
 use anyhow::{Context, Result};
+use http_body_util::Full;
+use hyper::body::Bytes;
+use hyper::{Method, Request, Response, StatusCode};
+use hyper_util::rt::{TokioIo, TokioTimer};
 use serde_json::{json, Value};
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
+use tokio_rustls::rustls;
+use tokio_rustls::rustls::pki_types::pem::PemObject;
+use tokio_rustls::rustls::pki_types::{CertificateDer, PrivateKeyDer};
 
-/// What the page shows: the daemon's history and its report, rendered
-/// again only after something new was recorded.
+/// How long a client may take for the TLS handshake or a request's headers.
+const CLIENT_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// The page's trends: the days before the latest result.
+const RECENT_DAYS: f64 = 3.0;
+
+/// What the page shows: the daemon's history, its report and the recent
+/// trends, rendered again only after something new was recorded.
 struct PageState {
     history: History,
     report: Option<Report>,
-    stale: bool,
+    recent: Option<String>,
+    /// The history's version they were rendered at.
+    rendered: Option<u64>,
 }
 
 impl PageState {
-    fn report(&mut self) -> Option<&Report> {
-        if self.stale {
+    fn refresh(&mut self) {
+        let version = self.history.version();
+        if self.rendered != Some(version) {
             self.report = self.history.report();
-            self.stale = false;
+            self.recent = self
+                .history
+                .read(|contents| crate::outputs::report::recent_figures(contents, RECENT_DAYS));
+            self.rendered = Some(version);
         }
+    }
+
+    fn report(&mut self) -> Option<&Report> {
+        self.refresh();
         self.report.as_ref()
     }
 }
 
 pub struct StatusPage {
-    state: Arc<Mutex<PageState>>,
     address: SocketAddr,
-    stop: Arc<AtomicBool>,
+    stop: Option<tokio::sync::oneshot::Sender<()>>,
     server: Option<JoinHandle<()>>,
 }
 
 impl StatusPage {
-    /// Binds `[web] listen` and serves until dropped.
-    pub fn serve(config: &Config, web: &WebConfig) -> Result<Self> {
-        let server = tiny_http::Server::http(&web.listen)
-            .map_err(|e| anyhow::anyhow!("{e}"))
+    /// Binds `[web] listen` (and reads `[web.tls]`'s files) and serves
+    /// `history` (what the daemon records into it) until dropped.
+    pub fn serve(config: &Config, web: &WebConfig, history: History) -> Result<Self> {
+        let tls = web.tls.as_ref().map(tls_acceptor).transpose()?;
+        let listener = std::net::TcpListener::bind(&web.listen)
             .with_context(|| format!("web: cannot listen on {}", web.listen))?;
-        let address = server
-            .server_addr()
-            .to_ip()
-            .context("web: the listener has no IP address")?;
-        let state = Arc::new(Mutex::new(PageState {
-            history: History::new(config),
-            report: None,
-            stale: true,
-        }));
-        let stop = Arc::new(AtomicBool::new(false));
-        let settings = Settings {
-            token_file: web.token_file.clone(),
-            refresh: web.refresh_seconds,
-            bridge: config.structure.name.clone(),
-        };
-        let (thread_state, thread_stop) = (Arc::clone(&state), Arc::clone(&stop));
+        listener.set_nonblocking(true)?;
+        let address = listener.local_addr()?;
+        let page = Arc::new(Page {
+            state: Mutex::new(PageState {
+                history,
+                report: None,
+                recent: None,
+                rendered: None,
+            }),
+            settings: Settings {
+                token_file: web.token_file.clone(),
+                refresh: web.refresh_seconds,
+                bridge: config.structure.name.clone(),
+            },
+        });
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .context("web: cannot start the server's runtime")?;
+        let (stop, stopped) = tokio::sync::oneshot::channel();
+        let scheme = if tls.is_some() { "https" } else { "http" };
         let handle = std::thread::Builder::new()
             .name("web".into())
-            .spawn(move || serve_loop(&server, &thread_state, &settings, &thread_stop))
+            .spawn(move || runtime.block_on(accept_loop(listener, tls, page, stopped)))
             .context("web: cannot start the server thread")?;
-        tracing::info!(message = "serving the status page", url = %format!("http://{address}/"));
+        tracing::info!(message = "serving the status page", url = %format!("{scheme}://{address}/"));
         Ok(Self {
-            state,
             address,
-            stop,
+            stop: Some(stop),
             server: Some(handle),
         })
     }
@@ -83,21 +111,116 @@ impl StatusPage {
     pub fn address(&self) -> SocketAddr {
         self.address
     }
-
-    /// Keeps a results message the daemon wrote.
-    pub fn record(&self, suffix: &str, json: &[u8]) {
-        let mut state = self.state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        state.history.record(suffix, json);
-        state.stale = true;
-    }
 }
 
 impl Drop for StatusPage {
     fn drop(&mut self) {
-        self.stop.store(true, Ordering::Relaxed);
+        if let Some(stop) = self.stop.take() {
+            let _ = stop.send(());
+        }
         if let Some(h) = self.server.take() {
             let _ = h.join();
         }
+    }
+}
+
+/// The server's TLS from `[web.tls]`: its certificate chain and key, and
+/// with `client_ca` a verifier that requires a client certificate that CA
+/// signed.
+fn tls_acceptor(tls: &WebTlsConfig) -> Result<tokio_rustls::TlsAcceptor> {
+    let provider = Arc::new(rustls::crypto::ring::default_provider());
+    let chain = CertificateDer::pem_file_iter(&tls.certificate)
+        .and_then(Iterator::collect::<Result<Vec<_>, _>>)
+        .with_context(|| format!("web.tls.certificate: cannot read {}", tls.certificate.display()))?;
+    let key = PrivateKeyDer::from_pem_file(&tls.private_key)
+        .with_context(|| format!("web.tls.private_key: cannot read {}", tls.private_key.display()))?;
+    let builder = rustls::ServerConfig::builder_with_provider(Arc::clone(&provider))
+        .with_safe_default_protocol_versions()
+        .context("web.tls: no TLS version in common with the crypto provider")?;
+    let builder = match &tls.client_ca {
+        None => builder.with_no_client_auth(),
+        Some(ca) => {
+            let mut roots = rustls::RootCertStore::empty();
+            for cert in CertificateDer::pem_file_iter(ca)
+                .with_context(|| format!("web.tls.client_ca: cannot read {}", ca.display()))?
+            {
+                let cert = cert.with_context(|| format!("web.tls.client_ca: {}", ca.display()))?;
+                roots
+                    .add(cert)
+                    .with_context(|| format!("web.tls.client_ca: {}", ca.display()))?;
+            }
+            let verifier = rustls::server::WebPkiClientVerifier::builder_with_provider(Arc::new(roots), provider)
+                .build()
+                .with_context(|| format!("web.tls.client_ca: {}", ca.display()))?;
+            builder.with_client_cert_verifier(verifier)
+        }
+    };
+    let mut server = builder
+        .with_single_cert(chain, key)
+        .context("web.tls: the certificate and private key do not make a server identity")?;
+    server.alpn_protocols = vec![b"http/1.1".to_vec()];
+    Ok(tokio_rustls::TlsAcceptor::from(Arc::new(server)))
+}
+
+struct Page {
+    state: Mutex<PageState>,
+    settings: Settings,
+}
+
+/// Accepts connections until `stopped`, each served on a task of its own.
+async fn accept_loop(
+    listener: std::net::TcpListener,
+    tls: Option<tokio_rustls::TlsAcceptor>,
+    page: Arc<Page>,
+    mut stopped: tokio::sync::oneshot::Receiver<()>,
+) {
+    let listener = match tokio::net::TcpListener::from_std(listener) {
+        Ok(l) => l,
+        Err(e) => {
+            tracing::error!(message = "web: the listener cannot be used: no status page", error = %e);
+            return;
+        }
+    };
+    loop {
+        let (stream, peer) = tokio::select! {
+            _ = &mut stopped => return,
+            accepted = listener.accept() => match accepted {
+                Ok(a) => a,
+                Err(e) => {
+                    tracing::warn!(message = "web: a connection could not be accepted", error = %e);
+                    continue;
+                }
+            },
+        };
+        let (page, tls) = (Arc::clone(&page), tls.clone());
+        tokio::spawn(async move {
+            match tls {
+                None => serve_connection(TokioIo::new(stream), page).await,
+                Some(acceptor) => match tokio::time::timeout(CLIENT_TIMEOUT, acceptor.accept(stream)).await {
+                    Ok(Ok(stream)) => serve_connection(TokioIo::new(stream), page).await,
+                    Ok(Err(e)) => tracing::info!(message = "web: TLS handshake refused", %peer, error = %e),
+                    Err(_) => tracing::info!(message = "web: TLS handshake timed out", %peer),
+                },
+            }
+        });
+    }
+}
+
+async fn serve_connection<S>(io: TokioIo<S>, page: Arc<Page>)
+where
+    S: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + Send + 'static,
+{
+    let service = hyper::service::service_fn(move |request: Request<hyper::body::Incoming>| {
+        let page = Arc::clone(&page);
+        async move { Ok::<_, std::convert::Infallible>(respond(&request, &page)) }
+    });
+    let served = hyper::server::conn::http1::Builder::new()
+        .timer(TokioTimer::new())
+        .header_read_timeout(CLIENT_TIMEOUT)
+        .serve_connection(io, service)
+        .await;
+    if let Err(e) = served {
+        tracing::debug!(message = "web: the browser went away", error = %e);
     }
 }
 
@@ -109,7 +232,7 @@ struct Settings {
 
 impl Settings {
     /// Whether the request carries the token (always, without one).
-    fn allows(&self, request: &tiny_http::Request) -> bool {
+    fn allows<B>(&self, request: &Request<B>) -> bool {
         let Some(path) = &self.token_file else {
             return true;
         };
@@ -123,82 +246,79 @@ impl Settings {
         };
         let bearer = request
             .headers()
-            .iter()
-            .find(|h| h.field.equiv("Authorization"))
-            .and_then(|h| {
-                h.value
-                    .as_str()
-                    .strip_prefix("Bearer ")
-                    .map(str::trim)
-                    .map(str::to_string)
-            });
-        let query = query_token(request.url());
-        bearer.as_deref() == Some(token.as_str()) || query.as_deref() == Some(token.as_str())
+            .get(hyper::header::AUTHORIZATION)
+            .and_then(|v| v.to_str().ok())
+            .and_then(|v| v.strip_prefix("Bearer "))
+            .map(str::trim);
+        let query = request.uri().query().and_then(query_token);
+        bearer == Some(token.as_str()) || query.as_deref() == Some(token.as_str())
     }
 }
 
 /// The `token` of a URL's query.
-fn query_token(url: &str) -> Option<String> {
-    url.split_once('?')?
-        .1
+fn query_token(query: &str) -> Option<String> {
+    query
         .split('&')
         .find_map(|pair| pair.strip_prefix("token=").map(str::to_string))
 }
 
-fn header(name: &str, value: &str) -> tiny_http::Header {
-    tiny_http::Header::from_bytes(name.as_bytes(), value.as_bytes()).expect("a valid header")
+fn reply(status: StatusCode, content_type: &str, body: impl Into<Bytes>) -> Response<Full<Bytes>> {
+    let mut response = Response::new(Full::new(body.into()));
+    *response.status_mut() = status;
+    let headers = response.headers_mut();
+    headers.insert(
+        hyper::header::CONTENT_TYPE,
+        content_type.parse().expect("a valid header value"),
+    );
+    headers.insert(
+        hyper::header::CACHE_CONTROL,
+        "no-store".parse().expect("a valid header value"),
+    );
+    response
 }
 
-fn serve_loop(server: &tiny_http::Server, state: &Mutex<PageState>, settings: &Settings, stop: &AtomicBool) {
-    while !stop.load(Ordering::Relaxed) {
-        let request = match server.recv_timeout(Duration::from_millis(100)) {
-            Ok(Some(r)) => r,
-            Ok(None) => continue,
-            Err(e) => {
-                tracing::warn!(message = "web: a request could not be read", error = %e);
-                continue;
-            }
-        };
-        let response = respond(&request, state, settings);
-        if let Err(e) = request.respond(response) {
-            tracing::debug!(message = "web: the browser went away", error = %e);
-        }
-    }
+fn text(status: StatusCode, body: &'static str) -> Response<Full<Bytes>> {
+    reply(status, "text/plain; charset=utf-8", body)
 }
 
-type Response = tiny_http::Response<std::io::Cursor<Vec<u8>>>;
-
-fn text(status: u16, body: &str) -> Response {
-    tiny_http::Response::from_string(body)
-        .with_status_code(status)
-        .with_header(header("Content-Type", "text/plain; charset=utf-8"))
-}
-
-fn respond(request: &tiny_http::Request, state: &Mutex<PageState>, settings: &Settings) -> Response {
-    use tiny_http::Method;
-    if !matches!(request.method(), Method::Get | Method::Head) {
-        return text(405, "read-only: GET and HEAD only\n").with_header(header("Allow", "GET, HEAD"));
+fn respond<B>(request: &Request<B>, page: &Page) -> Response<Full<Bytes>> {
+    let settings = &page.settings;
+    if !matches!(*request.method(), Method::GET | Method::HEAD) {
+        let mut response = text(StatusCode::METHOD_NOT_ALLOWED, "read-only: GET and HEAD only\n");
+        response
+            .headers_mut()
+            .insert(hyper::header::ALLOW, "GET, HEAD".parse().expect("a valid header value"));
+        return response;
     }
     if !settings.allows(request) {
-        return text(401, "a token is required\n").with_header(header("WWW-Authenticate", "Bearer"));
+        let mut response = text(StatusCode::UNAUTHORIZED, "a token is required\n");
+        response.headers_mut().insert(
+            hyper::header::WWW_AUTHENTICATE,
+            "Bearer".parse().expect("a valid header value"),
+        );
+        return response;
     }
-    let html = |body: String| {
-        tiny_http::Response::from_data(body.into_bytes())
-            .with_header(header("Content-Type", "text/html; charset=utf-8"))
-            .with_header(header("Cache-Control", "no-store"))
-    };
-    let token = query_token(request.url());
-    let mut state = state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-    match request.url().split('?').next().unwrap_or_default() {
-        "/" => html(page(&mut state, settings, token.as_deref())),
-        "/status.json" => tiny_http::Response::from_data(status_json(&mut state, settings).to_string().into_bytes())
-            .with_header(header("Content-Type", "application/json"))
-            .with_header(header("Cache-Control", "no-store")),
+    let html = |body: String| reply(StatusCode::OK, "text/html; charset=utf-8", body);
+    let token = request.uri().query().and_then(query_token);
+    let mut state = page.state.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+    match request.uri().path() {
+        "/" => html(render_page(&mut state, settings, token.as_deref())),
+        "/status.json" => reply(
+            StatusCode::OK,
+            "application/json",
+            status_json(&mut state, settings).to_string(),
+        ),
         "/report" => match state.report() {
             Some(r) => html(r.html.clone()),
-            None => text(404, "no results yet: the report comes with the first update or event\n"),
+            None => text(
+                StatusCode::NOT_FOUND,
+                "no results yet: the report comes with the first update or event\n",
+            ),
         },
-        _ => text(404, "splinewatch status page: GET /, /status.json, /report\n"),
+        _ => text(
+            StatusCode::NOT_FOUND,
+            "splinewatch status page: GET /, /status.json, /report\n",
+        ),
     }
 }
 
@@ -208,8 +328,7 @@ fn status_json(state: &mut PageState, settings: &Settings) -> Value {
     let (priority, verdict) = state
         .report()
         .map_or((None, None), |r| (Some(r.priority.label()), Some(r.verdict.clone())));
-    let c = state.history.contents();
-    json!({
+    state.history.read(|c| json!({
         "bridge": settings.bridge,
         "prefix": c.prefix,
         "priority": priority,
@@ -223,10 +342,10 @@ fn status_json(state: &mut PageState, settings: &Settings) -> Value {
             "verdict": e.verdict.as_ref().map(|v| v.state.clone()), "skipped": e.skipped})),
         "alarms": c.alarms.iter().filter(|a| a.state == "alarm").count(),
         "health": c.health,
-    })
+    }))
 }
 
-fn page(state: &mut PageState, settings: &Settings, token: Option<&str>) -> String {
+fn render_page(state: &mut PageState, settings: &Settings, token: Option<&str>) -> String {
     let status = status_json(state, settings);
     let priority = state.report().map(|r| r.priority);
     let class = priority.map_or("unjudged", |p| p.class());
@@ -280,9 +399,15 @@ fn page(state: &mut PageState, settings: &Settings, token: Option<&str>) -> Stri
     .collect();
     rows.push(vec!["health".into(), counters.join(" · ")]);
     rows.push(vec!["health reported".into(), cell(&health["time"])]);
+    state.refresh();
+    let recent = state.recent.as_deref().map_or(String::new(), |figures| {
+        format!(
+            "<h2 id=\"recent\">The last {RECENT_DAYS} days</h2><p>Before the latest result; the whole record is in the report.</p>{figures}"
+        )
+    });
     let body = format!(
         "<header><p class=\"subtitle\">{} · {} · refreshed every {} s</p><h1>Status</h1></header>\
-<div id=\"verdict\" class=\"{class}\" role=\"status\"><span class=\"priority\">{}</span><p id=\"verdict-text\">{}</p></div>{}",
+<div id=\"verdict\" class=\"{class}\" role=\"status\"><span class=\"priority\">{}</span><p id=\"verdict-text\">{}</p></div>{}{recent}",
         escape(&settings.bridge),
         escape(status["prefix"].as_str().unwrap_or_default()),
         settings.refresh,
@@ -301,4 +426,168 @@ fn page(state: &mut PageState, settings: &Settings, token: Option<&str>) -> Stri
         )
     );
     html::refreshing_page(&format!("{} status", settings.bridge), &body, Some(settings.refresh))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rcgen::{BasicConstraints, CertificateParams, CertifiedIssuer, DnType, IsCa, KeyPair, KeyUsagePurpose};
+    use std::path::Path;
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+
+    /// A site CA and another CA, made now: `ca.pem`, `server.{pem,key}` for
+    /// localhost and 127.0.0.1, `client.{pem,key}` signed by the site CA,
+    /// `stranger.{pem,key}` signed by the other.
+    fn make_pki(dir: &Path) {
+        let ca = |name: &str| {
+            let mut p = CertificateParams::new(Vec::<String>::new()).unwrap();
+            p.is_ca = IsCa::Ca(BasicConstraints::Unconstrained);
+            p.distinguished_name.push(DnType::CommonName, name);
+            p.key_usages = vec![KeyUsagePurpose::KeyCertSign, KeyUsagePurpose::CrlSign];
+            CertifiedIssuer::self_signed(p, KeyPair::generate().unwrap()).unwrap()
+        };
+        let leaf = |issuer: &CertifiedIssuer<'_, KeyPair>, name: &str, hosts: Vec<String>| {
+            let mut p = CertificateParams::new(hosts).unwrap();
+            p.distinguished_name.push(DnType::CommonName, name);
+            let key = KeyPair::generate().unwrap();
+            let cert = p.signed_by(&key, issuer).unwrap();
+            std::fs::write(dir.join(format!("{name}.pem")), cert.pem()).unwrap();
+            std::fs::write(dir.join(format!("{name}.key")), key.serialize_pem()).unwrap();
+        };
+        let site = ca("site CA");
+        std::fs::write(dir.join("ca.pem"), site.pem()).unwrap();
+        leaf(&site, "server", vec!["localhost".into(), "127.0.0.1".into()]);
+        leaf(&site, "client", vec![]);
+        leaf(&ca("another CA"), "stranger", vec![]);
+    }
+
+    /// One request over TLS (the site CA trusted, `identity` presented):
+    /// the server's whole answer, or why there was none.
+    fn request_over_tls(
+        address: SocketAddr,
+        dir: &Path,
+        identity: Option<&str>,
+        request: &str,
+    ) -> Result<String, String> {
+        let provider = Arc::new(rustls::crypto::ring::default_provider());
+        let mut roots = rustls::RootCertStore::empty();
+        for cert in CertificateDer::pem_file_iter(dir.join("ca.pem")).unwrap() {
+            roots.add(cert.unwrap()).unwrap();
+        }
+        let builder = rustls::ClientConfig::builder_with_provider(provider)
+            .with_safe_default_protocol_versions()
+            .unwrap()
+            .with_root_certificates(roots);
+        let client = match identity {
+            None => builder.with_no_client_auth(),
+            Some(name) => {
+                let chain = CertificateDer::pem_file_iter(dir.join(format!("{name}.pem")))
+                    .unwrap()
+                    .collect::<Result<Vec<_>, _>>()
+                    .unwrap();
+                let key = PrivateKeyDer::from_pem_file(dir.join(format!("{name}.key"))).unwrap();
+                builder.with_client_auth_cert(chain, key).unwrap()
+            }
+        };
+        let connector = tokio_rustls::TlsConnector::from(Arc::new(client));
+        let runtime = tokio::runtime::Builder::new_current_thread()
+            .enable_all()
+            .build()
+            .unwrap();
+        runtime.block_on(async {
+            let tcp = tokio::net::TcpStream::connect(address)
+                .await
+                .map_err(|e| e.to_string())?;
+            let name = rustls::pki_types::ServerName::try_from("localhost").unwrap();
+            let mut tls = connector.connect(name, tcp).await.map_err(|e| e.to_string())?;
+            tls.write_all(request.as_bytes()).await.map_err(|e| e.to_string())?;
+            let mut answer = String::new();
+            tls.read_to_string(&mut answer).await.map_err(|e| e.to_string())?;
+            if answer.is_empty() {
+                return Err("no answer".into());
+            }
+            Ok(answer)
+        })
+    }
+
+    #[test]
+    fn with_a_client_ca_only_its_clients_are_served_and_nothing_can_be_written() {
+        let dir = tempfile::tempdir().unwrap();
+        make_pki(dir.path());
+        let config_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello.toml");
+        let config = Config::from_toml(&std::fs::read_to_string(config_path).unwrap()).unwrap();
+        let web = WebConfig {
+            listen: "127.0.0.1:0".into(),
+            tls: Some(WebTlsConfig {
+                certificate: dir.path().join("server.pem"),
+                private_key: dir.path().join("server.key"),
+                client_ca: Some(dir.path().join("ca.pem")),
+            }),
+            ..WebConfig::default()
+        };
+        web.check(None).unwrap();
+        let page = StatusPage::serve(&config, &web, History::new(&config)).unwrap();
+        let get =
+            |identity: Option<&str>, request: &str| request_over_tls(page.address(), dir.path(), identity, request);
+
+        let answer = get(Some("client"), "GET /status.json HTTP/1.0\r\n\r\n").unwrap();
+        assert!(answer.starts_with("HTTP/1.0 200"), "{answer}");
+        assert!(answer.contains("\"bridge\":\"sinello-span2\""), "{answer}");
+        let answer = get(Some("client"), "GET / HTTP/1.0\r\n\r\n").unwrap();
+        assert!(answer.contains("<h1>Status</h1>"), "{answer}");
+        for method in ["POST", "PUT", "DELETE", "PATCH"] {
+            let answer = get(
+                Some("client"),
+                &format!("{method} / HTTP/1.0\r\nContent-Length: 0\r\n\r\n"),
+            )
+            .unwrap();
+            assert!(answer.starts_with("HTTP/1.0 405"), "{method}: {answer}");
+        }
+        // Without a certificate, or with one another CA signed: no answer at
+        // all (the handshake or the first read fails), not even a 401.
+        for identity in [None, Some("stranger")] {
+            let refused = get(identity, "GET /status.json HTTP/1.0\r\n\r\n");
+            assert!(refused.is_err(), "{identity:?} was served: {refused:?}");
+        }
+        // The server is still up for its own clients after refusing others.
+        assert!(get(Some("client"), "GET /status.json HTTP/1.0\r\n\r\n")
+            .unwrap()
+            .starts_with("HTTP/1.0 200"));
+    }
+
+    #[test]
+    fn tls_files_are_checked_by_what_they_hold() {
+        let dir = tempfile::tempdir().unwrap();
+        make_pki(dir.path());
+        let with = |certificate: &str, private_key: &str| WebConfig {
+            listen: "0.0.0.0:9465".into(),
+            tls: Some(WebTlsConfig {
+                certificate: dir.path().join(certificate),
+                private_key: dir.path().join(private_key),
+                client_ca: Some(dir.path().join("ca.pem")),
+            }),
+            ..WebConfig::default()
+        };
+        // Off loopback, client certificates stand in for the token.
+        with("server.pem", "server.key").check(None).unwrap();
+        let swapped = with("server.key", "server.pem").check(None).unwrap_err().to_string();
+        assert!(
+            swapped.contains("web.tls.certificate") && swapped.contains("no PEM CERTIFICATE"),
+            "{swapped}"
+        );
+        let missing = with("server.pem", "absent.key").check(None).unwrap_err().to_string();
+        assert!(
+            missing.contains("web.tls.private_key") && missing.contains("absent.key"),
+            "{missing}"
+        );
+        let open = WebConfig {
+            listen: "0.0.0.0:9465".into(),
+            ..WebConfig::default()
+        };
+        let refused = open.check(None).unwrap_err().to_string();
+        assert!(
+            refused.contains("token_file") && refused.contains("client_ca"),
+            "{refused}"
+        );
+    }
 }

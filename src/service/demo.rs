@@ -10,16 +10,94 @@ use crate::io::wire::{Encoding, Limits};
 use crate::outputs::publisher::Publisher;
 use crate::outputs::rerun::RerunTargets;
 use crate::studies::simulation::{parse_scenario, simulate, SimulationOptions};
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use std::path::Path;
 
-/// The demo's scenario: `east.k2` drops 40 % between 40 % and 60 % of the run.
-pub fn demo_scenario(duration: f64) -> String {
-    format!(
-        "update_seconds = 5.0\n[[change]]\nparameter = \"east.k2\"\nstart_minute = {}\nend_minute = {}\nfactor = 0.6\n",
-        0.4 * duration / 60.0,
-        0.6 * duration / 60.0
-    )
+/// What the demo simulates: the scenario (TOML) and the run's length.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DemoPlan {
+    pub scenario: String,
+    /// Simulated seconds.
+    pub duration: f64,
+    /// When `east.k2` starts to drop, seconds from the start.
+    pub damage_from: f64,
+}
+
+/// The simulated seconds of a demo without `[monitoring]` unless given.
+pub const DEFAULT_DEMO_SECONDS: f64 = 600.0;
+
+/// Windows a monitoring demo runs after training unless a duration is given;
+/// the damage comes halfway through them.
+const SCORED_WINDOWS: f64 = 50.0;
+
+/// The fewest windows after training a monitoring demo accepts: the damage
+/// halfway, then room for the alarm's persistence (`[k, m]`) to fill.
+const FEWEST_SCORED_WINDOWS: f64 = 30.0;
+
+/// The demo's scenario for `cfg`. Without `[monitoring]`: `east.k2` drops
+/// 40 % between 40 % and 60 % of the run (600 s unless given). With it:
+/// the monitored temperatures are published too (a steady 10 °C with
+/// 0.3 °C of sensor noise), the reference trains on its first
+/// `training_windows` updates, and `east.k2` drops 40 % at once halfway
+/// through the scored windows after them, so the run raises an alarm.
+pub fn demo_plan(cfg: &Config, duration: Option<f64>) -> Result<DemoPlan> {
+    let change = |from: f64, to: f64| {
+        format!(
+            "[[change]]\nparameter = \"east.k2\"\nstart_minute = {}\nend_minute = {}\nfactor = 0.6\n",
+            from / 60.0,
+            to / 60.0
+        )
+    };
+    let Some(monitoring) = &cfg.monitoring else {
+        let duration = duration.unwrap_or(DEFAULT_DEMO_SECONDS);
+        let damage_from = 0.4 * duration;
+        return Ok(DemoPlan {
+            scenario: format!("update_seconds = 5.0\n{}", change(damage_from, 0.6 * duration)),
+            duration,
+            damage_from,
+        });
+    };
+    if monitoring.training_from.is_some() || monitoring.training_until.is_some() {
+        bail!(
+            "the demo trains [monitoring] on its first training_windows updates; this config trains on a time span \
+             (training_from, training_until): remove them for the demo"
+        );
+    }
+    if cfg.schedule.update_every_minutes.is_some() {
+        bail!("the demo counts updates in windows; this config updates by time ([schedule] update_every_minutes): remove it for the demo");
+    }
+    let update_seconds = cfg.frf.window_seconds * cfg.schedule.update_every_windows as f64;
+    let training = monitoring.training_windows as f64 * update_seconds;
+    let fewest = training + FEWEST_SCORED_WINDOWS * update_seconds;
+    let duration = duration.unwrap_or(training + SCORED_WINDOWS * update_seconds);
+    if duration < fewest {
+        bail!(
+            "--duration {duration} s is too short for a monitoring demo: [monitoring] trains on {} updates of {update_seconds} s \
+             ({training} s), then the damage needs {} more updates to raise an alarm: give --duration {fewest} or more",
+            monitoring.training_windows,
+            FEWEST_SCORED_WINDOWS
+        );
+    }
+    let damage_from = training + 0.5 * (duration - training);
+    let mut scenario = String::from("update_seconds = 5.0\n");
+    if !monitoring.temperature_channels.is_empty() {
+        let channels: Vec<String> = monitoring
+            .temperature_channels
+            .iter()
+            .map(|c| format!("{c:?}"))
+            .collect();
+        scenario += &format!(
+            "[environment]\nchannels = [{}]\nmean_c = 10.0\nnoise_c = 0.3\nsample_seconds = {}\n",
+            channels.join(", "),
+            (update_seconds / 4.0).min(60.0)
+        );
+    }
+    scenario += &change(damage_from, damage_from);
+    Ok(DemoPlan {
+        scenario,
+        duration,
+        damage_from,
+    })
 }
 
 /// Runs the daemon on a free loopback port and `source` on a publisher
@@ -85,10 +163,11 @@ pub fn run_with_source(
     })
 }
 
-/// Simulates a bearing-damage scenario and publishes it live.
-pub fn run_live(config_path: &Path, out: &Path, duration: f64, speed: f64, seed: u64) -> Result<RunSummary> {
-    let cfg = load_config(config_path)?;
-    let scenario = parse_scenario(&demo_scenario(duration))?;
+/// Simulates the demo's bearing-damage scenario ([`demo_plan`]) and
+/// publishes it live.
+pub fn run_live(cfg: Config, plan: &DemoPlan, out: &Path, speed: f64, seed: u64) -> Result<RunSummary> {
+    let duration = plan.duration;
+    let scenario = parse_scenario(&plan.scenario)?;
     run_with_source(cfg, out, speed, usize::MAX, move |cfg, publisher| {
         let options = SimulationOptions {
             scenario: Some(scenario),
@@ -117,7 +196,8 @@ pub fn run_recording_live(config_path: &Path, recording: &Path, out: &Path, spee
 }
 
 /// Whether `name` is one of the files a demo writes in its folder:
-/// `state.json`, `results.mcap`, `results.rrd` or a numbered
+/// `state.json`, `monitoring.json` (the monitoring reference), `results.mcap`,
+/// `results.rrd`, `report.html` or a numbered
 /// `results-<n>.mcap`/`.rrd` (what a daemon restarted on them writes).
 fn is_demo_file(name: &str) -> bool {
     let numbered = |ext: &str| {
@@ -125,7 +205,11 @@ fn is_demo_file(name: &str) -> bool {
             .and_then(|rest| rest.strip_suffix(ext))
             .is_some_and(|n| !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()))
     };
-    matches!(name, "state.json" | "results.mcap" | "results.rrd") || numbered(".mcap") || numbered(".rrd")
+    matches!(
+        name,
+        "state.json" | "monitoring.json" | "results.mcap" | "results.rrd" | "report.html"
+    ) || numbered(".mcap")
+        || numbered(".rrd")
 }
 
 /// The demo's files in `out` (regular files only), sorted.
@@ -160,12 +244,54 @@ pub fn clear_previous(out: &Path) -> Result<Vec<String>> {
 
 #[cfg(test)]
 mod tests {
-    use super::is_demo_file;
+    use super::{demo_plan, is_demo_file};
+    use crate::config::Config;
+    use crate::studies::simulation::parse_scenario;
+
+    fn bundled(name: &str) -> Config {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("config")
+            .join(name);
+        Config::from_toml(&std::fs::read_to_string(path).unwrap()).unwrap()
+    }
+
+    #[test]
+    fn the_plain_demo_ramps_the_bearing_between_40_and_60_per_cent() {
+        let plan = demo_plan(&bundled("sinello.toml"), None).unwrap();
+        assert_eq!((plan.duration, plan.damage_from), (600.0, 240.0));
+        let scenario = parse_scenario(&plan.scenario).unwrap();
+        assert!(scenario.environment.is_none());
+        assert_eq!(scenario.changes.len(), 1);
+        assert_eq!(
+            (scenario.changes[0].start_minute, scenario.changes[0].end_minute),
+            (4.0, 6.0)
+        );
+    }
+
+    #[test]
+    fn the_monitoring_demo_trains_then_drops_the_bearing_with_temperatures() {
+        // 100 training updates of 20 s, then 50 more with the damage halfway.
+        let cfg = bundled("sinello-monitoring.toml");
+        let plan = demo_plan(&cfg, None).unwrap();
+        assert_eq!((plan.duration, plan.damage_from), (3000.0, 2500.0));
+        let scenario = parse_scenario(&plan.scenario).unwrap();
+        assert_eq!(scenario.environment.as_ref().unwrap().channels, vec!["T1".to_string()]);
+        let change = &scenario.changes[0];
+        assert_eq!((change.start_minute * 60.0, change.end_minute * 60.0), (2500.0, 2500.0));
+        let short = demo_plan(&cfg, Some(2500.0)).unwrap_err().to_string();
+        assert!(short.contains("--duration 2600 or more"), "{short}");
+        let mut by_span = cfg.clone();
+        by_span.monitoring.as_mut().unwrap().training_from = Some("2026-01-01T00:00:00Z".into());
+        let span = demo_plan(&by_span, None).unwrap_err().to_string();
+        assert!(span.contains("training_from"), "{span}");
+    }
 
     #[test]
     fn only_the_demos_own_files_are_cleared() {
         for name in [
             "state.json",
+            "monitoring.json",
+            "report.html",
             "results.mcap",
             "results.rrd",
             "results-1.mcap",

@@ -16,10 +16,15 @@ With --screenshots DIR, each report's top at 390 px and its full page at
 A running daemon's status page is given as status=URL: once its JSON
 shows an update, the page is checked the same way (it has no figure), and
 at 390 px it must show a later update by itself (its refresh) within 6 s.
+Given as alarm=URL (a daemon that will raise an alarm, e.g. the monitoring
+demo's), the page is also left open at 390 px while its JSON is polled
+every 0.2 s; once the JSON shows the alarm ("High: inspect"), the open page
+must show it by itself within one refresh (its refresh_seconds, plus 1.5 s
+to load).
 
 Usage: python check_reports.py [--chromium PATH] [--screenshots DIR]
            KIND=REPORT.html ...      (KIND: event, period or monitoring)
-           status=http://127.0.0.1:PORT/
+           status=http://127.0.0.1:PORT/  alarm=http://127.0.0.1:PORT/
 """
 
 import argparse
@@ -33,8 +38,12 @@ REQUIRED = {
     "period": ["verdict", "trends", "alarms", "provenance"],
     "monitoring": ["verdict", "state", "trends", "alarms", "health", "provenance"],
     # A running daemon's status page (`[web]`), by its URL.
-    "status": ["verdict", "now"],
+    "status": ["verdict", "now", "trends"],
+    "alarm": ["verdict", "now", "trends"],
 }
+
+LIVE = ("status", "alarm")
+ALARM = "High: inspect"
 
 CHROMIUM_FLAGS = [
     "--no-sandbox",
@@ -47,8 +56,9 @@ CHROMIUM_FLAGS = [
 ]
 
 
-def wait_for_update(url, timeout=90.0):
-    """Polls a status page's JSON until the daemon has written an update."""
+def wait_for_status(url, ready, timeout, every=0.5):
+    """Polls a status page's JSON until `ready(status)`: the status and the
+    monotonic time it was first seen."""
     import json
     import time
     import urllib.request
@@ -58,19 +68,39 @@ def wait_for_update(url, timeout=90.0):
         try:
             with urllib.request.urlopen(url.rstrip("/") + "/status.json", timeout=5) as r:
                 status = json.load(r)
-            if status.get("last_update"):
-                return status
+            if ready(status):
+                return status, time.monotonic()
         except OSError:
             pass
-        time.sleep(0.5)
-    sys.exit(f"{url}: no update within {timeout} s")
+        time.sleep(every)
+    sys.exit(f"{url}: not there within {timeout} s")
+
+
+def check_alarm_shown(page, url, tag):
+    """The open page shows the alarm within one refresh of its JSON."""
+    import time
+
+    refresh = float(page.get_attribute('meta[http-equiv="refresh"]', "content"))
+    status, seen = wait_for_status(url, lambda s: s.get("priority") == ALARM, timeout=300, every=0.2)
+    deadline = seen + refresh + 1.5
+    while time.monotonic() < deadline:
+        try:
+            if ALARM in page.inner_text("#verdict .priority", timeout=500):
+                shown = time.monotonic() - seen
+                print(f"{tag}: the alarm on the page {shown:.1f} s after its JSON (refresh {refresh:.0f} s): {status['verdict'][:90]}…")
+                return []
+        except Exception:  # the page is between two loads
+            pass
+        page.wait_for_timeout(100)
+    return [f"{tag}: the JSON showed {ALARM!r} but the page did not within {refresh + 1.5:.1f} s"]
 
 
 def check(browser, kind, path, screenshots):
     problems = []
-    url = path if kind == "status" else path.resolve().as_uri()
-    if kind == "status":
-        wait_for_update(url)
+    live = kind in LIVE
+    url = path if live else path.resolve().as_uri()
+    if live:
+        wait_for_status(url, lambda s: s.get("last_update"), timeout=90)
     for width in (1000, 390):
         page = browser.new_page(viewport={"width": width, "height": 800})
         console, requests = [], []
@@ -106,7 +136,7 @@ def check(browser, kind, path, screenshots):
                 scripts: document.scripts.length,
             })"""
         )
-        name = "status" if kind == "status" else path.name
+        name = kind if live else path.name
         tag = f"{name} at {width} px"
         if console:
             problems.append(f"{tag}: console: {console}")
@@ -117,7 +147,7 @@ def check(browser, kind, path, screenshots):
         for section in REQUIRED[kind]:
             if section != "verdict" and section not in dom["sections"]:
                 problems.append(f"{tag}: section {section!r} missing (has {dom['sections']})")
-        if not dom["figures"] and kind != "status":
+        if not dom["figures"] and not live:
             problems.append(f"{tag}: no figure")
         for f in dom["figures"]:
             if not f["svg"] or f["marks"] < 5 or not f["caption"].strip():
@@ -130,17 +160,19 @@ def check(browser, kind, path, screenshots):
             problems.append(f"{tag}: overflows horizontally ({dom['scrollWidth']} > {dom['clientWidth']} px)")
         if dom["scripts"]:
             problems.append(f"{tag}: {dom['scripts']} scripts")
-        if kind == "status" and width == 390:
+        if live and width == 390:
             # The browser reloads the page by itself (its refresh): within
             # a few refreshes it shows a later update than it first did.
             first = page.inner_text("#status-table")
             page.wait_for_timeout(6000)
             if page.inner_text("#status-table") == first:
                 problems.append(f"{tag}: the page did not refresh to a later update within 6 s")
+            if kind == "alarm":
+                problems += check_alarm_shown(page, url, tag)
             if console or requests:
                 problems.append(f"{tag}: after the refreshes: console {console}, requests {requests}")
         if screenshots:
-            stem = "status" if kind == "status" else path.stem
+            stem = kind if live else path.stem
             if width == 390:
                 page.screenshot(path=str(screenshots / f"{stem}-phone.png"))
             else:
@@ -170,7 +202,7 @@ def main():
             kind, _, name = item.partition("=")
             if kind not in REQUIRED:
                 sys.exit(f"{item}: give KIND=PATH, KIND one of {sorted(REQUIRED)}")
-            problems += check(browser, kind, name if kind == "status" else Path(name), args.screenshots)
+            problems += check(browser, kind, name if kind in LIVE else Path(name), args.screenshots)
         browser.close()
     for problem in problems:
         print("FAIL", problem, file=sys.stderr)

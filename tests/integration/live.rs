@@ -4,7 +4,7 @@
 use splinewatch::config::load_config;
 use splinewatch::outputs::results::ResultsWriter;
 use splinewatch::outputs::state::load_state;
-use splinewatch::service::demo::{run_live, run_recording_live};
+use splinewatch::service::demo::{demo_plan, run_live, run_recording_live};
 use splinewatch::service::replay::replay;
 use splinewatch::studies;
 use std::io::Cursor;
@@ -27,7 +27,9 @@ fn temp(name: &str) -> TestDir {
 fn live_zenoh_run_tracks_a_bearing_damage() {
     let out = temp("damage");
     let duration = 300.0;
-    let summary = run_live(&root().join("config/sinello.toml"), &out, duration, 40.0, 11).unwrap();
+    let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
+    let plan = demo_plan(&cfg, Some(duration)).unwrap();
+    let summary = run_live(cfg, &plan, &out, 40.0, 11).unwrap();
     let value = |u: &splinewatch::pipeline::UpdateOutcome, name: &str| {
         estimates(u).iter().find(|p| p.name == name).unwrap().value
     };

@@ -65,6 +65,7 @@ fn issue_48_metrics_parse_never_go_down_and_equal_the_health_message() {
         listen: format!("127.0.0.1:{web_port}"),
         token_file: Some(dir.join("web-token")),
         refresh_seconds: 5,
+        tls: None,
     });
     let pages = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
     let kept_pages = std::sync::Arc::clone(&pages);

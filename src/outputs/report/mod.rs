@@ -21,6 +21,7 @@ use html::escape;
 use std::fmt::Write;
 use thiserror::Error;
 
+pub use period::recent_figures;
 pub use words::Priority;
 
 /// What a report is of.

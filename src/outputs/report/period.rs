@@ -15,74 +15,107 @@ use std::fmt::Write;
 
 const HOUR_NS: f64 = 3600e9;
 
+/// What a period holds: its messages and its clock.
+struct Period<'a> {
+    statuses: Vec<&'a StatusMessage>,
+    updates: Vec<&'a UpdateSummary>,
+    alarms: Vec<&'a AlarmMessage>,
+    events: Vec<&'a EventSummary>,
+    t0: i128,
+    t1: i128,
+    clock: Clock,
+}
+
+impl<'a> Period<'a> {
+    /// The messages timed inside `[from, to]`; `None` when there is none.
+    fn select(contents: &'a ResultsContents, from: Option<i128>, to: Option<i128>) -> Option<Self> {
+        let inside = |t: Option<i128>| t.is_some_and(|t| from.is_none_or(|f| t >= f) && to.is_none_or(|e| t <= e));
+        let statuses: Vec<&StatusMessage> = contents
+            .statuses
+            .iter()
+            .filter(|s| inside(time_of(Some(&s.time))))
+            .collect();
+        let updates: Vec<&UpdateSummary> = contents
+            .updates
+            .iter()
+            .filter(|u| inside(time_of(Some(&u.time))))
+            .collect();
+        let alarms: Vec<_> = contents
+            .alarms
+            .iter()
+            .filter(|a| inside(time_of(Some(&a.time))))
+            .collect();
+        let events: Vec<_> = contents
+            .events
+            .iter()
+            .filter(|e| inside(time_of(e.start.as_deref())))
+            .collect();
+        let times: Vec<i128> = statuses
+            .iter()
+            .map(|s| time_of(Some(&s.time)))
+            .chain(updates.iter().map(|u| time_of(Some(&u.time))))
+            .chain(events.iter().map(|e| time_of(e.start.as_deref())))
+            .flatten()
+            .collect();
+        let (&t0, &t1) = (times.iter().min()?, times.iter().max()?);
+        Some(Self {
+            statuses,
+            updates,
+            alarms,
+            events,
+            t0,
+            t1,
+            clock: Clock::new(t0, t1),
+        })
+    }
+
+    /// The monitoring state's figures and table, then every parameter's
+    /// trend (the updates', or where there are none the events'), alarmed
+    /// windows and alarmed events shaded.
+    fn figures(&self) -> String {
+        let clock = &self.clock;
+        let mut spans = alarmed_spans(&self.statuses, clock);
+        let mut out = state_section(&self.statuses, &spans, clock);
+        let estimates: Vec<(i128, &[ParameterEstimate])> = if self.updates.is_empty() {
+            self.events
+                .iter()
+                .filter_map(|e| Some((time_of(e.start.as_deref())?, &e.parameters[..])))
+                .collect()
+        } else {
+            self.updates
+                .iter()
+                .filter_map(|u| Some((time_of(Some(&u.time))?, &u.parameters[..])))
+                .collect()
+        };
+        spans.extend(
+            self.events
+                .iter()
+                .filter(|e| e.verdict.as_ref().is_some_and(|v| v.state == "alarm"))
+                .filter_map(|e| time_of(e.start.as_deref()))
+                .map(|t| (clock.x(t) - 0.005 * clock.span(), clock.x(t) + 0.005 * clock.span())),
+        );
+        out.push_str(&trends(&estimates, &spans, clock));
+        out
+    }
+}
+
 pub(super) fn render(contents: &ResultsContents, from: Option<i128>, to: Option<i128>) -> Result<Report, ReportError> {
-    let inside = |t: Option<i128>| t.is_some_and(|t| from.is_none_or(|f| t >= f) && to.is_none_or(|e| t <= e));
-    let statuses: Vec<&StatusMessage> = contents
-        .statuses
-        .iter()
-        .filter(|s| inside(time_of(Some(&s.time))))
-        .collect();
-    let updates: Vec<&UpdateSummary> = contents
-        .updates
-        .iter()
-        .filter(|u| inside(time_of(Some(&u.time))))
-        .collect();
-    let alarms: Vec<_> = contents
-        .alarms
-        .iter()
-        .filter(|a| inside(time_of(Some(&a.time))))
-        .collect();
-    let events: Vec<_> = contents
-        .events
-        .iter()
-        .filter(|e| inside(time_of(e.start.as_deref())))
-        .collect();
-    let times: Vec<i128> = statuses
-        .iter()
-        .map(|s| time_of(Some(&s.time)))
-        .chain(updates.iter().map(|u| time_of(Some(&u.time))))
-        .chain(events.iter().map(|e| time_of(e.start.as_deref())))
-        .flatten()
-        .collect();
-    let (Some(&t0), Some(&t1)) = (times.iter().min(), times.iter().max()) else {
+    let Some(period) = Period::select(contents, from, to) else {
         return Err(empty(contents, from, to));
     };
-    let (verdict, priority) = period_verdict(&statuses, &alarms, &events, updates.len());
-    let title = format!("Monitoring report: {} to {}", day(t0), day(t1));
+    let (verdict, priority) = period_verdict(&period.statuses, &period.alarms, &period.events, period.updates.len());
+    let title = format!("Monitoring report: {} to {}", day(period.t0), day(period.t1));
     let subtitle = format!(
         "{} updates, {} scored, {} alarm changes, {} events",
-        updates.len(),
-        statuses.iter().filter(|s| s.state != "training").count(),
-        alarms.len(),
-        events.len()
+        period.updates.len(),
+        period.statuses.iter().filter(|s| s.state != "training").count(),
+        period.alarms.len(),
+        period.events.len()
     );
     let mut body = header(contents, &title, &subtitle, &verdict, priority);
-    let clock = Clock::new(t0, t1);
-    let spans = alarmed_spans(&statuses, &clock);
-    body.push_str(&state_section(&statuses, &spans, &clock));
-    // The updates' parameters, or where there are none the events'.
-    let estimates: Vec<(i128, &[ParameterEstimate])> = if updates.is_empty() {
-        events
-            .iter()
-            .filter_map(|e| Some((time_of(e.start.as_deref())?, &e.parameters[..])))
-            .collect()
-    } else {
-        updates
-            .iter()
-            .filter_map(|u| Some((time_of(Some(&u.time))?, &u.parameters[..])))
-            .collect()
-    };
-    let mut spans = spans;
-    spans.extend(
-        events
-            .iter()
-            .filter(|e| e.verdict.as_ref().is_some_and(|v| v.state == "alarm"))
-            .filter_map(|e| time_of(e.start.as_deref()))
-            .map(|t| (clock.x(t) - 0.005 * clock.span(), clock.x(t) + 0.005 * clock.span())),
-    );
-    body.push_str(&trends(&estimates, &spans, &clock));
-    body.push_str(&alarms_section(&alarms));
-    body.push_str(&events_section(&events));
+    body.push_str(&period.figures());
+    body.push_str(&alarms_section(&period.alarms));
+    body.push_str(&events_section(&period.events));
     body.push_str(&health(contents, from, to));
     body.push_str(&provenance_section(contents));
     Ok(Report {
@@ -92,6 +125,15 @@ pub(super) fn render(contents: &ResultsContents, from: Option<i128>, to: Option<
         priority,
         title,
     })
+}
+
+/// The figures of the last `days` before the latest message (the status
+/// page's): the monitoring state and every parameter's trend; `None` before
+/// anything was written.
+pub fn recent_figures(contents: &ResultsContents, days: f64) -> Option<String> {
+    let latest = Period::select(contents, None, None)?.t1;
+    let from = latest - (days * 24.0 * HOUR_NS) as i128;
+    Some(Period::select(contents, Some(from), None)?.figures())
 }
 
 fn day(t: i128) -> String {

@@ -11,6 +11,7 @@ use crate::io::{console, files};
 use crate::outputs::metrics::Metrics;
 use crate::outputs::notify::Notifier;
 use crate::outputs::raw_recorder::RawRecorder;
+use crate::outputs::report::history::History;
 use crate::outputs::rerun::RerunOutput;
 use crate::outputs::results::{self, ResultsSink};
 use crate::outputs::state;
@@ -47,8 +48,11 @@ pub(super) struct Daemon {
     pub(super) events: Option<EventWorker>,
     /// `[metrics]`: the Prometheus endpoint.
     metrics: Option<Metrics>,
-    /// `[web]`: the read-only status page.
-    web: Option<crate::outputs::web::StatusPage>,
+    /// `[web]`: the read-only status page, served until the daemon drops it.
+    _web: Option<crate::outputs::web::StatusPage>,
+    /// What this run wrote, for the notifications' report and the status
+    /// page (one history both share; none without either).
+    history: Option<History>,
     /// Raw messages waiting in the ingest queue at the last health tick.
     pub(super) ingest_depth: usize,
 }
@@ -90,6 +94,8 @@ impl Daemon {
         } else {
             None
         };
+        let notify = config.monitoring.as_ref().is_some_and(|m| m.notify.is_some());
+        let history = (notify || config.web.is_some()).then(|| History::new(config));
         Ok(Self {
             pipeline,
             worker: UpdateWorker::default(),
@@ -104,18 +110,25 @@ impl Daemon {
             last_time: 0,
             logged_rejections: BTreeMap::new(),
             said_waiting: false,
-            notifier: Notifier::for_config(config).context("starting the notify thread")?,
+            notifier: Notifier::for_config(config)
+                .context("starting the notify thread")?
+                .map(|n| match &history {
+                    Some(h) => n.sharing(h.clone()),
+                    None => n,
+                }),
             events: EventWorker::start(config, options.state.as_deref())?,
             metrics: config
                 .metrics
                 .as_ref()
                 .map(|m| Metrics::serve(&m.listen, &config.structure.name))
                 .transpose()?,
-            web: config
+            _web: config
                 .web
                 .as_ref()
-                .map(|w| crate::outputs::web::StatusPage::serve(config, w))
+                .zip(history.clone())
+                .map(|(w, h)| crate::outputs::web::StatusPage::serve(config, w, h))
                 .transpose()?,
+            history,
             ingest_depth: 0,
         })
     }
@@ -354,11 +367,8 @@ impl Daemon {
     /// Keeps a results message for the report of the notifications and the
     /// status page.
     fn keep_for_report(&mut self, suffix: &str, json: &[u8]) {
-        if let Some(n) = self.notifier.as_mut() {
-            n.record(suffix, json);
-        }
-        if let Some(w) = &self.web {
-            w.record(suffix, json);
+        if let Some(h) = &self.history {
+            h.record(suffix, json);
         }
     }
 
