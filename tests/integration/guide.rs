@@ -292,3 +292,74 @@ fn every_relative_link_and_picture_of_the_guide_and_readme_resolves() {
     }
     assert!(checked > 50, "only {checked} relative links found");
 }
+
+/// Phrases of a diary, not of the software: the pages speak of what the
+/// program does, not of when or where it was made (a figure's date stays,
+/// once, on the benchmarks or verification page).
+const MAKING_OF: &[&str] = &[
+    "this machine",
+    "this vm",
+    "that evening",
+    "that morning",
+    "same evening",
+    "late evening",
+    "this session",
+    "that session",
+    "first session",
+    "second session",
+    "third session",
+    "fourth session",
+    "earlier session",
+    "later session",
+    "next session",
+    "last session",
+    "here on 20",
+    "the issue's",
+    "the issue asks",
+];
+
+/// Words before "issue #N" that name another project's tracker (zenoh's,
+/// faer's): a reference a reader can follow, not this project's history.
+const OTHER_TRACKERS: &[&str] = &["zenoh ", "faer's ", "faer ", "rerun ", "upstream "];
+
+/// Where `line` names an issue number of this project ("issue 32",
+/// "issues 31", "issue #15").
+fn own_issue_number(line: &str) -> Option<usize> {
+    let lower = line.to_lowercase();
+    lower.match_indices("issue").map(|(at, _)| at).find(|&at| {
+        let rest = lower[at + "issue".len()..].trim_start_matches('s');
+        let rest = rest.strip_prefix(' ').unwrap_or(rest);
+        let rest = rest.strip_prefix('#').unwrap_or(rest);
+        rest.starts_with(|c: char| c.is_ascii_digit()) && !OTHER_TRACKERS.iter().any(|t| lower[..at].ends_with(t))
+    })
+}
+
+/// Checked by scanning README.md and every page of the guide line by line
+/// (lower-cased) for the phrases above and for "issue" followed by a number
+/// (unless another project's tracker is named just before it).
+#[test]
+fn no_page_speaks_of_its_making() {
+    let mut found = Vec::new();
+    for (page, text) in pages() {
+        for (n, line) in text.lines().enumerate() {
+            let lower = line.to_lowercase();
+            for phrase in MAKING_OF.iter().filter(|p| lower.contains(*p)) {
+                found.push(format!("{}:{}: {phrase:?}", page.display(), n + 1));
+            }
+            if own_issue_number(line).is_some() {
+                found.push(format!("{}:{}: an issue number", page.display(), n + 1));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "pages that speak of their making:\n{}",
+        found.join("\n")
+    );
+    // The check itself: it sees what it must and lets a tracker through.
+    assert!(own_issue_number("before issue 32's work").is_some());
+    assert!(own_issue_number("(issues #31 and 32)").is_some());
+    assert!(own_issue_number("zenoh issue #2711, checked").is_none());
+    assert!(own_issue_number("faer's issue #262, a hang").is_none());
+    assert!(own_issue_number("no issue found").is_none());
+}
