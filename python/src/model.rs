@@ -24,6 +24,9 @@ pub struct RawModel {
     setup: FrfSetup,
     parameters: Vec<Parameter>,
     base: Vec<f64>,
+    /// The shell's control points, which place the deck's axes for the
+    /// modes' motion.
+    positions: Vec<splinewatch_core::geometry::vec3::Vec3>,
 }
 
 impl RawModel {
@@ -36,11 +39,13 @@ impl RawModel {
             setup.model.field_coefficients(),
             &setup.damping,
         );
+        let positions = config.build_model().or_py()?.control_point_positions();
         Ok(Self {
             config,
             setup,
             parameters,
             base,
+            positions,
         })
     }
 
@@ -135,7 +140,9 @@ impl RawModel {
     }
 
     /// The first `count` modes at `values`: frequency (Hz), damping ratio,
-    /// kind, and the shapes at the sensors (sensors × modes).
+    /// kind, where each moves the deck (`motion`, and `motion_shares`: modes
+    /// × [longitudinal, transverse, vertical, torsion]), and the shapes at
+    /// the sensors (sensors × modes).
     fn modes<'py>(
         &self,
         py: Python<'py>,
@@ -156,6 +163,20 @@ impl RawModel {
             .map(|k| format!("{k:?}").to_lowercase())
             .collect();
         d.set_item("kind", kinds)?;
+        let axes = state.modes.deck_axes(&self.positions);
+        let shares: Vec<_> = (0..n)
+            .map(|i| {
+                axes.as_ref()
+                    .map_or_else(Default::default, |a| state.modes.motion(a, i))
+            })
+            .collect();
+        let motion: Vec<Option<&str>> = shares.iter().map(|s| s.dominant().map(|m| m.label())).collect();
+        d.set_item("motion", motion)?;
+        let rows: Vec<Vec<f64>> = shares
+            .iter()
+            .map(|s| vec![s.longitudinal, s.transverse, s.vertical, s.torsion])
+            .collect();
+        d.set_item("motion_shares", matrix(py, &rows, 4))?;
         let sensors = self.setup.sensor_names.len();
         let rows: Vec<Vec<f64>> = (0..sensors)
             .map(|s| (0..n).map(|i| state.amplitude(s, i)).collect())

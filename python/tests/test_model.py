@@ -22,6 +22,9 @@ def test_modes_are_the_clis_modes(cli, model):
     modes = model.modes(12)
     assert modes["frequency"].tolist() == [m["frequency_hz"] for m in expected]
     assert modes["kind"] == [m["kind"] for m in expected]
+    assert modes["motion"] == [m["motion"] for m in expected]
+    shares = [[m["motion_shares"][k] for k in ("longitudinal", "transverse", "vertical", "torsion")] for m in expected]
+    assert np.allclose(modes["motion_shares"], shares, rtol=0, atol=1e-12)
     assert modes["shapes"].shape == (12, 12) and modes["shapes"].dtype == np.float64
     assert modes["damping"].shape == (12,)
 

@@ -7,6 +7,7 @@ use splinewatch_core::model::constraints::Edge;
 use splinewatch_core::model::members::BeamBase;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::solvers::modal::ModeKind;
+use splinewatch_core::solvers::mode_motion::{Motion, MotionShares};
 use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::io::Write;
 use std::time::Instant;
@@ -18,6 +19,11 @@ pub struct ModeRow {
     pub kind: ModeKind,
     /// Shares of the mode's translational kinetic energy along x, y, z.
     pub translation_shares: [f64; 3],
+    /// Where it moves the deck: along it, across, vertically, in torsion
+    /// (the deck's axes from its mass in plan; they sum to 1).
+    pub motion_shares: MotionShares,
+    /// The largest of those (`null` for a mode that moves no mass).
+    pub motion: Option<Motion>,
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -44,13 +50,20 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         Some(cutoff) => Some(cutoff),
         None => config.modal_cutoff_hz()?,
     };
-    let (modes, dofs, free_dofs, t1) = match cutoff_hz {
+    let (modes, dofs, free_dofs, t1, positions) = match cutoff_hz {
         None => {
             let model = config.build_dense_model()?;
+            let positions = model.control_point_positions();
             let assembled = model.assemble().context("assembling the model")?;
             let t1 = Instant::now();
             let modes = assembled.modes().context("solving the eigenproblem")?;
-            (modes, assembled.dof_count(), assembled.reduction.free_count(), t1)
+            (
+                modes,
+                assembled.dof_count(),
+                assembled.reduction.free_count(),
+                t1,
+                positions,
+            )
         }
         Some(cutoff) => {
             if !(cutoff.is_finite() && cutoff > 0.0) {
@@ -63,16 +76,28 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
             let modes = sparse
                 .modes_below(&sparse.spring_stiffness, &theta, cutoff)
                 .context("solving the partial eigenproblem")?;
-            (modes, sparse.dof_count(), sparse.free_count(), t1)
+            (
+                modes,
+                sparse.dof_count(),
+                sparse.free_count(),
+                t1,
+                model.control_point_positions(),
+            )
         }
     };
+    let axes = modes.deck_axes(&positions);
     let t2 = Instant::now();
     let rows = (0..modes.len().min(count))
-        .map(|i| ModeRow {
-            index: i + 1,
-            frequency_hz: modes.frequency_hz(i),
-            kind: modes.kinds[i],
-            translation_shares: modes.translation_shares[i],
+        .map(|i| {
+            let motion_shares = axes.as_ref().map_or_else(MotionShares::default, |a| modes.motion(a, i));
+            ModeRow {
+                index: i + 1,
+                frequency_hz: modes.frequency_hz(i),
+                kind: modes.kinds[i],
+                translation_shares: modes.translation_shares[i],
+                motion_shares,
+                motion: motion_shares.dominant(),
+            }
         })
         .collect();
     let info = ModalRunInfo {
@@ -140,12 +165,13 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
         writeln!(out)?;
         return Ok(());
     }
-    // The kind, and where the mode moves: the shares of its translational
-    // kinetic energy along the global axes.
+    // The kind, and where the mode moves the deck: the shares of its
+    // translational kinetic energy along it, across, vertically and in
+    // torsion, and the largest of them.
     writeln!(
         out,
-        "{:>5}  {:>12}  {:<8}  {:>4}  {:>4}  {:>4}",
-        "mode", "frequency Hz", "kind", "x %", "y %", "z %"
+        "{:>5}  {:>12}  {:<8}  {:<12}  {:>6}  {:>6}  {:>6}  {:>6}",
+        "mode", "frequency Hz", "kind", "motion", "long %", "tran %", "vert %", "tors %"
     )?;
     for r in &report.modes {
         let kind = match r.kind {
@@ -153,10 +179,12 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
             ModeKind::Membrane => "membrane",
             ModeKind::Bending => "bending",
         };
-        let [x, y, z] = r.translation_shares.map(|s| (100.0 * s).round());
+        let motion = r.motion.map_or("—", Motion::label);
+        let s = &r.motion_shares;
+        let [l, t, v, o] = [s.longitudinal, s.transverse, s.vertical, s.torsion].map(|x| (100.0 * x).round());
         writeln!(
             out,
-            "{:>5}  {:>12.4}  {kind:<8}  {x:>4}  {y:>4}  {z:>4}",
+            "{:>5}  {:>12.4}  {kind:<8}  {motion:<12}  {l:>6}  {t:>6}  {v:>6}  {o:>6}",
             r.index, r.frequency_hz
         )?;
     }

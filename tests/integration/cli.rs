@@ -37,7 +37,37 @@ fn modes_json_on_the_bundled_config() {
         assert!((shares.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{m}");
         let vertical = shares[2] > 0.5;
         assert_eq!(vertical, m["kind"] == "bending", "{m}");
+        // Named by where it moves the deck: a bending mode of this flat
+        // deck bends or twists it, a membrane mode moves it in its plane.
+        let motion = &m["motion_shares"];
+        let sum: f64 = ["longitudinal", "transverse", "vertical", "torsion"]
+            .iter()
+            .map(|k| motion[k].as_f64().unwrap())
+            .sum();
+        assert!((sum - 1.0).abs() < 1e-12, "{m}");
+        let named = m["motion"].as_str().unwrap();
+        assert_eq!(["vertical", "torsion"].contains(&named), m["kind"] == "bending", "{m}");
     }
+}
+
+/// On the bundled overpass (a box girder along x) the first mode named
+/// vertical and the first named transverse are the ones the shapes say:
+/// the vertical one's translational energy is almost all along z, the
+/// transverse one's mostly along y, and no earlier mode moves more along
+/// its axis.
+#[test]
+fn modes_of_the_overpass_name_its_first_vertical_and_transverse_modes() {
+    let out = splinewatch(&["modes", "--config", "config/overpass.toml", "--count", "8", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let modes = v["modes"].as_array().unwrap();
+    let first = |motion: &str| modes.iter().position(|m| m["motion"] == motion).unwrap();
+    let share = |i: usize, axis: usize| modes[i]["translation_shares"][axis].as_f64().unwrap();
+    let (vertical, transverse) = (first("vertical"), first("transverse"));
+    assert_eq!(vertical, 0, "{v}");
+    assert!(share(vertical, 2) > 0.9, "{v}");
+    assert!(share(transverse, 1) > 0.5, "{v}");
+    assert!((0..transverse).all(|i| share(i, 1) < share(transverse, 1)), "{v}");
 }
 
 #[test]
@@ -48,14 +78,18 @@ fn modes_table_is_human_readable() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 6);
     assert!(
-        lines[0].contains("frequency Hz") && lines[0].ends_with("x %   y %   z %"),
+        lines[0].contains("frequency Hz") && lines[0].ends_with("long %  tran %  vert %  tors %"),
         "{text}"
     );
-    // Mode 4, the first bending mode: all of it vertical.
+    // Mode 4, the first bending mode: all of it vertical; mode 5 twists
+    // the deck.
     assert!(
-        lines[4].trim_start().starts_with('4') && lines[4].contains("bending") && lines[4].ends_with("0     0   100"),
+        lines[4].trim_start().starts_with('4')
+            && lines[4].contains("bending   vertical")
+            && lines[4].ends_with("0       0     100       0"),
         "{text}"
     );
+    assert!(lines[5].contains("bending   torsion"), "{text}");
 }
 
 #[test]

@@ -80,7 +80,8 @@ fn a_demo_with_closed_pipes_finishes_and_leaves_valid_files() {
     let log = String::from_utf8_lossy(&first.stderr);
     assert!(first.status.success(), "{log}");
     assert!(
-        log.contains(&format!("wrote {}", out.join("results.mcap").display())),
+        log.contains(&out.join("results.mcap").display().to_string())
+            && log.contains(&out.join("report.html").display().to_string()),
         "{log}"
     );
     let status = with_closed_pipes(&mut demo()).wait().unwrap();
@@ -90,7 +91,7 @@ fn a_demo_with_closed_pipes_finishes_and_leaves_valid_files() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     files.sort();
-    assert_eq!(files, ["results.mcap", "results.rrd", "state.json"]);
+    assert_eq!(files, ["report.html", "results.mcap", "results.rrd", "state.json"]);
     assert!(finalised_messages(&out.join("results.mcap")) > 0);
     let state = splinewatch::outputs::state::load_state(&out.join("state.json"))
         .unwrap()

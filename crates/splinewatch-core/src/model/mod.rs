@@ -139,6 +139,14 @@ impl ShellModel {
         self.springs.len() + self.bearings.len() + self.line_supports.len()
     }
 
+    /// The shell patches' control points (their nets), in global order.
+    pub fn control_point_positions(&self) -> Vec<crate::geometry::vec3::Vec3> {
+        self.patches
+            .iter()
+            .flat_map(|p| p.shell.surface().points().iter().copied())
+            .collect()
+    }
+
     /// The director frames of every control point, in global order.
     pub fn frames(&self) -> Vec<Frame> {
         self.patches

@@ -4,6 +4,7 @@
 //!
 //! - [`dense_model`]: `AssembledModel` (dense `K_f`, `M`, `∂K/∂κ_j`, `∂K/∂θ_k`) and `ShellModel::assemble`;
 //! - [`modal`]: the prepared dense eigen-solver (`ModalSolver`) and the reference `solve`;
+//! - [`mode_motion`]: where a mode moves the deck (along, across, vertical, torsion);
 //! - [`sparse_model`]: the sparse, reduced model and the modes below a cut-off;
 //! - [`reanalysis`]: the Ritz basis of a start point answering spring changes without a new factorisation;
 //! - [`partial_eigen`]: shift-invert Lanczos with a supernodal Cholesky factor, Sturm counts;
@@ -12,6 +13,7 @@
 
 pub mod dense_model;
 pub mod modal;
+pub mod mode_motion;
 pub mod partial_eigen;
 pub mod reanalysis;
 pub mod sparse_model;

@@ -21,6 +21,7 @@
 //! along the directors `v3` (out of the surface) and `membrane` when most is
 //! tangential. Energies use the row-sum lumped mass per control point.
 
+use super::mode_motion::{DeckAxes, MotionShares};
 use crate::geometry::vec3::{dot, Vec3};
 use crate::linalg::symmetric_part;
 use crate::model::constraints::DofReduction;
@@ -65,6 +66,9 @@ pub struct Modes {
     /// the global x, y and z axes (they sum to 1): a deck's vertical mode is
     /// mostly z, a transverse one mostly the horizontal axis across the span.
     pub translation_shares: Vec<[f64; 3]>,
+    /// The shell control points' lumped translational masses (kg), which
+    /// weigh the shares.
+    pub lumped: Vec<f64>,
 }
 
 impl Modes {
@@ -80,7 +84,24 @@ impl Modes {
             shapes,
             kinds,
             translation_shares,
+            lumped: lumped.to_vec(),
         }
+    }
+
+    /// The deck's axes and stations for [`Self::motion`], with `positions`
+    /// the shell's control points in global order (`None` for a deck
+    /// without mass or extent in plan).
+    pub fn deck_axes(&self, positions: &[Vec3]) -> Option<DeckAxes> {
+        DeckAxes::new(positions, &self.lumped)
+    }
+
+    /// Where mode `i` moves the deck: its energy along, across, vertical
+    /// and in torsion ([`super::mode_motion`]).
+    pub fn motion(&self, axes: &DeckAxes, i: usize) -> MotionShares {
+        axes.shares(|cp| {
+            let b = DOFS_PER_CONTROL_POINT * cp;
+            [self.shapes[(b, i)], self.shapes[(b + 1, i)], self.shapes[(b + 2, i)]]
+        })
     }
 
     /// Natural frequency in Hz of mode `i`: `f_i = ω_i / 2π` (zero for
