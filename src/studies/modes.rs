@@ -24,6 +24,17 @@ pub struct ModeRow {
     pub motion_shares: MotionShares,
     /// The largest of those (`null` for a mode that moves no mass).
     pub motion: Option<Motion>,
+    /// The share of the mode's strain energy stored in each support (spring
+    /// field, bearing, line support), in the config's order: how much the
+    /// mode engages it.
+    pub support_shares: Vec<SupportShare>,
+}
+
+/// One support's share of a mode's strain energy.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct SupportShare {
+    pub support: String,
+    pub share: f64,
 }
 
 #[derive(Debug, Clone, Serialize, PartialEq)]
@@ -50,7 +61,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         Some(cutoff) => Some(cutoff),
         None => config.modal_cutoff_hz()?,
     };
-    let (modes, dofs, free_dofs, t1, positions) = match cutoff_hz {
+    let (modes, dofs, free_dofs, t1, positions, springs) = match cutoff_hz {
         None => {
             let model = config.build_dense_model()?;
             let positions = model.control_point_positions();
@@ -63,6 +74,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
                 assembled.reduction.free_count(),
                 t1,
                 positions,
+                (assembled.spring_blocks, assembled.spring_stiffness),
             )
         }
         Some(cutoff) => {
@@ -82,10 +94,19 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
                 sparse.free_count(),
                 t1,
                 model.control_point_positions(),
+                (sparse.spring_blocks, sparse.spring_stiffness),
             )
         }
     };
     let axes = modes.deck_axes(&positions);
+    let (blocks, stiffness) = springs;
+    let names = config.spring_field_names();
+    anyhow::ensure!(
+        names.len() == blocks.len(),
+        "{} support names for {} assembled spring fields",
+        names.len(),
+        blocks.len()
+    );
     let t2 = Instant::now();
     let rows = (0..modes.len().min(count))
         .map(|i| {
@@ -97,6 +118,14 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
                 translation_shares: modes.translation_shares[i],
                 motion_shares,
                 motion: motion_shares.dominant(),
+                support_shares: names
+                    .iter()
+                    .zip(blocks.iter().zip(&stiffness))
+                    .map(|(name, (b, k))| SupportShare {
+                        support: name.clone(),
+                        share: modes.spring_energy_share(i, b, k),
+                    })
+                    .collect(),
             }
         })
         .collect();
@@ -167,11 +196,12 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
     }
     // The kind, and where the mode moves the deck: the shares of its
     // translational kinetic energy along it, across, vertically and in
-    // torsion, and the largest of them.
+    // torsion, and the largest of them; then the share of its strain energy
+    // in the supports.
     writeln!(
         out,
-        "{:>5}  {:>12}  {:<8}  {:<12}  {:>6}  {:>6}  {:>6}  {:>6}",
-        "mode", "frequency Hz", "kind", "motion", "long %", "tran %", "vert %", "tors %"
+        "{:>5}  {:>12}  {:<8}  {:<12}  {:>6}  {:>6}  {:>6}  {:>6}  {:>6}",
+        "mode", "frequency Hz", "kind", "motion", "long %", "tran %", "vert %", "tors %", "supp %"
     )?;
     for r in &report.modes {
         let kind = match r.kind {
@@ -182,9 +212,10 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
         let motion = r.motion.map_or("—", Motion::label);
         let s = &r.motion_shares;
         let [l, t, v, o] = [s.longitudinal, s.transverse, s.vertical, s.torsion].map(|x| (100.0 * x).round());
+        let supports = (100.0 * r.support_shares.iter().map(|s| s.share).sum::<f64>()).round();
         writeln!(
             out,
-            "{:>5}  {:>12.4}  {kind:<8}  {motion:<12}  {l:>6}  {t:>6}  {v:>6}  {o:>6}",
+            "{:>5}  {:>12.4}  {kind:<8}  {motion:<12}  {l:>6}  {t:>6}  {v:>6}  {o:>6}  {supports:>6}",
             r.index, r.frequency_hz
         )?;
     }

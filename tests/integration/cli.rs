@@ -70,6 +70,53 @@ fn modes_of_the_overpass_name_its_first_vertical_and_transverse_modes() {
     assert!((0..transverse).all(|i| share(i, 1) < share(transverse, 1)), "{v}");
 }
 
+/// A support's share of a mode's strain energy is `(dω²/dα) / ω²` with its
+/// coefficients scaled by α, at α = 1 (`K` is linear in κ, so the share is
+/// exactly that sensitivity): checked against central differences of the
+/// frequencies `modes --json` prints with the west spring field scaled by
+/// 1 ± 1e-3 (truncation error ~1e-7 of the share; tolerance 1e-6).
+#[test]
+fn support_shares_are_the_frequencies_sensitivity_to_the_support() {
+    let dir = fresh_dir("support-shares");
+    let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
+    let west = "stiffness = [0.4e9, 1.5e9, 1.8e9, 0.6e9]";
+    assert!(good.contains(west));
+    let modes = |text: &str, name: &str| -> Vec<serde_json::Value> {
+        let path = temp_config(&dir, name, text);
+        let out = splinewatch(&["modes", "--config", path.to_str().unwrap(), "--count", "14", "--json"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        v["modes"].as_array().unwrap().clone()
+    };
+    let scaled = |factor: f64| {
+        let k: Vec<String> = [0.4e9, 1.5e9, 1.8e9, 0.6e9]
+            .iter()
+            .map(|k| format!("{:e}", k * factor))
+            .collect();
+        good.replace(west, &format!("stiffness = [{}]", k.join(", ")))
+    };
+    let h = 1e-3;
+    let (base, up, down) = (
+        modes(&good, "base.toml"),
+        modes(&scaled(1.0 + h), "up.toml"),
+        modes(&scaled(1.0 - h), "down.toml"),
+    );
+    let f = |m: &[serde_json::Value], i: usize| m[i]["frequency_hz"].as_f64().unwrap();
+    for i in 3..base.len() {
+        let shares = base[i]["support_shares"].as_array().unwrap();
+        assert_eq!(shares[0]["support"], "west", "{}", base[i]);
+        let west = shares[0]["share"].as_f64().unwrap();
+        let fd = (f(&up, i).powi(2) - f(&down, i).powi(2)) / (2.0 * h * f(&base, i).powi(2));
+        assert!(
+            (west - fd).abs() < 1e-6,
+            "mode {}: share {west}, central difference {fd}",
+            i + 1
+        );
+        let total: f64 = shares.iter().map(|s| s["share"].as_f64().unwrap()).sum();
+        assert!((0.0..1.0).contains(&total) && west >= 0.0, "{}", base[i]);
+    }
+}
+
 #[test]
 fn modes_table_is_human_readable() {
     let out = splinewatch(&["modes", "--config", "config/sinello.toml", "--count", "5"]);
@@ -78,7 +125,7 @@ fn modes_table_is_human_readable() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 6);
     assert!(
-        lines[0].contains("frequency Hz") && lines[0].ends_with("long %  tran %  vert %  tors %"),
+        lines[0].contains("frequency Hz") && lines[0].ends_with("long %  tran %  vert %  tors %  supp %"),
         "{text}"
     );
     // Mode 4, the first bending mode: all of it vertical; mode 5 twists
@@ -86,7 +133,7 @@ fn modes_table_is_human_readable() {
     assert!(
         lines[4].trim_start().starts_with('4')
             && lines[4].contains("bending   vertical")
-            && lines[4].ends_with("0       0     100       0"),
+            && lines[4].contains("0       0     100       0  "),
         "{text}"
     );
     assert!(lines[5].contains("bending   torsion"), "{text}");

@@ -131,6 +131,19 @@ impl Config {
         Ok(model)
     }
 
+    /// The names of the model's spring fields in the assembled order of
+    /// `∂K/∂κ` ([`splinewatch_core::model::ShellModel::spring_coefficients`]):
+    /// the `[[model.springs]]`, then the bearings, then the line supports.
+    pub fn spring_field_names(&self) -> Vec<String> {
+        let m = &self.model;
+        m.springs
+            .iter()
+            .map(|s| s.name.clone())
+            .chain(m.bearings.iter().map(|b| b.name.clone()))
+            .chain(m.supports.iter().map(|s| s.name.clone()))
+            .collect()
+    }
+
     /// Names of springs, stiffness fields, bearings and line supports are
     /// distinct (they prefix the updating parameters).
     fn check_names(&self) -> Result<(), ConfigError> {

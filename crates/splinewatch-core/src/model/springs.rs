@@ -109,6 +109,18 @@ impl LowRankBlock {
             }
         }
     }
+
+    /// `vᵀ B v` with `v(d)` the vector's entry at global dof `d`.
+    pub fn quadratic_form(&self, v: impl Fn(usize) -> f64) -> f64 {
+        let local: Vec<f64> = self.dofs.iter().map(|&d| v(d)).collect();
+        let mut sum = 0.0;
+        for (a, va) in local.iter().enumerate() {
+            for (b, vb) in local.iter().enumerate() {
+                sum += va * self.values[(a, b)] * vb;
+            }
+        }
+        sum
+    }
 }
 
 impl SpringField {

@@ -95,6 +95,24 @@ impl Modes {
         DeckAxes::new(positions, &self.lumped)
     }
 
+    /// The share of mode `i`'s strain energy stored in one spring field
+    /// (a field, a bearing or a line support: its `∂K/∂κ_j` blocks and
+    /// coefficients κ_j, on the generalised dofs): `Σ_j κ_j φ_iᵀ B_j φ_i /
+    /// ω_i²`, since `K` is linear in κ and `φ_iᵀ K φ_i = ω_i²` for a
+    /// mass-normalised mode (the modal strain energy fraction); zero for a
+    /// rigid mode.
+    pub fn spring_energy_share(&self, i: usize, blocks: &[LowRankBlock], coefficients: &[f64]) -> f64 {
+        if self.kinds[i] == ModeKind::Rigid || self.omega2[i] <= 0.0 {
+            return 0.0;
+        }
+        let energy: f64 = blocks
+            .iter()
+            .zip(coefficients)
+            .map(|(b, k)| k * b.quadratic_form(|d| self.shapes[(d, i)]))
+            .sum();
+        energy / self.omega2[i]
+    }
+
     /// Where mode `i` moves the deck: its energy along, across, vertical
     /// and in torsion ([`super::mode_motion`]).
     pub fn motion(&self, axes: &DeckAxes, i: usize) -> MotionShares {
