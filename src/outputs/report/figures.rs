@@ -297,21 +297,16 @@ pub fn paired_bars(categories: &[String], first: &[f64], second: &[f64], y_label
             .ok()?;
         for (k, (&a, &b)) in first.iter().zip(second).enumerate() {
             let x = k as f64;
-            if a.is_finite() {
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [(x + 0.12, 0.0), (x + 0.48, a)],
-                        HIGHLIGHT.filled(),
-                    )))
-                    .ok()?;
-            }
-            if b.is_finite() {
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [(x + 0.52, 0.0), (x + 0.88, b)],
-                        GREY.filled(),
-                    )))
-                    .ok()?;
+            // The first value's bar on the left half of its slot, the second's on the right.
+            for (value, from, colour) in [(a, 0.12, HIGHLIGHT), (b, 0.52, GREY)] {
+                if value.is_finite() {
+                    chart
+                        .draw_series(std::iter::once(Rectangle::new(
+                            [(x + from, 0.0), (x + from + 0.36, value)],
+                            colour.filled(),
+                        )))
+                        .ok()?;
+                }
             }
         }
         Some(())
