@@ -9,6 +9,7 @@
 mod events;
 mod frf;
 mod ground;
+mod loss_factor;
 mod materials;
 mod metrics;
 mod model;
@@ -28,6 +29,7 @@ mod zenoh;
 pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
 pub use frf::FrfConfig;
 pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};
+pub use loss_factor::{LossFactorConfig, LossFactorTable};
 pub use metrics::MetricsConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,
@@ -256,6 +258,7 @@ impl Config {
             let groups = self.support_groups(&model)?;
             self.ground_plan(&groups)?;
             self.modal_cutoff_hz()?;
+            self.loss_factors()?;
             if self.model.damping.is_some() {
                 self.build_damping()?;
             }

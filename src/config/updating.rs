@@ -1,6 +1,6 @@
 //! `[updating]`: the solver's settings and the updating parameters.
 
-use super::{err, Config, ConfigError};
+use super::{err, Config, ConfigError, LossFactorConfig};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::updating::{LineSelection, Method, Parameter, ParameterKind, UpdateSettings, Weighting};
 
@@ -151,6 +151,9 @@ pub enum ParameterFamily {
     StiffnessField,
     /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
     Damping,
+    /// `<support>.eta`: a spring field's, bearing's or line support's loss
+    /// factor η, a ratio.
+    LossFactor,
 }
 
 /// The family of the parameter named `name`.
@@ -158,6 +161,8 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
     let last = name.rsplit('.').next().unwrap_or("");
     if name.starts_with("damping.") {
         ParameterFamily::Damping
+    } else if last == "eta" {
+        ParameterFamily::LossFactor
     } else if matches!(last, "kx" | "ky" | "kz") {
         ParameterFamily::Bearing
     } else if matches!(last, "x" | "y" | "z" | "rx" | "ry" | "rz") {
@@ -240,6 +245,37 @@ impl Config {
                 d.coefficients.len(),
                 |coefficient| ParameterKind::Damping { coefficient },
             )?);
+        }
+        out.extend(self.loss_factor_parameters()?);
+        Ok(out)
+    }
+
+    /// `<name>.eta` for every updated `loss_factor`, a run of tied bearings
+    /// sharing its leader's.
+    fn loss_factor_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
+        let m = &self.model;
+        let names = self.spring_field_names();
+        let losses = self.loss_factors()?;
+        let mut out = Vec::new();
+        let mut field = 0;
+        while field < losses.len() {
+            // A bearing's run: the tied bearings after it.
+            let mut count = 1;
+            let bearing = field.checked_sub(m.springs.len()).filter(|&b| b < m.bearings.len());
+            if let Some(b) = bearing {
+                while m.bearings.get(b + count).is_some_and(|next| next.tie.is_some()) {
+                    count += 1;
+                }
+            }
+            if let Some([lower, upper]) = losses[field].1.and_then(LossFactorConfig::updated) {
+                out.push(Parameter {
+                    name: format!("{}.eta", names[field]),
+                    kind: ParameterKind::LossFactor { field, count },
+                    lower,
+                    upper,
+                });
+            }
+            field += count;
         }
         Ok(out)
     }

@@ -4,10 +4,12 @@ use crate::config::Config;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use splinewatch_core::model::constraints::Edge;
+use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::members::BeamBase;
+use splinewatch_core::model::springs::LowRankBlock;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::solvers::modal::ModeKind;
-use splinewatch_core::solvers::mode_motion::{Motion, MotionShares};
+use splinewatch_core::solvers::modal::{ModeKind, Modes};
+use splinewatch_core::solvers::mode_motion::{DeckAxes, Motion, MotionShares};
 use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::io::Write;
 use std::time::Instant;
@@ -28,6 +30,10 @@ pub struct ModeRow {
     /// field, bearing, line support), in the config's order: how much the
     /// mode engages it.
     pub support_shares: Vec<SupportShare>,
+    /// ζ_i with `[model.damping]`: the curve's ζ(f_i) and the supports'
+    /// loss factors' share `½ Σ_s η_s e_{i,s}` (`null` without the curve,
+    /// or for a rigid mode).
+    pub damping_ratio: Option<f64>,
 }
 
 /// One support's share of a mode's strain energy.
@@ -107,27 +113,20 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         names.len(),
         blocks.len()
     );
+    let damping = config
+        .model
+        .damping
+        .is_some()
+        .then(|| config.build_damping())
+        .transpose()?;
     let t2 = Instant::now();
+    let supports = Supports {
+        names: &names,
+        blocks: &blocks,
+        stiffness: &stiffness,
+    };
     let rows = (0..modes.len().min(count))
-        .map(|i| {
-            let motion_shares = axes.as_ref().map_or_else(MotionShares::default, |a| modes.motion(a, i));
-            ModeRow {
-                index: i + 1,
-                frequency_hz: modes.frequency_hz(i),
-                kind: modes.kinds[i],
-                translation_shares: modes.translation_shares[i],
-                motion_shares,
-                motion: motion_shares.dominant(),
-                support_shares: names
-                    .iter()
-                    .zip(blocks.iter().zip(&stiffness))
-                    .map(|(name, (b, k))| SupportShare {
-                        support: name.clone(),
-                        share: modes.spring_energy_share(i, b, k),
-                    })
-                    .collect(),
-            }
-        })
+        .map(|i| mode_row(&modes, i, axes.as_ref(), &supports, damping.as_ref()))
         .collect();
     let info = ModalRunInfo {
         dofs,
@@ -136,6 +135,54 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         solve_seconds: (t2 - t1).as_secs_f64(),
     };
     Ok((ModesReport { modes: rows }, info))
+}
+
+/// The supports' names and `∂K/∂κ` blocks at their coefficients.
+struct Supports<'a> {
+    names: &'a [String],
+    blocks: &'a [Vec<LowRankBlock>],
+    stiffness: &'a [Vec<f64>],
+}
+
+/// Mode `i`'s row: frequency, kind, motion, the supports' shares of its
+/// strain energy and, with a damping curve, its damping ratio (the curve's
+/// and the supports' loss factors' share, as the FRF model's).
+fn mode_row(
+    modes: &Modes,
+    i: usize,
+    axes: Option<&DeckAxes>,
+    supports: &Supports<'_>,
+    damping: Option<&DampingCurve>,
+) -> ModeRow {
+    let motion_shares = axes.map_or_else(MotionShares::default, |a| modes.motion(a, i));
+    let support_shares: Vec<SupportShare> = supports
+        .names
+        .iter()
+        .zip(supports.blocks.iter().zip(supports.stiffness))
+        .map(|(name, (b, k))| SupportShare {
+            support: name.clone(),
+            share: modes.spring_energy_share(i, b, k),
+        })
+        .collect();
+    let damping_ratio = damping.filter(|_| modes.kinds[i] != ModeKind::Rigid).map(|d| {
+        let loss: f64 = d
+            .loss_factors()
+            .iter()
+            .zip(&support_shares)
+            .map(|(eta, s)| eta * s.share)
+            .sum();
+        d.zeta(modes.frequency_hz(i)) + 0.5 * loss
+    });
+    ModeRow {
+        index: i + 1,
+        frequency_hz: modes.frequency_hz(i),
+        kind: modes.kinds[i],
+        translation_shares: modes.translation_shares[i],
+        motion_shares,
+        motion: motion_shares.dominant(),
+        support_shares,
+        damping_ratio,
+    }
 }
 
 /// The patches and joints of a deck of several patches (patch, edge, the
@@ -197,11 +244,11 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
     // The kind, and where the mode moves the deck: the shares of its
     // translational kinetic energy along it, across, vertically and in
     // torsion, and the largest of them; then the share of its strain energy
-    // in the supports.
+    // in the supports, and the damping ratio.
     writeln!(
         out,
-        "{:>5}  {:>12}  {:<8}  {:<12}  {:>6}  {:>6}  {:>6}  {:>6}  {:>6}",
-        "mode", "frequency Hz", "kind", "motion", "long %", "tran %", "vert %", "tors %", "supp %"
+        "{:>5}  {:>12}  {:<8}  {:<12}  {:>6}  {:>6}  {:>6}  {:>6}  {:>6}  {:>6}",
+        "mode", "frequency Hz", "kind", "motion", "long %", "tran %", "vert %", "tors %", "supp %", "ζ %"
     )?;
     for r in &report.modes {
         let kind = match r.kind {
@@ -213,9 +260,12 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
         let s = &r.motion_shares;
         let [l, t, v, o] = [s.longitudinal, s.transverse, s.vertical, s.torsion].map(|x| (100.0 * x).round());
         let supports = (100.0 * r.support_shares.iter().map(|s| s.share).sum::<f64>()).round();
+        let zeta = r
+            .damping_ratio
+            .map_or_else(|| "—".to_owned(), |z| format!("{:.2}", 100.0 * z));
         writeln!(
             out,
-            "{:>5}  {:>12.4}  {kind:<8}  {motion:<12}  {l:>6}  {t:>6}  {v:>6}  {o:>6}  {supports:>6}",
+            "{:>5}  {:>12.4}  {kind:<8}  {motion:<12}  {l:>6}  {t:>6}  {v:>6}  {o:>6}  {supports:>6}  {zeta:>6}",
             r.index, r.frequency_hz
         )?;
     }

@@ -384,7 +384,7 @@ impl Scenario {
                 ParameterKind::Stiffness { field, coefficient } => {
                     theta[field][coefficient] = base_theta[field][coefficient] * c.factor_at(t);
                 }
-                ParameterKind::Damping { .. } => {}
+                ParameterKind::Damping { .. } | ParameterKind::LossFactor { .. } => {}
             }
         }
         (k, theta)
@@ -398,9 +398,9 @@ impl Scenario {
                     c.parameter
                 );
             };
-            if matches!(p.kind, ParameterKind::Damping { .. }) {
+            if matches!(p.kind, ParameterKind::Damping { .. } | ParameterKind::LossFactor { .. }) {
                 bail!(
-                    "scenario: {:?}: scenarios change spring or stiffness-field coefficients, not the damping curve",
+                    "scenario: {:?}: scenarios change spring or stiffness-field coefficients, not the damping",
                     c.parameter
                 );
             }

@@ -125,8 +125,8 @@ pub fn update_from_modes(
 
 /// The unit of a parameter: spring coefficients κ (`<spring>.k<j>`) in
 /// N/m³ (eq. 19), bearings in N/m, line supports per metre (N/m² for a
-/// translation, N m/rad per metre = N/rad for a rotation); the damping curve's γ (`damping.g<z>`) and stiffness-field
-/// multipliers θ (`<field>.s<j>`) are ratios.
+/// translation, N m/rad per metre = N/rad for a rotation); the damping curve's γ (`damping.g<z>`), loss factors
+/// (`<support>.eta`) and stiffness-field multipliers θ (`<field>.s<j>`) are ratios.
 pub fn parameter_unit(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "N/m³",

@@ -115,6 +115,28 @@ fn support_shares_are_the_frequencies_sensitivity_to_the_support() {
         let total: f64 = shares.iter().map(|s| s["share"].as_f64().unwrap()).sum();
         assert!((0.0..1.0).contains(&total) && west >= 0.0, "{}", base[i]);
     }
+    // A loss factor η on the west field adds ½ η × its share to every
+    // mode's ζ (modal strain energy), the curve's ζ(f_i) unchanged.
+    let lossy = modes(
+        &good.replacen(
+            "bounds = [1.0e7, 5.0e9]",
+            "bounds = [1.0e7, 5.0e9]\nloss_factor = 0.3",
+            1,
+        ),
+        "lossy.toml",
+    );
+    let zeta = |m: &[serde_json::Value], i: usize| m[i]["damping_ratio"].as_f64().unwrap();
+    for i in 3..base.len() {
+        let west = base[i]["support_shares"][0]["share"].as_f64().unwrap();
+        let added = zeta(&lossy, i) - zeta(&base, i);
+        assert!(
+            (added - 0.15 * west).abs() < 1e-12,
+            "mode {}: ζ grew by {added}, ½ η e = {}",
+            i + 1,
+            0.15 * west
+        );
+    }
+    assert!((3..base.len()).any(|i| zeta(&lossy, i) > zeta(&base, i) + 0.01));
 }
 
 #[test]
@@ -125,7 +147,7 @@ fn modes_table_is_human_readable() {
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 6);
     assert!(
-        lines[0].contains("frequency Hz") && lines[0].ends_with("long %  tran %  vert %  tors %  supp %"),
+        lines[0].contains("frequency Hz") && lines[0].ends_with("long %  tran %  vert %  tors %  supp %     ζ %"),
         "{text}"
     );
     // Mode 4, the first bending mode: all of it vertical; mode 5 twists
@@ -143,11 +165,26 @@ fn modes_table_is_human_readable() {
 fn bad_config_is_a_clear_error_not_a_panic() {
     let dir = fresh_dir("cli");
     let good = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/config/sinello.toml")).unwrap();
+    let west_bounds = "bounds = [1.0e7, 5.0e9]";
     let cases = [
         (
             "negative-thickness.toml",
             good.replace("thickness = 1.6", "thickness = -1.6"),
             "thickness",
+        ),
+        (
+            "negative-loss-factor.toml",
+            good.replacen(west_bounds, &format!("{west_bounds}\nloss_factor = -0.1"), 1),
+            "model.springs[0].loss_factor: -0.1 must be a finite loss factor >= 0",
+        ),
+        (
+            "loss-factor-outside-bounds.toml",
+            good.replacen(
+                west_bounds,
+                &format!("{west_bounds}\nloss_factor = {{ value = 0.7, bounds = [0.0, 0.5] }}"),
+                1,
+            ),
+            "model.springs[0].loss_factor: value 0.7 lies outside its bounds [0, 0.5]",
         ),
         (
             "unknown-key.toml",

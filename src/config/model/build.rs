@@ -389,7 +389,82 @@ impl Config {
                 ));
             }
         }
-        DampingCurve::new(d.degree, d.coefficients.clone(), d.f_start, d.f_end).map_err(|e| err("model.damping", e))
+        let curve = DampingCurve::new(d.degree, d.coefficients.clone(), d.f_start, d.f_end)
+            .map_err(|e| err("model.damping", e))?;
+        let losses = self.loss_factors()?;
+        if losses.iter().all(|(_, eta)| eta.is_none()) {
+            return Ok(curve);
+        }
+        curve
+            .with_loss_factors(
+                losses
+                    .into_iter()
+                    .map(|(_, eta)| eta.map_or(0.0, LossFactorConfig::value))
+                    .collect(),
+            )
+            .map_err(|e| err("model", e))
+    }
+
+    /// Each spring field's, bearing's and line support's `loss_factor` (the
+    /// model's order of spring fields) with its key; a tied bearing takes
+    /// its leader's and may not give its own. A value must be finite and
+    /// non-negative, within its bounds when updated, and needs
+    /// `[model.damping]` (the curve it adds to).
+    pub fn loss_factors(&self) -> Result<Vec<(String, Option<LossFactorConfig>)>, ConfigError> {
+        let m = &self.model;
+        let mut all: Vec<(String, Option<LossFactorConfig>)> = m
+            .springs
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (format!("model.springs[{i}].loss_factor"), s.loss_factor))
+            .collect();
+        let mut leader = None;
+        for (i, b) in m.bearings.iter().enumerate() {
+            let key = format!("model.bearings[{i}].loss_factor");
+            if let Some(name) = &b.tie {
+                if b.loss_factor.is_some() {
+                    return Err(err(
+                        key,
+                        format!("a tied bearing takes the loss factor of {name:?}: remove it"),
+                    ));
+                }
+                all.push((key, leader));
+            } else {
+                leader = b.loss_factor;
+                all.push((key, b.loss_factor));
+            }
+        }
+        all.extend(
+            m.supports
+                .iter()
+                .enumerate()
+                .map(|(i, s)| (format!("model.supports[{i}].loss_factor"), s.loss_factor)),
+        );
+        for (key, eta) in &all {
+            let Some(eta) = eta else { continue };
+            let value = eta.value();
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(err(
+                    key,
+                    format!("{value} must be a finite loss factor >= 0 (0.1 = 10 %)"),
+                ));
+            }
+            if let Some([lo, hi]) = eta.updated() {
+                if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
+                    return Err(err(key, format!("bounds [{lo}, {hi}] must satisfy 0 <= lower < upper")));
+                }
+                if !(lo..=hi).contains(&value) {
+                    return Err(err(key, format!("value {value} lies outside its bounds [{lo}, {hi}]")));
+                }
+            }
+            if m.damping.is_none() {
+                return Err(err(
+                    key,
+                    "needs [model.damping]: the support's damping adds to the curve's",
+                ));
+            }
+        }
+        Ok(all)
     }
 }
 

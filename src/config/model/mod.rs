@@ -1,6 +1,7 @@
 //! `[model]` and `[[sensors]]`: the shell, its material, springs,
 //! constraints, damping curve and measurement points, built into core types.
 
+use super::loss_factor::LossFactorConfig;
 use super::materials::MaterialConfig;
 use super::patches::{
     build_patches, default_true, face_tau, locate, patch_index, BearingConfig, FaceConfig, MassConfig, PatchConfig,
@@ -314,6 +315,13 @@ pub struct SpringConfig {
     /// The support group whose ground the springs connect to (default "ground").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
+    /// The support's loss factor η (hysteretic damping: 0.1 = 10 %): modes
+    /// whose strain energy sits in it are damped more, by
+    /// `½ η × (its share of the mode's strain energy)` on top of
+    /// `[model.damping]`'s ζ(f). A number is held; `{ value, bounds }` is
+    /// updated (parameter `<name>.eta`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loss_factor: Option<LossFactorConfig>,
 }
 
 /// `[[model.stiffness_fields]]`: a B-spline multiplier θ(ξ, η) of the deck's

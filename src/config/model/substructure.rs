@@ -275,6 +275,13 @@ pub struct LineSupportConfig {
     /// a list (`["z", "ry"]`): those.
     #[serde(default)]
     pub update: BearingUpdate,
+    /// The support's loss factor η (hysteretic damping: 0.1 = 10 %): modes
+    /// whose strain energy sits in it are damped more, by
+    /// `½ η × (its share of the mode's strain energy)` on top of
+    /// `[model.damping]`'s ζ(f). A number is held; `{ value, bounds }` is
+    /// updated (parameter `<name>.eta`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loss_factor: Option<LossFactorConfig>,
 }
 
 /// A line support's stiffness per component.

@@ -1,6 +1,7 @@
 //! `[[model.stiffness_fields]]` read and built.
 
 use super::*;
+use splinewatch_core::updating::ParameterKind;
 
 fn with_field(section: &str) -> Result<Config, ConfigError> {
     let text = format!("{}\n{section}", include_str!("../../../config/sinello.toml"));
@@ -270,4 +271,70 @@ fn a_channel_pointing_the_other_way_enters_with_the_opposite_sign() {
     );
     let message = Config::from_toml(&bad).unwrap_err().to_string();
     assert!(message.contains("direction") && message.contains("\"-x\""), "{message}");
+}
+
+/// Loss factors: a held one enters the damping, an updated one becomes
+/// `<name>.eta` (a ratio, its own family); a run of tied bearings shares
+/// its leader's, and a tied bearing may not give its own.
+#[test]
+fn loss_factors_enter_the_damping_and_the_parameters() {
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let lossy = WEST_ABUTMENT.replacen(
+        "update = [\"ry\"]",
+        "update = [\"ry\"]\nloss_factor = { value = 0.2, bounds = [0.0, 0.6] }",
+        1,
+    );
+    let config = Config::from_toml(&format!("{base}\n{lossy}")).unwrap();
+    config.validate().unwrap();
+    assert_eq!(config.build_damping().unwrap().loss_factors(), &[0.2]);
+    let parameters = config.build_parameters().unwrap();
+    let eta = parameters.iter().find(|p| p.name == "west_abutment.eta").unwrap();
+    assert_eq!(eta.kind, ParameterKind::LossFactor { field: 0, count: 1 });
+    assert_eq!((eta.lower, eta.upper), (0.0, 0.6));
+    assert_eq!(
+        crate::config::parameter_family(&eta.name),
+        crate::config::ParameterFamily::LossFactor
+    );
+    let held = Config::from_toml(&format!(
+        "{base}\n{}",
+        WEST_ABUTMENT.replacen("update", "loss_factor = 0.1\nupdate", 1)
+    ))
+    .unwrap();
+    assert!(held
+        .build_parameters()
+        .unwrap()
+        .iter()
+        .all(|p| p.name != "west_abutment.eta"));
+    assert_eq!(held.build_damping().unwrap().loss_factors(), &[0.1]);
+
+    let painter = include_str!("../../../config/painter-street.toml");
+    let leader = "tie = \"west_south\"";
+    let with_leader = painter.replacen(
+        "name = \"west_south\"",
+        "name = \"west_south\"\nloss_factor = { value = 0.3, bounds = [0.0, 1.0] }",
+        1,
+    );
+    let config = Config::from_toml(&with_leader).unwrap();
+    let eta: Vec<_> = config
+        .build_parameters()
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.name.ends_with(".eta"))
+        .collect();
+    assert_eq!(eta.len(), 1, "{eta:?}");
+    let ParameterKind::LossFactor { field, count } = eta[0].kind else {
+        panic!("{eta:?}")
+    };
+    let losses = config.build_damping().unwrap().loss_factors().to_vec();
+    assert!(
+        count >= 2 && losses[field..field + count].iter().all(|&l| l == 0.3),
+        "{losses:?}"
+    );
+    assert_eq!(losses.iter().filter(|&&l| l > 0.0).count(), count);
+    let own = with_leader.replacen(leader, &format!("{leader}\nloss_factor = 0.1"), 1);
+    let message = Config::from_toml(&own).unwrap().validate().unwrap_err().to_string();
+    assert!(
+        message.contains("loss_factor: a tied bearing takes the loss factor of \"west_south\""),
+        "{message}"
+    );
 }

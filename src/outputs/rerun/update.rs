@@ -230,7 +230,8 @@ impl RerunOutput {
 
 /// The trend group of a parameter: `springs` (`<spring>.k<j>`), `bearings`,
 /// `supports` (line supports' components), `fields`
-/// (stiffness multipliers `<field>.s<j>`) or `damping` (`damping.g<z>`).
+/// (stiffness multipliers `<field>.s<j>`), `damping` (`damping.g<z>`) or
+/// `loss_factors` (`<support>.eta`).
 pub(super) fn parameter_group(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "springs",
@@ -238,5 +239,6 @@ pub(super) fn parameter_group(name: &str) -> &'static str {
         crate::config::ParameterFamily::LineSupport => "supports",
         crate::config::ParameterFamily::StiffnessField => "fields",
         crate::config::ParameterFamily::Damping => "damping",
+        crate::config::ParameterFamily::LossFactor => "loss_factors",
     }
 }

@@ -6,6 +6,16 @@
 //! `f_i = ω_i / 2π` (eq. 28 prints `2π·ω_i`, a typo). The damping matrix of
 //! eq. (25), `C = Φ⁻ᵀ diag(2 ζ_i ω_i) Φ⁻¹`, is diagonal in modal coordinates,
 //! so the FRF code never forms it except for the direct verification path.
+//!
+//! Loss factors on the supports (modal strain energy, Johnson & Kienholz
+//! 1982): support `s` (a spring field, bearing or line support, in the
+//! model's order of spring fields) may carry a loss factor `η_s`, and mode
+//! `i` then gets `ζ_i = ζ(f_i) + ½ Σ_s η_s e_{i,s}`, `e_{i,s}` the share of
+//! the mode's strain energy in support `s` (`φ_iᵀ K_s φ_i / ω_i²`): modes
+//! whose energy sits in the abutments are damped more. It is the first
+//! order of the complex modes of `K + j Σ_s η_s K_s`: exact to `O(η²)` when
+//! the hysteretic matrix couples modes far apart in frequency only weakly
+//! (`|η φ_iᵀ K_s φ_k| ≪ |λ_i − λ_k|`), as the verification checks.
 
 use crate::geometry::knots::{KnotError, KnotVector, MAX_DEGREE};
 use thiserror::Error;
@@ -18,6 +28,8 @@ pub enum DampingError {
     Knots(#[from] KnotError),
     #[error("coefficient {index} must be finite and non-negative, got {value}")]
     Coefficient { index: usize, value: f64 },
+    #[error("loss factor {index} must be finite and non-negative, got {value}")]
+    LossFactor { index: usize, value: f64 },
 }
 
 /// A validated damping curve ζ(f).
@@ -27,6 +39,8 @@ pub struct DampingCurve {
     f_start: f64,
     f_end: f64,
     gamma: Vec<f64>,
+    /// `η_s` per spring field; empty without support damping.
+    loss_factors: Vec<f64>,
 }
 
 impl DampingCurve {
@@ -41,6 +55,7 @@ impl DampingCurve {
             f_start,
             f_end,
             gamma: Vec::new(),
+            loss_factors: Vec::new(),
         };
         curve.with_coefficients(gamma)
     }
@@ -62,6 +77,33 @@ impl DampingCurve {
 
     pub fn coefficients(&self) -> &[f64] {
         &self.gamma
+    }
+
+    /// The same curve with loss factors `η_s`, one per spring field of the
+    /// model (empty: none); any count is taken here, the model checks it
+    /// against its spring fields.
+    pub fn with_loss_factors(&self, loss_factors: Vec<f64>) -> Result<Self, DampingError> {
+        if let Some(index) = loss_factors.iter().position(|g| !(g.is_finite() && *g >= 0.0)) {
+            return Err(DampingError::LossFactor {
+                index,
+                value: loss_factors[index],
+            });
+        }
+        Ok(Self {
+            loss_factors,
+            ..self.clone()
+        })
+    }
+
+    /// `η_s` per spring field (empty without support damping).
+    pub fn loss_factors(&self) -> &[f64] {
+        &self.loss_factors
+    }
+
+    /// Every damping parameter: the curve's `γ_z`, then the loss factors
+    /// `η_s` (the columns of the damping sensitivities).
+    pub fn parameter_count(&self) -> usize {
+        self.gamma.len() + self.loss_factors.len()
     }
 
     pub fn degree(&self) -> usize {
@@ -170,5 +212,16 @@ mod tests {
             DampingCurve::new(2, vec![0.01, f64::NAN, 0.01], 0.0, 80.0),
             Err(DampingError::Coefficient { index: 1, .. })
         ));
+        let curve = DampingCurve::new(1, vec![0.01; 2], 0.0, 80.0).unwrap();
+        assert!(matches!(
+            curve.with_loss_factors(vec![0.1, -0.2]),
+            Err(DampingError::LossFactor { index: 1, .. })
+        ));
+        let lossy = curve.with_loss_factors(vec![0.1, 0.0]).unwrap();
+        assert_eq!(lossy.parameter_count(), 4);
+        assert_eq!(
+            lossy.with_coefficients(vec![0.02; 2]).unwrap().loss_factors(),
+            &[0.1, 0.0]
+        );
     }
 }

@@ -39,6 +39,10 @@ pub struct ModalSensitivities {
     pub eigenvalue: Mat<f64>,
     /// Per selected mode, `∂a_{s,i}/∂κ_j` at the sensors: `sensors × coefficients`.
     pub amplitude: Vec<Mat<f64>>,
+    /// `∂ζ_i/∂κ_j`: `modes × coefficients` (the damping curve's slope
+    /// through `f_i`, and the supports' loss factors' share,
+    /// [`crate::model::damping`]).
+    pub damping_ratio: Mat<f64>,
 }
 
 impl FrfModel {
@@ -49,6 +53,13 @@ impl FrfModel {
         let phi_u = state.spring_shapes();
         let sensors = self.sensor_count();
         let mut eigenvalue = Mat::zeros(modes.len(), blocks.len());
+        let mut damping_ratio = Mat::zeros(modes.len(), blocks.len());
+        let field_of: Vec<usize> = self
+            .spring_blocks()
+            .iter()
+            .enumerate()
+            .flat_map(|(s, b)| std::iter::repeat_n(s, b.len()))
+            .collect();
         let mut amplitude = Vec::with_capacity(modes.len());
         for (row, &i) in modes.iter().enumerate() {
             let mut da = Mat::zeros(sensors, blocks.len());
@@ -70,6 +81,8 @@ impl FrfModel {
                     }
                 }
                 eigenvalue[(row, j)] = coupling(i);
+                damping_ratio[(row, j)] = state.zeta_eigenvalue_slope(i) * coupling(i)
+                    + state.support_zeta_slope(i, Some(field_of[j]), coupling);
             }
             amplitude.push(da);
         }
@@ -77,6 +90,7 @@ impl FrfModel {
             modes: modes.to_vec(),
             eigenvalue,
             amplitude,
+            damping_ratio,
         }
     }
 
@@ -158,10 +172,13 @@ fn field_derivatives(
 ) -> ModalSensitivities {
     let sensors = state.sensor_count();
     let mut eigenvalue = Mat::zeros(modes.len(), couplings.len());
+    let mut damping_ratio = Mat::zeros(modes.len(), couplings.len());
     let mut amplitude = vec![Mat::zeros(sensors, couplings.len()); modes.len()];
     for (j, c) in couplings.iter().enumerate() {
         for (row, &i) in modes.iter().enumerate() {
             eigenvalue[(row, j)] = c.modes[(i, i)];
+            damping_ratio[(row, j)] = state.zeta_eigenvalue_slope(i) * c.modes[(i, i)]
+                + state.support_zeta_slope(i, None, |k| c.modes[(k, i)]);
             expand(state, i, |k| c.modes[(k, i)], &mut amplitude[row], j);
             if let (true, Some(r), Some(residual)) = (discarded, &c.residual, state.residual()) {
                 let shifted = state.modes.omega2[i] - residual.shift();
@@ -175,6 +192,7 @@ fn field_derivatives(
         modes: modes.to_vec(),
         eigenvalue,
         amplitude,
+        damping_ratio,
     }
 }
 
@@ -229,6 +247,9 @@ impl FrfModel {
                 _ => damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI),
             })
             .collect();
+        let support_slopes = Mat::from_fn(nm, nk, |i, k| {
+            state.support_zeta_slope(i, None, |m| couplings[k].modes[(m, i)])
+        });
         // The frequency-independent factors of every (coefficient, pair),
         // mode by mode: ∂(a_r a_s), ∂λ, the damping term's ζ∂ω + ω ζ' ∂ω,
         // and a_r a_s (the loop over frequencies then reads them in order).
@@ -240,7 +261,12 @@ impl FrfModel {
                     let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
                     let da = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
                     let dw = d_omega[(i, k)];
-                    let damping_term = state.zeta[i] * dw + omega[i] * slope[i] * dw;
+                    // ∂(ζ_i ω_i): the curve's and the supports' loss
+                    // factors' share (crate::model::damping), whose shape
+                    // part is `support_zeta_slope`.
+                    let support = 2.0 * state.support_zeta(i);
+                    let damping_term =
+                        (state.zeta[i] - support) * dw + omega[i] * slope[i] * dw + omega[i] * support_slopes[(i, k)];
                     *term = [da, sens.eigenvalue[(i, k)], damping_term, ar * as_];
                 }
             }

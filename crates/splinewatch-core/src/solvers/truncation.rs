@@ -190,6 +190,13 @@ impl Residual {
         self.everywhere.as_ref()
     }
 
+    /// The damping curve's coefficients the residual depends on (the
+    /// discarded modes are damped by the curve alone: the supports' loss
+    /// factors, which need each mode's shape, do not reach them).
+    pub fn damping_coefficient_count(&self) -> usize {
+        self.damping_gradient.len()
+    }
+
     /// `∂/∂γ_z` of [`Self::at_sensors`]: `−2j ω B_z(f_e) ω_e R_1,rs`.
     pub fn damping_sensitivity(&self, r: usize, s: usize, omega: f64, z: usize) -> c64 {
         c64::new(0.0, -2.0 * omega * self.damping_gradient[z] * self.sensors[1][(r, s)])

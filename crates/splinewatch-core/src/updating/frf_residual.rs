@@ -423,8 +423,9 @@ impl<'a> UpdateProblem<'a> {
 
 /// `∂h/∂p` of a parameter of kind `kind` from the sensitivities to every
 /// spring coefficient (`dkappa`, flat order), stiffness-field coefficient
-/// (`dtheta`) and damping coefficient (`dgamma`): a tied parameter's is the
-/// sum of its springs'.
+/// (`dtheta`) and damping parameter (`dgamma`: the curve's coefficients,
+/// then one loss factor per spring field when the damping has them): a tied
+/// parameter's is the sum of its springs'.
 pub(super) fn parameter_column(
     model: &FrfModel,
     kind: ParameterKind,
@@ -440,6 +441,10 @@ pub(super) fn parameter_column(
         ),
         ParameterKind::Stiffness { field, coefficient } => dtheta[model.flat_field_index(field, coefficient)].clone(),
         ParameterKind::Damping { coefficient } => dgamma[coefficient].clone(),
+        ParameterKind::LossFactor { field, count } => {
+            let first = dgamma.len() - model.spring_blocks().len() + field;
+            summed(dgamma[first..first + count].iter().map(Vec::as_slice))
+        }
     }
 }
 

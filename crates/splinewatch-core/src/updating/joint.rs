@@ -136,7 +136,7 @@ impl<'a> JointUpdateProblem<'a> {
         let frf = self.frf.weighted(p, frfs, jacobian)?;
         let (_, damping) = self.frf.model_at(p)?;
         let pairs = pairs.unwrap_or_else(|| self.modal.pairs_at(&state));
-        let modal = self.modal.residue_at(&state, &damping, &pairs, jacobian);
+        let modal = self.modal.residue_at(&state, &pairs, jacobian);
         if modal.residual.iter().any(|r| !r.is_finite()) {
             return Err(UpdateError::NonFinite(p.to_vec()));
         }
@@ -323,9 +323,8 @@ impl<'a> JointTransmissibilityProblem<'a> {
         pairs: Option<Vec<ModePair>>,
         jacobian: bool,
     ) -> Result<Evaluated<RecordExtra>, UpdateError> {
-        let (_, damping) = self.modal.model_at(p)?;
         let pairs = pairs.unwrap_or_else(|| self.modal.pairs_at(&at.extra.state));
-        let modal = self.modal.residue_at(&at.extra.state, &damping, &pairs, jacobian);
+        let modal = self.modal.residue_at(&at.extra.state, &pairs, jacobian);
         if modal.residual.iter().any(|r| !r.is_finite()) {
             return Err(UpdateError::NonFinite(p.to_vec()));
         }

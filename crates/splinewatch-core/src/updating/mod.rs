@@ -88,6 +88,11 @@ pub enum ParameterKind {
     Stiffness { field: usize, coefficient: usize },
     /// Damping coefficient γ_z.
     Damping { coefficient: usize },
+    /// The loss factor η of the `count` consecutive spring fields from
+    /// `field` (spring fields, bearings or line supports; a run of tied
+    /// bearings shares one; [`crate::model::damping`]), all set to the
+    /// parameter's value.
+    LossFactor { field: usize, count: usize },
 }
 
 /// An updating parameter with its bounds.
@@ -188,6 +193,14 @@ pub(crate) fn check_parameters(
                     return bad("a damping lower bound must be non-negative".into());
                 }
             }
+            ParameterKind::LossFactor { field, count } => {
+                if count == 0 || field + count > damping.loss_factors().len() {
+                    return bad("refers to a loss factor the damping does not have".into());
+                }
+                if p.lower < 0.0 {
+                    return bad("a loss factor's lower bound must be non-negative".into());
+                }
+            }
         }
     }
     Ok(())
@@ -204,7 +217,7 @@ impl ParameterKind {
                 count,
                 coefficient,
             } => (field..field + count).map(|f| (f, coefficient)).collect(),
-            Self::Stiffness { .. } | Self::Damping { .. } => Vec::new(),
+            Self::Stiffness { .. } | Self::Damping { .. } | Self::LossFactor { .. } => Vec::new(),
         }
     }
 }
@@ -220,6 +233,7 @@ pub fn model_at(
 ) -> Result<(Vec<Vec<f64>>, DampingCurve), UpdateError> {
     let mut kappa = kappa.to_vec();
     let mut gamma = damping.coefficients().to_vec();
+    let mut eta = damping.loss_factors().to_vec();
     for (par, &v) in parameters.iter().zip(p) {
         match par.kind {
             ParameterKind::Spring { field, coefficient } => kappa[field][coefficient] = v,
@@ -233,10 +247,11 @@ pub fn model_at(
                 }
             }
             ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
+            ParameterKind::LossFactor { field, count } => eta[field..field + count].fill(v),
             ParameterKind::Stiffness { .. } => {}
         }
     }
-    Ok((kappa, damping.with_coefficients(gamma)?))
+    Ok((kappa, damping.with_coefficients(gamma)?.with_loss_factors(eta)?))
 }
 
 /// The base stiffness-field coefficients `theta` with the field
@@ -284,6 +299,7 @@ pub fn base_values(
             }
             ParameterKind::Stiffness { field, coefficient } => theta[field][coefficient],
             ParameterKind::Damping { coefficient } => damping.coefficients()[coefficient],
+            ParameterKind::LossFactor { field, .. } => damping.loss_factors()[field],
         })
         .collect()
 }

@@ -124,22 +124,8 @@ impl<'a> ModalUpdateProblem<'a> {
     }
 
     /// The residues of `pairs` at `state` ([`modal_residue`]).
-    pub(super) fn residue_at(
-        &self,
-        state: &ModalState,
-        damping: &DampingCurve,
-        pairs: &[ModePair],
-        jacobian: bool,
-    ) -> ModalResidue {
-        modal_residue(
-            self.model,
-            state,
-            damping,
-            self.observed,
-            pairs,
-            &self.parameters,
-            jacobian,
-        )
+    pub(super) fn residue_at(&self, state: &ModalState, pairs: &[ModePair], jacobian: bool) -> ModalResidue {
+        modal_residue(self.model, state, self.observed, pairs, &self.parameters, jacobian)
     }
 
     /// The identified modes.
@@ -153,7 +139,7 @@ impl<'a> ModalUpdateProblem<'a> {
             .model
             .modal_state_with_fields(&kappa, &self.fields_at(p), &damping)?;
         let pairs = self.pairs_at(&state);
-        let residue = self.residue_at(&state, &damping, &pairs, jacobian);
+        let residue = self.residue_at(&state, &pairs, jacobian);
         if residue.residual.len() <= self.parameters.len() {
             return Err(UpdateError::Underdetermined {
                 residuals: residue.residual.len(),
@@ -235,7 +221,7 @@ impl ResidualModel for ModalUpdateProblem<'_> {
     }
 
     fn with_jacobian(&self, _p: &[f64], trial: Evaluated<Extra>) -> Result<Evaluated<Extra>, UpdateError> {
-        let residue = self.residue_at(&trial.extra.state, &trial.extra.damping, &trial.extra.pairs, true);
+        let residue = self.residue_at(&trial.extra.state, &trial.extra.pairs, true);
         Ok(Evaluated {
             residual: residue.residual,
             jacobian: residue.jacobian,

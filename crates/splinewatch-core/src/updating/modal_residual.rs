@@ -11,17 +11,18 @@
 //!   instead of one per mode, weighted by each component's std, and a
 //!   non-zero gradient at the solution (1 − MAC is quadratic there, which
 //!   starves Gauss–Newton);
-//! - damping, against the curve so ζ(f) is still identified:
-//!   `(ζ(f_m) − ζ_x)/σ_ζ`.
+//! - damping, against the model's ζ_m (the curve ζ(f_m) and the supports'
+//!   loss factors' share, [`crate::model::damping`]) so both are identified:
+//!   `(ζ_m − ζ_x)/σ_ζ`.
 //!
 //! The Jacobian uses the eigen-derivatives of [`crate::response::modal_sensitivity`]
 //! (`∂f/∂κ = ∂λ/∂κ / (8π² f)`, `∂(α a)/∂κ = α ∂a + a ∂α`,
-//! `∂α = (φ_xᵀ∂a − 2α a_mᵀ∂a)/a_mᵀa_m`), `∂ζ(f_m)/∂κ = ζ'(f_m) ∂f/∂κ` and
-//! `∂ζ/∂γ_z = B_z(f_m)`. The pairing is redone at every evaluation (modes
+//! `∂α = (φ_xᵀ∂a − 2α a_mᵀ∂a)/a_mᵀa_m`), `∂ζ_m/∂κ` (the curve's
+//! `ζ'(f_m) ∂f/∂κ` and the loss factors' share) and `∂ζ_m/∂γ_z` (`B_z(f_m)`,
+//! or `½ e_{m,s}` for a loss factor). The pairing is redone at every evaluation (modes
 //! swap order as κ changes) and held fixed within one Jacobian.
 
 use crate::identification::oma::shape::mac_real;
-use crate::model::damping::DampingCurve;
 use crate::response::frf::{FrfModel, ModalState};
 use crate::solvers::modal::ModeKind;
 use crate::updating::{updates_fields, Parameter, ParameterKind};
@@ -118,7 +119,6 @@ fn real_shape(shape: &[(usize, c64)]) -> Vec<f64> {
 pub fn modal_residue(
     model: &FrfModel,
     state: &ModalState,
-    damping: &DampingCurve,
     observed: &[ObservedMode],
     pairs: &[ModePair],
     parameters: &[Parameter],
@@ -134,7 +134,6 @@ pub fn modal_residue(
     } else {
         Mat::zeros(0, 0)
     };
-    let mut basis = vec![0.0; damping.coefficients().len()];
     for (k, pair) in pairs.iter().enumerate() {
         let x = &observed[pair.observed];
         let i = pair.model;
@@ -143,7 +142,7 @@ pub fn modal_residue(
         let a: Vec<f64> = x.shape.iter().map(|&(s, _)| state.amplitude(s, i)).collect();
         let aa: f64 = a.iter().map(|v| v * v).sum();
         let alpha = a.iter().zip(&phi).map(|(a, p)| a * p).sum::<f64>() / aa;
-        let zeta = damping.zeta(f);
+        let zeta = state.zeta[i];
         let row0 = residual.len();
         residual.push((f - x.frequency_hz) / x.frequency_std_hz);
         residual.extend(a.iter().zip(&phi).map(|(a, p)| (alpha * a - p) / x.shape_std));
@@ -151,8 +150,7 @@ pub fn modal_residue(
         let Some(sens) = &sens else {
             continue;
         };
-        damping.basis_at(f, &mut basis);
-        let slope = damping.slope(f);
+        let gradient = state.zeta_gradient(i);
         let n = a.len();
         for (c, par) in parameters.iter().enumerate() {
             // The rows of a stiffness parameter (spring κ or field θ) from
@@ -167,7 +165,7 @@ pub fn modal_residue(
                 for r in 0..n {
                     jac[(row0 + 1 + r, c)] += (alpha * da[r] + a[r] * dalpha) / x.shape_std;
                 }
-                jac[(row0 + 1 + n, c)] += slope * df / x.damping_std;
+                jac[(row0 + 1 + n, c)] += s.damping_ratio[(k, j)] / x.damping_std;
             };
             match stiffness_columns(model, par.kind) {
                 // A tied parameter's rows add up its springs' (the rows are linear in them).
@@ -175,8 +173,12 @@ pub fn modal_residue(
                 StiffnessColumns::Field(j) => {
                     stiffness_rows(field_sens.as_ref().expect("computed when a field is updated"), j);
                 }
+                StiffnessColumns::LossFactor(field, count) => {
+                    let first = gradient.len() - model.spring_blocks().len() + field;
+                    jac[(row0 + 1 + n, c)] = gradient[first..first + count].iter().sum::<f64>() / x.damping_std;
+                }
                 StiffnessColumns::Damping(coefficient) => {
-                    jac[(row0 + 1 + n, c)] = basis[coefficient] / x.damping_std;
+                    jac[(row0 + 1 + n, c)] = gradient[coefficient] / x.damping_std;
                 }
             }
         }
@@ -196,6 +198,8 @@ enum StiffnessColumns {
     Springs(Vec<usize>),
     Field(usize),
     Damping(usize),
+    /// The first spring field and how many share the loss factor.
+    LossFactor(usize, usize),
 }
 
 fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns {
@@ -210,6 +214,8 @@ fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns 
             StiffnessColumns::Field(model.flat_field_index(field, coefficient))
         }
         ParameterKind::Damping { coefficient } => StiffnessColumns::Damping(coefficient),
+        // The loss factors follow the curve's coefficients in ζ's gradient.
+        ParameterKind::LossFactor { field, count } => StiffnessColumns::LossFactor(field, count),
     }
 }
 
@@ -229,7 +235,7 @@ pub fn frequency_gradient(model: &FrfModel, state: &ModalState, mode: usize, par
             StiffnessColumns::Field(j) => {
                 fields.as_ref().expect("computed when a field is updated").eigenvalue[(0, j)] * scale
             }
-            StiffnessColumns::Damping(_) => 0.0,
+            StiffnessColumns::Damping(_) | StiffnessColumns::LossFactor(..) => 0.0,
         })
         .collect()
 }

@@ -265,7 +265,7 @@ impl<'a> TransmissibilityProblem<'a> {
     ) -> Result<Evaluated<Extra>, UpdateError> {
         let (_, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
         let loads = self.model.with_extra_rows(motion.load_rows(self.model));
-        let load_state = loads.modal_state_from(state.modes.clone(), &damping);
+        let load_state = loads.restate(&state, &damping);
         let per_pair = motion.transmissibility_with_residual(
             self.model,
             &loads,

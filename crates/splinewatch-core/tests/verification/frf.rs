@@ -199,7 +199,7 @@ fn sensitivities_match_central_differences() {
         let at = |delta: f64| {
             let mut g = curve.coefficients().to_vec();
             g[z] += delta;
-            let s = model.modal_state_from(state.modes.clone(), &curve.with_coefficients(g).unwrap());
+            let s = model.restate(&state, &curve.with_coefficients(g).unwrap());
             model.evaluate(&s, request, false).h
         };
         let (plus, minus) = (at(h), at(-h));

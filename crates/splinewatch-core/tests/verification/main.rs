@@ -16,6 +16,7 @@ mod shell;
 mod simulate;
 mod srim;
 mod stiffness_field;
+mod support_loss;
 mod support_motion;
 mod truncation;
 mod updating;

@@ -132,7 +132,7 @@ fn truncated_eigen_sensitivities_match_the_every_mode_expansion() {
     let found = truncated.modal_sensitivities(&kept, &modes);
     // The kept modes alone (no residual): the same modes through the dense
     // model's state builder.
-    let alone = dense.modal_sensitivities(&dense.modal_state_from(kept.modes.clone(), &damping()), &modes);
+    let alone = dense.modal_sensitivities(&dense.restate(&kept, &damping()), &modes);
     check_eigen_sensitivities(("κ", &modes), (&full, &kept), (&reference, &found, &alone));
 }
 
@@ -234,7 +234,7 @@ fn truncated_field_frf_sensitivities_match_the_every_mode_ones() {
     };
     let reference = dense.field_frf_sensitivities(&full, &damping(), request);
     let found = truncated.field_frf_sensitivities(&kept, &damping(), request);
-    let alone_state = dense.modal_state_from(kept.modes.clone(), &damping());
+    let alone_state = dense.restate(&kept, &damping());
     let alone = dense.field_frf_sensitivities(&alone_state, &damping(), request);
     assert_eq!(found.len(), 8);
     let n = lines.len();
@@ -270,7 +270,7 @@ fn truncated_field_eigen_sensitivities_match_the_every_mode_expansion() {
     assert_eq!(modes, bending_modes_below_80_hz(&kept));
     let reference = dense.field_sensitivities(&full, &modes);
     let found = truncated.field_sensitivities(&kept, &modes);
-    let alone = dense.field_sensitivities(&dense.modal_state_from(kept.modes.clone(), &damping()), &modes);
+    let alone = dense.field_sensitivities(&dense.restate(&kept, &damping()), &modes);
     check_eigen_sensitivities(("θ", &modes), (&full, &kept), (&reference, &found, &alone));
 }
 

@@ -232,6 +232,7 @@ impl FrfModel {
                 diagonal: Mat::zeros(0, 0),
                 diagonal_rate: Vec::new(),
                 near_pairs: Vec::new(),
+                loss: Mat::zeros(0, 0),
             }
         };
         Prepared {
@@ -304,12 +305,19 @@ impl FrfModel {
         let blocks: Vec<&LowRankBlock> = wanted.iter().map(|&j| all[j]).collect();
         let positions: Vec<&Vec<usize>> = wanted.iter().map(|&j| &self.block_positions[j]).collect();
         let count = blocks.len();
+        // The supports' loss factors' share of ζ_i moves with the shapes:
+        // ∂H_rs ∋ Σ_i a_ri a_si (∂H/∂ζ_i) ∂ζ_i/∂κ_j (super::support_loss).
+        let slopes = state
+            .loss
+            .is_some()
+            .then(|| self.loss_zeta_slopes(state, active, wanted));
         let mut terms = SpringTerms {
             count,
             far: Mat::zeros(count * np, nm),
             diagonal: Mat::zeros(count * np, nm),
             diagonal_rate: (0..nm).map(|i| e[(i, i)]).collect(),
             near_pairs: Vec::new(),
+            loss: Mat::zeros(if slopes.is_some() { count * np } else { 0 }, nm),
         };
         for (j, (block, pos)) in blocks.iter().zip(positions).enumerate() {
             let shapes = Mat::from_fn(pos.len(), nm, |b, i| state.phi_springs[(pos[b], active[i])]);
@@ -326,6 +334,9 @@ impl FrfModel {
                 for i in 0..nm {
                     terms.far[(j * np + p, i)] = a[(i, ts)] * fa[(i, tr)] + a[(i, tr)] * fa[(i, ts)];
                     terms.diagonal[(j * np + p, i)] = a[(i, tr)] * a[(i, ts)] * m[(i, i)];
+                    if let Some(slopes) = &slopes {
+                        terms.loss[(j * np + p, i)] = a[(i, tr)] * a[(i, ts)] * slopes[(i, j)];
+                    }
                 }
             }
             for &(i, k) in &near_pairs {
@@ -433,6 +444,14 @@ fn spring_lines(prepared: &Prepared, s: &mut Scratch, lines: &Lines<'_>, dh_dkap
     }
     s.far.product(terms.count * np, nc, &terms.far, &s.q);
     s.diagonal.product(terms.count * np, nc, &terms.diagonal, &s.squared);
+    if terms.loss.nrows() > 0 {
+        // `s.e` holds −2j ω_i ω q² = ∂q_i/∂ζ_i (damping_lines ran first).
+        s.loss.product(terms.count * np, nc, &terms.loss, &s.e);
+        for (dst, src) in [(&mut s.far.re, &s.loss.re), (&mut s.far.im, &s.loss.im)] {
+            let mut part = dst.submatrix_mut(0, 0, terms.count * np, nc);
+            part -= src.submatrix(0, 0, terms.count * np, nc);
+        }
+    }
     // The near pairs into the diagonal's rows (contiguous per line).
     for pair in &terms.near_pairs {
         let (i, k) = pair.modes;
@@ -488,6 +507,9 @@ struct SpringTerms {
     /// `E_ii` of every active mode.
     diagonal_rate: Vec<f64>,
     near_pairs: Vec<NearPair>,
+    /// `a_ri a_si ∂ζ_i/∂κ_j` with `λ_i` held (the supports' loss factors,
+    /// [`super::support_loss`]); empty without loss factors.
+    loss: Mat<f64>,
 }
 
 /// One ordered pair of distinct modes with (nearly) equal eigenvalues.
@@ -562,6 +584,8 @@ struct Scratch {
     squared: Split,
     far: Split,
     diagonal: Split,
+    /// The loss factors' rows of the spring products.
+    loss: Split,
 }
 
 impl Scratch {
@@ -576,6 +600,7 @@ impl Scratch {
             squared: Split::zeros(springs, width),
             far: Split::zeros(rows, width),
             diagonal: Split::zeros(rows, width),
+            loss: Split::zeros(if prepared.springs.loss.nrows() > 0 { rows } else { 0 }, width),
         }
     }
 }

@@ -40,6 +40,7 @@ use thiserror::Error;
 
 mod direct;
 mod evaluate;
+mod support_loss;
 mod truncated;
 
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -62,6 +63,10 @@ pub enum FrfError {
     Cutoff(f64),
     #[error("{0} needs every mode (the dense model); this model is truncated")]
     DenseOnly(&'static str),
+    #[error(
+        "{found} loss factors for {expected} spring fields (one per spring field, bearing and line support, or none)"
+    )]
+    LossFactorCount { found: usize, expected: usize },
 }
 
 /// Which FRF is measured: displacement, velocity or acceleration per force.
@@ -131,14 +136,21 @@ pub struct FrfEvaluation {
 #[derive(Debug, Clone)]
 pub struct ModalState {
     pub modes: Modes,
-    /// ζ_i of every mode (eq. 28), zero for rigid modes.
+    /// ζ_i of every mode (eq. 28, and the supports' loss factors' share,
+    /// [`crate::model::damping`]), zero for rigid modes.
     pub zeta: Vec<f64>,
-    /// `∂ζ_i/∂γ_z`: `n_modes × n_z`.
+    /// `∂ζ_i/∂γ_z`, then `∂ζ_i/∂η_s`: `n_modes × (n_z + n_η)`.
     zeta_basis: Mat<f64>,
-    /// `dc_i/dλ_i` of the modal damping rate `c_i = 2 ζ(f_i) ω_i` as the
-    /// mode's eigenvalue `λ_i = ω_i²` changes: `ζ_i/ω_i + ζ'(f_i)/(2π)`,
-    /// zero for rigid modes (the spring sensitivities' damping term).
+    /// `dc_i/dλ_i` of the modal damping rate `c_i = 2 ζ_i ω_i` as the
+    /// mode's eigenvalue `λ_i = ω_i²` changes with its shape held:
+    /// `ζ_i/ω_i + ζ'(f_i)/(2π) − Σ_s η_s e_{i,s}/ω_i`, zero for rigid modes
+    /// (the spring sensitivities' damping term).
     damping_rate_slope: Vec<f64>,
+    /// The supports' strain energies and loss factors, when the damping
+    /// has loss factors ([`support_loss`]).
+    loss: Option<support_loss::SupportLoss>,
+    /// The spring coefficients the modes were solved at.
+    kappa: Vec<Vec<f64>>,
     /// `a_{s,i}`: `n_sensors × n_modes`.
     amplitudes: Mat<f64>,
     /// Mode shapes on the spring dofs `U`: `|U| × n_modes`.
@@ -168,6 +180,24 @@ impl ModalState {
     /// The residual of the discarded modes (a truncated model's state).
     pub fn residual(&self) -> Option<&Residual> {
         self.residual.as_ref()
+    }
+
+    /// The share of mode `i`'s strain energy in spring field `s`
+    /// (`e_{i,s}`), when the damping has loss factors.
+    pub fn support_energy(&self, i: usize, s: usize) -> Option<f64> {
+        self.loss.as_ref().map(|l| l.energy[(i, s)])
+    }
+
+    /// The supports' share of `ζ_i` (`½ Σ_s η_s e_{i,s}`; zero without
+    /// loss factors).
+    pub fn support_zeta(&self, i: usize) -> f64 {
+        self.loss.as_ref().map_or(0.0, |l| 0.5 * l.loss(i))
+    }
+
+    /// `∂ζ_i/∂γ_z` for every damping parameter (the curve's, then the loss
+    /// factors).
+    pub fn zeta_gradient(&self, i: usize) -> Vec<f64> {
+        (0..self.zeta_basis.ncols()).map(|z| self.zeta_basis[(i, z)]).collect()
     }
 }
 
@@ -437,10 +467,11 @@ impl FrfModel {
         theta: &[Vec<f64>],
         damping: &DampingCurve,
     ) -> Result<ModalState, FrfError> {
+        self.check_loss_factors(damping)?;
         match &self.source {
             Source::Dense(assembled) => {
                 let modes = assembled.modes_with_fields(kappa, theta)?;
-                Ok(self.modal_state_from(modes, damping))
+                Ok(self.modal_state_from(modes, kappa, damping))
             }
             Source::Truncated { .. } => Ok(self.modal_state_with_loads(kappa, theta, damping, &[])?.0),
         }
@@ -488,8 +519,9 @@ impl FrfModel {
             let ((x_own, x_loads), (xmx_own, xmx_loads)) = (split(&x), split(&xmx));
             (modes, (x_own, xmx_own), (x_loads, xmx_loads))
         };
+        self.check_loss_factors(damping)?;
         let shift = SparseModel::shift_for(*cutoff_hz);
-        let mut state = self.modal_state_from(modes, damping);
+        let mut state = self.modal_state_from(modes, kappa, damping);
         state.residual = Some(Residual::new(
             &state.modes,
             &state.amplitudes,
@@ -543,13 +575,33 @@ impl FrfModel {
         Ok(Self::with_source(source, self.sensor_rows.clone()))
     }
 
-    /// Builds the modal state from already computed modes.
-    pub fn modal_state_from(&self, modes: Modes, damping: &DampingCurve) -> ModalState {
+    /// One loss factor per spring field, or none.
+    fn check_loss_factors(&self, damping: &DampingCurve) -> Result<(), FrfError> {
+        let (found, expected) = (damping.loss_factors().len(), self.spring_blocks().len());
+        if found != 0 && found != expected {
+            return Err(FrfError::LossFactorCount { found, expected });
+        }
+        Ok(())
+    }
+
+    /// Builds the modal state from modes already computed at spring
+    /// coefficients `kappa`. `damping`'s loss factors, if any, must be one
+    /// per spring field (the constructors that solve the modes check it).
+    #[track_caller]
+    pub fn modal_state_from(&self, modes: Modes, kappa: &[Vec<f64>], damping: &DampingCurve) -> ModalState {
         let nm = modes.len();
         let nz = damping.coefficients().len();
+        let factors = damping.loss_factors();
+        assert!(
+            factors.is_empty() || factors.len() == self.spring_blocks().len(),
+            "one loss factor per spring field"
+        );
         let omega: Vec<f64> = modes.omega2.iter().map(|w2| w2.max(0.0).sqrt()).collect();
+        let phi_springs = dense_rows(&modes.shapes, &self.spring_dofs);
+        let loss =
+            (!factors.is_empty()).then(|| support_loss::SupportLoss::new(self, &modes, &phi_springs, kappa, factors));
         let mut zeta = vec![0.0; nm];
-        let mut zeta_basis = Mat::<f64>::zeros(nm, nz);
+        let mut zeta_basis = Mat::<f64>::zeros(nm, nz + factors.len());
         let mut damping_rate_slope = vec![0.0; nm];
         let mut b = vec![0.0; nz];
         for i in 0..nm {
@@ -561,24 +613,40 @@ impl FrfModel {
                 zeta_basis[(i, z)] = b[z];
             }
             zeta[i] = b.iter().zip(damping.coefficients()).map(|(b, g)| b * g).sum();
+            let mut support = 0.0;
+            if let Some(loss) = &loss {
+                for s in 0..factors.len() {
+                    zeta_basis[(i, nz + s)] = 0.5 * loss.energy[(i, s)];
+                }
+                support = loss.loss(i);
+                zeta[i] += 0.5 * support;
+            }
             if omega[i] > 0.0 {
-                damping_rate_slope[i] = zeta[i] / omega[i] + damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI);
+                damping_rate_slope[i] =
+                    (zeta[i] - support) / omega[i] + damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI);
             }
         }
         let amplitudes = Mat::from_fn(self.sensor_rows.len(), nm, |s, i| {
             self.sensor_rows[s].iter().map(|&(d, v)| v * modes.shapes[(d, i)]).sum()
         });
-        let phi_springs = dense_rows(&modes.shapes, &self.spring_dofs);
         ModalState {
             modes,
             zeta,
             zeta_basis,
             damping_rate_slope,
+            loss,
+            kappa: kappa.to_vec(),
             amplitudes,
             phi_springs,
             omega,
             residual: None,
         }
+    }
+
+    /// `state`'s modes as a state of this model (the same structure with
+    /// other sensor rows, [`Self::with_extra_rows`]) on `damping`.
+    pub fn restate(&self, state: &ModalState, damping: &DampingCurve) -> ModalState {
+        self.modal_state_from(state.modes.clone(), &state.kappa, damping)
     }
 }
 

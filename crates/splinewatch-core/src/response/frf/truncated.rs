@@ -35,7 +35,8 @@ impl FrfModel {
         if matches!(wanted, Wanted::Nothing) {
             return;
         }
-        for (z, dz) in evaluation.dh_dgamma.iter_mut().enumerate() {
+        let curve = residual.damping_coefficient_count();
+        for (z, dz) in evaluation.dh_dgamma.iter_mut().enumerate().take(curve) {
             for (p, &(r, s)) in request.pairs.iter().enumerate() {
                 for (f, &hz) in request.frequencies_hz.iter().enumerate() {
                     let w = 2.0 * PI * hz;

@@ -333,7 +333,7 @@ impl SupportMotion {
         pairs: &[(usize, usize)],
         frequencies_hz: &[f64],
     ) -> TransmissibilitySensitivities {
-        let load_state = loads.modal_state_from(state.modes.clone(), damping);
+        let load_state = loads.restate(state, damping);
         self.sensitivities_for(
             frf,
             (loads, &load_state),
