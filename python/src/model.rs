@@ -12,7 +12,7 @@ use splinewatch::config::{frf_setup, load_config, Config, FrfSetup};
 use splinewatch::io::modes_json::ModesFile;
 use splinewatch::studies::{self, synth::SynthOptions};
 use splinewatch_core::response::frf::{FrfRequest, ModalState, Quantity};
-use splinewatch_core::updating::{modal_state_at, Parameter};
+use splinewatch_core::updating::{modal_state_at, model_at, Parameter};
 use std::path::PathBuf;
 
 /// Identified mode, model mode (0-based) and their MAC.
@@ -141,8 +141,9 @@ impl RawModel {
 
     /// The first `count` modes at `values`: frequency (Hz), damping ratio,
     /// kind, where each moves the deck (`motion`, and `motion_shares`: modes
-    /// × [longitudinal, transverse, vertical, torsion]), and the shapes at
-    /// the sensors (sensors × modes).
+    /// × [longitudinal, transverse, vertical, torsion]), each support's share
+    /// of its strain energy (`support_shares`: modes × `supports`), and the
+    /// shapes at the sensors (sensors × modes).
     fn modes<'py>(
         &self,
         py: Python<'py>,
@@ -177,6 +178,20 @@ impl RawModel {
             .map(|s| vec![s.longitudinal, s.transverse, s.vertical, s.torsion])
             .collect();
         d.set_item("motion_shares", matrix(py, &rows, 4))?;
+        // Each support's share of each mode's strain energy, as `modes --json`.
+        let (kappa, _) = model_at(&self.parameters, &self.setup.kappa, &self.setup.damping, &values).or_py()?;
+        let blocks = self.setup.model.spring_blocks();
+        let rows: Vec<Vec<f64>> = (0..n)
+            .map(|i| {
+                blocks
+                    .iter()
+                    .zip(&kappa)
+                    .map(|(b, k)| state.modes.spring_energy_share(i, b, k))
+                    .collect()
+            })
+            .collect();
+        d.set_item("support_shares", matrix(py, &rows, blocks.len()))?;
+        d.set_item("supports", self.config.spring_field_names())?;
         let sensors = self.setup.sensor_names.len();
         let rows: Vec<Vec<f64>> = (0..sensors)
             .map(|s| (0..n).map(|i| state.amplitude(s, i)).collect())

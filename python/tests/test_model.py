@@ -25,6 +25,10 @@ def test_modes_are_the_clis_modes(cli, model):
     assert modes["motion"] == [m["motion"] for m in expected]
     shares = [[m["motion_shares"][k] for k in ("longitudinal", "transverse", "vertical", "torsion")] for m in expected]
     assert np.allclose(modes["motion_shares"], shares, rtol=0, atol=1e-12)
+    assert modes["supports"] == [s["support"] for s in expected[0]["support_shares"]]
+    supports = [[s["share"] for s in m["support_shares"]] for m in expected]
+    assert np.allclose(modes["support_shares"], supports, rtol=0, atol=1e-12)
+    assert np.allclose(modes["damping"], [m["damping_ratio"] or 0.0 for m in expected], rtol=0, atol=1e-15)
     assert modes["shapes"].shape == (12, 12) and modes["shapes"].dtype == np.float64
     assert modes["damping"].shape == (12,)
 

@@ -128,12 +128,15 @@ class Model:
         Returns
         -------
         dict
-            ``frequency`` (Hz) and ``damping`` (ζ(f) of the config) of shape
-            (n,), ``kind`` (rigid, membrane or bending), ``motion``
-            (longitudinal, transverse, vertical or torsion: where most of the
-            mode's energy goes on the deck), ``motion_shares`` of shape (n, 4)
-            (those four shares, summing to 1) and ``shapes`` at the sensors,
-            shape (n_sensors, n), mass-normalised.
+            ``frequency`` (Hz) and ``damping`` (ζ(f) of the config, plus the
+            supports' loss factors' share) of shape (n,), ``kind`` (rigid,
+            membrane or bending), ``motion`` (longitudinal, transverse,
+            vertical or torsion: where most of the mode's energy goes on the
+            deck), ``motion_shares`` of shape (n, 4) (those four shares,
+            summing to 1), ``support_shares`` of shape (n, n_supports) (each
+            support's share of the mode's strain energy; ``supports`` names
+            them: spring fields, bearings, line supports) and ``shapes`` at
+            the sensors, shape (n_sensors, n), mass-normalised.
         """
         out = self._raw.modes(self._values(), None if n is None else int(n))
         out["sensors"] = list(self.sensors)
