@@ -470,6 +470,11 @@ impl LinOp<f64> for Deflated<'_> {
 /// only those it reports converged.
 fn lanczos(op: &dyn LinOp<f64>, count: usize) -> (Vec<f64>, Mat<f64>) {
     let n = op.nrows();
+    if 2 * count.max(LANCZOS_MIN_SUBSPACE) >= n {
+        // faer's Lanczos needs a subspace smaller than the operator (it
+        // panics otherwise): a small model, or most of its modes wanted.
+        return dense_largest(op, count);
+    }
     let params = PartialEigenParams::default();
     let req = partial_self_adjoint_eigen_scratch::<f64>(op, count, Par::Seq, params);
     let mut buffer = MemBuffer::new(req);
@@ -491,6 +496,35 @@ fn lanczos(op: &dyn LinOp<f64>, count: usize) -> (Vec<f64>, Mat<f64>) {
     values.truncate(converged);
     let vectors = vectors.subcols(0, converged).to_owned();
     (values, vectors)
+}
+
+/// faer's smallest Lanczos subspace (`MIN_DIM` of its partial eigensolver):
+/// it works on subspaces of at least twice this or twice the pairs asked.
+const LANCZOS_MIN_SUBSPACE: usize = 32;
+
+/// The `count` eigenpairs of `op` largest in magnitude, from its dense
+/// matrix (`op` applied to the identity, symmetrised): what [`lanczos`]
+/// returns when the operator is too small for a Krylov subspace.
+fn dense_largest(op: &dyn LinOp<f64>, count: usize) -> (Vec<f64>, Mat<f64>) {
+    let n = op.nrows();
+    let mut buffer = MemBuffer::new(op.apply_scratch(n, Par::Seq));
+    let mut a = Mat::<f64>::zeros(n, n);
+    op.apply(
+        a.as_mut(),
+        Mat::<f64>::identity(n, n).as_ref(),
+        Par::Seq,
+        MemStack::new(&mut buffer),
+    );
+    let symmetric = Mat::from_fn(n, n, |i, j| 0.5 * (a[(i, j)] + a[(j, i)]));
+    let Ok(eigen) = symmetric.self_adjoint_eigen(Side::Lower) else {
+        return (Vec::new(), Mat::zeros(n, 0));
+    };
+    let values = eigen.S().column_vector();
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| values[b].abs().total_cmp(&values[a].abs()));
+    order.truncate(count.min(n));
+    let vectors = Mat::from_fn(n, order.len(), |r, c| eigen.U()[(r, order[c])]);
+    (order.iter().map(|&i| values[i]).collect(), vectors)
 }
 
 /// The modes below the cut-off from Lanczos pairs `(μ, y)`: back-transformed,
