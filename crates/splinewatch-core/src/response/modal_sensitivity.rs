@@ -81,8 +81,9 @@ impl FrfModel {
                     }
                 }
                 eigenvalue[(row, j)] = coupling(i);
+                let on_springs: Vec<(usize, f64)> = pos.iter().copied().zip(w.iter().copied()).collect();
                 damping_ratio[(row, j)] = state.zeta_eigenvalue_slope(i) * coupling(i)
-                    + state.support_zeta_slope(i, Some(field_of[j]), coupling);
+                    + state.support_zeta_slope(i, Some((field_of[j], &on_springs)), coupling);
             }
             amplitude.push(da);
         }

@@ -103,10 +103,11 @@ impl<'a> ModalUpdateProblem<'a> {
         let Some(varied) = super::reanalysed_springs(&self.parameters, self.model) else {
             return Ok(None);
         };
-        let (kappa, _) = self.model_at(start)?;
+        let (kappa, damping) = self.model_at(start)?;
+        let loads = self.model.loss_factor_loads(&damping);
         let reduced = self
             .model
-            .with_reanalysis((&kappa, &self.fields_at(start)), &[], &varied)?;
+            .with_reanalysis((&kappa, &self.fields_at(start)), &loads, &varied)?;
         Ok(reduced.reanalysis().is_some().then_some(reduced))
     }
 

@@ -355,14 +355,14 @@ impl<'a> TransmissibilityProblem<'a> {
         let Some(varied) = reanalysed_springs(&self.parameters, self.model) else {
             return Ok(None);
         };
-        let (kappa, _) = model_at(&self.parameters, &self.kappa, &self.damping, start)?;
+        let (kappa, damping) = model_at(&self.parameters, &self.kappa, &self.damping, start)?;
         let theta = fields_at(&self.parameters, self.model.field_coefficients(), start);
         SupportMotion::reanalysed(
             self.model,
             self.shell,
             self.groups,
             (&kappa, &theta),
-            &self.inputs,
+            (&self.inputs, &self.model.loss_factor_loads(&damping)),
             &varied,
         )
         .map(|reduced| reduced.reanalysis().is_some().then_some(reduced))

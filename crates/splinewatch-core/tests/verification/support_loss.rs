@@ -417,16 +417,17 @@ fn check_modal_residue_with_loss_factor(name: &str, count: usize) {
 }
 
 /// On a truncated model the loss factors' share of ζ moves with the kept
-/// modes only: the eigenvector derivatives in `∂ζ_i/∂κ` run over them (a
-/// line support's stiffness couples each mode with the discarded ones
-/// strongly, so the sum converges slowly), and the discarded modes keep the
-/// curve's damping. `∂H/∂κ` and `∂H/∂η` of the deck truncated at 60 Hz
-/// against central differences of its own evaluation (which also exercises
-/// the partial eigensolver on a model too small for a Krylov subspace):
-/// `∂H/∂η` exact (1e-6); `∂H/∂κ` measured within 23 % per column (test:
-/// 0.3, to catch it growing), where the same deck without loss factors is
-/// within 0.3 %: the approximation the static correction of the discarded
-/// modes (as the amplitudes' derivatives have, Wang 1991) would remove.
+/// modes and, through the eigenvector derivatives, with the discarded ones:
+/// a line support's stiffness couples each mode with them strongly (the
+/// sum over modes converges slowly), so their part comes from the
+/// discarded modes' flexibility at the spring dofs (first order, Wang
+/// 1991). `∂H/∂κ` and `∂H/∂η` of the deck truncated at 60 Hz against
+/// central differences of its own evaluation (which also exercises the
+/// partial eigensolver on a model too small for a Krylov subspace):
+/// `∂H/∂η` exact (1e-6); `∂H/∂κ` within 4.6e-3 per column (test 1e-2),
+/// where the same deck without loss factors is within 3e-3 (the truncation
+/// of the damping curve's part) and without the discarded modes' part the
+/// loss factors' columns were 23 % off.
 #[test]
 fn loss_factors_on_a_truncated_model_are_close_to_exact() {
     let (model, sensors) = deck_model(Vec::new());
@@ -461,7 +462,7 @@ fn loss_factors_on_a_truncated_model_are_close_to_exact() {
             if fd.iter().any(|v| v.norm() > 1e-3 * scale) {
                 let e = column_error(&eval.dh_dkappa[flat], &fd);
                 worst = worst.max(e);
-                assert!(e < 0.3, "∂H/∂κ support {s} component {j}: relative error {e:e}");
+                assert!(e < 1e-2, "∂H/∂κ support {s} component {j}: relative error {e:e}");
             }
             flat += 1;
         }

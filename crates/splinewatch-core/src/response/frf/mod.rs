@@ -448,6 +448,19 @@ impl FrfModel {
         }
     }
 
+    /// A unit load at each spring dof (sparse rows on the generalised
+    /// dofs) when `damping` has loss factors, none otherwise: the loads
+    /// whose responses give a truncated model the discarded modes' part of
+    /// the loss factors' sensitivities ([`crate::model::damping`]), for a
+    /// Ritz basis that answers them ([`Self::with_reanalysis`]).
+    pub fn loss_factor_loads(&self, damping: &DampingCurve) -> Vec<Vec<(usize, f64)>> {
+        if damping.loss_factors().iter().any(|&eta| eta > 0.0) {
+            self.spring_dofs.iter().map(|&d| vec![(d, 1.0)]).collect()
+        } else {
+            Vec::new()
+        }
+    }
+
     /// Total number of spring coefficients over all fields.
     pub fn spring_coefficient_count(&self) -> usize {
         self.block_positions.len()
@@ -496,32 +509,41 @@ impl FrfModel {
         else {
             return Ok((self.modal_state_with_fields(kappa, theta, damping)?, None));
         };
-        // The sensors' responses (the truncation residual) and the loads'
-        // from one solve; without loads, the sensors' as they come.
+        // The sensors' responses (the truncation residual), the loads' and,
+        // with loss factors, unit loads at the spring dofs' (the discarded
+        // modes' flexibility there, support_loss) from one solve; without
+        // loads, the sensors' as they come.
         let sensors = self.sensor_rows.len();
-        let (modes, own, theirs) = if loads.is_empty() {
+        let units = self.loss_factor_loads(damping);
+        let (modes, own, theirs, at_springs) = if loads.is_empty() && units.is_empty() {
             let (modes, own) = truncated_solve(
                 (model, *cutoff_hz, reanalysis.as_deref()),
                 (kappa, theta),
                 &self.sensor_rows,
             )?;
             let none = Mat::<f64>::zeros(own.0.nrows(), 0);
-            (modes, own, (none.clone(), none))
+            (modes, own, (none.clone(), none), None)
         } else {
-            let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).cloned().collect();
+            let all: Vec<Vec<(usize, f64)>> = self.sensor_rows.iter().chain(loads).chain(&units).cloned().collect();
             let (modes, (x, xmx)) = truncated_solve((model, *cutoff_hz, reanalysis.as_deref()), (kappa, theta), &all)?;
+            let part = |m: &Mat<f64>, from: usize, count: usize| m.subcols(from, count).to_owned();
             let split = |m: &Mat<f64>| {
                 (
-                    m.subcols(0, sensors).to_owned(),
-                    m.subcols(sensors, loads.len()).to_owned(),
+                    part(m, 0, sensors),
+                    part(m, sensors, loads.len()),
+                    part(m, sensors + loads.len(), units.len()),
                 )
             };
-            let ((x_own, x_loads), (xmx_own, xmx_loads)) = (split(&x), split(&xmx));
-            (modes, (x_own, xmx_own), (x_loads, xmx_loads))
+            let ((x_own, x_loads, x_units), (xmx_own, xmx_loads, xmx_units)) = (split(&x), split(&xmx));
+            let at_springs = (!units.is_empty()).then_some((x_units, xmx_units));
+            (modes, (x_own, xmx_own), (x_loads, xmx_loads), at_springs)
         };
         self.check_loss_factors(damping)?;
         let shift = SparseModel::shift_for(*cutoff_hz);
         let mut state = self.modal_state_from(modes, kappa, damping);
+        if let (Some(loss), Some(responses)) = (state.loss.as_mut(), at_springs) {
+            loss.add_discarded(&state.modes, &state.phi_springs, &self.spring_dofs, &responses, shift);
+        }
         state.residual = Some(Residual::new(
             &state.modes,
             &state.amplitudes,

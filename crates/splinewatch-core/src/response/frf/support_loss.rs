@@ -14,9 +14,16 @@
 //!   `s(j)`, or a stiffness-field coefficient with `∂K_s = 0`):
 //!   `∂Q_i = η_{s(j)} φ_iᵀ B_j φ_i + 2 Σ_{k≠i} G_{ik} C_{ki} / (λ_i − λ_k)`,
 //!   `G = Φᵀ (Σ_s η_s K_s) Φ`, `C = Φᵀ (∂K) Φ`; the sum runs over the
-//!   state's modes, so it is exact on the dense model (every mode) and
-//!   leaves out the discarded modes on a truncated one; (nearly) repeated
-//!   eigenvalues are skipped as there.
+//!   state's modes, so it is exact on the dense model (every mode); on a
+//!   truncated one the discarded modes' part
+//!   `Σ_d (wᵀφ_d)(φ_dᵀ b)/(λ_i − λ_d)`, `w = (Σ_s η_s K_s) φ_i`,
+//!   `b = ∂K φ_i`, is `−wᵀ (R_0 + (λ_i − σ) R_1) b` to first order, with the
+//!   discarded modes' flexibility `R_p` on the spring dofs from unit loads
+//!   there (the modified modal method, Wang 1991, as
+//!   [`crate::solvers::truncation`] does for the sensors) when `∂K` is a
+//!   spring coefficient's (a stiffness field's reaches beyond the spring
+//!   dofs: its discarded part is left out); (nearly) repeated eigenvalues
+//!   are skipped as there.
 
 use super::{FrfModel, ModalState};
 use crate::solvers::modal::{ModeKind, Modes};
@@ -34,6 +41,21 @@ pub(super) struct SupportLoss {
     /// `G = Φᵀ (Σ_s η_s K_s) Φ` over the state's modes (empty when every
     /// `η_s` is zero: no term depends on it then).
     coupling: Mat<f64>,
+    /// `Σ_s η_s K_s` on the spring dofs (`|U| × |U|`; empty as `coupling`).
+    hysteretic: Mat<f64>,
+    /// The discarded modes' flexibility on the spring dofs, on a truncated
+    /// model with loss factors.
+    discarded: Option<Discarded>,
+}
+
+/// The discarded modes seen from the spring dofs `U` ([`SupportLoss::add_discarded`]).
+#[derive(Debug, Clone)]
+struct Discarded {
+    /// `R_0`, `R_1`: `|U| × |U|`.
+    flexibility: [Mat<f64>; 2],
+    shift: f64,
+    /// `w_i = (Σ_s η_s K_s) φ_i` on `U`: `|U| × modes`.
+    hysteretic_shapes: Mat<f64>,
 }
 
 impl SupportLoss {
@@ -52,6 +74,8 @@ impl SupportLoss {
         let lossy = factors.iter().any(|&eta| eta > 0.0);
         let mut energy = Mat::<f64>::zeros(nm, fields.len());
         let mut coupling = if lossy { Mat::zeros(nm, nm) } else { Mat::zeros(0, 0) };
+        let units = if lossy { phi_springs.nrows() } else { 0 };
+        let mut hysteretic = Mat::<f64>::zeros(units, units);
         let mut flat = 0;
         for (s, blocks) in fields.iter().enumerate() {
             for (j, block) in blocks.iter().enumerate() {
@@ -64,6 +88,11 @@ impl SupportLoss {
                 }
                 if lossy && factors[s] > 0.0 {
                     coupling += (factors[s] * k) * (shapes.transpose() * &product);
+                    for (a, &pa) in pos.iter().enumerate() {
+                        for (b, &pb) in pos.iter().enumerate() {
+                            hysteretic[(pa, pb)] += factors[s] * k * block.values[(a, b)];
+                        }
+                    }
                 }
             }
             flat += blocks.len();
@@ -89,7 +118,37 @@ impl SupportLoss {
             factors: factors.to_vec(),
             weighted,
             coupling,
+            hysteretic,
+            discarded: None,
         }
+    }
+
+    /// The discarded modes' flexibility on the spring dofs `spring_dofs`
+    /// from `responses` (`(K − σM)⁻¹` and `(K − σM)⁻¹ M (K − σM)⁻¹` applied
+    /// to a unit load at each, on every dof) less the kept modes' part.
+    pub(super) fn add_discarded(
+        &mut self,
+        modes: &Modes,
+        phi_springs: &Mat<f64>,
+        spring_dofs: &[usize],
+        responses: &(Mat<f64>, Mat<f64>),
+        shift: f64,
+    ) {
+        let nu = spring_dofs.len();
+        let flexibility = |response: &Mat<f64>, power: i32| {
+            let r = Mat::from_fn(nu, nu, |a, b| {
+                response[(spring_dofs[a], b)]
+                    - (0..modes.len())
+                        .map(|i| phi_springs[(a, i)] * phi_springs[(b, i)] / (modes.omega2[i] - shift).powi(power))
+                        .sum::<f64>()
+            });
+            Mat::from_fn(nu, nu, |a, b| 0.5 * (r[(a, b)] + r[(b, a)]))
+        };
+        self.discarded = Some(Discarded {
+            flexibility: [flexibility(&responses.0, 1), flexibility(&responses.1, 2)],
+            shift,
+            hysteretic_shapes: &self.hysteretic * phi_springs,
+        });
     }
 
     /// `Σ_s η_s e_{i,s}`: twice the supports' share of `ζ_i`.
@@ -101,8 +160,17 @@ impl SupportLoss {
 
     /// `∂ζ_i` with `λ_i` held, through `φ_i` (and `K_s` by `direct =
     /// η_{s(j)} φ_iᵀ B_j φ_i`), for a stiffness change whose modal couplings
-    /// `C_{ki}` are `coupling(k)`.
-    pub(super) fn zeta_slope(&self, modes: &Modes, i: usize, direct: f64, coupling: impl Fn(usize) -> f64) -> f64 {
+    /// `C_{ki}` are `coupling(k)` and, for a spring coefficient, whose
+    /// `∂K φ_i` on the spring dofs is `on_springs` (`(index in U, value)`:
+    /// the discarded modes' part on a truncated model).
+    pub(super) fn zeta_slope(
+        &self,
+        modes: &Modes,
+        i: usize,
+        direct: f64,
+        coupling: impl Fn(usize) -> f64,
+        on_springs: Option<&[(usize, f64)]>,
+    ) -> f64 {
         let lambda = &modes.omega2;
         if self.weighted[i] == 0.0 && direct == 0.0 && self.coupling.nrows() == 0 {
             return 0.0;
@@ -119,6 +187,9 @@ impl SupportLoss {
                 }
                 dq += 2.0 * self.coupling[(i, k)] * coupling(k) / gap;
             }
+            if let (Some(discarded), Some(b)) = (&self.discarded, on_springs) {
+                dq -= 2.0 * discarded.product(i, lambda[i], b);
+            }
         }
         dq / (2.0 * lambda[i])
     }
@@ -126,6 +197,23 @@ impl SupportLoss {
     /// `η_s`.
     pub(super) fn factor(&self, s: usize) -> f64 {
         self.factors[s]
+    }
+}
+
+impl Discarded {
+    /// `w_iᵀ (R_0 + (λ_i − σ) R_1) b` for `b` on the spring dofs.
+    fn product(&self, i: usize, lambda: f64, b: &[(usize, f64)]) -> f64 {
+        let [r0, r1] = &self.flexibility;
+        let t = lambda - self.shift;
+        let w = self.hysteretic_shapes.col(i);
+        b.iter()
+            .map(|&(u, value)| {
+                value
+                    * (0..w.nrows())
+                        .map(|a| w[a] * (r0[(a, u)] + t * r1[(a, u)]))
+                        .sum::<f64>()
+            })
+            .sum()
     }
 }
 
@@ -159,7 +247,8 @@ impl FrfModel {
                     .map(|a| (0..pos.len()).map(|b| all[j].values[(a, b)] * shapes[(b, i)]).sum())
                     .collect();
                 let couple = |k: usize| (0..pos.len()).map(|a| shapes[(a, k)] * bi[a]).sum::<f64>();
-                out[(r, c)] = loss.zeta_slope(&state.modes, i, eta * couple(i), couple);
+                let on_springs: Vec<(usize, f64)> = pos.iter().copied().zip(bi.iter().copied()).collect();
+                out[(r, c)] = loss.zeta_slope(&state.modes, i, eta * couple(i), couple, Some(&on_springs));
             }
         }
         out
@@ -168,13 +257,20 @@ impl FrfModel {
 
 impl ModalState {
     /// `∂ζ_i` with `λ_i` held for a stiffness change `∂K` that couples the
-    /// modes by `coupling(k) = C_{ki}` and is a coefficient of spring field
-    /// `field` (`None`: a stiffness field, which leaves the supports alone):
+    /// modes by `coupling(k) = C_{ki}` and is a coefficient of a spring
+    /// field (`None`: a stiffness field, which leaves the supports alone):
     /// the loss factors' share moving with the shape.
-    pub(crate) fn support_zeta_slope(&self, i: usize, field: Option<usize>, coupling: impl Fn(usize) -> f64) -> f64 {
+    /// `spring` is the spring field and `∂K φ_i` on the spring dofs
+    /// (`(index in U, value)`) for a spring coefficient.
+    pub(crate) fn support_zeta_slope(
+        &self,
+        i: usize,
+        spring: Option<(usize, &[(usize, f64)])>,
+        coupling: impl Fn(usize) -> f64,
+    ) -> f64 {
         self.loss.as_ref().map_or(0.0, |l| {
-            let direct = field.map_or(0.0, |s| l.factor(s) * coupling(i));
-            l.zeta_slope(&self.modes, i, direct, coupling)
+            let direct = spring.map_or(0.0, |(s, _)| l.factor(s) * coupling(i));
+            l.zeta_slope(&self.modes, i, direct, coupling, spring.map(|(_, b)| b))
         })
     }
 

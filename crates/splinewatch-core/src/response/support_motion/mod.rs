@@ -48,6 +48,9 @@ use faer::{c64, Mat};
 use ground_forces::{ground_force, truncated_forces, GroundLifts};
 use std::f64::consts::PI;
 
+/// A load as a sparse row on the generalised dofs `(dof, value)`.
+type LoadRow = Vec<(usize, f64)>;
+
 /// A measured ground input: group `group`'s ground acceleration along global
 /// axis `axis` (0 = x, 1 = y, 2 = z).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -150,15 +153,17 @@ impl SupportMotion {
     }
 
     /// `frf` with a Ritz basis at `(kappa, theta)` for the ground forces of
-    /// `inputs` and the spring coefficients `varied` (flat indices): the
-    /// model [`Self::with_state`] solves on by projection wherever only those
-    /// springs move ([`FrfModel::with_reanalysis`]); a dense model as it is.
+    /// `inputs`, the `extra` loads (the loss factors',
+    /// [`FrfModel::loss_factor_loads`]) and the spring coefficients `varied`
+    /// (flat indices): the model [`Self::with_state`] solves on by
+    /// projection wherever only those springs move
+    /// ([`FrfModel::with_reanalysis`]); a dense model as it is.
     pub fn reanalysed(
         frf: &FrfModel,
         model: &ShellModel,
         groups: &SupportGroups,
         (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
-        inputs: &[GroundInput],
+        (inputs, extra): (&[GroundInput], &[LoadRow]),
         varied: &[usize],
     ) -> Result<FrfModel, SupportError> {
         if frf.dense().is_some() {
@@ -166,7 +171,8 @@ impl SupportMotion {
         }
         check_inputs(groups, inputs)?;
         let lifts = GroundLifts::new(model, groups)?;
-        let forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
+        let mut forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
+        forces.extend_from_slice(extra);
         frf.with_reanalysis((kappa, theta), &forces, varied)
             .map_err(|e| SupportError::Solve(e.to_string()))
     }
