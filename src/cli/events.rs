@@ -35,6 +35,9 @@ pub struct EventsArgs {
     /// recording (a triggered logger's: each burst, silences longer than `[events] gap_seconds` apart, one event).
     #[arg(required = true, num_args = 1..)]
     pub input: Vec<PathBuf>,
+    /// The record's first sample, RFC 3339, over the time its files give (one input only).
+    #[arg(long, value_parser = super::ground::parse_start)]
+    pub start: Option<i128>,
     /// Write every event's results as MCAP (`<prefix>/events/*` topics).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -52,16 +55,28 @@ pub struct EventsArgs {
     pub rerun_save: Option<PathBuf>,
 }
 
-pub fn events(a: EventsArgs) -> Result<()> {
+/// The config of `events`, with ground sensors; `--start` with one input.
+fn checked_config(a: &EventsArgs) -> Result<Config> {
     let cfg = load_config(&a.config)?;
     if !cfg.has_ground_sensors() {
         bail!("config: sensors: events need ground sensors ([[sensors]] with support = \"<group>\")");
     }
+    if a.start.is_some() && a.input.len() > 1 {
+        bail!(
+            "--start gives one record's first sample: with {} inputs, run events once per input that needs it",
+            a.input.len()
+        );
+    }
+    Ok(cfg)
+}
+
+pub fn events(a: EventsArgs) -> Result<()> {
+    let cfg = checked_config(&a)?;
     let mut chain = Chain::resume(a.state.as_deref())?;
     chain.check(&cfg)?;
     // The model once, for the records' ground plan and then the chain.
     let parts = chain.parts(&cfg)?;
-    let mut loaded = load_inputs(&cfg, &parts.plan, &a.input);
+    let mut loaded = load_inputs(&cfg, &parts.plan, &a.input, a.start);
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
     let mut writer = a
@@ -178,19 +193,22 @@ fn mode_points(lines: &[EventLine], kind: EventAmplitude) -> Vec<super::events_p
     points
 }
 
-/// The events of one input: its record, or each burst of it when it holds
-/// several (a triggered logger's raw-input recording: silences longer than
-/// `[events] gap_seconds`), named `<file>@<start>`.
 /// Every input's events, in the inputs' order: read on as many threads as
 /// there are cores (each record is decompressed, parsed and checked on its
 /// own: 20 Painter Street zips 0.5 s on one).
-fn load_inputs(cfg: &Config, plan: &[GroundInputPlan], inputs: &[PathBuf]) -> Vec<Loaded> {
+fn load_inputs(cfg: &Config, plan: &[GroundInputPlan], inputs: &[PathBuf], start: Option<i128>) -> Vec<Loaded> {
     let threads = std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get);
     let chunk = inputs.len().div_ceil(threads).max(1);
     std::thread::scope(|scope| {
         let handles: Vec<_> = inputs
             .chunks(chunk)
-            .map(|part| scope.spawn(move || part.iter().flat_map(|p| load_input(cfg, plan, p)).collect::<Vec<_>>()))
+            .map(|part| {
+                scope.spawn(move || {
+                    part.iter()
+                        .flat_map(|p| load_input(cfg, plan, p, start))
+                        .collect::<Vec<_>>()
+                })
+            })
             .collect();
         handles
             .into_iter()
@@ -199,15 +217,20 @@ fn load_inputs(cfg: &Config, plan: &[GroundInputPlan], inputs: &[PathBuf]) -> Ve
     })
 }
 
-fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path) -> Vec<Loaded> {
+/// The events of one input: its record, or each burst of it when it holds
+/// several (a triggered logger's raw-input recording: silences longer than
+/// `[events] gap_seconds`), named `<file>@<start>`; what the import did to
+/// the record in each event's notes.
+fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path, start: Option<i128>) -> Vec<Loaded> {
     let name = path
         .file_name()
         .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-    let blocks = match event_files(path).and_then(|files| read_records(cfg, &files)) {
-        Ok(blocks) => blocks,
+    let records = match event_files(path).and_then(|files| read_records(cfg, &files, start)) {
+        Ok(records) => records,
         Err(e) => return vec![load(cfg, plan, name, Err(e))],
     };
-    let bursts = split(blocks, cfg.events().gap_seconds, cfg.events().max_seconds);
+    let notes = records.notes;
+    let bursts = split(records.blocks, cfg.events().gap_seconds, cfg.events().max_seconds);
     if bursts.is_empty() {
         // Said by the check: the record holds none of the config's channels.
         return vec![load(cfg, plan, name, Ok(Vec::new()))];
@@ -221,7 +244,7 @@ fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path) -> Vec<Loaded
             } else {
                 name.clone()
             };
-            load(cfg, plan, event, Ok(b.blocks))
+            load(cfg, plan, event, Ok(b.blocks)).noted(&notes)
         })
         .collect()
 }

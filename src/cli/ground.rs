@@ -25,6 +25,10 @@ pub struct PredictArgs {
     /// The record: a station's .zip or .V2 files (one event), raw-input MCAP recordings, or a logger's CSV/UFF 58 file.
     #[arg(required = true, num_args = 1..)]
     pub record: Vec<PathBuf>,
+    /// The record's first sample, RFC 3339: over the time a station's or logger's file gives (a file
+    /// without one, or a recorder whose clock was wrong).
+    #[arg(long, value_parser = parse_start)]
+    pub start: Option<i128>,
     /// Parameters of an update (`update --json` output): the model at those values.
     #[arg(long, conflicts_with = "state")]
     pub parameters: Option<PathBuf>,
@@ -45,6 +49,12 @@ pub struct PredictArgs {
     pub rerun_save: Option<PathBuf>,
 }
 
+/// `--start`: an RFC 3339 timestamp, as ns since the epoch.
+pub fn parse_start(text: &str) -> Result<i128, String> {
+    crate::io::wire::parse_timestamp(text)
+        .ok_or_else(|| format!("{text:?} is not an RFC 3339 timestamp (e.g. 2022-12-20T10:34:01Z)"))
+}
+
 /// The updating parameters named in an `update --json` result or a state file.
 fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -58,8 +68,11 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         (None, None) => Vec::new(),
     };
     let mut model = GroundModel::new(&cfg, &named)?;
-    let blocks = read_records(&cfg, &a.record)?;
-    let event = align_event(&cfg, &mut model.plan, &blocks)?;
+    let records = read_records(&cfg, &a.record, a.start)?;
+    for note in &records.notes {
+        errln!("{note}");
+    }
+    let event = align_event(&cfg, &mut model.plan, &records.blocks)?;
     if event.deck.is_empty() {
         bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
     }
@@ -184,8 +197,11 @@ pub fn simulate_ground(
         bail!("--noise must be >= 0, got {noise}");
     }
     let mut model = GroundModel::new(cfg, &[])?;
-    let blocks = read_records(cfg, record)?;
-    let event = align_event(cfg, &mut model.plan, &blocks)?;
+    let records = read_records(cfg, record, None)?;
+    for note in &records.notes {
+        errln!("{note}");
+    }
+    let event = align_event(cfg, &mut model.plan, &records.blocks)?;
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
     let mut deck = model.respond(channel, event.fs);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -323,6 +339,10 @@ pub struct IdentifyArgs {
     /// The record: a station's .zip or .V2 files (one event), raw-input MCAP recordings, or a logger's CSV/UFF 58 file.
     #[arg(required = true, num_args = 1..)]
     pub record: Vec<PathBuf>,
+    /// The record's first sample, RFC 3339: over the time a station's or logger's file gives (a file
+    /// without one, or a recorder whose clock was wrong).
+    #[arg(long, value_parser = parse_start)]
+    pub start: Option<i128>,
     #[command(flatten)]
     pub output: super::identified::ModesOutput,
     /// Also write the multi-input H1 transmissibilities (inputs to every output, with the multiple
@@ -336,7 +356,11 @@ pub struct IdentifyArgs {
 /// sensor) against every deck acceleration sensor it holds.
 pub fn identify(a: IdentifyArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let blocks = read_records(&cfg, &a.record)?;
+    let records = read_records(&cfg, &a.record, a.start)?;
+    for note in &records.notes {
+        errln!("{note}");
+    }
+    let blocks = records.blocks;
     let recorded = |i: usize| recorded(&cfg, &blocks, i);
     let (force, inputs): (Option<usize>, Vec<usize>) = if cfg.has_ground_sensors() {
         let ground: Vec<usize> = (cfg.deck_sensor_count()..cfg.sensors.len())

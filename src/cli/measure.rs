@@ -250,6 +250,7 @@ pub fn import(a: ImportArgs) -> Result<()> {
     for note in &series.notes {
         errln!("{input}: {note}");
     }
+    let notes = series.notes.clone();
     let start_ns = a
         .start
         .as_deref()
@@ -273,6 +274,9 @@ pub fn import(a: ImportArgs) -> Result<()> {
     let blocks = imported.blocks;
     let prefix = cfg.topic_prefix();
     let mut writer = RecordingWriter::create(out, a.encoding)?;
+    if !notes.is_empty() {
+        writer.write_import_notes(&input, &notes)?;
+    }
     for b in &blocks {
         writer.write_block(&prefix, b)?;
     }

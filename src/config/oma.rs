@@ -21,6 +21,11 @@ pub struct OmaConfig {
     /// Horizon: block rows of the Hankel (SSI-cov) or data (SRIM) matrices,
     /// in samples; the orders computed are capped at the size it gives.
     pub block_rows: usize,
+    /// The horizon in seconds instead: `block_rows` is this times the
+    /// record's rate, so one config holds records at 50, 100 and 200 Hz
+    /// (a station's recorders of several vintages) with the same horizon
+    /// and the same shortest usable record.
+    pub horizon_seconds: Option<f64>,
     /// Lowest model order of the stabilisation diagram.
     pub min_order: usize,
     /// Highest model order of the stabilisation diagram.
@@ -49,6 +54,7 @@ impl Default for OmaConfig {
             window_seconds: None,
             window_hop_seconds: None,
             block_rows: d.block_rows,
+            horizon_seconds: None,
             min_order: d.min_order,
             max_order: d.max_order,
             order_step: d.order_step,
@@ -141,6 +147,11 @@ impl Config {
             })
             .collect::<Result<Vec<usize>, _>>()?;
         let settings = o.settings(self.frf.band)?;
+        if let Some(h) = o.horizon_seconds {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(err("oma.horizon_seconds", format!("must be positive, got {h}")));
+            }
+        }
         if let Some(w) = o.window_seconds {
             if !(w.is_finite() && w > 0.0) {
                 return Err(err("oma.window_seconds", format!("must be positive, got {w}")));
@@ -154,6 +165,24 @@ impl Config {
                     format!("must be positive and at most the window ({window} s), got {hop}"),
                 ));
             }
+        }
+        Ok((settings, references))
+    }
+
+    /// [`Config::oma_settings`] for a record at `fs` Hz: the horizon from
+    /// `[oma] horizon_seconds` when given.
+    pub fn oma_settings_at(&self, fs: f64) -> Result<(OmaSettings, Vec<usize>), ConfigError> {
+        let (mut settings, references) = self.oma_settings()?;
+        if let Some(seconds) = self.oma().horizon_seconds {
+            let rows = (seconds * fs).round();
+            if !(seconds.is_finite() && rows >= 2.0) {
+                return Err(err(
+                    "oma.horizon_seconds",
+                    format!("must give 2 block rows or more at {fs} Hz, got {seconds} s"),
+                ));
+            }
+            settings.block_rows = rows as usize;
+            settings.check().map_err(|e| err("oma.horizon_seconds", e))?;
         }
         Ok((settings, references))
     }
@@ -185,5 +214,32 @@ mod tests {
         assert_eq!(sensors(&ambient), sensors(&bundled));
         assert_eq!(ambient.analysis_window(), (1200.0, None));
         assert_eq!(bundled.analysis_window(), (20.0, None));
+    }
+
+    /// `[oma] horizon_seconds` gives the same horizon in seconds at any
+    /// rate: 0.5 s is 25 block rows at 50 Hz and 100 at 200 Hz; without it
+    /// `block_rows` counts samples; a horizon of less than 2 rows, or not
+    /// positive, is refused naming the key.
+    #[test]
+    fn a_horizon_in_seconds_is_the_same_at_any_rate() {
+        let base = include_str!("../../config/painter-street.toml");
+        let with = |line: &str| Config::from_toml(&base.replace("block_rows = 100", line));
+        let seconds = with("horizon_seconds = 0.5").unwrap();
+        assert_eq!(seconds.oma_settings_at(50.0).unwrap().0.block_rows, 25);
+        assert_eq!(seconds.oma_settings_at(200.0).unwrap().0.block_rows, 100);
+        let rows = with("block_rows = 100").unwrap();
+        assert_eq!(rows.oma_settings_at(50.0).unwrap().0.block_rows, 100);
+        assert_eq!(rows.oma_settings_at(200.0).unwrap().0.block_rows, 100);
+        let e = seconds.oma_settings_at(2.0).unwrap_err().to_string();
+        assert!(e.contains("oma.horizon_seconds") && e.contains("2 block rows"), "{e}");
+        let e = with("horizon_seconds = -1.0")
+            .unwrap()
+            .oma_settings()
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("oma.horizon_seconds") && e.contains("must be positive"),
+            "{e}"
+        );
     }
 }

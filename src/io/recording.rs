@@ -119,6 +119,23 @@ impl<W: Write + Seek> RecordingWriter<W> {
         Ok(payload.len())
     }
 
+    /// What an import said of the data it wrote (a recorder placed by its
+    /// channels' motion, channels cut to a common span): an MCAP metadata
+    /// record `splinewatch.import` with the source and one `note.N` per
+    /// sentence, which readers (Foxglove, `mcap info`) show beside the data.
+    pub fn write_import_notes(&mut self, source: &str, notes: &[String]) -> Result<()> {
+        let mut metadata = BTreeMap::from([("source".to_string(), source.to_string())]);
+        for (i, note) in notes.iter().enumerate() {
+            metadata.insert(format!("note.{}", i + 1), note.clone());
+        }
+        self.writer
+            .write_metadata(&mcap::records::Metadata {
+                name: "splinewatch.import".into(),
+                metadata,
+            })
+            .context("cannot write the import's notes to the MCAP file")
+    }
+
     /// One message at `time_ns` (log and publish time).
     fn write_message(&mut self, channel_id: u16, time_ns: i128, data: &[u8]) -> Result<()> {
         let log_time = u64::try_from(time_ns).context("timestamps before 1970 cannot be recorded")?;

@@ -102,6 +102,8 @@ impl OmaReport {
 #[derive(Debug, Clone)]
 pub(super) struct Identification {
     pub(super) settings: OmaSettings,
+    /// `[oma] horizon_seconds`: the block rows at each record's rate.
+    horizon_seconds: Option<f64>,
     /// Reference channels (positions among the outputs).
     pub(super) references: Vec<usize>,
     /// The acceleration sensors, in channel order.
@@ -141,6 +143,7 @@ impl Identification {
         let (settings, references) = config.oma_settings()?;
         Ok(Self {
             settings,
+            horizon_seconds: config.oma().horizon_seconds,
             references,
             sensors: outputs.iter().map(|&i| config.sensors[i].name.clone()).collect(),
             min_mac: config.updating.min_mac,
@@ -153,14 +156,19 @@ impl Identification {
     /// `fs` from `start_ns`; NaN for missing samples).
     fn identify(&self, channels: &[Vec<f64>], start_ns: i128, fs: f64) -> Result<OmaReport, OmaError> {
         let views: Vec<&[f64]> = channels.iter().map(Vec::as_slice).collect();
+        let mut settings = self.settings.clone();
+        if let Some(seconds) = self.horizon_seconds {
+            // Checked by the config: at least 2 rows at the configured rates.
+            settings.block_rows = ((seconds * fs).round() as usize).max(2);
+        }
         let correlations =
-            OutputCorrelations::from_samples(&views, &self.references, self.settings.max_lag(), self.settings.batches)?;
+            OutputCorrelations::from_samples(&views, &self.references, settings.max_lag(), settings.batches)?;
         Ok(OmaReport {
             start_ns,
             samples: channels.first().map_or(0, Vec::len),
             fs,
             sensors: self.sensors.clone(),
-            result: identify(&correlations, fs, &self.settings)?,
+            result: identify(&correlations, fs, &settings)?,
             spectrum: self.with_spectrum.then(|| spectrum(&views, fs)).flatten(),
         })
     }

@@ -21,13 +21,24 @@ pub fn recorded(config: &Config, blocks: &[RecordedBlock], i: usize) -> bool {
         .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
 }
 
+/// The channel blocks of an event's files and what reading them found.
+pub struct Records {
+    pub blocks: Vec<RecordedBlock>,
+    /// What the import did to the data, a sentence each (a recorder placed
+    /// by its channels' motion, channels cut to the span all share).
+    pub notes: Vec<String>,
+}
+
 /// Every channel block of the records: V2 files and station zips are
-/// imported (together: one event), MCAP recordings read.
-pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBlock>> {
+/// imported (together: one event), MCAP recordings read. `start_ns`, when
+/// given, is the first sample's time of the V2 and logger files (over
+/// their own; `--start`); an MCAP recording keeps its times.
+pub fn read_records(config: &Config, paths: &[PathBuf], start_ns: Option<i128>) -> Result<Records> {
     let limits = crate::pipeline::block_limits(config);
     let prefix = config.topic_prefix();
     let mut v2 = Vec::new();
     let mut blocks = Vec::new();
+    let mut notes = Vec::new();
     for path in paths {
         let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
         let extension = path
@@ -36,6 +47,12 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
             .unwrap_or_default()
             .to_ascii_lowercase();
         if bytes.starts_with(b"\x89MCAP") {
+            if start_ns.is_some() {
+                bail!(
+                    "{}: --start applies to station (V2) and logger files; an MCAP recording has its own times",
+                    path.display()
+                );
+            }
             let (mut read, rejected) =
                 read_recording(&bytes, &limits).with_context(|| format!("reading {}", path.display()))?;
             for r in &rejected {
@@ -53,9 +70,9 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
                 crate::io::import::read_csv(text, &Default::default())
             }
             .with_context(|| path.display().to_string())?;
-            blocks.extend(imported_blocks(config, series, &prefix).with_context(|| {
+            blocks.extend(imported_blocks(config, series, &prefix, start_ns).with_context(|| {
                 format!(
-                    "{}: convert it with `splinewatch import` (--fs, --start) first",
+                    "{}: give --start, or convert it with `splinewatch import` (--fs, --start) first",
                     path.display()
                 )
             })?);
@@ -65,12 +82,10 @@ pub fn read_records(config: &Config, paths: &[PathBuf]) -> Result<Vec<RecordedBl
     }
     if !v2.is_empty() {
         let series = crate::io::cosmos_v2::read_v2(&v2)?;
-        for note in &series.notes {
-            tracing::info!("{}: {note}", v2[0].1);
-        }
-        blocks.extend(imported_blocks(config, series, &prefix)?);
+        notes.extend(series.notes.iter().cloned());
+        blocks.extend(imported_blocks(config, series, &prefix, start_ns)?);
     }
-    Ok(blocks)
+    Ok(Records { blocks, notes })
 }
 
 /// A file's columns as the config's channel blocks (as `import` makes them).
@@ -78,10 +93,11 @@ fn imported_blocks(
     config: &Config,
     series: crate::io::import::ImportedSeries,
     prefix: &str,
+    start_ns: Option<i128>,
 ) -> Result<Vec<RecordedBlock>> {
     let options = ImportOptions {
         fs: None,
-        start_ns: None,
+        start_ns,
         block_seconds: 10.0,
         strict: false,
         units: None,
@@ -152,7 +168,7 @@ pub fn identify_io(
     splinewatch_core::identification::oma::OmaResult,
     splinewatch_core::identification::oma::OmaSettings,
 )> {
-    let (mut settings, _) = cfg.oma_settings()?;
+    let (mut settings, _) = cfg.oma_settings_at(fs)?;
     // The exact replicates: their first-order continuation overstated SRIM's
     // spreads up to fivefold on simulated records (the core's verification),
     // and 8-165x on the overpass simulated from the 20 Painter Street grounds

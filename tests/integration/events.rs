@@ -134,7 +134,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     for reason in [
         ("dead.csv", "ch9: a dead channel"),
         ("clipped.csv", "ch4: clipped (10 samples in a row"),
-        ("short.csv", "500 samples (5.0 s), fewer than"),
+        ("short.csv", "5.0 s (500 samples at 100 Hz), shorter than"),
         ("no-ground.csv", "none of the config's ground sensors"),
         ("missing.zip", "cannot read"),
     ] {
@@ -449,7 +449,9 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
     .unwrap();
     for r in records {
         let path = std::path::PathBuf::from(record(r));
-        let burst = splinewatch::service::records::read_records(&cfg, &[path]).unwrap();
+        let burst = splinewatch::service::records::read_records(&cfg, &[path], None)
+            .unwrap()
+            .blocks;
         for b in &burst {
             writer.write_block(&cfg.topic_prefix(), &b.block).unwrap();
         }

@@ -103,8 +103,12 @@ fn issue_44_the_painter_street_model_predicts_a_real_event_better_than_its_groun
     let plots = dir.join("plots");
     let out = dir.join("predicted.mcap");
     let rrd = dir.join("predicted.rrd");
+    // `--start` over the file's own time (here the same instant, so the
+    // figures are the record's).
     let report = predict_json(&[
         &record(EVENT_2015),
+        "--start",
+        "2015-01-28T21:08:38Z",
         "--plot",
         plots.to_str().unwrap(),
         "--out",
@@ -120,6 +124,7 @@ fn issue_44_the_painter_street_model_predicts_a_real_event_better_than_its_groun
             summary.entities
         );
     }
+    assert_eq!(report["start"], "2015-01-28T21:08:38Z", "{report}");
     let [t0, t1] = [0, 1].map(|k| report["strong_span_s"][k].as_f64().unwrap());
     let seconds = report["record_seconds"].as_f64().unwrap();
     assert!(0.0 <= t0 && t0 < t1 && t1 <= seconds, "{report}");
@@ -186,6 +191,35 @@ fn issue_44_ground_inputs_are_listed_and_missing_ones_refused() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success() && e.contains("none of the config's ground sensors"),
+        "{e}"
+    );
+    // `--start`: a timestamp, for files that take one, one event at a time.
+    let sinello = ["--config", config.to_str().unwrap(), "recordings/sinello-demo.mcap"];
+    let o = splinewatch(&[&["predict", "--start", "2026-11-21T10:00:00Z"][..], &sinello].concat());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("an MCAP recording has its own times"),
+        "{e}"
+    );
+    let o = splinewatch(&[&["identify", "--start", "yesterday"][..], &sinello].concat());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("\"yesterday\" is not an RFC 3339 timestamp"),
+        "{e}"
+    );
+    let two = [record(EVENT_2015), record(EVENT_2015)];
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        CONFIG,
+        "--start",
+        "2015-01-28T21:08:38Z",
+        &two[0],
+        &two[1],
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && e.contains("with 2 inputs, run events once per input"),
         "{e}"
     );
     let bad = std::fs::read_to_string(&config)
@@ -373,7 +407,9 @@ fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator()
             );
         }
         let path = std::path::PathBuf::from(record(peer["record"].as_str().unwrap()));
-        let blocks = splinewatch::service::records::read_records(&cfg, &[path]).unwrap();
+        let blocks = splinewatch::service::records::read_records(&cfg, &[path], None)
+            .unwrap()
+            .blocks;
         let wanted: Vec<(usize, ChannelQuantity)> = inputs
             .iter()
             .chain(&outputs)

@@ -13,7 +13,7 @@ use splinewatch::service::replay::{replay, ReplayOptions};
 use std::path::Path;
 use std::process::Command;
 
-fn root() -> &'static Path {
+pub(super) fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
@@ -29,9 +29,9 @@ fn import(args: &[&str]) -> std::process::Output {
 
 /// The blocks of an imported recording, per channel, concatenated.
 /// An imported channel: name, quantity, rate, start, samples.
-type Channel = (String, ChannelQuantity, f64, i128, Vec<f64>);
+pub(super) type Channel = (String, ChannelQuantity, f64, i128, Vec<f64>);
 
-fn channels(path: &Path) -> Vec<Channel> {
+pub(super) fn channels(path: &Path) -> Vec<Channel> {
     let (blocks, rejected) = read_recording(&std::fs::read(path).unwrap(), &Default::default()).unwrap();
     assert!(rejected.is_empty());
     let mut out: Vec<Channel> = Vec::new();

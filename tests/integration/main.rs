@@ -27,4 +27,5 @@ mod report;
 mod robust_updating;
 #[cfg(unix)]
 mod security;
+mod stations;
 mod uff;

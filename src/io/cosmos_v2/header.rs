@@ -171,3 +171,16 @@ pub(super) fn instant(year: i32, month: u32, day: u32, clock: &str, zone: &str) 
     let midnight = crate::io::wire::parse_timestamp(&text)?;
     Some(midnight + (seconds * 1e9).round() as i128 - i128::from(offset_hours) * 3_600_000_000_000)
 }
+
+/// `01336-E0784-10190.09   Start time:  7/07/10, 23:54 GMT (*LoQ*)` →
+/// (`E0784`, whether the start is flagged): the recorder of the channel
+/// (the second part of the record's id) and the CGS's flag on its clock,
+/// `*LoQ*` (low quality: no time signal, the clock drifted). Only the
+/// current layout has this line.
+pub(super) fn recorder_clock(line: &str) -> Option<(String, bool)> {
+    let lower = line.to_ascii_lowercase();
+    let at = lower.find("start time:")?;
+    let id = line[..at].split_whitespace().next()?;
+    let recorder = id.split('-').nth(1).filter(|r| !r.is_empty())?;
+    Some((recorder.to_string(), lower[at..].contains("loq")))
+}

@@ -25,15 +25,18 @@
 use crate::io::import::{ImportError, ImportedSeries};
 use std::io::Read;
 
+mod clock;
 mod grid;
 mod header;
+pub mod placement;
 #[cfg(test)]
 mod tests;
 
+use clock::{align_flagged_recorders, Clock, Recorder};
 use grid::to_series;
 use header::{
     channel_description, channel_number, field_width, fields, file_channel_number, number_after, record_start,
-    series_unit, station_channel, trigger_start,
+    recorder_clock, series_unit, station_channel, trigger_start,
 };
 
 /// One channel's acceleration as the file gives it.
@@ -49,6 +52,8 @@ pub(super) struct V2Channel {
     pub(super) time_step: f64,
     pub(super) unit: String,
     pub(super) start_ns: Option<i128>,
+    /// The recorder and its clock, when the header says (the current layout).
+    pub(super) recorder: Option<Recorder>,
     pub(super) values: Vec<f64>,
 }
 
@@ -78,9 +83,15 @@ pub(super) fn error(what: &str, message: impl Into<String>) -> ImportError {
 /// Reads `.V2` files or `.zip` files of them (told by their first bytes),
 /// each given with its name (for messages and, when line 8 gives none, the
 /// channel number), into one series: the channels of all of them, on one
-/// grid (see `to_series`: the lowest rate over the common span).
+/// grid (see `to_series`: the lowest rate over the common span), the
+/// recorders whose clock is flagged placed by their channels' motion first
+/// (see `clock`; said in the series' notes).
 pub fn read_v2(files: &[(Vec<u8>, String)]) -> Result<ImportedSeries, ImportError> {
-    to_series(read_channels(files)?)
+    let mut channels = read_channels(files)?;
+    let clocks = align_flagged_recorders(&mut channels);
+    let mut series = to_series(channels)?;
+    series.notes.splice(0..0, clocks);
+    Ok(series)
 }
 
 /// Every channel of the files, as `import --list` shows them, by channel.
@@ -279,6 +290,13 @@ fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
         .iter()
         .find_map(|l| record_start(l))
         .or_else(|| header.iter().find_map(|l| trigger_start(l)));
+    let recorder = header
+        .iter()
+        .find_map(|l| recorder_clock(l))
+        .map(|(id, flagged)| Recorder {
+            id,
+            clock: if flagged { Clock::Flagged } else { Clock::Trusted },
+        });
     Ok(V2Channel {
         number,
         file: name.to_string(),
@@ -287,6 +305,7 @@ fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
         time_step,
         unit,
         start_ns,
+        recorder,
         values,
     })
 }

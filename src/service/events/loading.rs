@@ -21,6 +21,15 @@ impl Loaded {
             Err(_) => self.first_sample_ns,
         }
     }
+
+    /// With what reading the record found (a recorder placed by its
+    /// channels' motion, channels cut) first among the event's notes.
+    pub fn noted(mut self, notes: &[String]) -> Self {
+        if let Ok((event, _)) = &mut self.event {
+            event.notes.splice(0..0, notes.iter().cloned());
+        }
+        self
+    }
 }
 
 /// The event `name` of `blocks` (or the error reading them) checked and
@@ -58,7 +67,7 @@ const CLIPPED_RUN: usize = 5;
 /// A dead channel (constant), a clipped one (a run at its extreme) or a
 /// record too short for the identification and the Welch segments.
 fn check_channels(cfg: &Config, event: &Event, plan: &[GroundInputPlan]) -> Result<()> {
-    let (oma, _) = cfg.oma_settings()?;
+    let (oma, _) = cfg.oma_settings_at(event.fs)?;
     let (welch, _) = cfg.welch_settings(event.fs)?;
     for i in ground_sensors(plan).into_iter().chain(event.deck.iter().copied()) {
         let x = event.channels[i].as_deref().unwrap_or_default();
@@ -66,9 +75,18 @@ fn check_channels(cfg: &Config, event: &Event, plan: &[GroundInputPlan]) -> Resu
         let needed = (2 * welch.segment).max(4 * oma.block_rows * oma.batches.max(1));
         if x.len() < needed {
             bail!(
-                "{name}: {} samples ({:.1} s), fewer than the {needed} the identification and two Welch segments need",
+                "{name}: {:.1} s ({} samples at {} Hz), shorter than the {:.1} s the identification (4 horizons of {} samples per batch, {} batches) and two Welch segments need{}",
+                x.len() as f64 / event.fs,
                 x.len(),
-                x.len() as f64 / event.fs
+                event.fs,
+                needed as f64 / event.fs,
+                oma.block_rows,
+                oma.batches.max(1),
+                if cfg.oma().horizon_seconds.is_none() {
+                    " ([oma] block_rows counts samples: horizon_seconds keeps it in seconds at any rate)"
+                } else {
+                    ""
+                }
             );
         }
         let (lo, hi) = x
