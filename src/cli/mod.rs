@@ -11,6 +11,7 @@ mod model;
 mod monitor;
 mod reference;
 mod report;
+mod station;
 
 use crate::io::console::errln;
 use anyhow::Result;
@@ -52,6 +53,9 @@ enum Command {
     Predict(ground::PredictArgs),
     /// Input–output modal identification (SRIM) of a record with measured inputs (ground channels or a force).
     Identify(ground::IdentifyArgs),
+    /// A starter config from a strong-motion station's records (CESMD Volume 2 zips): every channel by
+    /// its station number and orientation, the ground channels as support groups, `[oma]` and `[events]`.
+    Station(station::StationArgs),
     /// Earthquake by earthquake: each record identified, forecast by the model of the events before it,
     /// updated on its transmissibilities and judged against the earlier events at its amplitude.
     Events(events::EventsArgs),
@@ -115,6 +119,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Import(args) => measure::import(args),
         Command::Predict(args) => ground::predict(args),
         Command::Identify(args) => ground::identify(args),
+        Command::Station(args) => station::station(args),
         Command::Events(args) => events::events(args),
         Command::Export(args) => measure::export(args),
         Command::Replay(args) => monitor::replay(args),

@@ -267,6 +267,17 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
                 outln!("  {}", input.describe(&cfg));
             }
         }
+    } else if cfg.has_ground_sensors() {
+        let ground = cfg.sensors.len() - cfg.deck_sensor_count();
+        let mut groups: Vec<&str> = cfg.sensors.iter().filter_map(|s| s.support.as_deref()).collect();
+        groups.sort_unstable();
+        groups.dedup();
+        outln!(
+            "no model: {} structure sensors and {ground} ground sensors in {} support groups ({}) for identification (identify: input-output; oma: output-only; import, frf); predict, events and the model's commands need [model]",
+            cfg.deck_sensor_count(),
+            groups.len(),
+            groups.join(", ")
+        );
     } else {
         outln!(
             "no model: {} sensors for output-only identification (oma, import, frf); the model's commands need [model]",

@@ -263,8 +263,6 @@ impl Config {
                 self.build_damping()?;
             }
             self.build_parameters()?;
-        } else if self.has_ground_sensors() {
-            return Err(err("sensors", "ground sensors (support = …) need a deck: give [model]"));
         } else if self.sensors.is_empty() {
             return Err(err(
                 "model",

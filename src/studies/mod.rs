@@ -18,6 +18,7 @@ pub mod paper;
 pub mod parameters;
 pub mod predict;
 pub mod simulation;
+pub mod station;
 pub mod synth;
 pub mod update;
 

@@ -1,7 +1,7 @@
 //! Strong-motion stations' archives as the CESMD distributes them: the
 //! recorders of a station put on one time line, whatever their clocks.
 
-use super::common::fresh_dir;
+use super::common::{fresh_dir, painter_street_record, splinewatch};
 use super::import::{channels, root, Channel};
 use splinewatch::io::wire::parse_timestamp;
 use std::path::Path;
@@ -96,4 +96,121 @@ fn recorders_whose_clock_is_flagged_are_placed_by_their_ground_channels() {
         let off = *start_ns as f64 * 1e-9 - corrected;
         assert!(off.abs() <= 0.015, "{name}: starts {off:.4} s from scipy's alignment");
     }
+}
+
+/// `station` writes a starter config from a station's records: Painter
+/// Street's 2012 and 2015 records and its 1980 one (another layout, other
+/// descriptions of the same channel numbers). Every channel by station
+/// number, `Tran`/`Long`/`Up` on y/x/z, the ground channels (locations
+/// naming the ground) in one support group per location, the records that
+/// lack a channel and the other descriptions noted; the config is valid
+/// without a model and `identify` runs with it on the 2015 record.
+#[test]
+fn station_writes_a_starter_config_that_identify_runs_with() {
+    let dir = fresh_dir("station");
+    let config = dir.join("painter.toml");
+    let records = [
+        "RioDell_14Sep2012_71842255_ce89324p.zip",
+        "ferndale_28jan2015_72387946_ce89324p.zip",
+        "trinidad-offshore_08nov1980_ce89324p.zip",
+    ]
+    .map(painter_street_record);
+    let mut args = vec!["station", "--out", config.to_str().unwrap()];
+    args.extend(records.iter().map(String::as_str));
+    let o = splinewatch(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let text = std::fs::read_to_string(&config).unwrap();
+    assert!(
+        text.contains("# CSMIP station 89324: Rio Dell - Hwy 101/Painter St. Overpass"),
+        "{text}"
+    );
+    let entry = |name: &str| -> String {
+        let at = text
+            .find(&format!("name = \"{name}\"\n"))
+            .unwrap_or_else(|| panic!("{name} in {text}"));
+        text[at..].split("\n\n").next().unwrap().to_string()
+    };
+    assert!(entry("ch7").contains("direction = \"y\"") && !entry("ch7").contains("support"));
+    assert!(entry("ch5").contains("direction = \"z\""));
+    assert!(
+        entry("ch4").contains("not in trinidad-offshore_08nov1980"),
+        "{}",
+        entry("ch4")
+    );
+    // The 1980 free field, an azimuth without --axis: on compass axes, said.
+    assert!(entry("ch12").contains("direction = \"-y\"") && entry("ch12").contains("support = \"free_field\""));
+    assert!(stderr.contains("ch12 points at 270°: without --axis"), "{stderr}");
+    assert!(entry("ch11").contains("direction = \"x\""));
+    assert!(
+        entry("ch3").contains("support = \"middle_bent_column\""),
+        "{}",
+        entry("ch3")
+    );
+    assert!(entry("ch17").contains("support = \"east_abutment\""));
+    assert!(entry("ch20").contains("support = \"west_abutment\""));
+    assert!(
+        entry("ch1").contains("some records describe it as \"270 DEG"),
+        "{}",
+        entry("ch1")
+    );
+    let o = splinewatch(&["check-config", config.to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        out.contains("4 support groups (east_abutment, free_field, middle_bent_column, west_abutment)"),
+        "{out}"
+    );
+    let o = splinewatch(&["identify", "--config", config.to_str().unwrap(), &records[1], "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let modes: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(!modes["modes"].as_array().unwrap().is_empty(), "{modes}");
+}
+
+/// A station's record `station` cannot read as a bridge's: each problem one
+/// line on stderr and a comment in the file, nothing left out silently (a
+/// channel whose orientation is not read stays in the file, commented); a
+/// record of ground channels only is refused.
+#[test]
+fn station_says_what_it_cannot_read_once() {
+    let dir = fresh_dir("station-bad");
+    let channel = |number: u32, direction: &str, location: &str| {
+        format!(
+            "Corrected accelerogram   99999-X0001-26327.01       Chan  {number}: {direction}\n\
+             Station No. 99999   37.000N, 122.000W    Test  s/n 1\n\
+             Test Building   CGS\n\
+             Chan  {number}: {direction}   Location: {location}\n\
+             Rcrd of Mon Nov 23, 2026 10:00:00.0 UTC\n\
+             \x20    3 points of accel data equally spaced at  0.010 sec, in cm/sec2. (8f10.5)\n\
+             \x20  1.00000   2.00000   3.00000\n"
+        )
+    };
+    let building = dir.join("building.V2");
+    std::fs::write(
+        &building,
+        [channel(1, "Up", "Roof"), channel(2, "Radial", "3rd Floor")]
+            .join("/&  ---------- End of data for channel  1 ----------\n"),
+    )
+    .unwrap();
+    let o = splinewatch(&["station", building.to_str().unwrap()]);
+    let (stdout, stderr) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{stderr}");
+    for said in [
+        "ch2: its orientation \"Radial\" is none of Up, Tran, Long or an azimuth",
+        "no channel's location names the ground",
+        "is this a building's station?",
+    ] {
+        assert_eq!(stderr.matches(said).count(), 1, "{said} once in {stderr}");
+        assert_eq!(stdout.matches(said).count(), 1, "{said} once in the file: {stdout}");
+    }
+    assert!(stdout.contains("# name = \"ch2\""), "{stdout}");
+    let ground = dir.join("ground.V2");
+    std::fs::write(&ground, channel(1, "Up", "Freefield")).unwrap();
+    let o = splinewatch(&["station", ground.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("every channel of the records is on the ground"),
+        "{stderr}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
 }

@@ -184,3 +184,32 @@ pub(super) fn recorder_clock(line: &str) -> Option<(String, bool)> {
     let recorder = id.split('-').nth(1).filter(|r| !r.is_empty())?;
     Some((recorder.to_string(), lower[at..].contains("loq")))
 }
+
+/// `Station No. 89324   40.503N, 124.101W    130-MC …` (or in capitals) →
+/// the station's number and its latitude and longitude in degrees (north
+/// and east positive).
+pub(super) fn station_line(line: &str) -> Option<(String, f64, f64)> {
+    let lower = line.to_ascii_lowercase();
+    let rest = &line[lower.find("station no.")? + 11..];
+    let mut words = rest.split_whitespace();
+    let number = words.next()?.trim_end_matches(',').to_string();
+    let degrees = |word: &str, positive: char, negative: char| -> Option<f64> {
+        let word = word.trim_end_matches(',');
+        let hemisphere = word.chars().last()?.to_ascii_uppercase();
+        let value: f64 = word[..word.len() - 1].parse().ok()?;
+        match hemisphere {
+            h if h == positive => Some(value),
+            h if h == negative => Some(-value),
+            _ => None,
+        }
+    };
+    let latitude = degrees(words.next()?, 'N', 'S')?;
+    let longitude = degrees(words.next()?, 'E', 'W')?;
+    Some((number, latitude, longitude))
+}
+
+/// The station's name on the line after its number: the text before a run
+/// of spaces (`Rio Dell - Hwy 101/Painter St. Overpass   CGS   Data: …`).
+pub(super) fn station_name(line: &str) -> String {
+    line.trim().split("  ").next().unwrap_or_default().trim().to_string()
+}

@@ -36,7 +36,7 @@ use clock::{align_flagged_recorders, Clock, Recorder};
 use grid::to_series;
 use header::{
     channel_description, channel_number, field_width, fields, file_channel_number, number_after, record_start,
-    recorder_clock, series_unit, station_channel, trigger_start,
+    recorder_clock, series_unit, station_channel, station_line, station_name, trigger_start,
 };
 
 /// One channel's acceleration as the file gives it.
@@ -54,7 +54,21 @@ pub(super) struct V2Channel {
     pub(super) start_ns: Option<i128>,
     /// The recorder and its clock, when the header says (the current layout).
     pub(super) recorder: Option<Recorder>,
+    pub(super) station: Option<Station>,
     pub(super) values: Vec<f64>,
+}
+
+/// The station a channel's header names.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Station {
+    /// The CSMIP station number as written (`89324`, `01336`).
+    pub number: String,
+    /// `Rio Dell - Hwy 101/Painter St. Overpass`.
+    pub name: String,
+    /// Degrees north.
+    pub latitude: f64,
+    /// Degrees east (west negative).
+    pub longitude: f64,
 }
 
 /// One channel as `import --list` shows it.
@@ -71,6 +85,7 @@ pub struct V2Summary {
     pub peak: f64,
     pub unit: String,
     pub file: String,
+    pub station: Option<Station>,
 }
 
 pub(super) fn error(what: &str, message: impl Into<String>) -> ImportError {
@@ -107,6 +122,7 @@ pub fn list_v2(files: &[(Vec<u8>, String)]) -> Result<Vec<V2Summary>, ImportErro
             location: c.location,
             unit: c.unit,
             file: c.file,
+            station: c.station,
         })
         .collect())
 }
@@ -290,6 +306,15 @@ fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
         .iter()
         .find_map(|l| record_start(l))
         .or_else(|| header.iter().find_map(|l| trigger_start(l)));
+    let station = header.iter().enumerate().find_map(|(i, l)| {
+        let (number, latitude, longitude) = station_line(l)?;
+        Some(Station {
+            number,
+            name: header.get(i + 1).map(|n| station_name(n)).unwrap_or_default(),
+            latitude,
+            longitude,
+        })
+    });
     let recorder = header
         .iter()
         .find_map(|l| recorder_clock(l))
@@ -306,6 +331,7 @@ fn read_channel(lines: &[&str], name: &str) -> Result<V2Channel, ImportError> {
         unit,
         start_ns,
         recorder,
+        station,
         values,
     })
 }

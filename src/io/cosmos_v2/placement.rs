@@ -59,21 +59,16 @@ pub enum Placement {
 /// Words of a location that put a channel on the structure; they win over
 /// [`GROUND_WORDS`] (`Deck: Near South Abutment` is on the deck).
 pub const STRUCTURE_WORDS: [&str; 8] = [
-    "deck",
-    "girder",
-    "span",
-    "bent cap",
-    "top of",
-    "column top",
-    "roof",
-    "cap beam",
+    "deck", "girder", "span", "midspan", "bent cap", "top", "roof", "cap beam",
 ];
 
 /// Words of a location that put a channel on the ground or a foundation.
-pub const GROUND_WORDS: [&str; 10] = [
+pub const GROUND_WORDS: [&str; 12] = [
     "free field",
     "freefield",
     "ground",
+    "grnd",
+    "bottom of",
     "embankment",
     "footing",
     "pile cap",
@@ -84,13 +79,20 @@ pub const GROUND_WORDS: [&str; 10] = [
 ];
 
 impl Placement {
-    /// The placement a location text gives by the rules above, `None` when
-    /// it names neither.
+    /// The placement a location text gives by the rules above (each word
+    /// matched at a word's start: "top" is not "stop"), `None` when it
+    /// names neither.
     pub fn of(location: &str) -> Option<Self> {
-        let lower = location.to_ascii_lowercase();
-        if STRUCTURE_WORDS.iter().any(|w| lower.contains(w)) {
+        let lower = format!(
+            " {}",
+            location
+                .to_ascii_lowercase()
+                .replace(|c: char| !c.is_ascii_alphanumeric(), " ")
+        );
+        let has = |w: &&str| lower.contains(&format!(" {w}"));
+        if STRUCTURE_WORDS.iter().any(has) {
             Some(Self::Structure)
-        } else if GROUND_WORDS.iter().any(|w| lower.contains(w)) {
+        } else if GROUND_WORDS.iter().any(has) {
             Some(Self::Ground)
         } else {
             None
@@ -128,5 +130,14 @@ mod tests {
         assert_eq!(Placement::of("Deck: Near South Abutment"), Some(Placement::Structure));
         assert_eq!(Placement::of("Abutment 1"), Some(Placement::Ground));
         assert_eq!(Placement::of("Pier 3"), None);
+        assert_eq!(
+            Placement::of("Middle Bent: Column at Grnd Level"),
+            Some(Placement::Ground)
+        );
+        assert_eq!(Placement::of("Middle Bent: Top of Column"), Some(Placement::Structure));
+        assert_eq!(Placement::of("Bent 4: North Column, Top"), Some(Placement::Structure));
+        assert_eq!(Placement::of("Bent 4: Bottom of Column"), Some(Placement::Ground));
+        assert_eq!(Placement::of("Midspan Between Bents 4 & 5"), Some(Placement::Structure));
+        assert_eq!(Placement::of("On Ground: Near West Abutment"), Some(Placement::Ground));
     }
 }
