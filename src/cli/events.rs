@@ -74,9 +74,9 @@ pub fn events(a: EventsArgs) -> Result<()> {
     let cfg = checked_config(&a)?;
     let mut chain = Chain::resume(a.state.as_deref())?;
     chain.check(&cfg)?;
-    // The model once, for the records' ground plan and then the chain.
-    let parts = chain.parts(&cfg)?;
-    let mut loaded = load_inputs(&cfg, &parts.plan, &a.input, a.start);
+    // The model once (when there is one), for the records' ground plan and then the chain.
+    let plan = chain.plan(&cfg)?;
+    let mut loaded = load_inputs(&cfg, &plan, &a.input, a.start);
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
     let mut writer = a

@@ -273,7 +273,7 @@ pub fn check_config(a: CheckConfigArgs) -> Result<()> {
         groups.sort_unstable();
         groups.dedup();
         outln!(
-            "no model: {} structure sensors and {ground} ground sensors in {} support groups ({}) for identification (identify: input-output; oma: output-only; import, frf); predict, events and the model's commands need [model]",
+            "no model: {} structure sensors and {ground} ground sensors in {} support groups ({}) for identification (identify: input-output; oma: output-only; events: modes and verdicts; import, frf); predict, the events' forecast and update, and the model's commands need [model]",
             cfg.deck_sensor_count(),
             groups.len(),
             groups.join(", ")

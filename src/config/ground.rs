@@ -144,17 +144,38 @@ impl Config {
     /// The ground inputs and the sensors behind each (empty without ground
     /// sensors).
     pub fn ground_plan(&self, groups: &SupportGroups) -> Result<Vec<GroundInputPlan>, ConfigError> {
+        self.ground_plan_of(groups.names())
+    }
+
+    /// The ground inputs of a config without a model (identification and
+    /// the events' verdicts): each support group a ground sensor names, in
+    /// the order they are first named.
+    pub fn ground_plan_of_sensors(&self) -> Result<Vec<GroundInputPlan>, ConfigError> {
+        let mut names: Vec<String> = Vec::new();
+        for s in &self.sensors {
+            if let Some(group) = &s.support {
+                if !names.contains(group) {
+                    names.push(group.clone());
+                }
+            }
+        }
+        self.ground_plan_of(&names)
+    }
+
+    /// The ground inputs of the support groups `names` (the model's, or
+    /// the sensors' own).
+    fn ground_plan_of(&self, names: &[String]) -> Result<Vec<GroundInputPlan>, ConfigError> {
         let first = self.deck_sensor_count();
-        let mut own: Vec<[Vec<usize>; 3]> = vec![Default::default(); groups.names().len()];
+        let mut own: Vec<[Vec<usize>; 3]> = vec![Default::default(); names.len()];
         let mut inverted = Vec::new();
         for (i, s) in self.sensors.iter().enumerate().skip(first) {
             let group = s.support.as_deref().unwrap_or_default();
-            let Some(g) = groups.names().iter().position(|n| n == group) else {
+            let Some(g) = names.iter().position(|n| n == group) else {
                 return Err(err(
                     format!("sensors[{i}].support"),
                     format!(
                         "{group:?} is no support group of the model (its springs, bearings, line supports, constraints and beam bases name {})",
-                        groups.names().join(", ")
+                        names.join(", ")
                     ),
                 ));
             };
@@ -168,12 +189,12 @@ impl Config {
         for axis in 0..3 {
             let measured: Vec<String> = (0..own.len())
                 .filter(|&g| !own[g][axis].is_empty())
-                .map(|g| groups.names()[g].clone())
+                .map(|g| names[g].clone())
                 .collect();
             if measured.is_empty() {
                 continue;
             }
-            for (g, name) in groups.names().iter().enumerate() {
+            for (g, name) in names.iter().enumerate() {
                 let sensors = own[g][axis].clone();
                 let borrowed_from = if sensors.is_empty() {
                     measured.clone()

@@ -263,6 +263,8 @@ impl Config {
                 self.build_damping()?;
             }
             self.build_parameters()?;
+        } else if self.has_ground_sensors() {
+            self.ground_plan_of_sensors()?;
         } else if self.sensors.is_empty() {
             return Err(err(
                 "model",

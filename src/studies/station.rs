@@ -314,8 +314,9 @@ fn header(station: &Station, records: &[StationRecord], axis_deg: Option<f64>) -
         GROUND_WORDS.join(", "),
         STRUCTURE_WORDS.join(", ")
     );
-    text.push_str("# It serves `identify` (input-output, from the ground channels) and `oma` as it is;\n");
-    text.push_str("# `predict`, `events` and `update` need a [model] of the structure.\n\n");
+    text.push_str("# It serves `identify` (input-output, from the ground channels), `oma` and `events`\n");
+    text.push_str("# (each event identified and judged on its modes) as it is; the forecast, `predict` and\n");
+    text.push_str("# `update` need a [model] of the structure.\n\n");
     let _ = writeln!(text, "[structure]\nname = \"station-{}\"\n", station.number);
     text
 }

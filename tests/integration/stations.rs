@@ -104,7 +104,7 @@ fn recorders_whose_clock_is_flagged_are_placed_by_their_ground_channels() {
 /// number, `Tran`/`Long`/`Up` on y/x/z, the ground channels (locations
 /// naming the ground) in one support group per location, the records that
 /// lack a channel and the other descriptions noted; the config is valid
-/// without a model and `identify` runs with it on the 2015 record.
+/// without a model; `identify` and `events` run with it.
 #[test]
 fn station_writes_a_starter_config_that_identify_runs_with() {
     let dir = fresh_dir("station");
@@ -165,6 +165,38 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let modes: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(!modes["modes"].as_array().unwrap().is_empty(), "{modes}");
+    // `events` without a model: an event identified and judged on its
+    // modes (no forecast, no update); the 1980 record (19.7 s at 50 Hz) is
+    // shorter than the horizon's 32 s at any rate, and says so in seconds.
+    // (The 2012 record, at 200 Hz a horizon of 200 rows, takes 8 s to identify.)
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        config.to_str().unwrap(),
+        "--json",
+        &records[1],
+        &records[2],
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 2);
+    for line in &lines[1..] {
+        assert!(line["skipped"].is_null(), "{line}");
+        assert!(!line["modes"].as_array().unwrap().is_empty(), "{line}");
+        assert!(
+            line["forecast"].is_null() && line["parameters"].as_array().unwrap().is_empty(),
+            "{line}"
+        );
+        assert_eq!(line["verdict"]["state"], "insufficient history", "{line}");
+    }
+    let skipped = lines[0]["skipped"].as_str().unwrap_or_default();
+    assert!(
+        skipped.contains("19.7 s (985 samples at 50 Hz), shorter than the 32.0 s"),
+        "{skipped}"
+    );
 }
 
 /// A station's record `station` cannot read as a bridge's: each problem one

@@ -84,6 +84,17 @@ impl Chain {
     }
 
     /// The config's model parts, assembled on first use.
+    /// The ground inputs of the events: the model's (built once, see
+    /// [`Chain::parts`]), or, for a config without a model, the support
+    /// groups its ground sensors name.
+    pub fn plan(&mut self, cfg: &Config) -> Result<Vec<GroundInputPlan>> {
+        if cfg.has_model() {
+            Ok(self.parts(cfg)?.plan.clone())
+        } else {
+            Ok(cfg.ground_plan_of_sensors()?)
+        }
+    }
+
     pub fn parts(&mut self, cfg: &Config) -> Result<Arc<GroundParts>> {
         if let Some(parts) = &self.parts {
             return Ok(Arc::clone(parts));

@@ -146,11 +146,16 @@ fn run_chain(
     // otherwise the identification is taken after it, so that one running
     // on another thread overlaps the forecast and the update.
     let fits_modes = cfg.events().residues != Residues::Frf;
-    if fits_modes {
+    if fits_modes && cfg.has_model() {
         take_identification(identified, line)?;
     }
-    let updated = forecast_and_update(cfg, (event, plan), chain, line, amplitude);
-    if !fits_modes {
+    // Without a model the event is identified and judged on its modes.
+    let updated = if cfg.has_model() {
+        forecast_and_update(cfg, (event, plan), chain, line, amplitude)
+    } else {
+        Ok(())
+    };
+    if !fits_modes || !cfg.has_model() {
         take_identification(identified, line)?;
     }
     updated?;
