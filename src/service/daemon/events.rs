@@ -120,8 +120,8 @@ impl EventWorker {
         let config = Arc::clone(&self.config);
         self.running = Some(tokio::task::spawn_blocking(move || {
             let name = format_timestamp(burst.start_ns);
-            let loaded = match chain.parts(&config) {
-                Ok(parts) => load(&config, &parts.plan, name, Ok(burst.blocks)),
+            let loaded = match chain.plan(&config) {
+                Ok(plan) => load(&config, &plan, name, Ok(burst.blocks)),
                 Err(e) => load(&config, &[], name, Err(e)),
             };
             let line = process(&config, &loaded, &mut chain);
