@@ -6,8 +6,10 @@
 //! - [`welch`]: streaming cross spectra, H1/H2/Hv and coherence;
 //! - [`oma`]: SSI-cov with stabilisation, clustering and uncertainty;
 //! - [`srim`]: input–output identification (SRIM) on the same subspace model, stabilisation and uncertainty;
-//! - [`transmissibility`]: multi-input H1 estimates with multiple coherence and the inputs' conditioning.
+//! - [`transmissibility`]: multi-input H1 estimates with multiple coherence and the inputs' conditioning;
+//! - [`lscf`]: the poles common to several frequency response functions (least-squares complex frequency).
 
+pub mod lscf;
 pub mod oma;
 pub mod srim;
 pub mod transmissibility;
