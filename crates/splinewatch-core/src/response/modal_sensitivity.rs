@@ -54,12 +54,7 @@ impl FrfModel {
         let sensors = self.sensor_count();
         let mut eigenvalue = Mat::zeros(modes.len(), blocks.len());
         let mut damping_ratio = Mat::zeros(modes.len(), blocks.len());
-        let field_of: Vec<usize> = self
-            .spring_blocks()
-            .iter()
-            .enumerate()
-            .flat_map(|(s, b)| std::iter::repeat_n(s, b.len()))
-            .collect();
+        let field_of = self.spring_field_of_flat();
         let mut amplitude = Vec::with_capacity(modes.len());
         for (row, &i) in modes.iter().enumerate() {
             let mut da = Mat::zeros(sensors, blocks.len());

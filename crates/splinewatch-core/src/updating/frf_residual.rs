@@ -442,7 +442,7 @@ pub(super) fn parameter_column(
         ParameterKind::Stiffness { field, coefficient } => dtheta[model.flat_field_index(field, coefficient)].clone(),
         ParameterKind::Damping { coefficient } => dgamma[coefficient].clone(),
         ParameterKind::LossFactor { field, count } => {
-            let first = dgamma.len() - model.spring_blocks().len() + field;
+            let first = model.loss_factor_index(dgamma.len(), field);
             summed(dgamma[first..first + count].iter().map(Vec::as_slice))
         }
     }

@@ -174,7 +174,7 @@ pub fn modal_residue(
                     stiffness_rows(field_sens.as_ref().expect("computed when a field is updated"), j);
                 }
                 StiffnessColumns::LossFactor(field, count) => {
-                    let first = gradient.len() - model.spring_blocks().len() + field;
+                    let first = model.loss_factor_index(gradient.len(), field);
                     jac[(row0 + 1 + n, c)] = gradient[first..first + count].iter().sum::<f64>() / x.damping_std;
                 }
                 StiffnessColumns::Damping(coefficient) => {

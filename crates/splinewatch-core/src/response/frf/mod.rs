@@ -398,6 +398,23 @@ impl FrfModel {
         blocks[..field].iter().map(Vec::len).sum::<usize>() + coefficient
     }
 
+    /// The spring field of every flat spring coefficient (the order of
+    /// [`FrfModel::flat_spring_index`]).
+    pub fn spring_field_of_flat(&self) -> Vec<usize> {
+        self.spring_blocks()
+            .iter()
+            .enumerate()
+            .flat_map(|(s, b)| std::iter::repeat_n(s, b.len()))
+            .collect()
+    }
+
+    /// Index of spring field `field`'s loss factor among `damping_parameters`
+    /// damping parameters (the curve's coefficients, then one loss factor per
+    /// spring field: the order of `FrfEvaluation::dh_dgamma`).
+    pub fn loss_factor_index(&self, damping_parameters: usize, field: usize) -> usize {
+        damping_parameters - self.spring_blocks().len() + field
+    }
+
     /// Index of stiffness-field coefficient `coefficient` of field `field`
     /// among all fields' coefficients (the columns of
     /// [`FrfModel::field_sensitivities`]).

@@ -227,12 +227,7 @@ impl FrfModel {
         let Some(loss) = &state.loss else {
             return out;
         };
-        let field_of: Vec<usize> = self
-            .spring_blocks()
-            .iter()
-            .enumerate()
-            .flat_map(|(s, b)| std::iter::repeat_n(s, b.len()))
-            .collect();
+        let field_of = self.spring_field_of_flat();
         let all: Vec<_> = self.spring_blocks().iter().flatten().collect();
         let nm = state.modes.len();
         for (c, &j) in blocks.iter().enumerate() {
