@@ -302,4 +302,70 @@ mod tests {
         let (lag, _) = normalised_peak(&y[..1500], &x);
         assert!((lag + 137.0).abs() < 1e-6, "{lag}");
     }
+
+    fn channel(
+        number: u32,
+        recorder: &str,
+        clock: Clock,
+        direction: &str,
+        start_s: f64,
+        values: Vec<f64>,
+    ) -> V2Channel {
+        V2Channel {
+            number,
+            file: format!("{recorder}/CHAN{number:03}.V2"),
+            direction: direction.into(),
+            location: "Freefield".into(),
+            time_step: 0.01,
+            unit: "cm/s^2".into(),
+            start_ns: Some((start_s * 1e9) as i128),
+            recorder: Some(Recorder {
+                id: recorder.into(),
+                clock,
+            }),
+            station: None,
+            values,
+        }
+    }
+
+    /// With no trusted clock the largest recorder is the reference (said);
+    /// a flagged recorder that shares no direction keeps its clock (said);
+    /// one of pure noise against the other correlates below the floor and
+    /// keeps its clock (said). Nothing moves silently.
+    #[test]
+    fn flagged_recorders_without_a_match_keep_their_clock_and_say_so() {
+        let ground = motion(3000, 3);
+        let mut channels = vec![
+            channel(1, "A", Clock::Flagged, "Tran", 0.0, ground[..2000].to_vec()),
+            channel(2, "A", Clock::Flagged, "Up", 0.0, motion(2000, 4)),
+            channel(3, "B", Clock::Flagged, "Tran", 7.0, ground[500..2500].to_vec()),
+        ];
+        let notes = align_flagged_recorders(&mut channels);
+        assert!(
+            notes[0].contains("no recorder's clock is trusted") && notes[0].contains("recorder A's"),
+            "{notes:?}"
+        );
+        // B's first sample is A's sample 500: 5 s after A's start, not 7.
+        let start = channels[2].start_ns.unwrap() as f64 * 1e-9;
+        assert!((start - 5.0).abs() < 1e-6, "{start} {notes:?}");
+        let mut channels = vec![
+            channel(1, "A", Clock::Trusted, "Tran", 0.0, ground[..2000].to_vec()),
+            channel(2, "B", Clock::Flagged, "Long", 3.0, ground[..2000].to_vec()),
+        ];
+        let notes = align_flagged_recorders(&mut channels);
+        assert!(
+            notes[0].contains("shares no direction") && channels[1].start_ns == Some(3_000_000_000),
+            "{notes:?}"
+        );
+        let mut channels = vec![
+            channel(1, "A", Clock::Trusted, "Tran", 0.0, ground[..2000].to_vec()),
+            channel(2, "B", Clock::Flagged, "Tran", 3.0, motion(2000, 9)),
+        ];
+        let notes = align_flagged_recorders(&mut channels);
+        assert!(
+            notes[0].contains("no pair") && channels[1].start_ns == Some(3_000_000_000),
+            "{notes:?}"
+        );
+        assert_eq!(notes.len(), 1);
+    }
 }
