@@ -3,7 +3,7 @@
 
 use crate::config::{load_config, Config};
 use crate::io::console::{errln, outln};
-use crate::io::recording::RecordingWriter;
+use crate::io::recording::{RecordedBlock, RecordingWriter};
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
 use crate::outputs::rerun::prediction::PredictedChannel;
 use crate::pipeline::estimate::aligned_span;
@@ -49,6 +49,16 @@ pub struct PredictArgs {
     pub rerun_save: Option<PathBuf>,
 }
 
+/// The records' blocks ([`read_records`]), what the import did to them said
+/// on stderr.
+fn read_records_said(cfg: &Config, paths: &[PathBuf], start_ns: Option<i128>) -> Result<Vec<RecordedBlock>> {
+    let records = read_records(cfg, paths, start_ns)?;
+    for note in &records.notes {
+        errln!("{note}");
+    }
+    Ok(records.blocks)
+}
+
 /// `--start`: an RFC 3339 timestamp, as ns since the epoch.
 pub fn parse_start(text: &str) -> Result<i128, String> {
     crate::io::wire::parse_timestamp(text)
@@ -68,11 +78,8 @@ pub fn predict(a: PredictArgs) -> Result<()> {
         (None, None) => Vec::new(),
     };
     let mut model = GroundModel::new(&cfg, &named)?;
-    let records = read_records(&cfg, &a.record, a.start)?;
-    for note in &records.notes {
-        errln!("{note}");
-    }
-    let event = align_event(&cfg, &mut model.plan, &records.blocks)?;
+    let blocks = read_records_said(&cfg, &a.record, a.start)?;
+    let event = align_event(&cfg, &mut model.plan, &blocks)?;
     if event.deck.is_empty() {
         bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
     }
@@ -197,11 +204,8 @@ pub fn simulate_ground(
         bail!("--noise must be >= 0, got {noise}");
     }
     let mut model = GroundModel::new(cfg, &[])?;
-    let records = read_records(cfg, record, None)?;
-    for note in &records.notes {
-        errln!("{note}");
-    }
-    let event = align_event(cfg, &mut model.plan, &records.blocks)?;
+    let blocks = read_records_said(cfg, record, None)?;
+    let event = align_event(cfg, &mut model.plan, &blocks)?;
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
     let mut deck = model.respond(channel, event.fs);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -356,11 +360,7 @@ pub struct IdentifyArgs {
 /// sensor) against every deck acceleration sensor it holds.
 pub fn identify(a: IdentifyArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let records = read_records(&cfg, &a.record, a.start)?;
-    for note in &records.notes {
-        errln!("{note}");
-    }
-    let blocks = records.blocks;
+    let blocks = read_records_said(&cfg, &a.record, a.start)?;
     let recorded = |i: usize| recorded(&cfg, &blocks, i);
     let (force, inputs): (Option<usize>, Vec<usize>) = if cfg.has_ground_sensors() {
         let ground: Vec<usize> = (cfg.deck_sensor_count()..cfg.sensors.len())

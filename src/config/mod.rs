@@ -37,7 +37,7 @@ pub use model::{
     AUTO_TRUNCATED_CONTROL_POINTS, MAX_CONTROL_POINTS, MAX_DENSE_CONTROL_POINTS,
 };
 pub use monitoring::{MonitoringConfig, NotifyConfig};
-pub use oma::OmaConfig;
+pub use oma::{horizon_rows, OmaConfig};
 pub use output::{OutputConfig, RawRecordingConfig};
 pub use patches::FaceConfig;
 pub use schedule::ScheduleConfig;

@@ -174,18 +174,23 @@ impl Config {
     pub fn oma_settings_at(&self, fs: f64) -> Result<(OmaSettings, Vec<usize>), ConfigError> {
         let (mut settings, references) = self.oma_settings()?;
         if let Some(seconds) = self.oma().horizon_seconds {
-            let rows = (seconds * fs).round();
-            if !(seconds.is_finite() && rows >= 2.0) {
+            let rows = horizon_rows(seconds, fs);
+            if !(seconds.is_finite() && rows >= 2) {
                 return Err(err(
                     "oma.horizon_seconds",
                     format!("must give 2 block rows or more at {fs} Hz, got {seconds} s"),
                 ));
             }
-            settings.block_rows = rows as usize;
+            settings.block_rows = rows;
             settings.check().map_err(|e| err("oma.horizon_seconds", e))?;
         }
         Ok((settings, references))
     }
+}
+
+/// The block rows of a horizon of `seconds` at `fs` Hz (`[oma] horizon_seconds`).
+pub fn horizon_rows(seconds: f64, fs: f64) -> usize {
+    (seconds * fs).round() as usize
 }
 
 #[cfg(test)]

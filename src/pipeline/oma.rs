@@ -159,7 +159,7 @@ impl Identification {
         let mut settings = self.settings.clone();
         if let Some(seconds) = self.horizon_seconds {
             // Checked by the config: at least 2 rows at the configured rates.
-            settings.block_rows = ((seconds * fs).round() as usize).max(2);
+            settings.block_rows = crate::config::horizon_rows(seconds, fs).max(2);
         }
         let correlations =
             OutputCorrelations::from_samples(&views, &self.references, settings.max_lag(), settings.batches)?;

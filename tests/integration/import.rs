@@ -31,6 +31,16 @@ fn import(args: &[&str]) -> std::process::Output {
 /// An imported channel: name, quantity, rate, start, samples.
 pub(super) type Channel = (String, ChannelQuantity, f64, i128, Vec<f64>);
 
+/// A config of vertical sensors named `names`, for `import` (which reads
+/// names only), written to `path`.
+pub(super) fn write_naming_config(path: &Path, structure: &str, names: &[&str]) {
+    let sensors: String = names
+        .iter()
+        .map(|c| format!("[[sensors]]\nname = \"{c}\"\ndirection = \"z\"\n\n"))
+        .collect();
+    std::fs::write(path, format!("[structure]\nname = \"{structure}\"\n\n{sensors}")).unwrap();
+}
+
 pub(super) fn channels(path: &Path) -> Vec<Channel> {
     let (blocks, rejected) = read_recording(&std::fs::read(path).unwrap(), &Default::default()).unwrap();
     assert!(rejected.is_empty());
@@ -675,11 +685,11 @@ fn station_archives_as_they_come_import_or_are_refused_by_name() {
     let names: Vec<String> = expected.as_object().unwrap().keys().cloned().collect();
     assert_eq!(names.len(), 18);
     let config = dir.join("painter.toml");
-    let sensors: String = names
-        .iter()
-        .map(|c| format!("[[sensors]]\nname = \"{c}\"\ndirection = \"z\"\n\n"))
-        .collect();
-    std::fs::write(&config, format!("[structure]\nname = \"painter\"\n\n{sensors}")).unwrap();
+    write_naming_config(
+        &config,
+        "painter",
+        &names.iter().map(String::as_str).collect::<Vec<_>>(),
+    );
     let zip = root().join("tests/fixtures/painter-street/trinidad-offshore_08nov1980_ce89324p.zip");
     let import = |inputs: &[&Path], out: &Path| {
         Command::new(env!("CARGO_BIN_EXE_splinewatch"))

@@ -2,7 +2,7 @@
 //! recorders of a station put on one time line, whatever their clocks.
 
 use super::common::{fresh_dir, painter_street_record, splinewatch};
-use super::import::{channels, root, Channel};
+use super::import::{channels, root, write_naming_config, Channel};
 use splinewatch::io::wire::parse_timestamp;
 use std::path::Path;
 use std::process::Command;
@@ -11,11 +11,7 @@ use std::process::Command;
 /// direction does not matter to import): the channels and stderr.
 fn import_named(dir: &Path, zip: &Path, names: &[&str]) -> (Vec<Channel>, String, Vec<u8>) {
     let config = dir.join("station.toml");
-    let sensors: String = names
-        .iter()
-        .map(|c| format!("[[sensors]]\nname = \"{c}\"\ndirection = \"z\"\n\n"))
-        .collect();
-    std::fs::write(&config, format!("[structure]\nname = \"station\"\n\n{sensors}")).unwrap();
+    write_naming_config(&config, "station", names);
     let out = dir.join("station.mcap");
     let o = Command::new(env!("CARGO_BIN_EXE_splinewatch"))
         .args(["import", "--config", config.to_str().unwrap(), "--format", "v2"])

@@ -145,8 +145,9 @@ fn run_chain(
     // The update needs the modes when it fits them (`[events] residues`);
     // otherwise the identification is taken after it, so that one running
     // on another thread overlaps the forecast and the update.
-    let fits_modes = cfg.events().residues != Residues::Frf;
-    if fits_modes && cfg.has_model() {
+    // Without a model there is nothing to overlap: modes first as well.
+    let modes_first = cfg.events().residues != Residues::Frf && cfg.has_model();
+    if modes_first {
         take_identification(identified, line)?;
     }
     // Without a model the event is identified and judged on its modes.
@@ -155,7 +156,7 @@ fn run_chain(
     } else {
         Ok(())
     };
-    if !fits_modes || !cfg.has_model() {
+    if !modes_first {
         take_identification(identified, line)?;
     }
     updated?;
