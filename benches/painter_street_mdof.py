@@ -15,6 +15,10 @@ chrystalchern/mdof, notebooks/uploads/CE89324), in time order:
 - `splinewatch events` (one run over every record) forecasts it with the
   physical model updated on the events before it (issue 45's honest
   forecast);
+- `splinewatch events` on the starter config `splinewatch station` writes
+  from the same zips (no model) forecasts it by the realization identified
+  on the previous event (SRIM of every ground group to every deck channel,
+  `[events] realization_order`), mdof's method in splinewatch;
 
 and both forecasts are scored the same way: NRMSE over the strong motion
 (5-95 % of the energy of the ground channels), median over channels 7, 9, 4.
@@ -25,6 +29,7 @@ import json
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -80,9 +85,29 @@ def main():
         if d["forecast"]:
             scores = {c["sensor"]: c["nrmse_strong"] for c in d["forecast"]["channels"]}
             chain[d["event"]] = statistics.median(scores[f"ch{c}"] for c in OUTPUTS)
+    # Without a model: the station's starter config, the realization chain.
+    zips = [str(p) for p in sorted(directory.glob("*.zip"))]
+    free = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        station = f"{tmp}/station.toml"
+        subprocess.run([binary, "station", *zips, "--out", station], capture_output=True, check=True)
+        t0 = time.perf_counter()
+        out = subprocess.run(
+            [binary, "events", "--config", station, "--json", *zips], capture_output=True, check=True, text=True
+        ).stdout
+        free_seconds = time.perf_counter() - t0
+    for line in out.splitlines():
+        d = json.loads(line)
+        if d["forecast"]:
+            scores = {c["sensor"]: c["nrmse_strong"] for c in d["forecast"]["channels"]}
+            if all(f"ch{c}" in scores for c in OUTPUTS):
+                free[d["event"]] = statistics.median(scores[f"ch{c}"] for c in OUTPUTS)
     previous = None
-    tally = {"events": [0, 0], "sw": [0, 0]}
-    print(f"{'start':20s} {'event':44s} {'mdof s':>7s} {'modes (Hz, damping %) by mdof SRIM':40s} {'mdof prev':>9s} {'sw':>6s} {'events':>6s}")
+    tally = {"events": [0, 0], "sw": [0, 0], "free": [0, 0]}
+    print(
+        f"{'start':20s} {'event':44s} {'mdof s':>7s} {'modes (Hz, damping %) by mdof SRIM':40s} "
+        f"{'mdof prev':>9s} {'sw':>6s} {'events':>6s} {'no model':>8s}"
+    )
     for start, name, inputs, outputs, dt, sw in events:
         t0 = time.perf_counter()
         realization = mdof.sysid(inputs, outputs, dt=dt, method="srim", **SETTINGS)
@@ -98,14 +123,24 @@ def main():
         ours = {c["sensor"]: c["nrmse_strong"] for c in sw["channels"]}
         sw_median = statistics.median(ours[f"ch{c}"] for c in OUTPUTS)
         updated = chain.get(name, float("nan"))
-        print(f"{start[:19]:20s} {name:44s} {seconds:7.2f} {text:40s} {forecast:9.3f} {sw_median:6.3f} {updated:6.3f}")
+        event_name = name.removesuffix(".zip")
+        model_free = free.get(event_name, free.get(name, float("nan")))
+        print(
+            f"{start[:19]:20s} {name:44s} {seconds:7.2f} {text:40s} {forecast:9.3f} {sw_median:6.3f} "
+            f"{updated:6.3f} {model_free:8.3f}"
+        )
         previous = realization
         if np.isfinite(forecast):
-            for key, ours_here in (("events", updated), ("sw", sw_median)):
+            for key, ours_here in (("events", updated), ("sw", sw_median), ("free", model_free)):
                 if np.isfinite(ours_here):
                     tally[key][0] += ours_here <= forecast
                     tally[key][1] += 1
-    for key, label in (("events", "the events chain's forecast"), ("sw", "the hand-set model's")):
+    print(f"events without a model (the realization chain): {free_seconds:.1f} s for {len(zips)} records")
+    for key, label in (
+        ("events", "the events chain's forecast"),
+        ("sw", "the hand-set model's"),
+        ("free", "the realization chain's (no model)"),
+    ):
         print(f"{label} at or below mdof's (previous event's realization) in {tally[key][0]} of {tally[key][1]} events")
 
 

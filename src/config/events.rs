@@ -57,6 +57,17 @@ pub struct EventsConfig {
     /// `"last"` (the previous event's update).
     #[serde(default)]
     pub forecast: EventForecast,
+    /// Without a `[model]`: the order (states) of the realization each
+    /// event's record gives (SRIM over `[oma]`'s horizon, then `B` and `D`
+    /// by least squares), which forecasts the next event from its ground
+    /// channels. Even, at least 2; default 12 (two states per mode: six
+    /// modes, mdof's notebooks' order for these records).
+    #[serde(default = "default_realization_order")]
+    pub realization_order: usize,
+}
+
+fn default_realization_order() -> usize {
+    12
 }
 
 /// `[events] forecast`.
@@ -108,6 +119,7 @@ impl Default for EventsConfig {
             residues: default_residues(),
             amplitude: EventAmplitude::default(),
             forecast: EventForecast::default(),
+            realization_order: default_realization_order(),
         }
     }
 }
@@ -171,6 +183,15 @@ impl EventsConfig {
             return Err(err(
                 "events.false_alarm_rate",
                 format!("must be in (0, 0.5), got {}", self.false_alarm_rate),
+            ));
+        }
+        if self.realization_order < 2 || self.realization_order % 2 == 1 {
+            return Err(err(
+                "events.realization_order",
+                format!(
+                    "must be even and at least 2 (two states per mode), got {}",
+                    self.realization_order
+                ),
             ));
         }
         Ok(())

@@ -13,7 +13,7 @@
 //! them).
 
 use super::ground_motion::GroundModel;
-use crate::config::Config;
+use crate::config::{Config, GroundInputPlan};
 use serde::Serialize;
 
 /// One deck channel's figures.
@@ -73,10 +73,38 @@ pub fn predict<'a>(
     fs: f64,
 ) -> Prediction {
     let predicted_all = model.respond(channel, fs);
-    let ground_sensors = model.ground_sensors();
+    let predicted: Vec<Vec<f64>> = deck.iter().map(|&s| predicted_all[s].clone()).collect();
+    let grounds = GroundsOf {
+        plan: &model.plan,
+        anchors: &model.anchors,
+    };
+    score_forecast(config, &grounds, deck, channel, fs, predicted)
+}
+
+/// The ground inputs a forecast was driven by, and where each support
+/// group holds the structure (none known without a model): the baseline's
+/// "nearest ground".
+pub struct GroundsOf<'p> {
+    pub plan: &'p [GroundInputPlan],
+    pub anchors: &'p [(String, Option<[f64; 3]>)],
+}
+
+/// Scores `predicted` (one series per sensor of `deck`, config indices)
+/// against the deck's measured series, beside the "deck = nearest ground"
+/// baseline of `grounds`: a model's forecast ([`predict`]) or a
+/// realization's.
+pub fn score_forecast<'a>(
+    config: &Config,
+    grounds: &GroundsOf<'_>,
+    deck: &[usize],
+    channel: impl Fn(usize) -> &'a [f64] + Copy,
+    fs: f64,
+    predicted: Vec<Vec<f64>>,
+) -> Prediction {
+    let ground_sensors = crate::config::ground_sensors(grounds.plan);
     let samples = channel(ground_sensors[0]).len();
     let (i0, i1) = significant_span(ground_sensors.iter().map(|&i| channel(i)), samples);
-    let inputs = crate::config::ground_signals(&model.plan, channel);
+    let inputs = crate::config::ground_signals(grounds.plan, channel);
     let mut report = PredictionReport {
         start: None,
         channels: Vec::new(),
@@ -87,19 +115,17 @@ pub fn predict<'a>(
         pga_ground: ground_sensors.iter().map(|&i| peak(channel(i))).fold(0.0, f64::max),
         peak_deck: deck.iter().map(|&i| peak(channel(i))).fold(0.0, f64::max),
     };
-    let (mut measured, mut predicted, mut baseline) = (Vec::new(), Vec::new(), Vec::new());
-    for &s in deck {
+    let (mut measured, mut baseline) = (Vec::new(), Vec::new());
+    for (&s, p) in deck.iter().zip(&predicted) {
         let name = &config.sensors[s].name;
         let m = channel(s);
-        let p = &predicted_all[s];
         report.channels.push(score(name, m, p, (i0, i1)));
-        let (ground, b) = nearest_ground(config, model, s, &inputs);
+        let (ground, b) = nearest_ground(config, grounds, s, &inputs);
         report.baseline.push(BaselineScore {
             score: score(name, m, &b, (i0, i1)),
             ground,
         });
         measured.push(m.to_vec());
-        predicted.push(p.clone());
         baseline.push(b);
     }
     Prediction {
@@ -174,12 +200,12 @@ pub fn significant_span<'a>(channels: impl Iterator<Item = &'a [f64]>, samples: 
 /// The baseline series of deck sensor `s`: the ground input (along the
 /// sensor's direction) of the group whose supports (bearings, line
 /// supports, column bases) lie nearest.
-fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<f64>]) -> (String, Vec<f64>) {
+fn nearest_ground(config: &Config, grounds: &GroundsOf<'_>, s: usize, inputs: &[Vec<f64>]) -> (String, Vec<f64>) {
     let sensor = &config.sensors[s];
     let direction = sensor.direction.unit_vector();
     let group_of = |name: &str| name.rsplit_once('.').map_or(name, |(g, _)| g).to_string();
     let mut groups: Vec<String> = Vec::new();
-    for g in model.plan.iter().map(|p| group_of(&p.name)) {
+    for g in grounds.plan.iter().map(|p| group_of(&p.name)) {
         if !groups.contains(&g) {
             groups.push(g);
         }
@@ -189,7 +215,7 @@ fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<
         _ => None,
     };
     let centroid = |group: &str| -> Option<[f64; 3]> {
-        model
+        grounds
             .anchors
             .iter()
             .find(|(name, _)| name == group)
@@ -209,7 +235,7 @@ fn nearest_ground(config: &Config, model: &GroundModel, s: usize, inputs: &[Vec<
     let samples = inputs.first().map_or(0, Vec::len);
     let mut out = vec![0.0; samples];
     let mut used = Vec::new();
-    for (k, p) in model.plan.iter().enumerate() {
+    for (k, p) in grounds.plan.iter().enumerate() {
         let weight = direction[p.input.axis];
         if weight == 0.0 || !chosen.contains(&group_of(&p.name)) {
             continue;

@@ -6,9 +6,9 @@
 //! that keep half the shorter record, refined by a parabola through its
 //! neighbours).
 
-use super::grid::fourier_resample;
 use super::placement::{Orientation, Placement};
 use super::V2Channel;
+use splinewatch_core::identification::resample::fourier_resample;
 use std::collections::BTreeMap;
 
 /// The recorder of a channel and whether the CGS trusts its clock.

@@ -3,6 +3,7 @@
 use super::{error, V2Channel};
 use crate::io::import::{ImportError, ImportedChannel, ImportedSeries};
 use crate::io::wire::ChannelQuantity;
+use splinewatch_core::identification::resample::fourier_resample;
 
 /// The channels on one grid. Channels of several recorders may differ in
 /// rate, start and length: the grid is the lowest rate over the span all
@@ -103,39 +104,4 @@ pub(super) fn cut_note(cut: &[&V2Channel], seconds: f64) -> Vec<String> {
         "the channels share {seconds:.2} s: {} cut to it (the record's other channels are shorter or start later)",
         named.join(", ")
     )]
-}
-
-/// `x` (one span) resampled to `n` points over the same span: the discrete
-/// Fourier series truncated or zero-padded (the Nyquist line of an even
-/// length halved), as `scipy.signal.resample`.
-pub(super) fn fourier_resample(x: &[f64], n: usize) -> Vec<f64> {
-    let m = x.len();
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let forward = planner.plan_fft_forward(m);
-    let mut input = x.to_vec();
-    let mut spectrum = forward.make_output_vec();
-    forward
-        .process(&mut input, &mut spectrum)
-        .expect("lengths from the plan");
-    let inverse = planner.plan_fft_inverse(n);
-    let mut target = inverse.make_input_vec();
-    let keep = target.len().min(spectrum.len());
-    target[..keep].copy_from_slice(&spectrum[..keep]);
-    // A Nyquist line present in only one of the two lengths is split or summed
-    // so that the real signal stays real (its imaginary part is dropped).
-    if m % 2 == 0 && keep == spectrum.len() && n > m {
-        target[m / 2] *= 0.5;
-    }
-    if n % 2 == 0 && keep == target.len() {
-        let nyquist = target.len() - 1;
-        target[nyquist].im = 0.0;
-        if n < m {
-            target[nyquist] *= 2.0;
-        }
-    }
-    target[0].im = 0.0;
-    let mut out = inverse.make_output_vec();
-    inverse.process(&mut target, &mut out).expect("lengths from the plan");
-    let scale = 1.0 / m as f64;
-    out.iter().map(|v| v * scale).collect()
 }

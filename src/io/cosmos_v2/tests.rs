@@ -1,4 +1,3 @@
-use super::grid::fourier_resample;
 use super::header::*;
 use super::*;
 
@@ -178,25 +177,6 @@ fn two_recorders_come_on_one_grid_by_station_channel() {
     assert_eq!(s.start_ns, crate::io::wire::parse_timestamp("2026-11-23T10:00:00.01Z"));
     // ch7 cut at its second sample (the file's five decimals of sin 0.7).
     assert_eq!(s.channels[0].data[0], 0.64422);
-}
-
-#[test]
-fn fourier_resampling_keeps_a_band_limited_periodic_signal() {
-    // A sum of harmonics below both Nyquist lines of a periodic span.
-    let signal = |n: usize| -> Vec<f64> {
-        (0..n)
-            .map(|i| {
-                let t = i as f64 / n as f64;
-                (2.0 * std::f64::consts::PI * 3.0 * t).sin() + 0.5 * (2.0 * std::f64::consts::PI * 7.0 * t).cos()
-            })
-            .collect()
-    };
-    for (from, to) in [(64, 40), (40, 64), (63, 41), (41, 63), (50, 50)] {
-        let got = fourier_resample(&signal(from), to);
-        let want = signal(to);
-        let err = got.iter().zip(&want).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        assert!(err < 1e-12, "{from} -> {to}: {err:.2e}");
-    }
 }
 
 proptest::proptest! {

@@ -1,5 +1,6 @@
 //! What carries from one event to the next.
 
+use super::realization::SavedRealization;
 use super::*;
 
 /// What carries from one event to the next (and across runs, `--state`).
@@ -25,6 +26,10 @@ pub struct Chain {
     /// judged events.
     #[serde(default)]
     pub(super) events_seen: u64,
+    /// Without a model: the last realization identified, which forecasts
+    /// the next event.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) realization: Option<SavedRealization>,
     /// The config's model, assembled for the first event and kept for the
     /// others (not saved).
     #[serde(skip)]

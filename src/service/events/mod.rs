@@ -18,6 +18,7 @@ mod chain;
 mod emit;
 mod line;
 mod loading;
+mod realization;
 
 pub use chain::Chain;
 use chain::{feature_of_parameter, Named};
@@ -150,11 +151,12 @@ fn run_chain(
     if modes_first {
         take_identification(identified, line)?;
     }
-    // Without a model the event is identified and judged on its modes.
+    // Without a model the event is forecast by the previous event's
+    // realization, identified and judged on its modes.
     let updated = if cfg.has_model() {
         forecast_and_update(cfg, (event, plan), chain, line, amplitude)
     } else {
-        Ok(())
+        realization::forecast_and_realize(cfg, (event, plan), chain, line)
     };
     if !modes_first {
         take_identification(identified, line)?;

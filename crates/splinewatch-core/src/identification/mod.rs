@@ -7,10 +7,14 @@
 //! - [`oma`]: SSI-cov with stabilisation, clustering and uncertainty;
 //! - [`srim`]: input–output identification (SRIM) on the same subspace model, stabilisation and uncertainty;
 //! - [`transmissibility`]: multi-input H1 estimates with multiple coherence and the inputs' conditioning;
+//! - [`realization`]: a stable state-space realization whose `B`, `D` fit a record, and its response to other inputs;
+//! - [`resample`]: a record on another number of points over its span (Fourier);
 //! - [`lscf`]: the poles common to several frequency response functions (least-squares complex frequency).
 
 pub mod lscf;
 pub mod oma;
+pub mod realization;
+pub mod resample;
 pub mod srim;
 pub mod transmissibility;
 pub mod welch;

@@ -53,6 +53,7 @@
 use super::oma::correlation::{centred_channels, ChunkPlan};
 use super::oma::uncertainty::ReplicateSource;
 use super::oma::{self, OmaError, OmaResult, OmaSettings, SubspaceModel};
+use super::realization::{Realization, RealizationError};
 use crate::linalg::leading_eigen::eigenpairs_above;
 use faer::Mat;
 use std::sync::OnceLock;
@@ -473,6 +474,32 @@ pub fn identify_io(
     let matrix = information.matrix(None)?;
     let model = SubspaceModel::from_symmetric(&matrix, outputs.len(), settings.max_order, fs)?;
     oma::identify_model(&model, &information, fs, settings)
+}
+
+/// The stable realization of order `order` of `outputs` driven by
+/// `inputs` at `fs` (complete records): `A`, `C` by SRIM over the horizon
+/// `horizon`, `B`, `D` by least squares on the same record
+/// ([`Realization::fit`]).
+pub fn realization(
+    inputs: &[&[f64]],
+    outputs: &[&[f64]],
+    fs: f64,
+    horizon: usize,
+    order: usize,
+) -> Result<Realization, RealizationFailure> {
+    let information = InformationMatrix::new(outputs, inputs, horizon, 1)?;
+    let model = SubspaceModel::from_symmetric(&information.matrix(None)?, outputs.len(), order, fs)?;
+    let (a, c) = model.state_space(order)?;
+    Ok(Realization::fit(a.as_ref(), c.as_ref(), inputs, outputs, fs)?)
+}
+
+/// Why [`realization`] failed: the subspace step or the least squares.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RealizationFailure {
+    #[error(transparent)]
+    Subspace(#[from] OmaError),
+    #[error(transparent)]
+    Fit(#[from] RealizationError),
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ mod modal_residual;
 mod modal_sensitivity;
 mod oma;
 mod patches;
+mod realization;
 mod shell;
 mod simulate;
 mod srim;

@@ -18,7 +18,7 @@ const OVERSAMPLE: usize = 4;
 /// The two ground records and the twelve deck records, and the model's
 /// frequencies of the modes the grounds drive (participation above 5 % of
 /// the largest) below 40 Hz.
-fn shaken_deck(seconds: f64, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>) {
+pub(super) fn shaken_deck(seconds: f64, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f64>>, Vec<f64>) {
     let shell_model = sinello_model();
     let model = FrfModel::new(shell_model.assemble().unwrap(), &sinello_sensors()).unwrap();
     let damping = DampingCurve::new(2, vec![0.02; 7], 0.0, 80.0).unwrap();

@@ -336,6 +336,11 @@ impl SubspaceModel {
         self.gram_up.ncols()
     }
 
+    /// `(A, C)` at `order` in `B_n`'s basis: `B_n` and `U_top`, similar to the module's.
+    pub fn state_space(&self, order: usize) -> Result<(Mat<f64>, Mat<f64>), OmaError> {
+        Ok((self.shift_matrix(order)?, self.u_top.subcols(0, order).to_owned()))
+    }
+
     /// The oscillating poles (one of each conjugate pair) at order `n`.
     pub fn poles(&self, order: usize) -> Result<Vec<Pole>, OmaError> {
         Ok(self.poles_of(&self.eigen(order)?))

@@ -1,0 +1,142 @@
+//! Without a model: each event is forecast by the realization identified on
+//! the event before it (SRIM's `A`, `C` over `[oma]`'s horizon, `B`, `D` by
+//! least squares; stable by construction, see
+//! [`splinewatch_core::identification::realization`]), driven by this
+//! event's ground inputs and scored as `predict` scores a model's forecast;
+//! then this event's own realization is kept for the next.
+
+use super::*;
+use crate::studies::predict::{score_forecast, GroundsOf};
+use splinewatch_core::identification::realization::Realization;
+use splinewatch_core::identification::srim;
+
+/// A realization as the chain keeps it (`--state`): its channels by name,
+/// so that a record with other channels is not forecast by it.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub(super) struct SavedRealization {
+    /// The event it was identified on.
+    event: String,
+    /// The ground inputs (the plan's, group and axis), in order.
+    inputs: Vec<String>,
+    /// The deck sensors, in order.
+    outputs: Vec<String>,
+    realization: Realization,
+}
+
+/// The event forecast by the previous event's realization (none for the
+/// first, or when the channels differ: said in the notes), then this
+/// event's realization kept (when it cannot be identified, said, and the
+/// previous one kept).
+pub(super) fn forecast_and_realize(
+    cfg: &Config,
+    (event, plan): (&Event, &[GroundInputPlan]),
+    chain: &mut Chain,
+    line: &mut EventLine,
+) -> Result<()> {
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let signals = ground_signals(plan, channel);
+    let inputs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
+    let outputs: Vec<&[f64]> = event.deck.iter().map(|&i| channel(i)).collect();
+    let input_names: Vec<String> = plan.iter().map(|p| p.name.clone()).collect();
+    let output_names: Vec<String> = event.deck.iter().map(|&i| cfg.sensors[i].name.clone()).collect();
+    if let Some(saved) = &chain.realization {
+        forecast(cfg, saved, (event, plan), &inputs, line)?;
+    }
+    let (settings, _) = cfg.oma_settings_at(event.fs)?;
+    let order = cfg.events().realization_order;
+    match srim::realization(&inputs, &outputs, event.fs, settings.block_rows, order) {
+        Ok(realization) => {
+            chain.realization = Some(SavedRealization {
+                event: line.event.clone(),
+                inputs: input_names,
+                outputs: output_names,
+                realization,
+            });
+        }
+        Err(e) => line.notes.push(format!(
+            "no realization of order {order} from this record ({e}): the next event is forecast by {}",
+            chain
+                .realization
+                .as_ref()
+                .map_or_else(|| "none".to_string(), |s| format!("the realization of {}", s.event))
+        )),
+    }
+    Ok(())
+}
+
+/// The event forecast by `saved` on the deck channels both have (a record
+/// may lack one; the others are still forecast, the missing ones named);
+/// none when the ground inputs differ (said).
+fn forecast(
+    cfg: &Config,
+    saved: &SavedRealization,
+    (event, plan): (&Event, &[GroundInputPlan]),
+    inputs: &[&[f64]],
+    line: &mut EventLine,
+) -> Result<()> {
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let input_names: Vec<&str> = plan.iter().map(|p| p.name.as_str()).collect();
+    if saved.inputs != input_names {
+        line.notes.push(format!(
+            "not forecast: the realization of {} is driven by other ground inputs ({}) than this record's ({})",
+            saved.event,
+            saved.inputs.join(", "),
+            input_names.join(", ")
+        ));
+        return Ok(());
+    }
+    let realization = &saved.realization;
+    if realization.inputs() != saved.inputs.len() || realization.outputs() != saved.outputs.len() {
+        bail!(
+            "the realization of {} in the events' state has {} inputs and {} outputs for {} and {} names",
+            saved.event,
+            realization.inputs(),
+            realization.outputs(),
+            saved.inputs.len(),
+            saved.outputs.len()
+        );
+    }
+    let (deck, rows): (Vec<usize>, Vec<usize>) = event
+        .deck
+        .iter()
+        .filter_map(|&i| {
+            let name = &cfg.sensors[i].name;
+            saved.outputs.iter().position(|o| o == name).map(|row| (i, row))
+        })
+        .unzip();
+    let missing: Vec<&str> = event
+        .deck
+        .iter()
+        .map(|&i| cfg.sensors[i].name.as_str())
+        .filter(|name| !saved.outputs.iter().any(|o| o == name))
+        .collect();
+    if deck.is_empty() {
+        line.notes.push(format!(
+            "not forecast: the realization of {} has none of this record's deck channels",
+            saved.event
+        ));
+        return Ok(());
+    }
+    let all = realization
+        .simulate_at(inputs, event.fs)
+        .context("the forecast by the previous event's realization")?;
+    let predicted: Vec<Vec<f64>> = rows.iter().map(|&row| all[row].clone()).collect();
+    let grounds = GroundsOf { plan, anchors: &[] };
+    let mut prediction = score_forecast(cfg, &grounds, &deck, channel, event.fs, predicted);
+    prediction.report.start = line.start.clone();
+    line.notes.push(format!(
+        "forecast by the realization of {} (order {}, identified at {} Hz)",
+        saved.event,
+        realization.states(),
+        realization.fs()
+    ));
+    if !missing.is_empty() {
+        line.notes.push(format!(
+            "not forecast: {} (not in the record the realization of {} was identified on)",
+            missing.join(", "),
+            saved.event
+        ));
+    }
+    line.forecast = Some(prediction.report);
+    Ok(())
+}
