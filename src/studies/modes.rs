@@ -1,6 +1,7 @@
 //! `splinewatch modes`: the configured model's natural frequencies and mode kinds.
 
 use crate::config::Config;
+use crate::io::modes_json::ShapeEntry;
 use anyhow::{Context, Result};
 use serde::Serialize;
 use splinewatch_core::model::constraints::Edge;
@@ -8,6 +9,7 @@ use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::members::BeamBase;
 use splinewatch_core::model::springs::LowRankBlock;
 use splinewatch_core::model::ShellModel;
+use splinewatch_core::response::frf::sensor_rows;
 use splinewatch_core::solvers::modal::{ModeKind, Modes};
 use splinewatch_core::solvers::mode_motion::{DeckAxes, Motion, MotionShares};
 use splinewatch_core::solvers::sparse_model::SparseModel;
@@ -34,6 +36,11 @@ pub struct ModeRow {
     /// loss factors' share `½ Σ_s η_s e_{i,s}` (`null` without the curve,
     /// or for a rigid mode).
     pub damping_ratio: Option<f64>,
+    /// The mode at the config's deck sensors, each along its direction,
+    /// largest component 1 (`im` 0: a real mode), in the layout of the
+    /// identified modes' shapes (`identify --json`), so the two compare by
+    /// MAC as they are.
+    pub shape: Vec<ShapeEntry>,
 }
 
 /// One support's share of a mode's strain energy.
@@ -67,9 +74,10 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         Some(cutoff) => Some(cutoff),
         None => config.modal_cutoff_hz()?,
     };
-    let (modes, dofs, free_dofs, t1, positions, springs) = match cutoff_hz {
+    let (modes, dofs, free_dofs, t1, positions, springs, sensors) = match cutoff_hz {
         None => {
             let model = config.build_dense_model()?;
+            let sensors = Sensors::of(config, &model)?;
             let positions = model.control_point_positions();
             let assembled = model.assemble().context("assembling the model")?;
             let t1 = Instant::now();
@@ -81,6 +89,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
                 t1,
                 positions,
                 (assembled.spring_blocks, assembled.spring_stiffness),
+                sensors,
             )
         }
         Some(cutoff) => {
@@ -88,6 +97,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
                 anyhow::bail!("--cutoff must be a positive frequency in Hz, got {cutoff}");
             }
             let model = config.build_model()?;
+            let sensors = Sensors::of(config, &model)?;
             let sparse = SparseModel::assemble(&model).context("assembling the sparse model")?;
             let t1 = Instant::now();
             let theta = sparse.field_coefficients.clone();
@@ -101,6 +111,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
                 t1,
                 model.control_point_positions(),
                 (sparse.spring_blocks, sparse.spring_stiffness),
+                sensors,
             )
         }
     };
@@ -126,7 +137,7 @@ pub fn compute_modes(config: &Config, count: usize, cutoff_hz: Option<f64>) -> R
         stiffness: &stiffness,
     };
     let rows = (0..modes.len().min(count))
-        .map(|i| mode_row(&modes, i, axes.as_ref(), &supports, damping.as_ref()))
+        .map(|i| mode_row(&modes, i, axes.as_ref(), &supports, damping.as_ref(), &sensors))
         .collect();
     let info = ModalRunInfo {
         dofs,
@@ -145,14 +156,16 @@ struct Supports<'a> {
 }
 
 /// Mode `i`'s row: frequency, kind, motion, the supports' shares of its
-/// strain energy and, with a damping curve, its damping ratio (the curve's
-/// and the supports' loss factors' share, as the FRF model's).
+/// strain energy, with a damping curve its damping ratio (the curve's and
+/// the supports' loss factors' share, as the FRF model's), and its shape at
+/// the sensors.
 fn mode_row(
     modes: &Modes,
     i: usize,
     axes: Option<&DeckAxes>,
     supports: &Supports<'_>,
     damping: Option<&DampingCurve>,
+    sensors: &Sensors,
 ) -> ModeRow {
     let motion_shares = axes.map_or_else(MotionShares::default, |a| modes.motion(a, i));
     let support_shares: Vec<SupportShare> = supports
@@ -182,6 +195,43 @@ fn mode_row(
         motion: motion_shares.dominant(),
         support_shares,
         damping_ratio,
+        shape: sensors.shape(modes, i),
+    }
+}
+
+/// The config's deck sensors: names and rows `N_ψ(P_s)` on the model's dofs.
+struct Sensors {
+    names: Vec<String>,
+    rows: Vec<Vec<(usize, f64)>>,
+}
+
+impl Sensors {
+    fn of(config: &Config, model: &ShellModel) -> Result<Self> {
+        let (names, points): (Vec<String>, Vec<_>) = config.build_sensors(model)?.into_iter().unzip();
+        let rows = sensor_rows(&model.patches, &points).context("the sensors' rows")?;
+        Ok(Self { names, rows })
+    }
+
+    /// Mode `i` at the sensors, its largest component `+1`.
+    fn shape(&self, modes: &Modes, i: usize) -> Vec<ShapeEntry> {
+        let values: Vec<f64> = self
+            .rows
+            .iter()
+            .map(|row| row.iter().map(|&(dof, w)| w * modes.shapes[(dof, i)]).sum())
+            .collect();
+        let peak = values
+            .iter()
+            .fold(0.0f64, |m, v| if v.abs() > m.abs() { *v } else { m });
+        self.names
+            .iter()
+            .zip(values)
+            .map(|(sensor, v)| ShapeEntry {
+                sensor: sensor.clone(),
+                re: if peak == 0.0 { 0.0 } else { v / peak },
+                im: 0.0,
+                std: None,
+            })
+            .collect()
     }
 }
 

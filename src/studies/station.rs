@@ -315,8 +315,8 @@ fn header(station: &Station, records: &[StationRecord], axis_deg: Option<f64>) -
         STRUCTURE_WORDS.join(", ")
     );
     text.push_str("# It serves `identify` (input-output, from the ground channels), `oma` and `events`\n");
-    text.push_str("# (each event identified and judged on its modes) as it is; the forecast, `predict` and\n");
-    text.push_str("# `update` need a [model] of the structure.\n\n");
+    text.push_str("# (each event identified, judged on its modes, and forecast by the previous event's\n");
+    text.push_str("# realization) as it is; `predict` and `update` need a [model] of the structure.\n\n");
     let _ = writeln!(text, "[structure]\nname = \"station-{}\"\n", station.number);
     text
 }
