@@ -101,10 +101,7 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = crate::common::json_lines(&o.stdout);
     assert_eq!(lines.len(), 8, "{lines:?}");
     let used: Vec<&serde_json::Value> = lines.iter().filter(|l| l["skipped"].is_null()).collect();
     let names: Vec<&str> = used.iter().map(|l| l["event"].as_str().unwrap()).collect();
@@ -290,10 +287,7 @@ fn issue_45_a_stiffness_drop_at_the_fifth_event_raises_the_alarm_there_and_not_b
     args.extend(events.iter().map(String::as_str));
     let o = splinewatch(&args);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let lines = crate::common::json_lines(&o.stdout);
     assert_eq!(lines.len(), 10);
     // One lateral stiffness per support line (`tie`): the bent's, and the
     // abutments' (1.6e8 N/m), within 5 %.
@@ -377,10 +371,7 @@ fn issue_45_events_resume_from_their_state() {
         args.extend(records.iter().map(String::as_str));
         let o = splinewatch(&args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        String::from_utf8_lossy(&o.stdout)
-            .lines()
-            .map(|l| serde_json::from_str(l).unwrap())
-            .collect()
+        crate::common::json_lines(&o.stdout)
     };
     let (first, second) = (
         "RioDell_14Sep2012_71842255_ce89324p.zip",
@@ -490,10 +481,7 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
         &record(records[1]),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let offline: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let offline = crate::common::json_lines(&o.stdout);
     for (a, b) in live.iter().zip(&offline) {
         assert!(a["skipped"].is_null(), "{a}");
         assert_eq!(a["event"], a["start"], "a burst is named by its start");
@@ -513,10 +501,7 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
     // The recording of the logger's raw input, given to `events`, is cut the same way.
     let o = splinewatch(&["events", "--config", CONFIG, "--json", recording.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let recorded: Vec<serde_json::Value> = String::from_utf8_lossy(&o.stdout)
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect();
+    let recorded = crate::common::json_lines(&o.stdout);
     assert_eq!(recorded.len(), 2);
     for (a, b) in recorded.iter().zip(&offline) {
         assert_eq!(a["event"], format!("triggered.mcap@{}", b["start"].as_str().unwrap()));

@@ -179,10 +179,7 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         args.extend(records);
         let o = splinewatch(&args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        String::from_utf8_lossy(&o.stdout)
-            .lines()
-            .map(|l| serde_json::from_str(l).unwrap())
-            .collect()
+        crate::common::json_lines(&o.stdout)
     };
     let lines = events(&[&records[1], &records[2]]);
     assert_eq!(lines.len(), 2);

@@ -212,3 +212,11 @@ pub fn painter_street_record(name: &str) -> String {
         .unwrap()
         .to_string()
 }
+
+/// One JSON value per line of a command's output (`--json` streams).
+pub fn json_lines(stdout: &[u8]) -> Vec<serde_json::Value> {
+    String::from_utf8_lossy(stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect()
+}

@@ -57,7 +57,7 @@ pub enum RealizationError {
     NonFinite(&'static str),
     #[error("the sampling rate must be positive and finite, not {0}")]
     BadRate(f64),
-    #[error("input {input} has {len} samples, the first output {expected}")]
+    #[error("input {input} has {len} samples, {expected} expected (the record's length)")]
     UnequalLengths { input: usize, len: usize, expected: usize },
     #[error("input {0} has a missing sample (NaN) or an infinity: a realization is driven by complete inputs")]
     MissingInput(usize),
@@ -148,18 +148,7 @@ impl Realization {
                 )));
             }
         }
-        for (input, u) in inputs.iter().enumerate() {
-            if u.len() != samples {
-                return Err(RealizationError::UnequalLengths {
-                    input,
-                    len: u.len(),
-                    expected: samples,
-                });
-            }
-            if !u.iter().all(|v| v.is_finite()) {
-                return Err(RealizationError::MissingInput(input));
-            }
-        }
+        complete_inputs(inputs, samples)?;
         let modal = ModalForm::of(a, c)?;
         let (b, d) = modal.fit_inputs(inputs, outputs)?;
         Self::new(modal.a(), b, modal.c, d, fs)
@@ -216,18 +205,10 @@ impl Realization {
             return self.simulate(inputs);
         }
         let samples = inputs.first().map_or(0, |u| u.len());
+        complete_inputs(inputs, samples)?;
         let points = (samples as f64 * self.fs / fs).round() as usize;
         let resampled: Vec<Vec<f64>> = inputs.iter().map(|u| fourier_resample(u, points)).collect();
         let views: Vec<&[f64]> = resampled.iter().map(Vec::as_slice).collect();
-        for (input, u) in inputs.iter().enumerate() {
-            if u.len() != samples {
-                return Err(RealizationError::UnequalLengths {
-                    input,
-                    len: u.len(),
-                    expected: samples,
-                });
-            }
-        }
         Ok(self
             .simulate(&views)?
             .iter()
@@ -246,18 +227,7 @@ impl Realization {
             )));
         }
         let samples = inputs[0].len();
-        for (input, u) in inputs.iter().enumerate() {
-            if u.len() != samples {
-                return Err(RealizationError::UnequalLengths {
-                    input,
-                    len: u.len(),
-                    expected: samples,
-                });
-            }
-            if !u.iter().all(|v| v.is_finite()) {
-                return Err(RealizationError::MissingInput(input));
-            }
-        }
+        complete_inputs(inputs, samples)?;
         let (n, m) = (self.states(), self.outputs());
         let mut x = vec![0.0; n];
         let mut next = vec![0.0; n];
@@ -280,6 +250,24 @@ impl Realization {
         }
         Ok(y)
     }
+}
+
+/// Every input `samples` long and complete (finite): what drives a
+/// realization.
+fn complete_inputs(inputs: &[&[f64]], samples: usize) -> Result<(), RealizationError> {
+    for (input, u) in inputs.iter().enumerate() {
+        if u.len() != samples {
+            return Err(RealizationError::UnequalLengths {
+                input,
+                len: u.len(),
+                expected: samples,
+            });
+        }
+        if !u.iter().all(|v| v.is_finite()) {
+            return Err(RealizationError::MissingInput(input));
+        }
+    }
+    Ok(())
 }
 
 /// [`Realization`] as stored: each matrix by rows.

@@ -101,26 +101,19 @@ fn poles_outside_the_unit_circle_are_reflected_inside() {
 fn the_modal_form_keeps_the_poles() {
     let system = truth();
     let modal = ModalForm::of(system.a(), system.c()).unwrap();
-    let mut expected: Vec<f64> = system
-        .a()
-        .eigen()
-        .unwrap()
-        .S()
-        .column_vector()
-        .iter()
-        .map(|z| z.norm())
-        .collect();
-    let mut got: Vec<f64> = modal
-        .a()
-        .eigen()
-        .unwrap()
-        .S()
-        .column_vector()
-        .iter()
-        .map(|z| z.norm())
-        .collect();
-    expected.sort_by(f64::total_cmp);
-    got.sort_by(f64::total_cmp);
+    let moduli = |a: MatRef<'_, f64>| -> Vec<f64> {
+        let mut moduli: Vec<f64> = a
+            .eigen()
+            .unwrap()
+            .S()
+            .column_vector()
+            .iter()
+            .map(|z| z.norm())
+            .collect();
+        moduli.sort_by(f64::total_cmp);
+        moduli
+    };
+    let (expected, got) = (moduli(system.a()), moduli(modal.a().as_ref()));
     for (e, g) in expected.iter().zip(&got) {
         assert!((e - g).abs() < 1e-12, "{e} {g}");
     }
