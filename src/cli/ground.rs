@@ -394,7 +394,7 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
     if let Some(path) = &a.transmissibility {
         write_transmissibility(&cfg, (&inputs, input_views), (&outputs, output_views), span.fs, path)?;
     }
-    let (result, settings) = identify_io(&cfg, input_views, output_views, span.fs)?;
+    let (result, settings, rate) = identify_io(&cfg, input_views, output_views, span.fs)?;
     let report = crate::pipeline::oma::OmaReport {
         start_ns: span.start_ns,
         samples: span.samples,
@@ -410,7 +410,7 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
             .join(", ")
     };
     errln!(
-        "{} samples ({:.1} s at {} Hz) from {}: inputs {}; outputs {}; {} modes (SRIM, horizon {})",
+        "{} samples ({:.1} s at {} Hz) from {}: inputs {}; outputs {}; {} modes (SRIM{}, horizon {})",
         span.samples,
         span.samples as f64 / span.fs,
         span.fs,
@@ -418,6 +418,11 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         names(&inputs),
         names(&outputs),
         report.result.modes.len(),
+        if rate < span.fs {
+            format!(" at {} Hz, resampled", crate::service::records::rate_text(rate))
+        } else {
+            String::new()
+        },
         settings.block_rows
     );
     super::identified::write_identified(&cfg, &report, &a.output)

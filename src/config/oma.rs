@@ -26,6 +26,15 @@ pub struct OmaConfig {
     /// (a station's recorders of several vintages) with the same horizon
     /// and the same shortest usable record.
     pub horizon_seconds: Option<f64>,
+    /// SRIM of records (`identify` with ground inputs, `events`, the
+    /// realization): a record sampled faster than this rate (Hz) is first
+    /// resampled to it (Fourier series truncated: an ideal low-pass at half
+    /// of it; mdof's `decimate`, anti-aliased). The information matrix
+    /// shrinks with the square of the ratio and its decomposition with the
+    /// cube: strong-motion records at 100–200 Hz of bridges whose modes lie
+    /// below 20 Hz lose nothing. The modes are sought below half of it:
+    /// `band` must end there; the band taken from `frf.band` is cut there.
+    pub resample_hz: Option<f64>,
     /// Lowest model order of the stabilisation diagram.
     pub min_order: usize,
     /// Highest model order of the stabilisation diagram.
@@ -55,6 +64,7 @@ impl Default for OmaConfig {
             window_hop_seconds: None,
             block_rows: d.block_rows,
             horizon_seconds: None,
+            resample_hz: None,
             min_order: d.min_order,
             max_order: d.max_order,
             order_step: d.order_step,
@@ -152,6 +162,19 @@ impl Config {
                 return Err(err("oma.horizon_seconds", format!("must be positive, got {h}")));
             }
         }
+        if let Some(rate) = o.resample_hz {
+            if !(rate.is_finite() && rate > 0.0) {
+                return Err(err("oma.resample_hz", format!("must be positive, got {rate}")));
+            }
+            if let Some([_, top]) = o.band {
+                if top > rate / 2.0 {
+                    return Err(err(
+                        "oma.band",
+                        format!("ends at {top} Hz, above half of oma.resample_hz ({rate} Hz): the modes are sought below {} Hz", rate / 2.0),
+                    ));
+                }
+            }
+        }
         if let Some(w) = o.window_seconds {
             if !(w.is_finite() && w > 0.0) {
                 return Err(err("oma.window_seconds", format!("must be positive, got {w}")));
@@ -169,8 +192,18 @@ impl Config {
         Ok((settings, references))
     }
 
+    /// The rate SRIM identifies a record at `fs` Hz at: `[oma] resample_hz`
+    /// when the record is faster, its own otherwise.
+    pub fn identification_rate(&self, fs: f64) -> f64 {
+        match self.oma().resample_hz {
+            Some(rate) if rate < fs => rate,
+            _ => fs,
+        }
+    }
+
     /// [`Config::oma_settings`] for a record at `fs` Hz: the horizon from
-    /// `[oma] horizon_seconds` when given.
+    /// `[oma] horizon_seconds` when given; the band cut at half of `fs`
+    /// when it comes from `frf.band` and `[oma] resample_hz` is given.
     pub fn oma_settings_at(&self, fs: f64) -> Result<(OmaSettings, Vec<usize>), ConfigError> {
         let (mut settings, references) = self.oma_settings()?;
         if let Some(seconds) = self.oma().horizon_seconds {
@@ -183,6 +216,10 @@ impl Config {
             }
             settings.block_rows = rows;
             settings.check().map_err(|e| err("oma.horizon_seconds", e))?;
+        }
+        if self.oma().resample_hz.is_some() && self.oma().band.is_none() {
+            settings.band[1] = settings.band[1].min(fs / 2.0);
+            settings.check().map_err(|e| err("oma.resample_hz", e))?;
         }
         Ok((settings, references))
     }
@@ -246,5 +283,28 @@ mod tests {
             e.contains("oma.horizon_seconds") && e.contains("must be positive"),
             "{e}"
         );
+    }
+
+    /// `[oma] resample_hz`: a faster record is identified at that rate, a
+    /// slower one at its own; the band from `frf.band` is cut at
+    /// half the rate (25 → 20 Hz), an explicit band above it refused naming both keys,
+    /// as is a rate that is not positive.
+    #[test]
+    fn a_resampling_rate_sets_the_identification_rate_and_the_band() {
+        let base = include_str!("../../config/painter-street.toml");
+        let with = |line: &str| Config::from_toml(&base.replace("block_rows = 100", line)).unwrap();
+        let cfg = with("horizon_seconds = 1.0\nresample_hz = 40.0");
+        assert_eq!(cfg.identification_rate(200.0), 40.0);
+        assert_eq!(cfg.identification_rate(20.0), 20.0);
+        let (settings, _) = cfg.oma_settings_at(cfg.identification_rate(200.0)).unwrap();
+        assert_eq!((settings.block_rows, settings.band[1]), (40, 20.0));
+        assert_eq!(with("horizon_seconds = 1.0").identification_rate(200.0), 200.0);
+        let e = with("resample_hz = 40.0\nband = [0.5, 30.0]")
+            .oma_settings()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("oma.band") && e.contains("oma.resample_hz"), "{e}");
+        let e = with("resample_hz = 0.0").oma_settings().unwrap_err().to_string();
+        assert!(e.contains("oma.resample_hz") && e.contains("must be positive"), "{e}");
     }
 }

@@ -11,6 +11,8 @@ use crate::io::wire::ChannelQuantity;
 use crate::pipeline::estimate::aligned_span;
 use crate::studies::import::{to_blocks, ImportOptions};
 use anyhow::{bail, Context, Result};
+use splinewatch_core::identification::resample::fourier_resample;
+use std::borrow::Cow;
 use std::path::PathBuf;
 
 /// Whether the record holds config sensor `i`'s acceleration.
@@ -158,7 +160,8 @@ pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[R
 }
 
 /// SRIM of `inputs` to `outputs` with the config's `[oma]` settings and
-/// delete-one-batch (jackknife) uncertainty; returns the settings used.
+/// delete-one-batch (jackknife) uncertainty, at the identification rate
+/// ([`at_identification_rate`]); returns the settings and the rate used.
 pub fn identify_io(
     cfg: &Config,
     inputs: &[&[f64]],
@@ -167,7 +170,10 @@ pub fn identify_io(
 ) -> Result<(
     splinewatch_core::identification::oma::OmaResult,
     splinewatch_core::identification::oma::OmaSettings,
+    f64,
 )> {
+    let record = at_identification_rate(cfg, inputs, outputs, fs);
+    let (inputs, outputs, fs) = (record.inputs(), record.outputs(), record.fs);
     let (mut settings, _) = cfg.oma_settings_at(fs)?;
     // The exact replicates: their first-order continuation overstated SRIM's
     // spreads up to fivefold on simulated records (the core's verification),
@@ -175,7 +181,64 @@ pub fn identify_io(
     // (measured 2026-11-27, the data matrices' estimate; it would have taken
     // identify from 0.42 to 0.28 s).
     settings.uncertainty = splinewatch_core::identification::oma::UncertaintyMethod::Jackknife;
-    let result = splinewatch_core::identification::srim::identify_io(inputs, outputs, fs, &settings)
+    let result = splinewatch_core::identification::srim::identify_io(&inputs, &outputs, fs, &settings)
         .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
-    Ok((result, settings))
+    Ok((result, settings, fs))
+}
+
+/// A record's inputs and outputs at the rate SRIM identifies them at
+/// ([`at_identification_rate`]).
+pub struct AtIdentificationRate<'a> {
+    inputs: Vec<Cow<'a, [f64]>>,
+    outputs: Vec<Cow<'a, [f64]>>,
+    /// The rate (Hz): exactly the points per span.
+    pub fs: f64,
+}
+
+impl AtIdentificationRate<'_> {
+    pub fn inputs(&self) -> Vec<&[f64]> {
+        self.inputs.iter().map(|x| x.as_ref()).collect()
+    }
+
+    pub fn outputs(&self) -> Vec<&[f64]> {
+        self.outputs.iter().map(|x| x.as_ref()).collect()
+    }
+}
+
+/// `inputs` and `outputs` at `fs` at the rate SRIM identifies them at
+/// ([`Config::identification_rate`]): resampled over the same span
+/// (Fourier) when `[oma] resample_hz` is below `fs`, as they are otherwise.
+pub fn at_identification_rate<'a>(
+    cfg: &Config,
+    inputs: &[&'a [f64]],
+    outputs: &[&'a [f64]],
+    fs: f64,
+) -> AtIdentificationRate<'a> {
+    let rate = cfg.identification_rate(fs);
+    let samples = outputs.first().or(inputs.first()).map_or(0, |x| x.len());
+    let points = (samples as f64 * rate / fs).round() as usize;
+    if rate >= fs || samples == 0 || points >= samples {
+        let keep = |list: &[&'a [f64]]| list.iter().map(|&x| Cow::Borrowed(x)).collect();
+        return AtIdentificationRate {
+            inputs: keep(inputs),
+            outputs: keep(outputs),
+            fs,
+        };
+    }
+    let resample = |list: &[&'a [f64]]| list.iter().map(|x| Cow::Owned(fourier_resample(x, points))).collect();
+    AtIdentificationRate {
+        inputs: resample(inputs),
+        outputs: resample(outputs),
+        fs: fs * points as f64 / samples as f64,
+    }
+}
+
+/// A rate as people write it: `100` for a whole number of Hz, `50.006`
+/// otherwise (a resampled record's exact rate, points per span).
+pub fn rate_text(fs: f64) -> String {
+    if (fs - fs.round()).abs() < 1e-9 {
+        format!("{}", fs.round())
+    } else {
+        format!("{fs:.3}")
+    }
 }

@@ -323,7 +323,7 @@ fn header(station: &Station, records: &[StationRecord], axis_deg: Option<f64>) -
 
 /// `[oma]` (SRIM of an earthquake record: the settings measured on the
 /// Painter Street records, the horizon in seconds so that records at any
-/// rate share it) and `[events]` (the structure's horizontal channels).
+/// rate share it, resampled to 50 Hz: a bridge's modes lie below 25 Hz) and `[events]` (the structure's horizontal channels).
 fn analysis_sections(structure: &[&ChannelEntry]) -> String {
     let horizontal: Vec<String> = structure
         .iter()
@@ -333,6 +333,7 @@ fn analysis_sections(structure: &[&ChannelEntry]) -> String {
     let mut text = String::new();
     text.push_str("[oma]                       # SRIM of an earthquake record: a horizon of 1 s at any rate,\n");
     text.push_str("horizon_seconds = 1.0       # eight batches for the standard deviations, orders 2-60 by 2\n");
+    text.push_str("resample_hz = 50.0          # records resampled to 50 Hz: the modes sought below 25 Hz\n");
     text.push_str("batches = 8\nmax_order = 60\norder_step = 2\n\n");
     text.push_str("[oma.clustering]            # every mode found keeps its std across the batches\n");
     text.push_str("replicate_distance = 0.1\n\n");

@@ -158,14 +158,20 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         "{out}"
     );
     let o = splinewatch(&["identify", "--config", config.to_str().unwrap(), &records[1], "--json"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    // The starter's `[oma] resample_hz = 50`: the 100 Hz record identified
+    // at half its rate (exactly its points over the same span).
+    assert!(
+        stderr.contains("(SRIM at 50.006 Hz, resampled, horizon 50)"),
+        "{stderr}"
+    );
     let modes: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(!modes["modes"].as_array().unwrap().is_empty(), "{modes}");
     // `events` without a model: an event identified and judged on its
     // modes (no update, and no forecast for the first); the 1980 record
     // (19.7 s at 50 Hz) is shorter than the horizon's 32 s at any rate, and
-    // says so in seconds. (The 2012 record, at 200 Hz a horizon of 200 rows,
-    // takes 8 s to identify.)
+    // says so in seconds.
     let state = dir.join("chain.json");
     let events = |records: &[&str]| -> Vec<serde_json::Value> {
         let mut args = vec![
@@ -225,7 +231,7 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
     let notes = line["notes"].to_string();
     assert!(
         notes.contains(
-            "forecast by the realization of ferndale_28jan2015_72387946_ce89324p.zip (order 12, identified at 100 Hz)"
+            "forecast by the realization of ferndale_28jan2015_72387946_ce89324p.zip (order 12, identified at 50.006 Hz)"
         ),
         "{notes}"
     );

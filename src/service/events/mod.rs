@@ -65,7 +65,7 @@ pub fn identify(cfg: &Config, loaded: &Loaded) -> Identified {
     let inputs: Vec<&[f64]> = ground_sensors(plan).iter().map(|&i| channel(i)).collect();
     let outputs: Vec<&[f64]> = event.deck.iter().map(|&i| channel(i)).collect();
     Some(match identify_io(cfg, &inputs, &outputs, event.fs) {
-        Ok((result, _)) => {
+        Ok((result, _, _)) => {
             let report = OmaReport {
                 start_ns: event.start_ns,
                 samples: outputs[0].len(),

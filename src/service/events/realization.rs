@@ -6,6 +6,7 @@
 //! then this event's own realization is kept for the next.
 
 use super::*;
+use crate::service::records::{at_identification_rate, rate_text};
 use crate::studies::predict::{score_forecast, GroundsOf};
 use splinewatch_core::identification::realization::Realization;
 use splinewatch_core::identification::srim;
@@ -42,9 +43,16 @@ pub(super) fn forecast_and_realize(
     if let Some(saved) = &chain.realization {
         forecast(cfg, saved, (event, plan), &inputs, line)?;
     }
-    let (settings, _) = cfg.oma_settings_at(event.fs)?;
+    let record = at_identification_rate(cfg, &inputs, &outputs, event.fs);
+    let (settings, _) = cfg.oma_settings_at(record.fs)?;
     let order = cfg.events().realization_order;
-    match srim::realization(&inputs, &outputs, event.fs, settings.block_rows, order) {
+    match srim::realization(
+        &record.inputs(),
+        &record.outputs(),
+        record.fs,
+        settings.block_rows,
+        order,
+    ) {
         Ok(realization) => {
             chain.realization = Some(SavedRealization {
                 event: line.event.clone(),
@@ -128,7 +136,7 @@ fn forecast(
         "forecast by the realization of {} (order {}, identified at {} Hz)",
         saved.event,
         realization.states(),
-        realization.fs()
+        rate_text(realization.fs())
     ));
     if !missing.is_empty() {
         line.notes.push(format!(
