@@ -1,8 +1,9 @@
 //! The guide and the README stay true (issue 47): the generated reference
 //! pages are what the code generates now, every TOML block validates (a
 //! fragment inside the bundled config), every command a shell block names
-//! exists with the flags it is given, and the blocks marked `sh,runnable`
-//! run on the bundled data. A TOML block is a fragment laid over
+//! exists with the flags it is given, the blocks marked `sh,runnable`
+//! run on the bundled data, and those marked `console,tested` print what
+//! they show. A TOML block is a fragment laid over
 //! `config/sinello.toml`, or over the config its fence names
 //! (`toml,config=config/painter-street.toml`), or a whole config when it
 //! names its `[structure]`; a block that names a deployed site's files
@@ -164,6 +165,7 @@ fn invocation(line: &str) -> Option<(String, Vec<String>)> {
         .next()
         .unwrap_or(line)
         .trim()
+        .trim_start_matches("$ ")
         .trim_end_matches('\\')
         .trim();
     let rest = [
@@ -263,6 +265,138 @@ fn the_blocks_marked_runnable_run_on_the_bundled_data() {
         }
     }
     assert!(ran >= 2, "only {ran} runnable commands in the guide");
+}
+
+/// A printed line with its figures masked: every number (a sign, digits,
+/// a decimal point, an exponent) one `#`, the spaces between words one.
+/// What a listing shows is compared this way: the words, the columns and
+/// their order must be what the program prints, the figures may vary.
+fn masked(line: &str) -> String {
+    let mut out = String::new();
+    let chars: Vec<char> = line.chars().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let starts_number = c.is_ascii_digit()
+            || (matches!(c, '-' | '+' | '.' | '−')
+                && chars.get(i + 1).is_some_and(char::is_ascii_digit)
+                && (i == 0 || !chars[i - 1].is_alphanumeric()));
+        if starts_number {
+            i += 1;
+            while i < chars.len() {
+                let d = chars[i];
+                let exponent_sign = matches!(d, '-' | '+') && matches!(chars[i - 1], 'e' | 'E');
+                let exponent = matches!(d, 'e' | 'E')
+                    && chars
+                        .get(i + 1)
+                        .is_some_and(|n| n.is_ascii_digit() || matches!(n, '-' | '+'));
+                if d.is_ascii_digit() || d == '.' || exponent || exponent_sign {
+                    i += 1;
+                } else {
+                    break;
+                }
+            }
+            out.push('#');
+        } else {
+            out.push(c);
+            i += 1;
+        }
+    }
+    out.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Whether `printed` is what `shown` shows: line by line, masked, a shown
+/// `...` standing for any number of printed lines (none too).
+fn shows(shown: &[String], printed: &[String]) -> bool {
+    match shown.split_first() {
+        None => printed.is_empty(),
+        Some((first, rest)) if first == "..." => (0..=printed.len()).any(|skip| shows(rest, &printed[skip..])),
+        Some((first, rest)) => printed.first().is_some_and(|p| p == first) && shows(rest, &printed[1..]),
+    }
+}
+
+/// The listings marked `console,tested` show what the program prints: each
+/// `$ splinewatch …` line runs (a page's `/tmp/…` files in a folder of its
+/// own, and its `toml,file=/tmp/NAME` blocks written there first, in the
+/// page's order), and its standard output must be the lines shown below
+/// it, up to the next `$` ([`masked`], [`shows`]). Progress and notes go
+/// to standard error and are not shown. Renaming a flag, a column or a
+/// word the listing shows fails here.
+#[test]
+fn every_tested_listing_prints_what_it_shows() {
+    let mut ran = 0;
+    for (page, text) in pages() {
+        let scratch = crate::common::fresh_dir(&format!("listing-{}", page.file_stem().unwrap().to_string_lossy()));
+        let local = |a: &str| match a.strip_prefix("/tmp/") {
+            Some(name) => scratch.join(name).to_string_lossy().into_owned(),
+            None => a.to_string(),
+        };
+        for (info, body, line) in blocks(&text) {
+            if let Some(file) = info.split(',').find_map(|p| p.strip_prefix("file=")) {
+                std::fs::write(local(file), &body).unwrap();
+                continue;
+            }
+            if info != "console,tested" {
+                continue;
+            }
+            let mut commands: Vec<(String, Vec<String>)> = Vec::new();
+            for l in body.lines() {
+                match l.strip_prefix("$ ") {
+                    Some(command) => commands.push((command.to_string(), Vec::new())),
+                    None => commands
+                        .last_mut()
+                        .unwrap_or_else(|| panic!("{}:{line}: a tested listing starts with `$ `", page.display()))
+                        .1
+                        .push(masked(l)),
+                }
+            }
+            for (command, shown) in commands {
+                let rest = command.strip_prefix("splinewatch ").unwrap_or_else(|| {
+                    panic!(
+                        "{}:{line}: a tested listing runs splinewatch: {command}",
+                        page.display()
+                    )
+                });
+                let args: Vec<String> = rest.split_whitespace().map(local).collect();
+                let args: Vec<&str> = args.iter().map(String::as_str).collect();
+                let out = splinewatch(&args);
+                // The scratch folder printed as the listing's `/tmp`.
+                let stdout = String::from_utf8_lossy(&out.stdout).replace(&format!("{}/", scratch.display()), "/tmp/");
+                assert!(
+                    out.status.success(),
+                    "{}:{line}: `{command}` failed: {}",
+                    page.display(),
+                    String::from_utf8_lossy(&out.stderr)
+                );
+                let printed: Vec<String> = stdout.lines().map(masked).collect();
+                assert!(
+                    shows(&shown, &printed),
+                    "{}:{line}: `{command}` prints\n{stdout}\nwhich the listing does not show (masked: {printed:#?} against {shown:#?})",
+                    page.display()
+                );
+                ran += 1;
+            }
+        }
+    }
+    assert!(ran >= 8, "only {ran} tested commands in the guide");
+}
+
+/// The masks and the matcher of the tested listings.
+#[test]
+fn a_listing_masks_figures_and_keeps_words() {
+    assert_eq!(
+        masked("west.k1   N/m³  4.036168e8  -1.2e-3  0.31 %"),
+        "west.k# N/m³ # # # %"
+    );
+    assert_eq!(
+        masked("ρ: g1–g2 -0.96, 2026-11-21T10:00:00Z"),
+        "ρ: g#–g# #, #-#-#T#:#:#Z"
+    );
+    let lines = |t: &str| t.lines().map(masked).collect::<Vec<_>>();
+    assert!(shows(&lines("a 1\n...\nc 3"), &lines("a 2\nb\nb\nc 4")));
+    assert!(shows(&lines("a 1\n...\nc 3"), &lines("a 2\nc 4")));
+    assert!(!shows(&lines("a 1\nc 3"), &lines("a 2\nb\nc 4")));
+    assert!(!shows(&lines("mode freq"), &lines("mode frequency")));
 }
 
 #[test]
