@@ -1,5 +1,6 @@
 //! Linear least squares over rows given one at a time, on the range of
-//! its columns (see the parent module's `REGRESSOR_RANGE`).
+//! its columns (see the parent module's `REGRESSOR_RANGE`), and the range
+//! of the inputs' own columns, which the direct terms `D u` eliminate.
 
 use super::{RealizationError, CHUNK_ROWS, REGRESSOR_RANGE};
 use faer::Mat;
@@ -95,5 +96,69 @@ impl RegressorRows {
             *value = if *norm > 0.0 { *value / norm } else { 0.0 };
         }
         Ok(theta)
+    }
+}
+
+/// The range of the inputs' columns over the samples one output observes
+/// (the regressors of its row of `D`): `Q` (samples × kept, orthonormal,
+/// zero rows where the output is not observed) spans the unit-norm
+/// columns' range above [`REGRESSOR_RANGE`], and `to_d` maps a residual's
+/// projection `Qᵀ r` to that row of `D` (the truncated pseudo-inverse:
+/// `U D⁻¹ = Q_U R`, `R = W Σ Vᵀ`, `Q = Q_U W_kept`, `to_d = D⁻¹ V_kept Σ_kept⁻¹`).
+pub(super) struct InputRange {
+    pub(super) q: Mat<f64>,
+    pub(super) to_d: Mat<f64>,
+}
+
+impl InputRange {
+    pub(super) fn of(inputs: &[&[f64]], observed: &[bool]) -> Result<Self, RealizationError> {
+        let (samples, r) = (observed.len(), inputs.len());
+        let norms: Vec<f64> = inputs
+            .iter()
+            .map(|u| {
+                u.iter()
+                    .zip(observed)
+                    .filter(|(_, seen)| **seen)
+                    .map(|(v, _)| v * v)
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
+        let scaled = Mat::from_fn(samples, r, |k, i| {
+            if observed[k] && norms[i] > 0.0 {
+                inputs[i][k] / norms[i]
+            } else {
+                0.0
+            }
+        });
+        let qr = scaled.qr();
+        let q_u = qr.compute_thin_Q();
+        let svd = qr
+            .thin_R()
+            .to_owned()
+            .thin_svd()
+            .map_err(|_| RealizationError::LeastSquaresFailed)?;
+        let sigma: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+        let top = sigma.first().copied().unwrap_or(0.0);
+        let kept: Vec<usize> = (0..sigma.len())
+            .filter(|&j| sigma[j] > REGRESSOR_RANGE * top && sigma[j] > 0.0)
+            .collect();
+        let rotation = Mat::from_fn(q_u.ncols(), kept.len(), |row, j| svd.U()[(row, kept[j])]);
+        let q = &q_u * &rotation;
+        let to_d = Mat::from_fn(r, kept.len(), |i, j| {
+            if norms[i] > 0.0 {
+                svd.V()[(i, kept[j])] / sigma[kept[j]] / norms[i]
+            } else {
+                0.0
+            }
+        });
+        if !q.col_iter().all(|col| col.iter().all(|v| v.is_finite())) {
+            return Err(RealizationError::LeastSquaresFailed);
+        }
+        Ok(Self { q, to_d })
+    }
+
+    pub(super) fn kept(&self) -> usize {
+        self.q.ncols()
     }
 }

@@ -18,7 +18,9 @@
 //!
 //! (Verhaegen & Verdult 2007, "Filtering and system identification", §9.2.4,
 //! the subspace methods' usual last step). With `A` block diagonal each
-//! regressor column is a one- or two-state recursion. Coherent inputs (one
+//! regressor column is a one- or two-state recursion; `D`'s columns (the
+//! inputs themselves, one output's each) are eliminated first, so the
+//! factorised least squares is over `x₀` and `B` alone. Coherent inputs (one
 //! ground motion recorded at several supports) make the columns nearly
 //! dependent: the least squares is solved on the columns' range (a
 //! truncated SVD of the unit-norm columns, [`REGRESSOR_RANGE`]), as SRIM
