@@ -16,5 +16,7 @@ pub mod oma;
 pub mod realization;
 pub mod resample;
 pub mod srim;
+#[cfg(test)]
+mod test_noise;
 pub mod transmissibility;
 pub mod welch;

@@ -505,19 +505,8 @@ pub enum RealizationFailure {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::identification::test_noise::uniform_noise as noise;
     use faer::linalg::solvers::DenseSolveCore;
-
-    fn noise(seed: u64, n: usize) -> Vec<f64> {
-        let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-        (0..n)
-            .map(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect()
-    }
 
     /// The batched sums and edge corrections give exactly the block Hankel
     /// data matrix's Gram `Σ_t z_p(t) z_p(t)ᵀ / K` over the kept columns

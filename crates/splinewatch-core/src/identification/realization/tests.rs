@@ -1,18 +1,7 @@
 use super::modal_form::{ModalBlock, ModalForm};
 use super::*;
+use crate::identification::test_noise::uniform_noise as noise;
 use faer::linalg::solvers::{DenseSolveCore, SolveLstsq};
-
-fn noise(seed: u64, n: usize) -> Vec<f64> {
-    let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-    (0..n)
-        .map(|_| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        })
-        .collect()
-}
 
 /// Two damped modes (2.1 Hz 3 %, 5.3 Hz 6 %) at 50 Hz, two inputs,
 /// three outputs, with feedthrough: a realization in a rotated
