@@ -427,6 +427,39 @@ fn every_relative_link_and_picture_of_the_guide_and_readme_resolves() {
     assert!(checked > 50, "only {checked} relative links found");
 }
 
+/// Every `{{#include FILE}}` of the guide resolves, and the gallery shows
+/// every Python example (its source included, as mdBook renders it).
+#[test]
+fn every_include_resolves_and_the_gallery_shows_every_example() {
+    let mut included = Vec::new();
+    for (page, text) in pages() {
+        let dir = root().join(&page).parent().unwrap().to_path_buf();
+        for (at, _) in text.match_indices("{{#include ") {
+            let target: String = text[at + "{{#include ".len()..]
+                .chars()
+                .take_while(|&c| c != '}')
+                .collect();
+            let path = dir.join(target.split(':').next().unwrap().trim());
+            assert!(
+                path.exists(),
+                "{}: {{{{#include {target}}}}} leads nowhere",
+                page.display()
+            );
+            included.push(path.canonicalize().unwrap());
+        }
+    }
+    for entry in std::fs::read_dir(root().join("python/examples")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "py") {
+            assert!(
+                included.contains(&path.canonicalize().unwrap()),
+                "the gallery does not show {}",
+                path.display()
+            );
+        }
+    }
+}
+
 /// Phrases of a diary, not of the software: the pages speak of what the
 /// program does, not of when or where it was made (a figure's date stays,
 /// once, on the benchmarks or verification page).
