@@ -84,7 +84,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
         .as_deref()
         .map(|p| ResultsWriter::create_for(p, &cfg))
         .transpose()?;
-    let mut notifier = Notifier::for_config(&cfg).context("starting the notifier")?;
+    let mut notifier = Notifier::for_config(&cfg, None).context("starting the notifier")?;
     let mut rerun = a.rerun_save.as_ref().map(|path| open_rerun(&cfg, path)).transpose()?;
     if !a.json {
         outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tmodel_mode_hz\tforecast_nrmse\tbaseline_nrmse\tverdict");

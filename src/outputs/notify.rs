@@ -98,15 +98,18 @@ impl Notifier {
         })
     }
 
-    /// The notifier `[monitoring.notify]` of `config` asks for, if any.
-    pub fn for_config(config: &crate::config::Config) -> std::io::Result<Option<Self>> {
+    /// The notifier `[monitoring.notify]` of `config` asks for, if any. Its
+    /// notifications carry the report of `history` when given (one the
+    /// caller also records into and shares, e.g. with the status page),
+    /// else of a history of its own.
+    pub fn for_config(config: &crate::config::Config, history: Option<History>) -> std::io::Result<Option<Self>> {
         config
             .monitoring
             .as_ref()
             .and_then(|m| m.notify.as_ref())
             .map(|notify| {
                 Self::start(notify).map(|mut n| {
-                    n.history = Some(History::new(config));
+                    n.history = Some(history.unwrap_or_else(|| History::new(config)));
                     n
                 })
             })
@@ -119,14 +122,6 @@ impl Notifier {
         if let Some(h) = &self.history {
             h.record(suffix, json);
         }
-    }
-
-    /// Takes its report from `history` (one the caller also records into
-    /// and shares, e.g. with the status page) instead of its own.
-    #[must_use]
-    pub fn sharing(mut self, history: History) -> Self {
-        self.history = Some(history);
-        self
     }
 
     /// Takes a scored window's status (and its JSON): queues it when the

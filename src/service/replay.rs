@@ -176,7 +176,7 @@ pub fn replay_sources<W: Write + Seek>(
             keep: keep_latest,
             last_time: 0,
             summary: ReplaySummary::default(),
-            notifier: Notifier::for_config(config).context("starting the notify thread")?,
+            notifier: Notifier::for_config(config, None).context("starting the notify thread")?,
             metrics,
         };
         let replayed = run_stages(scope, pipeline, limits, messages, pipelined, &mut sink);

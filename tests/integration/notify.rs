@@ -166,7 +166,7 @@ fn a_webhook_receives_the_alarm_state_changes_over_verified_tls() {
         splinewatch::config::load_config(&Path::new(env!("CARGO_MANIFEST_DIR")).join("config/sinello-monitoring.toml"))
             .unwrap();
     site.monitoring.as_mut().unwrap().notify = Some(config.clone());
-    let mut notifier = Notifier::for_config(&site).unwrap().unwrap();
+    let mut notifier = Notifier::for_config(&site, None).unwrap().unwrap();
     let states = [
         "training",
         "normal",

@@ -110,12 +110,7 @@ impl Daemon {
             last_time: 0,
             logged_rejections: BTreeMap::new(),
             said_waiting: false,
-            notifier: Notifier::for_config(config)
-                .context("starting the notify thread")?
-                .map(|n| match &history {
-                    Some(h) => n.sharing(h.clone()),
-                    None => n,
-                }),
+            notifier: Notifier::for_config(config, history.clone()).context("starting the notify thread")?,
             events: EventWorker::start(config, options.state.as_deref())?,
             metrics: config
                 .metrics
