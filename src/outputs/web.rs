@@ -9,7 +9,8 @@
 //! certificate that CA signed is refused in the handshake (mutual TLS).
 
 use crate::config::{Config, WebConfig, WebTlsConfig};
-use crate::outputs::report::history::History;
+use crate::io::results_file::ResultsContents;
+use crate::outputs::report::history::{report_of, History};
 use crate::outputs::report::html::{self, escape, number};
 use crate::outputs::report::Report;
 use anyhow::{Context, Result};
@@ -37,6 +38,9 @@ const RECENT_DAYS: f64 = 3.0;
 /// trends, rendered again only after something new was recorded.
 struct PageState {
     history: History,
+    /// The history as of the last render: the report, the trends and the
+    /// figures are all drawn from it, rendered outside the history's lock.
+    contents: ResultsContents,
     report: Option<Report>,
     recent: Option<String>,
     /// The history's version they were rendered at.
@@ -45,12 +49,11 @@ struct PageState {
 
 impl PageState {
     fn refresh(&mut self) {
-        let version = self.history.version();
-        if self.rendered != Some(version) {
-            self.report = self.history.report();
-            self.recent = self
-                .history
-                .read(|contents| crate::outputs::report::recent_figures(contents, RECENT_DAYS));
+        if self.rendered != Some(self.history.version()) {
+            let (version, contents) = self.history.snapshot();
+            self.report = report_of(&contents);
+            self.recent = crate::outputs::report::recent_figures(&contents, RECENT_DAYS);
+            self.contents = contents;
             self.rendered = Some(version);
         }
     }
@@ -79,6 +82,7 @@ impl StatusPage {
         let page = Arc::new(Page {
             state: Mutex::new(PageState {
                 history,
+                contents: ResultsContents::default(),
                 report: None,
                 recent: None,
                 rendered: None,
@@ -328,7 +332,8 @@ fn status_json(state: &mut PageState, settings: &Settings) -> Value {
     let (priority, verdict) = state
         .report()
         .map_or((None, None), |r| (Some(r.priority.label()), Some(r.verdict.clone())));
-    state.history.read(|c| json!({
+    let c = &state.contents;
+    json!({
         "bridge": settings.bridge,
         "prefix": c.prefix,
         "priority": priority,
@@ -342,7 +347,7 @@ fn status_json(state: &mut PageState, settings: &Settings) -> Value {
             "verdict": e.verdict.as_ref().map(|v| v.state.clone()), "skipped": e.skipped})),
         "alarms": c.alarms.iter().filter(|a| a.state == "alarm").count(),
         "health": c.health,
-    }))
+    })
 }
 
 fn render_page(state: &mut PageState, settings: &Settings, token: Option<&str>) -> String {

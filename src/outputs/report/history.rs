@@ -66,16 +66,25 @@ impl History {
         self.lock().version
     }
 
-    /// `read` of what is kept, as a results file's contents.
-    pub fn read<R>(&self, read: impl FnOnce(&ResultsContents) -> R) -> R {
-        read(&self.lock().contents)
+    /// What is kept now and its version, copied out under the lock once:
+    /// rendering it then holds up no `record` (a copy takes less than a
+    /// render), and everything drawn from one snapshot agrees.
+    pub fn snapshot(&self) -> (u64, ResultsContents) {
+        let kept = self.lock();
+        (kept.version, kept.contents.clone())
     }
 
     /// The report of the last event when there are events, else of the
     /// period kept.
     pub fn report(&self) -> Option<Report> {
-        self.read(|contents| render(contents, &Selection::Latest).ok())
+        report_of(&self.snapshot().1)
     }
+}
+
+/// The report of `contents`' last event when it has events, else of its
+/// period.
+pub fn report_of(contents: &ResultsContents) -> Option<Report> {
+    render(contents, &Selection::Latest).ok()
 }
 
 fn trim<T>(v: &mut Vec<T>) {
