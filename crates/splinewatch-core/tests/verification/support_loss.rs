@@ -11,7 +11,7 @@ use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity, SensorPoint};
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, ModalState, Quantity, SensorPoint};
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::updating::modal_residual::{modal_residue, pair_modes, ObservedMode};
 use splinewatch_core::updating::{model_at, Parameter, ParameterKind};
@@ -179,26 +179,44 @@ fn column_error(analytic: &[c64], fd: &[c64]) -> f64 {
 /// eigenvalue), to the loss factors themselves, and the modes' `∂ζ_i/∂κ_j`
 /// against central differences of the whole evaluation (modes re-solved):
 /// 1e-6 relative per column, as for the springs without loss factors.
+/// The damping curve of the sensitivity checks: ζ(f) quadratic on
+/// [0, 120] Hz, loss factors 0.15 and 0.08 on the two abutments.
+fn lossy_curve() -> DampingCurve {
+    DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0)
+        .unwrap()
+        .with_loss_factors(vec![0.15, 0.08])
+        .unwrap()
+}
+
+/// The sensor pairs the checks compare (a driving point, a transfer, the
+/// other input's transfer).
+const PAIRS: [(usize, usize); 3] = [(0, 0), (1, 0), (2, 1)];
+
+fn accelerances(frequencies_hz: &[f64]) -> FrfRequest<'_> {
+    FrfRequest {
+        frequencies_hz,
+        pairs: &PAIRS,
+        quantity: Quantity::Accelerance,
+    }
+}
+
+/// The first `count` bending modes of `state`.
+fn first_bending(state: &ModalState, count: usize) -> Vec<usize> {
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
+        .take(count)
+        .collect()
+}
+
 #[test]
 fn loss_factor_sensitivities_match_central_differences() {
     let (frf, kappa) = deck_on_abutments();
-    let curve = DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0)
-        .unwrap()
-        .with_loss_factors(vec![0.15, 0.08])
-        .unwrap();
+    let curve = lossy_curve();
     let state = frf.modal_state(&kappa, &curve).unwrap();
     let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0, 63.0];
-    let pairs = [(0, 0), (1, 0), (2, 1)];
-    let request = FrfRequest {
-        frequencies_hz: &freqs,
-        pairs: &pairs,
-        quantity: Quantity::Accelerance,
-    };
+    let request = accelerances(&freqs);
     let eval = frf.evaluate(&state, request, true);
-    let bending: Vec<usize> = (0..state.modes.len())
-        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
-        .take(6)
-        .collect();
+    let bending = first_bending(&state, 6);
     let modal = frf.modal_sensitivities(&state, &bending);
     let mut worst: f64 = 0.0;
     let mut flat = 0;
@@ -268,24 +286,13 @@ fn loss_factors_follow_the_deck_stiffness_in_its_sensitivities() {
     let knots = |n| KnotVector::uniform(1, n, 0.0, 1.0).unwrap();
     let field = StiffnessField::new(knots(3), knots(2), vec![1.0; 6]).unwrap();
     let (frf, kappa) = deck_with_fields(vec![field]);
-    let curve = DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0)
-        .unwrap()
-        .with_loss_factors(vec![0.15, 0.08])
-        .unwrap();
+    let curve = lossy_curve();
     let theta = vec![vec![1.0, 0.9, 1.1, 0.8, 1.05, 1.2]];
     let state = frf.modal_state_with_fields(&kappa, &theta, &curve).unwrap();
     let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0, 63.0];
-    let pairs = [(0, 0), (1, 0), (2, 1)];
-    let request = FrfRequest {
-        frequencies_hz: &freqs,
-        pairs: &pairs,
-        quantity: Quantity::Accelerance,
-    };
+    let request = accelerances(&freqs);
     let analytic = frf.field_frf_sensitivities(&state, &curve, request);
-    let bending: Vec<usize> = (0..state.modes.len())
-        .filter(|&i| state.modes.kinds[i] == ModeKind::Bending)
-        .take(6)
-        .collect();
+    let bending = first_bending(&state, 6);
     let modal = frf.field_sensitivities(&state, &bending);
     let mut worst: f64 = 0.0;
     for k in 0..theta[0].len() {
@@ -433,18 +440,10 @@ fn loss_factors_on_a_truncated_model_are_close_to_exact() {
     let (model, sensors) = deck_model(Vec::new());
     let kappa = model.spring_coefficients();
     let frf = FrfModel::truncated(&model, &sensors, 60.0).unwrap();
-    let curve = DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0)
-        .unwrap()
-        .with_loss_factors(vec![0.15, 0.08])
-        .unwrap();
+    let curve = lossy_curve();
     let state = frf.modal_state(&kappa, &curve).unwrap();
     let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0];
-    let pairs = [(0, 0), (1, 0), (2, 1)];
-    let request = FrfRequest {
-        frequencies_hz: &freqs,
-        pairs: &pairs,
-        quantity: Quantity::Accelerance,
-    };
+    let request = accelerances(&freqs);
     let eval = frf.evaluate(&state, request, true);
     let mut worst: f64 = 0.0;
     let mut flat = 0;
