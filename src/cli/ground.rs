@@ -1,7 +1,7 @@
 //! `predict` and `simulate --ground`: the deck driven by recorded ground
 //! motion (issue 44).
 
-use crate::config::{load_config, Config};
+use crate::config::{load_config, Config, GroundInputPlan};
 use crate::io::console::{errln, outln};
 use crate::io::recording::{RecordedBlock, RecordingWriter};
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
@@ -32,7 +32,8 @@ pub struct PredictArgs {
     /// Parameters of an update (`update --json` output): the model at those values.
     #[arg(long, conflicts_with = "state")]
     pub parameters: Option<PathBuf>,
-    /// The daemon's state file: the model at its last accepted parameters.
+    /// The daemon's state file: the model at its last accepted parameters; for a config without a
+    /// model, the state `events --state` wrote: the record forecast by the realization it holds.
     #[arg(long)]
     pub state: Option<PathBuf>,
     /// Write the predicted deck accelerations (channels `<sensor>_predicted`) and the record as MCAP.
@@ -59,6 +60,16 @@ fn read_records_said(cfg: &Config, paths: &[PathBuf], start_ns: Option<i128>) ->
     Ok(records.blocks)
 }
 
+/// The record on one grid with the config's deck channels it holds (none:
+/// nothing to compare a prediction with).
+fn deck_event(cfg: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[RecordedBlock]) -> Result<Event> {
+    let event = align_event(cfg, plan, blocks)?;
+    if event.deck.is_empty() {
+        bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
+    }
+    Ok(event)
+}
+
 /// `--start`: an RFC 3339 timestamp, as ns since the epoch.
 pub fn parse_start(text: &str) -> Result<i128, String> {
     crate::io::wire::parse_timestamp(text)
@@ -71,21 +82,44 @@ fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
     crate::studies::update::named_values(&text).with_context(|| path.display().to_string())
 }
 
+/// The record and its prediction: by the model (at the config's values,
+/// an update's or a state's), or, without a model, by the realization of
+/// an events state.
+fn predicted_event(cfg: &Config, a: &PredictArgs) -> Result<(Event, Prediction)> {
+    Ok(if cfg.has_model() {
+        let named = match (&a.parameters, &a.state) {
+            (Some(p), _) | (None, Some(p)) => named_parameters(p)?,
+            (None, None) => Vec::new(),
+        };
+        let mut model = GroundModel::new(cfg, &named)?;
+        let blocks = read_records_said(cfg, &a.record, a.start)?;
+        let event = deck_event(cfg, &mut model.plan, &blocks)?;
+        let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
+        let mut prediction = predict_event(cfg, &model, &event.deck, channel, event.fs);
+        prediction.report.start = Some(crate::io::wire::format_timestamp(event.start_ns));
+        (event, prediction)
+    } else {
+        // Without a model: the realization `events --state` kept.
+        let Some(state) = &a.state else {
+            bail!(
+                    "{} has no [model]: predict forecasts with the realization of an events state: give --state (the file `splinewatch events --state` wrote on this station's records)",
+                    a.config.display()
+                );
+        };
+        let mut plan = cfg.ground_plan_of_sensors()?;
+        let blocks = read_records_said(cfg, &a.record, a.start)?;
+        let event = deck_event(cfg, &mut plan, &blocks)?;
+        let (prediction, notes) = crate::service::events::predict_by_realization(cfg, state, (&event, &plan))?;
+        for note in notes {
+            errln!("{note}");
+        }
+        (event, prediction)
+    })
+}
+
 pub fn predict(a: PredictArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let named = match (&a.parameters, &a.state) {
-        (Some(p), _) | (None, Some(p)) => named_parameters(p)?,
-        (None, None) => Vec::new(),
-    };
-    let mut model = GroundModel::new(&cfg, &named)?;
-    let blocks = read_records_said(&cfg, &a.record, a.start)?;
-    let event = align_event(&cfg, &mut model.plan, &blocks)?;
-    if event.deck.is_empty() {
-        bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
-    }
-    let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
-    let mut prediction = predict_event(&cfg, &model, &event.deck, channel, event.fs);
-    prediction.report.start = Some(crate::io::wire::format_timestamp(event.start_ns));
+    let (event, prediction) = predicted_event(&cfg, &a)?;
     if let Some(dir) = &a.plot {
         plot(&cfg, &prediction, event.fs, dir)?;
     }

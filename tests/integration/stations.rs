@@ -235,6 +235,35 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         ),
         "{notes}"
     );
+    // `predict` without a model forecasts by the state's realization, with
+    // the figures `events` gave the same record; without `--state` it says
+    // what it needs.
+    let o = splinewatch(&[
+        "predict",
+        "--config",
+        config.to_str().unwrap(),
+        "--state",
+        state.to_str().unwrap(),
+        "--json",
+        &records[1],
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("forecast by the realization of ferndale_28jan2015"),
+        "{stderr}"
+    );
+    let predicted: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    for sensor in ["ch4", "ch7", "ch9"] {
+        assert_eq!(
+            score(&predicted["channels"], sensor),
+            score(&forecast["channels"], sensor),
+            "{sensor}"
+        );
+    }
+    let o = splinewatch(&["predict", "--config", config.to_str().unwrap(), &records[1]]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && stderr.contains("give --state"), "{stderr}");
 }
 
 /// A station's record `station` cannot read as a bridge's: each problem one

@@ -25,6 +25,7 @@ use chain::{feature_of_parameter, Named};
 pub use emit::{forecast_medians, log_rerun, messages, status_message, EventMessages};
 pub use line::{BandLine, EventLine, UpdateLine, VerdictLine};
 pub use loading::{load, Loaded};
+pub use realization::predict_by_realization;
 
 use super::records::{identify_io, Event};
 use crate::config::{ground_sensors, ground_signals, Config, EventAmplitude, EventForecast, GroundInputPlan, Residues};

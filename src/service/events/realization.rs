@@ -7,7 +7,7 @@
 
 use super::*;
 use crate::service::records::{at_identification_rate, rate_text};
-use crate::studies::predict::{score_forecast, GroundsOf};
+use crate::studies::predict::{score_forecast, GroundsOf, Prediction};
 use splinewatch_core::identification::realization::Realization;
 use splinewatch_core::identification::srim;
 
@@ -82,16 +82,63 @@ fn forecast(
     inputs: &[&[f64]],
     line: &mut EventLine,
 ) -> Result<()> {
+    match prediction_by(cfg, saved, (event, plan), inputs)? {
+        Err(why) => line.notes.push(format!("not forecast: {why}")),
+        Ok((mut prediction, notes)) => {
+            prediction.report.start = line.start.clone();
+            line.notes.extend(notes);
+            line.forecast = Some(prediction.report);
+        }
+    }
+    Ok(())
+}
+
+/// `predict` without a model: `event` forecast by the realization the
+/// events' state holds (`--state` of `events` on the same config), scored
+/// as a model's prediction; what it says goes to stderr.
+pub fn predict_by_realization(
+    cfg: &Config,
+    state: &Path,
+    (event, plan): (&Event, &[GroundInputPlan]),
+) -> Result<(Prediction, Vec<String>)> {
+    if !state.exists() {
+        bail!(
+            "{}: no such events state (run `splinewatch events --state` on the station's records first)",
+            state.display()
+        );
+    }
+    let chain = Chain::resume(Some(state))?;
+    let Some(saved) = &chain.realization else {
+        bail!(
+            "{}: the events' state holds no realization (run `splinewatch events --state` on a config without a model first)",
+            state.display()
+        );
+    };
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let signals = ground_signals(plan, channel);
+    let inputs: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
+    prediction_by(cfg, saved, (event, plan), &inputs)?.map_err(|why| anyhow::anyhow!("not forecast: {why}"))
+}
+
+/// A realization's forecast with its notes, or why there is none.
+type ForecastOrWhy = std::result::Result<(Prediction, Vec<String>), String>;
+
+/// The forecast by `saved` with its notes, or why there is none.
+fn prediction_by(
+    cfg: &Config,
+    saved: &SavedRealization,
+    (event, plan): (&Event, &[GroundInputPlan]),
+    inputs: &[&[f64]],
+) -> Result<ForecastOrWhy> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
     let input_names: Vec<&str> = plan.iter().map(|p| p.name.as_str()).collect();
     if saved.inputs != input_names {
-        line.notes.push(format!(
-            "not forecast: the realization of {} is driven by other ground inputs ({}) than this record's ({})",
+        return Ok(Err(format!(
+            "the realization of {} is driven by other ground inputs ({}) than this record's ({})",
             saved.event,
             saved.inputs.join(", "),
             input_names.join(", ")
-        ));
-        return Ok(());
+        )));
     }
     let realization = &saved.realization;
     if realization.inputs() != saved.inputs.len() || realization.outputs() != saved.outputs.len() {
@@ -119,11 +166,10 @@ fn forecast(
         .filter(|name| !saved.outputs.iter().any(|o| o == name))
         .collect();
     if deck.is_empty() {
-        line.notes.push(format!(
-            "not forecast: the realization of {} has none of this record's deck channels",
+        return Ok(Err(format!(
+            "the realization of {} has none of this record's deck channels",
             saved.event
-        ));
-        return Ok(());
+        )));
     }
     let all = realization
         .simulate_at(inputs, event.fs)
@@ -131,20 +177,19 @@ fn forecast(
     let predicted: Vec<Vec<f64>> = rows.iter().map(|&row| all[row].clone()).collect();
     let grounds = GroundsOf { plan, anchors: &[] };
     let mut prediction = score_forecast(cfg, &grounds, &deck, channel, event.fs, predicted);
-    prediction.report.start = line.start.clone();
-    line.notes.push(format!(
+    prediction.report.start = Some(format_timestamp(event.start_ns));
+    let mut notes = vec![format!(
         "forecast by the realization of {} (order {}, identified at {} Hz)",
         saved.event,
         realization.states(),
         rate_text(realization.fs())
-    ));
+    )];
     if !missing.is_empty() {
-        line.notes.push(format!(
+        notes.push(format!(
             "not forecast: {} (not in the record the realization of {} was identified on)",
             missing.join(", "),
             saved.event
         ));
     }
-    line.forecast = Some(prediction.report);
-    Ok(())
+    Ok(Ok((prediction, notes)))
 }
