@@ -161,4 +161,9 @@ impl InputRange {
     pub(super) fn kept(&self) -> usize {
         self.q.ncols()
     }
+
+    /// `Q`'s rows at `samples`.
+    pub(super) fn rows_at(&self, samples: &[usize]) -> Mat<f64> {
+        Mat::from_fn(samples.len(), self.kept(), |row, j| self.q[(samples[row], j)])
+    }
 }

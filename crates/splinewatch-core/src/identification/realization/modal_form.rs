@@ -180,18 +180,14 @@ impl ModalForm {
         // on the inputs' range.
         let mut on_range: Vec<Mat<f64>> = ranges.iter().map(|q| Mat::zeros(q.kept(), shared + 1)).collect();
         self.for_each_chunk(inputs, outputs, |o, samples, rows| {
-            let q = ranges[o].q.as_ref();
-            let q_rows = Mat::from_fn(samples.len(), q.ncols(), |row, j| q[(samples[row], j)]);
-            on_range[o] += q_rows.transpose() * rows;
+            on_range[o] += ranges[o].rows_at(samples).transpose() * rows;
             Ok(())
         })?;
         // The rows off that range, `[Φ_o y_o] − Q_o [W w]_o`, over `x₀` and `B`.
         let mut regressors = RegressorRows::new(shared);
         let mut values = vec![0.0; shared];
         self.for_each_chunk(inputs, outputs, |o, samples, rows| {
-            let q = ranges[o].q.as_ref();
-            let q_rows = Mat::from_fn(samples.len(), q.ncols(), |row, j| q[(samples[row], j)]);
-            let projected = rows - &q_rows * &on_range[o];
+            let projected = rows - ranges[o].rows_at(samples) * &on_range[o];
             for row in 0..projected.nrows() {
                 for (c, value) in values.iter_mut().enumerate() {
                     *value = projected[(row, c)];
