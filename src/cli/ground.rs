@@ -76,19 +76,13 @@ pub fn parse_start(text: &str) -> Result<i128, String> {
         .ok_or_else(|| format!("{text:?} is not an RFC 3339 timestamp (e.g. 2022-12-20T10:34:01Z)"))
 }
 
-/// The updating parameters named in an `update --json` result or a state file.
-fn named_parameters(path: &Path) -> Result<Vec<(String, f64)>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    crate::studies::update::named_values(&text).with_context(|| path.display().to_string())
-}
-
 /// The record and its prediction: by the model (at the config's values,
 /// an update's or a state's), or, without a model, by the realization of
 /// an events state.
 fn predicted_event(cfg: &Config, a: &PredictArgs) -> Result<(Event, Prediction)> {
     Ok(if cfg.has_model() {
         let named = match (&a.parameters, &a.state) {
-            (Some(p), _) | (None, Some(p)) => named_parameters(p)?,
+            (Some(p), _) | (None, Some(p)) => crate::studies::update::named_values_of_file(p)?,
             (None, None) => Vec::new(),
         };
         let mut model = GroundModel::new(cfg, &named)?;
@@ -383,6 +377,8 @@ pub struct IdentifyArgs {
     pub start: Option<i128>,
     #[command(flatten)]
     pub output: super::identified::ModesOutput,
+    #[command(flatten)]
+    pub comparison: super::identified::ModelComparison,
     /// Also write the multi-input H1 transmissibilities (inputs to every output, with the multiple
     /// coherence and the inputs' condition number per line; `[frf] segment_seconds` and `overlap`) as JSON.
     #[arg(long)]
@@ -459,7 +455,7 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         },
         settings.block_rows
     );
-    super::identified::write_identified(&cfg, &report, &a.output)
+    super::identified::write_identified(&cfg, &report, &a.output, &a.comparison)
 }
 
 /// The multi-input H1 estimates of `identify --transmissibility` as JSON:

@@ -1,9 +1,10 @@
 //! Where an identification's modes go (`oma`, `identify`): the Rerun file,
-//! the modes file, and the modes as JSON or a table on stdout.
+//! the modes file, and the modes as JSON or a table on stdout, each with
+//! the model mode nearest it by shape when the config has a model.
 
 use crate::config::Config;
 use crate::io::console::outln;
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -21,12 +22,24 @@ pub struct ModesOutput {
     pub rerun_save: Option<PathBuf>,
 }
 
+/// The model an identification is compared with (`oma`, `identify`).
+#[derive(Args)]
+pub struct ModelComparison {
+    /// Compare the modes with the model at these parameters (`update --json` output or a state
+    /// file) instead of the config's values. With a `[model]`, each identified mode is shown with
+    /// the model mode nearest it by shape (MAC), whatever its frequency.
+    #[arg(long)]
+    pub parameters: Option<PathBuf>,
+}
+
 /// The outputs of an identification (`oma`, `identify`): the Rerun file,
-/// the modes file, and the modes as JSON or a table on stdout.
+/// the modes file, and the modes as JSON or a table on stdout; with a
+/// model, each mode with the model mode nearest it by shape.
 pub(super) fn write_identified(
     cfg: &Config,
     report: &crate::pipeline::oma::OmaReport,
     output: &ModesOutput,
+    comparison: &ModelComparison,
 ) -> Result<()> {
     let (rerun_save, out, json) = (output.rerun_save.as_deref(), output.out.as_deref(), output.json);
     if let Some(path) = rerun_save {
@@ -38,7 +51,22 @@ pub(super) fn write_identified(
         rerun.log_oma(report)?;
         rerun.finish()?;
     }
-    let file = report.modes_file();
+    let mut file = report.modes_file();
+    match (&comparison.parameters, cfg.has_model()) {
+        (Some(path), false) => bail!(
+            "--parameters {}: the config has no [model] to compare the modes with",
+            path.display()
+        ),
+        (parameters, true) => {
+            let named = match parameters {
+                Some(path) => crate::studies::update::named_values_of_file(path)?,
+                None => Vec::new(),
+            };
+            crate::studies::mode_match::match_with_model(cfg, &mut file, &named)
+                .context("comparing the modes with the model's")?;
+        }
+        (None, false) => {}
+    }
     if let Some(path) = out {
         std::fs::write(path, serde_json::to_string_pretty(&file)?)
             .with_context(|| format!("cannot write {}", path.display()))?;
@@ -51,10 +79,30 @@ pub(super) fn write_identified(
         Some(x) => format!("{:.*}", digits, x * scale),
         None => "-".into(),
     };
-    outln!(" mode  frequency Hz    ± std Hz  damping %  ± std %    MPC  orders");
-    for (i, m) in report.result.modes.iter().enumerate() {
+    let with_model = cfg.has_model();
+    outln!(
+        " mode  frequency Hz    ± std Hz  damping %  ± std %    MPC  orders{}",
+        if with_model {
+            "  model mode  model Hz    MAC    Δf %  pairs"
+        } else {
+            ""
+        }
+    );
+    for (i, (m, entry)) in report.result.modes.iter().zip(&file.modes).enumerate() {
+        let model = match (&entry.model, with_model) {
+            (Some(n), _) => format!(
+                "  {:10}  {:8.4}  {:5.3}  {:+6.1}  {:>5}",
+                n.mode,
+                n.frequency_hz,
+                n.mac,
+                100.0 * n.frequency_gap,
+                if n.pairs { "yes" } else { "no" }
+            ),
+            (None, true) => "  no flexible model mode".into(),
+            (None, false) => String::new(),
+        };
         outln!(
-            "{:5}  {:12.4}  {:>10}  {:9.3}  {:>7}  {:5.3}  {:6}",
+            "{:5}  {:12.4}  {:>10}  {:9.3}  {:>7}  {:5.3}  {:6}{model}",
             i + 1,
             m.frequency_hz,
             or_dash(m.frequency_std_hz, 1.0, 4),

@@ -553,6 +553,8 @@ pub struct OmaArgs {
     pub to: Option<String>,
     #[command(flatten)]
     pub output: super::identified::ModesOutput,
+    #[command(flatten)]
+    pub comparison: super::identified::ModelComparison,
 }
 
 /// `splinewatch oma`: output-only modal identification of a recorded span.
@@ -573,7 +575,7 @@ pub fn oma(a: OmaArgs) -> Result<()> {
         stable,
         report.result.modes.len()
     );
-    super::identified::write_identified(&cfg, &report, &a.output)
+    super::identified::write_identified(&cfg, &report, &a.output, &a.comparison)
 }
 
 fn parse_xy(s: &str) -> Result<(f64, f64), String> {

@@ -1,8 +1,8 @@
 //! The identified-modes file (`splinewatch oma --json`, `update --modes`):
 //! `{"modes":[{"frequency_hz":…, "damping_ratio":…, "frequency_std_hz":…,
 //! "damping_std":…, "shape":[{"sensor":"P1","re":…,"im":…},…]},…]}`.
-//! Extra keys (`mpc`, `order`, `stable_orders`, a shape entry's `std`, the
-//! file's `start`, `duration_s`, `fs_hz`) are informative; readers ignore
+//! Extra keys (`mpc`, `order`, `stable_orders`, `model`, a shape entry's
+//! `std`, the file's `start`, `duration_s`, `fs_hz`) are informative; readers ignore
 //! keys they do not know. A standard deviation is `null` when the
 //! jackknife could not estimate it.
 
@@ -45,6 +45,26 @@ pub struct ModeEntry {
     pub order: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stable_orders: Option<usize>,
+    /// With a config that has a model: the model mode nearest this one by
+    /// shape.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model: Option<ModelMatch>,
+}
+
+/// The model mode nearest an identified one by shape: the largest MAC at
+/// the identified mode's sensors over the model's flexible modes, whatever
+/// their frequency.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModelMatch {
+    /// The model mode, numbered as `splinewatch modes` numbers them (from 1).
+    pub mode: usize,
+    pub frequency_hz: f64,
+    pub mac: f64,
+    /// `(f_model − f_identified) / f_identified`.
+    pub frequency_gap: f64,
+    /// Whether updating on this mode would pair it with that model mode
+    /// (`[updating] min_mac` and `max_frequency_gap`).
+    pub pairs: bool,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -9,7 +9,6 @@ use crate::io::uff::UffPoint;
 use anyhow::{bail, Context, Result};
 use splinewatch_core::c64;
 use splinewatch_core::solvers::modal::ModeKind;
-use splinewatch_core::updating::modal_state_at;
 
 /// The config's sensors as universal-file points: node `uff_node` (default:
 /// the sensor's place in the list, 1, 2, …), position on the deck surface,
@@ -98,16 +97,7 @@ pub fn uff_file(config: &Config, content: &UffContent<'_>) -> Result<String> {
 /// The model's elastic modes up to `below_hz` with `parameters` set, their
 /// mass-normalised shapes at the sensors and ζ(f).
 fn model_modes(config: &Config, parameters: &[(String, f64)], below_hz: f64) -> Result<Vec<UffMode>> {
-    let setup = crate::config::frf_setup(config)?;
-    let defined = config.build_parameters()?;
-    let base = splinewatch_core::updating::base_values(
-        &defined,
-        &setup.kappa,
-        setup.model.field_coefficients(),
-        &setup.damping,
-    );
-    let values = super::parameters::values_by_name(&defined, &base, parameters, "parameter")?;
-    let (state, _) = modal_state_at(&setup.model, &defined, &setup.kappa, &setup.damping, &values)?;
+    let (setup, state) = super::parameters::modal_state_of(config, parameters)?;
     let sensors = setup.sensor_names.len();
     Ok((0..state.modes.len())
         .filter(|&i| {

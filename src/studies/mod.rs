@@ -13,6 +13,7 @@ pub mod frf_windows;
 pub mod ground_motion;
 pub mod import;
 pub mod matrices;
+pub mod mode_match;
 pub mod modes;
 pub mod paper;
 pub mod parameters;

@@ -39,6 +39,13 @@ pub fn named_values(text: &str) -> Result<Vec<(String, f64)>> {
     Ok(start.parameters.into_iter().map(|p| (p.name, p.value)).collect())
 }
 
+/// The updating parameters named in a file: an `update --json` result or a
+/// state file.
+pub fn named_values_of_file(path: &std::path::Path) -> Result<Vec<(String, f64)>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    named_values(&text).with_context(|| path.display().to_string())
+}
+
 /// The FRFs of an FRF file's `bytes`: a universal file (dataset 58/58b,
 /// recognised by content; nodes mapped by `[[sensors]] uff_node`) or FRF JSON.
 pub fn read_frf_file(config: &Config, bytes: &[u8]) -> Result<FrfFile> {

@@ -200,6 +200,35 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let predicted: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(predicted["channels"], forecast["channels"]);
+    // Each identified mode names the model mode nearest it by shape in the
+    // forecast's model: as `identify --parameters` with that model names it.
+    let o = splinewatch(&[
+        "identify",
+        "--config",
+        CONFIG,
+        "--json",
+        "--parameters",
+        earlier.to_str().unwrap(),
+        &record("ferndale_28jan2015_72387946_ce89324p.zip"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let identified: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut compared = 0;
+    for m in second["modes"].as_array().unwrap() {
+        let near = &m["model"];
+        assert!(near["mac"].as_f64().is_some_and(|v| v > 0.0 && v <= 1.0 + 1e-12), "{m}");
+        let f = m["frequency_hz"].as_f64().unwrap();
+        let same = identified["modes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|o| (o["frequency_hz"].as_f64().unwrap() - f).abs() < 1e-9 * f);
+        if let Some(other) = same {
+            assert_eq!(other["model"], *near, "{f} Hz");
+            compared += 1;
+        }
+    }
+    assert!(compared > 0, "{} against {identified}", second["modes"]);
     // Every event on events/summary, the judged ones on events/verdict.
     let topics = results_by_topic(&std::fs::read(&out).unwrap());
     assert_eq!(topics["events/summary"].len(), 8);

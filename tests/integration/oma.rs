@@ -155,6 +155,24 @@ fn ambient_recording_to_oma_json_gives_the_model_modes() {
         assert!(*value > 0.9, "mode at {f} Hz pairs with {f_model} Hz at MAC {value}");
         assert!((f / f_model - 1.0).abs() < 0.005, "{f} Hz vs model {f_model} Hz");
     }
+    // Each mode names the model mode nearest it by shape: this test's own
+    // MAC against the bending modes is at most the CLI's over every
+    // flexible mode, and equal where the nearest is a bending mode.
+    // The update pairs them (MAC ≥ 0.8, within 10 %; a model mode claimed
+    // twice by the closest pair goes to one).
+    let mut paired = 0;
+    for (m, (f_model, f, value)) in file.modes.iter().zip(&found) {
+        let near = m.model.as_ref().expect("the bundled config has a model");
+        assert!(near.mac >= value - 1e-9, "{f} Hz: {near:?} against MAC {value}");
+        if (near.frequency_hz - f_model).abs() < 1e-9 * f_model {
+            assert!((near.mac - value).abs() < 1e-9, "{f} Hz: {near:?} against MAC {value}");
+        }
+        if near.pairs {
+            assert!(near.mac >= 0.8 && near.frequency_gap.abs() <= 0.1, "{f} Hz: {near:?}");
+            paired += 1;
+        }
+    }
+    assert!(paired >= 17, "{paired} modes pair: {file:?}");
     let distinct: std::collections::BTreeSet<u64> = found.iter().map(|p| p.0.to_bits()).collect();
     assert!(
         distinct.len() >= 17,
@@ -636,7 +654,14 @@ fn issue_33_oma_runs_on_a_config_without_a_model() {
     let with = identify("config/sinello.toml");
     let file: ModesFile = serde_json::from_slice(&without).unwrap();
     assert!(file.modes.len() >= 10, "{} modes", file.modes.len());
-    assert_eq!(without, with, "the model plays no part in the identification");
+    assert!(file.modes.iter().all(|m| m.model.is_none()), "no model, no match");
+    // With the model, each mode also names its nearest model mode; the
+    // identification is the same, bit for bit.
+    let mut compared: ModesFile = serde_json::from_slice(&with).unwrap();
+    for mode in &mut compared.modes {
+        assert!(mode.model.take().is_some(), "the bundled config has a model");
+    }
+    assert_eq!(file, compared, "the model plays no part in the identification");
     let o = splinewatch(&["modes", "--config", config.to_str().unwrap()]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("model: no deck"), "{}", stderr(&o));

@@ -168,6 +168,21 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
     );
     let modes: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(!modes["modes"].as_array().unwrap().is_empty(), "{modes}");
+    assert!(modes["modes"][0].get("model").is_none(), "no model, no match: {modes}");
+    let o = splinewatch(&[
+        "identify",
+        "--config",
+        config.to_str().unwrap(),
+        &records[1],
+        "--parameters",
+        "state.json",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        stderr.contains("--parameters state.json: the config has no [model] to compare the modes with"),
+        "{stderr}"
+    );
     // `events` without a model: an event identified and judged on its
     // modes (no update, and no forecast for the first); the 1980 record
     // (19.7 s at 50 Hz) is shorter than the horizon's 32 s at any rate, and

@@ -163,6 +163,9 @@ fn run_chain(
         take_identification(identified, line)?;
     }
     updated?;
+    if cfg.has_model() && !line.modes.is_empty() {
+        match_with_forecast_model(cfg, chain, line)?;
+    }
     judge_event(cfg, chain, line, amplitude);
     Ok(())
 }
@@ -177,6 +180,19 @@ fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>, lin
         None => bail!("the event was not read"),
     }
     Ok(())
+}
+
+/// Each identified mode with the model mode nearest it by shape in the
+/// forecast's model (the events before this one; the config's values for
+/// the first): does the model the event was forecast with have the modes
+/// the record shows?
+fn match_with_forecast_model(cfg: &Config, chain: &mut Chain, line: &mut EventLine) -> Result<()> {
+    let parts = chain.parts(cfg)?;
+    let named: Vec<(String, f64)> = line.forecast_model.iter().map(|n| (n.name.clone(), n.value)).collect();
+    let state = crate::studies::parameters::modal_state_in(&parts.setup, &parts.parameters, &named)
+        .context("the forecast's model's modes")?;
+    crate::studies::mode_match::match_modes(cfg, &state, &parts.setup.sensor_names, &mut line.modes)
+        .context("the identified modes against the forecast's model")
 }
 
 /// The event forecast by the model of the events before it (none for the

@@ -61,6 +61,39 @@ pub struct ModalResidue {
     pub pairs: Vec<ModePair>,
 }
 
+/// The flexible model mode of largest MAC with `mode` (at its sensors)
+/// among those `admit` lets through, and that MAC.
+fn best_mac(state: &ModalState, mode: &ObservedMode, admit: impl Fn(usize) -> bool) -> Option<(usize, f64)> {
+    let shape: Vec<c64> = mode.shape.iter().map(|&(_, v)| v).collect();
+    (0..state.modes.len())
+        .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid && admit(i))
+        .map(|i| {
+            let a: Vec<f64> = mode.shape.iter().map(|&(s, _)| state.amplitude(s, i)).collect();
+            (i, mac_real(&shape, &a))
+        })
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
+/// Each observed mode's nearest model mode by shape alone: the flexible
+/// mode of largest MAC at its sensors, whatever its frequency (`None` when
+/// the model has no flexible mode). Not a pairing for updating (see
+/// [`pair_modes`] for why the frequency gate matters there): what a modal
+/// analyst compares to tell which model mode an identified one is, and by
+/// how much their frequencies differ.
+pub fn nearest_by_shape(state: &ModalState, observed: &[ObservedMode]) -> Vec<Option<ModePair>> {
+    observed
+        .iter()
+        .enumerate()
+        .map(|(o, mode)| {
+            best_mac(state, mode, |_| true).map(|(model, mac)| ModePair {
+                observed: o,
+                model,
+                mac,
+            })
+        })
+        .collect()
+}
+
 /// Pairs each observed mode with the flexible model mode of largest MAC
 /// (at the observed sensors) among those within `max_gap` relative
 /// frequency, if that MAC is at least `min_mac`; a model mode claimed twice
@@ -70,15 +103,9 @@ pub struct ModalResidue {
 pub fn pair_modes(state: &ModalState, observed: &[ObservedMode], min_mac: f64, max_gap: f64) -> Vec<ModePair> {
     let mut pairs: Vec<ModePair> = Vec::new();
     for (o, mode) in observed.iter().enumerate() {
-        let shape: Vec<c64> = mode.shape.iter().map(|&(_, v)| v).collect();
-        let best = (0..state.modes.len())
-            .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid)
-            .filter(|&i| (state.modes.frequency_hz(i) - mode.frequency_hz).abs() <= max_gap * mode.frequency_hz)
-            .map(|i| {
-                let a: Vec<f64> = mode.shape.iter().map(|&(s, _)| state.amplitude(s, i)).collect();
-                (i, mac_real(&shape, &a))
-            })
-            .max_by(|a, b| a.1.total_cmp(&b.1));
+        let best = best_mac(state, mode, |i| {
+            (state.modes.frequency_hz(i) - mode.frequency_hz).abs() <= max_gap * mode.frequency_hz
+        });
         let Some((model, mac)) = best.filter(|b| b.1 >= min_mac) else {
             continue;
         };

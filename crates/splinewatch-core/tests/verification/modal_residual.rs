@@ -8,7 +8,7 @@ use super::common::{
 use splinewatch_core::c64;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::response::frf::{FrfModel, ModalState};
-use splinewatch_core::updating::modal_residual::{modal_residue, pair_modes, ObservedMode};
+use splinewatch_core::updating::modal_residual::{modal_residue, nearest_by_shape, pair_modes, ObservedMode};
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
 fn parameters() -> Vec<Parameter> {
@@ -41,6 +41,36 @@ fn observed_from(state: &ModalState) -> Vec<ObservedMode> {
             }
         })
         .collect()
+}
+
+/// Nearest by shape ignores the frequency that the pairing gates on: the
+/// bending modes below 80 Hz as identified (exact shapes, complex-rotated),
+/// every other one reported at 1.6× its frequency. The pairing (10 % gate)
+/// keeps the others only; the nearest by shape finds every one's own model
+/// mode at MAC 1 (the rotation is undone by the modulus), and names the
+/// model mode, not the index into the identified list.
+#[test]
+fn the_nearest_model_mode_by_shape_is_found_whatever_the_frequency() {
+    let model = FrfModel::new(sinello_model().assemble().unwrap(), &sinello_sensors()).unwrap();
+    let damping = DampingCurve::new(2, vec![0.01; 7], 0.0, 80.0).unwrap();
+    let state = model.modal_state(&true_kappa(), &damping).unwrap();
+    let bending = bending_modes_below_80_hz(&state);
+    let mut observed = observed_from(&state);
+    for mode in observed.iter_mut().skip(1).step_by(2) {
+        mode.frequency_hz *= 1.6;
+    }
+    let paired: Vec<usize> = pair_modes(&state, &observed, 0.8, 0.1)
+        .iter()
+        .map(|p| p.observed)
+        .collect();
+    assert_eq!(paired, (0..observed.len()).step_by(2).collect::<Vec<_>>());
+    let nearest = nearest_by_shape(&state, &observed);
+    assert_eq!(nearest.len(), observed.len());
+    for (o, (found, &own)) in nearest.iter().zip(&bending).enumerate() {
+        let found = found.expect("a flexible model mode");
+        assert_eq!((found.observed, found.model), (o, own), "identified mode {o}");
+        assert!((found.mac - 1.0).abs() < 1e-9, "identified mode {o}: MAC {}", found.mac);
+    }
 }
 
 /// Every column of `jacobian` against central differences of `residual`
