@@ -9,7 +9,9 @@
 # ones beside the "deck = nearest ground" baseline's, with the events where
 # the forecast wins in each set and on each channel; then the wall time of
 # the whole run and the frequency against amplitude figure in OUT (default
-# out/events). CONFIG=config/painter-street-bridge.toml runs the whole bridge.
+# out/events), and each identified mode against the forecast's model (the
+# model mode nearest it by shape). CONFIG=config/painter-street-bridge.toml
+# runs the whole bridge.
 # Usage: benches/painter_street_events.sh DIR [splinewatch binary] [OUT]
 set -euo pipefail
 dir="$1"
@@ -56,5 +58,32 @@ for line in open(sys.argv[1]):
 for g in groups:
     print(f"forecast's median NRMSE below the baseline's, {g} channels: {wins[g]} of {total} events")
 print("per channel: " + ", ".join(f"{c} {n}" for c, n in channel_wins.items()))
+# Each identified mode against the forecast's model (the config's values for
+# the first event): the model mode nearest it by shape (MAC at the deck
+# channels), its frequency and the gap. A vertical mode: over half its
+# squared shape on the vertical channels; the first vertical mode identified
+# at 3.2-3.7 Hz, the second at 4.4-5.2 Hz. It "pairs" (the acceptance) when
+# updating pairs it (MAC >= [updating] min_mac within max_frequency_gap) and
+# the gap is within 5 %.
+print("identified modes against the forecast's model, nearest by shape (model mode: Hz, MAC, gap):")
+shown = {"first vertical": [0, 0], "second vertical": [0, 0]}
+for line in open(sys.argv[1]):
+    d = json.loads(line)
+    if d["skipped"] or not d["modes"]:
+        continue
+    cells = []
+    for m in d["modes"]:
+        share = {s["sensor"]: s["re"] ** 2 + s["im"] ** 2 for s in m["shape"]}
+        vertical = sum(share.get(c, 0) for c in groups["vertical"]) > 0.5 * sum(share.values())
+        n = m.get("model")
+        f = m["frequency_hz"]
+        which = ("first vertical" if 3.2 <= f <= 3.7 else "second vertical" if 4.4 <= f <= 5.2 else None) if vertical else None
+        if which and n:
+            shown[which][0] += 1
+            shown[which][1] += n["pairs"] and abs(n["frequency_gap"]) <= 0.05
+        cells.append(f"{f:.2f}{'v' if vertical else ''} -> {n['mode']}: {n['frequency_hz']:.2f} {n['mac']:.2f} {100 * n['frequency_gap']:+.0f}%{' pairs' if n['pairs'] else ''}" if n else f"{f:.2f}: -")
+    print(f"{d['start'][:10]:10s} {d['event'][:28]:28s} " + "; ".join(cells))
+for which, (seen, paired) in shown.items():
+    print(f"{which} mode identified on {seen} events, paired with the model's within 5 %: {paired}")
 PY
 echo "wall time of the events run: $(python3 -c "print(f'{$end - $start:.1f} s')")"

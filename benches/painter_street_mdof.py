@@ -14,7 +14,8 @@ chrystalchern/mdof, notebooks/uploads/CE89324), in time order:
   config/painter-street.toml at its (hand-set) values;
 - `splinewatch events` (one run over every record) forecasts it with the
   physical model updated on the events before it (issue 45's honest
-  forecast);
+  forecast), config/painter-street.toml or the config in $CONFIG (e.g.
+  config/painter-street-bridge.toml, the whole bridge);
 - `splinewatch events` on the starter config `splinewatch station` writes
   from the same zips (no model) forecasts it by the realization identified
   on the previous event (SRIM of every ground group to every deck channel,
@@ -26,6 +27,7 @@ Usage: .venv/bin/python benches/painter_street_mdof.py DIR [splinewatch]
 """
 
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -75,7 +77,8 @@ def main():
     events.sort()
     chain = {}
     out = subprocess.run(
-        [binary, "events", "--config", "config/painter-street.toml", "--json", *map(str, sorted(directory.glob("*.zip")))],
+        [binary, "events", "--config", os.environ.get("CONFIG", "config/painter-street.toml"), "--json",
+         *map(str, sorted(directory.glob("*.zip")))],
         capture_output=True,
         check=True,
         text=True,

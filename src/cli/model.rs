@@ -212,7 +212,7 @@ pub fn update(a: UpdateArgs) -> Result<()> {
         serde_json::to_writer(&mut out, &result)?;
         writeln!(out)?;
     } else {
-        studies::write_update_table(&result, &mut out)?;
+        studies::write_update_table(&cfg, &result, &mut out)?;
         if let Some((file, pairs)) = pairs {
             writeln!(out, "paired modes (identified → model, MAC):")?;
             for p in pairs {

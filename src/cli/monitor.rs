@@ -378,7 +378,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         let mut out = crate::io::console::Stdout;
         studies::write_parameter_header(&mut out, false)?;
         for p in &acc.parameters {
-            studies::write_parameter_row(&mut out, &p.name, p.value, p.std)?;
+            studies::write_parameter_row(&mut out, &cfg, &p.name, p.value, p.std)?;
             writeln!(out)?;
         }
     }

@@ -120,11 +120,12 @@ impl Config {
             .chain(m.supports.iter().map(|s| named(&s.support)))
             .collect();
         let constraints: Vec<String> = m.constraints.iter().map(|c| named(&c.support)).collect();
-        // A free beam base follows no ground: it names none.
+        // Only a held beam base follows a ground: a free one, or one on a
+        // support (that support's springs do), names none.
         let bases: Vec<Option<String>> = m
             .beams
             .iter()
-            .map(|b| (b.base != "free").then(|| named(&b.support)))
+            .map(|b| matches!(b.base.as_str(), "fixed" | "pinned").then(|| named(&b.support)))
             .collect();
         let mut names: Vec<String> = Vec::new();
         for n in springs.iter().chain(&constraints).chain(bases.iter().flatten()) {

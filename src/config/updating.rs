@@ -144,9 +144,9 @@ pub enum ParameterFamily {
     Spring,
     /// `<bearing>.kx`, `.ky`, `.kz`: a bearing's stiffness, N/m.
     Bearing,
-    /// `<support>.x`, `.y`, `.z` (N/m per metre) and `.rx`, `.ry`, `.rz`
-    /// (N m/rad per metre): a line support's component.
-    LineSupport,
+    /// `<support>.x`, `.y`, `.z` and `.rx`, `.ry`, `.rz`: a support's
+    /// component (per metre along an edge; at a beam base, N/m and N m/rad).
+    ElasticSupport,
     /// `<field>.s<j>`: a stiffness-field multiplier θ, a ratio.
     StiffnessField,
     /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
@@ -166,11 +166,42 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
     } else if matches!(last, "kx" | "ky" | "kz") {
         ParameterFamily::Bearing
     } else if matches!(last, "x" | "y" | "z" | "rx" | "ry" | "rz") {
-        ParameterFamily::LineSupport
+        ParameterFamily::ElasticSupport
     } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
         ParameterFamily::StiffnessField
     } else {
         ParameterFamily::Spring
+    }
+}
+
+impl Config {
+    /// The unit of updating parameter `name`: spring coefficients κ
+    /// (`<spring>.k<j>`) in N/m³ (eq. 19), bearings in N/m, supports along
+    /// an edge per metre (N/m² for a translation, N m/rad per metre = N/rad
+    /// for a rotation), supports at beam bases in N/m and N m/rad; the
+    /// damping curve's γ (`damping.g<z>`), loss factors (`<support>.eta`)
+    /// and stiffness-field multipliers θ (`<field>.s<j>`) are ratios.
+    pub fn parameter_unit(&self, name: &str) -> &'static str {
+        match parameter_family(name) {
+            ParameterFamily::Spring => "N/m³",
+            ParameterFamily::Bearing => "N/m",
+            ParameterFamily::ElasticSupport => {
+                let (support, component) = name.rsplit_once('.').unwrap_or((name, ""));
+                let along_edge = self
+                    .model
+                    .supports
+                    .iter()
+                    .find(|s| s.name == support)
+                    .is_none_or(|s| s.edge.is_some());
+                match (along_edge, component.starts_with('r')) {
+                    (true, true) => "N/rad",
+                    (true, false) => "N/m²",
+                    (false, true) => "Nm/rad",
+                    (false, false) => "N/m",
+                }
+            }
+            _ => "-",
+        }
     }
 }
 

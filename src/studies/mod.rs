@@ -25,6 +25,4 @@ pub mod update;
 
 pub use modes::{compute_modes, write_modes, ModalRunInfo, ModeRow, ModesReport};
 pub use synth::{synth, SynthOptions};
-pub use update::{
-    parameter_unit, start_values, update, write_parameter_header, write_parameter_row, write_update_table,
-};
+pub use update::{start_values, update, write_parameter_header, write_parameter_row, write_update_table};

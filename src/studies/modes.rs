@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use splinewatch_core::model::constraints::Edge;
 use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::elastic_supports::SupportSite;
 use splinewatch_core::model::members::BeamBase;
 use splinewatch_core::model::springs::LowRankBlock;
 use splinewatch_core::model::ShellModel;
@@ -264,11 +265,17 @@ pub fn describe_patches(model: &ShellModel) -> Vec<String> {
             j.length
         )
     }));
-    lines.extend(model.beams.members().iter().map(|b| {
-        let base = match b.base() {
-            BeamBase::Fixed => "fixed",
-            BeamBase::Pinned => "pinned",
-            BeamBase::Free => "free",
+    lines.extend(model.beams.members().iter().enumerate().map(|(k, b)| {
+        let base_node = model.beams.member_nodes(k)[0];
+        let footing = model.elastic_supports.iter().find(|s| match s.site() {
+            SupportSite::BeamNodes(nodes) => nodes.contains(&base_node),
+            SupportSite::Edge { .. } => false,
+        });
+        let base = match (b.base(), footing) {
+            (BeamBase::Fixed, _) => "fixed".to_string(),
+            (BeamBase::Pinned, _) => "pinned".to_string(),
+            (BeamBase::Free, Some(s)) => format!("on support {}", s.name()),
+            (BeamBase::Free, None) => "free".to_string(),
         };
         format!(
             "beam {}: {:.3} m in {} elements, base {base}",

@@ -130,34 +130,24 @@ pub fn update_from_modes(
     Ok(problem.solve(&start, progress)?)
 }
 
-/// The unit of a parameter: spring coefficients κ (`<spring>.k<j>`) in
-/// N/m³ (eq. 19), bearings in N/m, line supports per metre (N/m² for a
-/// translation, N m/rad per metre = N/rad for a rotation); the damping curve's γ (`damping.g<z>`), loss factors
-/// (`<support>.eta`) and stiffness-field multipliers θ (`<field>.s<j>`) are ratios.
-pub fn parameter_unit(name: &str) -> &'static str {
-    match crate::config::parameter_family(name) {
-        crate::config::ParameterFamily::Spring => "N/m³",
-        crate::config::ParameterFamily::Bearing => "N/m",
-        crate::config::ParameterFamily::LineSupport if name.rsplit('.').next().is_some_and(|c| c.starts_with('r')) => {
-            "N/rad"
-        }
-        crate::config::ParameterFamily::LineSupport => "N/m²",
-        _ => "-",
-    }
-}
-
 /// One row of the parameter tables of `update` and `replay`: name, unit,
 /// value, standard deviation and its percentage of the value.
-pub fn write_parameter_row(out: &mut impl Write, name: &str, value: f64, std: Option<f64>) -> Result<()> {
+pub fn write_parameter_row(
+    out: &mut impl Write,
+    config: &Config,
+    name: &str,
+    value: f64,
+    std: Option<f64>,
+) -> Result<()> {
     let (std, pct) = match std {
         Some(s) => (format!("{s:.4e}"), format!("{:.2}", 100.0 * s / value.abs())),
         None => ("unidentif.".to_string(), "-".to_string()),
     };
     write!(
         out,
-        "{:<14} {:<5} {:>14.6e} {:>12} {:>7}",
+        "{:<14} {:<6} {:>14.6e} {:>12} {:>7}",
         name,
-        parameter_unit(name),
+        config.parameter_unit(name),
         value,
         std,
         pct
@@ -169,7 +159,7 @@ pub fn write_parameter_row(out: &mut impl Write, name: &str, value: f64, std: Op
 pub fn write_parameter_header(out: &mut impl Write, bounds: bool) -> Result<()> {
     write!(
         out,
-        "{:<14} {:<5} {:>14} {:>12} {:>7}",
+        "{:<14} {:<6} {:>14} {:>12} {:>7}",
         "parameter", "unit", "value", "std", "std %"
     )?;
     if bounds {
@@ -180,10 +170,10 @@ pub fn write_parameter_header(out: &mut impl Write, bounds: bool) -> Result<()> 
 }
 
 /// The final table of `splinewatch update`.
-pub fn write_update_table(result: &UpdateResult, out: &mut impl Write) -> Result<()> {
+pub fn write_update_table(config: &Config, result: &UpdateResult, out: &mut impl Write) -> Result<()> {
     write_parameter_header(out, true)?;
     for p in &result.parameters {
-        write_parameter_row(out, &p.name, p.value, p.std)?;
+        write_parameter_row(out, config, &p.name, p.value, p.std)?;
         writeln!(out, " {:>12.4e} {:>12.4e}", p.lower, p.upper)?;
     }
     writeln!(

@@ -107,7 +107,7 @@ impl Config {
         }
         let beams = self.build_beams()?;
         let rigid_bodies = self.build_rigid_bodies(&patches, &beams)?;
-        let line_supports = self.build_line_supports(&patches)?;
+        let elastic_supports = self.build_supports(&patches, &beams)?;
         let model = ShellModel {
             joints: find_joints(&patches, m.joint_tolerance),
             joint_penalty: m.joint_penalty,
@@ -117,7 +117,7 @@ impl Config {
             constraints,
             bearings,
             masses,
-            line_supports,
+            elastic_supports,
             beams,
             rigid_bodies,
         };
@@ -238,7 +238,7 @@ impl Config {
             let supported = model.constraints.iter().any(|c| c.patch == k)
                 || model.springs.iter().any(|s| s.patch() == k)
                 || model.bearings.iter().any(|b| b.at().patch == k)
-                || model.line_supports.iter().any(|s| s.patch() == k)
+                || model.elastic_supports.iter().any(|s| s.patch() == Some(k))
                 || self.model.rigid.iter().any(|r| {
                     r.edges
                         .iter()

@@ -79,7 +79,7 @@ pub struct ModelConfig {
     /// `[[model.supports]]`: springs along patch edges in six components
     /// (abutments, embankments).
     #[serde(default)]
-    pub supports: Vec<substructure::LineSupportConfig>,
+    pub supports: Vec<substructure::SupportConfig>,
     pub damping: Option<DampingConfig>,
     /// `[model.solver]`: every mode (dense) or the modes below a cut-off
     /// (sparse, with the residual of the rest).

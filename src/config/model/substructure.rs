@@ -1,11 +1,11 @@
 //! `[[model.beams]]`, `[[model.rigid]]` and `[[model.supports]]`: the
-//! columns, piers, caps and abutments under the deck, built into the core's
-//! beam members, rigid bodies and line supports.
+//! columns, piers, caps, footings and abutments under the deck, built into
+//! the core's beam members, rigid bodies and elastic supports.
 
 use super::super::patches::{material_table, BearingUpdate};
 use super::*;
 use splinewatch_core::model::beam::{BeamError, Section};
-use splinewatch_core::model::line_supports::{LineSupport, LineSupportError, SupportComponent};
+use splinewatch_core::model::elastic_supports::{ElasticSupport, ElasticSupportError, SupportComponent};
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet, MemberError};
 use splinewatch_core::model::rigid::{RigidBody, RigidError};
 use splinewatch_core::solvers::dense_model::ModelError;
@@ -31,12 +31,14 @@ pub struct BeamConfig {
     /// Elements along the member (default 8).
     #[serde(default = "default_elements")]
     pub elements: usize,
-    /// How the start is held: `"fixed"`, `"pinned"` (translations) or
-    /// `"free"` (the default: it meets another member or a rigid body).
+    /// How the start is held: `"fixed"`, `"pinned"` (translations),
+    /// `"free"` (the default: it meets another member or a rigid body), or
+    /// the name of a `[[model.supports]]` entry without an `edge`: a
+    /// footing's springs in six components to that support's ground.
     #[serde(default = "default_base")]
     pub base: String,
-    /// The support group whose ground a held base follows (default
-    /// "ground").
+    /// The support group whose ground a fixed or pinned base follows
+    /// (default "ground"; a base on a support follows the support's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
 }
@@ -147,12 +149,28 @@ impl Config {
                 "fixed" => BeamBase::Fixed,
                 "pinned" => BeamBase::Pinned,
                 "free" => BeamBase::Free,
-                other => {
-                    return Err(err(
-                        key("base"),
-                        format!("{other:?}: give \"fixed\", \"pinned\" or \"free\" (a base on a six-component support is not available yet)"),
-                    ))
-                }
+                other => match m.supports.iter().find(|s| s.name == other) {
+                    Some(s) if s.edge.is_some() => {
+                        return Err(err(
+                            key("base"),
+                            format!("{other:?} is a support along a patch edge: a base stands on a support without an `edge`"),
+                        ))
+                    }
+                    Some(s) if b.support.is_some() && b.support != s.support => {
+                        return Err(err(
+                            key("support"),
+                            format!("the base stands on support {other:?}, whose own `support` key names its ground: leave this out"),
+                        ))
+                    }
+                    // The support's springs hold it: free in the member.
+                    Some(_) => BeamBase::Free,
+                    None => {
+                        return Err(err(
+                            key("base"),
+                            format!("{other:?}: give \"fixed\", \"pinned\", \"free\" or the name of a [[model.supports]] entry without an `edge`"),
+                        ))
+                    }
+                },
             };
             let member = BeamMember::new(
                 &b.name,
@@ -248,21 +266,26 @@ fn beam_end(beams: &BeamNet, end: &str) -> Result<usize, String> {
     }
 }
 
-/// `[[model.supports]]`: springs per metre along a patch edge, in up to six
-/// components (an integral abutment's backfill and piles, an embankment).
+/// `[[model.supports]]`: springs in up to six components, per metre along a
+/// patch edge (an integral abutment's backfill and piles, an embankment),
+/// or, without an `edge`, at the base of every beam whose `base` names it
+/// (a column's footing on its piles and soil).
 #[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct LineSupportConfig {
+pub struct SupportConfig {
     /// Unique among springs, bearings, fields and supports: it prefixes the
     /// updating parameters `<name>.<component>`.
     pub name: String,
-    /// The patch edge it acts along.
-    pub edge: EdgeRefConfig,
+    /// The patch edge it acts along; none: it acts at the bases of the
+    /// beams whose `base` names it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub edge: Option<EdgeRefConfig>,
     /// The support group whose ground it stands on (default "ground").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
-    /// Components: `x`, `y`, `z` (N/m per metre) and `rx`, `ry`, `rz`
-    /// (N m/rad per metre), along the support's axes.
+    /// Components: `x`, `y`, `z` (N/m per metre along an edge, N/m at a
+    /// base) and `rx`, `ry`, `rz` (N m/rad per metre, N m/rad), along the
+    /// support's axes.
     pub stiffness: ComponentsConfig,
     /// The support's axes as three orthonormal rows, right-handed (a skewed
     /// abutment's line); default the global axes.
@@ -314,7 +337,7 @@ impl ComponentsConfig {
     }
 }
 
-impl LineSupportConfig {
+impl SupportConfig {
     /// The names of the given components, in κ order (`x, y, z, rx, ry, rz`).
     pub fn component_names(&self) -> Vec<&'static str> {
         self.stiffness.given().iter().map(|(c, _)| c.name()).collect()
@@ -365,20 +388,50 @@ impl LineSupportConfig {
 }
 
 impl Config {
-    /// The line supports of `[[model.supports]]` on `patches`.
-    pub(super) fn build_line_supports(&self, patches: &[Patch]) -> Result<Vec<LineSupport>, ConfigError> {
+    /// The supports of `[[model.supports]]`: along edges of `patches`, or at
+    /// the bases of the `beams` that name them.
+    pub(super) fn build_supports(
+        &self,
+        patches: &[Patch],
+        beams: &BeamNet,
+    ) -> Result<Vec<ElasticSupport>, ConfigError> {
         self.model
             .supports
             .iter()
             .enumerate()
             .map(|(i, s)| {
                 let key = |k: &str| format!("model.supports[{i}].{k}");
-                let patch = patch_index(patches, s.edge.patch.as_deref(), &key("edge.patch"))?;
                 let axes = s.axes.unwrap_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
-                LineSupport::new(&s.name, (patch, s.edge.edge.into()), axes, s.stiffness.given()).map_err(|e| {
+                let built = match &s.edge {
+                    Some(edge) => {
+                        let patch = patch_index(patches, edge.patch.as_deref(), &key("edge.patch"))?;
+                        ElasticSupport::along_edge(&s.name, (patch, edge.edge.into()), axes, s.stiffness.given())
+                    }
+                    None => {
+                        let nodes: Vec<usize> = self
+                            .model
+                            .beams
+                            .iter()
+                            .enumerate()
+                            .filter(|(_, b)| b.base == s.name)
+                            .map(|(member, _)| beams.member_nodes(member)[0])
+                            .collect();
+                        if nodes.is_empty() {
+                            return Err(err(
+                                key("edge"),
+                                format!(
+                                    "{:?} has no edge and no beam's `base` names it: give one or the other",
+                                    s.name
+                                ),
+                            ));
+                        }
+                        ElasticSupport::at_beam_nodes(&s.name, nodes, axes, s.stiffness.given())
+                    }
+                };
+                built.map_err(|e| {
                     let at = match e {
-                        LineSupportError::Axes { .. } => "axes",
-                        LineSupportError::EmptyName => "name",
+                        ElasticSupportError::Axes { .. } => "axes",
+                        ElasticSupportError::EmptyName => "name",
                         _ => "stiffness",
                     };
                     err(key(at), e)

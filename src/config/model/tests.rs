@@ -173,13 +173,13 @@ fn a_line_support_builds_with_its_parameters_and_ground() {
     let base = include_str!("../../../config/examples/deck-on-bent.toml");
     let config = Config::from_toml(&format!("{base}\n{WEST_ABUTMENT}")).unwrap();
     let model = config.build_model().unwrap();
-    assert_eq!(model.line_supports.len(), 1);
+    assert_eq!(model.elastic_supports.len(), 1);
     assert_eq!(model.spring_coefficients(), vec![vec![2e8, 5e8]]);
     let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
     assert_eq!(names, ["west_abutment.ry"]);
     assert_eq!(
         crate::config::parameter_family(&names[0]),
-        crate::config::ParameterFamily::LineSupport
+        crate::config::ParameterFamily::ElasticSupport
     );
     let groups = config.support_groups(&model).unwrap();
     assert_eq!(groups.names()[groups.of_spring(0)], "west");
@@ -220,6 +220,91 @@ fn bad_line_supports_name_their_key() {
         "support = \"west\"\naxes = [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
     );
     assert!(skew.contains("model.supports[0].axes"), "{skew}");
+}
+
+const FOOTINGS: &str = r#"
+[[model.supports]]
+name = "footings"
+support = "bent"
+stiffness = { x = 2e9, y = 2e9, z = 5e8, rx = 1e10, ry = 1e10, rz = 1e10 }
+bounds = [1e6, 1e13]
+update = ["z", "ry"]
+"#;
+
+/// The columns' bases on a support without an edge (their footings): the
+/// support acts at both bases with one parameter per updated component,
+/// its ground the bent's, the bases free in the members (the springs hold
+/// them); softer footings lower the first modes; the parameters' units are
+/// N/m and N m/rad (not per metre).
+#[test]
+fn beam_bases_stand_on_a_support_without_an_edge() {
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let on_footings = base.replace("base = \"fixed\"\nsupport = \"bent\"", "base = \"footings\"");
+    let config = Config::from_toml(&format!("{on_footings}\n{FOOTINGS}")).unwrap();
+    let model = config.build_model().unwrap();
+    assert_eq!(model.elastic_supports.len(), 1);
+    let nodes = match model.elastic_supports[0].site() {
+        splinewatch_core::model::elastic_supports::SupportSite::BeamNodes(nodes) => nodes.clone(),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(nodes, [model.beams.member_nodes(0)[0], model.beams.member_nodes(1)[0]]);
+    assert!(model.beams.base_nodes().is_empty(), "no base is held");
+    let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
+    assert_eq!(names, ["footings.z", "footings.ry"]);
+    assert_eq!(config.parameter_unit("footings.z"), "N/m");
+    assert_eq!(config.parameter_unit("footings.ry"), "Nm/rad");
+    let groups = config.support_groups(&model).unwrap();
+    assert_eq!(groups.names()[groups.of_spring(0)], "bent");
+    let fixed = Config::from_toml(base).unwrap().build_model().unwrap();
+    let (soft, stiff) = (
+        model.assemble().unwrap().modes().unwrap().frequencies_hz(),
+        fixed.assemble().unwrap().modes().unwrap().frequencies_hz(),
+    );
+    assert!(
+        soft.iter().zip(&stiff).take(6).all(|(a, b)| a <= &(b * (1.0 + 1e-9))),
+        "{soft:?} {stiff:?}"
+    );
+    assert!(
+        soft.iter().zip(&stiff).take(6).any(|(a, b)| a < &(b * 0.99)),
+        "{soft:?} {stiff:?}"
+    );
+}
+
+#[test]
+fn bad_footings_name_their_key() {
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let message = |text: String| Config::from_toml(&text).unwrap().build_model().unwrap_err().to_string();
+    let on_footings = base.replacen("base = \"fixed\"\nsupport = \"bent\"", "base = \"footings\"", 1);
+    // A support without an edge that no base names.
+    let alone = message(format!("{base}\n{FOOTINGS}"));
+    assert!(
+        alone.contains("model.supports[0].edge") && alone.contains("no beam's `base` names it"),
+        "{alone}"
+    );
+    // A base on a support along an edge.
+    let on_edge = message(format!(
+        "{}\n{WEST_ABUTMENT}",
+        base.replacen("base = \"fixed\"", "base = \"west_abutment\"", 1)
+    ));
+    assert!(
+        on_edge.contains("model.beams[0].base") && on_edge.contains("along a patch edge"),
+        "{on_edge}"
+    );
+    // A base on a support and a ground of its own.
+    let twice = message(format!(
+        "{}\n{FOOTINGS}",
+        base.replacen(
+            "base = \"fixed\"\nsupport = \"bent\"",
+            "base = \"footings\"\nsupport = \"west\"",
+            1
+        )
+    ));
+    assert!(twice.contains("model.beams[0].support"), "{twice}");
+    let unknown = message(on_footings.clone());
+    assert!(
+        unknown.contains("model.beams[0].base") && unknown.contains("\"footings\""),
+        "{unknown}"
+    );
 }
 
 /// A ground channel pointing along −x (a station's "Long" channels on the

@@ -236,7 +236,7 @@ pub(super) fn parameter_group(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
         crate::config::ParameterFamily::Spring => "springs",
         crate::config::ParameterFamily::Bearing => "bearings",
-        crate::config::ParameterFamily::LineSupport => "supports",
+        crate::config::ParameterFamily::ElasticSupport => "supports",
         crate::config::ParameterFamily::StiffnessField => "fields",
         crate::config::ParameterFamily::Damping => "damping",
         crate::config::ParameterFamily::LossFactor => "loss_factors",

@@ -14,7 +14,7 @@
 //! - [`joints`]: rigid joints between patches by penalty coupling;
 //! - [`beam`]: straight 3-D Timoshenko beam elements (columns, piers), their stiffness and consistent mass;
 //! - [`members`]: beam members cut into elements, meeting where their nodes coincide, their bases held;
-//! - [`line_supports`]: springs per metre along a patch edge in six components (abutments, embankments);
+//! - [`elastic_supports`]: springs in six components along a patch edge (abutments, embankments) or at beam nodes (footings);
 //! - [`rigid`]: rigid bodies (bent caps, diaphragms, rigid offsets) that deck edges and beam nodes follow;
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.
@@ -27,8 +27,8 @@ pub mod bearings;
 pub mod constraints;
 pub mod damping;
 pub mod dofs;
+pub mod elastic_supports;
 pub mod joints;
-pub mod line_supports;
 pub mod material;
 pub mod members;
 pub mod patch;
@@ -41,8 +41,8 @@ pub mod supports;
 
 use bearings::{Bearing, PointMass};
 use constraints::EdgeConstraint;
+use elastic_supports::ElasticSupport;
 use joints::Joint;
-use line_supports::LineSupport;
 use material::OrthotropicMaterial;
 use members::BeamNet;
 use patch::Patch;
@@ -68,9 +68,9 @@ pub struct ShellModel {
     /// Discrete bearings; their `k_x, k_y, k_z` follow the spring fields'
     /// coefficients in the assembled model.
     pub bearings: Vec<Bearing>,
-    /// Springs along patch edges; their components follow the bearings'
+    /// Springs along patch edges or at beam nodes; their components follow the bearings'
     /// coefficients in the assembled model.
-    pub line_supports: Vec<LineSupport>,
+    pub elastic_supports: Vec<ElasticSupport>,
     pub masses: Vec<PointMass>,
     /// Beam members (columns, piers) and their nodes, numbered after the
     /// patches' control points.
@@ -90,7 +90,7 @@ impl Default for ShellModel {
             joints: Vec::new(),
             joint_penalty: joints::DEFAULT_PENALTY,
             bearings: Vec::new(),
-            line_supports: Vec::new(),
+            elastic_supports: Vec::new(),
             masses: Vec::new(),
             beams: BeamNet::default(),
             rigid_bodies: Vec::new(),
@@ -122,21 +122,21 @@ impl ShellModel {
     }
 
     /// The spring coefficients κ of eq. (22): each spring field's, then each
-    /// bearing's `[k_x, k_y, k_z]`, then each line support's components
+    /// bearing's `[k_x, k_y, k_z]`, then each elastic support's components
     /// (the assembled model's order).
     pub fn spring_coefficients(&self) -> Vec<Vec<f64>> {
         self.springs
             .iter()
             .map(|s| s.stiffness().to_vec())
             .chain(self.bearings.iter().map(|b| b.stiffness().to_vec()))
-            .chain(self.line_supports.iter().map(|s| s.stiffness().to_vec()))
+            .chain(self.elastic_supports.iter().map(|s| s.stiffness().to_vec()))
             .collect()
     }
 
     /// How many vectors [`Self::spring_coefficients`] holds: spring fields,
-    /// bearings and line supports.
+    /// bearings and elastic supports.
     pub fn spring_field_count(&self) -> usize {
-        self.springs.len() + self.bearings.len() + self.line_supports.len()
+        self.springs.len() + self.bearings.len() + self.elastic_supports.len()
     }
 
     /// The shell patches' control points (their nets), in global order.

@@ -11,6 +11,7 @@
 //! group is uniform excitation.
 
 use crate::geometry::vec3::Vec3;
+use crate::model::elastic_supports::SupportSite;
 use crate::model::ShellModel;
 use thiserror::Error;
 
@@ -177,25 +178,29 @@ impl SupportGroups {
             points[self.of_springs[fields + b]].push(shell.position(at.xi, at.eta, at.tau));
         }
         let first_line = fields + model.bearings.len();
-        for (s, support) in model.line_supports.iter().enumerate() {
-            let shell = &model.patches[support.patch()].shell;
-            let net = shell.surface().points();
-            let edge = support.edge().control_points(shell);
-            let n = edge.len() as f64;
-            let centroid = [0, 1, 2].map(|d| edge.iter().map(|&c| net[c][d]).sum::<f64>() / n);
-            points[self.of_springs[first_line + s]].push(centroid);
+        for (s, support) in model.elastic_supports.iter().enumerate() {
+            let at: Vec<Vec3> = match support.site() {
+                SupportSite::Edge { patch, edge } => {
+                    let shell = &model.patches[*patch].shell;
+                    let net = shell.surface().points();
+                    edge.control_points(shell).iter().map(|&c| net[c]).collect()
+                }
+                SupportSite::BeamNodes(nodes) => nodes.iter().map(|&n| model.beams.position(n)).collect(),
+            };
+            points[self.of_springs[first_line + s]].push(centroid(&at));
         }
         for (node, member) in model.beams.base_nodes() {
             points[self.of_beam_bases[member]].push(model.beams.position(node));
         }
         points
             .into_iter()
-            .map(|p| {
-                (!p.is_empty()).then(|| {
-                    let n = p.len() as f64;
-                    [0, 1, 2].map(|d| p.iter().map(|x| x[d]).sum::<f64>() / n)
-                })
-            })
+            .map(|p| (!p.is_empty()).then(|| centroid(&p)))
             .collect()
     }
+}
+
+/// The mean of `points` (not empty).
+fn centroid(points: &[Vec3]) -> Vec3 {
+    let n = points.len() as f64;
+    [0, 1, 2].map(|d| points.iter().map(|x| x[d]).sum::<f64>() / n)
 }

@@ -11,7 +11,7 @@
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
-use crate::model::line_supports::LineSupport;
+use crate::model::elastic_supports::{ElasticSupport, SupportSite};
 use crate::model::patch::Patch;
 use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
@@ -33,6 +33,8 @@ pub enum ModelError {
     Patch { index: usize, source: ShellError },
     #[error("patch {patch} does not exist (the model has {count})")]
     UnknownPatch { patch: usize, count: usize },
+    #[error("a support names beam node {node}, but the beams have {count} nodes")]
+    UnknownBeamNode { node: usize, count: usize },
     #[error("bearing {index}: {source}")]
     Bearing { index: usize, source: BearingError },
     #[error("point mass {index}: {source}")]
@@ -179,10 +181,21 @@ impl ShellModel {
                 .map_err(|source| ModelError::Bearing { index, source })?;
             spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
         }
-        for s in &self.line_supports {
-            let (p, offset) = self.patch_at(s.patch(), dofs)?;
-            let blocks = s.coefficient_matrices(&p.shell);
-            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+        for s in &self.elastic_supports {
+            match s.site() {
+                SupportSite::Edge { patch, .. } => {
+                    let (p, offset) = self.patch_at(*patch, dofs)?;
+                    let blocks = s.edge_matrices(&p.shell);
+                    spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
+                }
+                SupportSite::BeamNodes(nodes) => {
+                    let count = self.beams.node_count();
+                    if let Some(&node) = nodes.iter().find(|&&n| n >= count) {
+                        return Err(ModelError::UnknownBeamNode { node, count });
+                    }
+                    spring_blocks.push(s.node_matrices(dofs));
+                }
+            }
         }
         Ok(spring_blocks)
     }
@@ -232,7 +245,7 @@ impl ShellModel {
             .chain(self.stiffness_fields.iter().map(StiffnessField::patch))
             .chain(self.constraints.iter().map(|c| c.patch))
             .chain(self.bearings.iter().map(|b| b.at().patch))
-            .chain(self.line_supports.iter().map(LineSupport::patch))
+            .chain(self.elastic_supports.iter().filter_map(ElasticSupport::patch))
             .chain(self.masses.iter().map(|m| m.at().patch))
             .chain(self.joints.iter().flat_map(|j| [j.patch, j.other]));
         match used.into_iter().find(|&p| p >= self.patches.len()) {

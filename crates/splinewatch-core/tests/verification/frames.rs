@@ -5,8 +5,8 @@
 use splinewatch_core::model::beam::{BeamMaterial, Section};
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
 use splinewatch_core::model::joints::find_joints;
-use splinewatch_core::model::line_supports::{LineSupport, SupportComponent};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet};
 use splinewatch_core::model::patch::Patch;
@@ -279,6 +279,48 @@ fn the_grounds_of_a_deck_on_a_bent_add_up_to_a_rigid_translation() {
     }
 }
 
+/// The same with the columns on footings (six-component springs at their
+/// free bases, on the bent's ground): the three grounds together still
+/// translate every sensor rigidly (1e-9), and the bent's ground alone
+/// moves the deck through the footings' springs.
+#[test]
+fn grounds_through_footing_springs_add_up_to_a_rigid_translation() {
+    let (mut model, _) = deck_on_bent([6, 4]);
+    let members: Vec<BeamMember> = model
+        .beams
+        .members()
+        .iter()
+        .map(|m| m.clone().with_base(BeamBase::Free))
+        .collect();
+    model.beams = BeamNet::new(members, 1e-6).unwrap();
+    let bases = vec![model.beams.member_nodes(0)[0], model.beams.member_nodes(1)[0]];
+    let components = SupportComponent::ALL.iter().map(|&c| (c, 5e9)).collect();
+    let global = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    model.elastic_supports = vec![ElasticSupport::at_beam_nodes("footings", bases, global, components).unwrap()];
+    let sensors = deck_sensors();
+    let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
+    let kappa = model.spring_coefficients();
+    let state = frf.modal_state(&kappa, &damping()).unwrap();
+    let names = ["west", "east", "bent"].map(String::from).to_vec();
+    let groups = SupportGroups::new(names, vec![2], vec![0, 1], &model).unwrap();
+    for axis in 0..3 {
+        let inputs: Vec<GroundInput> = (0..3).map(|group| GroundInput { group, axis }).collect();
+        let motion = SupportMotion::new(&frf, &model, &groups, &kappa, &[], &state, &inputs).unwrap();
+        for (s, sensor) in sensors.iter().enumerate() {
+            let sum: f64 = (0..3).map(|g| motion.quasi_static(s, g)).sum();
+            let rigid = sensor.direction[axis];
+            assert!(
+                (sum - rigid).abs() < 1e-9,
+                "axis {axis}, sensor {s}: Σ {sum} vs {rigid}"
+            );
+        }
+        let footings = (0..sensors.len())
+            .map(|s| motion.quasi_static(s, 2).abs())
+            .fold(0.0, f64::max);
+        assert!(footings > 1e-3, "axis {axis}: the footings' ground moves no sensor");
+    }
+}
+
 /// Four deck points along the axes and one oblique direction.
 fn deck_sensors() -> Vec<SensorPoint> {
     let directions = [[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.6, 0.8, 0.0]];
@@ -385,11 +427,11 @@ fn line_support_sensitivities_on_a_bent_match_central_differences() {
             (SupportComponent::Translation(2), 2e8),
             (SupportComponent::Rotation(1), 5e7),
         ];
-        LineSupport::new(name, (patch, edge), axes, components).unwrap()
+        ElasticSupport::along_edge(name, (patch, edge), axes, components).unwrap()
     };
     let model = ShellModel {
         constraints: vec![],
-        line_supports: vec![abutment("west", 0, Edge::Xi0), abutment("east", 1, Edge::Xi1)],
+        elastic_supports: vec![abutment("west", 0, Edge::Xi0), abutment("east", 1, Edge::Xi1)],
         ..bare
     };
     let sensors = deck_sensors();

@@ -3,7 +3,7 @@
 //! simply supported strip (no spring) to the clamped one (stiff springs).
 
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
-use splinewatch_core::model::line_supports::{LineSupport, SupportComponent};
+use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::ShellModel;
@@ -21,9 +21,9 @@ fn strip(kind: SupportKind, k: Option<f64>) -> ShellModel {
         .map(|edge| EdgeConstraint { edge, kind, patch: 0 })
         .to_vec();
     if let Some(k) = k {
-        model.line_supports = [("west", Edge::Xi0), ("east", Edge::Xi1)]
+        model.elastic_supports = [("west", Edge::Xi0), ("east", Edge::Xi1)]
             .map(|(name, edge)| {
-                LineSupport::new(name, (0, edge), GLOBAL, vec![(SupportComponent::Rotation(1), k)]).unwrap()
+                ElasticSupport::along_edge(name, (0, edge), GLOBAL, vec![(SupportComponent::Rotation(1), k)]).unwrap()
             })
             .to_vec();
     }

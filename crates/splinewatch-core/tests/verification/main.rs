@@ -3,6 +3,7 @@
 mod beam;
 mod common;
 mod event_updating;
+mod footing;
 mod frames;
 mod frf;
 mod joint;

@@ -6,7 +6,7 @@
 use faer::{c64, Mat, Side};
 use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::model::damping::DampingCurve;
-use splinewatch_core::model::line_supports::{LineSupport, SupportComponent};
+use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
@@ -40,7 +40,7 @@ fn deck_model(fields: Vec<StiffnessField>) -> (ShellModel, Vec<SensorPoint>) {
     let mut model = ShellModel::new(shell, material);
     model.stiffness_fields = fields;
     let abutment = |name: &str, edge, vertical: f64, rotation: f64| {
-        LineSupport::new(
+        ElasticSupport::along_edge(
             name,
             (0, edge),
             GLOBAL,
@@ -54,7 +54,7 @@ fn deck_model(fields: Vec<StiffnessField>) -> (ShellModel, Vec<SensorPoint>) {
         .unwrap()
     };
     use splinewatch_core::model::constraints::Edge;
-    model.line_supports = vec![
+    model.elastic_supports = vec![
         abutment("west", Edge::Xi0, 3e8, 2e8),
         abutment("east", Edge::Xi1, 5e8, 6e7),
     ];

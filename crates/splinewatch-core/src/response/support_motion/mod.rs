@@ -98,7 +98,7 @@ impl SupportMotion {
         state: &ModalState,
         inputs: &[GroundInput],
     ) -> Result<Self, SupportError> {
-        check_inputs(groups, inputs)?;
+        check_inputs(frf, kappa, groups, inputs)?;
         let lifts = GroundLifts::new(model, groups)?;
         let influence = match frf.dense() {
             Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lifts),
@@ -126,7 +126,7 @@ impl SupportMotion {
         (kappa, theta, damping): (&[Vec<f64>], &[Vec<f64>], &DampingCurve),
         inputs: &[GroundInput],
     ) -> Result<(ModalState, Self), SupportError> {
-        check_inputs(groups, inputs)?;
+        check_inputs(frf, kappa, groups, inputs)?;
         let lifts = GroundLifts::new(model, groups)?;
         let solve_error = |e: crate::response::frf::FrfError| SupportError::Solve(e.to_string());
         let (state, influence) = match frf.dense() {
@@ -169,7 +169,7 @@ impl SupportMotion {
         if frf.dense().is_some() {
             return Ok(frf.clone());
         }
-        check_inputs(groups, inputs)?;
+        check_inputs(frf, kappa, groups, inputs)?;
         let lifts = GroundLifts::new(model, groups)?;
         let mut forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
         forces.extend_from_slice(extra);
@@ -586,8 +586,23 @@ fn static_by_modes(state: &ModalState, force: &[f64]) -> Vec<f64> {
     x
 }
 
-/// The inputs name groups and axes that exist.
-fn check_inputs(groups: &SupportGroups, inputs: &[GroundInput]) -> Result<(), SupportError> {
+/// The inputs name groups and axes that exist, and `kappa` holds a vector
+/// per spring field of `frf` (a short one would silently leave springs
+/// out of the ground's forces).
+fn check_inputs(
+    frf: &FrfModel,
+    kappa: &[Vec<f64>],
+    groups: &SupportGroups,
+    inputs: &[GroundInput],
+) -> Result<(), SupportError> {
+    let fields = frf.spring_blocks().len();
+    if kappa.len() != fields {
+        return Err(SupportError::Count {
+            what: "spring coefficient vectors",
+            found: kappa.len(),
+            expected: fields,
+        });
+    }
     for (index, i) in inputs.iter().enumerate() {
         if i.group >= groups.names().len() || i.axis > 2 {
             return Err(SupportError::Input {

@@ -1,15 +1,18 @@
-//! Line supports: springs per metre along a patch edge, in up to six
-//! components (translations and rotations about three axes, the global
-//! ones or a skewed frame such as an abutment's line): an integral
-//! abutment's backfill and piles, an embankment.
+//! Elastic supports in up to six components (translations and rotations
+//! about three axes, the global ones or a skewed frame such as an
+//! abutment's line): springs per metre along a patch edge (an integral
+//! abutment's backfill and piles, an embankment), or springs at beam nodes
+//! (a column's footing on its piles and soil).
 //!
-//! Component `c` with stiffness `k_c` (N/m per metre, or N m/rad per metre)
+//! Along an edge, component `c` with stiffness `k_c` (N/m per metre, or N m/rad per metre)
 //! adds `ΔK = k_c ∫_edge n_cᵀ n_c ds`, `n_c` the row of eq. (3) that gives
 //! the mid-surface's translation along the component's axis `a`
 //! (`Σ N_i a·(u, v, w)_i`) or its rotation about `a`
 //! (`Σ N_i (a·v1_i α_i + a·v2_i β_i)`: the director turns by
 //! `α v1 + β v2`). So `∂K/∂k_c` is the integral itself and the updating
-//! treats every `k_c` like a spring coefficient κ (eq. 22). On the ground's
+//! treats every `k_c` like a spring coefficient κ (eq. 22). At a beam node
+//! (6 dofs: `u, v, w, rx, ry, rz`) it adds `k_c a aᵀ` on the node's three
+//! translations or three rotations (N/m, N m/rad). On the ground's
 //! motion a translation spring acts on the relative displacement, a
 //! rotation spring on the rotation (the ground translates only).
 
@@ -19,11 +22,12 @@ use thiserror::Error;
 use crate::geometry::quadrature::GaussLegendre;
 use crate::geometry::vec3::{cross, dot, norm, Vec3};
 use crate::model::constraints::Edge;
+use crate::model::dofs::DofMap;
 use crate::model::shell::{Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
 use crate::model::springs::LowRankBlock;
 
 #[derive(Debug, Clone, PartialEq, Error)]
-pub enum LineSupportError {
+pub enum ElasticSupportError {
     #[error("line support {name:?}: give at least one stiffness component")]
     NoComponent { name: String },
     #[error("line support {name:?}: stiffness {component} must be finite and not negative, got {value}")]
@@ -36,7 +40,9 @@ pub enum LineSupportError {
     Twice { name: String, component: &'static str },
     #[error("line support {name:?}: its axes must be three orthonormal vectors")]
     Axes { name: String },
-    #[error("a line support's name must not be empty")]
+    #[error("support {name:?}: give at least one beam node")]
+    NoNode { name: String },
+    #[error("a support's name must not be empty")]
     EmptyName,
 }
 
@@ -69,43 +75,75 @@ impl SupportComponent {
     }
 }
 
-/// Springs per metre along one edge of a patch, validated.
+/// Where a support acts.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LineSupport {
+pub enum SupportSite {
+    /// Along edge `edge` of patch `patch`, per metre.
+    Edge { patch: usize, edge: Edge },
+    /// At each of these beam nodes (the net's numbering), the same springs.
+    BeamNodes(Vec<usize>),
+}
+
+/// Springs in up to six components along a patch edge or at beam nodes,
+/// validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ElasticSupport {
     name: String,
-    patch: usize,
-    edge: Edge,
+    site: SupportSite,
     /// Rows: the support's axes in global coordinates.
     axes: [Vec3; 3],
     components: Vec<SupportComponent>,
     stiffness: Vec<f64>,
 }
 
-impl LineSupport {
-    /// `components` with their `stiffness` along `axes` (rows, orthonormal).
-    pub fn new(
+impl ElasticSupport {
+    /// Springs per metre along edge `edge` of patch `patch`: `components`
+    /// with their `stiffness` along `axes` (rows, orthonormal).
+    pub fn along_edge(
         name: impl Into<String>,
         (patch, edge): (usize, Edge),
         axes: [Vec3; 3],
         components: Vec<(SupportComponent, f64)>,
-    ) -> Result<Self, LineSupportError> {
+    ) -> Result<Self, ElasticSupportError> {
+        Self::new(name.into(), SupportSite::Edge { patch, edge }, axes, components)
+    }
+
+    /// The same springs at each of the beam nodes `nodes`.
+    pub fn at_beam_nodes(
+        name: impl Into<String>,
+        nodes: Vec<usize>,
+        axes: [Vec3; 3],
+        components: Vec<(SupportComponent, f64)>,
+    ) -> Result<Self, ElasticSupportError> {
         let name = name.into();
+        if nodes.is_empty() {
+            return Err(ElasticSupportError::NoNode { name });
+        }
+        Self::new(name, SupportSite::BeamNodes(nodes), axes, components)
+    }
+
+    fn new(
+        name: String,
+        site: SupportSite,
+        axes: [Vec3; 3],
+        components: Vec<(SupportComponent, f64)>,
+    ) -> Result<Self, ElasticSupportError> {
         if name.is_empty() {
-            return Err(LineSupportError::EmptyName);
+            return Err(ElasticSupportError::EmptyName);
         }
         if components.is_empty() {
-            return Err(LineSupportError::NoComponent { name });
+            return Err(ElasticSupportError::NoComponent { name });
         }
         for (k, &(c, value)) in components.iter().enumerate() {
             if !(value.is_finite() && value >= 0.0) {
-                return Err(LineSupportError::Stiffness {
+                return Err(ElasticSupportError::Stiffness {
                     name,
                     component: c.name(),
                     value,
                 });
             }
             if components[..k].iter().any(|o| o.0 == c) {
-                return Err(LineSupportError::Twice {
+                return Err(ElasticSupportError::Twice {
                     name,
                     component: c.name(),
                 });
@@ -113,13 +151,12 @@ impl LineSupport {
         }
         let orthonormal = (0..3).all(|i| (0..3).all(|j| (dot(axes[i], axes[j]) - f64::from(i == j)).abs() < 1e-9));
         if !orthonormal || dot(cross(axes[0], axes[1]), axes[2]) < 0.0 {
-            return Err(LineSupportError::Axes { name });
+            return Err(ElasticSupportError::Axes { name });
         }
         let (components, stiffness) = components.into_iter().unzip();
         Ok(Self {
             name,
-            patch,
-            edge,
+            site,
             axes,
             components,
             stiffness,
@@ -130,12 +167,16 @@ impl LineSupport {
         &self.name
     }
 
-    pub fn patch(&self) -> usize {
-        self.patch
+    pub fn site(&self) -> &SupportSite {
+        &self.site
     }
 
-    pub fn edge(&self) -> Edge {
-        self.edge
+    /// The patch of a support along an edge.
+    pub fn patch(&self) -> Option<usize> {
+        match self.site {
+            SupportSite::Edge { patch, .. } => Some(patch),
+            SupportSite::BeamNodes(_) => None,
+        }
     }
 
     pub fn components(&self) -> &[SupportComponent] {
@@ -147,15 +188,55 @@ impl LineSupport {
         &self.stiffness
     }
 
-    /// `∂K/∂k_c` per component on the patch's own dofs: the edge's control
-    /// points (clamped knots: nothing else is non-zero on the edge),
-    /// Gauss with `p + 1` points per knot span of the edge.
-    pub fn coefficient_matrices(&self, shell: &Shell) -> Vec<LowRankBlock> {
+    /// `∂K/∂k_c` per component at beam nodes, on global dofs (`dofs`):
+    /// `a aᵀ` on each node's translations or rotations.
+    ///
+    /// # Panics
+    /// For a support along an edge ([`Self::edge_matrices`]).
+    pub fn node_matrices(&self, dofs: &DofMap) -> Vec<LowRankBlock> {
+        let SupportSite::BeamNodes(nodes) = &self.site else {
+            panic!("support {:?} is along an edge", self.name);
+        };
+        let global: Vec<usize> = nodes.iter().flat_map(|&n| dofs.node_dofs(dofs.beam_node(n))).collect();
+        self.components
+            .iter()
+            .map(|&c| {
+                let (axis, first) = match c {
+                    SupportComponent::Translation(a) => (a, 0),
+                    SupportComponent::Rotation(a) => (a, 3),
+                };
+                let a = self.axes[axis];
+                let mut values = Mat::zeros(global.len(), global.len());
+                for k in 0..nodes.len() {
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            values[(6 * k + first + i, 6 * k + first + j)] = a[i] * a[j];
+                        }
+                    }
+                }
+                LowRankBlock {
+                    dofs: global.clone(),
+                    values,
+                }
+            })
+            .collect()
+    }
+
+    /// `∂K/∂k_c` per component along an edge, on the patch's own dofs: the
+    /// edge's control points (clamped knots: nothing else is non-zero on the
+    /// edge), Gauss with `p + 1` points per knot span of the edge.
+    ///
+    /// # Panics
+    /// For a support at beam nodes ([`Self::node_matrices`]).
+    pub fn edge_matrices(&self, shell: &Shell) -> Vec<LowRankBlock> {
+        let SupportSite::Edge { edge, .. } = self.site else {
+            panic!("support {:?} is at beam nodes", self.name);
+        };
         let surface = shell.surface();
         let (kx, ke) = (surface.xi(), surface.eta());
         let (xs, es) = (kx.breakpoints(), ke.breakpoints());
-        let along_eta = matches!(self.edge, Edge::Xi0 | Edge::Xi1);
-        let fixed = match self.edge {
+        let along_eta = matches!(edge, Edge::Xi0 | Edge::Xi1);
+        let fixed = match edge {
             Edge::Xi0 => xs[0],
             Edge::Xi1 => xs[xs.len() - 1],
             Edge::Eta0 => es[0],
@@ -166,7 +247,7 @@ impl LineSupport {
         } else {
             (xs, kx.degree())
         };
-        let points = self.edge.control_points(shell);
+        let points = edge.control_points(shell);
         let dofs: Vec<usize> = points
             .iter()
             .flat_map(|&cp| (0..DOFS_PER_CONTROL_POINT).map(move |d| DOFS_PER_CONTROL_POINT * cp + d))
@@ -249,8 +330,8 @@ mod tests {
     fn rigid_motions_of_an_edge_store_half_the_length_per_unit_stiffness() {
         let shell = Shell::rectangular_plate(6.0, 3.0, 0.2, [3, 2], [6, 5]).unwrap();
         let all: Vec<(SupportComponent, f64)> = SupportComponent::ALL.iter().map(|&c| (c, 1.0)).collect();
-        let support = LineSupport::new("west", (0, Edge::Xi0), global(), all.clone()).unwrap();
-        let blocks = support.coefficient_matrices(&shell);
+        let support = ElasticSupport::along_edge("west", (0, Edge::Xi0), global(), all.clone()).unwrap();
+        let blocks = support.edge_matrices(&shell);
         let n = shell.dof_count();
         let unit = |d: usize| -> Vec<f64> { (0..n).map(|i| f64::from(i % 5 == d)).collect() };
         for (c, block) in blocks.iter().enumerate() {
@@ -264,17 +345,56 @@ mod tests {
         }
         let c = std::f64::consts::FRAC_1_SQRT_2;
         let skewed = [[c, c, 0.0], [-c, c, 0.0], [0.0, 0.0, 1.0]];
-        let support = LineSupport::new("skewed", (0, Edge::Xi0), skewed, all).unwrap();
-        let blocks = support.coefficient_matrices(&shell);
+        let support = ElasticSupport::along_edge("skewed", (0, Edge::Xi0), skewed, all).unwrap();
+        let blocks = support.edge_matrices(&shell);
         let e = energy(&blocks[0], &unit(0));
         assert!((e - 1.5 * 0.5).abs() < 1e-12, "{e}");
+    }
+
+    /// At two beam nodes: a unit translation of both nodes along a
+    /// component's axis stores `½` per node and unit stiffness in that
+    /// component (and nothing in the rotations'); a unit rotation about it
+    /// the same in the rotation's; on skewed axes the projection.
+    #[test]
+    fn springs_at_beam_nodes_store_half_the_stiffness_per_node() {
+        let dofs = DofMap::of_model(&[], 3, 0);
+        let all: Vec<(SupportComponent, f64)> = SupportComponent::ALL.iter().map(|&c| (c, 1.0)).collect();
+        let support = ElasticSupport::at_beam_nodes("footings", vec![0, 2], global(), all.clone()).unwrap();
+        let blocks = support.node_matrices(&dofs);
+        let n = dofs.dof_count();
+        // Dof d of beam nodes 0 and 2 (not 1) moved by 1.
+        let unit = |d: usize| -> Vec<f64> { (0..n).map(|i| f64::from(i % 6 == d && i / 6 != 1)).collect() };
+        for (c, block) in blocks.iter().enumerate() {
+            for d in 0..6 {
+                let expected = if c == d { 1.0 } else { 0.0 };
+                let e = energy(block, &unit(d));
+                assert!((e - expected).abs() < 1e-12, "component {c}, dof {d}: {e}");
+            }
+        }
+        let c = std::f64::consts::FRAC_1_SQRT_2;
+        let skewed = [[c, c, 0.0], [-c, c, 0.0], [0.0, 0.0, 1.0]];
+        let support = ElasticSupport::at_beam_nodes("skewed", vec![1], skewed, all).unwrap();
+        let blocks = support.node_matrices(&dofs);
+        let rotated: Vec<f64> = (0..n).map(|i| f64::from(i == 6 + 3)).collect();
+        assert!((energy(&blocks[3], &rotated) - 0.25).abs() < 1e-12);
+        assert!((energy(&blocks[0], &rotated)).abs() < 1e-12);
+        let none = ElasticSupport::at_beam_nodes(
+            "nowhere",
+            vec![],
+            global(),
+            vec![(SupportComponent::Translation(2), 1.0)],
+        );
+        assert!(none
+            .unwrap_err()
+            .to_string()
+            .contains("\"nowhere\": give at least one beam node"));
     }
 
     #[test]
     fn bad_supports_are_refused_by_name() {
         let edge = (0, Edge::Xi0);
         let error = |components: Vec<(SupportComponent, f64)>, axes: [Vec3; 3]| {
-            LineSupport::new("east", edge, axes, components)
+            ElasticSupport::along_edge("east", edge, axes, components)
                 .unwrap_err()
                 .to_string()
         };
