@@ -67,6 +67,7 @@ print("per channel: " + ", ".join(f"{c} {n}" for c, n in channel_wins.items()))
 # the gap is within 5 %.
 print("identified modes against the forecast's model, nearest by shape (model mode: Hz, MAC, gap):")
 shown = {"first vertical": [0, 0], "second vertical": [0, 0]}
+damping = {"first vertical": [], "second vertical": []}
 for line in open(sys.argv[1]):
     d = json.loads(line)
     if d["skipped"] or not d["modes"]:
@@ -81,9 +82,19 @@ for line in open(sys.argv[1]):
         if which and n:
             shown[which][0] += 1
             shown[which][1] += n["pairs"] and abs(n["frequency_gap"]) <= 0.05
+        if which and n and n["pairs"]:
+            damping[which].append((m["damping_ratio"], n["damping_ratio"]))
         cells.append(f"{f:.2f}{'v' if vertical else ''} -> {n['mode']}: {n['frequency_hz']:.2f} {n['mac']:.2f} {100 * n['frequency_gap']:+.0f}%{' pairs' if n['pairs'] else ''}" if n else f"{f:.2f}: -")
     print(f"{d['start'][:10]:10s} {d['event'][:28]:28s} " + "; ".join(cells))
 for which, (seen, paired) in shown.items():
     print(f"{which} mode identified on {seen} events, paired with the model's within 5 %: {paired}")
+# The damping of the paired modes: the identified range against the forecast
+# model's zeta for the same modes.
+for which, pairs in damping.items():
+    if pairs:
+        ident = [100 * p[0] for p in pairs]
+        model = [100 * p[1] for p in pairs]
+        print(f"{which} mode's damping where paired: identified {min(ident):.1f}-{max(ident):.1f} %, "
+              f"the forecast's model {min(model):.1f}-{max(model):.1f} %")
 PY
 echo "wall time of the events run: $(python3 -c "print(f'{$end - $start:.1f} s')")"

@@ -83,7 +83,7 @@ pub(super) fn write_identified(
     outln!(
         " mode  frequency Hz    ± std Hz  damping %  ± std %    MPC  orders{}",
         if with_model {
-            "  model mode  model Hz    MAC    Δf %  pairs"
+            "  model mode  model Hz  model ζ %    MAC    Δf %  pairs"
         } else {
             ""
         }
@@ -91,9 +91,10 @@ pub(super) fn write_identified(
     for (i, (m, entry)) in report.result.modes.iter().zip(&file.modes).enumerate() {
         let model = match (&entry.model, with_model) {
             (Some(n), _) => format!(
-                "  {:10}  {:8.4}  {:5.3}  {:+6.1}  {:>5}",
+                "  {:10}  {:8.4}  {:9.3}  {:5.3}  {:+6.1}  {:>5}",
                 n.mode,
                 n.frequency_hz,
+                100.0 * n.damping_ratio,
                 n.mac,
                 100.0 * n.frequency_gap,
                 if n.pairs { "yes" } else { "no" }

@@ -59,6 +59,9 @@ pub struct ModelMatch {
     /// The model mode, numbered as `splinewatch modes` numbers them (from 1).
     pub mode: usize,
     pub frequency_hz: f64,
+    /// The model mode's damping ratio ζ (`[model.damping]`'s curve and the
+    /// supports' loss factors), to compare with the identified one.
+    pub damping_ratio: f64,
     pub mac: f64,
     /// `(f_model − f_identified) / f_identified`.
     pub frequency_gap: f64,

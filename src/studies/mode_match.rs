@@ -39,6 +39,7 @@ pub fn match_modes(
             ModelMatch {
                 mode: n.model + 1,
                 frequency_hz,
+                damping_ratio: state.zeta[n.model],
                 mac: n.mac,
                 frequency_gap: (frequency_hz - mode.frequency_hz) / mode.frequency_hz,
                 pairs: paired.iter().any(|p| p.observed == n.observed && p.model == n.model),

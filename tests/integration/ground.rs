@@ -387,6 +387,8 @@ fn issue_45_identify_recovers_the_simulated_overpass_driven_by_a_real_record() {
         assert_eq!(near["mode"].as_u64(), Some(index), "{f:.3} Hz: {near}");
         assert!((near["frequency_hz"].as_f64().unwrap() - f).abs() < 1e-9 * f, "{near}");
         assert!(near["mac"].as_f64().unwrap() > 0.98, "{f:.3} Hz: {near}");
+        // The config's ζ(f) is 5 % at every frequency, no loss factor.
+        assert!((near["damping_ratio"].as_f64().unwrap() - 0.05).abs() < 1e-12, "{near}");
         assert_eq!(near["pairs"], true, "{f:.3} Hz: {near}");
         let own = m["frequency_hz"].as_f64().unwrap();
         assert!(

@@ -501,6 +501,20 @@ fn own_issue_number(line: &str) -> Option<usize> {
     })
 }
 
+/// The README is the front page, not the manual: at most 200 lines (the
+/// guide holds the rest).
+#[test]
+fn the_readme_stays_within_two_hundred_lines() {
+    let lines = std::fs::read_to_string(root().join("README.md"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!(
+        lines <= 200,
+        "README.md has {lines} lines: move the detail to the guide"
+    );
+}
+
 /// Checked by scanning README.md and every page of the guide line by line
 /// (lower-cased) for the phrases above and for "issue" followed by a number
 /// (unless another project's tracker is named just before it).
