@@ -39,6 +39,7 @@ use crate::studies::predict::{predict as predict_event, significant_span, Predic
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::monitoring::amplitude::{expected, judge, FeatureBand, Verdict};
+use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::updating::{ParameterEstimate, StopReason};
 use std::path::Path;
 use std::sync::Arc;
@@ -157,14 +158,14 @@ fn run_chain(
     let updated = if cfg.has_model() {
         forecast_and_update(cfg, (event, plan), chain, line, amplitude)
     } else {
-        realization::forecast_and_realize(cfg, (event, plan), chain, line)
+        realization::forecast_and_realize(cfg, (event, plan), chain, line).map(|()| None)
     };
     if !modes_first {
         take_identification(identified, line)?;
     }
-    updated?;
+    let forecast_state = updated?;
     if cfg.has_model() && !line.modes.is_empty() {
-        match_with_forecast_model(cfg, chain, line)?;
+        match_with_forecast_model(cfg, chain, line, forecast_state)?;
     }
     judge_event(cfg, chain, line, amplitude);
     Ok(())
@@ -185,27 +186,36 @@ fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>, lin
 /// Each identified mode with the model mode nearest it by shape in the
 /// forecast's model (the events before this one; the config's values for
 /// the first): does the model the event was forecast with have the modes
-/// the record shows?
-fn match_with_forecast_model(cfg: &Config, chain: &mut Chain, line: &mut EventLine) -> Result<()> {
+/// the record shows? `forecast` is the forecast's own modal state, when
+/// there was a forecast.
+fn match_with_forecast_model(
+    cfg: &Config,
+    chain: &mut Chain,
+    line: &mut EventLine,
+    forecast: Option<ModalState>,
+) -> Result<()> {
     let parts = chain.parts(cfg)?;
-    let named: Vec<(String, f64)> = line.forecast_model.iter().map(|n| (n.name.clone(), n.value)).collect();
-    let state = crate::studies::parameters::modal_state_in(&parts.setup, &parts.parameters, &named)
-        .context("the forecast's model's modes")?;
+    let state = match forecast {
+        Some(state) => state,
+        None => crate::studies::parameters::modal_state_in(&parts.setup, &parts.parameters, &[])
+            .context("the config's model's modes")?,
+    };
     crate::studies::mode_match::match_modes(cfg, &state, &parts.setup.sensor_names, &mut line.modes)
         .context("the identified modes against the forecast's model")
 }
 
 /// The event forecast by the model of the events before it (none for the
-/// first), then the update on its own record.
+/// first), then the update on its own record; the forecast's modal state.
 fn forecast_and_update(
     cfg: &Config,
     (event, plan): (&Event, &[GroundInputPlan]),
     chain: &mut Chain,
     line: &mut EventLine,
     amplitude: f64,
-) -> Result<()> {
+) -> Result<Option<ModalState>> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
     // The forecast: the model of the events before this one.
+    let mut forecast_state = None;
     if !chain.parameters.is_empty() {
         let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, amplitude);
         let parts = chain.parts(cfg)?;
@@ -225,8 +235,10 @@ fn forecast_and_update(
             .filter(|s| fitted(cfg, s))
             .collect();
         line.forecast = Some(prediction.report);
+        forecast_state = Some(forecaster.state);
     }
-    update_event(cfg, event, plan, chain, line)
+    update_event(cfg, event, plan, chain, line)?;
+    Ok(forecast_state)
 }
 
 /// Whether the update fits deck sensor `name` (`[events] outputs`; every
