@@ -7,7 +7,7 @@ use crate::io::recording::{RecordedBlock, RecordingWriter};
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
 use crate::outputs::rerun::prediction::PredictedChannel;
 use crate::pipeline::estimate::aligned_span;
-use crate::service::records::{align_event, identify_io, read_records, recorded, Event};
+use crate::service::records::{align_event, read_records, recorded, Event};
 use crate::studies::ground_motion::GroundModel;
 use crate::studies::predict::{predict as predict_event, Prediction};
 use anyhow::{bail, Context, Result};
@@ -424,15 +424,18 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
     if let Some(path) = &a.transmissibility {
         write_transmissibility(&cfg, (&inputs, input_views), (&outputs, output_views), span.fs, path)?;
     }
-    let (result, settings, rate) = identify_io(&cfg, input_views, output_views, span.fs)?;
-    let report = crate::pipeline::oma::OmaReport {
-        start_ns: span.start_ns,
-        samples: span.samples,
-        fs: span.fs,
-        sensors: outputs.iter().map(|&i| cfg.sensors[i].name.clone()).collect(),
-        result,
-        spectrum: None,
-    };
+    let input_channels: Vec<(usize, &[f64])> = inputs.iter().copied().zip(input_views.iter().copied()).collect();
+    let output_channels: Vec<(usize, &[f64])> = outputs.iter().copied().zip(output_views.iter().copied()).collect();
+    let record = crate::service::frequency_domain::identify_record(
+        &cfg,
+        &input_channels,
+        &output_channels,
+        span.fs,
+        span.start_ns,
+    )?;
+    for note in &record.notes {
+        errln!("{note}");
+    }
     let names = |list: &[usize]| {
         list.iter()
             .map(|&i| cfg.sensors[i].name.as_str())
@@ -440,22 +443,27 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
             .join(", ")
     };
     errln!(
-        "{} samples ({:.1} s at {} Hz) from {}: inputs {}; outputs {}; {} modes (SRIM{}, horizon {})",
+        "{} samples ({:.1} s at {} Hz) from {}: inputs {}; outputs {}; {} modes (SRIM{}, horizon {}){}",
         span.samples,
         span.samples as f64 / span.fs,
         span.fs,
         crate::io::wire::format_timestamp(span.start_ns),
         names(&inputs),
         names(&outputs),
-        report.result.modes.len(),
-        if rate < span.fs {
-            format!(" at {} Hz, resampled", crate::service::records::rate_text(rate))
+        record.report.result.modes.len(),
+        if record.rate < span.fs {
+            format!(" at {} Hz, resampled", crate::service::records::rate_text(record.rate))
         } else {
             String::new()
         },
-        settings.block_rows
+        record.settings.block_rows,
+        if record.fitted.is_empty() {
+            String::new()
+        } else {
+            format!("; {} fitted in the frequency domain", record.fitted.len())
+        }
     );
-    super::identified::write_identified(&cfg, &report, &a.output, &a.comparison)
+    super::identified::write_identified(&cfg, &record.report, &record.fitted, &a.output, &a.comparison)
 }
 
 /// The multi-input H1 estimates of `identify --transmissibility` as JSON:

@@ -38,6 +38,7 @@ pub struct ModelComparison {
 pub(super) fn write_identified(
     cfg: &Config,
     report: &crate::pipeline::oma::OmaReport,
+    fitted: &[crate::io::modes_json::ModeEntry],
     output: &ModesOutput,
     comparison: &ModelComparison,
 ) -> Result<()> {
@@ -52,6 +53,7 @@ pub(super) fn write_identified(
         rerun.finish()?;
     }
     let mut file = report.modes_file();
+    file.modes = crate::service::frequency_domain::merged(file.modes, fitted);
     match (&comparison.parameters, cfg.has_model()) {
         (Some(path), false) => bail!(
             "--parameters {}: the config has no [model] to compare the modes with",
@@ -88,7 +90,7 @@ pub(super) fn write_identified(
             ""
         }
     );
-    for (i, (m, entry)) in report.result.modes.iter().zip(&file.modes).enumerate() {
+    for (i, entry) in file.modes.iter().enumerate() {
         let model = match (&entry.model, with_model) {
             (Some(n), _) => format!(
                 "  {:10}  {:8.4}  {:9.3}  {:5.3}  {:+6.1}  {:>5}",
@@ -102,15 +104,18 @@ pub(super) fn write_identified(
             (None, true) => "  no flexible model mode".into(),
             (None, false) => String::new(),
         };
+        // A fitted mode has no MPC and no orders: "fit" says how it was found.
+        let (mpc, orders) = match (entry.mpc, entry.stable_orders) {
+            (Some(mpc), Some(orders)) => (format!("{mpc:5.3}"), orders.to_string()),
+            _ => ("    -".into(), "fit".into()),
+        };
         outln!(
-            "{:5}  {:12.4}  {:>10}  {:9.3}  {:>7}  {:5.3}  {:6}{model}",
+            "{:5}  {:12.4}  {:>10}  {:9.3}  {:>7}  {mpc}  {orders:6}{model}",
             i + 1,
-            m.frequency_hz,
-            or_dash(m.frequency_std_hz, 1.0, 4),
-            100.0 * m.damping_ratio,
-            or_dash(m.damping_std, 100.0, 3),
-            m.mpc,
-            m.stable_orders
+            entry.frequency_hz,
+            or_dash(entry.frequency_std_hz, 1.0, 4),
+            100.0 * entry.damping_ratio,
+            or_dash(entry.damping_std, 100.0, 3),
         );
     }
     Ok(())

@@ -575,7 +575,7 @@ pub fn oma(a: OmaArgs) -> Result<()> {
         stable,
         report.result.modes.len()
     );
-    super::identified::write_identified(&cfg, &report, &a.output, &a.comparison)
+    super::identified::write_identified(&cfg, &report, &[], &a.output, &a.comparison)
 }
 
 fn parse_xy(s: &str) -> Result<(f64, f64), String> {

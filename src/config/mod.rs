@@ -7,6 +7,7 @@
 //! (`[model.discretization]`); see the guide's configuration reference for every key.
 
 mod events;
+mod frequency_domain;
 mod frf;
 mod ground;
 mod loss_factor;
@@ -27,6 +28,7 @@ mod web;
 mod zenoh;
 
 pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
+pub use frequency_domain::{FrequencyDomainConfig, FrequencyDomainPlan, MAX_FITTED_MODES};
 pub use frf::FrfConfig;
 pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};
 pub use loss_factor::{LossFactorConfig, LossFactorTable};
@@ -280,6 +282,7 @@ impl Config {
             self.oma_settings()?;
         }
         if !self.sensors.is_empty() {
+            self.frequency_domain()?;
             self.residues()?;
         }
         self.validate_monitoring()?;

@@ -53,6 +53,10 @@ pub struct OmaConfig {
     pub stability: StabilityCriteria,
     #[schemars(with = "super::schema::ClusterCriteriaDef")]
     pub clustering: ClusterCriteria,
+    /// `[oma.frequency_domain]`: records with measured inputs (`identify`,
+    /// `events`) also get the modes a pole–residue fit of their H1
+    /// transmissibilities finds in this band; absent: SRIM's alone.
+    pub frequency_domain: Option<super::FrequencyDomainConfig>,
 }
 
 impl Default for OmaConfig {
@@ -73,6 +77,7 @@ impl Default for OmaConfig {
             uncertainty: d.uncertainty,
             stability: d.stability,
             clustering: d.clustering,
+            frequency_domain: None,
         }
     }
 }

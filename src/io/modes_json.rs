@@ -1,7 +1,7 @@
 //! The identified-modes file (`splinewatch oma --json`, `update --modes`):
 //! `{"modes":[{"frequency_hz":…, "damping_ratio":…, "frequency_std_hz":…,
 //! "damping_std":…, "shape":[{"sensor":"P1","re":…,"im":…},…]},…]}`.
-//! Extra keys (`mpc`, `order`, `stable_orders`, `model`, a shape entry's
+//! Extra keys (`mpc`, `order`, `stable_orders`, `method`, `model`, a shape entry's
 //! `std`, the file's `start`, `duration_s`, `fs_hz`) are informative; readers ignore
 //! keys they do not know. A standard deviation is `null` when the
 //! jackknife could not estimate it.
@@ -45,10 +45,24 @@ pub struct ModeEntry {
     pub order: Option<usize>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stable_orders: Option<usize>,
+    /// How the mode was found when not by the command's subspace method
+    /// (SSI-cov for `oma`, SRIM for `identify` and `events`): absent for
+    /// those.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<ModeMethod>,
     /// With a config that has a model: the model mode nearest this one by
     /// shape.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model: Option<ModelMatch>,
+}
+
+/// An estimator of modes other than the subspace methods.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModeMethod {
+    /// The pole–residue fit of the H1 transmissibilities
+    /// (`[oma.frequency_domain]`).
+    PoleResidue,
 }
 
 /// The model mode nearest an identified one by shape: the largest MAC at

@@ -86,6 +86,7 @@ impl OmaReport {
                 mpc: Some(m.mpc),
                 order: Some(m.order),
                 stable_orders: Some(m.stable_orders),
+                method: None,
                 model: None,
             })
             .collect();

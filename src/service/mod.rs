@@ -8,6 +8,7 @@ pub mod demo;
 pub mod events;
 pub mod export;
 pub mod fleet;
+pub mod frequency_domain;
 pub mod records;
 pub mod replay;
 pub mod rescore;

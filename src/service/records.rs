@@ -159,6 +159,10 @@ pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[R
     })
 }
 
+/// SRIM's modes of a record, or why it found none (no stable mode: not an
+/// error when another estimate may find them).
+pub type SrimModes = std::result::Result<splinewatch_core::identification::oma::OmaResult, String>;
+
 /// SRIM of `inputs` to `outputs` with the config's `[oma]` settings and
 /// delete-one-batch (jackknife) uncertainty, at the identification rate
 /// ([`at_identification_rate`]); returns the settings and the rate used.
@@ -167,11 +171,7 @@ pub fn identify_io(
     inputs: &[&[f64]],
     outputs: &[&[f64]],
     fs: f64,
-) -> Result<(
-    splinewatch_core::identification::oma::OmaResult,
-    splinewatch_core::identification::oma::OmaSettings,
-    f64,
-)> {
+) -> Result<(SrimModes, splinewatch_core::identification::oma::OmaSettings, f64)> {
     let record = at_identification_rate(cfg, inputs, outputs, fs);
     let (inputs, outputs, fs) = (record.inputs(), record.outputs(), record.fs);
     let (mut settings, _) = cfg.oma_settings_at(fs)?;
@@ -181,8 +181,12 @@ pub fn identify_io(
     // (measured 2026-11-27, the data matrices' estimate; it would have taken
     // identify from 0.42 to 0.28 s).
     settings.uncertainty = splinewatch_core::identification::oma::UncertaintyMethod::Jackknife;
-    let result = splinewatch_core::identification::srim::identify_io(&inputs, &outputs, fs, &settings)
-        .map_err(|e| anyhow::anyhow!("identification: {e}"))?;
+    use splinewatch_core::identification::oma::OmaError;
+    let result = match splinewatch_core::identification::srim::identify_io(&inputs, &outputs, fs, &settings) {
+        Ok(result) => Ok(result),
+        Err(e @ OmaError::NoModes { .. }) => Err(format!("identification: {e}")),
+        Err(e) => bail!("identification: {e}"),
+    };
     Ok((result, settings, fs))
 }
 

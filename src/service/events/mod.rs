@@ -27,12 +27,12 @@ pub use line::{BandLine, EventLine, UpdateLine, VerdictLine};
 pub use loading::{load, Loaded};
 pub use realization::predict_by_realization;
 
-use super::records::{identify_io, Event};
+use super::frequency_domain::identify_record;
+use super::records::Event;
 use crate::config::{ground_sensors, ground_signals, Config, EventAmplitude, EventForecast, GroundInputPlan, Residues};
 use crate::io::modes_json::{ModeEntry, ModesFile};
 use crate::io::monitoring_json::{NamedValue, StatusMessage};
 use crate::io::wire::format_timestamp;
-use crate::pipeline::oma::OmaReport;
 use crate::studies::event_update::{update_on_event, EventSignals, PairedMode};
 use crate::studies::ground_motion::{GroundModel, GroundParts};
 use crate::studies::predict::{predict as predict_event, significant_span, PredictionReport};
@@ -53,33 +53,26 @@ pub fn process(cfg: &Config, loaded: &Loaded, chain: &mut Chain) -> EventLine {
     process_identified(cfg, loaded, || identify(cfg, loaded), chain)
 }
 
-/// An event's identified modes (item 1 of the chain), or why there are
-/// none; `None` for an event that could not be read. It depends on the
-/// record alone, not on the chain, so `events` identifies the next records
-/// on a second thread while the chain updates this one.
-pub type Identified = Option<Result<Vec<ModeEntry>, String>>;
+/// An event's identified modes (item 1 of the chain) and what their
+/// identification had to say, or why there are none; `None` for an event
+/// that could not be read. It depends on the record alone, not on the
+/// chain, so `events` identifies the next records on a second thread while
+/// the chain updates this one.
+pub type Identified = Option<Result<(Vec<ModeEntry>, Vec<String>), String>>;
 
 /// [`Identified`] of `loaded`: SRIM of every recorded ground channel to
-/// every deck channel.
+/// every deck channel, and with `[oma.frequency_domain]` the modes its fit
+/// of the transmissibilities finds (its failure a note, SRIM's modes kept).
 pub fn identify(cfg: &Config, loaded: &Loaded) -> Identified {
     let (event, plan) = loaded.event.as_ref().ok()?;
-    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
-    let inputs: Vec<&[f64]> = ground_sensors(plan).iter().map(|&i| channel(i)).collect();
-    let outputs: Vec<&[f64]> = event.deck.iter().map(|&i| channel(i)).collect();
-    Some(match identify_io(cfg, &inputs, &outputs, event.fs) {
-        Ok((result, _, _)) => {
-            let report = OmaReport {
-                start_ns: event.start_ns,
-                samples: outputs[0].len(),
-                fs: event.fs,
-                sensors: event.deck.iter().map(|&i| cfg.sensors[i].name.clone()).collect(),
-                result,
-                spectrum: None,
-            };
-            Ok(report.modes_file().modes)
-        }
-        Err(e) => Err(format!("{e:#}")),
-    })
+    let channel = |i: usize| (i, event.channels[i].as_deref().expect("aligned"));
+    let inputs: Vec<(usize, &[f64])> = ground_sensors(plan).iter().map(|&i| channel(i)).collect();
+    let outputs: Vec<(usize, &[f64])> = event.deck.iter().map(|&i| channel(i)).collect();
+    Some(
+        identify_record(cfg, &inputs, &outputs, event.fs, event.start_ns)
+            .map(|record| (record.modes(), record.notes))
+            .map_err(|e| format!("{e:#}")),
+    )
 }
 
 /// [`process`] with the event's identification from `identified` (as
@@ -176,7 +169,10 @@ fn run_chain(
 /// `notes`.
 fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>, line: &mut EventLine) -> Result<()> {
     match identified.take().and_then(|identify| identify()) {
-        Some(Ok(modes)) => line.modes = modes,
+        Some(Ok((modes, notes))) => {
+            line.modes = modes;
+            line.notes.extend(notes);
+        }
         Some(Err(e)) => line.notes.insert(0, e),
         None => bail!("the event was not read"),
     }

@@ -1,0 +1,245 @@
+use super::*;
+use crate::identification::test_noise::uniform_noise;
+use crate::identification::transmissibility;
+
+fn pole(f: f64, zeta: f64) -> c64 {
+    let w = 2.0 * PI * f;
+    c64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt())
+}
+
+/// `Σ_m A/(s−λ) + Ā/(s−λ̄) + c` at `frequencies`.
+fn exact(frequencies: &[f64], modes: &[(f64, f64)], residues: &[c64], constant: c64) -> Vec<c64> {
+    frequencies
+        .iter()
+        .map(|&f| {
+            let s = c64::new(0.0, 2.0 * PI * f);
+            modes
+                .iter()
+                .zip(residues)
+                .map(|(&(fm, z), &a)| {
+                    let l = pole(fm, z);
+                    a / (s - l) + a.conj() / (s - l.conj())
+                })
+                .sum::<c64>()
+                + constant
+        })
+        .collect()
+}
+
+/// Two modes 12 % and 8 % damped, 13 % apart, in three functions with
+/// their own constants: recovered to 1e-7 from exact data, the residues
+/// too, and nothing left (s² at rounding level).
+#[test]
+fn close_heavily_damped_modes_are_recovered_from_exact_functions() {
+    let truth = [(3.8, 0.12), (4.3, 0.08)];
+    let residues = [
+        [c64::new(10.0, 3.0), c64::new(5.0, -2.0)],
+        [c64::new(7.0, -1.0), c64::new(-6.0, 1.0)],
+        [c64::new(2.0, 0.0), c64::new(10.0, 0.0)],
+    ];
+    let frequencies: Vec<f64> = (0..81).map(|k| 2.0 + 0.05 * f64::from(k)).collect();
+    let h: Vec<Vec<c64>> = residues
+        .iter()
+        .enumerate()
+        .map(|(j, r)| exact(&frequencies, &truth, r, c64::new(1.0 + j as f64, -0.1)))
+        .collect();
+    let sigma = vec![vec![0.01; frequencies.len()]; 3];
+    let functions = Functions {
+        frequencies_hz: &frequencies,
+        h: &h,
+        sigma: &sigma,
+    };
+    let fitted = fit(functions, 2).unwrap();
+    for (mode, &(f, z)) in fitted.modes.iter().zip(&truth) {
+        assert!((mode.frequency_hz - f).abs() < 1e-7 * f, "{mode:?} for {f}");
+        assert!((mode.damping_ratio - z).abs() < 1e-7, "{mode:?} for {z}");
+        assert!(!mode.at_bound);
+    }
+    for (j, r) in residues.iter().enumerate() {
+        for (m, a) in r.iter().enumerate() {
+            assert!((fitted.modes[m].residues[j] - a).norm() < 1e-5 * a.norm(), "{j} {m}");
+        }
+    }
+    assert!(fitted.residual_scale < 1e-12, "{}", fitted.residual_scale);
+    // Bad input is named.
+    let short = Functions {
+        frequencies_hz: &frequencies[..6],
+        ..functions
+    };
+    assert!(matches!(fit(short, 1), Err(PoleResidueError::TooFewLines { .. })));
+    let zero = vec![vec![0.0; frequencies.len()]; 3];
+    let unweighted = Functions {
+        sigma: &zero,
+        ..functions
+    };
+    assert!(matches!(
+        fit(unweighted, 1),
+        Err(PoleResidueError::BadLine { function: 0, line: 0 })
+    ));
+}
+
+/// The reported standard deviations are the scatter: one 10 %-damped mode
+/// in two functions, complex Gaussian-like noise of a known level (the sum
+/// of 12 uniforms, Irwin–Hall) on every line; over 200 noise draws the mean
+/// reported std of f and ζ is within 20 % of the draws' scatter (the scatter
+/// of 200 draws is itself known to about 5 %), and the mean estimate is
+/// within one scatter of the truth.
+#[test]
+fn reported_standard_deviations_match_the_scatter_over_noise_draws() {
+    let truth = [(4.0, 0.10)];
+    let frequencies: Vec<f64> = (0..41).map(|k| 2.0 + 0.125 * f64::from(k)).collect();
+    let clean = [
+        exact(&frequencies, &truth, &[c64::new(5.0, 1.0)], c64::new(1.0, 0.0)),
+        exact(&frequencies, &truth, &[c64::new(3.0, -1.0)], c64::new(0.8, 0.1)),
+    ];
+    let level = 0.15;
+    let sigma = vec![vec![level; frequencies.len()]; 2];
+    let gaussian = |seed: u64, n: usize| -> Vec<f64> {
+        let u = uniform_noise(seed, 12 * n);
+        u.chunks(12).map(|c| c.iter().sum::<f64>()).collect()
+    };
+    let draws = 200;
+    let mut estimates = Vec::new();
+    let mut reported = (0.0, 0.0);
+    for seed in 0..draws {
+        let noise = gaussian(seed + 1, 4 * frequencies.len());
+        let scale = level / 2f64.sqrt();
+        let h: Vec<Vec<c64>> = clean
+            .iter()
+            .enumerate()
+            .map(|(j, hj)| {
+                hj.iter()
+                    .enumerate()
+                    .map(|(k, v)| {
+                        let i = 2 * (j * frequencies.len() + k);
+                        v + c64::new(scale * noise[i], scale * noise[i + 1])
+                    })
+                    .collect()
+            })
+            .collect();
+        let fitted = fit(
+            Functions {
+                frequencies_hz: &frequencies,
+                h: &h,
+                sigma: &sigma,
+            },
+            1,
+        )
+        .unwrap();
+        let m = &fitted.modes[0];
+        estimates.push((m.frequency_hz, m.damping_ratio));
+        reported.0 += m.frequency_std_hz / f64::from(draws as u32);
+        reported.1 += m.damping_std / f64::from(draws as u32);
+    }
+    let n = estimates.len() as f64;
+    let mean = |g: fn(&(f64, f64)) -> f64| estimates.iter().map(g).sum::<f64>() / n;
+    let spread = |g: fn(&(f64, f64)) -> f64, m: f64| {
+        (estimates.iter().map(|e| (g(e) - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
+    };
+    let (mf, mz) = (mean(|e| e.0), mean(|e| e.1));
+    let (sf, sz) = (spread(|e| e.0, mf), spread(|e| e.1, mz));
+    assert!(
+        (reported.0 / sf - 1.0).abs() < 0.2,
+        "f: reported {} scatter {sf}",
+        reported.0
+    );
+    assert!(
+        (reported.1 / sz - 1.0).abs() < 0.2,
+        "ζ: reported {} scatter {sz}",
+        reported.1
+    );
+    assert!(
+        (mf - truth[0].0).abs() < sf && (mz - truth[0].1).abs() < sz,
+        "{mf} {mz}"
+    );
+}
+
+/// A simulated record: a 10 %-damped base-excited oscillator at 4 Hz
+/// (absolute acceleration, `H = (2ζωs + ω²)/(s² + 2ζωs + ω²)`, matched
+/// poles `z = e^{λT}`) driven by a random ground at 50 Hz for 120 s, its
+/// output with 30 % noise; the H1 estimate's standard deviations from the
+/// coherence. Over 40 records the mean reported std is within a factor 1.6
+/// of the records' scatter (40 records know their scatter to about 11 %;
+/// the H1 errors are correlated across lines by the window, which the
+/// residual scale only partly absorbs), and the mean estimate within 2 %
+/// of 4 Hz and 0.02 of ζ (the discrete system is not the continuous one).
+#[test]
+fn reported_standard_deviations_hold_on_simulated_records() {
+    let fs = 50.0;
+    let samples = 6000;
+    let (f0, zeta) = (4.0, 0.10);
+    let lambda = pole(f0, zeta);
+    let t = 1.0 / fs;
+    let z = (lambda * t).exp();
+    let (a1, a2) = (2.0 * z.re, -z.norm_sqr());
+    let mut estimates = Vec::new();
+    let mut reported = (0.0, 0.0);
+    let records = 40;
+    for seed in 0..records {
+        let ground = uniform_noise(1000 + seed, samples);
+        // Numerator from the continuous one at zero frequency and the
+        // damping term (a first difference): gain 1 at 0 Hz.
+        let w = 2.0 * PI * f0;
+        let (b0, b1) = (2.0 * zeta * w * t, (1.0 - a1 - a2) - 2.0 * zeta * w * t);
+        let mut response = vec![0.0; samples];
+        for k in 0..samples {
+            let y1 = if k >= 1 { response[k - 1] } else { 0.0 };
+            let y2 = if k >= 2 { response[k - 2] } else { 0.0 };
+            let x1 = if k >= 1 { ground[k - 1] } else { 0.0 };
+            response[k] = a1 * y1 + a2 * y2 + b0 * ground[k] + b1 * x1;
+        }
+        let rms = (response.iter().map(|v| v * v).sum::<f64>() / samples as f64).sqrt();
+        let noise = uniform_noise(5000 + seed, samples);
+        let measured: Vec<f64> = response
+            .iter()
+            .zip(&noise)
+            .map(|(r, e)| r + 0.3 * rms * e * 12f64.sqrt())
+            .collect();
+        let est = transmissibility::estimate(&[&ground], &[&measured], fs, 400, 200).unwrap();
+        let band: Vec<usize> = (0..est.frequencies_hz.len())
+            .filter(|&k| (2.0..=7.0).contains(&est.frequencies_hz[k]))
+            .collect();
+        let frequencies: Vec<f64> = band.iter().map(|&k| est.frequencies_hz[k]).collect();
+        let h = vec![band.iter().map(|&k| est.h[0][0][k]).collect::<Vec<_>>()];
+        let sigma = vec![band
+            .iter()
+            .map(|&k| {
+                let g = est.coherence[0][k].clamp(1e-6, 0.999);
+                est.h[0][0][k].norm() * ((1.0 - g) / (2.0 * est.averages as f64 * g)).sqrt()
+            })
+            .collect::<Vec<_>>()];
+        let fitted = fit(
+            Functions {
+                frequencies_hz: &frequencies,
+                h: &h,
+                sigma: &sigma,
+            },
+            1,
+        )
+        .unwrap();
+        let m = &fitted.modes[0];
+        estimates.push((m.frequency_hz, m.damping_ratio));
+        reported.0 += m.frequency_std_hz / f64::from(records as u32);
+        reported.1 += m.damping_std / f64::from(records as u32);
+    }
+    let n = estimates.len() as f64;
+    let mf = estimates.iter().map(|e| e.0).sum::<f64>() / n;
+    let mz = estimates.iter().map(|e| e.1).sum::<f64>() / n;
+    let sf = (estimates.iter().map(|e| (e.0 - mf).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let sz = (estimates.iter().map(|e| (e.1 - mz).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    eprintln!(
+        "f {mf} ± {sf} (reported {}), ζ {mz} ± {sz} (reported {})",
+        reported.0, reported.1
+    );
+    assert!(
+        (reported.0 / sf).ln().abs() < 1.6f64.ln(),
+        "f: reported {} scatter {sf}",
+        reported.0
+    );
+    assert!(
+        (reported.1 / sz).ln().abs() < 1.6f64.ln(),
+        "ζ: reported {} scatter {sz}",
+        reported.1
+    );
+    assert!((mf - f0).abs() < 0.02 * f0 && (mz - zeta).abs() < 0.02, "{mf} {mz}");
+}
