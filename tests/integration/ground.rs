@@ -500,3 +500,79 @@ fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator()
         );
     }
 }
+
+/// `identify` with `[oma.frequency_domain]` on the 2012 and 2015 records
+/// (`tests/fixtures/painter-street/pole_residue.toml`: no model, the bent's
+/// transverse ground to the deck's transverse channels), against
+/// `pole_residue_scipy.json` there (made by `make_pole_residue_fixture.py`:
+/// scipy's Welch H1 and coherence, `least_squares` over the poles and then
+/// over every parameter, the stds from that whole problem's Jacobian). The
+/// fitted mode: frequency within 1e-6 relative, damping ratio within 1e-5
+/// relative (both reach the same optimum to their stopping tolerances),
+/// stds within 1e-3 relative (two formulas: splinewatch's projected
+/// Jacobian, scipy's whole one). SRIM finds no mode on these channels: said,
+/// and the fit's mode is the record's, marked `pole_residue` in the modes
+/// file and "fit" in the table. A band above half the rate, with SRIM
+/// finding nothing either, is refused naming the key once.
+#[test]
+fn identify_fits_the_transverse_mode_as_scipy_does() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let fixture: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(root.join("tests/fixtures/painter-street/pole_residue_scipy.json")).unwrap(),
+    )
+    .unwrap();
+    let dir = fresh_dir("pole-residue");
+    let config = "tests/fixtures/painter-street/pole_residue.toml";
+    for (name, peer) in fixture["records"].as_object().unwrap() {
+        let out = dir.join(format!("{name}.json"));
+        let o = splinewatch(&[
+            "identify",
+            "--config",
+            config,
+            &record(name),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{stderr}");
+        assert!(
+            stderr.contains("no physical mode") && stderr.contains("the frequency-domain fit's modes alone"),
+            "{stderr}"
+        );
+        assert!(
+            stderr.contains("0 modes (SRIM, horizon 100); 1 fitted in the frequency domain"),
+            "{stderr}"
+        );
+        let table = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            table.lines().nth(1).is_some_and(|l| l.trim_end().ends_with("fit")),
+            "{table}"
+        );
+        let modes: serde_json::Value = serde_json::from_slice(&std::fs::read(&out).unwrap()).unwrap();
+        let modes = modes["modes"].as_array().unwrap();
+        assert_eq!(modes.len(), 1, "{name}: {modes:?}");
+        let (ours, theirs) = (&modes[0], &peer["modes"][0]);
+        assert_eq!(ours["method"], "pole_residue");
+        let value = |m: &serde_json::Value, key: &str| m[key].as_f64().unwrap();
+        let close = |key: &str, tolerance: f64| {
+            let (a, b) = (value(ours, key), value(theirs, key));
+            assert!((a - b).abs() <= tolerance * b.abs(), "{name} {key}: {a} vs scipy's {b}");
+        };
+        close("frequency_hz", 1e-6);
+        close("damping_ratio", 1e-5);
+        close("frequency_std_hz", 1e-3);
+        close("damping_std", 1e-3);
+        assert!(ours["mpc"].is_null() && ours["stable_orders"].is_null());
+        let shape = ours["shape"].as_array().unwrap();
+        assert_eq!(shape.len(), 3, "{name}: the outputs fitted");
+        assert!(shape.iter().any(|s| s["re"] == 1.0 && s["im"] == 0.0), "{shape:?}");
+    }
+    let text = std::fs::read_to_string(root.join(config)).unwrap();
+    let wide = dir.join("wide.toml");
+    std::fs::write(&wide, text.replace("[1.5, 7.0]", "[1.5, 60.0]")).unwrap();
+    let o = splinewatch(&["identify", "--config", wide.to_str().unwrap(), &record(EVENT_2015)]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && o.stdout.is_empty(), "{stderr}");
+    assert_eq!(stderr.matches("oma.frequency_domain.band").count(), 1, "{stderr}");
+    assert!(stderr.contains("above half the record's rate (100 Hz)"), "{stderr}");
+}
