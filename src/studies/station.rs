@@ -112,9 +112,17 @@ pub fn starter_config(records: &[StationRecord], axis_deg: Option<f64>) -> Resul
         guesses.push("no channel's location reads as a bridge's (deck, bent, abutment, span, pier, column): is this a building's station? The rules are a bridge's".into());
     }
     let mut toml = header(&station, records, axis_deg);
-    let sensor = |entry: &ChannelEntry, support: Option<&str>, toml: &mut String, guesses: &mut Vec<String>| {
+    let mut transverse = Transverse::default();
+    let mut sensor = |entry: &ChannelEntry, support: Option<&str>, toml: &mut String, guesses: &mut Vec<String>| {
         let c = entry.summary;
         let direction = axis_of(c, axis_deg, guesses);
+        if direction == "y" {
+            let name = format!("\"ch{}\"", c.channel);
+            match support {
+                Some(_) => transverse.ground.push((name, c.location.clone())),
+                None => transverse.structure.push(name),
+            }
+        }
         let _ = writeln!(toml, "[[sensors]]                 # {}: {}", c.direction, c.location);
         let _ = writeln!(toml, "name = \"ch{}\"", c.channel);
         let _ = writeln!(toml, "direction = \"{direction}\"");
@@ -136,7 +144,21 @@ pub fn starter_config(records: &[StationRecord], axis_deg: Option<f64>) -> Resul
             sensor(entry, Some(group), &mut toml, &mut guesses);
         }
     }
-    for entry in &unreadable {
+    commented_out(&unreadable, &mut toml);
+    toml.push_str(&analysis_sections(&structure));
+    toml.push_str(&transverse.section());
+    if !guesses.is_empty() {
+        toml.push_str("\n# What `splinewatch station` guessed:\n");
+        for g in &guesses {
+            let _ = writeln!(toml, "# - {g}");
+        }
+    }
+    Ok(StarterConfig { toml, guesses })
+}
+
+/// The channels whose orientation was not read, as commented entries.
+fn commented_out(unreadable: &[&ChannelEntry], toml: &mut String) {
+    for entry in unreadable {
         let c = entry.summary;
         let _ = writeln!(
             toml,
@@ -146,14 +168,6 @@ pub fn starter_config(records: &[StationRecord], axis_deg: Option<f64>) -> Resul
         let _ = writeln!(toml, "# name = \"ch{}\"", c.channel);
         let _ = writeln!(toml, "# direction = \"?\"\n");
     }
-    toml.push_str(&analysis_sections(&structure));
-    if !guesses.is_empty() {
-        toml.push_str("\n# What `splinewatch station` guessed:\n");
-        for g in &guesses {
-            let _ = writeln!(toml, "# - {g}");
-        }
-    }
-    Ok(StarterConfig { toml, guesses })
 }
 
 /// The station all records are of (refused when they name several).
@@ -342,6 +356,51 @@ fn analysis_sections(structure: &[&ChannelEntry]) -> String {
         let _ = writeln!(text, "outputs = [{}]", horizontal.join(", "));
     }
     text
+}
+
+/// The transverse (`y`) channels, for the frequency-domain fit.
+#[derive(Default)]
+struct Transverse {
+    /// Quoted names.
+    structure: Vec<String>,
+    /// Quoted names and locations.
+    ground: Vec<(String, String)>,
+}
+
+impl Transverse {
+    /// `[oma.frequency_domain]`: the structure's transverse channels per
+    /// one transverse ground channel (a bent's, pier's or column's when
+    /// there is one: the support that moves most of the deck's mass; the
+    /// first otherwise), one estimate each (few averages in an earthquake
+    /// record do not separate several coherent grounds); empty without them.
+    fn section(&self) -> String {
+        let below = ["bent", "pier", "column"];
+        let input = self
+            .ground
+            .iter()
+            .find(|(_, location)| {
+                let lower = location.to_ascii_lowercase();
+                below.iter().any(|w| lower.contains(w))
+            })
+            .or(self.ground.first());
+        let Some((input, location)) = input.filter(|_| !self.structure.is_empty()) else {
+            return String::new();
+        };
+        let mut text = String::new();
+        text.push_str(
+            "\n[oma.frequency_domain]      # the transverse modes from the transmissibilities (a pole-residue fit),\n",
+        );
+        text.push_str("band = [1.0, 10.0]          # two in 1-10 Hz: narrow the band around the mode once the first\n");
+        text.push_str("modes = 2                   # records show it (a band that holds it and little else)\n");
+        let _ = writeln!(
+            text,
+            "inputs = [{input}]{:pad$}# {location}",
+            "",
+            pad = 17usize.saturating_sub(input.len())
+        );
+        let _ = writeln!(text, "outputs = [{}]", self.structure.join(", "));
+        text
+    }
 }
 
 #[cfg(test)]

@@ -100,7 +100,8 @@ fn recorders_whose_clock_is_flagged_are_placed_by_their_ground_channels() {
 /// number, `Tran`/`Long`/`Up` on y/x/z, the ground channels (locations
 /// naming the ground) in one support group per location, the records that
 /// lack a channel and the other descriptions noted; the config is valid
-/// without a model; `identify` and `events` run with it.
+/// without a model; `identify` and `events` run with it, the frequency-domain
+/// fit of the transverse channels among the modes.
 #[test]
 fn station_writes_a_starter_config_that_identify_runs_with() {
     let dir = fresh_dir("station");
@@ -169,6 +170,22 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
     let modes: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(!modes["modes"].as_array().unwrap().is_empty(), "{modes}");
     assert!(modes["modes"][0].get("model").is_none(), "no model, no match: {modes}");
+    // The transverse modes fitted from the bent's transverse ground to the
+    // structure's transverse channels: the one near 4 Hz among them.
+    assert!(
+        text.contains(
+            "inputs = [\"ch3\"]            # Middle Bent: Column at Grnd Level\noutputs = [\"ch4\", \"ch7\", \"ch9\"]"
+        ),
+        "{text}"
+    );
+    let fitted: Vec<f64> = modes["modes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["method"] == "pole_residue")
+        .map(|m| m["frequency_hz"].as_f64().unwrap())
+        .collect();
+    assert!(fitted.iter().any(|f| (3.0..=4.6).contains(f)), "{fitted:?}");
     let o = splinewatch(&[
         "identify",
         "--config",
