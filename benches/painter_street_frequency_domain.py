@@ -4,10 +4,10 @@ identifies each record (SRIM, and the frequency-domain fit the starter's
 `[oma.frequency_domain]` asks for), and this script sets each event's
 fitted transverse mode beside the figure a skeptic reads off the data: the
 frequency of the largest |H1| of ground channel 3 (the bent's base) to
-channel 7 (the top of the bent) between 2 and 6 Hz, computed here with
-scipy at the same Welch segments (8 s, half overlapping). It then fits the
-mode's frequency against the ground's peak acceleration (per decade of it:
-slope and r^2).
+channel 7 (the top of the bent) between 2 and 6 Hz, from
+`painter_street_h1_peaks.py` (scipy, the same Welch segments: 8 s, half
+overlapping). It then fits the mode's frequency against the ground's peak
+acceleration (channel 3's, per decade of it: slope and r^2).
 
 Usage (from the repository root, with scipy and quakeio installed):
     python benches/painter_street_frequency_domain.py RECORDS_DIR BINARY [--band LOW HIGH --modes N]
@@ -24,24 +24,9 @@ import time
 from pathlib import Path
 
 import numpy as np
-import quakeio
-from scipy import signal
 
-
-def h1_peak(path):
-    event = quakeio.read(str(path), exclusions=["*filter*"])
-    x = event.match("l", station_channel="3")
-    y = event.match("l", station_channel="7")
-    dt = x.accel["time_step"]
-    fs = 1 / dt
-    a, b = np.asarray(x.accel.data, float), np.asarray(y.accel.data, float)
-    n = min(len(a), len(b))
-    seg = int(round(8 * fs))
-    kw = dict(fs=fs, window="hann", nperseg=seg, noverlap=seg // 2, detrend="constant")
-    f, pxx = signal.welch(a[:n], **kw)
-    _, pxy = signal.csd(a[:n], b[:n], **kw)
-    around = (f >= 2.0) & (f <= 6.0)
-    return float(f[around][np.argmax(np.abs(pxy / pxx)[around])])
+sys.path.insert(0, str(Path(__file__).parent))
+from painter_street_h1_peaks import h1_peak  # noqa: E402
 
 
 def main():
@@ -72,18 +57,18 @@ def main():
         sys.exit(run.stderr)
     lines = [json.loads(l) for l in run.stdout.splitlines() if l.startswith("{")]
     rows = []
-    print(f"\n{'event':28s} {'PGA m/s2':>8s} {'H1 peak':>7s} {'fitted Hz':>15s} {'zeta %':>11s} {'gap %':>6s}  SRIM within 5 %")
+    print(f"\n{'event':28s} {'ch3 m/s2':>8s} {'H1 peak':>7s} {'fitted Hz':>15s} {'zeta %':>11s} {'gap %':>6s}  SRIM within 5 %")
     for line in lines:
         name = line["event"]
         fitted = [m for m in line.get("modes", []) if m.get("method") == "pole_residue"]
         mode = fitted[0] if fitted else None
         srim = [m for m in line.get("modes", []) if m.get("method") is None and mode is not None
                 and abs(m["frequency_hz"] - mode["frequency_hz"]) <= 0.05 * mode["frequency_hz"]]
-        peak = h1_peak(Path(args.records) / name)
+        peak, ground, _ = h1_peak(Path(args.records) / name)
         gap = None if mode is None else (mode["frequency_hz"] - peak) / peak
-        rows.append((name, line["pga_ground"], peak, mode, gap, len(srim)))
+        rows.append((name, ground / 100.0, peak, mode, gap, len(srim)))
         m = mode
-        print(f"{name[:28]:28s} {line['pga_ground']:8.3f} {peak:7.3f} "
+        print(f"{name[:28]:28s} {ground / 100.0:8.3f} {peak:7.3f} "
               + (f"{m['frequency_hz']:7.3f} ± {m['frequency_std_hz']:5.3f} {100*m['damping_ratio']:5.1f} ± {100*m['damping_std']:3.1f} {100*gap:+6.1f}"
                  if m else f"{'none':>15s} {'':11s} {'':6s}")
               + f"  {len(srim)}")

@@ -22,26 +22,35 @@ def channel(event, number):
     return None if found is None else (np.asarray(found.accel.data, float), found.accel["time_step"])
 
 
+def h1_peak(path):
+    """(peak of |H1| 3 -> 7 over 2-6 Hz in Hz, channel 3's peak in cm/s2, fs),
+    or None without channel 3 or 7."""
+    event = quakeio.read(str(path), exclusions=["*filter*"])
+    base, top = channel(event, 3), channel(event, 7)
+    if base is None or top is None:
+        return None
+    (x, dt), (y, _) = base, top
+    n = min(len(x), len(y))
+    fs = 1.0 / dt
+    segment = int(round(8.0 * fs))
+    f, pxx = signal.welch(x[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
+    _, pxy = signal.csd(x[:n], y[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
+    h1 = pxy / pxx
+    band = (f >= 2.0) & (f <= 6.0)
+    return float(f[band][np.argmax(np.abs(h1[band]))]), float(np.abs(x).max()), fs
+
+
 def main():
     directory = Path(sys.argv[1])
     rows = []
     for path in sorted(directory.glob("*.zip")):
-        event = quakeio.read(str(path), exclusions=["*filter*"])
-        base, top = channel(event, 3), channel(event, 7)
-        if base is None or top is None:
+        found = h1_peak(path)
+        if found is None:
             print(f"{path.name}: no channel 3 or 7", file=sys.stderr)
             continue
-        (x, dt), (y, dt7) = base, top
-        n = min(len(x), len(y))
-        fs = 1.0 / dt
-        segment = int(round(8.0 * fs))
-        f, pxx = signal.welch(x[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
-        _, pxy = signal.csd(x[:n], y[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
-        h1 = pxy / pxx
-        band = (f >= 2.0) & (f <= 6.0)
-        peak = float(f[band][np.argmax(np.abs(h1[band]))])
-        rows.append({"record": path.name, "fs": fs, "pga_ground_cm_s2": float(np.abs(x).max()), "h1_peak_hz": peak})
-        print(f"{path.name:52s} fs {fs:5.0f} Hz  ch3 peak {np.abs(x).max():7.2f} cm/s2  H1 3->7 peak {peak:.3f} Hz")
+        peak, ground, fs = found
+        rows.append({"record": path.name, "fs": fs, "pga_ground_cm_s2": ground, "h1_peak_hz": peak})
+        print(f"{path.name:52s} fs {fs:5.0f} Hz  ch3 peak {ground:7.2f} cm/s2  H1 3->7 peak {peak:.3f} Hz")
     if "--json" in sys.argv:
         Path(sys.argv[sys.argv.index("--json") + 1]).write_text(json.dumps(rows, indent=1) + "\n")
 

@@ -227,10 +227,6 @@ fn reported_standard_deviations_hold_on_simulated_records() {
     let mz = estimates.iter().map(|e| e.1).sum::<f64>() / n;
     let sf = (estimates.iter().map(|e| (e.0 - mf).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
     let sz = (estimates.iter().map(|e| (e.1 - mz).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-    eprintln!(
-        "f {mf} ± {sf} (reported {}), ζ {mz} ± {sz} (reported {})",
-        reported.0, reported.1
-    );
     assert!(
         (reported.0 / sf).ln().abs() < 1.6f64.ln(),
         "f: reported {} scatter {sf}",
