@@ -44,6 +44,8 @@ pub enum ElasticSupportError {
     NoNode { name: String },
     #[error("a support's name must not be empty")]
     EmptyName,
+    #[error("support {name:?} names beam node {node}, but the beams have {count} nodes")]
+    UnknownBeamNode { name: String, node: usize, count: usize },
 }
 
 /// One stiffness component: a translation along, or a rotation about, axis
@@ -188,15 +190,41 @@ impl ElasticSupport {
         &self.stiffness
     }
 
-    /// `∂K/∂k_c` per component at beam nodes, on global dofs (`dofs`):
-    /// `a aᵀ` on each node's translations or rotations.
-    ///
-    /// # Panics
-    /// For a support along an edge ([`Self::edge_matrices`]).
-    pub fn node_matrices(&self, dofs: &DofMap) -> Vec<LowRankBlock> {
-        let SupportSite::BeamNodes(nodes) = &self.site else {
-            panic!("support {:?} is along an edge", self.name);
-        };
+    /// `∂K/∂k_c` per component on global dofs: along an edge, integrated
+    /// on the patch `patch_of` gives (its shell and its first global dof);
+    /// at beam nodes, on `dofs`' beam nodes (one it does not have is
+    /// refused).
+    pub fn matrices<'s, E: From<ElasticSupportError>>(
+        &self,
+        dofs: &DofMap,
+        patch_of: impl FnOnce(usize) -> Result<(&'s Shell, usize), E>,
+    ) -> Result<Vec<LowRankBlock>, E> {
+        match &self.site {
+            SupportSite::Edge { patch, edge } => {
+                let (shell, offset) = patch_of(*patch)?;
+                Ok(self
+                    .edge_matrices(*edge, shell)
+                    .into_iter()
+                    .map(|b| b.shifted(offset))
+                    .collect())
+            }
+            SupportSite::BeamNodes(nodes) => {
+                let count = dofs.beam_node_count();
+                if let Some(&node) = nodes.iter().find(|&&n| n >= count) {
+                    return Err(ElasticSupportError::UnknownBeamNode {
+                        name: self.name.clone(),
+                        node,
+                        count,
+                    }
+                    .into());
+                }
+                Ok(self.node_matrices(nodes, dofs))
+            }
+        }
+    }
+
+    /// At beam `nodes`: `a aᵀ` on each node's translations or rotations.
+    fn node_matrices(&self, nodes: &[usize], dofs: &DofMap) -> Vec<LowRankBlock> {
         let global: Vec<usize> = nodes.iter().flat_map(|&n| dofs.node_dofs(dofs.beam_node(n))).collect();
         self.components
             .iter()
@@ -222,16 +250,10 @@ impl ElasticSupport {
             .collect()
     }
 
-    /// `∂K/∂k_c` per component along an edge, on the patch's own dofs: the
-    /// edge's control points (clamped knots: nothing else is non-zero on the
-    /// edge), Gauss with `p + 1` points per knot span of the edge.
-    ///
-    /// # Panics
-    /// For a support at beam nodes ([`Self::node_matrices`]).
-    pub fn edge_matrices(&self, shell: &Shell) -> Vec<LowRankBlock> {
-        let SupportSite::Edge { edge, .. } = self.site else {
-            panic!("support {:?} is at beam nodes", self.name);
-        };
+    /// Along `edge`, on the patch's own dofs: the edge's control points
+    /// (clamped knots: nothing else is non-zero on the edge), Gauss with
+    /// `p + 1` points per knot span of the edge.
+    fn edge_matrices(&self, edge: Edge, shell: &Shell) -> Vec<LowRankBlock> {
         let surface = shell.surface();
         let (kx, ke) = (surface.xi(), surface.eta());
         let (xs, es) = (kx.breakpoints(), ke.breakpoints());
@@ -331,7 +353,7 @@ mod tests {
         let shell = Shell::rectangular_plate(6.0, 3.0, 0.2, [3, 2], [6, 5]).unwrap();
         let all: Vec<(SupportComponent, f64)> = SupportComponent::ALL.iter().map(|&c| (c, 1.0)).collect();
         let support = ElasticSupport::along_edge("west", (0, Edge::Xi0), global(), all.clone()).unwrap();
-        let blocks = support.edge_matrices(&shell);
+        let blocks = support.edge_matrices(Edge::Xi0, &shell);
         let n = shell.dof_count();
         let unit = |d: usize| -> Vec<f64> { (0..n).map(|i| f64::from(i % 5 == d)).collect() };
         for (c, block) in blocks.iter().enumerate() {
@@ -346,7 +368,7 @@ mod tests {
         let c = std::f64::consts::FRAC_1_SQRT_2;
         let skewed = [[c, c, 0.0], [-c, c, 0.0], [0.0, 0.0, 1.0]];
         let support = ElasticSupport::along_edge("skewed", (0, Edge::Xi0), skewed, all).unwrap();
-        let blocks = support.edge_matrices(&shell);
+        let blocks = support.edge_matrices(Edge::Xi0, &shell);
         let e = energy(&blocks[0], &unit(0));
         assert!((e - 1.5 * 0.5).abs() < 1e-12, "{e}");
     }
@@ -360,7 +382,7 @@ mod tests {
         let dofs = DofMap::of_model(&[], 3, 0);
         let all: Vec<(SupportComponent, f64)> = SupportComponent::ALL.iter().map(|&c| (c, 1.0)).collect();
         let support = ElasticSupport::at_beam_nodes("footings", vec![0, 2], global(), all.clone()).unwrap();
-        let blocks = support.node_matrices(&dofs);
+        let blocks = support.node_matrices(&[0, 2], &dofs);
         let n = dofs.dof_count();
         // Dof d of beam nodes 0 and 2 (not 1) moved by 1.
         let unit = |d: usize| -> Vec<f64> { (0..n).map(|i| f64::from(i % 6 == d && i / 6 != 1)).collect() };
@@ -374,10 +396,24 @@ mod tests {
         let c = std::f64::consts::FRAC_1_SQRT_2;
         let skewed = [[c, c, 0.0], [-c, c, 0.0], [0.0, 0.0, 1.0]];
         let support = ElasticSupport::at_beam_nodes("skewed", vec![1], skewed, all).unwrap();
-        let blocks = support.node_matrices(&dofs);
+        let blocks = support.node_matrices(&[1], &dofs);
         let rotated: Vec<f64> = (0..n).map(|i| f64::from(i == 6 + 3)).collect();
         assert!((energy(&blocks[3], &rotated) - 0.25).abs() < 1e-12);
         assert!((energy(&blocks[0], &rotated)).abs() < 1e-12);
+        // Through `matrices`, the same blocks; a node the beams lack is refused by name.
+        let through = support
+            .matrices(&dofs, |_| Err(ElasticSupportError::EmptyName))
+            .unwrap();
+        assert_eq!(through, blocks);
+        let beyond =
+            ElasticSupport::at_beam_nodes("far", vec![5], global(), vec![(SupportComponent::ALL[0], 1.0)]).unwrap();
+        let e = beyond
+            .matrices(&dofs, |_| Err(ElasticSupportError::EmptyName))
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "support \"far\" names beam node 5, but the beams have 3 nodes"
+        );
         let none = ElasticSupport::at_beam_nodes(
             "nowhere",
             vec![],

@@ -11,7 +11,7 @@
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
-use crate::model::elastic_supports::{ElasticSupport, SupportSite};
+use crate::model::elastic_supports::{ElasticSupport, ElasticSupportError};
 use crate::model::patch::Patch;
 use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
@@ -33,8 +33,8 @@ pub enum ModelError {
     Patch { index: usize, source: ShellError },
     #[error("patch {patch} does not exist (the model has {count})")]
     UnknownPatch { patch: usize, count: usize },
-    #[error("a support names beam node {node}, but the beams have {count} nodes")]
-    UnknownBeamNode { node: usize, count: usize },
+    #[error("{0}")]
+    Support(#[from] ElasticSupportError),
     #[error("bearing {index}: {source}")]
     Bearing { index: usize, source: BearingError },
     #[error("point mass {index}: {source}")]
@@ -182,20 +182,9 @@ impl ShellModel {
             spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
         }
         for s in &self.elastic_supports {
-            match s.site() {
-                SupportSite::Edge { patch, .. } => {
-                    let (p, offset) = self.patch_at(*patch, dofs)?;
-                    let blocks = s.edge_matrices(&p.shell);
-                    spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
-                }
-                SupportSite::BeamNodes(nodes) => {
-                    let count = self.beams.node_count();
-                    if let Some(&node) = nodes.iter().find(|&&n| n >= count) {
-                        return Err(ModelError::UnknownBeamNode { node, count });
-                    }
-                    spring_blocks.push(s.node_matrices(dofs));
-                }
-            }
+            spring_blocks.push(s.matrices(dofs, |patch| {
+                self.patch_at(patch, dofs).map(|(p, offset)| (&p.shell, offset))
+            })?);
         }
         Ok(spring_blocks)
     }
