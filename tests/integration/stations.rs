@@ -229,6 +229,18 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
             "{line}"
         );
         assert_eq!(line["verdict"]["state"], "insufficient history", "{line}");
+        // The fitted transverse modes, as `identify` fitted them on the record.
+        let from_events: Vec<f64> = line["modes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|m| m["method"] == "pole_residue")
+            .map(|m| m["frequency_hz"].as_f64().unwrap())
+            .collect();
+        assert_eq!(from_events.len(), fitted.len(), "{line}");
+        for (a, b) in from_events.iter().zip(&fitted) {
+            assert!((a - b).abs() <= 1e-9 * b, "{from_events:?} vs identify's {fitted:?}");
+        }
     }
     let skipped = lines[0]["skipped"].as_str().unwrap_or_default();
     assert!(
