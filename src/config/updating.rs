@@ -256,8 +256,8 @@ impl Config {
         }
         // Line supports follow the bearings among κ.
         let first_support = springs + self.model.bearings.len();
-        for (s, support) in self.model.supports.iter().enumerate() {
-            out.extend(support.parameters(s, first_support + s)?);
+        for (s, count) in self.support_runs()? {
+            out.extend(self.model.supports[s].parameters(s, first_support + s, count)?);
         }
         for (field, f) in self.model.stiffness_fields.iter().enumerate().filter(|(_, f)| f.update) {
             out.extend(coefficient_parameters(
@@ -282,7 +282,7 @@ impl Config {
     }
 
     /// `<name>.eta` for every updated `loss_factor`, a run of tied bearings
-    /// sharing its leader's.
+    /// or supports sharing its leader's.
     fn loss_factor_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
         let m = &self.model;
         let names = self.spring_field_names();
@@ -290,11 +290,16 @@ impl Config {
         let mut out = Vec::new();
         let mut field = 0;
         while field < losses.len() {
-            // A bearing's run: the tied bearings after it.
+            // A bearing's or support's run: the tied ones after it.
             let mut count = 1;
             let bearing = field.checked_sub(m.springs.len()).filter(|&b| b < m.bearings.len());
+            let support = field.checked_sub(m.springs.len() + m.bearings.len());
             if let Some(b) = bearing {
                 while m.bearings.get(b + count).is_some_and(|next| next.tie.is_some()) {
+                    count += 1;
+                }
+            } else if let Some(s) = support {
+                while m.supports.get(s + count).is_some_and(|next| next.tie.is_some()) {
                     count += 1;
                 }
             }

@@ -406,8 +406,8 @@ impl Config {
     }
 
     /// Each spring field's, bearing's and line support's `loss_factor` (the
-    /// model's order of spring fields) with its key; a tied bearing takes
-    /// its leader's and may not give its own. A value must be finite and
+    /// model's order of spring fields) with its key; a tied bearing or
+    /// support takes its leader's and may not give its own. A value must be finite and
     /// non-negative, within its bounds when updated, and needs
     /// `[model.damping]` (the curve it adds to).
     pub fn loss_factors(&self) -> Result<Vec<(String, Option<LossFactorConfig>)>, ConfigError> {
@@ -434,12 +434,22 @@ impl Config {
                 all.push((key, b.loss_factor));
             }
         }
-        all.extend(
-            m.supports
-                .iter()
-                .enumerate()
-                .map(|(i, s)| (format!("model.supports[{i}].loss_factor"), s.loss_factor)),
-        );
+        let mut leader = None;
+        for (i, s) in m.supports.iter().enumerate() {
+            let key = format!("model.supports[{i}].loss_factor");
+            if let Some(name) = &s.tie {
+                if s.loss_factor.is_some() {
+                    return Err(err(
+                        key,
+                        format!("a tied support takes the loss factor of {name:?}: remove it"),
+                    ));
+                }
+                all.push((key, leader));
+            } else {
+                leader = s.loss_factor;
+                all.push((key, s.loss_factor));
+            }
+        }
         for (key, eta) in &all {
             let Some(eta) = eta else { continue };
             let value = eta.value();

@@ -305,6 +305,14 @@ pub struct SupportConfig {
     /// updated (parameter `<name>.eta`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loss_factor: Option<LossFactorConfig>,
+    /// Another support's name, just before this one in `[[model.supports]]`
+    /// (or before supports tied to it): this one takes its updating
+    /// parameters and its loss factor (one soil under both abutments). It
+    /// gives the same components with the same stiffness, updates the same
+    /// ones, on the same kind of site, and no `bounds` or `loss_factor` of
+    /// its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tie: Option<String>,
 }
 
 /// A line support's stiffness per component.
@@ -351,8 +359,9 @@ impl SupportConfig {
         }
     }
 
-    /// The updating parameters of support `index`, κ field `field`.
-    pub fn parameters(&self, index: usize, field: usize) -> Result<Vec<Parameter>, ConfigError> {
+    /// The updating parameters of support `index`, κ field `field`, with
+    /// the `count − 1` supports tied to it after it.
+    pub fn parameters(&self, index: usize, field: usize, count: usize) -> Result<Vec<Parameter>, ConfigError> {
         let key = |k: &str| format!("model.supports[{index}].{k}");
         let given = self.stiffness.given();
         if let BearingUpdate::Axes(list) = &self.update {
@@ -379,11 +388,78 @@ impl SupportConfig {
             .into_iter()
             .map(|(coefficient, c)| Parameter {
                 name: format!("{}.{}", self.name, c.name()),
-                kind: ParameterKind::Spring { field, coefficient },
+                kind: if count == 1 {
+                    ParameterKind::Spring { field, coefficient }
+                } else {
+                    ParameterKind::SpringRun {
+                        field,
+                        count,
+                        coefficient,
+                    }
+                },
                 lower,
                 upper,
             })
             .collect())
+    }
+
+    /// Why `self` (support `index`) cannot be tied to `leader`, if it cannot.
+    fn tie_mismatch(&self, leader: &SupportConfig) -> Option<String> {
+        let components = |s: &SupportConfig| -> Vec<(&'static str, f64, bool)> {
+            s.stiffness
+                .given()
+                .iter()
+                .map(|&(c, v)| (c.name(), v, s.updates(c)))
+                .collect()
+        };
+        if self.bounds.is_some() {
+            return Some(format!(
+                "a tied support takes the bounds of {:?}: remove its own",
+                leader.name
+            ));
+        }
+        if self.edge.is_some() != leader.edge.is_some() {
+            return Some(format!(
+                "a tied support stands on the same kind of site as {:?} (along an edge, or under beams)",
+                leader.name
+            ));
+        }
+        (components(self) != components(leader)).then(|| {
+            format!(
+                "a tied support gives the same components with the same stiffness as {:?}, and updates the same ones",
+                leader.name
+            )
+        })
+    }
+}
+
+impl Config {
+    /// Every support with the number of supports tied to it after it, plus
+    /// one (`tie`; a tied support is in its leader's run, not listed).
+    pub(crate) fn support_runs(&self) -> Result<Vec<(usize, usize)>, ConfigError> {
+        let supports = &self.model.supports;
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        for (s, support) in supports.iter().enumerate() {
+            let Some(leader) = &support.tie else {
+                runs.push((s, 1));
+                continue;
+            };
+            let key = format!("model.supports[{s}].tie");
+            let run = runs
+                .last_mut()
+                .filter(|(l, count)| supports[*l].name == *leader && l + *count == s)
+                .ok_or_else(|| {
+                    err(
+                        &key,
+                        format!("{leader:?} must be the support just before this one (or before supports tied to it)"),
+                    )
+                })?;
+            if let Some(why) = support.tie_mismatch(&supports[run.0]) {
+                return Err(err(&key, why));
+            }
+            run.1 += 1;
+        }
+        Ok(runs)
     }
 }
 

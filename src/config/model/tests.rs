@@ -423,3 +423,76 @@ fn loss_factors_enter_the_damping_and_the_parameters() {
         "{message}"
     );
 }
+
+/// Two abutments on one soil: `east_abutment` tied to `west_abutment` on
+/// Painter Street's whole bridge shares its updated components and its loss
+/// factor (one parameter each over the two supports' κ fields); each
+/// mismatch is refused naming the tied support's key.
+#[test]
+fn supports_tie_into_one_soil() {
+    let base = include_str!("../../../config/painter-street-bridge.toml");
+    let east = "name = \"east_abutment\"\nedge = { patch = \"bottom_slab.span2\", edge = \"xi1\" }\nsupport = \"east\"\nstiffness = { x = 1.556e+08, y = 3.113e+07, z = 3.891e+09, ry = 1.297e+10 }\nbounds = [1.0e5, 1.0e12]\nupdate = [\"y\", \"ry\"]\nloss_factor = { value = 0.3, bounds = [0.0, 1.5] }\n";
+    assert!(base.contains(east));
+    let tied_east = east
+        .replace("bounds = [1.0e5, 1.0e12]\n", "tie = \"west_abutment\"\n")
+        .replace("loss_factor = { value = 0.3, bounds = [0.0, 1.5] }\n", "");
+    let with = |entry: &str| {
+        let cfg = Config::from_toml(&base.replace(east, entry))?;
+        cfg.validate().map(|()| cfg)
+    };
+    let cfg = with(&tied_east).unwrap();
+    let parameters = cfg.build_parameters().unwrap();
+    let named = |name: &str| parameters.iter().find(|p| p.name == name).map(|p| p.kind);
+    let field = cfg.model.springs.len() + cfg.model.bearings.len();
+    assert_eq!(
+        named("west_abutment.y"),
+        Some(ParameterKind::SpringRun {
+            field,
+            count: 2,
+            coefficient: 1
+        })
+    );
+    assert_eq!(
+        named("west_abutment.ry"),
+        Some(ParameterKind::SpringRun {
+            field,
+            count: 2,
+            coefficient: 3
+        })
+    );
+    assert_eq!(
+        named("west_abutment.eta"),
+        Some(ParameterKind::LossFactor { field, count: 2 })
+    );
+    assert!(
+        parameters.iter().all(|p| !p.name.starts_with("east_abutment")),
+        "{parameters:?}"
+    );
+    let untied = Config::from_toml(base).unwrap().build_parameters().unwrap();
+    assert_eq!(parameters.len() + 3, untied.len());
+    for (entry, why) in [
+        (
+            tied_east.replace("tie = \"west_abutment\"", "tie = \"footings\""),
+            "must be the support just before",
+        ),
+        (
+            tied_east.replace("y = 3.113e+07", "y = 4.0e+07"),
+            "the same components with the same stiffness",
+        ),
+        (
+            tied_east.replace("update = [\"y\", \"ry\"]", "update = [\"y\"]"),
+            "updates the same ones",
+        ),
+        (
+            format!("{tied_east}bounds = [1.0, 2.0]\n"),
+            "takes the bounds of \"west_abutment\"",
+        ),
+        (
+            format!("{tied_east}loss_factor = 0.2\n"),
+            "takes the loss factor of \"west_abutment\"",
+        ),
+    ] {
+        let e = with(&entry).unwrap_err().to_string();
+        assert!(e.contains("model.supports[1]") && e.contains(why), "{entry}: {e}");
+    }
+}
