@@ -259,13 +259,27 @@ impl Config {
         for (s, count) in self.support_runs()? {
             out.extend(self.model.supports[s].parameters(s, first_support + s, count)?);
         }
-        for (field, f) in self.model.stiffness_fields.iter().enumerate().filter(|(_, f)| f.update) {
+        for (field, count) in self.stiffness_field_runs()? {
+            let f = &self.model.stiffness_fields[field];
+            if !f.update {
+                continue;
+            }
             out.extend(coefficient_parameters(
                 &format!("model.stiffness_fields[{field}].bounds"),
                 f.bounds,
                 &format!("{}.s", f.name),
                 f.coefficient_count(),
-                |coefficient| ParameterKind::Stiffness { field, coefficient },
+                |coefficient| {
+                    if count == 1 {
+                        ParameterKind::Stiffness { field, coefficient }
+                    } else {
+                        ParameterKind::StiffnessRun {
+                            field,
+                            count,
+                            coefficient,
+                        }
+                    }
+                },
             )?);
         }
         if let Some(d) = self.model.damping.as_ref().filter(|d| d.update) {
@@ -314,6 +328,34 @@ impl Config {
             field += count;
         }
         Ok(out)
+    }
+
+    /// Every stiffness field with the number of fields tied to it after it,
+    /// plus one (`tie`; a tied field is in its leader's run, not listed).
+    fn stiffness_field_runs(&self) -> Result<Vec<(usize, usize)>, ConfigError> {
+        let fields = &self.model.stiffness_fields;
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        for (i, field) in fields.iter().enumerate() {
+            let Some(leader) = &field.tie else {
+                runs.push((i, 1));
+                continue;
+            };
+            let key = format!("model.stiffness_fields[{i}].tie");
+            let run = runs
+                .last_mut()
+                .filter(|(l, count)| fields[*l].name == *leader && l + *count == i)
+                .ok_or_else(|| {
+                    err(
+                        &key,
+                        format!("{leader:?} must be the field just before this one (or before fields tied to it)"),
+                    )
+                })?;
+            if let Some(why) = field.tie_mismatch(&fields[run.0]) {
+                return Err(err(&key, why));
+            }
+            run.1 += 1;
+        }
+        Ok(runs)
     }
 
     /// The updated bearings that lead a run (`tie`), with the run's length

@@ -154,6 +154,7 @@ impl Environment {
                     coefficients: Some(vec![1.0]),
                     bounds: None,
                     update: false,
+                    tie: None,
                 }));
         }
         truth

@@ -381,8 +381,10 @@ impl Scenario {
                         k[field][coefficient] = setup.kappa[field][coefficient] * c.factor_at(t);
                     }
                 }
-                ParameterKind::Stiffness { field, coefficient } => {
-                    theta[field][coefficient] = base_theta[field][coefficient] * c.factor_at(t);
+                ParameterKind::Stiffness { .. } | ParameterKind::StiffnessRun { .. } => {
+                    for (field, coefficient) in p.kind.fields() {
+                        theta[field][coefficient] = base_theta[field][coefficient] * c.factor_at(t);
+                    }
                 }
                 ParameterKind::Damping { .. } | ParameterKind::LossFactor { .. } => {}
             }

@@ -346,9 +346,45 @@ pub struct StiffnessFieldConfig {
     pub bounds: Option<[f64; 2]>,
     #[serde(default = "default_true")]
     pub update: bool,
+    /// Another field's name, just before this one in
+    /// `[[model.stiffness_fields]]` (or before fields tied to it): this one
+    /// takes its updating parameters (one modulus over several patches).
+    /// Both are updated, with as many coefficients, the same start values
+    /// and `scales`; it gives no `bounds` of its own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tie: Option<String>,
 }
 
 impl StiffnessFieldConfig {
+    /// Why `self` cannot be tied to `leader`, if it cannot.
+    pub(crate) fn tie_mismatch(&self, leader: &StiffnessFieldConfig) -> Option<String> {
+        let start = |f: &StiffnessFieldConfig| {
+            f.coefficients
+                .clone()
+                .unwrap_or_else(|| vec![1.0; f.coefficient_count()])
+        };
+        if self.bounds.is_some() {
+            Some(format!(
+                "a tied field takes the bounds of {:?}: remove its own",
+                leader.name
+            ))
+        } else if !(self.update && leader.update) {
+            Some(format!(
+                "a tied field and {:?} are both updated (update = true)",
+                leader.name
+            ))
+        } else if self.coefficient_count() != leader.coefficient_count() || start(self) != start(leader) {
+            Some(format!(
+                "a tied field has as many coefficients as {:?}, with the same start values",
+                leader.name
+            ))
+        } else if self.scales != leader.scales {
+            Some(format!("a tied field scales what {:?} scales", leader.name))
+        } else {
+            None
+        }
+    }
+
     /// Coefficients the clamped knot vectors define (as
     /// `KnotVector::basis_count`; the vectors are validated by `build_model`),
     /// or the count of `coefficients` when given.

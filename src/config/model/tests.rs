@@ -496,3 +496,65 @@ fn supports_tie_into_one_soil() {
         assert!(e.contains("model.supports[1]") && e.contains(why), "{entry}: {e}");
     }
 }
+
+/// One modulus over both spans: a constant field on each patch of the deck
+/// on a bent, the second tied to the first, is one parameter
+/// (`StiffnessRun` over both fields); a tied field that is not just after
+/// its leader, has other start values or its own bounds is refused by its
+/// key.
+#[test]
+fn stiffness_fields_tie_into_one_modulus() {
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let field = |name: &str, patch: &str, extra: &str| {
+        format!(
+            "\n[[model.stiffness_fields]]\nname = \"{name}\"\npatch = \"{patch}\"\nknots_xi = [0.0, 1.0]\ndegree_xi = 0\nknots_eta = [0.0, 1.0]\ndegree_eta = 0\n{extra}"
+        )
+    };
+    let with = |fields: String| {
+        let cfg = Config::from_toml(&format!("{base}{fields}"))?;
+        cfg.validate().map(|()| cfg)
+    };
+    let tied = field("modulus", "span1", "bounds = [0.5, 1.5]\n") + &field("modulus2", "span2", "tie = \"modulus\"\n");
+    let cfg = with(tied.clone()).unwrap();
+    let fields: Vec<_> = cfg
+        .build_parameters()
+        .unwrap()
+        .into_iter()
+        .filter(|p| p.name.starts_with("modulus"))
+        .collect();
+    assert_eq!(fields.len(), 1, "{fields:?}");
+    assert_eq!(fields[0].name, "modulus.s1");
+    assert_eq!(
+        fields[0].kind,
+        ParameterKind::StiffnessRun {
+            field: 0,
+            count: 2,
+            coefficient: 0
+        }
+    );
+    assert_eq!(cfg.build_model().unwrap().stiffness_fields.len(), 2);
+    for (fields, why) in [
+        (
+            field("modulus2", "span2", "tie = \"modulus\"\n") + &field("modulus", "span1", "bounds = [0.5, 1.5]\n"),
+            "must be the field just before",
+        ),
+        (
+            tied.replace("tie = \"modulus\"\n", "tie = \"modulus\"\ncoefficients = [0.9]\n"),
+            "the same start values",
+        ),
+        (
+            tied.replace("tie = \"modulus\"\n", "tie = \"modulus\"\nbounds = [0.1, 2.0]\n"),
+            "takes the bounds of \"modulus\"",
+        ),
+        (
+            tied.replace("tie = \"modulus\"\n", "tie = \"modulus\"\nupdate = false\n"),
+            "both updated",
+        ),
+    ] {
+        let e = with(fields.clone()).unwrap_err().to_string();
+        assert!(
+            e.contains("model.stiffness_fields[") && e.contains(".tie") && e.contains(why),
+            "{fields}: {e}"
+        );
+    }
+}

@@ -439,7 +439,11 @@ pub(super) fn parameter_column(
                 .into_iter()
                 .map(|(f, c)| dkappa[model.flat_spring_index(f, c)].as_slice()),
         ),
-        ParameterKind::Stiffness { field, coefficient } => dtheta[model.flat_field_index(field, coefficient)].clone(),
+        ParameterKind::Stiffness { .. } | ParameterKind::StiffnessRun { .. } => summed(
+            kind.fields()
+                .into_iter()
+                .map(|(f, c)| dtheta[model.flat_field_index(f, c)].as_slice()),
+        ),
         ParameterKind::Damping { coefficient } => dgamma[coefficient].clone(),
         ParameterKind::LossFactor { field, count } => {
             let first = model.loss_factor_index(dgamma.len(), field);

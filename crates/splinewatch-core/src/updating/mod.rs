@@ -86,6 +86,14 @@ pub enum ParameterKind {
     /// Coefficient θ `coefficient` of stiffness field `field` of the deck
     /// ([`crate::model::stiffness_field`]).
     Stiffness { field: usize, coefficient: usize },
+    /// Coefficient θ `coefficient` of the `count` consecutive stiffness
+    /// fields from `field`, all set to the parameter's value (one modulus
+    /// over several patches): `∂h/∂p = Σ ∂h/∂θ` over them.
+    StiffnessRun {
+        field: usize,
+        count: usize,
+        coefficient: usize,
+    },
     /// Damping coefficient γ_z.
     Damping { coefficient: usize },
     /// The loss factor η of the `count` consecutive spring fields from
@@ -107,9 +115,7 @@ pub struct Parameter {
 /// Whether any of `parameters` is a stiffness-field coefficient (whose
 /// derivatives are dense over the deck, formed only then).
 pub(crate) fn updates_fields(parameters: &[Parameter]) -> bool {
-    parameters
-        .iter()
-        .any(|p| matches!(p.kind, ParameterKind::Stiffness { .. }))
+    parameters.iter().any(|p| !p.kind.fields().is_empty())
 }
 
 /// The spring coefficients (flat indices, each once) `parameters` move,
@@ -177,8 +183,9 @@ pub(crate) fn check_parameters(
                     return bad("a stiffness lower bound must be non-negative".into());
                 }
             }
-            ParameterKind::Stiffness { field, coefficient } => {
-                if theta.get(field).is_none_or(|t| coefficient >= t.len()) {
+            ParameterKind::Stiffness { .. } | ParameterKind::StiffnessRun { .. } => {
+                let fields = p.kind.fields();
+                if fields.is_empty() || fields.iter().any(|&(f, c)| theta.get(f).is_none_or(|t| c >= t.len())) {
                     return bad("refers to a stiffness-field coefficient that does not exist".into());
                 }
                 if p.lower <= 0.0 {
@@ -217,7 +224,23 @@ impl ParameterKind {
                 count,
                 coefficient,
             } => (field..field + count).map(|f| (f, coefficient)).collect(),
-            Self::Stiffness { .. } | Self::Damping { .. } | Self::LossFactor { .. } => Vec::new(),
+            Self::Stiffness { .. } | Self::StiffnessRun { .. } | Self::Damping { .. } | Self::LossFactor { .. } => {
+                Vec::new()
+            }
+        }
+    }
+
+    /// The stiffness-field coefficients `(field, coefficient)` the
+    /// parameter sets (none for a spring or damping parameter).
+    pub fn fields(self) -> Vec<(usize, usize)> {
+        match self {
+            Self::Stiffness { field, coefficient } => vec![(field, coefficient)],
+            Self::StiffnessRun {
+                field,
+                count,
+                coefficient,
+            } => (field..field + count).map(|f| (f, coefficient)).collect(),
+            Self::Spring { .. } | Self::SpringRun { .. } | Self::Damping { .. } | Self::LossFactor { .. } => Vec::new(),
         }
     }
 }
@@ -248,7 +271,7 @@ pub fn model_at(
             }
             ParameterKind::Damping { coefficient } => gamma[coefficient] = v,
             ParameterKind::LossFactor { field, count } => eta[field..field + count].fill(v),
-            ParameterKind::Stiffness { .. } => {}
+            ParameterKind::Stiffness { .. } | ParameterKind::StiffnessRun { .. } => {}
         }
     }
     Ok((kappa, damping.with_coefficients(gamma)?.with_loss_factors(eta)?))
@@ -259,7 +282,7 @@ pub fn model_at(
 pub fn fields_at(parameters: &[Parameter], theta: &[Vec<f64>], p: &[f64]) -> Vec<Vec<f64>> {
     let mut theta = theta.to_vec();
     for (par, &v) in parameters.iter().zip(p) {
-        if let ParameterKind::Stiffness { field, coefficient } = par.kind {
+        for (field, coefficient) in par.kind.fields() {
             theta[field][coefficient] = v;
         }
     }
@@ -297,7 +320,8 @@ pub fn base_values(
             ParameterKind::Spring { field, coefficient } | ParameterKind::SpringRun { field, coefficient, .. } => {
                 kappa[field][coefficient]
             }
-            ParameterKind::Stiffness { field, coefficient } => theta[field][coefficient],
+            ParameterKind::Stiffness { field, coefficient }
+            | ParameterKind::StiffnessRun { field, coefficient, .. } => theta[field][coefficient],
             ParameterKind::Damping { coefficient } => damping.coefficients()[coefficient],
             ParameterKind::LossFactor { field, .. } => damping.loss_factors()[field],
         })

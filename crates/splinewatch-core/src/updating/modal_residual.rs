@@ -197,8 +197,9 @@ pub fn modal_residue(
             match stiffness_columns(model, par.kind) {
                 // A tied parameter's rows add up its springs' (the rows are linear in them).
                 StiffnessColumns::Springs(columns) => columns.into_iter().for_each(|j| stiffness_rows(sens, j)),
-                StiffnessColumns::Field(j) => {
-                    stiffness_rows(field_sens.as_ref().expect("computed when a field is updated"), j);
+                StiffnessColumns::Fields(columns) => {
+                    let field_sens = field_sens.as_ref().expect("computed when a field is updated");
+                    columns.into_iter().for_each(|j| stiffness_rows(field_sens, j));
                 }
                 StiffnessColumns::LossFactor(field, count) => {
                     let first = model.loss_factor_index(gradient.len(), field);
@@ -223,7 +224,7 @@ pub fn modal_residue(
 /// coefficient moves no mode.
 enum StiffnessColumns {
     Springs(Vec<usize>),
-    Field(usize),
+    Fields(Vec<usize>),
     Damping(usize),
     /// The first spring field and how many share the loss factor.
     LossFactor(usize, usize),
@@ -237,9 +238,12 @@ fn stiffness_columns(model: &FrfModel, kind: ParameterKind) -> StiffnessColumns 
                 .map(|(field, coefficient)| model.flat_spring_index(field, coefficient))
                 .collect(),
         ),
-        ParameterKind::Stiffness { field, coefficient } => {
-            StiffnessColumns::Field(model.flat_field_index(field, coefficient))
-        }
+        ParameterKind::Stiffness { .. } | ParameterKind::StiffnessRun { .. } => StiffnessColumns::Fields(
+            kind.fields()
+                .into_iter()
+                .map(|(field, coefficient)| model.flat_field_index(field, coefficient))
+                .collect(),
+        ),
         ParameterKind::Damping { coefficient } => StiffnessColumns::Damping(coefficient),
         // The loss factors follow the curve's coefficients in ζ's gradient.
         ParameterKind::LossFactor { field, count } => StiffnessColumns::LossFactor(field, count),
@@ -259,8 +263,9 @@ pub fn frequency_gradient(model: &FrfModel, state: &ModalState, mode: usize, par
             StiffnessColumns::Springs(columns) => {
                 columns.iter().map(|&j| springs.eigenvalue[(0, j)]).sum::<f64>() * scale
             }
-            StiffnessColumns::Field(j) => {
-                fields.as_ref().expect("computed when a field is updated").eigenvalue[(0, j)] * scale
+            StiffnessColumns::Fields(columns) => {
+                let fields = fields.as_ref().expect("computed when a field is updated");
+                columns.iter().map(|&j| fields.eigenvalue[(0, j)]).sum::<f64>() * scale
             }
             StiffnessColumns::Damping(_) | StiffnessColumns::LossFactor(..) => 0.0,
         })

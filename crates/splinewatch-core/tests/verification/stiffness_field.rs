@@ -329,3 +329,62 @@ fn section_scales_identifiability_on_the_deck() {
     }
     assert!(cosine < 0.9, "bending and shear scales indistinguishable: cos {cosine}");
 }
+
+/// One modulus over two fields (`ParameterKind::StiffnessRun`: two 2 × 1
+/// fields, coefficient 1 of both set to the parameter): the frequency
+/// gradient of every bending mode below 80 Hz is the sum of the two fields'
+/// own and matches central differences of the frequency with both
+/// coefficients moved together (step 1e-4; 1e-6 relative to the largest).
+#[test]
+fn a_run_of_tied_fields_moves_them_together() {
+    use splinewatch_core::updating::modal_residual::frequency_gradient;
+    let model = FrfModel::new(
+        with_fields(vec![field([0, 0], [2, 1]), field([0, 0], [2, 1])])
+            .assemble()
+            .unwrap(),
+        &sinello_sensors(),
+    )
+    .unwrap();
+    let damping = DampingCurve::new(2, vec![0.01; 7], 0.0, 80.0).unwrap();
+    let kappa = true_kappa();
+    let theta = vec![vec![1.0, 0.9], vec![1.1, 0.9]];
+    let state = model.modal_state_with_fields(&kappa, &theta, &damping).unwrap();
+    let parameter = |kind| Parameter {
+        name: "deck.s2".into(),
+        kind,
+        lower: 0.3,
+        upper: 1.5,
+    };
+    let run = [parameter(ParameterKind::StiffnessRun {
+        field: 0,
+        count: 2,
+        coefficient: 1,
+    })];
+    let single = |field| [parameter(ParameterKind::Stiffness { field, coefficient: 1 })];
+    let h = 1e-4;
+    let at = |sign: f64| {
+        let mut t = theta.clone();
+        t[0][1] += sign * h;
+        t[1][1] += sign * h;
+        model.modal_state_with_fields(&kappa, &t, &damping).unwrap()
+    };
+    let (plus, minus) = (at(1.0), at(-1.0));
+    let modes = bending_modes_below_80_hz(&state);
+    assert!(modes.len() >= 15, "{} bending modes", modes.len());
+    let gradients: Vec<(f64, f64, f64)> = modes
+        .iter()
+        .map(|&m| {
+            let tied = frequency_gradient(&model, &state, m, &run)[0];
+            let sum = frequency_gradient(&model, &state, m, &single(0))[0]
+                + frequency_gradient(&model, &state, m, &single(1))[0];
+            let fd = (plus.modes.frequency_hz(m) - minus.modes.frequency_hz(m)) / (2.0 * h);
+            (tied, sum, fd)
+        })
+        .collect();
+    let largest = gradients.iter().map(|g| g.2.abs()).fold(0.0, f64::max);
+    assert!(largest > 0.0);
+    for (m, (tied, sum, fd)) in modes.iter().zip(&gradients) {
+        assert!((tied - sum).abs() <= 1e-12 * largest, "mode {m}: {tied} vs {sum}");
+        assert!((tied - fd).abs() <= 1e-6 * largest, "mode {m}: {tied} vs {fd}");
+    }
+}
