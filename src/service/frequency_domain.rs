@@ -67,6 +67,15 @@ pub fn fitted_modes(
     let overlap = welch.overlap.min(segment / 2);
     let est = transmissibility::estimate(&input_views, &output_views, fs, segment, overlap)
         .map_err(|e| anyhow!("oma.frequency_domain: the transmissibilities: {e}"))?;
+    if est.averages < est.combined.len() + 2 {
+        bail!(
+            "oma.frequency_domain: the record gives {} Welch average(s) of {:.1} s for {} input(s): too few for the \
+             coherence to weigh the lines (a longer record, or a shorter [frf] segment_seconds)",
+            est.averages,
+            segment as f64 / fs,
+            est.combined.len()
+        );
+    }
     let lines: Vec<usize> = (0..est.frequencies_hz.len())
         .filter(|&k| (low..=high).contains(&est.frequencies_hz[k]))
         .collect();

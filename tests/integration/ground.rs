@@ -11,6 +11,8 @@ const CONFIG: &str = "config/painter-street.toml";
 
 const EVENT_2015: &str = "ferndale_28jan2015_72387946_ce89324p.zip";
 
+const EVENT_2012: &str = "RioDell_14Sep2012_71842255_ce89324p.zip";
+
 fn predict_json(args: &[&str]) -> serde_json::Value {
     let mut all = vec!["predict", "--config", CONFIG, "--json"];
     all.extend_from_slice(args);
@@ -512,8 +514,9 @@ fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator()
 /// stds within 1e-3 relative (two formulas: splinewatch's projected
 /// Jacobian, scipy's whole one). SRIM finds no mode on these channels: said,
 /// and the fit's mode is the record's, marked `pole_residue` in the modes
-/// file and "fit" in the table. A band above half the rate, with SRIM
-/// finding nothing either, is refused naming the key once.
+/// file and "fit" in the table. A band above half the rate, or a segment
+/// that leaves one Welch average, with SRIM finding nothing either, is
+/// refused naming the key once.
 #[test]
 fn identify_fits_the_transverse_mode_as_scipy_does() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -575,4 +578,16 @@ fn identify_fits_the_transverse_mode_as_scipy_does() {
     assert!(!o.status.success() && o.stdout.is_empty(), "{stderr}");
     assert_eq!(stderr.matches("oma.frequency_domain.band").count(), 1, "{stderr}");
     assert!(stderr.contains("above half the record's rate (100 Hz)"), "{stderr}");
+    // One Welch average (40 s segments of a 60 s record): the coherence
+    // cannot weigh the lines; said once, naming the key.
+    let long = dir.join("long.toml");
+    std::fs::write(&long, format!("{text}\n[frf]\nsegment_seconds = 40.0\n")).unwrap();
+    let o = splinewatch(&["identify", "--config", long.to_str().unwrap(), &record(EVENT_2012)]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert_eq!(stderr.matches("Welch average(s)").count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("oma.frequency_domain: the record gives 1 Welch average(s) of 40.0 s"),
+        "{stderr}"
+    );
 }
