@@ -88,6 +88,13 @@ pub fn fitted_modes(
     };
     let fit = pole_residue::fit(functions, plan.modes)
         .with_context(|| format!("oma.frequency_domain: the fit over {low}–{high} Hz"))?;
+    tracing::debug!(
+        iterations = fit.iterations,
+        residual_scale = fit.residual_scale,
+        lines = frequencies.len(),
+        functions = h.len(),
+        "frequency-domain fit"
+    );
     let names = |list: &[usize]| -> Vec<String> { list.iter().map(|&i| cfg.sensors[i].name.clone()).collect() };
     let output_names = names(&outs.iter().map(|&k| outputs[k].0).collect::<Vec<_>>());
     let mut fitted = FittedModes::default();
