@@ -67,20 +67,11 @@ pub fn fitted_modes(
     let overlap = welch.overlap.min(segment / 2);
     let est = transmissibility::estimate(&input_views, &output_views, fs, segment, overlap)
         .map_err(|e| anyhow!("oma.frequency_domain: the transmissibilities: {e}"))?;
-    if est.averages < est.combined.len() + 2 {
-        bail!(
-            "oma.frequency_domain: the record gives {} Welch average(s) of {:.1} s for {} input(s): too few for the \
-             coherence to weigh the lines (a longer record, or a shorter [frf] segment_seconds)",
-            est.averages,
-            segment as f64 / fs,
-            est.combined.len()
-        );
-    }
     let lines: Vec<usize> = (0..est.frequencies_hz.len())
         .filter(|&k| (low..=high).contains(&est.frequencies_hz[k]))
         .collect();
     let frequencies: Vec<f64> = lines.iter().map(|&k| est.frequencies_hz[k]).collect();
-    let (h, sigma) = weighted_functions(&est, &lines);
+    let (h, sigma) = weighted_functions(&est, &lines, segment as f64 / fs)?;
     let functions = Functions {
         frequencies_hz: &frequencies,
         h: &h,
@@ -90,9 +81,7 @@ pub fn fitted_modes(
         .with_context(|| format!("oma.frequency_domain: the fit over {low}–{high} Hz"))?;
     tracing::debug!(
         iterations = fit.iterations,
-        residual_scale = fit.residual_scale,
-        lines = frequencies.len(),
-        functions = h.len(),
+        scale = fit.residual_scale,
         "frequency-domain fit"
     );
     let names = |list: &[usize]| -> Vec<String> { list.iter().map(|&i| cfg.sensors[i].name.clone()).collect() };
@@ -123,8 +112,23 @@ pub fn fitted_modes(
 
 /// Every output's H1 per (combined) input at `lines`, output-major, and
 /// each line's standard deviation from the multiple coherence (floored at
-/// 1e-9 of the function's largest value: a line never weighs infinitely).
-fn weighted_functions(est: &transmissibility::Transmissibility, lines: &[usize]) -> (Vec<Vec<c64>>, Vec<Vec<f64>>) {
+/// 1e-9 of the function's largest value: a line never weighs infinitely);
+/// refused when the segments (`segment_seconds` long) give too few
+/// averages for the coherence to say anything.
+fn weighted_functions(
+    est: &transmissibility::Transmissibility,
+    lines: &[usize],
+    segment_seconds: f64,
+) -> Result<(Vec<Vec<c64>>, Vec<Vec<f64>>)> {
+    if est.averages < est.combined.len() + 2 {
+        bail!(
+            "oma.frequency_domain: the record gives {} Welch average(s) of {:.1} s for {} input(s): too few for the \
+             coherence to weigh the lines (a longer record, or a shorter [frf] segment_seconds)",
+            est.averages,
+            segment_seconds,
+            est.combined.len()
+        );
+    }
     let averages = est.averages.saturating_sub(est.combined.len()).max(1) as f64;
     let mut h = Vec::new();
     let mut sigma = Vec::new();
@@ -144,7 +148,7 @@ fn weighted_functions(est: &transmissibility::Transmissibility, lines: &[usize])
             h.push(values);
         }
     }
-    (h, sigma)
+    Ok((h, sigma))
 }
 
 /// A fitted mode as a modes-file entry: its shape the residues at every
