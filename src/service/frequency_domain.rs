@@ -71,7 +71,7 @@ pub fn fitted_modes(
         .filter(|&k| (low..=high).contains(&est.frequencies_hz[k]))
         .collect();
     let frequencies: Vec<f64> = lines.iter().map(|&k| est.frequencies_hz[k]).collect();
-    let (h, sigma) = weighted_functions(&est, &lines, segment as f64 / fs)?;
+    let Weighted { h, sigma } = weighted_functions(&est, &lines, segment as f64 / fs)?;
     let functions = Functions {
         frequencies_hz: &frequencies,
         h: &h,
@@ -119,7 +119,7 @@ fn weighted_functions(
     est: &transmissibility::Transmissibility,
     lines: &[usize],
     segment_seconds: f64,
-) -> Result<(Vec<Vec<c64>>, Vec<Vec<f64>>)> {
+) -> Result<Weighted> {
     if est.averages < est.combined.len() + 2 {
         bail!(
             "oma.frequency_domain: the record gives {} Welch average(s) of {:.1} s for {} input(s): too few for the \
@@ -148,7 +148,13 @@ fn weighted_functions(
             h.push(values);
         }
     }
-    Ok((h, sigma))
+    Ok(Weighted { h, sigma })
+}
+
+/// The functions fitted and each line's standard deviation.
+struct Weighted {
+    h: Vec<Vec<c64>>,
+    sigma: Vec<Vec<f64>>,
 }
 
 /// A fitted mode as a modes-file entry: its shape the residues at every
