@@ -21,6 +21,7 @@ mod patches;
 mod schedule;
 mod schema;
 mod setup;
+mod tie;
 #[cfg(feature = "daemon")]
 mod tls;
 mod updating;

@@ -500,6 +500,16 @@ pub fn locate(
     })
 }
 
+impl super::tie::Tied for BearingConfig {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn tie(&self) -> Option<&str> {
+        self.tie.as_deref()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::config::Config;

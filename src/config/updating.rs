@@ -333,29 +333,12 @@ impl Config {
     /// Every stiffness field with the number of fields tied to it after it,
     /// plus one (`tie`; a tied field is in its leader's run, not listed).
     fn stiffness_field_runs(&self) -> Result<Vec<(usize, usize)>, ConfigError> {
-        let fields = &self.model.stiffness_fields;
-        let mut runs: Vec<(usize, usize)> = Vec::new();
-        for (i, field) in fields.iter().enumerate() {
-            let Some(leader) = &field.tie else {
-                runs.push((i, 1));
-                continue;
-            };
-            let key = format!("model.stiffness_fields[{i}].tie");
-            let run = runs
-                .last_mut()
-                .filter(|(l, count)| fields[*l].name == *leader && l + *count == i)
-                .ok_or_else(|| {
-                    err(
-                        &key,
-                        format!("{leader:?} must be the field just before this one (or before fields tied to it)"),
-                    )
-                })?;
-            if let Some(why) = field.tie_mismatch(&fields[run.0]) {
-                return Err(err(&key, why));
-            }
-            run.1 += 1;
-        }
-        Ok(runs)
+        super::tie::tied_runs(
+            &self.model.stiffness_fields,
+            "model.stiffness_fields",
+            "field",
+            super::model::StiffnessFieldConfig::tie_mismatch,
+        )
     }
 
     /// The updated bearings that lead a run (`tie`), with the run's length

@@ -2,6 +2,7 @@
 //! shell, material, springs, stiffness fields, bearings and masses, damping.
 
 use super::*;
+use crate::config::tie::tied_loss_factors;
 
 impl Config {
     /// The cut-off when the model is truncated (`[model.solver]`), `None`
@@ -418,38 +419,12 @@ impl Config {
             .enumerate()
             .map(|(i, s)| (format!("model.springs[{i}].loss_factor"), s.loss_factor))
             .collect();
-        let mut leader = None;
-        for (i, b) in m.bearings.iter().enumerate() {
-            let key = format!("model.bearings[{i}].loss_factor");
-            if let Some(name) = &b.tie {
-                if b.loss_factor.is_some() {
-                    return Err(err(
-                        key,
-                        format!("a tied bearing takes the loss factor of {name:?}: remove it"),
-                    ));
-                }
-                all.push((key, leader));
-            } else {
-                leader = b.loss_factor;
-                all.push((key, b.loss_factor));
-            }
-        }
-        let mut leader = None;
-        for (i, s) in m.supports.iter().enumerate() {
-            let key = format!("model.supports[{i}].loss_factor");
-            if let Some(name) = &s.tie {
-                if s.loss_factor.is_some() {
-                    return Err(err(
-                        key,
-                        format!("a tied support takes the loss factor of {name:?}: remove it"),
-                    ));
-                }
-                all.push((key, leader));
-            } else {
-                leader = s.loss_factor;
-                all.push((key, s.loss_factor));
-            }
-        }
+        all.extend(tied_loss_factors(&m.bearings, "model.bearings", "bearing", |b| {
+            b.loss_factor
+        })?);
+        all.extend(tied_loss_factors(&m.supports, "model.supports", "support", |s| {
+            s.loss_factor
+        })?);
         for (key, eta) in &all {
             let Some(eta) = eta else { continue };
             let value = eta.value();

@@ -355,6 +355,16 @@ pub struct StiffnessFieldConfig {
     pub tie: Option<String>,
 }
 
+impl crate::config::tie::Tied for StiffnessFieldConfig {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn tie(&self) -> Option<&str> {
+        self.tie.as_deref()
+    }
+}
+
 impl StiffnessFieldConfig {
     /// Why `self` cannot be tied to `leader`, if it cannot.
     pub(crate) fn tie_mismatch(&self, leader: &StiffnessFieldConfig) -> Option<String> {

@@ -437,29 +437,22 @@ impl Config {
     /// Every support with the number of supports tied to it after it, plus
     /// one (`tie`; a tied support is in its leader's run, not listed).
     pub(crate) fn support_runs(&self) -> Result<Vec<(usize, usize)>, ConfigError> {
-        let supports = &self.model.supports;
-        let mut runs: Vec<(usize, usize)> = Vec::new();
-        for (s, support) in supports.iter().enumerate() {
-            let Some(leader) = &support.tie else {
-                runs.push((s, 1));
-                continue;
-            };
-            let key = format!("model.supports[{s}].tie");
-            let run = runs
-                .last_mut()
-                .filter(|(l, count)| supports[*l].name == *leader && l + *count == s)
-                .ok_or_else(|| {
-                    err(
-                        &key,
-                        format!("{leader:?} must be the support just before this one (or before supports tied to it)"),
-                    )
-                })?;
-            if let Some(why) = support.tie_mismatch(&supports[run.0]) {
-                return Err(err(&key, why));
-            }
-            run.1 += 1;
-        }
-        Ok(runs)
+        crate::config::tie::tied_runs(
+            &self.model.supports,
+            "model.supports",
+            "support",
+            SupportConfig::tie_mismatch,
+        )
+    }
+}
+
+impl crate::config::tie::Tied for SupportConfig {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn tie(&self) -> Option<&str> {
+        self.tie.as_deref()
     }
 }
 
