@@ -94,6 +94,17 @@ fn recorders_whose_clock_is_flagged_are_placed_by_their_ground_channels() {
     }
 }
 
+/// The frequencies of the modes fitted in the frequency domain among `modes`.
+fn fitted_frequencies(modes: &serde_json::Value) -> Vec<f64> {
+    modes
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|m| m["method"] == "pole_residue")
+        .map(|m| m["frequency_hz"].as_f64().unwrap())
+        .collect()
+}
+
 /// `station` writes a starter config from a station's records: Painter
 /// Street's 2012 and 2015 records and its 1980 one (another layout, other
 /// descriptions of the same channel numbers). Every channel by station
@@ -178,13 +189,7 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         ),
         "{text}"
     );
-    let fitted: Vec<f64> = modes["modes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|m| m["method"] == "pole_residue")
-        .map(|m| m["frequency_hz"].as_f64().unwrap())
-        .collect();
+    let fitted = fitted_frequencies(&modes["modes"]);
     assert!(fitted.iter().any(|f| (3.0..=4.6).contains(f)), "{fitted:?}");
     let o = splinewatch(&[
         "identify",
@@ -230,13 +235,7 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         );
         assert_eq!(line["verdict"]["state"], "insufficient history", "{line}");
         // The fitted transverse modes, as `identify` fitted them on the record.
-        let from_events: Vec<f64> = line["modes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .filter(|m| m["method"] == "pole_residue")
-            .map(|m| m["frequency_hz"].as_f64().unwrap())
-            .collect();
+        let from_events = fitted_frequencies(&line["modes"]);
         assert_eq!(from_events.len(), fitted.len(), "{line}");
         for (a, b) in from_events.iter().zip(&fitted) {
             assert!((a - b).abs() <= 1e-9 * b, "{from_events:?} vs identify's {fitted:?}");

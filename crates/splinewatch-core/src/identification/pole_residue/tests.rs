@@ -7,6 +7,24 @@ fn pole(f: f64, zeta: f64) -> c64 {
     c64::new(-zeta * w, w * (1.0 - zeta * zeta).sqrt())
 }
 
+/// The one mode fitted to `h` (standard deviations `sigma`).
+fn one_mode(frequencies: &[f64], h: &[Vec<c64>], sigma: &[Vec<f64>]) -> FittedMode {
+    let functions = Functions {
+        frequencies_hz: frequencies,
+        h,
+        sigma,
+    };
+    fit(functions, 1).unwrap().modes.remove(0)
+}
+
+/// The mean and the sample standard deviation of `values`.
+fn mean_and_scatter(values: impl Iterator<Item = f64> + Clone) -> (f64, f64) {
+    let n = values.clone().count() as f64;
+    let mean = values.clone().sum::<f64>() / n;
+    let scatter = (values.map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    (mean, scatter)
+}
+
 /// `Σ_m A/(s−λ) + Ā/(s−λ̄) + c` at `frequencies`.
 fn exact(frequencies: &[f64], modes: &[(f64, f64)], residues: &[c64], constant: c64) -> Vec<c64> {
     frequencies
@@ -117,27 +135,13 @@ fn reported_standard_deviations_match_the_scatter_over_noise_draws() {
                     .collect()
             })
             .collect();
-        let fitted = fit(
-            Functions {
-                frequencies_hz: &frequencies,
-                h: &h,
-                sigma: &sigma,
-            },
-            1,
-        )
-        .unwrap();
-        let m = &fitted.modes[0];
+        let m = &one_mode(&frequencies, &h, &sigma);
         estimates.push((m.frequency_hz, m.damping_ratio));
         reported.0 += m.frequency_std_hz / f64::from(draws as u32);
         reported.1 += m.damping_std / f64::from(draws as u32);
     }
-    let n = estimates.len() as f64;
-    let mean = |g: fn(&(f64, f64)) -> f64| estimates.iter().map(g).sum::<f64>() / n;
-    let spread = |g: fn(&(f64, f64)) -> f64, m: f64| {
-        (estimates.iter().map(|e| (g(e) - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt()
-    };
-    let (mf, mz) = (mean(|e| e.0), mean(|e| e.1));
-    let (sf, sz) = (spread(|e| e.0, mf), spread(|e| e.1, mz));
+    let (mf, sf) = mean_and_scatter(estimates.iter().map(|e| e.0));
+    let (mz, sz) = mean_and_scatter(estimates.iter().map(|e| e.1));
     assert!(
         (reported.0 / sf - 1.0).abs() < 0.2,
         "f: reported {} scatter {sf}",
@@ -208,25 +212,13 @@ fn reported_standard_deviations_hold_on_simulated_records() {
                 est.h[0][0][k].norm() * ((1.0 - g) / (2.0 * est.averages as f64 * g)).sqrt()
             })
             .collect::<Vec<_>>()];
-        let fitted = fit(
-            Functions {
-                frequencies_hz: &frequencies,
-                h: &h,
-                sigma: &sigma,
-            },
-            1,
-        )
-        .unwrap();
-        let m = &fitted.modes[0];
+        let m = &one_mode(&frequencies, &h, &sigma);
         estimates.push((m.frequency_hz, m.damping_ratio));
         reported.0 += m.frequency_std_hz / f64::from(records as u32);
         reported.1 += m.damping_std / f64::from(records as u32);
     }
-    let n = estimates.len() as f64;
-    let mf = estimates.iter().map(|e| e.0).sum::<f64>() / n;
-    let mz = estimates.iter().map(|e| e.1).sum::<f64>() / n;
-    let sf = (estimates.iter().map(|e| (e.0 - mf).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-    let sz = (estimates.iter().map(|e| (e.1 - mz).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    let (mf, sf) = mean_and_scatter(estimates.iter().map(|e| e.0));
+    let (mz, sz) = mean_and_scatter(estimates.iter().map(|e| e.1));
     assert!(
         (reported.0 / sf).ln().abs() < 1.6f64.ln(),
         "f: reported {} scatter {sf}",
