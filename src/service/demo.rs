@@ -100,9 +100,15 @@ pub fn demo_plan(cfg: &Config, duration: Option<f64>) -> Result<DemoPlan> {
     })
 }
 
+/// How long a live run waits, once its source is done, for the daemon to
+/// take the messages still on their way.
+pub const DRAIN_LIMIT: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// Runs the daemon on a free loopback port and `source` on a publisher
-/// connected to it (on a blocking thread); stops the daemon once the source
-/// is done and the daemon had time to drain.
+/// connected to it (on a blocking thread), started once the daemon's
+/// subscribers are declared; stops the daemon once it has taken every
+/// message the source sent (or [`DRAIN_LIMIT`] passed) and the last
+/// windows' updates had time to run.
 pub fn run_with_source(
     mut cfg: Config,
     out: &Path,
@@ -135,11 +141,18 @@ pub fn run_with_source(
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async move {
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
-        let daemon = tokio::spawn(daemon::run(cfg, options, async {
-            let _ = stop_rx.await;
-        }));
-        // Give the daemon time to listen and declare its subscribers.
-        tokio::time::sleep(std::time::Duration::from_millis(800)).await;
+        let (taken_tx, mut taken) = tokio::sync::watch::channel(None);
+        let daemon = tokio::spawn(async move {
+            daemon::run_observed(cfg, options, &taken_tx, async {
+                let _ = stop_rx.await;
+            })
+            .await
+        });
+        if taken.wait_for(Option::is_some).await.is_err() {
+            // The daemon stopped before it listened: its error says why.
+            daemon.await.context("the daemon panicked")??;
+            bail!("the daemon stopped before it listened");
+        }
         let publisher = tokio::task::spawn_blocking(move || -> Result<u64> {
             let mut publisher = Publisher::open(&publisher_cfg, prefix, Encoding::Cbor, speed)?;
             // Let the publisher's session connect before the first block.
@@ -150,7 +163,18 @@ pub fn run_with_source(
             Ok(sent)
         });
         let sent = publisher.await.context("the publisher panicked")??;
-        // Drain: let the last messages and updates through.
+        // Drain: every message sent taken by the daemon, then time for the
+        // last windows' updates (a waiting one is skipped at shutdown, with
+        // its reason).
+        let all_taken = taken.wait_for(|n| n.is_some_and(|n| n >= sent));
+        if tokio::time::timeout(DRAIN_LIMIT, all_taken).await.is_err() {
+            tracing::warn!(
+                message = "the daemon had not taken every message sent; stopping it",
+                sent,
+                taken = taken.borrow().unwrap_or(0),
+                waited_s = DRAIN_LIMIT.as_secs()
+            );
+        }
         tokio::time::sleep(std::time::Duration::from_millis(1500)).await;
         let _ = stop_tx.send(());
         let summary = daemon.await.context("the daemon panicked")??;

@@ -77,10 +77,25 @@ impl RunSummary {
 
 /// Runs until `shutdown` resolves; returns what happened.
 pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Output = ()>) -> Result<RunSummary> {
+    run_observed(config, options, &tokio::sync::watch::channel(None).0, shutdown).await
+}
+
+/// [`run`], telling `taken` how many messages the daemon has taken from
+/// zenoh so far (queued, or dropped by the full ingest queue): `Some(0)`
+/// once its subscribers are declared (no message sent before can reach
+/// it), then after each message. A publisher in the same process (the demo)
+/// starts on the first and drains on the count instead of on guessed times.
+pub async fn run_observed(
+    config: Config,
+    options: RunOptions,
+    taken: &tokio::sync::watch::Sender<Option<u64>>,
+    shutdown: impl Future<Output = ()>,
+) -> Result<RunSummary> {
     let mut daemon = Daemon::start(&config, &options)?;
     let (link, mut messages) = ZenohLink::open(&config).await?;
     tracing::info!(message = "splinewatch running", prefix = %config.topic_prefix(), results = %options.results.display());
     notify_systemd(&[sd_notify::NotifyState::Ready]);
+    taken.send_replace(Some(link.ingest_drops()));
     let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
     let mut event_timer = tokio::time::interval(std::time::Duration::from_secs(1));
     let events = daemon.events.is_some();
@@ -91,6 +106,7 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
             message = messages.recv() => {
                 let Some(message) = message else { break };
                 daemon.on_message(message, &link);
+                taken.send_replace(Some(daemon.messages_received() + link.ingest_drops()));
             }
             outcome = daemon.worker.finished(), if daemon.worker.is_busy() => daemon.on_outcome(outcome, &link)?,
             finished = async { daemon.events.as_mut().expect("guarded").finished().await },

@@ -128,6 +128,11 @@ impl Daemon {
         })
     }
 
+    /// Messages taken from the ingest queue so far.
+    pub(super) fn messages_received(&self) -> u64 {
+        self.summary.messages
+    }
+
     /// A message from the ingest queue: a pre-computed FRF, or channel
     /// blocks to decode, record and feed to the pipeline.
     pub(super) fn on_message(&mut self, msg: RawMessage, link: &ZenohLink) {
