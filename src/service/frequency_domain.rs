@@ -14,8 +14,9 @@ use crate::io::modes_json::{ModeEntry, ModeMethod, ShapeEntry};
 use crate::pipeline::oma::OmaReport;
 use anyhow::{anyhow, bail, Context, Result};
 use splinewatch_core::c64;
+use splinewatch_core::identification::oma::shape::normalise;
 use splinewatch_core::identification::oma::{OmaResult, OmaSettings};
-use splinewatch_core::identification::pole_residue::{self, FittedMode, Functions};
+use splinewatch_core::identification::pole_residue::{self, h1_standard_deviation, FittedMode, Functions};
 use splinewatch_core::identification::transmissibility;
 
 /// The fitted modes of one record and what the fit had to say.
@@ -129,7 +130,6 @@ fn weighted_functions(
             est.combined.len()
         );
     }
-    let averages = est.averages.saturating_sub(est.combined.len()).max(1) as f64;
     let mut h = Vec::new();
     let mut sigma = Vec::new();
     for (o, per_input) in est.h.iter().enumerate() {
@@ -140,8 +140,8 @@ fn weighted_functions(
                 lines
                     .iter()
                     .map(|&k| {
-                        let g = est.coherence[o][k].clamp(1e-4, 0.9999);
-                        (hi[k].norm() * ((1.0 - g) / (2.0 * averages * g)).sqrt()).max(floor)
+                        let std = h1_standard_deviation(hi[k], est.coherence[o][k], est.averages, est.combined.len());
+                        std.max(floor)
                     })
                     .collect::<Vec<f64>>(),
             );
@@ -168,13 +168,10 @@ fn entry_of(mode: &FittedMode, per_output: usize, output_names: &[String]) -> Mo
     let input = (0..per_output)
         .max_by(|&a, &b| energy(a).total_cmp(&energy(b)))
         .unwrap_or(0);
-    let shape: Vec<c64> = (0..output_names.len())
+    let mut shape: Vec<c64> = (0..output_names.len())
         .map(|o| mode.residues[o * per_output + input])
         .collect();
-    let largest = shape.iter().copied().max_by(|a, b| a.norm().total_cmp(&b.norm()));
-    let scale = largest
-        .filter(|v| v.norm() > 0.0)
-        .map_or(c64::new(1.0, 0.0), |v| c64::new(1.0, 0.0) / v);
+    normalise(&mut shape);
     ModeEntry {
         frequency_hz: mode.frequency_hz,
         damping_ratio: mode.damping_ratio,
@@ -183,14 +180,11 @@ fn entry_of(mode: &FittedMode, per_output: usize, output_names: &[String]) -> Mo
         shape: shape
             .iter()
             .zip(output_names)
-            .map(|(v, name)| {
-                let v = v * scale;
-                ShapeEntry {
-                    sensor: name.clone(),
-                    re: v.re,
-                    im: v.im,
-                    std: None,
-                }
+            .map(|(v, name)| ShapeEntry {
+                sensor: name.clone(),
+                re: v.re,
+                im: v.im,
+                std: None,
             })
             .collect(),
         mpc: None,

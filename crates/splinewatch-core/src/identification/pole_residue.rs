@@ -17,7 +17,10 @@
 //!
 //! The residues enter linearly and are projected out (variable projection,
 //! Golub & Pereyra 1973); the poles are found by Levenberg–Marquardt from
-//! a greedy grid of start values, one mode at a time. The covariance of
+//! a greedy grid of start values, one mode at a time, on Kaufman's (1975)
+//! Jacobian of the projected residual, `−P⊥ ∂A/∂θ c` (analytic: the
+//! gradient `Jᵀr` it gives is the exact one, so the optimum is the same;
+//! only the curvature's second-order term is left out). The covariance of
 //! `(f_m, ζ_m)` is `s² ((P⊥J)ᵀ(P⊥J))⁻¹`, the Gauss–Newton covariance of
 //! the whole problem with the residues eliminated: `J` the model's
 //! derivative in the poles at fixed residues, `P⊥` the projection off the
@@ -30,7 +33,7 @@
 //! poles over model orders, so a mode damped 10–30 % that does not recur
 //! over the orders is still estimated.
 
-use faer::linalg::solvers::{Solve, SolveLstsq};
+use faer::linalg::solvers::{Qr, Solve, SolveLstsq};
 use faer::{c64, Mat};
 use std::f64::consts::PI;
 use thiserror::Error;
@@ -93,6 +96,17 @@ pub struct Functions<'a> {
     pub frequencies_hz: &'a [f64],
     pub h: &'a [Vec<c64>],
     pub sigma: &'a [Vec<f64>],
+}
+
+/// The standard deviation of one line of an H1 estimate from its
+/// (multiple) coherence `γ²` over `averages` Welch averages with `inputs`
+/// inputs: `|H| √((1 − γ²)/(2 n γ²))`, `n` the averages less the inputs
+/// (at least 1; Bendat & Piersol 2010, eq. 9.90), `γ²` held within
+/// [1e-4, 0.9999] so that no line weighs infinitely or not at all.
+pub fn h1_standard_deviation(h: c64, coherence: f64, averages: usize, inputs: usize) -> f64 {
+    let n = averages.saturating_sub(inputs).max(1) as f64;
+    let g = coherence.clamp(1e-4, 0.9999);
+    h.norm() * ((1.0 - g) / (2.0 * n * g)).sqrt()
 }
 
 /// Fits `modes` modes to `functions` over their band (the first to the last
@@ -181,12 +195,20 @@ struct Problem<'a> {
     band: (f64, f64),
 }
 
-/// One evaluation: per function, the weighted real design matrix, the
-/// data and the residues' least-squares coefficients.
+/// One evaluation: per function, the weighted real design matrix and its
+/// QR factors, the residues' least-squares coefficients, and the weighted
+/// residual stacked over the functions.
 struct Evaluation {
     designs: Vec<Mat<f64>>,
+    factors: Vec<Qr<f64>>,
     coefficients: Vec<Mat<f64>>,
     residual: Vec<f64>,
+}
+
+impl Evaluation {
+    fn cost(&self) -> f64 {
+        self.residual.iter().map(|r| r * r).sum()
+    }
 }
 
 impl<'a> Problem<'a> {
@@ -270,68 +292,104 @@ impl<'a> Problem<'a> {
         let basis = self.basis(theta);
         let mut evaluation = Evaluation {
             designs: Vec::new(),
+            factors: Vec::new(),
             coefficients: Vec::new(),
             residual: Vec::new(),
         };
         for j in 0..self.functions.h.len() {
             let (a, y) = self.design(&basis, j);
-            let c = a.qr().solve_lstsq(&y);
+            let qr = a.qr();
+            let c = qr.solve_lstsq(&y);
             if !c.norm_max().is_finite() {
                 return None;
             }
             let r = &y - &a * &c;
             evaluation.residual.extend((0..r.nrows()).map(|i| r[(i, 0)]));
             evaluation.designs.push(a);
+            evaluation.factors.push(qr);
             evaluation.coefficients.push(c);
         }
         Some(evaluation)
     }
 
     fn cost(&self, theta: &[f64]) -> Option<f64> {
-        self.evaluate(theta).map(|e| e.residual.iter().map(|r| r * r).sum())
+        self.evaluate(theta).map(|e| e.cost())
     }
 
-    /// Steps of a parameter for central differences.
-    fn steps(theta: &[f64]) -> Vec<f64> {
+    /// Per parameter (`f_m`, then `ζ_m`, per mode) and line, the derivatives
+    /// of mode `m`'s two basis columns, `g + ḡ` and `i(g − ḡ)`:
+    /// `∂g/∂θ = g² ∂λ/∂θ`, with `∂λ/∂f = 2π(−ζ + i√(1 − ζ²))` and
+    /// `∂λ/∂ζ = −ω(1 + iζ/√(1 − ζ²))`.
+    fn basis_derivatives(&self, theta: &[f64]) -> Vec<Vec<(c64, c64)>> {
+        let i = c64::new(0.0, 1.0);
         theta
-            .iter()
-            .enumerate()
-            .map(|(i, v)| if i % 2 == 0 { 1e-6 * v.abs().max(1e-3) } else { 1e-6 })
+            .chunks(2)
+            .flat_map(|p| {
+                let (w, zeta) = (2.0 * PI * p[0], p[1]);
+                let root = (1.0 - zeta * zeta).sqrt();
+                let lambda = c64::new(-zeta * w, w * root);
+                let by_frequency = c64::new(-zeta, root) * (2.0 * PI);
+                let by_damping = c64::new(-1.0, -zeta / root) * w;
+                [by_frequency, by_damping].map(|d_lambda| {
+                    self.functions
+                        .frequencies_hz
+                        .iter()
+                        .map(|&f| {
+                            let s = c64::new(0.0, 2.0 * PI * f);
+                            let g = c64::new(1.0, 0.0) / (s - lambda);
+                            let gb = c64::new(1.0, 0.0) / (s - lambda.conj());
+                            let (dg, dgb) = (g * g * d_lambda, gb * gb * d_lambda.conj());
+                            (dg + dgb, i * (dg - dgb))
+                        })
+                        .collect()
+                })
+            })
             .collect()
     }
 
-    /// The Jacobian of the projected residual (central differences).
-    fn jacobian(&self, theta: &[f64]) -> Option<Mat<f64>> {
-        let steps = Self::steps(theta);
-        let mut columns = Vec::with_capacity(theta.len());
-        for (p, &step) in steps.iter().enumerate() {
-            let mut plus = theta.to_vec();
-            let mut minus = theta.to_vec();
-            plus[p] += step;
-            minus[p] -= step;
-            let (rp, rm) = (self.evaluate(&plus)?.residual, self.evaluate(&minus)?.residual);
-            columns.push(
-                rp.iter()
-                    .zip(&rm)
-                    .map(|(a, b)| (a - b) / (2.0 * step))
-                    .collect::<Vec<_>>(),
-            );
+    /// The Jacobian of the projected residual at `theta` (Kaufman's form,
+    /// `−P⊥ ∂A/∂θ c`, per function at its fitted residues `c`), stacked
+    /// over the functions as the residual is.
+    fn jacobian(&self, theta: &[f64], evaluation: &Evaluation) -> Mat<f64> {
+        let lines = self.lines();
+        let derivatives = self.basis_derivatives(theta);
+        let mut jacobian = Mat::<f64>::zeros(evaluation.residual.len(), theta.len());
+        for (j, c) in evaluation.coefficients.iter().enumerate() {
+            let sigma = &self.functions.sigma[j];
+            // ∂(A c)/∂θ_p: only mode m = p/2's residue α + iβ multiplies its columns.
+            let d = Mat::<f64>::from_fn(2 * lines, theta.len(), |r, p| {
+                let k = r % lines;
+                let m = p / 2;
+                let (d_sum, d_difference) = derivatives[p][k];
+                let v = (d_sum * c[(2 * m, 0)] + d_difference * c[(2 * m + 1, 0)]) / sigma[k];
+                if r < lines {
+                    v.re
+                } else {
+                    v.im
+                }
+            });
+            let a = &evaluation.designs[j];
+            let off = &d - a * evaluation.factors[j].solve_lstsq(&d);
+            for p in 0..theta.len() {
+                for r in 0..2 * lines {
+                    jacobian[(j * 2 * lines + r, p)] = -off[(r, p)];
+                }
+            }
         }
-        let rows = columns[0].len();
-        Some(Mat::from_fn(rows, theta.len(), |r, c| columns[c][r]))
+        jacobian
     }
 
     /// Levenberg–Marquardt on the projected cost from `theta` (kept within
     /// the bounds); returns the iterations taken.
     fn levenberg_marquardt(&self, theta: &mut Vec<f64>) -> Result<usize, PoleResidueError> {
-        let mut cost = self.cost(theta).ok_or(PoleResidueError::Singular)?;
+        let mut current = self.evaluate(theta).ok_or(PoleResidueError::Singular)?;
+        let mut cost = current.cost();
         let mut mu = 1e-3;
         let n = theta.len();
         for iteration in 1..=200 {
-            let residual = self.evaluate(theta).ok_or(PoleResidueError::Singular)?.residual;
-            let jac = self.jacobian(theta).ok_or(PoleResidueError::Singular)?;
+            let jac = self.jacobian(theta, &current);
             let jtj = jac.transpose() * &jac;
-            let r = Mat::<f64>::from_fn(residual.len(), 1, |i, _| residual[i]);
+            let r = Mat::<f64>::from_fn(current.residual.len(), 1, |i, _| current.residual[i]);
             let gradient = jac.transpose() * &r;
             let mut improved = false;
             for _ in 0..30 {
@@ -341,8 +399,9 @@ impl<'a> Problem<'a> {
                 let step = damped.partial_piv_lu().solve(&gradient);
                 let mut trial: Vec<f64> = theta.iter().enumerate().map(|(i, v)| v - step[(i, 0)]).collect();
                 self.clamp(&mut trial);
-                match self.cost(&trial) {
-                    Some(c) if c < cost => {
+                match self.evaluate(&trial) {
+                    Some(e) if e.cost() < cost => {
+                        let c = e.cost();
                         let change = trial
                             .iter()
                             .zip(theta.iter())
@@ -350,6 +409,7 @@ impl<'a> Problem<'a> {
                             .fold(0.0, f64::max);
                         let relative = (cost - c) / cost.max(f64::MIN_POSITIVE);
                         *theta = trial;
+                        current = e;
                         cost = c;
                         mu = (mu / 3.0).max(1e-12);
                         improved = true;
@@ -375,31 +435,10 @@ impl<'a> Problem<'a> {
         let columns = evaluation.coefficients[0].nrows();
         let observations = evaluation.residual.len();
         let parameters = theta.len() + functions * columns;
-        let ssr: f64 = evaluation.residual.iter().map(|r| r * r).sum();
-        let scale = ssr / (observations.saturating_sub(parameters).max(1)) as f64;
-        // P⊥ ∂(A(θ) c)/∂θ at the fitted residues c, stacked over functions.
-        let steps = Self::steps(theta);
-        let mut projected = Mat::<f64>::zeros(observations, theta.len());
-        for (p, &step) in steps.iter().enumerate() {
-            let mut plus = theta.to_vec();
-            let mut minus = theta.to_vec();
-            plus[p] += step;
-            minus[p] -= step;
-            let (bp, bm) = (self.basis(&plus), self.basis(&minus));
-            let mut row = 0;
-            for j in 0..functions {
-                let c = &evaluation.coefficients[j];
-                let (ap, _) = self.design(&bp, j);
-                let (am, _) = self.design(&bm, j);
-                let derivative = (&ap * c - &am * c) * (1.0 / (2.0 * step));
-                let a = &evaluation.designs[j];
-                let off = &derivative - a * a.qr().solve_lstsq(&derivative);
-                for i in 0..off.nrows() {
-                    projected[(row + i, p)] = off[(i, 0)];
-                }
-                row += off.nrows();
-            }
-        }
+        let scale = evaluation.cost() / (observations.saturating_sub(parameters).max(1)) as f64;
+        // P⊥ ∂(A(θ) c)/∂θ at the fitted residues c, stacked over functions
+        // (its sign does not enter the covariance).
+        let projected = self.jacobian(theta, &evaluation);
         let information = projected.transpose() * &projected;
         let identity = Mat::<f64>::identity(theta.len(), theta.len());
         let inverse = information.partial_piv_lu().solve(&identity);

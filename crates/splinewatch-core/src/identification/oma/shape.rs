@@ -36,9 +36,15 @@ pub fn mpc(phi: &[c64]) -> f64 {
     (spread / total).powi(2)
 }
 
-/// Scales `phi` so its largest-modulus component is `1 + 0i`.
+/// Scales `phi` so its largest-modulus component is `1 + 0i` (exactly: the
+/// product with the reciprocal leaves it within rounding of that).
 pub fn normalise(phi: &mut [c64]) {
-    let Some(largest) = phi.iter().copied().max_by(|a, b| a.norm().total_cmp(&b.norm())) else {
+    let Some((index, largest)) = phi
+        .iter()
+        .copied()
+        .enumerate()
+        .max_by(|a, b| a.1.norm().total_cmp(&b.1.norm()))
+    else {
         return;
     };
     if largest.norm() == 0.0 {
@@ -46,6 +52,7 @@ pub fn normalise(phi: &mut [c64]) {
     }
     let inverse = c64::new(1.0, 0.0) / largest;
     phi.iter_mut().for_each(|v| *v *= inverse);
+    phi[index] = c64::new(1.0, 0.0);
 }
 
 #[cfg(test)]
@@ -82,7 +89,12 @@ mod tests {
     fn normalise_makes_the_largest_component_one() {
         let mut phi = vec![c64::new(0.1, 0.2), c64::new(-3.0, 4.0), c64::new(1.0, 0.0)];
         normalise(&mut phi);
-        assert!((phi[1] - c64::new(1.0, 0.0)).norm() < 1e-15);
+        assert_eq!(phi[1], c64::new(1.0, 0.0));
         assert!(phi.iter().all(|v| v.norm() <= 1.0 + 1e-15));
+        // A component whose reciprocal's product rounds off 1 is 1 all the same.
+        let odd = c64::new(0.11585926857179238, 0.23051628235920657) * 3.7;
+        let mut phi = vec![odd, c64::new(0.1, 0.0)];
+        normalise(&mut phi);
+        assert_eq!(phi[0], c64::new(1.0, 0.0));
     }
 }
