@@ -1,17 +1,20 @@
 //! Identification from arrays: output-only SSI-cov (`oma`), input–output
-//! SRIM (`identify`) and Welch FRFs (`frf`), each the core's, with the
+//! SRIM (`identify`), Welch FRFs (`frf`) and the pole–residue fit to
+//! functions (`fit_modes`), each the core's, with the
 //! settings of the config sections `[oma]` and `[frf]` (the Python keyword
 //! arguments arrive as those sections' JSON, so a wrong key or value gets
 //! the config's message).
 
-use crate::arrays::{complex_matrix, finite_channel, matrix, vector, Channels};
+use crate::arrays::{complex_matrix, finite_channel, finite_vector, matrix, vector, Channels};
 use crate::errors::{bad, OrPy};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splinewatch::config::{FrfConfig, OmaConfig};
 use splinewatch::pipeline::oma::OmaReport;
+use splinewatch_core::c64;
 use splinewatch_core::identification::oma::{identify as ssi_cov, OmaSettings, OutputCorrelations};
+use splinewatch_core::identification::pole_residue::{self, FittedMode, Functions};
 use splinewatch_core::identification::srim;
 use splinewatch_core::identification::welch::WelchEstimator;
 
@@ -171,6 +174,100 @@ pub fn frf<'py>(
         matrix(py, &estimate.coherence, lines),
         info,
     ))
+}
+
+/// The pole–residue fit of `modes` modes shared by the functions `h`
+/// (functions × lines, complex) at `frequencies` (Hz), each line weighted by
+/// its standard deviation `sigma` (functions × lines): a dict of arrays
+/// (`frequency`, `damping`, their stds, `residues` modes × functions,
+/// `at_bound`) and the fit's `residual_scale` and `iterations`.
+#[pyfunction]
+#[pyo3(signature = (frequencies, h, sigma, modes))]
+pub fn fit_modes<'py>(
+    py: Python<'py>,
+    frequencies: PyReadonlyArray1<'_, f64>,
+    h: PyReadonlyArray2<'_, numpy::Complex64>,
+    sigma: PyReadonlyArray2<'_, f64>,
+    modes: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let frequencies = finite_vector(&frequencies, "f")?;
+    let (h, sigma) = (h.as_array(), sigma.as_array());
+    if h.shape() != sigma.shape() || h.ncols() != frequencies.len() {
+        return Err(bad(format!(
+            "H is {}×{} and sigma {}×{} for {} lines: give both as functions × lines",
+            h.nrows(),
+            h.ncols(),
+            sigma.nrows(),
+            sigma.ncols(),
+            frequencies.len()
+        )));
+    }
+    let h: Vec<Vec<c64>> = h
+        .rows()
+        .into_iter()
+        .map(|r| r.iter().map(|v| c64::new(v.re, v.im)).collect())
+        .collect();
+    let sigma: Vec<Vec<f64>> = sigma.rows().into_iter().map(|r| r.to_vec()).collect();
+    let functions = Functions {
+        frequencies_hz: &frequencies,
+        h: &h,
+        sigma: &sigma,
+    };
+    let fitted = py
+        .detach(|| pole_residue::fit(functions, modes))
+        .map_err(|e| bad(format!("fit_modes: {e}")))?;
+    let column = |pick: fn(&FittedMode) -> f64| vector(py, fitted.modes.iter().map(pick).collect());
+    let result = PyDict::new(py);
+    result.set_item("frequency", column(|m| m.frequency_hz))?;
+    result.set_item("damping", column(|m| m.damping_ratio))?;
+    result.set_item("frequency_std", column(|m| m.frequency_std_hz))?;
+    result.set_item("damping_std", column(|m| m.damping_std))?;
+    let residues: Vec<Vec<c64>> = fitted.modes.iter().map(|m| m.residues.clone()).collect();
+    result.set_item("residues", complex_matrix(py, &residues, h.len()))?;
+    result.set_item(
+        "at_bound",
+        fitted.modes.iter().map(|m| m.at_bound).collect::<Vec<bool>>(),
+    )?;
+    result.set_item("residual_scale", fitted.residual_scale)?;
+    result.set_item("iterations", fitted.iterations)?;
+    Ok(result)
+}
+
+/// Each line's standard deviation of H1 estimates `h` (functions × lines)
+/// from their coherence (the same shape) over `averages` Welch averages
+/// with `inputs` inputs: the weights `fit_modes` and `identify`'s
+/// frequency-domain estimate use.
+#[pyfunction]
+#[pyo3(signature = (h, coherence, averages, inputs))]
+pub fn h1_sigma<'py>(
+    py: Python<'py>,
+    h: PyReadonlyArray2<'_, numpy::Complex64>,
+    coherence: PyReadonlyArray2<'_, f64>,
+    averages: usize,
+    inputs: usize,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let (h, coherence) = (h.as_array(), coherence.as_array());
+    if h.shape() != coherence.shape() {
+        return Err(bad(format!(
+            "H is {}×{} and coherence {}×{}: give both as functions × lines",
+            h.nrows(),
+            h.ncols(),
+            coherence.nrows(),
+            coherence.ncols()
+        )));
+    }
+    let rows: Vec<Vec<f64>> = h
+        .rows()
+        .into_iter()
+        .zip(coherence.rows())
+        .map(|(hr, gr)| {
+            hr.iter()
+                .zip(gr.iter())
+                .map(|(v, &g)| pole_residue::h1_standard_deviation(c64::new(v.re, v.im), g, averages, inputs))
+                .collect()
+        })
+        .collect();
+    Ok(matrix(py, &rows, h.ncols()))
 }
 
 fn check_rate(fs: f64) -> PyResult<()> {

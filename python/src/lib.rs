@@ -21,6 +21,8 @@ fn _splinewatch(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(identification::oma, m)?)?;
     m.add_function(wrap_pyfunction!(identification::identify, m)?)?;
     m.add_function(wrap_pyfunction!(identification::frf, m)?)?;
+    m.add_function(wrap_pyfunction!(identification::fit_modes, m)?)?;
+    m.add_function(wrap_pyfunction!(identification::h1_sigma, m)?)?;
     m.add_function(wrap_pyfunction!(files::read_recording, m)?)?;
     m.add_function(wrap_pyfunction!(files::read_results, m)?)?;
     m.add_function(wrap_pyfunction!(files::result_topics, m)?)?;

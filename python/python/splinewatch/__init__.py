@@ -14,16 +14,18 @@ engine is splinewatch's Rust core (the CLI's, bit for bit).
 
 from ._splinewatch import __version__
 from ._files import Channel, Results, read_recording, read_results
-from ._identification import Modes, frf, identify, oma
+from ._identification import FittedModes, Modes, fit_modes, frf, identify, oma
 from ._model import Model, Update
 
 __all__ = [
     "__version__",
     "Channel",
+    "FittedModes",
     "Model",
     "Modes",
     "Results",
     "Update",
+    "fit_modes",
     "frf",
     "identify",
     "oma",

@@ -72,6 +72,18 @@ def frf(
 ) -> Tuple[
     npt.NDArray[np.float64], npt.NDArray[np.complex128], npt.NDArray[np.float64], Dict[str, Any]
 ]: ...
+def fit_modes(
+    frequencies: npt.NDArray[np.float64],
+    h: npt.NDArray[np.complex128],
+    sigma: npt.NDArray[np.float64],
+    modes: int,
+) -> Dict[str, Any]: ...
+def h1_sigma(
+    h: npt.NDArray[np.complex128],
+    coherence: npt.NDArray[np.float64],
+    averages: int,
+    inputs: int,
+) -> npt.NDArray[np.float64]: ...
 def read_recording(
     path: Union[str, PathLike[str]],
 ) -> Tuple[List[Dict[str, Any]], List[Tuple[str, int, str]]]: ...
