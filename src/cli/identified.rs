@@ -17,9 +17,24 @@ pub struct ModesOutput {
     /// Also write the modes JSON to this file (for `update --modes`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the stabilisation diagram and the modes with ±1σ to a Rerun `.rrd` file.
+    /// Write the stabilisation diagram and the modes with ±1σ (the fitted ones too) to a Rerun `.rrd` file.
     #[arg(long)]
     pub rerun_save: Option<PathBuf>,
+}
+
+impl ModesOutput {
+    /// Refuses, before any work, what the config cannot give: the Rerun
+    /// file draws the identification with the model's deck and sensors.
+    pub(super) fn check(&self, cfg: &Config) -> Result<()> {
+        if let (Some(path), false) = (&self.rerun_save, cfg.has_model()) {
+            bail!(
+                "--rerun-save {}: the Rerun file draws the modes on the model's deck, and the config has no \
+                 [model]; --out or --json write the modes",
+                path.display()
+            );
+        }
+        Ok(())
+    }
 }
 
 /// The model an identification is compared with (`oma`, `identify`).
@@ -50,6 +65,7 @@ pub(super) fn write_identified(
         };
         let mut rerun = crate::outputs::rerun::RerunOutput::open(cfg, &targets)?;
         rerun.log_oma(report)?;
+        rerun.log_fitted(report, fitted)?;
         rerun.finish()?;
     }
     let mut file = report.modes_file();

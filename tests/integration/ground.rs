@@ -514,7 +514,8 @@ fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator()
 /// stds within 1e-3 relative (two formulas: splinewatch's projected
 /// Jacobian, scipy's whole one). SRIM finds no mode on these channels: said,
 /// and the fit's mode is the record's, marked `pole_residue` in the modes
-/// file and "fit" in the table. A band above half the rate, or a segment
+/// file and "fit" in the table; with the bridge's model it is drawn in the
+/// Rerun file (without a model, `--rerun-save` is refused before any work). A band above half the rate, or a segment
 /// that leaves one Welch average, with SRIM finding nothing either, is
 /// refused naming the key once.
 #[test]
@@ -569,6 +570,51 @@ fn identify_fits_the_transverse_mode_as_scipy_does() {
         let shape = ours["shape"].as_array().unwrap();
         assert_eq!(shape.len(), 3, "{name}: the outputs fitted");
         assert!(shape.iter().any(|s| s["re"] == 1.0 && s["im"] == 0.0), "{shape:?}");
+    }
+    // A Rerun file needs the model's deck: refused before any work without one.
+    let rrd = dir.join("fitted.rrd");
+    let o = splinewatch(&[
+        "identify",
+        "--config",
+        config,
+        &record(EVENT_2015),
+        "--rerun-save",
+        rrd.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && o.stdout.is_empty() && !rrd.exists(), "{stderr}");
+    assert_eq!(stderr.matches("--rerun-save").count(), 1, "{stderr}");
+    assert!(
+        stderr.contains("the config has no [model]") && !stderr.contains("samples"),
+        "{stderr}"
+    );
+    // With the bridge's model the fitted mode is drawn: its lines on the
+    // stabilisation diagram, its f and ζ with ±1σ.
+    let bridge = dir.join("bridge-fitted.toml");
+    let section =
+        "\n[oma.frequency_domain]\nband = [1.5, 7.0]\ninputs = [\"ch3\"]\noutputs = [\"ch4\", \"ch7\", \"ch9\"]\n";
+    std::fs::write(
+        &bridge,
+        std::fs::read_to_string(root.join("config/painter-street.toml")).unwrap() + section,
+    )
+    .unwrap();
+    let o = splinewatch(&[
+        "identify",
+        "--config",
+        bridge.to_str().unwrap(),
+        &record(EVENT_2015),
+        "--rerun-save",
+        rrd.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let drawn = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
+    for entity in [
+        "/oma/stabilisation",
+        "/oma/stabilisation/fitted",
+        "/oma/fitted/1/frequency_hz",
+        "/oma/fitted/1/damping_percent",
+    ] {
+        assert!(drawn.entities.contains(entity), "{entity} not in {:?}", drawn.entities);
     }
     let text = std::fs::read_to_string(root.join(config)).unwrap();
     let wide = dir.join("wide.toml");

@@ -19,8 +19,11 @@
 //! - `oma/stabilisation` (poles: frequency × order; its child
 //!   `first_singular_value`: the output spectral matrix's, log scale mapped
 //!   onto the order axis), `oma/singular_values` (Hankel),
-//!   `oma/modes/<k>/{frequency_hz,damping_percent}` (value, ±1σ): an
-//!   output-only identification (`splinewatch oma --rerun-save`, and every
+//!   `oma/modes/<k>/{frequency_hz,damping_percent}` (value, ±1σ), and
+//!   with `[oma.frequency_domain]` the fitted modes' vertical lines
+//!   `oma/stabilisation/fitted` (frequency ±1σ) and
+//!   `oma/fitted/<k>/{frequency_hz,damping_percent}`: an identification
+//!   (`splinewatch oma` or `identify --rerun-save`, and every
 //!   output-only window of the daemon and replay); per window also
 //!   `oma/trends/mode_<m>/{frequency_hz,damping_percent}` (value, ±1σ, by
 //!   the paired model mode `m`, so a trend follows one physical mode) and

@@ -1,12 +1,14 @@
 //! Output-only identifications in the Rerun stream: the stabilisation
 //! diagram (every pole at its order over frequency; grey unstable, blue
 //! stable, orange in a mode) over the first singular value of the output
-//! spectral matrix, the Hankel matrix's leading singular values, the identified frequencies and damping ratios with ±1σ; per
+//! spectral matrix, the Hankel matrix's leading singular values, the identified frequencies and damping ratios with ±1σ
+//! (and those of the modes fitted in the frequency domain, with their lines on the diagram); per
 //! pipeline window also the trends by paired model mode and the identified
 //! and model shapes at the sensors.
 
 use super::deck::f32x3;
 use super::{rerun_error, RerunOutput};
+use crate::io::modes_json::ModeEntry;
 use crate::pipeline::oma::OmaReport;
 use crate::pipeline::{WindowModes, WindowReport};
 use anyhow::Result;
@@ -16,6 +18,48 @@ impl RerunOutput {
     pub fn log_oma(&mut self, report: &OmaReport) -> Result<()> {
         self.set_time(report.start_ns);
         self.log_identification(report)
+    }
+
+    /// Logs the modes fitted in the frequency domain (`[oma.frequency_domain]`)
+    /// beside `report`'s, at its span's start time: on the stabilisation
+    /// diagram a vertical line at each fitted frequency over the diagram's
+    /// orders (green) with its ±1σ (pale green), and each mode's frequency
+    /// and damping with ±1σ under `oma/fitted/<k>` (by frequency).
+    pub fn log_fitted(&mut self, report: &OmaReport, fitted: &[ModeEntry]) -> Result<()> {
+        if fitted.is_empty() {
+            return Ok(());
+        }
+        self.set_time(report.start_ns);
+        let top = report.result.diagram.iter().map(|p| p.order).max().unwrap_or(1).max(1) as f32;
+        let mut strips: Vec<Vec<[f32; 2]>> = Vec::new();
+        let mut colors = Vec::new();
+        for m in fitted {
+            let sigma = m.frequency_std_hz.unwrap_or(0.0);
+            for (f, color) in [
+                (m.frequency_hz, rerun::Color::from_rgb(40, 160, 60)),
+                (m.frequency_hz - sigma, rerun::Color::from_rgb(160, 210, 160)),
+                (m.frequency_hz + sigma, rerun::Color::from_rgb(160, 210, 160)),
+            ] {
+                strips.push(vec![[f as f32, 0.0], [f as f32, top]]);
+                colors.push(color);
+            }
+        }
+        self.rec
+            .log(
+                "oma/stabilisation/fitted",
+                &rerun::LineStrips2D::new(strips).with_colors(colors),
+            )
+            .map_err(rerun_error)?;
+        for (k, m) in fitted.iter().enumerate() {
+            let (sigma_f, sigma_z) = (m.frequency_std_hz.unwrap_or(0.0), m.damping_std.unwrap_or(0.0));
+            self.log_band(&format!("oma/fitted/{}/frequency_hz", k + 1), m.frequency_hz, sigma_f)?;
+            self.log_band(
+                &format!("oma/fitted/{}/damping_percent", k + 1),
+                100.0 * m.damping_ratio,
+                100.0 * sigma_z,
+            )?;
+        }
+        Ok(())
     }
 
     /// Logs an output-only window's identification at the window's end (FRF

@@ -45,6 +45,8 @@ pub const DAMPING_BOUNDS: (f64, f64) = (1e-4, 0.7);
 pub enum PoleResidueError {
     #[error("no functions to fit")]
     NoFunctions,
+    #[error("{functions} functions and {deviations} rows of standard deviations: give one row per function")]
+    UnequalCounts { functions: usize, deviations: usize },
     #[error("function {function} has {len} lines and standard deviations, the frequencies {expected}")]
     UnequalLengths {
         function: usize,
@@ -160,8 +162,14 @@ fn check(functions: Functions<'_>, modes: usize) -> Result<(), PoleResidueError>
         h,
         sigma,
     } = functions;
-    if h.is_empty() || sigma.len() != h.len() {
+    if h.is_empty() {
         return Err(PoleResidueError::NoFunctions);
+    }
+    if sigma.len() != h.len() {
+        return Err(PoleResidueError::UnequalCounts {
+            functions: h.len(),
+            deviations: sigma.len(),
+        });
     }
     if modes == 0 {
         return Err(PoleResidueError::NoModes);

@@ -85,6 +85,20 @@ fn close_heavily_damped_modes_are_recovered_from_exact_functions() {
         ..functions
     };
     assert!(matches!(fit(short, 1), Err(PoleResidueError::TooFewLines { .. })));
+    let two = &sigma[..2];
+    assert_eq!(
+        fit(
+            Functions {
+                sigma: two,
+                ..functions
+            },
+            1
+        ),
+        Err(PoleResidueError::UnequalCounts {
+            functions: 3,
+            deviations: 2
+        })
+    );
     let zero = vec![vec![0.0; frequencies.len()]; 3];
     let unweighted = Functions {
         sigma: &zero,
