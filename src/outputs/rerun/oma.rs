@@ -51,12 +51,10 @@ impl RerunOutput {
             )
             .map_err(rerun_error)?;
         for (k, m) in fitted.iter().enumerate() {
-            let (sigma_f, sigma_z) = (m.frequency_std_hz.unwrap_or(0.0), m.damping_std.unwrap_or(0.0));
-            self.log_band(&format!("oma/fitted/{}/frequency_hz", k + 1), m.frequency_hz, sigma_f)?;
-            self.log_band(
-                &format!("oma/fitted/{}/damping_percent", k + 1),
-                100.0 * m.damping_ratio,
-                100.0 * sigma_z,
+            self.log_frequency_and_damping(
+                &format!("oma/fitted/{}", k + 1),
+                (m.frequency_hz, m.frequency_std_hz),
+                (m.damping_ratio, m.damping_std),
             )?;
         }
         Ok(())
@@ -79,14 +77,11 @@ impl RerunOutput {
     fn log_trends(&mut self, modes: &WindowModes) -> Result<()> {
         for (m, pair) in modes.report.result.modes.iter().zip(&modes.pairs) {
             let Some(pair) = pair else { continue };
-            let (sf, sz) = (m.frequency_std_hz.unwrap_or(0.0), m.damping_std.unwrap_or(0.0));
-            let base = format!("oma/trends/mode_{}", pair.model_mode + 1);
-            for (what, v, s) in [
-                ("frequency_hz", m.frequency_hz, sf),
-                ("damping_percent", 100.0 * m.damping_ratio, 100.0 * sz),
-            ] {
-                self.log_band(&format!("{base}/{what}"), v, s)?;
-            }
+            self.log_frequency_and_damping(
+                &format!("oma/trends/mode_{}", pair.model_mode + 1),
+                (m.frequency_hz, m.frequency_std_hz),
+                (m.damping_ratio, m.damping_std),
+            )?;
         }
         Ok(())
     }
@@ -179,15 +174,34 @@ impl RerunOutput {
             .log("oma/singular_values", &rerun::BarChart::new(singular))
             .map_err(rerun_error)?;
         for (k, m) in report.result.modes.iter().enumerate() {
-            let (sigma_f, sigma_z) = (m.frequency_std_hz.unwrap_or(0.0), m.damping_std.unwrap_or(0.0));
-            self.log_band(&format!("oma/modes/{}/frequency_hz", k + 1), m.frequency_hz, sigma_f)?;
-            self.log_band(
-                &format!("oma/modes/{}/damping_percent", k + 1),
-                100.0 * m.damping_ratio,
-                100.0 * sigma_z,
+            self.log_frequency_and_damping(
+                &format!("oma/modes/{}", k + 1),
+                (m.frequency_hz, m.frequency_std_hz),
+                (m.damping_ratio, m.damping_std),
             )?;
         }
         Ok(())
+    }
+
+    /// A mode's `frequency_hz` and `damping_percent` under `base`, each with
+    /// ±1σ (a missing std drawn as 0): (value, std) of the frequency in Hz
+    /// and of the damping ratio.
+    fn log_frequency_and_damping(
+        &mut self,
+        base: &str,
+        (frequency_hz, frequency_std_hz): (f64, Option<f64>),
+        (damping_ratio, damping_std): (f64, Option<f64>),
+    ) -> Result<()> {
+        self.log_band(
+            &format!("{base}/frequency_hz"),
+            frequency_hz,
+            frequency_std_hz.unwrap_or(0.0),
+        )?;
+        self.log_band(
+            &format!("{base}/damping_percent"),
+            100.0 * damping_ratio,
+            100.0 * damping_std.unwrap_or(0.0),
+        )
     }
 }
 

@@ -81,9 +81,10 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
 }
 
 /// [`run`], telling `taken` how many messages the daemon has taken from
-/// zenoh so far (queued, or dropped by the full ingest queue): `Some(0)`
-/// once its subscribers are declared (no message sent before can reach
-/// it), then after each message. A publisher in the same process (the demo)
+/// zenoh so far (queued, or dropped by the full ingest queue): first once
+/// its subscribers are declared (no message sent before can reach it),
+/// then after each message. A drop happens only while the queue is full,
+/// so the messages still queued behind it bring the count up to date. A publisher in the same process (the demo)
 /// starts on the first and drains on the count instead of on guessed times.
 pub async fn run_observed(
     config: Config,
@@ -95,7 +96,8 @@ pub async fn run_observed(
     let (link, mut messages) = ZenohLink::open(&config).await?;
     tracing::info!(message = "splinewatch running", prefix = %config.topic_prefix(), results = %options.results.display());
     notify_systemd(&[sd_notify::NotifyState::Ready]);
-    taken.send_replace(Some(link.ingest_drops()));
+    let taken_so_far = |daemon: &Daemon, link: &ZenohLink| Some(daemon.messages_received() + link.ingest_drops());
+    taken.send_replace(taken_so_far(&daemon, &link));
     let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
     let mut event_timer = tokio::time::interval(std::time::Duration::from_secs(1));
     let events = daemon.events.is_some();
@@ -106,7 +108,7 @@ pub async fn run_observed(
             message = messages.recv() => {
                 let Some(message) = message else { break };
                 daemon.on_message(message, &link);
-                taken.send_replace(Some(daemon.messages_received() + link.ingest_drops()));
+                taken.send_replace(taken_so_far(&daemon, &link));
             }
             outcome = daemon.worker.finished(), if daemon.worker.is_busy() => daemon.on_outcome(outcome, &link)?,
             finished = async { daemon.events.as_mut().expect("guarded").finished().await },
