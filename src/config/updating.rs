@@ -149,6 +149,8 @@ pub enum ParameterFamily {
     ElasticSupport,
     /// `<field>.s<j>`: a stiffness-field multiplier θ, a ratio.
     StiffnessField,
+    /// `<beam>.stiffness`: a beam member's stiffness multiplier θ, a ratio.
+    MemberStiffness,
     /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
     Damping,
     /// `<support>.eta`: a spring field's, bearing's or line support's loss
@@ -163,6 +165,8 @@ pub fn parameter_family(name: &str) -> ParameterFamily {
         ParameterFamily::Damping
     } else if last == "eta" {
         ParameterFamily::LossFactor
+    } else if last == "stiffness" {
+        ParameterFamily::MemberStiffness
     } else if matches!(last, "kx" | "ky" | "kz") {
         ParameterFamily::Bearing
     } else if matches!(last, "x" | "y" | "z" | "rx" | "ry" | "rz") {
@@ -282,6 +286,7 @@ impl Config {
                 },
             )?);
         }
+        out.extend(self.member_stiffness_parameters()?);
         if let Some(d) = self.model.damping.as_ref().filter(|d| d.update) {
             out.extend(coefficient_parameters(
                 "model.damping.bounds",

@@ -63,7 +63,8 @@ pub struct DofEntry {
 pub struct ParameterMatrix {
     pub name: String,
     /// `"spring"` (κ_j), `"bearing"` (a bearing's `k_x, k_y, k_z`),
-    /// `"support"` (a line support's components) or `"stiffness_field"` (θ_k).
+    /// `"support"` (a line support's components), `"stiffness_field"` (θ_k) or
+    /// `"member_stiffness"` (a beam's θ).
     pub kind: &'static str,
     /// The config's value.
     pub value: f64,
@@ -85,6 +86,29 @@ pub struct MatrixIndex {
     pub mass: String,
     pub parameters: Vec<ParameterMatrix>,
     pub dofs: Vec<DofEntry>,
+}
+
+/// Who owns each vector of κ and then of θ, with its kind: κ holds the
+/// spring fields' coefficients, then the bearings', then the line
+/// supports' (`ShellModel::spring_coefficients`); θ the stiffness fields',
+/// then the beams' multipliers (`ShellModel::field_coefficients`).
+fn coefficient_owners(config: &Config) -> Vec<(&str, &'static str)> {
+    let m = &config.model;
+    let springs = m.springs.iter().map(|s| (s.name.as_str(), "spring"));
+    let bearings = m.bearings.iter().map(|b| (b.name.as_str(), "bearing"));
+    let supports = m.supports.iter().map(|s| (s.name.as_str(), "support"));
+    let fields = m.stiffness_fields.iter().map(|f| (f.name.as_str(), "stiffness_field"));
+    let members = m
+        .beams
+        .iter()
+        .filter(|b| b.stiffness.is_some())
+        .map(|b| (b.name.as_str(), "member_stiffness"));
+    springs
+        .chain(bearings)
+        .chain(supports)
+        .chain(fields)
+        .chain(members)
+        .collect()
 }
 
 /// Writes the matrices and `index.json` into `dir`; returns the index and
@@ -111,20 +135,8 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
     write("K_f.mtx", &sparse.free_stiffness, "free stiffness K_f (eq. 16)")?;
     write("M.mtx", &sparse.mass, "consistent mass M (eq. 17)")?;
     let mut parameters = Vec::new();
-    // κ holds the spring fields' coefficients, then the bearings', then
-    // the line supports' (`ShellModel::spring_coefficients`).
-    let springs = config.model.springs.iter().map(|s| (s.name.as_str(), "spring"));
-    let bearings = config.model.bearings.iter().map(|b| (b.name.as_str(), "bearing"));
-    let supports = config.model.supports.iter().map(|s| (s.name.as_str(), "support"));
-    let fields = config
-        .model
-        .stiffness_fields
-        .iter()
-        .map(|f| (f.name.as_str(), "stiffness_field"));
-    let terms = springs
-        .chain(bearings)
-        .chain(supports)
-        .chain(fields)
+    let terms = coefficient_owners(config)
+        .into_iter()
         .zip(sparse.spring_terms.iter().chain(&sparse.field_terms));
     let values = sparse.spring_stiffness.iter().chain(&theta);
     for (((field, kind), terms), values) in terms.zip(values) {
@@ -137,6 +149,7 @@ pub fn export_matrices(config: &Config, dir: &Path) -> Result<(MatrixIndex, f64)
                     format!("{field}.{component}")
                 }
                 "spring" => format!("{field}.k{}", j + 1),
+                "member_stiffness" => format!("{field}.stiffness"),
                 _ => format!("{field}.s{}", j + 1),
             };
             let file = format!("dK_d{parameter}.mtx");

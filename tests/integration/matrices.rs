@@ -309,7 +309,8 @@ fn issue_30_matrices_of_several_patches_name_their_patch_and_bearings() {
     );
 }
 
-/// `K = K_f + Σ value · ∂K/∂parameter` on the export in `dir`, entry by
+/// `K = K_f + Σ value · ∂K/∂parameter` (`value − 1` for a multiplier θ) on
+/// the export in `dir`, entry by
 /// entry to 1e-14 of K's largest (the values read back exactly, only the
 /// sum rounds), every parameter file holding its `nnz_lower` entries and
 /// every entry of K in the sum; returns the matrices' size.
@@ -319,7 +320,9 @@ fn assert_equation_23(dir: &Path, parameters: &[serde_json::Value]) -> usize {
     for p in parameters {
         let (_, dk) = read(&dir.join(p["file"].as_str().unwrap()));
         assert_eq!(dk.len(), p["nnz_lower"].as_u64().unwrap() as usize);
-        let value = p["value"].as_f64().unwrap();
+        // A multiplier θ adds (θ − 1) ∂K/∂θ (index.json's `relation`).
+        let multiplier = matches!(p["kind"].as_str(), Some("stiffness_field" | "member_stiffness"));
+        let value = p["value"].as_f64().unwrap() - if multiplier { 1.0 } else { 0.0 };
         for (at, v) in dk {
             *sum.entry(at).or_insert(0.0) += value * v;
         }
@@ -336,12 +339,19 @@ fn assert_equation_23(dir: &Path, parameters: &[serde_json::Value]) -> usize {
 /// `matrices` of a deck on a bent with an abutment's line support: the
 /// beam nodes' rows name their member and their number along it (their
 /// rotations `rx, ry, rz`), the cap's rows its rigid body, the line
-/// support's `∂K/∂k` follow as `<name>.<component>`, and equation (23)
-/// holds on the export.
+/// support's `∂K/∂k` follow as `<name>.<component>`, a column's held
+/// stiffness multiplier as `<beam>.stiffness` at its value, and equation
+/// (23) holds on the export (with θ = 0.8 on that column's bending).
 #[test]
 fn matrices_of_a_deck_on_a_bent_name_beam_nodes_rigid_bodies_and_line_supports() {
     let dir = fresh_dir("matrices-bent");
-    let base = std::fs::read_to_string("config/examples/deck-on-bent.toml").unwrap();
+    let base = std::fs::read_to_string("config/examples/deck-on-bent.toml")
+        .unwrap()
+        .replacen(
+            "support = \"bent\"\n",
+            "support = \"bent\"\nstiffness = { value = 0.8, scales = \"bending\", update = false }\n",
+            1,
+        );
     let config = dir.join("deck-on-bent.toml");
     std::fs::write(
         &config,
@@ -382,6 +392,12 @@ fn matrices_of_a_deck_on_a_bent_name_beam_nodes_rigid_bodies_and_line_supports()
         .map(|p| p["name"].as_str().unwrap())
         .collect();
     assert_eq!(supports, ["west_abutment.y", "west_abutment.ry"]);
+    let members: Vec<(&str, f64)> = parameters
+        .iter()
+        .filter(|p| p["kind"] == "member_stiffness")
+        .map(|p| (p["name"].as_str().unwrap(), p["value"].as_f64().unwrap()))
+        .collect();
+    assert_eq!(members, [("bent.south.stiffness", 0.8)]);
     assert_eq!(
         assert_equation_23(&dir, parameters),
         index["free_dofs"].as_u64().unwrap() as usize

@@ -115,6 +115,7 @@ impl Config {
             patches,
             springs,
             stiffness_fields,
+            member_stiffness: self.build_member_stiffness()?,
             constraints,
             bearings,
             masses,

@@ -24,6 +24,7 @@ use splinewatch_core::response::frf::SensorPoint;
 use std::collections::BTreeMap;
 
 mod build;
+mod member_stiffness;
 mod sensors;
 mod substructure;
 #[cfg(test)]

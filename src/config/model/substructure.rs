@@ -3,6 +3,7 @@
 //! the core's beam members, rigid bodies and elastic supports.
 
 use super::super::patches::{material_table, BearingUpdate};
+use super::member_stiffness::BeamStiffnessConfig;
 use super::*;
 use splinewatch_core::model::beam::{BeamError, Section};
 use splinewatch_core::model::elastic_supports::{ElasticSupport, ElasticSupportError, SupportComponent};
@@ -41,6 +42,16 @@ pub struct BeamConfig {
     /// (default "ground"; a base on a support follows the support's).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
+    /// A multiplier θ on part of the member's stiffness, held or updated
+    /// (`<name>.stiffness`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<BeamStiffnessConfig>,
+    /// Another beam's name, just before this one in `[[model.beams]]` (or
+    /// before beams tied to it): this one takes its `stiffness` parameter
+    /// (one cracked-section factor for every column of a bent). Both give
+    /// `stiffness` with the same `value` and `scales`; this one no `bounds`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tie: Option<String>,
 }
 
 fn default_elements() -> usize {

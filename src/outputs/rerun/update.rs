@@ -230,7 +230,8 @@ impl RerunOutput {
 
 /// The trend group of a parameter: `springs` (`<spring>.k<j>`), `bearings`,
 /// `supports` (line supports' components), `fields`
-/// (stiffness multipliers `<field>.s<j>`), `damping` (`damping.g<z>`) or
+/// (stiffness multipliers `<field>.s<j>`), `members` (`<beam>.stiffness`),
+/// `damping` (`damping.g<z>`) or
 /// `loss_factors` (`<support>.eta`).
 pub(super) fn parameter_group(name: &str) -> &'static str {
     match crate::config::parameter_family(name) {
@@ -238,6 +239,7 @@ pub(super) fn parameter_group(name: &str) -> &'static str {
         crate::config::ParameterFamily::Bearing => "bearings",
         crate::config::ParameterFamily::ElasticSupport => "supports",
         crate::config::ParameterFamily::StiffnessField => "fields",
+        crate::config::ParameterFamily::MemberStiffness => "members",
         crate::config::ParameterFamily::Damping => "damping",
         crate::config::ParameterFamily::LossFactor => "loss_factors",
     }

@@ -148,6 +148,42 @@ impl BeamMaterial {
     }
 }
 
+/// A part of a beam's stiffness that a multiplier may scale
+/// ([`crate::model::member_stiffness`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StiffnessPart {
+    /// Axial, torsional and bending stiffness together (a factor on `E`
+    /// and `G`).
+    #[default]
+    All,
+    /// `E A`: stretching along the axis.
+    Axial,
+    /// `G J`: twisting about the axis.
+    Torsion,
+    /// Bending in both planes with its shear (`E I` and `G A_s` together,
+    /// so the shear parameter `Φ` stays: a cracked section's effective
+    /// flexural stiffness).
+    Bending,
+}
+
+impl StiffnessPart {
+    pub const NAMES: [&'static str; 4] = ["all", "axial", "torsion", "bending"];
+
+    pub fn parse(name: &str) -> Option<Self> {
+        match name {
+            "all" => Some(Self::All),
+            "axial" => Some(Self::Axial),
+            "torsion" => Some(Self::Torsion),
+            "bending" => Some(Self::Bending),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+}
+
 /// One straight two-node Timoshenko element.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BeamElement {
@@ -211,21 +247,39 @@ impl BeamElement {
         self.to_global(&self.local_mass())
     }
 
+    /// The part `part` of the stiffness on the global dofs of its two nodes
+    /// (the parts add up to [`Self::stiffness`]).
+    pub fn stiffness_part(&self, part: StiffnessPart) -> Mat<f64> {
+        self.to_global(&self.local_stiffness_part(part))
+    }
+
     /// The stiffness in the element's frame.
     pub fn local_stiffness(&self) -> Mat<f64> {
+        self.local_stiffness_part(StiffnessPart::All)
+    }
+
+    /// The part `part` of the stiffness in the element's frame: axial
+    /// stretching, torsion and bending in the two planes decouple there.
+    fn local_stiffness_part(&self, part: StiffnessPart) -> Mat<f64> {
         let (s, m, l) = (&self.section, &self.material, self.length);
         let mut k = Mat::<f64>::zeros(12, 12);
-        put_pair(&mut k, [0, 6], m.young * s.area / l);
-        put_pair(&mut k, [3, 9], m.shear_modulus * s.torsion / l);
-        let phi_y = self.shear_parameter(s.iz, s.shear_area_y);
-        put_bending(&mut k, [1, 5, 7, 11], 1.0, &bending_stiffness(m.young * s.iz, l, phi_y));
-        let phi_z = self.shear_parameter(s.iy, s.shear_area_z);
-        put_bending(
-            &mut k,
-            [2, 4, 8, 10],
-            -1.0,
-            &bending_stiffness(m.young * s.iy, l, phi_z),
-        );
+        if matches!(part, StiffnessPart::All | StiffnessPart::Axial) {
+            put_pair(&mut k, [0, 6], m.young * s.area / l);
+        }
+        if matches!(part, StiffnessPart::All | StiffnessPart::Torsion) {
+            put_pair(&mut k, [3, 9], m.shear_modulus * s.torsion / l);
+        }
+        if matches!(part, StiffnessPart::All | StiffnessPart::Bending) {
+            let phi_y = self.shear_parameter(s.iz, s.shear_area_y);
+            put_bending(&mut k, [1, 5, 7, 11], 1.0, &bending_stiffness(m.young * s.iz, l, phi_y));
+            let phi_z = self.shear_parameter(s.iy, s.shear_area_z);
+            put_bending(
+                &mut k,
+                [2, 4, 8, 10],
+                -1.0,
+                &bending_stiffness(m.young * s.iy, l, phi_z),
+            );
+        }
         k
     }
 

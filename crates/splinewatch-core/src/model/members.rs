@@ -13,7 +13,7 @@ use faer::Mat;
 use thiserror::Error;
 
 use crate::geometry::vec3::{norm, sub, Vec3};
-use crate::model::beam::{BeamElement, BeamError, BeamMaterial, Section, DOFS_PER_BEAM_NODE};
+use crate::model::beam::{BeamElement, BeamError, BeamMaterial, Section, StiffnessPart, DOFS_PER_BEAM_NODE};
 use crate::model::dofs::DofMap;
 use crate::model::shell::Assembly;
 use crate::model::sparse::SparseError;
@@ -146,6 +146,8 @@ pub struct BeamNet {
     member_nodes: Vec<Vec<usize>>,
     /// Per element, its two nodes and the element.
     elements: Vec<(usize, usize, BeamElement)>,
+    /// Per element, the member it belongs to.
+    element_members: Vec<usize>,
     /// Per node, the components its members' bases hold.
     held: Vec<[bool; DOFS_PER_BEAM_NODE]>,
 }
@@ -158,9 +160,10 @@ impl BeamNet {
             positions: Vec::new(),
             member_nodes: Vec::with_capacity(members.len()),
             elements: Vec::new(),
+            element_members: Vec::new(),
             held: Vec::new(),
         };
-        for m in &members {
+        for (k, m) in members.iter().enumerate() {
             let nodes: Vec<usize> = (0..=m.elements).map(|i| net.node_at(m.point(i), tolerance)).collect();
             for (c, held) in net.held[nodes[0]].iter_mut().enumerate() {
                 *held |= m.base.holds(c);
@@ -172,6 +175,7 @@ impl BeamNet {
                         source,
                     })?;
                 net.elements.push((pair[0], pair[1], element));
+                net.element_members.push(k);
             }
             net.member_nodes.push(nodes);
         }
@@ -235,6 +239,26 @@ impl BeamNet {
             let at = self.element_dofs((a, b), dofs);
             stiffness.add_local(&element.stiffness(), &at)?;
             mass.add_local(&element.mass(), &at)?;
+        }
+        Ok(())
+    }
+
+    /// Adds part `part` of member `member`'s stiffness to `stiffness` on
+    /// the global dofs of `dofs` (nothing for a member that does not exist).
+    pub fn add_member_stiffness<A: Assembly>(
+        &self,
+        member: usize,
+        part: StiffnessPart,
+        stiffness: &mut A,
+        dofs: &DofMap,
+    ) -> Result<(), SparseError> {
+        for (&(a, b, ref element), _) in self
+            .elements
+            .iter()
+            .zip(&self.element_members)
+            .filter(|(_, &m)| m == member)
+        {
+            stiffness.add_local(&element.stiffness_part(part), &self.element_dofs((a, b), dofs))?;
         }
         Ok(())
     }

@@ -30,6 +30,7 @@ pub mod dofs;
 pub mod elastic_supports;
 pub mod joints;
 pub mod material;
+pub mod member_stiffness;
 pub mod members;
 pub mod patch;
 pub mod rigid;
@@ -44,6 +45,7 @@ use constraints::EdgeConstraint;
 use elastic_supports::ElasticSupport;
 use joints::Joint;
 use material::OrthotropicMaterial;
+use member_stiffness::MemberStiffness;
 use members::BeamNet;
 use patch::Patch;
 use rigid::RigidBody;
@@ -60,6 +62,9 @@ pub struct ShellModel {
     pub springs: Vec<SpringField>,
     /// Stiffness multiplier fields of the deck (none: the nominal material).
     pub stiffness_fields: Vec<StiffnessField>,
+    /// Multipliers of beam members' stiffness; in the assembled models
+    /// they follow the stiffness fields, one coefficient each.
+    pub member_stiffness: Vec<MemberStiffness>,
     pub constraints: Vec<EdgeConstraint>,
     /// Rigid joints between patches ([`joints::find_joints`]).
     pub joints: Vec<Joint>,
@@ -86,6 +91,7 @@ impl Default for ShellModel {
             patches: Vec::new(),
             springs: Vec::new(),
             stiffness_fields: Vec::new(),
+            member_stiffness: Vec::new(),
             constraints: Vec::new(),
             joints: Vec::new(),
             joint_penalty: joints::DEFAULT_PENALTY,
@@ -137,6 +143,16 @@ impl ShellModel {
     /// bearings and elastic supports.
     pub fn spring_field_count(&self) -> usize {
         self.springs.len() + self.bearings.len() + self.elastic_supports.len()
+    }
+
+    /// The start coefficients θ of every stiffness field, then of every
+    /// member's multiplier (one each): the assembled models' order.
+    pub fn field_coefficients(&self) -> Vec<Vec<f64>> {
+        self.stiffness_fields
+            .iter()
+            .map(|f| f.coefficients().to_vec())
+            .chain(self.member_stiffness.iter().map(|m| vec![m.factor()]))
+            .collect()
     }
 
     /// The shell patches' control points (their nets), in global order.

@@ -12,6 +12,7 @@ use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
 use crate::model::elastic_supports::{ElasticSupport, ElasticSupportError};
+use crate::model::member_stiffness::MemberStiffnessError;
 use crate::model::patch::Patch;
 use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
@@ -45,6 +46,8 @@ pub enum ModelError {
     StiffnessField { index: usize, source: StiffnessFieldError },
     #[error("beams: {0}")]
     Beams(SparseError),
+    #[error("member stiffness {index}: {source}")]
+    MemberStiffness { index: usize, source: MemberStiffnessError },
     #[error("{0}")]
     Rigid(#[from] RigidError),
     #[error("modes: {0}")]
@@ -132,6 +135,13 @@ impl ShellModel {
                 .map_err(|source| ModelError::StiffnessField { index, source })?;
             field_matrices.push(own.into_iter().map(|m| embed(m, offset, n)).collect());
         }
+        for (index, member) in self.member_stiffness.iter().enumerate() {
+            let mut derivative = Mat::<f64>::zeros(n, n);
+            member
+                .derivative_into(&self.beams, &dofs, &mut derivative)
+                .map_err(|source| ModelError::MemberStiffness { index, source })?;
+            field_matrices.push(vec![derivative]);
+        }
         let spring_stiffness = self.spring_coefficients();
         Ok(AssembledModel {
             patches: self.patches.clone(),
@@ -141,11 +151,7 @@ impl ShellModel {
             spring_blocks,
             spring_stiffness,
             field_matrices,
-            field_coefficients: self
-                .stiffness_fields
-                .iter()
-                .map(|f| f.coefficients().to_vec())
-                .collect(),
+            field_coefficients: self.field_coefficients(),
             reduction: self.reduction()?,
             modal: OnceLock::new(),
         })

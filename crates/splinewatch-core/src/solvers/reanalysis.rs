@@ -285,6 +285,7 @@ mod tests {
         let model = ShellModel {
             springs: vec![spring(0.0, 0.05), spring(0.95, 1.0)],
             stiffness_fields: Vec::new(),
+            member_stiffness: Vec::new(),
             constraints: Vec::new(),
             ..ShellModel::new(Shell::clone(&shell), material)
         };

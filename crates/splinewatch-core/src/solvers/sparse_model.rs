@@ -237,6 +237,18 @@ fn field_matrices(
     reduction: &DofReduction,
     pattern: &Arc<Pattern>,
 ) -> Result<(Vec<Vec<SparseTerm>>, Vec<Vec<NonZeros>>), ModelError> {
+    let reduced = |d: &SparseSymmetric| -> Result<(SparseTerm, NonZeros), ModelError> {
+        let term = SparseTerm::from_matrix(&reduction.reduce_sparse(d, pattern).map_err(sparse_error)?);
+        Ok((term, d.nonzeros()))
+    };
+    let members = model.member_stiffness.iter().enumerate().map(|(index, member)| {
+        let mut derivative = SparseAccumulator::new(Arc::clone(full));
+        member
+            .derivative_into(&model.beams, dofs, &mut derivative)
+            .map_err(|source| ModelError::MemberStiffness { index, source })?;
+        let (term, product) = reduced(&derivative.to_matrix())?;
+        Ok((vec![term], vec![product]))
+    });
     let (terms, products): (Vec<_>, Vec<_>) = model
         .stiffness_fields
         .iter()
@@ -253,14 +265,13 @@ fn field_matrices(
             let mut terms = Vec::with_capacity(accumulated.len());
             let mut products = Vec::with_capacity(accumulated.len());
             for a in accumulated {
-                let d = a.inner.to_matrix();
-                terms.push(SparseTerm::from_matrix(
-                    &reduction.reduce_sparse(&d, pattern).map_err(sparse_error)?,
-                ));
-                products.push(d.nonzeros());
+                let (term, product) = reduced(&a.inner.to_matrix())?;
+                terms.push(term);
+                products.push(product);
             }
             Ok((terms, products))
         })
+        .chain(members)
         .collect::<Result<Vec<_>, ModelError>>()?
         .into_iter()
         .unzip();
@@ -450,11 +461,7 @@ impl SparseModel {
             spring_stiffness: model.spring_coefficients(),
             field_terms,
             field_products,
-            field_coefficients: model
-                .stiffness_fields
-                .iter()
-                .map(|f| f.coefficients().to_vec())
-                .collect(),
+            field_coefficients: model.field_coefficients(),
             lumped,
             blocks,
         })
@@ -740,6 +747,7 @@ mod tests {
         let model = ShellModel {
             springs: vec![spring(0.0, 0.05, 1e9), spring(0.95, 1.0, 3e9)],
             stiffness_fields: Vec::new(),
+            member_stiffness: Vec::new(),
             constraints: Vec::new(),
             ..ShellModel::new(shell, material)
         };

@@ -58,6 +58,7 @@ pub fn sinello_model() -> ShellModel {
     ShellModel {
         springs: sinello_springs(),
         stiffness_fields: vec![],
+        member_stiffness: Vec::new(),
         constraints: vec![],
         ..ShellModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
@@ -104,6 +105,7 @@ pub fn clamped_curved_panel() -> ShellModel {
     ShellModel {
         springs: sinello_springs(),
         stiffness_fields: vec![],
+        member_stiffness: Vec::new(),
         constraints: vec![EdgeConstraint {
             edge: Edge::Eta0,
             kind: SupportKind::Clamped,

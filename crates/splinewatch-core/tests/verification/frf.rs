@@ -111,6 +111,7 @@ fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
     let plate = ShellModel {
         springs: vec![],
         stiffness_fields: vec![],
+        member_stiffness: Vec::new(),
         constraints: [Edge::Xi0, Edge::Xi1, Edge::Eta0, Edge::Eta1]
             .into_iter()
             .map(|edge| EdgeConstraint {

@@ -157,6 +157,7 @@ fn modal_residue_jacobian_for_a_stiffness_field_matches_central_differences() {
     let field = StiffnessField::new(knots(1, 4), knots(1, 2), vec![1.0; 8]).unwrap();
     let deck = ShellModel {
         stiffness_fields: vec![field],
+        member_stiffness: Vec::new(),
         ..sinello_model()
     };
     let dense = FrfModel::new(deck.assemble().unwrap(), &sinello_sensors()).unwrap();

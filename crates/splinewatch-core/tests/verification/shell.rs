@@ -42,6 +42,7 @@ fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial
     ShellModel {
         springs: vec![],
         stiffness_fields: Vec::new(),
+        member_stiffness: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
         ..ShellModel::new(
             Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
@@ -153,6 +154,7 @@ fn sparse_path_at_20000_dofs_matches_navier() {
     let model = ShellModel {
         springs: vec![],
         stiffness_fields: Vec::new(),
+        member_stiffness: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
         ..ShellModel::new(
             Shell::rectangular_plate(a, b, h, [3, 3], [80, 50]).unwrap(),
@@ -281,6 +283,7 @@ fn section_scales_match_navier_mindlin() {
     let mat = sinello_material();
     let model = ShellModel {
         stiffness_fields: section_fields([StiffnessScale::Bending, StiffnessScale::Shear, StiffnessScale::Membrane]),
+        member_stiffness: Vec::new(),
         ..simply_supported_plate(a, b, h, &mat)
     };
     let assembled = model.assemble().unwrap();
@@ -332,6 +335,7 @@ fn free_plate_has_six_rigid_modes() {
     let model = ShellModel {
         springs: vec![],
         stiffness_fields: Vec::new(),
+        member_stiffness: Vec::new(),
         constraints: vec![],
         ..ShellModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
@@ -349,6 +353,7 @@ fn vertical_springs_leave_three_in_plane_rigid_modes() {
     let model = ShellModel {
         springs: sinello_springs(),
         stiffness_fields: Vec::new(),
+        member_stiffness: Vec::new(),
         constraints: vec![],
         ..ShellModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
@@ -378,6 +383,7 @@ fn sinello_deck_has_thirty_modes_below_80_hz() {
     let model = ShellModel {
         springs: sinello_springs(),
         stiffness_fields: Vec::new(),
+        member_stiffness: Vec::new(),
         constraints: vec![],
         ..ShellModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
@@ -459,6 +465,7 @@ fn material_angle_rotates_the_orthotropy() {
         let model = ShellModel {
             springs: vec![],
             stiffness_fields: Vec::new(),
+            member_stiffness: Vec::new(),
             constraints: all_edges(SupportKind::SimplySupported),
             ..ShellModel::new(
                 Shell::rectangular_plate(4.0, 3.0, 0.2, [3, 3], [8, 7]).unwrap(),

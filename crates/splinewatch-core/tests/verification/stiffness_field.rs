@@ -31,6 +31,7 @@ fn field(degree: [usize; 2], count: [usize; 2]) -> StiffnessField {
 fn with_fields(fields: Vec<StiffnessField>) -> ShellModel {
     ShellModel {
         stiffness_fields: fields,
+        member_stiffness: Vec::new(),
         ..sinello_model()
     }
 }

@@ -316,6 +316,7 @@ fn transmissibility_sensitivities_match_central_differences() {
     let field = StiffnessField::new(knots(2), knots(2), vec![1.0; 4]).unwrap();
     let shell_model = ShellModel {
         stiffness_fields: vec![field],
+        member_stiffness: Vec::new(),
         ..sinello_model()
     };
     let sensors: Vec<SensorPoint> = sinello_sensors()[..3].to_vec();

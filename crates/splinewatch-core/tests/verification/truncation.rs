@@ -199,6 +199,7 @@ fn regions() -> (ShellModel, Vec<f64>) {
     theta[5] = 0.7;
     let model = ShellModel {
         stiffness_fields: vec![regions],
+        member_stiffness: Vec::new(),
         ..sinello_model()
     };
     (model, theta)

@@ -700,6 +700,7 @@ mod tests {
         let model = ShellModel {
             springs,
             stiffness_fields: vec![],
+            member_stiffness: Vec::new(),
             constraints: vec![],
             ..ShellModel::new(
                 Shell::rectangular_plate(6.0, 6.0, 0.15, [3, 3], [7, 7]).unwrap(),
