@@ -513,6 +513,7 @@ impl super::tie::Tied for BearingConfig {
 #[cfg(test)]
 mod tests {
     use crate::config::Config;
+    use splinewatch_core::response::frf::{Sensor, SensorPoint};
 
     const DECK: &str = include_str!("../../tests/fixtures/slab_on_webs.toml");
 
@@ -549,9 +550,17 @@ origin = [30.0, 0.0, 0.0]
         // The bearings sit under the webs' bottom edges (η = 1), at the ends.
         let first = model.bearings[0].at();
         assert_eq!((first.patch, first.xi, first.eta, first.tau), (1, 0.0, 1.0, 0.0));
-        let sensors = config.build_sensors(&model).unwrap();
-        assert_eq!((sensors[0].1.patch, sensors[1].1.patch), (0, 2));
-        assert!((sensors[0].1.xi - 0.5).abs() < 1e-9 && (sensors[0].1.eta - 1.0 / 6.0).abs() < 1e-9);
+        let sensors: Vec<SensorPoint> = config
+            .build_sensors(&model)
+            .unwrap()
+            .into_iter()
+            .map(|(_, s)| match s {
+                Sensor::Shell(p) => p,
+                Sensor::Beam(_) => panic!("no beam in this config"),
+            })
+            .collect();
+        assert_eq!((sensors[0].patch, sensors[1].patch), (0, 2));
+        assert!((sensors[0].xi - 0.5).abs() < 1e-9 && (sensors[0].eta - 1.0 / 6.0).abs() < 1e-9);
         let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
         assert_eq!(names[..3], ["west_south.kx", "west_south.ky", "west_south.kz"]);
         // κ: no spring fields, then the four bearings.

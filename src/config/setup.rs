@@ -4,7 +4,7 @@ use super::Config;
 use anyhow::{Context, Result};
 use splinewatch_core::c64;
 use splinewatch_core::model::damping::DampingCurve;
-use splinewatch_core::response::frf::{FrfModel, FrfRequest, SensorPoint};
+use splinewatch_core::response::frf::{FrfModel, FrfRequest, Sensor, SensorPoint};
 use splinewatch_core::solvers::truncation::TruncationReport;
 
 /// The model, its sensors and damping, ready for FRF work.
@@ -72,7 +72,11 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
     }
     let damping = config.build_damping()?;
     let kappa = model.spring_coefficients();
-    let points: Vec<_> = sensors.iter().map(|(_, p)| *p).chain(extra.iter().copied()).collect();
+    let points: Vec<Sensor> = sensors
+        .iter()
+        .map(|(_, p)| *p)
+        .chain(extra.iter().map(|&p| Sensor::Shell(p)))
+        .collect();
     let dense = |model: &splinewatch_core::model::ShellModel| -> Result<FrfModel> {
         Ok(FrfModel::new(
             model.assemble().context("assembling the model")?,

@@ -8,6 +8,7 @@ use crate::io::uff::write::{UffMode, UffWriter};
 use crate::io::uff::UffPoint;
 use anyhow::{bail, Context, Result};
 use splinewatch_core::c64;
+use splinewatch_core::response::frf::Sensor;
 use splinewatch_core::solvers::modal::ModeKind;
 
 /// The config's sensors as universal-file points: node `uff_node` (default:
@@ -21,8 +22,14 @@ pub fn uff_points(config: &Config) -> Result<Vec<UffPoint>> {
         let point = UffPoint {
             name,
             node: c.uff_node.unwrap_or(k as i64 + 1),
-            position: model.patches[p.patch].shell.surface().evaluate(p.xi, p.eta).r,
-            axis: axis_of(p.direction),
+            position: match p {
+                Sensor::Shell(p) => model.patches[p.patch].shell.surface().evaluate(p.xi, p.eta).r,
+                Sensor::Beam(b) => b.at,
+            },
+            axis: axis_of(match p {
+                Sensor::Shell(p) => p.direction,
+                Sensor::Beam(b) => b.direction,
+            }),
         };
         if let Some(other) = points
             .iter()

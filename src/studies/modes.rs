@@ -10,7 +10,7 @@ use splinewatch_core::model::elastic_supports::SupportSite;
 use splinewatch_core::model::members::BeamBase;
 use splinewatch_core::model::springs::LowRankBlock;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::response::frf::sensor_rows;
+use splinewatch_core::response::frf::sensor_rows_of;
 use splinewatch_core::solvers::modal::{ModeKind, Modes};
 use splinewatch_core::solvers::mode_motion::{DeckAxes, Motion, MotionShares};
 use splinewatch_core::solvers::sparse_model::SparseModel;
@@ -209,7 +209,7 @@ struct Sensors {
 impl Sensors {
     fn of(config: &Config, model: &ShellModel) -> Result<Self> {
         let (names, points): (Vec<String>, Vec<_>) = config.build_sensors(model)?.into_iter().unzip();
-        let rows = sensor_rows(&model.patches, &points).context("the sensors' rows")?;
+        let rows = sensor_rows_of(model, &points).context("the sensors' rows")?;
         Ok(Self { names, rows })
     }
 

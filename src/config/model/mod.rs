@@ -197,6 +197,11 @@ pub struct SensorConfig {
     /// are listed after the deck's once loaded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
+    /// A sensor on a beam: the `[[model.beams]]` member it is fixed to, at
+    /// `x, y, z` (on its axis, its face or a bracket: the nearest axis
+    /// point carries it rigidly).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub beam: Option<String>,
 }
 
 fn default_quantity() -> QuantityList {

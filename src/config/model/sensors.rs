@@ -1,10 +1,13 @@
 //! `[[sensors]]` as points of the model.
 
+use super::super::patches::MAX_DISTANCE;
 use super::*;
+use splinewatch_core::response::frf::{BeamSensor, Sensor};
 
 impl Config {
-    /// The sensors as model points, in config order, with their names.
-    pub fn build_sensors(&self, model: &ShellModel) -> Result<Vec<(String, SensorPoint)>, ConfigError> {
+    /// The sensors as model points, in config order, with their names: on
+    /// a patch, or on the beam `beam` names.
+    pub fn build_sensors(&self, model: &ShellModel) -> Result<Vec<(String, Sensor)>, ConfigError> {
         let mut out = Vec::with_capacity(self.sensors.len());
         for (i, s) in self.sensors.iter().enumerate().take(self.deck_sensor_count()) {
             let key = |k: &str| format!("sensors[{i}].{k}");
@@ -16,47 +19,107 @@ impl Config {
                     ));
                 }
             }
-            let tau = face_tau(s.surface);
-            let (patch, xi, eta) = self.sensor_position(model, i)?;
-            let shell = &model.patches[patch].shell;
-            let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-            if !kx.contains(xi) || !ke.contains(eta) {
-                return Err(err(
-                    key("xi"),
-                    format!("({xi}, {eta}) lies outside the parameter domain"),
-                ));
-            }
-            let direction = match &s.direction {
-                named @ DirectionConfig::Named(n) => match (named.axis_vector(), n.as_str()) {
-                    (Some(axis), _) => axis,
-                    (None, "normal") => {
-                        let e = shell.surface().evaluate(xi, eta);
-                        splinewatch_core::geometry::vec3::cross(e.r_xi, e.r_eta)
-                    }
-                    (None, other) => {
-                        return Err(err(
-                            key("direction"),
-                            format!("{other:?} is not one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\", \"normal\" or a 3-vector"),
-                        ))
-                    }
-                },
-                DirectionConfig::Vector(v) => *v,
+            let sensor = match &s.beam {
+                Some(beam) => Sensor::Beam(self.beam_sensor(model, i, beam)?),
+                None => Sensor::Shell(self.shell_sensor(model, i)?),
             };
-            if splinewatch_core::geometry::vec3::normalize(direction).is_none() {
-                return Err(err(key("direction"), "must be a finite non-zero vector"));
-            }
-            out.push((
-                s.name.clone(),
-                SensorPoint {
-                    patch,
-                    xi,
-                    eta,
-                    tau,
-                    direction,
-                },
-            ));
+            out.push((s.name.clone(), sensor));
         }
         Ok(out)
+    }
+
+    /// Sensor `i` on a patch.
+    fn shell_sensor(&self, model: &ShellModel, i: usize) -> Result<SensorPoint, ConfigError> {
+        let s = &self.sensors[i];
+        let key = |k: &str| format!("sensors[{i}].{k}");
+        let tau = face_tau(s.surface);
+        let (patch, xi, eta) = self.sensor_position(model, i)?;
+        let shell = &model.patches[patch].shell;
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+        if !kx.contains(xi) || !ke.contains(eta) {
+            return Err(err(
+                key("xi"),
+                format!("({xi}, {eta}) lies outside the parameter domain"),
+            ));
+        }
+        let direction = match &s.direction {
+            named @ DirectionConfig::Named(n) => match (named.axis_vector(), n.as_str()) {
+                (Some(axis), _) => axis,
+                (None, "normal") => {
+                    let e = shell.surface().evaluate(xi, eta);
+                    splinewatch_core::geometry::vec3::cross(e.r_xi, e.r_eta)
+                }
+                (None, other) => {
+                    return Err(err(
+                        key("direction"),
+                        format!(
+                        "{other:?} is not one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\", \"normal\" or a 3-vector"
+                    ),
+                    ))
+                }
+            },
+            DirectionConfig::Vector(v) => *v,
+        };
+        if splinewatch_core::geometry::vec3::normalize(direction).is_none() {
+            return Err(err(key("direction"), "must be a finite non-zero vector"));
+        }
+        Ok(SensorPoint {
+            patch,
+            xi,
+            eta,
+            tau,
+            direction,
+        })
+    }
+
+    /// Sensor `i` on beam `beam`: at `x, y, z`, within 0.5 m of the
+    /// member's section (its axis point nearest moves it rigidly).
+    fn beam_sensor(&self, model: &ShellModel, i: usize, beam: &str) -> Result<BeamSensor, ConfigError> {
+        let s = &self.sensors[i];
+        let key = |k: &str| format!("sensors[{i}].{k}");
+        let members = model.beams.members();
+        let member = members.iter().position(|m| m.name() == beam).ok_or_else(|| {
+            let names: Vec<&str> = members.iter().map(|m| m.name()).collect();
+            err(
+                key("beam"),
+                format!("{beam:?} is not a [[model.beams]] name ({names:?})"),
+            )
+        })?;
+        if s.patch.is_some() || s.xi.is_some() || s.eta.is_some() || s.surface != FaceConfig::Middle {
+            return Err(err(
+                key("beam"),
+                "a sensor on a beam takes x, y and z: leave out patch, xi, eta and surface",
+            ));
+        }
+        let (Some(x), Some(y), Some(z)) = (s.x, s.y, s.z) else {
+            return Err(err(key("beam"), "a sensor on a beam needs x, y and z (metres)"));
+        };
+        let at = [x, y, z];
+        let reach = MAX_DISTANCE + members[member].section().area.sqrt();
+        let on_axis = model.beams.nearest_on_axis(member, at).expect("the member exists");
+        let distance = splinewatch_core::geometry::vec3::norm(splinewatch_core::geometry::vec3::sub(at, on_axis));
+        if distance.is_nan() || distance > reach {
+            return Err(err(
+                key("x"),
+                format!("({x}, {y}, {z}) m is {distance:.3} m from beam {beam:?}'s axis: more than {reach:.2} m (the section and {MAX_DISTANCE} m)"),
+            ));
+        }
+        let direction = match s.direction.axis_vector() {
+            Some(axis) => axis,
+            None => match &s.direction {
+                DirectionConfig::Vector(v) => *v,
+                DirectionConfig::Named(other) => {
+                    return Err(err(
+                        key("direction"),
+                        format!("{other:?}: a sensor on a beam measures along \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\" or a 3-vector"),
+                    ))
+                }
+            },
+        };
+        if splinewatch_core::geometry::vec3::normalize(direction).is_none() {
+            return Err(err(key("direction"), "must be a finite non-zero vector"));
+        }
+        Ok(BeamSensor { member, at, direction })
     }
 }
 
@@ -94,6 +157,68 @@ impl Config {
                 format!("sensors[{i}]"),
                 "give either both xi and eta (parametric), x and y (metres, in plan on a single patch) or x, y and z",
             )),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::Config;
+    use splinewatch_core::response::frf::{BeamSensor, Sensor};
+
+    /// The deck on a bent with a sensor on the north column's face.
+    fn on_column(sensor: &str) -> String {
+        format!(
+            "{}\n[[sensors]]\nname = \"column\"\n{sensor}\n",
+            include_str!("../../../config/examples/deck-on-bent.toml")
+        )
+    }
+
+    /// A sensor on a beam is the member by name at its point, after the
+    /// deck's sensors in config order; the errors name their key.
+    #[test]
+    fn a_sensor_on_a_beam_is_built_at_its_point() {
+        let text = on_column("beam = \"bent.north\"\nx = 20.6\ny = 6.0\nz = -3.0\ndirection = \"y\"");
+        let config = Config::from_toml(&text).unwrap();
+        let model = config.build_model().unwrap();
+        let sensors = config.build_sensors(&model).unwrap();
+        let (name, sensor) = sensors.last().unwrap();
+        assert_eq!(name, "column");
+        assert_eq!(
+            *sensor,
+            Sensor::Beam(BeamSensor {
+                member: 1,
+                at: [20.6, 6.0, -3.0],
+                direction: [0.0, 1.0, 0.0]
+            })
+        );
+        let cases = [
+            (
+                "beam = \"bent.west\"\nx = 20.6\ny = 6.0\nz = -3.0\ndirection = \"y\"",
+                "sensors[4].beam",
+            ),
+            (
+                "beam = \"bent.north\"\nx = 22.5\ny = 6.0\nz = -3.0\ndirection = \"y\"",
+                "sensors[4].x",
+            ),
+            (
+                "beam = \"bent.north\"\nx = 20.6\ny = 6.0\ndirection = \"y\"",
+                "sensors[4].beam",
+            ),
+            (
+                "beam = \"bent.north\"\nxi = 0.5\neta = 0.5\ndirection = \"y\"",
+                "sensors[4].beam",
+            ),
+            (
+                "beam = \"bent.north\"\nx = 20.6\ny = 6.0\nz = -3.0\ndirection = \"normal\"",
+                "sensors[4].direction",
+            ),
+        ];
+        for (sensor, key) in cases {
+            let config = Config::from_toml(&on_column(sensor)).unwrap();
+            let model = config.build_model().unwrap();
+            let e = config.build_sensors(&model).unwrap_err().to_string();
+            assert!(e.contains(key), "{key}: {e}");
         }
     }
 }

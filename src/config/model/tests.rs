@@ -334,7 +334,7 @@ fn a_channel_pointing_the_other_way_enters_with_the_opposite_sign() {
     assert_eq!(signals[at("bent.y")], vec![index("ch3") as f64 + 1.0; 3]);
     let sensors = config.build_sensors(&model).unwrap();
     let (_, ch11) = sensors.iter().find(|(n, _)| n == "ch11").unwrap();
-    assert_eq!(ch11.direction, [-1.0, 0.0, 0.0]);
+    assert_eq!(ch11.direction(), [-1.0, 0.0, 0.0]);
     let anchors = groups.anchors(&model);
     let anchor = |name: &str| anchors[groups.names().iter().position(|g| g == name).unwrap()].unwrap();
     // The bent's footings straddle x = 44.5 m at 8.97 m below the deck; the

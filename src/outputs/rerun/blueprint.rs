@@ -1,7 +1,6 @@
 //! What every `.rrd` file starts with: the blueprint (the viewer's layout)
 //! and the static sensor positions.
 
-use super::deck::f32x3;
 use super::{rerun_error, RerunOutput, MODES_SHOWN};
 use anyhow::{anyhow, Result};
 use rerun::blueprint::BarChartView;
@@ -9,7 +8,7 @@ use rerun::blueprint::{
     Blueprint, BlueprintActivation, ContainerLike, Horizontal, Spatial2DView, Spatial3DView, Tabs, TimeSeriesView,
     Vertical,
 };
-use splinewatch_core::response::frf::SensorPoint;
+use splinewatch_core::response::frf::Sensor;
 
 impl RerunOutput {
     /// The layout: trends left, the deck in the middle, and on the right
@@ -151,10 +150,10 @@ impl RerunOutput {
         Tabs::new(views).into()
     }
 
-    pub(super) fn log_sensors(&self, sensors: &[(String, SensorPoint)]) -> Result<()> {
+    pub(super) fn log_sensors(&self, sensors: &[(String, Sensor)]) -> Result<()> {
         let positions: Vec<[f32; 3]> = sensors
             .iter()
-            .map(|(_, s)| f32x3(self.model.patches[s.patch].shell.position(s.xi, s.eta, 1.0)))
+            .map(|(_, s)| super::deck::sensor_position(&self.model, s))
             .collect();
         let labels: Vec<String> = sensors.iter().map(|(name, _)| name.clone()).collect();
         self.rec

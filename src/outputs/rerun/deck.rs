@@ -4,9 +4,19 @@
 use super::GRID;
 use splinewatch_core::geometry::vec3::Vec3;
 use splinewatch_core::model::ShellModel;
+use splinewatch_core::response::frf::Sensor;
 
 pub(super) fn f32x3(v: Vec3) -> [f32; 3] {
     [v[0] as f32, v[1] as f32, v[2] as f32]
+}
+
+/// Where sensor `s` is drawn: a patch sensor on the top face, a beam
+/// sensor at its point.
+pub(super) fn sensor_position(model: &ShellModel, s: &Sensor) -> [f32; 3] {
+    match s {
+        Sensor::Shell(p) => f32x3(model.patches[p.patch].shell.position(p.xi, p.eta, 1.0)),
+        Sensor::Beam(b) => f32x3(b.at),
+    }
 }
 
 /// A blue → green → yellow ramp for `t ∈ [0, 1]`.

@@ -49,7 +49,7 @@ use crate::pipeline::{Health, UpdateOutcome};
 use anyhow::{anyhow, Result};
 use deck::DeckGrid;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::response::frf::SensorPoint;
+use splinewatch_core::response::frf::Sensor;
 use std::path::{Path, PathBuf};
 
 /// Where the Rerun stream goes.
@@ -84,7 +84,7 @@ pub struct RerunOutput {
     /// Parameter series already given their static names and colours.
     named: std::collections::BTreeSet<String>,
     targets: RerunTargets,
-    sensors: Vec<(String, SensorPoint)>,
+    sensors: Vec<(String, Sensor)>,
     rotate_ns: i128,
     /// The blueprint's right column: FRF views with a force sensor, OMA
     /// views when windows are identified (output-only, or both paths).

@@ -6,7 +6,6 @@
 //! pipeline window also the trends by paired model mode and the identified
 //! and model shapes at the sensors.
 
-use super::deck::f32x3;
 use super::{rerun_error, RerunOutput};
 use crate::io::modes_json::ModeEntry;
 use crate::pipeline::oma::OmaReport;
@@ -117,9 +116,9 @@ impl RerunOutput {
                     .zip(values)
                     .filter_map(|(s, v)| s.map(|s| (s, v)))
                     .map(|(s, v)| {
-                        let d = s.direction;
+                        let d = s.direction();
                         (
-                            f32x3(self.model.patches[s.patch].shell.position(s.xi, s.eta, 1.0)),
+                            super::deck::sensor_position(&self.model, s),
                             [
                                 (length * v * d[0]) as f32,
                                 (length * v * d[1]) as f32,

@@ -306,6 +306,52 @@ impl BeamElement {
         m
     }
 
+    /// The translation and rotation of the axis at `x` (a fraction of the
+    /// length from the start) in global axes, as rows on the element's 12
+    /// global dofs: linear in the axial and torsional dofs, the bending
+    /// planes by the interdependent interpolation that built the element
+    /// (eq. 14–15 of Friedman & Kosmatka 1993), so a node's motion is its
+    /// dofs exactly.
+    pub fn motion_rows(&self, x: f64) -> [[f64; 12]; 6] {
+        let (s, l) = (&self.section, self.length);
+        let mut local = [[0.0; 12]; 6];
+        local[0][0] = 1.0 - x;
+        local[0][6] = x;
+        local[3][3] = 1.0 - x;
+        local[3][9] = x;
+        // x–y plane: v and θ_z = dv/dx on (1, 5, 7, 11).
+        let phi_y = self.shear_parameter(s.iz, s.shear_area_y);
+        let (v, t) = (bending_displacement(x, l, phi_y), bending_rotation(x, l, phi_y));
+        for (a, &dof) in [1, 5, 7, 11].iter().enumerate() {
+            local[1][dof] = v[a];
+            local[5][dof] = t[a];
+        }
+        // x–z plane: w and θ_y = −dw/dx on (2, 4, 8, 10), whose rotation
+        // dofs are −dw/dx.
+        let phi_z = self.shear_parameter(s.iy, s.shear_area_z);
+        let (w, t) = (bending_displacement(x, l, phi_z), bending_rotation(x, l, phi_z));
+        let sign = [1.0, -1.0, 1.0, -1.0];
+        for (a, &dof) in [2, 4, 8, 10].iter().enumerate() {
+            local[2][dof] = sign[a] * w[a];
+            local[4][dof] = -sign[a] * t[a];
+        }
+        // Global output `Aᵀ (local)`, local dofs `A (global)` per node.
+        let a = &self.axes;
+        let mut rows = [[0.0; 12]; 6];
+        for (r, row) in rows.iter_mut().enumerate() {
+            let (block, g) = (r / 3, r % 3);
+            for (c, entry) in row.iter_mut().enumerate() {
+                let (node_block, k) = (c / 3, c % 3);
+                for i in 0..3 {
+                    for j in 0..3 {
+                        *entry += a[i][g] * local[3 * block + i][3 * node_block + j] * a[j][k];
+                    }
+                }
+            }
+        }
+        rows
+    }
+
     /// `Φ = 12 E I / (G A_s L²)`.
     fn shear_parameter(&self, inertia: f64, shear_area: f64) -> f64 {
         12.0 * self.material.young * inertia / (self.material.shear_modulus * shear_area * self.length.powi(2))
@@ -377,23 +423,8 @@ fn bending_stiffness(ei: f64, l: f64, phi: f64) -> [[f64; 4]; 4] {
 /// `μ = 1/(1+Φ)`, `ξ = x/L`), integrated exactly by 4 Gauss points
 /// (polynomials of degree 6).
 fn bending_mass(rho_a: f64, rho_i: f64, l: f64, phi: f64) -> [[f64; 4]; 4] {
-    let mu = 1.0 / (1.0 + phi);
-    let displacement = |x: f64| {
-        [
-            mu * (2.0 * x.powi(3) - 3.0 * x * x - phi * x + 1.0 + phi),
-            l * mu * (x.powi(3) - (2.0 + phi / 2.0) * x * x + (1.0 + phi / 2.0) * x),
-            mu * (-2.0 * x.powi(3) + 3.0 * x * x + phi * x),
-            l * mu * (x.powi(3) - (1.0 - phi / 2.0) * x * x - phi / 2.0 * x),
-        ]
-    };
-    let rotation = |x: f64| {
-        [
-            6.0 * mu / l * (x * x - x),
-            mu * (3.0 * x * x - (4.0 + phi) * x + 1.0 + phi),
-            -6.0 * mu / l * (x * x - x),
-            mu * (3.0 * x * x - (2.0 - phi) * x),
-        ]
-    };
+    let displacement = |x: f64| bending_displacement(x, l, phi);
+    let rotation = |x: f64| bending_rotation(x, l, phi);
     let mut mass = [[0.0; 4]; 4];
     for (x, w) in GaussLegendre::new(4).mapped(0.0, 1.0) {
         let (v, t) = (displacement(x), rotation(x));
@@ -404,6 +435,29 @@ fn bending_mass(rho_a: f64, rho_i: f64, l: f64, phi: f64) -> [[f64; 4]; 4] {
         }
     }
     mass
+}
+
+/// The interdependent interpolation's displacement `v(ξ)` on
+/// `(v₁, θ₁, v₂, θ₂)` (Friedman & Kosmatka 1993, eq. 14; `μ = 1/(1+Φ)`).
+fn bending_displacement(x: f64, l: f64, phi: f64) -> [f64; 4] {
+    let mu = 1.0 / (1.0 + phi);
+    [
+        mu * (2.0 * x.powi(3) - 3.0 * x * x - phi * x + 1.0 + phi),
+        l * mu * (x.powi(3) - (2.0 + phi / 2.0) * x * x + (1.0 + phi / 2.0) * x),
+        mu * (-2.0 * x.powi(3) + 3.0 * x * x + phi * x),
+        l * mu * (x.powi(3) - (1.0 - phi / 2.0) * x * x - phi / 2.0 * x),
+    ]
+}
+
+/// Its section rotation `θ(ξ)` (eq. 15).
+fn bending_rotation(x: f64, l: f64, phi: f64) -> [f64; 4] {
+    let mu = 1.0 / (1.0 + phi);
+    [
+        6.0 * mu / l * (x * x - x),
+        mu * (3.0 * x * x - (4.0 + phi) * x + 1.0 + phi),
+        -6.0 * mu / l * (x * x - x),
+        mu * (3.0 * x * x - (2.0 - phi) * x),
+    ]
 }
 
 #[cfg(test)]

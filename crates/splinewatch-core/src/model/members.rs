@@ -12,7 +12,7 @@
 use faer::Mat;
 use thiserror::Error;
 
-use crate::geometry::vec3::{norm, sub, Vec3};
+use crate::geometry::vec3::{axpy, cross, dot, norm, sub, Vec3};
 use crate::model::beam::{BeamElement, BeamError, BeamMaterial, Section, StiffnessPart, DOFS_PER_BEAM_NODE};
 use crate::model::dofs::DofMap;
 use crate::model::shell::Assembly;
@@ -120,6 +120,10 @@ impl BeamMember {
         self.base
     }
 
+    pub fn section(&self) -> Section {
+        self.section
+    }
+
     /// The same member with its start held as `base` says.
     pub fn with_base(mut self, base: BeamBase) -> Self {
         self.base = base;
@@ -132,7 +136,11 @@ impl BeamMember {
 
     /// Point `i` of `0..=elements` along the member.
     fn point(&self, i: usize) -> Vec3 {
-        let t = i as f64 / self.elements as f64;
+        self.point_at(i as f64 / self.elements as f64)
+    }
+
+    /// The point a fraction `t` of the length from the start.
+    fn point_at(&self, t: f64) -> Vec3 {
         std::array::from_fn(|d| self.start[d] + t * (self.end[d] - self.start[d]))
     }
 }
@@ -261,6 +269,51 @@ impl BeamNet {
             stiffness.add_local(&element.stiffness_part(part), &self.element_dofs((a, b), dofs))?;
         }
         Ok(())
+    }
+
+    /// The point of member `member`'s axis nearest `at` (m).
+    pub fn nearest_on_axis(&self, member: usize, at: Vec3) -> Option<Vec3> {
+        let m = self.members.get(member)?;
+        let t = (dot(sub(at, m.start), sub(m.end, m.start)) / m.length().powi(2)).clamp(0.0, 1.0);
+        Some(m.point_at(t))
+    }
+
+    /// The row of a sensor at `at` (m) along `direction` (unit) on member
+    /// `member`: the member's axis point nearest `at` moves by its element's
+    /// interpolation ([`BeamElement::motion_rows`]) and `at` follows it
+    /// rigidly, `u + θ × r` (`r` from the axis point to `at`: a sensor on
+    /// the column's face, on a bracket or just past an end); `None` when
+    /// the member does not exist.
+    pub fn sensor_row(&self, member: usize, at: Vec3, direction: Vec3, dofs: &DofMap) -> Option<Vec<(usize, f64)>> {
+        let m = self.members.get(member)?;
+        let along = dot(sub(at, m.start), sub(m.end, m.start)) / m.length();
+        let s = (along / m.length()).clamp(0.0, 1.0) * m.elements as f64;
+        let k = (s.floor() as usize).min(m.elements - 1);
+        let x = s - k as f64;
+        let element = self
+            .elements
+            .iter()
+            .zip(&self.element_members)
+            .filter(|&(_, &owner)| owner == member)
+            .nth(k)
+            .map(|(e, _)| e)?;
+        let (a, b, ref beam) = *element;
+        let on_axis = axpy(beam.start(), x * beam.length(), beam.axes()[0]);
+        let moment_arm = cross(sub(at, on_axis), direction);
+        let rows = beam.motion_rows(x);
+        let row = self
+            .element_dofs((a, b), dofs)
+            .into_iter()
+            .enumerate()
+            .map(|(c, dof)| {
+                let value = (0..3)
+                    .map(|g| direction[g] * rows[g][c] + moment_arm[g] * rows[3 + g][c])
+                    .sum::<f64>();
+                (dof, value)
+            })
+            .filter(|&(_, v)| v != 0.0)
+            .collect();
+        Some(row)
     }
 
     /// The held dofs, in `dofs`' numbering.

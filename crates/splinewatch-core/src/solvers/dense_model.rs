@@ -13,6 +13,7 @@ use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
 use crate::model::elastic_supports::{ElasticSupport, ElasticSupportError};
 use crate::model::member_stiffness::MemberStiffnessError;
+use crate::model::members::BeamNet;
 use crate::model::patch::Patch;
 use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
@@ -76,6 +77,8 @@ pub struct AssembledModel {
     /// The patches, for the sensors' rows (global dofs by
     /// [`crate::model::dofs::DofMap`]).
     pub patches: Vec<Patch>,
+    /// The beam members, for sensors on them.
+    pub beams: BeamNet,
     /// Every control point's directors, in global order.
     pub frames: Vec<Frame>,
     /// `K_f`, eq. (16).
@@ -145,6 +148,7 @@ impl ShellModel {
         let spring_stiffness = self.spring_coefficients();
         Ok(AssembledModel {
             patches: self.patches.clone(),
+            beams: self.beams.clone(),
             frames: self.frames(),
             free_stiffness,
             mass,

@@ -15,7 +15,9 @@ use splinewatch_core::model::rigid::{RigidBody, RigidError};
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::supports::SupportGroups;
 use splinewatch_core::model::ShellModel;
-use splinewatch_core::response::frf::{FrfModel, ModalState, SensorPoint};
+use splinewatch_core::response::frf::{
+    BeamSensor, FrfError, FrfModel, FrfRequest, ModalState, Quantity, Sensor, SensorPoint,
+};
 use splinewatch_core::response::support_motion::{GroundInput, SupportMotion};
 use splinewatch_core::solvers::dense_model::ModelError;
 use splinewatch_core::solvers::modal::ModeKind;
@@ -218,7 +220,7 @@ fn a_member_s_stiffness_multiplier_scales_its_part() {
         assert!((a / b - 1.0).abs() < 1e-10, "{a} vs {b}");
     }
 
-    let frf = FrfModel::new(model.assemble().unwrap(), &[]).unwrap();
+    let frf = FrfModel::new(model.assemble().unwrap(), &[] as &[Sensor]).unwrap();
     let damping = damping();
     let state = frf.modal_state_with_fields(&[], &theta, &damping).unwrap();
     let parameters: Vec<Parameter> = (0..parts.len())
@@ -251,6 +253,95 @@ fn a_member_s_stiffness_multiplier_scales_its_part() {
     for (analytic, fd) in gradients {
         assert!((analytic - fd).abs() <= 1e-6 * largest, "{analytic} vs {fd}");
     }
+}
+
+/// Sensors on a beam ([`BeamSensor`]): a column of 4 elements fixed at its
+/// base, a force at its top along `y`. The receptance at 1e-4 Hz (the
+/// static flexibility: every mode of the dense model, `(ω/ω₁)²` ~ 1e-12)
+/// to a sensor at mid-height along `y` equals the Timoshenko cantilever's
+/// `v(s) = (L s²/2 − s³/6)/(E I) + s/(G A_s)`, and to a sensor on the face
+/// at mid-height (`r = R` along `y`, measuring along the axis) the plane
+/// section's `−R ψ(s)`, `ψ(s) = (L s − s²/2)/(E I)`: the element's
+/// interpolation and the rigid transfer, both exact under an end load
+/// (1e-8 relative). A sensor on a member that does not exist is refused.
+#[test]
+fn sensors_on_a_column_measure_its_deflection_and_its_face() {
+    let material = BeamMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
+    let (diameter, length) = (1.2, 7.0);
+    let section = Section::circle(diameter, 0.2).unwrap();
+    let column = BeamMember::new(
+        "column",
+        ([0.0; 3], [0.0, 0.0, length]),
+        [1.0, 0.0, 0.0],
+        section,
+        material,
+        4,
+        BeamBase::Fixed,
+    )
+    .unwrap();
+    let model = ShellModel {
+        beams: BeamNet::new(vec![column], 1e-6).unwrap(),
+        ..ShellModel::default()
+    };
+    let (y, z) = ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+    let s = 0.5 * length;
+    let radius = 0.5 * diameter;
+    let sensor = |at, direction| {
+        Sensor::Beam(BeamSensor {
+            member: 0,
+            at,
+            direction,
+        })
+    };
+    let sensors = [
+        sensor([0.0, 0.0, length], y),
+        sensor([0.0, 0.0, s], y),
+        sensor([0.0, radius, s], z),
+    ];
+    let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
+    let state = frf.modal_state(&[], &damping()).unwrap();
+    let h = frf
+        .evaluate(
+            &state,
+            FrfRequest {
+                frequencies_hz: &[1e-4],
+                pairs: &[(1, 0), (2, 0)],
+                quantity: Quantity::Receptance,
+            },
+            false,
+        )
+        .h;
+    let ei = material.young * section.iz;
+    let psi = (length * s - s * s / 2.0) / ei;
+    let deflection =
+        (length * s * s / 2.0 - s.powi(3) / 6.0) / ei + s / (material.shear_modulus * section.shear_area_y);
+    let face = -radius * psi;
+    eprintln!(
+        "beam sensors: deflection {:.6e} against {deflection:.6e}, face {:.6e} against {face:.6e}",
+        h[0].re, h[1].re
+    );
+    assert!(
+        (h[0].re / deflection - 1.0).abs() < 1e-8,
+        "{} against {deflection}",
+        h[0].re
+    );
+    assert!((h[1].re / face - 1.0).abs() < 1e-8, "{} against {face}", h[1].re);
+    let missing = FrfModel::new(
+        model.assemble().unwrap(),
+        &[Sensor::Beam(BeamSensor {
+            member: 1,
+            at: [0.0; 3],
+            direction: y,
+        })],
+    );
+    assert!(matches!(
+        missing,
+        Err(FrfError::SensorMember {
+            index: 0,
+            member: 1,
+            count: 1
+        })
+    ));
 }
 
 /// The fixture's deck on a bent: two slab patches meeting at the bent, its

@@ -91,6 +91,80 @@ fn a_cantilever_of_one_element_has_the_exact_tip_displacements() {
     }
 }
 
+fn apply(rows: &[[f64; 12]; 6], q: &[f64]) -> [f64; 6] {
+    std::array::from_fn(|r| rows[r].iter().zip(q).map(|(a, b)| a * b).sum())
+}
+
+/// The axis's motion inside the element: a rigid motion's `t + w × P(x)`
+/// and `w` exactly; the nodes' own dofs at the ends.
+#[test]
+fn the_motion_inside_follows_a_rigid_motion_and_the_nodes() {
+    let e = column();
+    let (t, w) = ([0.3, -0.2, 0.7], [0.05, 0.11, -0.07]);
+    let q = rigid(&e, t, w);
+    for x in [0.0, 0.2, 0.5, 0.9, 1.0] {
+        let motion = apply(&e.motion_rows(x), &q);
+        let at = axpy(e.start(), x * e.length(), e.axes()[0]);
+        let u = axpy(t, 1.0, cross(w, at));
+        for d in 0..3 {
+            assert!((motion[d] - u[d]).abs() < 1e-12, "x {x}: {motion:?} against {u:?}");
+            assert!((motion[3 + d] - w[d]).abs() < 1e-12, "x {x}: {motion:?} against {w:?}");
+        }
+    }
+    for (x, node) in [(0.0, 0), (1.0, 6)] {
+        let rows = e.motion_rows(x);
+        for (r, row) in rows.iter().enumerate() {
+            for (c, &value) in row.iter().enumerate() {
+                let expected = if c == node + r { 1.0 } else { 0.0 };
+                assert!((value - expected).abs() < 1e-12, "x {x} ({r}, {c}): {value}");
+            }
+        }
+    }
+}
+
+/// A cantilever of one element under tip forces: the interpolation solves
+/// the Timoshenko beam under end loads, so the deflection and the section
+/// rotation inside equal the closed forms `v(s) = P (L s²/2 − s³/6)/(E I)
+/// + P s/(G A_s)`, `θ(s) = P (L s − s²/2)/(E I)` in both planes (1e-9).
+#[test]
+fn a_cantilever_deflects_inside_as_the_closed_form() {
+    let e = column();
+    let (s, m, l) = (e.section, e.material, e.length());
+    let k = e.stiffness();
+    let free = Mat::<f64>::from_fn(6, 6, |r, c| k[(6 + r, 6 + c)]);
+    let flexibility = free.llt(faer::Side::Lower).unwrap().inverse();
+    let [_, y, z] = e.axes();
+    let p = 1.0e6;
+    for (direction, inertia, shear_area, rotation_axis, sign) in
+        [(y, s.iz, s.shear_area_y, z, 1.0), (z, s.iy, s.shear_area_z, y, -1.0)]
+    {
+        let load: Vec<f64> = direction.iter().map(|d| p * d).chain([0.0; 3]).collect();
+        let tip: Vec<f64> = (0..6)
+            .map(|r| (0..6).map(|c| flexibility[(r, c)] * load[c]).sum())
+            .collect();
+        let q: Vec<f64> = [0.0; 6].into_iter().chain(tip).collect();
+        for x in [0.25, 0.5, 0.8] {
+            let at = x * l;
+            let deflection = p * (l * at * at / 2.0 - at.powi(3) / 6.0) / (m.young * inertia)
+                + p * at / (m.shear_modulus * shear_area);
+            let rotation = sign * p * (l * at - at * at / 2.0) / (m.young * inertia);
+            let motion = apply(&e.motion_rows(x), &q);
+            let (v, theta) = (
+                dot([motion[0], motion[1], motion[2]], direction),
+                dot([motion[3], motion[4], motion[5]], rotation_axis),
+            );
+            assert!(
+                (v - deflection).abs() <= 1e-9 * deflection.abs(),
+                "x {x}: {v} against {deflection}"
+            );
+            assert!(
+                (theta - rotation).abs() <= 1e-9 * rotation.abs(),
+                "x {x}: {theta} against {rotation}"
+            );
+        }
+    }
+}
+
 /// The consistent mass reproduces the kinetic energy of rigid motions
 /// exactly: `ρ A L` per translation, `ρ I_p L` about the axis, and
 /// `ρ A L³/12 + ρ I L` about a normal axis through the middle.

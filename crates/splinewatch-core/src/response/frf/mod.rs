@@ -18,11 +18,8 @@
 //! Mobility and accelerance are `jω H` and `-ω² H`; their sensitivities
 //! scale the same way.
 
-use crate::geometry::vec3::{dot, normalize, Vec3};
 use crate::linalg::dense_rows;
 use crate::model::damping::DampingCurve;
-use crate::model::dofs::DofMap;
-use crate::model::patch::Patch;
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
@@ -40,8 +37,11 @@ use thiserror::Error;
 
 mod direct;
 mod evaluate;
+mod sensors;
 mod support_loss;
 mod truncated;
+
+pub use sensors::{sensor_rows, sensor_rows_of, BeamSensor, Sensor, SensorPoint};
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum FrfError {
@@ -51,6 +51,8 @@ pub enum FrfError {
     SensorPatch { index: usize, patch: usize, count: usize },
     #[error("sensor {index}: direction must be a finite non-zero vector")]
     SensorDirection { index: usize },
+    #[error("sensor {index}: beam member {member} does not exist (the model has {count})")]
+    SensorMember { index: usize, member: usize, count: usize },
     #[error("{0}")]
     Model(#[from] ModelError),
     #[error("{0}")]
@@ -87,17 +89,6 @@ impl Quantity {
             Quantity::Accelerance => c64::new(-omega * omega, 0.0),
         }
     }
-}
-
-/// A measurement point `P = s(ξ, η, τ)` and direction (eq. 32).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct SensorPoint {
-    /// The patch the point lies on ([`crate::model::patch`]).
-    pub patch: usize,
-    pub xi: f64,
-    pub eta: f64,
-    pub tau: f64,
-    pub direction: Vec3,
 }
 
 /// What to evaluate: the frequency lines and `(output, input)` sensor pairs.
@@ -201,39 +192,6 @@ impl ModalState {
     }
 }
 
-/// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
-pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
-    let dofs = DofMap::of_patches(patches);
-    let mut rows = Vec::with_capacity(sensors.len());
-    for (index, s) in sensors.iter().enumerate() {
-        let Some(shell) = patches.get(s.patch).map(|p| &p.shell) else {
-            return Err(FrfError::SensorPatch {
-                index,
-                patch: s.patch,
-                count: patches.len(),
-            });
-        };
-        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-        if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
-            return Err(FrfError::SensorOutside {
-                index,
-                xi: s.xi,
-                eta: s.eta,
-                tau: s.tau,
-            });
-        }
-        let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
-        let row = shell
-            .shape_functions(s.xi, s.eta, s.tau)
-            .into_iter()
-            .map(|(dof, col)| (dofs.first_dof(s.patch) + dof, dot(dir, col)))
-            .filter(|(_, v)| *v != 0.0)
-            .collect();
-        rows.push(row);
-    }
-    Ok(rows)
-}
-
 /// Where a model's modes come from.
 #[derive(Debug, Clone)]
 enum Source {
@@ -269,19 +227,23 @@ static NEXT_MODEL_ID: AtomicU64 = AtomicU64::new(0);
 
 impl FrfModel {
     /// Every mode of the dense model.
-    pub fn new(assembled: AssembledModel, sensors: &[SensorPoint]) -> Result<Self, FrfError> {
-        let sensor_rows = sensor_rows(&assembled.patches, sensors)?;
+    pub fn new(assembled: AssembledModel, sensors: &[impl Into<Sensor> + Copy]) -> Result<Self, FrfError> {
+        let sensor_rows = sensors::rows(&assembled.patches, &assembled.beams, sensors)?;
         Ok(Self::with_source(Source::Dense(Arc::new(assembled)), sensor_rows))
     }
 
     /// The modes below `cutoff_hz` of the sparse model of `model`, the
     /// others by their residual ([`crate::solvers::truncation`]): for models too
     /// large for the dense path.
-    pub fn truncated(model: &ShellModel, sensors: &[SensorPoint], cutoff_hz: f64) -> Result<Self, FrfError> {
+    pub fn truncated(
+        model: &ShellModel,
+        sensors: &[impl Into<Sensor> + Copy],
+        cutoff_hz: f64,
+    ) -> Result<Self, FrfError> {
         if !(cutoff_hz.is_finite() && cutoff_hz > 0.0) {
             return Err(FrfError::Cutoff(cutoff_hz));
         }
-        let sensor_rows = sensor_rows(&model.patches, sensors)?;
+        let sensor_rows = sensors::rows(&model.patches, &model.beams, sensors)?;
         let source = Source::Truncated {
             model: Arc::new(SparseModel::assemble(model)?),
             cutoff_hz,

@@ -1,0 +1,141 @@
+//! Where the sensors are: points of the shell patches (eq. 32) and points
+//! on beam members or beside them, each a sparse row on the generalised
+//! dofs that gives the motion it measures.
+
+use super::FrfError;
+use crate::geometry::vec3::{dot, normalize, Vec3};
+use crate::model::dofs::DofMap;
+use crate::model::members::BeamNet;
+use crate::model::patch::Patch;
+
+/// A measurement point `P = s(ξ, η, τ)` and direction (eq. 32).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorPoint {
+    /// The patch the point lies on ([`crate::model::patch`]).
+    pub patch: usize,
+    pub xi: f64,
+    pub eta: f64,
+    pub tau: f64,
+    pub direction: Vec3,
+}
+/// A measurement point on a beam member (a column, a pier) and direction:
+/// the member's axis point nearest `at` moves by its element's
+/// interpolation and `at` follows it rigidly (`u + θ × r`), so a sensor
+/// on a column's face or top is measured as placed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeamSensor {
+    /// The member ([`BeamNet::members`]).
+    pub member: usize,
+    /// The point (m, global axes).
+    pub at: Vec3,
+    pub direction: Vec3,
+}
+
+/// A sensor on a shell patch or on a beam member.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sensor {
+    Shell(SensorPoint),
+    Beam(BeamSensor),
+}
+
+impl Sensor {
+    /// The direction it measures along (as given, not normalised).
+    pub fn direction(&self) -> Vec3 {
+        match self {
+            Self::Shell(p) => p.direction,
+            Self::Beam(b) => b.direction,
+        }
+    }
+}
+
+impl From<SensorPoint> for Sensor {
+    fn from(point: SensorPoint) -> Self {
+        Self::Shell(point)
+    }
+}
+
+impl From<BeamSensor> for Sensor {
+    fn from(point: BeamSensor) -> Self {
+        Self::Beam(point)
+    }
+}
+
+/// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
+pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
+    let dofs = DofMap::of_patches(patches);
+    let mut rows = Vec::with_capacity(sensors.len());
+    for (index, s) in sensors.iter().enumerate() {
+        let Some(shell) = patches.get(s.patch).map(|p| &p.shell) else {
+            return Err(FrfError::SensorPatch {
+                index,
+                patch: s.patch,
+                count: patches.len(),
+            });
+        };
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+        if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
+            return Err(FrfError::SensorOutside {
+                index,
+                xi: s.xi,
+                eta: s.eta,
+                tau: s.tau,
+            });
+        }
+        let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
+        let row = shell
+            .shape_functions(s.xi, s.eta, s.tau)
+            .into_iter()
+            .map(|(dof, col)| (dofs.first_dof(s.patch) + dof, dot(dir, col)))
+            .filter(|(_, v)| *v != 0.0)
+            .collect();
+        rows.push(row);
+    }
+    Ok(rows)
+}
+/// The rows of `sensors` on the patches and beams of a model: each
+/// sensor's [`sensor_rows`] on a patch, [`BeamNet::sensor_row`] on a
+/// member.
+pub(super) fn rows(
+    patches: &[Patch],
+    beams: &BeamNet,
+    sensors: &[impl Into<Sensor> + Copy],
+) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
+    let dofs = DofMap::of_model(patches, beams.node_count(), 0);
+    sensors
+        .iter()
+        .enumerate()
+        .map(|(index, &s)| match s.into() {
+            Sensor::Shell(point) => sensor_rows(patches, &[point])
+                .map_err(|e| renumbered(e, index))
+                .map(|mut rows| rows.remove(0)),
+            Sensor::Beam(b) => {
+                let direction = normalize(b.direction).ok_or(FrfError::SensorDirection { index })?;
+                beams
+                    .sensor_row(b.member, b.at, direction, &dofs)
+                    .ok_or(FrfError::SensorMember {
+                        index,
+                        member: b.member,
+                        count: beams.members().len(),
+                    })
+            }
+        })
+        .collect()
+}
+
+/// The rows of `sensors` on `model`'s patches and beams.
+pub fn sensor_rows_of(
+    model: &crate::model::ShellModel,
+    sensors: &[impl Into<Sensor> + Copy],
+) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
+    rows(&model.patches, &model.beams, sensors)
+}
+
+/// `e` of the one-sensor list as sensor `index`'s.
+fn renumbered(e: FrfError, index: usize) -> FrfError {
+    match e {
+        FrfError::SensorOutside { xi, eta, tau, .. } => FrfError::SensorOutside { index, xi, eta, tau },
+        FrfError::SensorPatch { patch, count, .. } => FrfError::SensorPatch { index, patch, count },
+        FrfError::SensorDirection { .. } => FrfError::SensorDirection { index },
+        other => other,
+    }
+}
