@@ -705,3 +705,29 @@ fn the_pipelined_replay_writes_the_bytes_of_the_in_line_one() {
         assert_eq!(monitor(&a).is_some(), name == "monitored");
     }
 }
+
+/// A bridge's columns are drawn with its deck: the saved file holds each
+/// member as a line through its nodes (`deck/model/beams`) and its base
+/// (`deck/model/beam_bases`) beside the patches.
+#[test]
+fn a_bridge_s_columns_are_drawn_with_its_deck() {
+    let dir = fresh_dir("rrd-beams");
+    let path = dir.join("deck-on-bent.rrd");
+    let config = load_config(Path::new("config/examples/deck-on-bent.toml")).unwrap();
+    let targets = splinewatch::outputs::rerun::RerunTargets {
+        save: Some(path.clone()),
+        connect: None,
+    };
+    splinewatch::outputs::rerun::RerunOutput::open(&config, &targets)
+        .unwrap()
+        .finish()
+        .unwrap();
+    let rrd = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&path).unwrap()).unwrap();
+    for entity in ["/deck/model", "/deck/model/beams", "/deck/model/beam_bases"] {
+        assert!(
+            rrd.entities.contains(entity),
+            "{entity} missing from {:?}",
+            rrd.entities
+        );
+    }
+}

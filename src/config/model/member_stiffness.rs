@@ -2,41 +2,11 @@
 //! stiffness ([`splinewatch_core::model::member_stiffness`]), held or
 //! updated, one parameter `<beam>.stiffness` shared by the beams tied to it.
 
-use super::super::patches::default_true;
 use super::substructure::BeamConfig;
 use super::*;
 use splinewatch_core::model::beam::StiffnessPart;
 use splinewatch_core::model::member_stiffness::MemberStiffness;
 use splinewatch_core::updating::{Parameter, ParameterKind};
-
-/// `stiffness = { value, scales, bounds, update }` of a `[[model.beams]]`
-/// entry: θ multiplies the part `scales` names of the member's stiffness
-/// (`"all"`: E and G; `"bending"`: E I with its shear stiffness, a cracked
-/// section's effective stiffness; `"axial"`: E A; `"torsion"`: G J).
-#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct BeamStiffnessConfig {
-    /// The start value of θ (default 1: the section and material as given).
-    #[serde(default = "one")]
-    pub value: f64,
-    /// `"all"` (the default), `"bending"`, `"axial"` or `"torsion"`.
-    #[serde(default = "all")]
-    pub scales: String,
-    /// `[lower, upper]` of θ when it is updated (required then).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub bounds: Option<[f64; 2]>,
-    /// Whether updating takes θ (default true; false holds it at `value`).
-    #[serde(default = "default_true")]
-    pub update: bool,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-fn all() -> String {
-    "all".into()
-}
 
 impl crate::config::tie::Tied for BeamConfig {
     fn name(&self) -> &str {

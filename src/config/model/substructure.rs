@@ -2,8 +2,7 @@
 //! columns, piers, caps, footings and abutments under the deck, built into
 //! the core's beam members, rigid bodies and elastic supports.
 
-use super::super::patches::{material_table, BearingUpdate};
-use super::member_stiffness::BeamStiffnessConfig;
+use super::super::patches::{default_true, material_table, BearingUpdate};
 use super::*;
 use splinewatch_core::model::beam::{BeamError, Section};
 use splinewatch_core::model::elastic_supports::{ElasticSupport, ElasticSupportError, SupportComponent};
@@ -52,6 +51,35 @@ pub struct BeamConfig {
     /// `stiffness` with the same `value` and `scales`; this one no `bounds`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tie: Option<String>,
+}
+
+/// `stiffness = { value, scales, bounds, update }` of a `[[model.beams]]`
+/// entry: θ multiplies the part `scales` names of the member's stiffness
+/// (`"all"`: E and G; `"bending"`: E I with its shear stiffness, a cracked
+/// section's effective stiffness; `"axial"`: E A; `"torsion"`: G J).
+#[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BeamStiffnessConfig {
+    /// The start value of θ (default 1: the section and material as given).
+    #[serde(default = "one")]
+    pub value: f64,
+    /// `"all"` (the default), `"bending"`, `"axial"` or `"torsion"`.
+    #[serde(default = "all")]
+    pub scales: String,
+    /// `[lower, upper]` of θ when it is updated (required then).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<[f64; 2]>,
+    /// Whether updating takes θ (default true; false holds it at `value`).
+    #[serde(default = "default_true")]
+    pub update: bool,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn all() -> String {
+    "all".into()
 }
 
 fn default_elements() -> usize {

@@ -3,6 +3,7 @@
 
 use super::GRID;
 use splinewatch_core::geometry::vec3::Vec3;
+use splinewatch_core::model::elastic_supports::SupportSite;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::Sensor;
 
@@ -176,7 +177,10 @@ const EDGE_SAMPLES: usize = 16;
 /// The model as built, for checking it: `deck/model` (the mid-surface of
 /// every patch in its own colour), `deck/model/elements` (the knot lines of
 /// each patch's analysis net, i.e. the element edges),
-/// `deck/model/bearings` and `deck/model/masses` (at their points).
+/// `deck/model/bearings` and `deck/model/masses` (at their points), and
+/// with beams `deck/model/beams` (each member through its nodes, as thick
+/// as its section, labelled) and `deck/model/beam_bases` (the bases held
+/// or on springs).
 pub(super) fn log_model(
     rec: &rerun::RecordingStream,
     model: &ShellModel,
@@ -238,5 +242,50 @@ pub(super) fn log_model(
         &rerun::Points3D::new(model.masses.iter().map(|m| at(m.at())))
             .with_colors([rerun::Color::from_rgb(150, 0, 150)])
             .with_radii([radius]),
+    )?;
+    log_beams(rec, model, radius)
+}
+
+/// `deck/model/beams` and `deck/model/beam_bases` (nothing without beams).
+fn log_beams(rec: &rerun::RecordingStream, model: &ShellModel, radius: f32) -> Result<(), rerun::RecordingStreamError> {
+    let beams = &model.beams;
+    if beams.is_empty() {
+        return Ok(());
+    }
+    let members = beams.members();
+    let strips: Vec<Vec<[f32; 3]>> = (0..members.len())
+        .map(|m| {
+            beams
+                .member_nodes(m)
+                .iter()
+                .map(|&n| f32x3(beams.position(n)))
+                .collect()
+        })
+        .collect();
+    // Drawn as thick as a circle of the section's area.
+    let thickness = members
+        .iter()
+        .map(|m| rerun::Radius::new_scene_units((m.section().area / std::f64::consts::PI).sqrt() as f32));
+    rec.log_static(
+        "deck/model/beams",
+        &rerun::LineStrips3D::new(strips)
+            .with_radii(thickness)
+            .with_colors([rerun::Color::from_rgb(120, 120, 120)])
+            .with_labels(members.iter().map(|m| m.name().to_string())),
+    )?;
+    let bases: Vec<[f32; 3]> = beams
+        .base_nodes()
+        .into_iter()
+        .map(|(node, _)| f32x3(beams.position(node)))
+        .chain(model.elastic_supports.iter().flat_map(|s| match s.site() {
+            SupportSite::BeamNodes(nodes) => nodes.iter().map(|&n| f32x3(beams.position(n))).collect(),
+            SupportSite::Edge { .. } => Vec::new(),
+        }))
+        .collect();
+    rec.log_static(
+        "deck/model/beam_bases",
+        &rerun::Points3D::new(bases)
+            .with_colors([rerun::Color::from_rgb(20, 20, 20)])
+            .with_radii([2.0 * radius]),
     )
 }

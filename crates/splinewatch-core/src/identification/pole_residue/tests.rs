@@ -232,7 +232,7 @@ fn reported_standard_deviations_match_the_scatter_over_noise_draws() {
 /// (absolute acceleration, `H = (2ζωs + ω²)/(s² + 2ζωs + ω²)`, matched
 /// poles `z = e^{λT}`) driven by a random ground at 50 Hz for 120 s, its
 /// output with 30 % noise; the H1 estimate's standard deviations from the
-/// coherence. Over 40 records the mean reported std is within a factor 1.6
+/// coherence ([`h1_standard_deviation`], as the commands give them). Over 40 records the mean reported std is within a factor 1.6
 /// of the records' scatter (40 records know their scatter to about 11 %;
 /// the H1 errors are correlated across lines by the window, which the
 /// residual scale only partly absorbs), and the mean estimate within 2 %
@@ -277,10 +277,7 @@ fn reported_standard_deviations_hold_on_simulated_records() {
         let h = vec![band.iter().map(|&k| est.h[0][0][k]).collect::<Vec<_>>()];
         let sigma = vec![band
             .iter()
-            .map(|&k| {
-                let g = est.coherence[0][k].clamp(1e-6, 0.999);
-                est.h[0][0][k].norm() * ((1.0 - g) / (2.0 * est.averages as f64 * g)).sqrt()
-            })
+            .map(|&k| h1_standard_deviation(est.h[0][0][k], est.coherence[0][k], est.averages, 1))
             .collect::<Vec<_>>()];
         let m = &one_mode(&frequencies, &h, &sigma);
         estimates.push((m.frequency_hz, m.damping_ratio));
