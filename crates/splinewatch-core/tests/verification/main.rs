@@ -8,6 +8,7 @@ mod frames;
 mod frf;
 mod joint;
 mod line_support;
+mod members;
 mod modal;
 mod modal_residual;
 mod modal_sensitivity;

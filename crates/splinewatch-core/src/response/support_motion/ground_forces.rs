@@ -12,16 +12,18 @@ use crate::response::frf::FrfModel;
 use faer::Mat;
 
 /// The ground forces `f = ΔK_g R_d − K ℓ` of every input on a truncated
-/// model (sparse, full dofs). `K ℓ` is taken where the sparse model keeps
-/// no unreduced stiffness: a held beam base couples to its neighbours
-/// through its beam elements only, whose matrices are assembled again here
-/// for the lifted columns; a constrained patch edge would need the shell's
-/// (and its stiffness fields'), so a moving group with one is refused.
+/// model (sparse, full dofs) at `(kappa, theta)`. `K ℓ` is taken where the
+/// sparse model keeps no unreduced stiffness: a held beam base couples to
+/// its neighbours through its beam elements only, whose matrices are
+/// assembled again here for the lifted columns, plus `(θ_k − 1) ∂K/∂θ_k ℓ`
+/// of every multiplier that reaches them (a column's own); a constrained
+/// patch edge would need the shell's (and its stiffness fields'), so a
+/// moving group with one is refused.
 pub(super) fn truncated_forces(
     frf: &FrfModel,
     model: &ShellModel,
     groups: &SupportGroups,
-    kappa: &[Vec<f64>],
+    (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
     inputs: &[GroundInput],
     lifts: &GroundLifts,
 ) -> Result<Vec<Vec<(usize, f64)>>, SupportError> {
@@ -64,6 +66,13 @@ pub(super) fn truncated_forces(
                     .beams
                     .add_matrices(&mut columns, &mut unused, &lifts.dofs)
                     .map_err(|e| SupportError::Solve(e.to_string()))?;
+                let lift_column = Mat::from_fn(n, 1, |d, _| lift[d]);
+                for (k, &t) in theta.iter().flatten().enumerate().filter(|&(_, &t)| t != 1.0) {
+                    let product = frf.field_times(k, &lift_column);
+                    for (d, f) in force.iter_mut().enumerate() {
+                        *f -= (t - 1.0) * product[(d, 0)];
+                    }
+                }
             }
             Ok(force.into_iter().enumerate().filter(|(_, v)| *v != 0.0).collect())
         })

@@ -103,7 +103,7 @@ impl SupportMotion {
         let influence = match frf.dense() {
             Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lifts),
             None => {
-                let forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
+                let forces = truncated_forces(frf, model, groups, (kappa, theta), inputs, &lifts)?;
                 let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
                 let (_, responses) = model
                     .modes_and_responses(kappa, theta, cutoff_hz, &forces)
@@ -138,7 +138,7 @@ impl SupportMotion {
                 (state, influence)
             }
             None => {
-                let forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
+                let forces = truncated_forces(frf, model, groups, (kappa, theta), inputs, &lifts)?;
                 let (state, responses) = frf
                     .modal_state_with_loads(kappa, theta, damping, &forces)
                     .map_err(solve_error)?;
@@ -171,7 +171,7 @@ impl SupportMotion {
         }
         check_inputs(frf, kappa, groups, inputs)?;
         let lifts = GroundLifts::new(model, groups)?;
-        let mut forces = truncated_forces(frf, model, groups, kappa, inputs, &lifts)?;
+        let mut forces = truncated_forces(frf, model, groups, (kappa, theta), inputs, &lifts)?;
         forces.extend_from_slice(extra);
         frf.with_reanalysis((kappa, theta), &forces, varied)
             .map_err(|e| SupportError::Solve(e.to_string()))
