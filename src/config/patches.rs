@@ -148,8 +148,13 @@ pub struct BearingConfig {
     /// The face it acts on (default: the bottom).
     #[serde(default = "bottom")]
     pub surface: FaceConfig,
-    /// `[k_x, k_y, k_z]` in N/m, along the global axes.
+    /// `[k_x, k_y, k_z]` in N/m, along the global axes or `axes`.
     pub stiffness: [f64; 3],
+    /// The axes of `k_x, k_y, k_z` as three orthonormal, right-handed rows
+    /// (along and across a skewed support line, and up); default the
+    /// global axes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<[[f64; 3]; 3]>,
     /// `[lower, upper]` for each of k_x, k_y, k_z when updating.
     pub bounds: Option<[f64; 2]>,
     /// `true` (default): `kx`, `ky` and `kz` are updated; `false`: none; a
@@ -665,6 +670,29 @@ origin = [30.0, 0.0, 0.0]
             let e = message(&text);
             assert!(e.contains(key), "{key}: {e}");
         }
+    }
+
+    /// A bearing on a skewed support line: `axes` turns its `kx, ky, kz`
+    /// (the model's bearing keeps them); axes that are not orthonormal and
+    /// right-handed are refused by key.
+    #[test]
+    fn a_bearing_takes_the_axes_of_its_support_line() {
+        let skew = "stiffness = [1e8, 1e8, 2e9]\nbounds = [1e6, 1e10]\naxes = [[0.7782431485260211, 0.6279630576493378, 0.0], [-0.6279630576493378, 0.7782431485260211, 0.0], [0.0, 0.0, 1.0]]\n";
+        let text = DECK.replacen("stiffness = [1e8, 1e8, 2e9]\nbounds = [1e6, 1e10]\n", skew, 1);
+        assert_ne!(text, DECK);
+        let config = Config::from_toml(&text).unwrap();
+        let model = config.build_model().unwrap();
+        assert_eq!(
+            model.bearings[0].axes()[1],
+            [-0.6279630576493378, 0.7782431485260211, 0.0]
+        );
+        assert_eq!(model.bearings[1].axes()[1], [0.0, 1.0, 0.0]);
+        let left_handed = text.replacen("[0.0, 0.0, 1.0]]", "[0.0, 0.0, -1.0]]", 1);
+        assert!(
+            message(&left_handed).contains("model.bearings[0].axes"),
+            "{}",
+            message(&left_handed)
+        );
     }
 
     /// The guide's multi-patch monitoring example stays a valid config:

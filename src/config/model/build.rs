@@ -208,7 +208,11 @@ impl Config {
                         return Err(err(key("stiffness"), format!("{k} lies outside bounds [{lo}, {hi}]")));
                     }
                 }
-                Bearing::new(at, b.stiffness).map_err(|e| err(key("stiffness"), e))
+                let bearing = Bearing::new(at, b.stiffness).map_err(|e| err(key("stiffness"), e))?;
+                match b.axes {
+                    Some(axes) => bearing.with_axes(axes).map_err(|e| err(key("axes"), e)),
+                    None => Ok(bearing),
+                }
             })
             .collect::<Result<Vec<_>, _>>()?;
         let masses = m

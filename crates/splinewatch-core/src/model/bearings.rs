@@ -1,12 +1,14 @@
 //! Discrete supports and masses at points of a patch.
 //!
-//! A bearing at `(ξ, η, τ)` is three springs along the global axes:
-//! `ΔK = Σ_d k_d a_dᵀ a_d`, `a_d` the row of eq. (3)'s `N` for axis `d` at the
-//! point, so `∂K/∂k_d = a_dᵀ a_d` (rank one) and the updating treats `k_x`,
-//! `k_y`, `k_z` like the spring coefficients κ_j of eq. (22). A point mass
+//! A bearing at `(ξ, η, τ)` is three springs along its axes `e_d` (the
+//! global ones, or a frame skewed with its support line):
+//! `ΔK = Σ_d k_d a_dᵀ a_d`, `a_d = Σ_g e_{d,g} N_g` with `N_g` the row of
+//! eq. (3)'s `N` for global axis `g` at the point, so `∂K/∂k_d = a_dᵀ a_d`
+//! (rank one) and the updating treats `k_x`, `k_y`, `k_z` like the spring
+//! coefficients κ_j of eq. (22). A point mass
 //! `m` at the mid-surface adds `m Σ_d a_dᵀ a_d` to `M` (translations only).
 
-use crate::geometry::vec3::Vec3;
+use crate::geometry::vec3::{cross, dot, Vec3};
 use crate::model::shell::Shell;
 use crate::model::springs::LowRankBlock;
 use faer::Mat;
@@ -20,6 +22,8 @@ pub enum BearingError {
     Stiffness { axis: &'static str, value: f64 },
     #[error("the mass must be finite and positive, got {0} kg")]
     Mass(f64),
+    #[error("the bearing's axes must be three orthonormal, right-handed rows, got {0:?}")]
+    Axes([Vec3; 3]),
 }
 
 /// Where on a patch: parameters and the thickness coordinate τ ∈ [0, 1].
@@ -31,11 +35,14 @@ pub struct PatchPoint {
     pub tau: f64,
 }
 
-/// An elastic bearing: springs `[k_x, k_y, k_z]` (N/m) along the global axes.
+/// An elastic bearing: springs `[k_x, k_y, k_z]` (N/m) along its axes
+/// (the global ones unless [`Bearing::with_axes`] skews them).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bearing {
     at: PatchPoint,
     stiffness: [f64; 3],
+    /// Rows: the axes of `k_x, k_y, k_z` in global coordinates.
+    axes: [Vec3; 3],
 }
 
 /// A point mass (kg) at the mid-surface.
@@ -55,7 +62,27 @@ impl Bearing {
                 value: stiffness[d],
             });
         }
-        Ok(Self { at, stiffness })
+        Ok(Self {
+            at,
+            stiffness,
+            axes: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        })
+    }
+
+    /// The same bearing with `k_x, k_y, k_z` along `axes` (rows,
+    /// orthonormal and right-handed: along and across a skewed support
+    /// line, and up).
+    pub fn with_axes(self, axes: [Vec3; 3]) -> Result<Self, BearingError> {
+        let orthonormal = (0..3).all(|i| (0..3).all(|j| (dot(axes[i], axes[j]) - f64::from(i == j)).abs() < 1e-9));
+        if !orthonormal || dot(cross(axes[0], axes[1]), axes[2]) < 0.0 {
+            return Err(BearingError::Axes(axes));
+        }
+        Ok(Self { axes, ..self })
+    }
+
+    /// The axes of `k_x, k_y, k_z` (rows, global coordinates).
+    pub fn axes(&self) -> [Vec3; 3] {
+        self.axes
     }
 
     pub fn at(&self) -> PatchPoint {
@@ -66,10 +93,23 @@ impl Bearing {
         &self.stiffness
     }
 
-    /// `∂K/∂k_d` for `d` = x, y, z on the patch's own dofs.
+    /// `∂K/∂k_d` for `d` = x, y, z (its axes) on the patch's own dofs.
     pub fn coefficient_matrices(&self, shell: &Shell) -> Result<Vec<LowRankBlock>, BearingError> {
-        let rows = axis_rows(shell, self.at)?;
-        Ok(rows.iter().map(|a| outer(a, 1.0)).collect())
+        let global = axis_rows(shell, self.at)?;
+        Ok(self
+            .axes
+            .iter()
+            .map(|e| {
+                let mut row: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+                for (g, a) in global.iter().enumerate().filter(|&(g, _)| e[g] != 0.0) {
+                    for &(dof, v) in a {
+                        *row.entry(dof).or_insert(0.0) += e[g] * v;
+                    }
+                }
+                let row: Vec<(usize, f64)> = row.into_iter().filter(|&(_, v)| v != 0.0).collect();
+                outer(&row, 1.0)
+            })
+            .collect())
     }
 }
 
@@ -167,6 +207,77 @@ mod tests {
         // x at the bottom face: u − (t/2)·β (β turns v3 towards v1 = x).
         assert_eq!(blocks[0].dofs, vec![0, 4]);
         assert!((blocks[0].values[(0, 1)] + 0.15).abs() < 1e-15);
+    }
+
+    /// A bearing skewed 38.9° about z stores `Σ_d k_d (e_d · u)²` for the
+    /// point's displacement `u` of any dof vector (against the global rows
+    /// directly, 1e-12), equals the global-axes bearing when its three
+    /// stiffnesses are equal (rotation invariance), and refuses axes that
+    /// are not orthonormal and right-handed.
+    #[test]
+    fn a_skewed_bearing_acts_along_its_axes() {
+        let shell = plate();
+        let at = PatchPoint {
+            patch: 0,
+            xi: 0.37,
+            eta: 0.61,
+            tau: 0.0,
+        };
+        let (s, c) = 38.9f64.to_radians().sin_cos();
+        let axes = [[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]];
+        let k = [2e8, 7e7, 3e9];
+        let skewed = Bearing::new(at, k).unwrap().with_axes(axes).unwrap();
+        let blocks = skewed.coefficient_matrices(&shell).unwrap();
+        let global = axis_rows(&shell, at).unwrap();
+        let q: Vec<f64> = (0..shell.dof_count())
+            .map(|i| ((i * 7919) % 97) as f64 / 97.0 - 0.5)
+            .collect();
+        let u: Vec<f64> = global.iter().map(|a| a.iter().map(|&(d, v)| v * q[d]).sum()).collect();
+        let expected: f64 = (0..3)
+            .map(|d| k[d] * (0..3).map(|g| axes[d][g] * u[g]).sum::<f64>().powi(2))
+            .sum();
+        let energy = |blocks: &[LowRankBlock], k: [f64; 3]| -> f64 {
+            blocks
+                .iter()
+                .zip(k)
+                .map(|(b, kd)| {
+                    let x: Vec<f64> = b.dofs.iter().map(|&d| q[d]).collect();
+                    kd * (0..x.len())
+                        .flat_map(|r| (0..x.len()).map(move |c| (r, c)))
+                        .map(|(r, c)| x[r] * b.values[(r, c)] * x[c])
+                        .sum::<f64>()
+                })
+                .sum()
+        };
+        let ours = energy(&blocks, k);
+        assert!((ours - expected).abs() <= 1e-12 * expected, "{ours} vs {expected}");
+        let equal = [5e8; 3];
+        let (a, b) = (
+            energy(
+                &Bearing::new(at, equal)
+                    .unwrap()
+                    .with_axes(axes)
+                    .unwrap()
+                    .coefficient_matrices(&shell)
+                    .unwrap(),
+                equal,
+            ),
+            energy(
+                &Bearing::new(at, equal).unwrap().coefficient_matrices(&shell).unwrap(),
+                equal,
+            ),
+        );
+        assert!((a - b).abs() <= 1e-12 * b, "{a} vs {b}");
+        let left_handed = [axes[1], axes[0], axes[2]];
+        assert!(matches!(
+            Bearing::new(at, k).unwrap().with_axes(left_handed),
+            Err(BearingError::Axes(_))
+        ));
+        let sheared = [[1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        assert!(matches!(
+            Bearing::new(at, k).unwrap().with_axes(sheared),
+            Err(BearingError::Axes(_))
+        ));
     }
 
     #[test]
