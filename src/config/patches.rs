@@ -155,6 +155,11 @@ pub struct BearingConfig {
     /// global axes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axes: Option<[[f64; 3]; 3]>,
+    /// The support line's skew in degrees, instead of `axes`: `kx` across
+    /// the line, `ky` along it (turned by this angle from the global y axis,
+    /// counter-clockwise seen from above), `kz` up.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skew_deg: Option<f64>,
     /// `[lower, upper]` for each of k_x, k_y, k_z when updating.
     pub bounds: Option<[f64; 2]>,
     /// `true` (default): `kx`, `ky` and `kz` are updated; `false`: none; a
@@ -505,6 +510,29 @@ pub fn locate(
     })
 }
 
+/// The axes `axes` or `skew_deg` give (the keys `key("axes")` and
+/// `key("skew_deg")`): across the line `[cos φ, sin φ, 0]`, along it
+/// `[−sin φ, cos φ, 0]`, up; the global axes when neither is given.
+pub(crate) fn support_axes(
+    axes: Option<[[f64; 3]; 3]>,
+    skew_deg: Option<f64>,
+    key: impl Fn(&str) -> String,
+) -> Result<[[f64; 3]; 3], ConfigError> {
+    match (axes, skew_deg) {
+        (Some(_), Some(_)) => Err(err(key("skew_deg"), "give `axes` or `skew_deg`, not both")),
+        (Some(axes), None) => Ok(axes),
+        (None, Some(skew)) if skew.is_finite() && skew.abs() < 90.0 => {
+            let (s, c) = skew.to_radians().sin_cos();
+            Ok([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+        }
+        (None, Some(skew)) => Err(err(
+            key("skew_deg"),
+            format!("{skew}: a skew angle lies strictly between −90 and 90 degrees"),
+        )),
+        (None, None) => Ok([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+    }
+}
+
 impl super::tie::Tied for BearingConfig {
     fn name(&self) -> &str {
         &self.name
@@ -693,6 +721,31 @@ origin = [30.0, 0.0, 0.0]
             "{}",
             message(&left_handed)
         );
+        // `skew_deg = 38.9` gives the same axes (to round-off).
+        let by_angle = DECK.replacen(
+            "stiffness = [1e8, 1e8, 2e9]\nbounds = [1e6, 1e10]\n",
+            "stiffness = [1e8, 1e8, 2e9]\nbounds = [1e6, 1e10]\nskew_deg = 38.9\n",
+            1,
+        );
+        let turned = Config::from_toml(&by_angle).unwrap().build_model().unwrap();
+        for (a, b) in turned.bearings[0]
+            .axes()
+            .iter()
+            .flatten()
+            .zip(model.bearings[0].axes().iter().flatten())
+        {
+            assert!((a - b).abs() < 1e-15, "{a} vs {b}");
+        }
+        for (text, why) in [
+            (
+                by_angle.replacen("skew_deg = 38.9", "skew_deg = 90.0", 1),
+                "strictly between",
+            ),
+            (text.replacen("axes = ", "skew_deg = 10.0\naxes = ", 1), "not both"),
+        ] {
+            let e = message(&text);
+            assert!(e.contains("model.bearings[0].skew_deg") && e.contains(why), "{e}");
+        }
     }
 
     /// The guide's multi-patch monitoring example stays a valid config:

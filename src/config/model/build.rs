@@ -208,11 +208,11 @@ impl Config {
                         return Err(err(key("stiffness"), format!("{k} lies outside bounds [{lo}, {hi}]")));
                     }
                 }
-                let bearing = Bearing::new(at, b.stiffness).map_err(|e| err(key("stiffness"), e))?;
-                match b.axes {
-                    Some(axes) => bearing.with_axes(axes).map_err(|e| err(key("axes"), e)),
-                    None => Ok(bearing),
-                }
+                let axes = super::super::patches::support_axes(b.axes, b.skew_deg, key)?;
+                Bearing::new(at, b.stiffness)
+                    .map_err(|e| err(key("stiffness"), e))?
+                    .with_axes(axes)
+                    .map_err(|e| err(key("axes"), e))
             })
             .collect::<Result<Vec<_>, _>>()?;
         let masses = m

@@ -330,6 +330,11 @@ pub struct SupportConfig {
     /// abutment's line); default the global axes.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axes: Option<[[f64; 3]; 3]>,
+    /// The abutment line's skew in degrees, instead of `axes`: `x` across
+    /// the line, `y` along it (turned by this angle from the global y
+    /// axis, counter-clockwise seen from above), `z` up.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skew_deg: Option<f64>,
     /// `[lower, upper]` for each updated component.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bounds: Option<[f64; 2]>,
@@ -509,7 +514,7 @@ impl Config {
             .enumerate()
             .map(|(i, s)| {
                 let key = |k: &str| format!("model.supports[{i}].{k}");
-                let axes = s.axes.unwrap_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+                let axes = super::super::patches::support_axes(s.axes, s.skew_deg, key)?;
                 let built = match &s.edge {
                     Some(edge) => {
                         let patch = patch_index(patches, edge.patch.as_deref(), &key("edge.patch"))?;

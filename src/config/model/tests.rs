@@ -220,6 +220,11 @@ fn bad_line_supports_name_their_key() {
         "support = \"west\"\naxes = [[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
     );
     assert!(skew.contains("model.supports[0].axes"), "{skew}");
+    let both = message(
+        "support = \"west\"",
+        "support = \"west\"\nskew_deg = 20.0\naxes = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
+    );
+    assert!(both.contains("model.supports[0].skew_deg"), "{both}");
 }
 
 const FOOTINGS: &str = r#"
