@@ -36,6 +36,13 @@ pub fn axpy(a: Vec3, s: f64, b: Vec3) -> Vec3 {
 }
 
 /// Unit vector along `a`, or `None` if `a` is (numerically) zero or not finite.
+/// Whether the rows `axes` are orthonormal (to 1e-9) and right-handed: a
+/// local frame a support's or a bearing's springs act along.
+pub fn is_right_handed_frame(axes: &[Vec3; 3]) -> bool {
+    let orthonormal = (0..3).all(|i| (0..3).all(|j| (dot(axes[i], axes[j]) - f64::from(i == j)).abs() < 1e-9));
+    orthonormal && dot(cross(axes[0], axes[1]), axes[2]) >= 0.0
+}
+
 pub fn normalize(a: Vec3) -> Option<Vec3> {
     let n = norm(a);
     (n.is_finite() && n > 1e-300).then(|| scale(a, 1.0 / n))

@@ -8,7 +8,7 @@
 //! coefficients κ_j of eq. (22). A point mass
 //! `m` at the mid-surface adds `m Σ_d a_dᵀ a_d` to `M` (translations only).
 
-use crate::geometry::vec3::{cross, dot, Vec3};
+use crate::geometry::vec3::{is_right_handed_frame, Vec3};
 use crate::model::shell::Shell;
 use crate::model::springs::LowRankBlock;
 use faer::Mat;
@@ -73,8 +73,7 @@ impl Bearing {
     /// orthonormal and right-handed: along and across a skewed support
     /// line, and up).
     pub fn with_axes(self, axes: [Vec3; 3]) -> Result<Self, BearingError> {
-        let orthonormal = (0..3).all(|i| (0..3).all(|j| (dot(axes[i], axes[j]) - f64::from(i == j)).abs() < 1e-9));
-        if !orthonormal || dot(cross(axes[0], axes[1]), axes[2]) < 0.0 {
+        if !is_right_handed_frame(&axes) {
             return Err(BearingError::Axes(axes));
         }
         Ok(Self { axes, ..self })

@@ -20,7 +20,7 @@ use faer::Mat;
 use thiserror::Error;
 
 use crate::geometry::quadrature::GaussLegendre;
-use crate::geometry::vec3::{cross, dot, norm, Vec3};
+use crate::geometry::vec3::{dot, is_right_handed_frame, norm, Vec3};
 use crate::model::constraints::Edge;
 use crate::model::dofs::DofMap;
 use crate::model::shell::{Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
@@ -151,8 +151,7 @@ impl ElasticSupport {
                 });
             }
         }
-        let orthonormal = (0..3).all(|i| (0..3).all(|j| (dot(axes[i], axes[j]) - f64::from(i == j)).abs() < 1e-9));
-        if !orthonormal || dot(cross(axes[0], axes[1]), axes[2]) < 0.0 {
+        if !is_right_handed_frame(&axes) {
             return Err(ElasticSupportError::Axes { name });
         }
         let (components, stiffness) = components.into_iter().unzip();

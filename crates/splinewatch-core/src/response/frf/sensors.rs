@@ -63,37 +63,42 @@ impl From<BeamSensor> for Sensor {
 /// The sparse rows `N_ψ(P_s)` of the sensors (eq. 32) on the generalised dofs.
 pub fn sensor_rows(patches: &[Patch], sensors: &[SensorPoint]) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
     let dofs = DofMap::of_patches(patches);
-    let mut rows = Vec::with_capacity(sensors.len());
-    for (index, s) in sensors.iter().enumerate() {
-        let Some(shell) = patches.get(s.patch).map(|p| &p.shell) else {
-            return Err(FrfError::SensorPatch {
-                index,
-                patch: s.patch,
-                count: patches.len(),
-            });
-        };
-        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-        if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
-            return Err(FrfError::SensorOutside {
-                index,
-                xi: s.xi,
-                eta: s.eta,
-                tau: s.tau,
-            });
-        }
-        let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
-        let row = shell
-            .shape_functions(s.xi, s.eta, s.tau)
-            .into_iter()
-            .map(|(dof, col)| (dofs.first_dof(s.patch) + dof, dot(dir, col)))
-            .filter(|(_, v)| *v != 0.0)
-            .collect();
-        rows.push(row);
-    }
-    Ok(rows)
+    sensors
+        .iter()
+        .enumerate()
+        .map(|(index, s)| shell_row(patches, &dofs, index, s))
+        .collect()
 }
+
+/// Sensor `index`'s row `N_ψ(P)` on a patch, on the generalised dofs `dofs`.
+fn shell_row(patches: &[Patch], dofs: &DofMap, index: usize, s: &SensorPoint) -> Result<Vec<(usize, f64)>, FrfError> {
+    let Some(shell) = patches.get(s.patch).map(|p| &p.shell) else {
+        return Err(FrfError::SensorPatch {
+            index,
+            patch: s.patch,
+            count: patches.len(),
+        });
+    };
+    let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+    if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
+        return Err(FrfError::SensorOutside {
+            index,
+            xi: s.xi,
+            eta: s.eta,
+            tau: s.tau,
+        });
+    }
+    let dir = normalize(s.direction).ok_or(FrfError::SensorDirection { index })?;
+    Ok(shell
+        .shape_functions(s.xi, s.eta, s.tau)
+        .into_iter()
+        .map(|(dof, col)| (dofs.first_dof(s.patch) + dof, dot(dir, col)))
+        .filter(|(_, v)| *v != 0.0)
+        .collect())
+}
+
 /// The rows of `sensors` on the patches and beams of a model: each
-/// sensor's [`sensor_rows`] on a patch, [`BeamNet::sensor_row`] on a
+/// sensor's row on a patch (eq. 32), [`BeamNet::sensor_row`] on a
 /// member.
 pub(super) fn rows(
     patches: &[Patch],
@@ -105,9 +110,7 @@ pub(super) fn rows(
         .iter()
         .enumerate()
         .map(|(index, &s)| match s.into() {
-            Sensor::Shell(point) => sensor_rows(patches, &[point])
-                .map_err(|e| renumbered(e, index))
-                .map(|mut rows| rows.remove(0)),
+            Sensor::Shell(point) => shell_row(patches, &dofs, index, &point),
             Sensor::Beam(b) => {
                 let direction = normalize(b.direction).ok_or(FrfError::SensorDirection { index })?;
                 beams
@@ -128,14 +131,4 @@ pub fn sensor_rows_of(
     sensors: &[impl Into<Sensor> + Copy],
 ) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
     rows(&model.patches, &model.beams, sensors)
-}
-
-/// `e` of the one-sensor list as sensor `index`'s.
-fn renumbered(e: FrfError, index: usize) -> FrfError {
-    match e {
-        FrfError::SensorOutside { xi, eta, tau, .. } => FrfError::SensorOutside { index, xi, eta, tau },
-        FrfError::SensorPatch { patch, count, .. } => FrfError::SensorPatch { index, patch, count },
-        FrfError::SensorDirection { .. } => FrfError::SensorDirection { index },
-        other => other,
-    }
 }
