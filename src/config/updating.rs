@@ -182,7 +182,7 @@ impl Config {
     /// The unit of updating parameter `name`: spring coefficients κ
     /// (`<spring>.k<j>`) in N/m³ (eq. 19), bearings in N/m, supports along
     /// an edge per metre (N/m² for a translation, N m/rad per metre = N/rad
-    /// for a rotation), supports at beam bases in N/m and N m/rad; the
+    /// for a rotation), supports at points and beam bases in N/m and N m/rad; the
     /// damping curve's γ (`damping.g<z>`), loss factors (`<support>.eta`)
     /// and stiffness-field multipliers θ (`<field>.s<j>`) are ratios.
     pub fn parameter_unit(&self, name: &str) -> &'static str {

@@ -269,7 +269,7 @@ pub fn describe_patches(model: &ShellModel) -> Vec<String> {
         let base_node = model.beams.member_nodes(k)[0];
         let footing = model.elastic_supports.iter().find(|s| match s.site() {
             SupportSite::BeamNodes(nodes) => nodes.contains(&base_node),
-            SupportSite::Edge { .. } => false,
+            SupportSite::Edge { .. } | SupportSite::Point(_) => false,
         });
         let base = match (b.base(), footing) {
             (BeamBase::Fixed, _) => "fixed".to_string(),

@@ -2,7 +2,7 @@
 //! columns, piers, caps, footings and abutments under the deck, built into
 //! the core's beam members, rigid bodies and elastic supports.
 
-use super::super::patches::{default_true, material_table, BearingUpdate};
+use super::super::patches::{default_true, face_tau, locate, material_table, BearingUpdate, FaceConfig};
 use super::*;
 use splinewatch_core::model::beam::{BeamError, Section};
 use splinewatch_core::model::elastic_supports::{ElasticSupport, ElasticSupportError, SupportComponent};
@@ -189,10 +189,10 @@ impl Config {
                 "pinned" => BeamBase::Pinned,
                 "free" => BeamBase::Free,
                 other => match m.supports.iter().find(|s| s.name == other) {
-                    Some(s) if s.edge.is_some() => {
+                    Some(s) if s.edge.is_some() || s.at.is_some() => {
                         return Err(err(
                             key("base"),
-                            format!("{other:?} is a support along a patch edge: a base stands on a support without an `edge`"),
+                            format!("{other:?} is a support on a patch (it has an `edge` or `at`): a base stands on a support without either"),
                         ))
                     }
                     Some(s) if b.support.is_some() && b.support != s.support => {
@@ -307,24 +307,36 @@ fn beam_end(beams: &BeamNet, end: &str) -> Result<usize, String> {
 
 /// `[[model.supports]]`: springs in up to six components, per metre along a
 /// patch edge (an integral abutment's backfill and piles, an embankment),
-/// or, without an `edge`, at the base of every beam whose `base` names it
-/// (a column's footing on its piles and soil).
+/// at a point of a patch (`at`: a bearing that also restrains rotations, a
+/// pile cap), or, without `edge` or `at`, at the base of every beam whose
+/// `base` names it (a column's footing on its piles and soil).
 #[derive(Debug, Clone, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SupportConfig {
     /// Unique among springs, bearings, fields and supports: it prefixes the
     /// updating parameters `<name>.<component>`.
     pub name: String,
-    /// The patch edge it acts along; none: it acts at the bases of the
-    /// beams whose `base` names it.
+    /// The patch edge it acts along; neither this nor `at`: it acts at the
+    /// bases of the beams whose `base` names it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub edge: Option<EdgeRefConfig>,
+    /// m: the point of a patch it acts at, instead of an edge (within
+    /// 0.5 m of the patch, as a bearing's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<[f64; 3]>,
+    /// With `at`: the patch (default: the nearest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patch: Option<String>,
+    /// With `at`: the face it acts on (default: the bottom, as a
+    /// bearing's); its translations then follow the section's rotation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub surface: Option<FaceConfig>,
     /// The support group whose ground it stands on (default "ground").
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub support: Option<String>,
     /// Components: `x`, `y`, `z` (N/m per metre along an edge, N/m at a
-    /// base) and `rx`, `ry`, `rz` (N m/rad per metre, N m/rad), along the
-    /// support's axes.
+    /// point or a base) and `rx`, `ry`, `rz` (N m/rad per metre, N m/rad),
+    /// along the support's axes.
     pub stiffness: ComponentsConfig,
     /// The support's axes as three orthonormal rows, right-handed (a skewed
     /// abutment's line); default the global axes.
@@ -462,9 +474,9 @@ impl SupportConfig {
                 leader.name
             ));
         }
-        if self.edge.is_some() != leader.edge.is_some() {
+        if (self.edge.is_some(), self.at.is_some()) != (leader.edge.is_some(), leader.at.is_some()) {
             return Some(format!(
-                "a tied support stands on the same kind of site as {:?} (along an edge, or under beams)",
+                "a tied support stands on the same kind of site as {:?} (along an edge, at a point, or under beams)",
                 leader.name
             ));
         }
@@ -501,8 +513,8 @@ impl crate::config::tie::Tied for SupportConfig {
 }
 
 impl Config {
-    /// The supports of `[[model.supports]]`: along edges of `patches`, or at
-    /// the bases of the `beams` that name them.
+    /// The supports of `[[model.supports]]`: along edges of `patches`, at
+    /// points of them, or at the bases of the `beams` that name them.
     pub(super) fn build_supports(
         &self,
         patches: &[Patch],
@@ -515,12 +527,34 @@ impl Config {
             .map(|(i, s)| {
                 let key = |k: &str| format!("model.supports[{i}].{k}");
                 let axes = super::super::patches::support_axes(s.axes, s.skew_deg, key)?;
-                let built = match &s.edge {
-                    Some(edge) => {
+                if s.at.is_none() && (s.patch.is_some() || s.surface.is_some()) {
+                    return Err(err(
+                        key("patch"),
+                        "`patch` and `surface` go with `at`: give `at` or remove them",
+                    ));
+                }
+                let built = match (&s.edge, s.at) {
+                    (Some(_), Some(_)) => {
+                        return Err(err(
+                            key("at"),
+                            "give `edge` (a line support) or `at` (a point), not both",
+                        ));
+                    }
+                    (Some(edge), None) => {
                         let patch = patch_index(patches, edge.patch.as_deref(), &key("edge.patch"))?;
                         ElasticSupport::along_edge(&s.name, (patch, edge.edge.into()), axes, s.stiffness.given())
                     }
-                    None => {
+                    (None, Some(at)) => {
+                        let patch = s
+                            .patch
+                            .as_deref()
+                            .map(|n| patch_index(patches, Some(n), &key("patch")))
+                            .transpose()?;
+                        let face = s.surface.unwrap_or(FaceConfig::Bottom);
+                        let point = locate(patches, patch, at, face_tau(face), &key("at"))?;
+                        ElasticSupport::at_point(&s.name, point, axes, s.stiffness.given())
+                    }
+                    (None, None) => {
                         let nodes: Vec<usize> = self
                             .model
                             .beams
@@ -533,7 +567,7 @@ impl Config {
                             return Err(err(
                                 key("edge"),
                                 format!(
-                                    "{:?} has no edge and no beam's `base` names it: give one or the other",
+                                    "{:?} has no edge, no point `at` and no beam's `base` names it: give one of them",
                                     s.name
                                 ),
                             ));

@@ -227,6 +227,81 @@ fn bad_line_supports_name_their_key() {
     assert!(both.contains("model.supports[0].skew_deg"), "{both}");
 }
 
+const POT_BEARINGS: &str = r#"
+[[model.supports]]
+name = "pot.west"
+at = [10.0, 4.0, -0.2]
+support = "west"
+stiffness = { z = 2e9, rx = 1e9, ry = 1e9 }
+bounds = [1e6, 1e12]
+update = ["ry"]
+
+[[model.supports]]
+name = "pot.east"
+at = [30.0, 4.0, -0.2]
+support = "west"
+stiffness = { z = 2e9, rx = 1e9, ry = 1e9 }
+update = ["ry"]
+tie = "pot.west"
+"#;
+
+/// Two point supports under the spans' middles (on the soffit, as a
+/// bearing's), tied: one parameter `pot.west.ry` in N m/rad; they stiffen
+/// the first vertical modes. A point support given with an `edge` too, or a `patch`
+/// without `at`, is refused by key.
+#[test]
+fn point_supports_build_tied_with_their_units() {
+    use splinewatch_core::model::elastic_supports::SupportSite;
+    let base = include_str!("../../../config/examples/deck-on-bent.toml");
+    let config = Config::from_toml(&format!("{base}\n{POT_BEARINGS}")).unwrap();
+    let model = config.build_model().unwrap();
+    assert_eq!(model.elastic_supports.len(), 2);
+    let SupportSite::Point(at) = model.elastic_supports[1].site() else {
+        panic!("{:?}", model.elastic_supports[1].site())
+    };
+    let shell = &model.patches[at.patch].shell;
+    let position = shell.position(at.xi, at.eta, at.tau);
+    assert_eq!((model.patches[at.patch].name(), at.tau), ("span2", 0.0));
+    assert!(
+        (position[0] - 30.0).abs() < 1e-9 && (position[2] + 0.2).abs() < 1e-9,
+        "{position:?}"
+    );
+    let names: Vec<String> = config.build_parameters().unwrap().into_iter().map(|p| p.name).collect();
+    assert_eq!(names, ["pot.west.ry"]);
+    assert_eq!(config.parameter_unit("pot.west.ry"), "Nm/rad");
+    let bare = Config::from_toml(base).unwrap().build_model().unwrap();
+    let (with, without) = (
+        model.assemble().unwrap().modes().unwrap().frequencies_hz(),
+        bare.assemble().unwrap().modes().unwrap().frequencies_hz(),
+    );
+    // Springs only raise the sorted frequencies (Weyl); modes with a node
+    // at both points keep theirs to round-off.
+    assert!(
+        with.iter().zip(&without).take(6).all(|(a, b)| *a >= b * (1.0 - 1e-9)),
+        "{with:?} vs {without:?}"
+    );
+    assert!(
+        with.iter().zip(&without).take(6).any(|(a, b)| *a > b * 1.01),
+        "{with:?} vs {without:?}"
+    );
+    let message = |from: &str, to: &str| {
+        let config = Config::from_toml(&format!("{base}\n{}", POT_BEARINGS.replacen(from, to, 1))).unwrap();
+        config.build_model().unwrap_err().to_string()
+    };
+    let both = message(
+        "support = \"west\"",
+        "support = \"west\"\nedge = { patch = \"span1\", edge = \"xi0\" }",
+    );
+    assert!(
+        both.contains("model.supports[0].at") && both.contains("not both"),
+        "{both}"
+    );
+    let stray = message("at = [10.0, 4.0, -0.2]", "patch = \"span1\"");
+    assert!(stray.contains("model.supports[0].patch"), "{stray}");
+    let far = message("at = [10.0, 4.0, -0.2]", "at = [10.0, 4.0, -3.0]");
+    assert!(far.contains("model.supports[0].at"), "{far}");
+}
+
 const FOOTINGS: &str = r#"
 [[model.supports]]
 name = "footings"
@@ -292,7 +367,7 @@ fn bad_footings_name_their_key() {
         base.replacen("base = \"fixed\"", "base = \"west_abutment\"", 1)
     ));
     assert!(
-        on_edge.contains("model.beams[0].base") && on_edge.contains("along a patch edge"),
+        on_edge.contains("model.beams[0].base") && on_edge.contains("a support on a patch"),
         "{on_edge}"
     );
     // A base on a support and a ground of its own.

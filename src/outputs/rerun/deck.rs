@@ -177,7 +177,8 @@ const EDGE_SAMPLES: usize = 16;
 /// The model as built, for checking it: `deck/model` (the mid-surface of
 /// every patch in its own colour), `deck/model/elements` (the knot lines of
 /// each patch's analysis net, i.e. the element edges),
-/// `deck/model/bearings` and `deck/model/masses` (at their points), and
+/// `deck/model/bearings` (the bearings and the point supports) and
+/// `deck/model/masses` (at their points), and
 /// with beams `deck/model/beams` (each member through its nodes, as thick
 /// as its section, labelled) and `deck/model/beam_bases` (the bases held
 /// or on springs).
@@ -233,9 +234,14 @@ pub(super) fn log_model(
     let radius = (grid.span / 150.0) as f32;
     rec.log_static(
         "deck/model/bearings",
-        &rerun::Points3D::new(model.bearings.iter().map(|b| at(b.at())))
-            .with_colors([rerun::Color::from_rgb(20, 20, 20)])
-            .with_radii([radius]),
+        &rerun::Points3D::new(model.bearings.iter().map(|b| at(b.at())).chain(
+            model.elastic_supports.iter().filter_map(|s| match s.site() {
+                SupportSite::Point(p) => Some(at(*p)),
+                SupportSite::Edge { .. } | SupportSite::BeamNodes(_) => None,
+            }),
+        ))
+        .with_colors([rerun::Color::from_rgb(20, 20, 20)])
+        .with_radii([radius]),
     )?;
     rec.log_static(
         "deck/model/masses",
@@ -279,7 +285,7 @@ fn log_beams(rec: &rerun::RecordingStream, model: &ShellModel, radius: f32) -> R
         .map(|(node, _)| f32x3(beams.position(node)))
         .chain(model.elastic_supports.iter().flat_map(|s| match s.site() {
             SupportSite::BeamNodes(nodes) => nodes.iter().map(|&n| f32x3(beams.position(n))).collect(),
-            SupportSite::Edge { .. } => Vec::new(),
+            SupportSite::Edge { .. } | SupportSite::Point(_) => Vec::new(),
         }))
         .collect();
     rec.log_static(

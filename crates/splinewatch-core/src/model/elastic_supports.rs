@@ -1,8 +1,10 @@
 //! Elastic supports in up to six components (translations and rotations
 //! about three axes, the global ones or a skewed frame such as an
 //! abutment's line): springs per metre along a patch edge (an integral
-//! abutment's backfill and piles, an embankment), or springs at beam nodes
-//! (a column's footing on its piles and soil).
+//! abutment's backfill and piles, an embankment), springs at a point of a
+//! patch (a bearing that also restrains rotations, a pile cap under a
+//! slab), or springs at beam nodes (a column's footing on its piles and
+//! soil).
 //!
 //! Along an edge, component `c` with stiffness `k_c` (N/m per metre, or N m/rad per metre)
 //! adds `ΔK = k_c ∫_edge n_cᵀ n_c ds`, `n_c` the row of eq. (3) that gives
@@ -10,7 +12,10 @@
 //! (`Σ N_i a·(u, v, w)_i`) or its rotation about `a`
 //! (`Σ N_i (a·v1_i α_i + a·v2_i β_i)`: the director turns by
 //! `α v1 + β v2`). So `∂K/∂k_c` is the integral itself and the updating
-//! treats every `k_c` like a spring coefficient κ (eq. 22). At a beam node
+//! treats every `k_c` like a spring coefficient κ (eq. 22). At a point
+//! `(ξ, η, τ)` of a patch it adds `k_c n_cᵀ n_c` there (N/m, N m/rad), the
+//! translation's row that of the point at `τ` (eq. 2–3: off the
+//! mid-surface it also turns with the director). At a beam node
 //! (6 dofs: `u, v, w, rx, ry, rz`) it adds `k_c a aᵀ` on the node's three
 //! translations or three rotations (N/m, N m/rad). On the ground's
 //! motion a translation spring acts on the relative displacement, a
@@ -21,6 +26,7 @@ use thiserror::Error;
 
 use crate::geometry::quadrature::GaussLegendre;
 use crate::geometry::vec3::{dot, is_right_handed_frame, norm, Vec3};
+use crate::model::bearings::PatchPoint;
 use crate::model::constraints::Edge;
 use crate::model::dofs::DofMap;
 use crate::model::shell::{Shell, ShellPoint, DOFS_PER_CONTROL_POINT};
@@ -44,6 +50,8 @@ pub enum ElasticSupportError {
     NoNode { name: String },
     #[error("a support's name must not be empty")]
     EmptyName,
+    #[error("support {name:?}: ({xi}, {eta}, {tau}) lies outside its patch's parameter domain")]
+    Outside { name: String, xi: f64, eta: f64, tau: f64 },
     #[error("support {name:?} names beam node {node}, but the beams have {count} nodes")]
     UnknownBeamNode { name: String, node: usize, count: usize },
 }
@@ -82,12 +90,14 @@ impl SupportComponent {
 pub enum SupportSite {
     /// Along edge `edge` of patch `patch`, per metre.
     Edge { patch: usize, edge: Edge },
+    /// At one point of a patch.
+    Point(PatchPoint),
     /// At each of these beam nodes (the net's numbering), the same springs.
     BeamNodes(Vec<usize>),
 }
 
-/// Springs in up to six components along a patch edge or at beam nodes,
-/// validated.
+/// Springs in up to six components along a patch edge, at a point of a
+/// patch or at beam nodes, validated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ElasticSupport {
     name: String,
@@ -108,6 +118,17 @@ impl ElasticSupport {
         components: Vec<(SupportComponent, f64)>,
     ) -> Result<Self, ElasticSupportError> {
         Self::new(name.into(), SupportSite::Edge { patch, edge }, axes, components)
+    }
+
+    /// Springs at point `at` of a patch: `components` with their
+    /// `stiffness` (N/m, N m/rad) along `axes` (rows, orthonormal).
+    pub fn at_point(
+        name: impl Into<String>,
+        at: PatchPoint,
+        axes: [Vec3; 3],
+        components: Vec<(SupportComponent, f64)>,
+    ) -> Result<Self, ElasticSupportError> {
+        Self::new(name.into(), SupportSite::Point(at), axes, components)
     }
 
     /// The same springs at each of the beam nodes `nodes`.
@@ -172,10 +193,10 @@ impl ElasticSupport {
         &self.site
     }
 
-    /// The patch of a support along an edge.
+    /// The patch of a support along an edge or at a point of a patch.
     pub fn patch(&self) -> Option<usize> {
         match self.site {
-            SupportSite::Edge { patch, .. } => Some(patch),
+            SupportSite::Edge { patch, .. } | SupportSite::Point(PatchPoint { patch, .. }) => Some(patch),
             SupportSite::BeamNodes(_) => None,
         }
     }
@@ -189,8 +210,9 @@ impl ElasticSupport {
         &self.stiffness
     }
 
-    /// `∂K/∂k_c` per component on global dofs: along an edge, integrated
-    /// on the patch `patch_of` gives (its shell and its first global dof);
+    /// `∂K/∂k_c` per component on global dofs: along an edge (integrated)
+    /// or at a point, on the patch `patch_of` gives (its shell and its
+    /// first global dof; a point outside the patch is refused);
     /// at beam nodes, on `dofs`' beam nodes (one it does not have is
     /// refused).
     pub fn matrices<'s, E: From<ElasticSupportError>>(
@@ -203,6 +225,24 @@ impl ElasticSupport {
                 let (shell, offset) = patch_of(*patch)?;
                 Ok(self
                     .edge_matrices(*edge, shell)
+                    .into_iter()
+                    .map(|b| b.shifted(offset))
+                    .collect())
+            }
+            SupportSite::Point(at) => {
+                let (shell, offset) = patch_of(at.patch)?;
+                let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+                if !(kx.contains(at.xi) && ke.contains(at.eta) && (0.0..=1.0).contains(&at.tau)) {
+                    return Err(ElasticSupportError::Outside {
+                        name: self.name.clone(),
+                        xi: at.xi,
+                        eta: at.eta,
+                        tau: at.tau,
+                    }
+                    .into());
+                }
+                Ok(self
+                    .point_matrices(*at, shell)
                     .into_iter()
                     .map(|b| b.shifted(offset))
                     .collect())
@@ -284,32 +324,9 @@ impl ElasticSupport {
                 let e = surface.evaluate(xi, eta);
                 let ds = w * norm(if along_eta { e.r_eta } else { e.r_xi });
                 shell.evaluate_into(xi, eta, 0.5, &mut pt);
-                for (c, block) in self.components.iter().zip(&mut blocks) {
-                    row.iter_mut().for_each(|r| *r = 0.0);
-                    for k in 0..pt.count {
-                        let (cp, n) = (pt.control_points[k], pt.n[k]);
-                        let Some(i) = local(cp).filter(|_| n != 0.0) else {
-                            continue;
-                        };
-                        let at = DOFS_PER_CONTROL_POINT * i;
-                        match *c {
-                            SupportComponent::Translation(a) => {
-                                for d in 0..3 {
-                                    row[at + d] += n * self.axes[a][d];
-                                }
-                            }
-                            SupportComponent::Rotation(a) => {
-                                let frame = shell.frames()[cp];
-                                row[at + 3] += n * dot(self.axes[a], frame.v1);
-                                row[at + 4] += n * dot(self.axes[a], frame.v2);
-                            }
-                        }
-                    }
-                    for (i, &ri) in row.iter().enumerate().filter(|r| *r.1 != 0.0) {
-                        for (j, &rj) in row.iter().enumerate().filter(|r| *r.1 != 0.0) {
-                            block[(i, j)] += ds * ri * rj;
-                        }
-                    }
+                for (&c, block) in self.components.iter().zip(&mut blocks) {
+                    self.component_row(c, shell, &pt, local, &mut row);
+                    add_outer(block, ds, &row);
                 }
             }
         }
@@ -320,6 +337,78 @@ impl ElasticSupport {
                 values,
             })
             .collect()
+    }
+
+    /// At point `at`, on the patch's own dofs: the control points whose
+    /// basis is non-zero there.
+    fn point_matrices(&self, at: PatchPoint, shell: &Shell) -> Vec<LowRankBlock> {
+        let mut pt = ShellPoint::new_empty();
+        shell.evaluate_into(at.xi, at.eta, at.tau, &mut pt);
+        let points: Vec<usize> = (0..pt.count)
+            .filter(|&k| pt.n[k] != 0.0)
+            .map(|k| pt.control_points[k])
+            .collect();
+        let dofs: Vec<usize> = points
+            .iter()
+            .flat_map(|&cp| (0..DOFS_PER_CONTROL_POINT).map(move |d| DOFS_PER_CONTROL_POINT * cp + d))
+            .collect();
+        let local = |cp: usize| points.iter().position(|&p| p == cp);
+        let mut row = vec![0.0; dofs.len()];
+        self.components
+            .iter()
+            .map(|&c| {
+                let mut values = Mat::zeros(dofs.len(), dofs.len());
+                self.component_row(c, shell, &pt, local, &mut row);
+                add_outer(&mut values, 1.0, &row);
+                LowRankBlock {
+                    dofs: dofs.clone(),
+                    values,
+                }
+            })
+            .collect()
+    }
+
+    /// `n_c` at `pt` on the local dofs `local` numbers (5 per control
+    /// point): the point's translation along the component's axis `a`
+    /// (eq. 2–3, at the point's τ), or the director's rotation about it,
+    /// `Σ N_i (a·v1_i α_i + a·v2_i β_i)`.
+    fn component_row(
+        &self,
+        c: SupportComponent,
+        shell: &Shell,
+        pt: &ShellPoint,
+        local: impl Fn(usize) -> Option<usize>,
+        row: &mut [f64],
+    ) {
+        row.iter_mut().for_each(|r| *r = 0.0);
+        for k in 0..pt.count {
+            let (cp, n) = (pt.control_points[k], pt.n[k]);
+            let Some(i) = local(cp).filter(|_| n != 0.0) else {
+                continue;
+            };
+            let at = DOFS_PER_CONTROL_POINT * i;
+            match c {
+                SupportComponent::Translation(a) => {
+                    for (d, shape) in shell.dof_shapes(pt, k).into_iter().enumerate() {
+                        row[at + d] += shape.psi * dot(self.axes[a], shape.g);
+                    }
+                }
+                SupportComponent::Rotation(a) => {
+                    let frame = shell.frames()[cp];
+                    row[at + 3] += n * dot(self.axes[a], frame.v1);
+                    row[at + 4] += n * dot(self.axes[a], frame.v2);
+                }
+            }
+        }
+    }
+}
+
+/// `block += scale row rowᵀ` over the non-zero entries of `row`.
+fn add_outer(block: &mut Mat<f64>, scale: f64, row: &[f64]) {
+    for (i, &ri) in row.iter().enumerate().filter(|r| *r.1 != 0.0) {
+        for (j, &rj) in row.iter().enumerate().filter(|r| *r.1 != 0.0) {
+            block[(i, j)] += scale * ri * rj;
+        }
     }
 }
 
@@ -423,6 +512,46 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("\"nowhere\": give at least one beam node"));
+    }
+
+    /// At a plate's centre (its frame the global axes): a unit rigid
+    /// translation stores `½` per unit stiffness in its own component, a
+    /// unit rotation about x (α) `½` in `rx`; on the bottom face a unit
+    /// rotation about y (β) moves the point by `−h/2` along x, so it
+    /// stores `½ (h/2)²` in `x`. A point beyond the patch is refused.
+    #[test]
+    fn a_point_support_stores_half_its_stiffness_under_unit_motions() {
+        let h = 0.2;
+        let shell = Shell::rectangular_plate(6.0, 3.0, h, [3, 2], [6, 5]).unwrap();
+        let all: Vec<(SupportComponent, f64)> = SupportComponent::ALL.iter().map(|&c| (c, 1.0)).collect();
+        let n = shell.dof_count();
+        let unit = |d: usize| -> Vec<f64> { (0..n).map(|i| f64::from(i % 5 == d)).collect() };
+        let centre = |tau| PatchPoint {
+            patch: 0,
+            xi: 0.37,
+            eta: 0.61,
+            tau,
+        };
+        let mid = ElasticSupport::at_point("pot", centre(0.5), global(), all.clone()).unwrap();
+        let blocks = mid.point_matrices(centre(0.5), &shell);
+        for (c, block) in blocks.iter().enumerate() {
+            for d in 0..5 {
+                let expected = if c == d && c < 5 { 0.5 } else { 0.0 };
+                let e = energy(block, &unit(d));
+                assert!((e - expected).abs() < 1e-12, "component {c}, dof {d}: {e}");
+            }
+        }
+        let bottom = ElasticSupport::at_point("pot", centre(0.0), global(), all).unwrap();
+        let blocks = bottom.point_matrices(centre(0.0), &shell);
+        let e = energy(&blocks[0], &unit(4));
+        assert!((e - 0.5 * (h / 2.0) * (h / 2.0)).abs() < 1e-12, "{e}");
+        let dofs = DofMap::of_model(&[], 0, 0);
+        let beyond = PatchPoint { xi: 1.5, ..centre(0.5) };
+        let e = ElasticSupport::at_point("far", beyond, global(), vec![(SupportComponent::ALL[2], 1.0)])
+            .unwrap()
+            .matrices(&dofs, |_| Ok::<_, ElasticSupportError>((&shell, 0)))
+            .unwrap_err();
+        assert!(e.to_string().contains("\"far\": (1.5, 0.61, 0.5) lies outside"), "{e}");
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //! - [`joints`]: rigid joints between patches by penalty coupling;
 //! - [`beam`]: straight 3-D Timoshenko beam elements (columns, piers), their stiffness and consistent mass;
 //! - [`members`]: beam members cut into elements, meeting where their nodes coincide, their bases held;
-//! - [`elastic_supports`]: springs in six components along a patch edge (abutments, embankments) or at beam nodes (footings);
+//! - [`elastic_supports`]: springs in six components along a patch edge (abutments, embankments), at a point of a patch or at beam nodes (footings);
 //! - [`rigid`]: rigid bodies (bent caps, diaphragms, rigid offsets) that deck edges and beam nodes follow;
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.

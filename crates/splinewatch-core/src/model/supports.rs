@@ -185,6 +185,7 @@ impl SupportGroups {
                     let net = shell.surface().points();
                     edge.control_points(shell).iter().map(|&c| net[c]).collect()
                 }
+                SupportSite::Point(at) => vec![model.patches[at.patch].shell.position(at.xi, at.eta, at.tau)],
                 SupportSite::BeamNodes(nodes) => nodes.iter().map(|&n| model.beams.position(n)).collect(),
             };
             points[self.of_springs[first_line + s]].push(centroid(&at));
