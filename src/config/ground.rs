@@ -82,11 +82,17 @@ impl Config {
             if group.trim().is_empty() {
                 return Err(err(key("support"), "must name a support group"));
             }
-            if s.patch.is_some() || s.xi.is_some() || s.eta.is_some() || s.x.is_some() || s.y.is_some() || s.z.is_some()
+            if s.patch.is_some()
+                || s.xi.is_some()
+                || s.eta.is_some()
+                || s.x.is_some()
+                || s.y.is_some()
+                || s.z.is_some()
+                || s.offset.is_some()
             {
                 return Err(err(
                     key("support"),
-                    "a ground sensor has no position on the deck: remove patch, xi, eta, x, y and z",
+                    "a ground sensor has no position on the deck: remove patch, xi, eta, x, y, z and offset",
                 ));
             }
             if ground_axis(&s.direction).is_none() {

@@ -483,13 +483,26 @@ pub fn locate(
     tau: f64,
     key: &str,
 ) -> Result<PatchPoint, ConfigError> {
+    locate_within(patches, patch, at, tau, 0.0, key)
+}
+
+/// [`locate`], for a point that may lie `beyond` metres off the
+/// mid-surface (a sensor's `offset`) rather than within the half thickness.
+pub fn locate_within(
+    patches: &[Patch],
+    patch: Option<usize>,
+    at: Vec3,
+    tau: f64,
+    beyond: f64,
+    key: &str,
+) -> Result<PatchPoint, ConfigError> {
     let candidates: Vec<usize> = patch.map_or_else(|| (0..patches.len()).collect(), |k| vec![k]);
     let (best, (xi, eta, distance)) = candidates
         .into_iter()
         .map(|k| (k, patches[k].shell.surface().closest_point(at)))
         .min_by(|a, b| a.1 .2.total_cmp(&b.1 .2))
         .ok_or_else(|| err(key, "the model has no patch"))?;
-    let half = 0.5 * patches[best].shell.thickness().iter().copied().fold(0.0, f64::max);
+    let half = (0.5 * patches[best].shell.thickness().iter().copied().fold(0.0, f64::max)).max(beyond);
     if distance.is_nan() || distance > MAX_DISTANCE + half {
         return Err(err(
             key,

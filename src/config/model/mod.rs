@@ -188,6 +188,12 @@ pub struct SensorConfig {
     /// Face the sensor sits on (default: the mid-surface).
     #[serde(default = "default_face")]
     pub surface: FaceConfig,
+    /// m: the sensor's distance from the patch's mid-surface along its
+    /// normal (the director: up on a deck whose ξ, η run along x, y),
+    /// instead of `surface`: a girder's soffit below the deck slab, a
+    /// barrier's top. The point follows the section rigidly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<f64>,
     /// The node number of this measurement point in universal files
     /// (dataset 58 response/reference nodes; `update --frf FILE.uff`).
     #[serde(default, skip_serializing_if = "Option::is_none")]

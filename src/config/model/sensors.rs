@@ -1,6 +1,6 @@
 //! `[[sensors]]` as points of the model.
 
-use super::super::patches::MAX_DISTANCE;
+use super::super::patches::{locate_within, MAX_DISTANCE};
 use super::*;
 use splinewatch_core::response::frf::{BeamSensor, Sensor};
 
@@ -32,7 +32,17 @@ impl Config {
     fn shell_sensor(&self, model: &ShellModel, i: usize) -> Result<SensorPoint, ConfigError> {
         let s = &self.sensors[i];
         let key = |k: &str| format!("sensors[{i}].{k}");
-        let tau = face_tau(s.surface);
+        if let Some(offset) = s.offset {
+            if s.surface != FaceConfig::Middle {
+                return Err(err(key("offset"), "give `surface` or `offset`, not both"));
+            }
+            if !offset.is_finite() {
+                return Err(err(
+                    key("offset"),
+                    format!("{offset}: must be a finite distance in metres"),
+                ));
+            }
+        }
         let (patch, xi, eta) = self.sensor_position(model, i)?;
         let shell = &model.patches[patch].shell;
         let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
@@ -42,6 +52,10 @@ impl Config {
                 format!("({xi}, {eta}) lies outside the parameter domain"),
             ));
         }
+        let tau = match s.offset {
+            Some(offset) => 0.5 + offset / shell.thickness_at(xi, eta),
+            None => face_tau(s.surface),
+        };
         let direction = match &s.direction {
             named @ DirectionConfig::Named(n) => match (named.axis_vector(), n.as_str()) {
                 (Some(axis), _) => axis,
@@ -85,10 +99,15 @@ impl Config {
                 format!("{beam:?} is not a [[model.beams]] name ({names:?})"),
             )
         })?;
-        if s.patch.is_some() || s.xi.is_some() || s.eta.is_some() || s.surface != FaceConfig::Middle {
+        if s.patch.is_some()
+            || s.xi.is_some()
+            || s.eta.is_some()
+            || s.surface != FaceConfig::Middle
+            || s.offset.is_some()
+        {
             return Err(err(
                 key("beam"),
-                "a sensor on a beam takes x, y and z: leave out patch, xi, eta and surface",
+                "a sensor on a beam takes x, y and z: leave out patch, xi, eta, surface and offset",
             ));
         }
         let (Some(x), Some(y), Some(z)) = (s.x, s.y, s.z) else {
@@ -126,7 +145,8 @@ impl Config {
 impl Config {
     /// Sensor `i`'s patch and parameters: `xi, eta` on the named (or only)
     /// patch; `x, y, z` at the nearest point of the named or nearest patch
-    /// (within 0.5 m); `x, y` on a single patch, located in plan.
+    /// (within 0.5 m, beyond the half thickness or the `offset`); `x, y`
+    /// on a single patch, located in plan.
     fn sensor_position(&self, model: &ShellModel, i: usize) -> Result<(usize, f64, f64), ConfigError> {
         let s = &self.sensors[i];
         let key = |k: &str| format!("sensors[{i}].{k}");
@@ -140,7 +160,8 @@ impl Config {
                     .as_deref()
                     .map(|n| patch_index(patches, Some(n), &key("patch")))
                     .transpose()?;
-                let at = locate(patches, patch, [x, y, z], face_tau(s.surface), &key("x"))?;
+                let beyond = s.offset.map_or(0.0, f64::abs);
+                let at = locate_within(patches, patch, [x, y, z], face_tau(s.surface), beyond, &key("x"))?;
                 Ok((at.patch, at.xi, at.eta))
             }
             (None, None, Some(x), Some(y), None) => {
@@ -212,6 +233,50 @@ mod tests {
             (
                 "beam = \"bent.north\"\nx = 20.6\ny = 6.0\nz = -3.0\ndirection = \"normal\"",
                 "sensors[4].direction",
+            ),
+        ];
+        for (sensor, key) in cases {
+            let config = Config::from_toml(&on_column(sensor)).unwrap();
+            let model = config.build_model().unwrap();
+            let e = config.build_sensors(&model).unwrap_err().to_string();
+            assert!(e.contains(key), "{key}: {e}");
+        }
+    }
+
+    /// A sensor 1.2 m below the deck's mid-surface (a girder's soffit) by
+    /// `offset`, given in space or in plan: its τ puts it there
+    /// (`½ − 1.2 / 0.4`); beside `surface`, on a beam or not finite it is
+    /// refused by key.
+    #[test]
+    fn a_sensor_off_the_mid_surface_sits_at_its_offset() {
+        let text = on_column("x = 10.0\ny = 7.5\nz = -1.2\noffset = -1.2\ndirection = \"y\"");
+        let config = Config::from_toml(&text).unwrap();
+        let model = config.build_model().unwrap();
+        let sensors = config.build_sensors(&model).unwrap();
+        let Sensor::Shell(point) = sensors.last().unwrap().1 else {
+            panic!("{sensors:?}")
+        };
+        assert!((point.tau - (0.5 - 1.2 / 0.4)).abs() < 1e-12, "{}", point.tau);
+        let at = model.patches[point.patch]
+            .shell
+            .position(point.xi, point.eta, point.tau);
+        assert!(
+            (at[0] - 10.0).abs() < 1e-9 && (at[1] - 7.5).abs() < 1e-9 && (at[2] + 1.2).abs() < 1e-9,
+            "{at:?}"
+        );
+        let cases = [
+            ("x = 10.0\ny = 7.5\nz = -1.2\ndirection = \"y\"", "sensors[4].x"),
+            (
+                "x = 10.0\ny = 7.5\nz = -1.2\noffset = -1.2\nsurface = \"top\"\ndirection = \"y\"",
+                "sensors[4].offset",
+            ),
+            (
+                "beam = \"bent.north\"\nx = 20.6\ny = 6.0\nz = -3.0\noffset = 0.5\ndirection = \"y\"",
+                "sensors[4].beam",
+            ),
+            (
+                "xi = 0.5\neta = 0.5\npatch = \"span1\"\noffset = nan\ndirection = \"y\"",
+                "sensors[4].offset",
             ),
         ];
         for (sensor, key) in cases {

@@ -15,6 +15,10 @@ pub struct SensorPoint {
     pub patch: usize,
     pub xi: f64,
     pub eta: f64,
+    /// 0 the bottom face, ½ the mid-surface, 1 the top; beyond them a
+    /// point off the shell on its director (a girder's soffit, a
+    /// barrier's top), carried rigidly by the section's rotation: eq.
+    /// (2)–(3) are linear in τ, so the rigid transfer is exact.
     pub tau: f64,
     pub direction: Vec3,
 }
@@ -80,7 +84,7 @@ fn shell_row(patches: &[Patch], dofs: &DofMap, index: usize, s: &SensorPoint) ->
         });
     };
     let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-    if !(kx.contains(s.xi) && ke.contains(s.eta) && (0.0..=1.0).contains(&s.tau)) {
+    if !(kx.contains(s.xi) && ke.contains(s.eta) && s.tau.is_finite()) {
         return Err(FrfError::SensorOutside {
             index,
             xi: s.xi,
@@ -131,4 +135,53 @@ pub fn sensor_rows_of(
     sensors: &[impl Into<Sensor> + Copy],
 ) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
     rows(&model.patches, &model.beams, sensors)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::shell::Shell;
+
+    /// A sensor `d` off a plate's mid-surface (τ = ½ + d/t, beyond the
+    /// faces too) reads `d θ` along x under a rigid rotation `θ` about y
+    /// (every β = θ), and the translation as it is.
+    #[test]
+    fn a_sensor_off_the_mid_surface_follows_the_section_rigidly() {
+        let shell = Shell::rectangular_plate(6.0, 3.0, 0.2, [3, 2], [6, 5]).unwrap();
+        let t = shell.thickness_at(0.3, 0.7);
+        assert!((t - 0.2).abs() < 1e-12);
+        let material = crate::model::material::OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
+        let patches = [Patch::new("deck", shell, material).unwrap()];
+        let dofs = DofMap::of_model(&patches, 0, 0);
+        for d in [-1.1, -0.1, 0.0, 0.35] {
+            let point = SensorPoint {
+                patch: 0,
+                xi: 0.3,
+                eta: 0.7,
+                tau: 0.5 + d / t,
+                direction: [1.0, 0.0, 0.0],
+            };
+            let row = shell_row(&patches, &dofs, 0, &point).unwrap();
+            let read = |q: &dyn Fn(usize) -> f64| row.iter().map(|&(dof, v)| v * q(dof)).sum::<f64>();
+            let theta = 1e-3;
+            let rotated = read(&|dof| if dof % 5 == 4 { theta } else { 0.0 });
+            assert!((rotated - d * theta).abs() < 1e-15, "offset {d}: {rotated}");
+            let translated = read(&|dof| f64::from(dof % 5 == 0));
+            assert!((translated - 1.0).abs() < 1e-12, "offset {d}: {translated}");
+        }
+        let nowhere = SensorPoint {
+            tau: f64::NAN,
+            ..SensorPoint {
+                patch: 0,
+                xi: 0.3,
+                eta: 0.7,
+                tau: 0.5,
+                direction: [1.0, 0.0, 0.0],
+            }
+        };
+        assert!(matches!(
+            shell_row(&patches, &dofs, 2, &nowhere),
+            Err(FrfError::SensorOutside { index: 2, .. })
+        ));
+    }
 }
