@@ -3,6 +3,7 @@
 //! cut into the same elements in both programs.
 
 use splinewatch_core::model::beam::{BeamMaterial, Section, StiffnessPart};
+use splinewatch_core::model::bearings::PatchPoint;
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
@@ -303,9 +304,12 @@ fn assert_three_grounds_translate_rigidly(
 }
 
 /// The same with the columns on footings (six-component springs at their
-/// free bases, on the bent's ground): the three grounds together still
-/// translate every sensor rigidly (1e-9), and the bent's ground alone
-/// moves the deck through the footings' springs.
+/// free bases, on the bent's ground) and a point support on the second
+/// span's soffit (its translations follow the section's rotation) on the
+/// bent's ground too: the three grounds together still translate every
+/// sensor rigidly (1e-9), one of them 0.8 m below the deck's mid-surface,
+/// and the bent's ground alone moves the deck through the footings'
+/// springs.
 #[test]
 fn grounds_through_footing_springs_add_up_to_a_rigid_translation() {
     let (mut model, _) = deck_on_bent([6, 4]);
@@ -319,13 +323,31 @@ fn grounds_through_footing_springs_add_up_to_a_rigid_translation() {
     let bases = vec![model.beams.member_nodes(0)[0], model.beams.member_nodes(1)[0]];
     let components = SupportComponent::ALL.iter().map(|&c| (c, 5e9)).collect();
     let global = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
-    model.elastic_supports = vec![ElasticSupport::at_beam_nodes("footings", bases, global, components).unwrap()];
-    let sensors = deck_sensors();
+    let soffit = PatchPoint {
+        patch: 1,
+        xi: 0.5,
+        eta: 0.5,
+        tau: 0.0,
+    };
+    let pot = SupportComponent::ALL[..5].iter().map(|&c| (c, 2e9)).collect();
+    model.elastic_supports = vec![
+        ElasticSupport::at_beam_nodes("footings", bases, global, components).unwrap(),
+        ElasticSupport::at_point("pot", soffit, global, pot).unwrap(),
+    ];
+    let mut sensors = deck_sensors();
+    let thickness = model.patches[0].shell.thickness_at(0.3, 0.6);
+    sensors.push(SensorPoint {
+        patch: 0,
+        xi: 0.3,
+        eta: 0.6,
+        tau: 0.5 - 0.8 / thickness,
+        direction: [0.0, 0.6, 0.8],
+    });
     let frf = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
     let kappa = model.spring_coefficients();
     let state = frf.modal_state(&kappa, &damping()).unwrap();
     let names = ["west", "east", "bent"].map(String::from).to_vec();
-    let groups = SupportGroups::new(names, vec![2], vec![0, 1], &model).unwrap();
+    let groups = SupportGroups::new(names, vec![2, 2], vec![0, 1], &model).unwrap();
     assert_three_grounds_translate_rigidly((&frf, &model, &groups), &kappa, &state, &sensors);
 }
 
