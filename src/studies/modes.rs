@@ -237,10 +237,14 @@ impl Sensors {
 }
 
 /// The patches and joints of a deck of several patches (patch, edge, the
-/// other patch, length), the beams and the rigid bodies, one line each;
-/// nothing for one patch alone.
+/// other patch, length), the beams, the rigid bodies and the supports
+/// (where, which components), one line each; nothing for one patch alone.
 pub fn describe_patches(model: &ShellModel) -> Vec<String> {
-    if model.patches.len() < 2 && model.beams.is_empty() && model.rigid_bodies.is_empty() {
+    if model.patches.len() < 2
+        && model.beams.is_empty()
+        && model.rigid_bodies.is_empty()
+        && model.elastic_supports.is_empty()
+    {
         return Vec::new();
     }
     let mut lines: Vec<String> = model
@@ -252,12 +256,7 @@ pub fn describe_patches(model: &ShellModel) -> Vec<String> {
         })
         .collect();
     lines.extend(model.joints.iter().map(|j| {
-        let edge = match j.edge {
-            Edge::Xi0 => "xi0",
-            Edge::Xi1 => "xi1",
-            Edge::Eta0 => "eta0",
-            Edge::Eta1 => "eta1",
-        };
+        let edge = edge_name(j.edge);
         format!(
             "joint: {} edge {edge} on {}, {:.3} m",
             model.patches[j.patch].name(),
@@ -288,7 +287,31 @@ pub fn describe_patches(model: &ShellModel) -> Vec<String> {
         let (edges, beam_nodes) = r.counts();
         format!("rigid {}: {edges} edges, {beam_nodes} beam nodes", r.name())
     }));
+    lines.extend(model.elastic_supports.iter().map(|s| {
+        let site = match s.site() {
+            SupportSite::Edge { patch, edge } => {
+                format!("along {} edge {}", model.patches[*patch].name(), edge_name(*edge))
+            }
+            SupportSite::Point(at) => {
+                let [x, y, z] = model.patches[at.patch].shell.position(at.xi, at.eta, at.tau);
+                format!("at ({x:.3}, {y:.3}, {z:.3}) m on {}", model.patches[at.patch].name())
+            }
+            SupportSite::BeamNodes(nodes) => format!("at {} beam bases", nodes.len()),
+        };
+        let components: Vec<&str> = s.components().iter().map(|c| c.name()).collect();
+        format!("support {}: {site}, {}", s.name(), components.join(" "))
+    }));
     lines
+}
+
+/// An edge as the configuration names it.
+fn edge_name(edge: Edge) -> &'static str {
+    match edge {
+        Edge::Xi0 => "xi0",
+        Edge::Xi1 => "xi1",
+        Edge::Eta0 => "eta0",
+        Edge::Eta1 => "eta1",
+    }
 }
 
 /// `splinewatch modes`: a table (or JSON) on `out`.
