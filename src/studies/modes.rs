@@ -351,3 +351,45 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::config::Config;
+
+    /// Every support is listed where it acts, with its components.
+    #[test]
+    fn the_model_s_description_lists_every_support_where_it_acts() {
+        let text = format!(
+            "{}{}",
+            include_str!("../../config/examples/deck-on-bent.toml"),
+            r#"
+[[model.supports]]
+name = "pot"
+at = [30.0, 4.0, -0.2]
+support = "west"
+stiffness = { z = 2e9, ry = 1e9 }
+update = false
+
+[[model.supports]]
+name = "west_abutment"
+edge = { patch = "span1", edge = "xi0" }
+support = "west"
+stiffness = { y = 2e8, ry = 5e8 }
+update = false
+"#
+        );
+        let lines = super::describe_patches(&Config::from_toml(&text).unwrap().build_model().unwrap());
+        let supports: Vec<&str> = lines
+            .iter()
+            .filter(|l| l.starts_with("support "))
+            .map(String::as_str)
+            .collect();
+        assert_eq!(
+            supports,
+            [
+                "support pot: at (30.000, 4.000, -0.200) m on span2, z ry",
+                "support west_abutment: along span1 edge xi0, y ry"
+            ]
+        );
+    }
+}

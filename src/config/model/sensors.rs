@@ -53,7 +53,13 @@ impl Config {
             ));
         }
         let tau = match s.offset {
-            Some(offset) => 0.5 + offset / shell.thickness_at(xi, eta),
+            // The faces' distance: `|Σ N_i t_i v3_i|`, what one unit of τ
+            // moves a point along the director (eq. 2).
+            Some(offset) => {
+                let faces = [0.0, 1.0].map(|tau| shell.position(xi, eta, tau));
+                0.5 + offset
+                    / splinewatch_core::geometry::vec3::norm(splinewatch_core::geometry::vec3::sub(faces[1], faces[0]))
+            }
             None => face_tau(s.surface),
         };
         let direction = match &s.direction {

@@ -322,17 +322,6 @@ impl Shell {
         out.jacobian = jac;
     }
 
-    /// The thickness at `(ξ, η)`: the control points' interpolated as eq. (2)
-    /// does (so `τ = ½ + d / t` lies `d` from the mid-surface along the
-    /// director).
-    pub fn thickness_at(&self, xi: f64, eta: f64) -> f64 {
-        let mut pt = ShellPoint::new_empty();
-        self.evaluate_into(xi, eta, 0.5, &mut pt);
-        (0..pt.count)
-            .map(|k| pt.n[k] * self.thickness[pt.control_points[k]])
-            .sum()
-    }
-
     /// Eq. (2): position of the material point `(ξ, η, τ)`.
     pub fn position(&self, xi: f64, eta: f64, tau: f64) -> Vec3 {
         let mut pt = ShellPoint::new_empty();

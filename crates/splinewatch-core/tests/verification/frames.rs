@@ -335,7 +335,8 @@ fn grounds_through_footing_springs_add_up_to_a_rigid_translation() {
         ElasticSupport::at_point("pot", soffit, global, pot).unwrap(),
     ];
     let mut sensors = deck_sensors();
-    let thickness = model.patches[0].shell.thickness_at(0.3, 0.6);
+    let faces = [0.0, 1.0].map(|tau| model.patches[0].shell.position(0.3, 0.6, tau));
+    let thickness = (0..3).map(|d| (faces[1][d] - faces[0][d]).powi(2)).sum::<f64>().sqrt();
     sensors.push(SensorPoint {
         patch: 0,
         xi: 0.3,
