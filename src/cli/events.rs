@@ -9,7 +9,8 @@
 //! An event that cannot be used (unreadable, a dead or clipped channel, no
 //! ground channel at all, too short) is reported as skipped with its reason
 //! and the others go on; a ground channel the record lacks takes the mean of
-//! the groups measured along its axis, said in the event's notes.
+//! the groups measured along its axis, said in the event's notes. When no
+//! input could be read at all, the run fails after saying so for each.
 
 use crate::config::{load_config, Config, EventAmplitude, GroundInputPlan};
 use crate::io::console::{errln, outln};
@@ -77,6 +78,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
     // The model once (when there is one), for the records' ground plan and then the chain.
     let plan = chain.plan(&cfg)?;
     let mut loaded = load_inputs(&cfg, &plan, &a.input, a.start);
+    let unreadable = loaded.iter().filter(|l| l.unreadable()).count();
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
     let mut writer = a
@@ -144,6 +146,14 @@ pub fn events(a: EventsArgs) -> Result<()> {
     }
     if let Some(p) = &a.state {
         chain.save(p)?;
+    }
+    // Every input unreadable (a mistyped path, a glob the shell did not
+    // expand): nothing was judged, which a script must not take for success.
+    if unreadable == loaded.len() {
+        bail!(
+            "none of the {} inputs could be read (each said above): nothing was judged",
+            loaded.len()
+        );
     }
     if let Some(dir) = &a.plot {
         let band = cfg.updating.band.unwrap_or(cfg.frf.band);

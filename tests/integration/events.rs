@@ -255,6 +255,23 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     assert!(summary.footer);
 }
 
+/// When no input can be read at all (a mistyped path, a glob the shell
+/// did not expand), each is said skipped and the run fails: nothing was
+/// judged, and a script must not take that for success.
+#[test]
+fn events_fail_when_no_input_can_be_read() {
+    let dir = fresh_dir("events-unreadable");
+    let missing = dir.join("*.zip");
+    let o = splinewatch(&["events", "--config", CONFIG, missing.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{stderr}");
+    assert!(stderr.contains("*.zip: skipped: cannot read"), "{stderr}");
+    assert!(
+        stderr.contains("none of the 1 inputs could be read (each said above): nothing was judged"),
+        "{stderr}"
+    );
+}
+
 /// Acceptance (simulated): ten events, the real 2015 record's grounds
 /// driving the config's model with 2 % noise (a seed each); from the fifth
 /// on, the bent's lateral stiffness 30 % lower. Each event's update fits its

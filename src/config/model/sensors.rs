@@ -201,6 +201,17 @@ mod tests {
         )
     }
 
+    /// Each `(sensor, key)`: the sensor added to the deck on a bent is
+    /// refused, the error naming `key`.
+    fn assert_refused_by_key(cases: &[(&str, &str)]) {
+        for (sensor, key) in cases {
+            let config = Config::from_toml(&on_column(sensor)).unwrap();
+            let model = config.build_model().unwrap();
+            let e = config.build_sensors(&model).unwrap_err().to_string();
+            assert!(e.contains(key), "{key}: {e}");
+        }
+    }
+
     /// A sensor on a beam is the member by name at its point, after the
     /// deck's sensors in config order; the errors name their key.
     #[test]
@@ -241,12 +252,7 @@ mod tests {
                 "sensors[4].direction",
             ),
         ];
-        for (sensor, key) in cases {
-            let config = Config::from_toml(&on_column(sensor)).unwrap();
-            let model = config.build_model().unwrap();
-            let e = config.build_sensors(&model).unwrap_err().to_string();
-            assert!(e.contains(key), "{key}: {e}");
-        }
+        assert_refused_by_key(&cases);
     }
 
     /// A sensor 1.2 m below the deck's mid-surface (a girder's soffit) by
@@ -285,11 +291,6 @@ mod tests {
                 "sensors[4].offset",
             ),
         ];
-        for (sensor, key) in cases {
-            let config = Config::from_toml(&on_column(sensor)).unwrap();
-            let model = config.build_model().unwrap();
-            let e = config.build_sensors(&model).unwrap_err().to_string();
-            assert!(e.contains(key), "{key}: {e}");
-        }
+        assert_refused_by_key(&cases);
     }
 }

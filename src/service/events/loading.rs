@@ -22,6 +22,12 @@ impl Loaded {
         }
     }
 
+    /// Whether its input could not be read at all (a missing or unreadable
+    /// file, not a record: no start time, no blocks).
+    pub fn unreadable(&self) -> bool {
+        self.start_ns().is_none()
+    }
+
     /// With what reading the record found (a recorder placed by its
     /// channels' motion, channels cut) first among the event's notes.
     pub fn noted(mut self, notes: &[String]) -> Self {
