@@ -16,6 +16,7 @@ use crate::config::{load_config, Config, EventAmplitude, GroundInputPlan};
 use crate::io::console::{errln, outln};
 use crate::io::wire::format_timestamp;
 use crate::outputs::notify::Notifier;
+use crate::outputs::rerun::events::{EventLog, EventTimeline};
 use crate::outputs::results::ResultsWriter;
 use crate::service::events::burst::split;
 use crate::service::events::{
@@ -128,7 +129,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
                 n.observe(&status, &serde_json::to_vec(&status)?);
             }
             if let Some(r) = rerun.as_mut() {
-                log_rerun(r, &line, cfg.events().amplitude)?;
+                log_rerun(r.as_mut(), &line, cfg.events().amplitude)?;
             }
             print_line(&line, a.json)?;
             lines.push(line);
@@ -136,7 +137,7 @@ pub fn events(a: EventsArgs) -> Result<()> {
         Ok(())
     })?;
     if let Some(r) = rerun {
-        r.finish()?;
+        r.close()?;
     }
     if let Some(n) = notifier.as_mut() {
         n.finish();
@@ -163,13 +164,19 @@ pub fn events(a: EventsArgs) -> Result<()> {
     Ok(())
 }
 
-/// The Rerun recording `--rerun-save` writes.
-fn open_rerun(cfg: &Config, path: &Path) -> Result<crate::outputs::rerun::RerunOutput> {
+/// The Rerun recording `--rerun-save` writes: the whole stream with a
+/// model, the events' timeline alone without one.
+fn open_rerun(cfg: &Config, path: &Path) -> Result<Box<dyn EventLog>> {
+    if !cfg.has_model() {
+        return Ok(Box::new(EventTimeline::save(path)?));
+    }
     let targets = crate::outputs::rerun::RerunTargets {
         save: Some(path.to_path_buf()),
         connect: None,
     };
-    crate::outputs::rerun::RerunOutput::open_rotating(cfg, &targets, false)
+    Ok(Box::new(crate::outputs::rerun::RerunOutput::open_rotating(
+        cfg, &targets, false,
+    )?))
 }
 
 /// Every identified mode of every used event, and the updated model's

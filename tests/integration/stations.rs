@@ -278,6 +278,28 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         ),
         "{notes}"
     );
+    // `--rerun-save` without a model: the events' timeline alone (no deck
+    // views), read back with Rerun's own decoder.
+    let rrd = dir.join("events.rrd");
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        config.to_str().unwrap(),
+        "--rerun-save",
+        rrd.to_str().unwrap(),
+        &records[1],
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
+    for entity in ["/events/pga_ground", "/events/frequency/identified", "/events/verdict"] {
+        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
+    }
+    assert!(
+        !summary.entities.iter().any(|e| e.starts_with("/deck")),
+        "{:?}",
+        summary.entities
+    );
+    assert!(summary.footer);
     // `predict` without a model forecasts by the state's realization, with
     // the figures `events` gave the same record; without `--state` it says
     // what it needs.

@@ -3,9 +3,13 @@
 //! peaks, the deck's strong-motion RMS, each updated parameter, the identified frequencies, the updated
 //! model's dominant mode, the forecast's and the baseline's NRMSE and the
 //! verdict (0 insufficient history, 1 normal, 3 alarm, as `monitoring/state`).
+//! Without a model the same points go to a recording of their own
+//! ([`EventTimeline`]).
 
 use super::{rerun_error, RerunOutput};
-use anyhow::Result;
+use anyhow::{anyhow, Result};
+use rerun::blueprint::{Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical};
+use std::path::Path;
 
 /// One event's figures.
 pub struct EventPoint<'a> {
@@ -25,45 +29,117 @@ pub struct EventPoint<'a> {
     pub verdict: Option<&'a str>,
 }
 
-impl RerunOutput {
+/// Where `events` logs its points: the whole stream of a config with a
+/// model ([`RerunOutput`]), or the events' timeline alone
+/// ([`EventTimeline`]).
+pub trait EventLog {
     /// Logs one event under `events/…`.
-    pub fn log_event(&mut self, event: &EventPoint<'_>) -> Result<()> {
+    fn log_event(&mut self, event: &EventPoint<'_>) -> Result<()>;
+    /// Flushes and closes the recording (the `.rrd` gets its footer).
+    fn close(self: Box<Self>) -> Result<()>;
+}
+
+impl EventLog for RerunOutput {
+    fn log_event(&mut self, event: &EventPoint<'_>) -> Result<()> {
         self.rotate_if_due(event.time_ns)?;
         self.updates += 1;
         self.set_time(event.time_ns);
-        let scalar =
-            |path: &str, v: f64| -> Result<()> { self.rec.log(path, &rerun::Scalars::new([v])).map_err(rerun_error) };
-        scalar("events/pga_ground", event.pga_ground)?;
-        scalar("events/peak_deck", event.peak_deck)?;
-        if let Some(rms) = event.rms_deck {
-            scalar("events/rms_deck", rms)?;
-        }
-        for (name, value) in event.parameters {
-            scalar(&format!("events/parameters/{name}"), *value)?;
-        }
-        if let Some(f) = event.model_mode_hz {
-            scalar("events/frequency/model", f)?;
-        }
-        if let Some((forecast, baseline)) = event.forecast {
-            scalar("events/forecast/nrmse", forecast)?;
-            scalar("events/forecast/baseline_nrmse", baseline)?;
-        }
-        if let Some(v) = event.verdict {
-            let code = match v {
-                "normal" => 1.0,
-                "alarm" => 3.0,
-                _ => 0.0,
-            };
-            scalar("events/verdict", code)?;
-        }
-        if !event.identified_hz.is_empty() {
-            self.rec
-                .log(
-                    "events/frequency/identified",
-                    &rerun::Points2D::new(event.identified_hz.iter().map(|&f| (event.amplitude as f32, f as f32))),
-                )
-                .map_err(rerun_error)?;
-        }
-        Ok(())
+        log_points(&self.rec, event)
     }
+
+    fn close(self: Box<Self>) -> Result<()> {
+        self.finish()
+    }
+}
+
+/// The events' timeline alone, for a config without a `[model]` (a
+/// station's starter config): no deck and no model views, a layout of the
+/// events' series and their frequencies against amplitude.
+pub struct EventTimeline {
+    rec: rerun::RecordingStream,
+}
+
+impl EventTimeline {
+    /// A recording saved to `path`, with its layout.
+    pub fn save(path: &Path) -> Result<Self> {
+        let rec = rerun::RecordingStreamBuilder::new("splinewatch")
+            .buffered()
+            .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
+        crate::io::files::create_output_file(path)?;
+        let sink = rerun::sink::FileSink::new(path).map_err(|e| anyhow!("Rerun file {}: {e}", path.display()))?;
+        rec.set_sink(Box::new(sink));
+        let layout = Blueprint::new(Horizontal::new([
+            Vertical::new([
+                TimeSeriesView::new("Ground peak, deck peak and RMS (m/s²)")
+                    .with_origin("/events")
+                    .with_contents(["/events/pga_ground", "/events/peak_deck", "/events/rms_deck"])
+                    .into(),
+                TimeSeriesView::new("Forecast and baseline NRMSE")
+                    .with_origin("/events/forecast")
+                    .into(),
+                TimeSeriesView::new("Verdict (0 insufficient history, 1 normal, 3 alarm)")
+                    .with_origin("/events")
+                    .with_contents(["/events/verdict"])
+                    .into(),
+            ])
+            .into(),
+            Spatial2DView::new("Identified frequency (Hz) against amplitude")
+                .with_origin("/events/frequency/identified")
+                .into(),
+        ]));
+        layout
+            .send(&rec, BlueprintActivation::default())
+            .map_err(|e| anyhow!("Rerun blueprint: {e}"))?;
+        Ok(Self { rec })
+    }
+}
+
+impl EventLog for EventTimeline {
+    fn log_event(&mut self, event: &EventPoint<'_>) -> Result<()> {
+        self.rec
+            .set_timestamp_nanos_since_epoch("measurement_time", event.time_ns.clamp(0, i64::MAX as i128) as i64);
+        log_points(&self.rec, event)
+    }
+
+    fn close(self: Box<Self>) -> Result<()> {
+        self.rec
+            .flush_blocking()
+            .map_err(|e| anyhow!("flushing the Rerun output: {e}"))
+    }
+}
+
+/// One event's points on `rec`, at the time already set.
+fn log_points(rec: &rerun::RecordingStream, event: &EventPoint<'_>) -> Result<()> {
+    let scalar = |path: &str, v: f64| -> Result<()> { rec.log(path, &rerun::Scalars::new([v])).map_err(rerun_error) };
+    scalar("events/pga_ground", event.pga_ground)?;
+    scalar("events/peak_deck", event.peak_deck)?;
+    if let Some(rms) = event.rms_deck {
+        scalar("events/rms_deck", rms)?;
+    }
+    for (name, value) in event.parameters {
+        scalar(&format!("events/parameters/{name}"), *value)?;
+    }
+    if let Some(f) = event.model_mode_hz {
+        scalar("events/frequency/model", f)?;
+    }
+    if let Some((forecast, baseline)) = event.forecast {
+        scalar("events/forecast/nrmse", forecast)?;
+        scalar("events/forecast/baseline_nrmse", baseline)?;
+    }
+    if let Some(v) = event.verdict {
+        let code = match v {
+            "normal" => 1.0,
+            "alarm" => 3.0,
+            _ => 0.0,
+        };
+        scalar("events/verdict", code)?;
+    }
+    if !event.identified_hz.is_empty() {
+        rec.log(
+            "events/frequency/identified",
+            &rerun::Points2D::new(event.identified_hz.iter().map(|&f| (event.amplitude as f32, f as f32))),
+        )
+        .map_err(rerun_error)?;
+    }
+    Ok(())
 }

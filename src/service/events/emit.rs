@@ -83,7 +83,11 @@ pub fn forecast_medians(line: &EventLine) -> Option<(f64, f64)> {
     })
 }
 
-pub fn log_rerun(r: &mut crate::outputs::rerun::RerunOutput, line: &EventLine, kind: EventAmplitude) -> Result<()> {
+pub fn log_rerun(
+    r: &mut (impl crate::outputs::rerun::events::EventLog + ?Sized),
+    line: &EventLine,
+    kind: EventAmplitude,
+) -> Result<()> {
     let (Some(start), Some(pga), Some(peak)) = (line.start.as_deref(), line.pga_ground, line.peak_deck) else {
         return Ok(());
     };
