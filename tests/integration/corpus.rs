@@ -467,7 +467,7 @@ proptest::proptest! {
 /// dropped in `queue_drops`: received = accepted + rejected + queue_drops.
 /// (10⁵ from a Python peer: `benches/damaged_peer.py`, the guide.)
 #[test]
-fn issue_34_a_live_daemon_accounts_for_every_damaged_message() {
+fn a_live_daemon_accounts_for_every_damaged_message() {
     let dir = crate::common::fresh_dir("issue_34_live");
     let cfg = load_config(&root().join("config/sinello.toml")).unwrap();
     let prefix = cfg.topic_prefix();

@@ -342,7 +342,7 @@ fn issue_45_identify_finds_the_modes_of_a_recording_with_a_measured_input() {
 /// Toeplitz estimate of before put them 0.6–3 % off), its damping within
 /// 20 % of the config's 5 % (4.3–5.1 %), each with a standard deviation.
 #[test]
-fn issue_45_identify_recovers_the_simulated_overpass_driven_by_a_real_record() {
+fn identify_recovers_the_simulated_overpass_driven_by_a_real_record() {
     let dir = fresh_dir("identify-overpass");
     let recording = dir.join("simulated.mcap");
     let o = splinewatch(&[
@@ -413,7 +413,7 @@ fn issue_45_identify_recovers_the_simulated_overpass_driven_by_a_real_record() {
 /// two estimator choices', measured in the fixture (the guide: up to 10 % at
 /// this low order on these records).
 #[test]
-fn issue_45_srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator() {
+fn srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator() {
     use splinewatch::io::wire::ChannelQuantity;
     use splinewatch_core::identification::oma::SubspaceModel;
     use splinewatch_core::identification::srim::InformationMatrix;

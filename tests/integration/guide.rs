@@ -490,12 +490,12 @@ const MAKING_OF: &[&str] = &[
 const OTHER_TRACKERS: &[&str] = &["zenoh ", "faer's ", "faer ", "rerun ", "upstream "];
 
 /// Where `line` names an issue number of this project ("issue 32",
-/// "issues 31", "issue #15").
+/// "issues 31", "issue #15", a test named `issue_32_…`).
 fn own_issue_number(line: &str) -> Option<usize> {
     let lower = line.to_lowercase();
     lower.match_indices("issue").map(|(at, _)| at).find(|&at| {
         let rest = lower[at + "issue".len()..].trim_start_matches('s');
-        let rest = rest.strip_prefix(' ').unwrap_or(rest);
+        let rest = rest.strip_prefix([' ', '_']).unwrap_or(rest);
         let rest = rest.strip_prefix('#').unwrap_or(rest);
         rest.starts_with(|c: char| c.is_ascii_digit()) && !OTHER_TRACKERS.iter().any(|t| lower[..at].ends_with(t))
     })
@@ -543,4 +543,5 @@ fn no_page_speaks_of_its_making() {
     assert!(own_issue_number("zenoh issue #2711, checked").is_none());
     assert!(own_issue_number("faer's issue #262, a hang").is_none());
     assert!(own_issue_number("no issue found").is_none());
+    assert!(own_issue_number("`issue_45_srim_at_mdofs_settings`").is_some());
 }

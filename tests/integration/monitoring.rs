@@ -607,7 +607,7 @@ fn systemd_status_ends_with_the_monitoring_state() {
 /// skipped with the reason (dropped by the full queue, counted in
 /// `queue_drops`, or still waiting when the daemon stopped).
 #[test]
-fn issue_31_a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
+fn a_burst_of_frf_windows_is_updated_or_recorded_as_skipped() {
     let out = temp("burst");
     let text = std::fs::read_to_string(root().join("config/sinello-monitoring.toml"))
         .unwrap()

@@ -569,7 +569,7 @@ fn output_only_monitoring_scores_the_identified_frequencies() {
 /// values. Each bent bearing's `kz` is found within 8 % of 2e9 N/m in the
 /// first window and of 3e9 in the second (measured: 1–6 %, σ about 1.5 %).
 #[test]
-fn issue_30_the_overpass_replay_finds_its_bent_bearings_stiffening() {
+fn the_overpass_replay_finds_its_bent_bearings_stiffening() {
     let dir = fresh_dir("issue_30_overpass");
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let (config, scenario) = (

@@ -187,7 +187,7 @@ fn replay_both_paths(
 /// within 15 % in every window. With both, each block's chi-square is
 /// reported beside its residue count.
 #[test]
-fn issue_31_a_force_sensor_and_oma_run_both_paths() {
+fn a_force_sensor_and_oma_run_both_paths() {
     let dir = fresh_dir("both-paths");
     let scenario = loss_scenario(&dir, 19.9, 20.0, 30.0);
     let rec = dir.join("shaken.mcap");
