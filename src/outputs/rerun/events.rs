@@ -6,7 +6,7 @@
 //! Without a model the same points go to a recording of their own
 //! ([`EventTimeline`]).
 
-use super::{rerun_error, RerunOutput};
+use super::{rerun_error, set_measurement_time, RerunOutput};
 use anyhow::{anyhow, Result};
 use rerun::blueprint::{Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical};
 use std::path::Path;
@@ -96,8 +96,7 @@ impl EventTimeline {
 
 impl EventLog for EventTimeline {
     fn log_event(&mut self, event: &EventPoint<'_>) -> Result<()> {
-        self.rec
-            .set_timestamp_nanos_since_epoch("measurement_time", event.time_ns.clamp(0, i64::MAX as i128) as i64);
+        set_measurement_time(&self.rec, event.time_ns);
         log_points(&self.rec, event)
     }
 

@@ -226,8 +226,7 @@ impl RerunOutput {
     }
 
     fn set_time(&self, time_ns: i128) {
-        self.rec
-            .set_timestamp_nanos_since_epoch("measurement_time", time_ns.clamp(0, i64::MAX as i128) as i64);
+        set_measurement_time(&self.rec, time_ns);
         self.rec.set_time_sequence("update", self.updates);
     }
 
@@ -303,6 +302,11 @@ impl RerunOutput {
         drop(self.rec);
         Ok(())
     }
+}
+
+/// `rec`'s `measurement_time` at `time_ns` (clamped to what Rerun holds).
+fn set_measurement_time(rec: &rerun::RecordingStream, time_ns: i128) {
+    rec.set_timestamp_nanos_since_epoch("measurement_time", time_ns.clamp(0, i64::MAX as i128) as i64);
 }
 
 fn rerun_error(e: rerun::RecordingStreamError) -> anyhow::Error {

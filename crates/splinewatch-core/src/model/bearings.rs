@@ -35,6 +35,14 @@ pub struct PatchPoint {
     pub tau: f64,
 }
 
+impl PatchPoint {
+    /// Whether `(ξ, η)` lies in `shell`'s parameter domain and τ in [0, 1].
+    pub fn lies_on(&self, shell: &Shell) -> bool {
+        let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
+        kx.contains(self.xi) && ke.contains(self.eta) && (0.0..=1.0).contains(&self.tau)
+    }
+}
+
 /// An elastic bearing: springs `[k_x, k_y, k_z]` (N/m) along its axes
 /// (the global ones unless [`Bearing::with_axes`] skews them).
 #[derive(Debug, Clone, PartialEq)]
@@ -153,8 +161,7 @@ impl PointMass {
 
 /// The rows `a_x, a_y, a_z` of eq. (3)'s `N` at the point, as `(dof, value)`.
 fn axis_rows(shell: &Shell, at: PatchPoint) -> Result<[Vec<(usize, f64)>; 3], BearingError> {
-    let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-    if !(kx.contains(at.xi) && ke.contains(at.eta) && (0.0..=1.0).contains(&at.tau)) {
+    if !at.lies_on(shell) {
         return Err(BearingError::Outside {
             xi: at.xi,
             eta: at.eta,

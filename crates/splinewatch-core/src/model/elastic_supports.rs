@@ -231,8 +231,7 @@ impl ElasticSupport {
             }
             SupportSite::Point(at) => {
                 let (shell, offset) = patch_of(at.patch)?;
-                let (kx, ke) = (shell.surface().xi(), shell.surface().eta());
-                if !(kx.contains(at.xi) && ke.contains(at.eta) && (0.0..=1.0).contains(&at.tau)) {
+                if !at.lies_on(shell) {
                     return Err(ElasticSupportError::Outside {
                         name: self.name.clone(),
                         xi: at.xi,
