@@ -32,7 +32,7 @@ pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
 pub use frequency_domain::{FrequencyDomainConfig, FrequencyDomainPlan, MAX_FITTED_MODES};
 pub use frf::FrfConfig;
 pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};
-pub use loss_factor::{LossFactorConfig, LossFactorTable};
+pub use loss_factor::{ComponentLossFactor, LossFactorConfig, LossFactorTable, LossSite};
 pub use metrics::MetricsConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,
@@ -261,7 +261,7 @@ impl Config {
             let groups = self.support_groups(&model)?;
             self.ground_plan(&groups)?;
             self.modal_cutoff_hz()?;
-            self.loss_factors()?;
+            self.loss_sites()?;
             if self.model.damping.is_some() {
                 self.build_damping()?;
             }

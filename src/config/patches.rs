@@ -2,7 +2,7 @@
 //! `[[model.bearings]]` and `[[model.masses]]`, built into core types; and
 //! where a point given in metres lies on the model.
 
-use super::loss_factor::LossFactorConfig;
+use super::loss_factor::ComponentLossFactor;
 use super::{err, ConfigError};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::geometry::knots::KnotVector;
@@ -174,13 +174,14 @@ pub struct BearingConfig {
     /// bearing's parameters (one value for a support line's bearings).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tie: Option<String>,
-    /// The support's loss factor η (hysteretic damping: 0.1 = 10 %): modes
+    /// The bearing's loss factor η (hysteretic damping: 0.1 = 10 %): modes
     /// whose strain energy sits in it are damped more, by
     /// `½ η × (its share of the mode's strain energy)` on top of
     /// `[model.damping]`'s ζ(f). A number is held; `{ value, bounds }` is
-    /// updated (parameter `<name>.eta`).
+    /// updated (parameter `<name>.eta`); `{ ky = 0.3 }` acts on the axes
+    /// named only, each its own (parameter `<name>.ky.eta`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub loss_factor: Option<LossFactorConfig>,
+    pub loss_factor: Option<ComponentLossFactor>,
 }
 
 /// `[[model.bearings]] update`: every axis, none, or the axes listed.

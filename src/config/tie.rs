@@ -1,7 +1,8 @@
 //! `tie`: an entry of a list (bearings, supports, stiffness fields) that
-//! takes the parameters and the loss factor of the entry before it.
+//! takes the parameters and the loss factor of the entry before it (its
+//! loss factor: [`super::loss_factor`]).
 
-use super::{err, ConfigError, LossFactorConfig};
+use super::{err, ConfigError};
 
 /// An entry that may be tied to another by name.
 pub(crate) trait Tied {
@@ -42,32 +43,4 @@ pub(crate) fn tied_runs<T: Tied>(
         run.1 += 1;
     }
     Ok(runs)
-}
-
-/// Each entry's `loss_factor` (by `loss`) with its key; a tied entry takes
-/// the last untied one's and may not give its own.
-pub(crate) fn tied_loss_factors<T: Tied>(
-    items: &[T],
-    section: &str,
-    what: &str,
-    loss: impl Fn(&T) -> Option<LossFactorConfig>,
-) -> Result<Vec<(String, Option<LossFactorConfig>)>, ConfigError> {
-    let mut leader = None;
-    let mut all = Vec::with_capacity(items.len());
-    for (i, item) in items.iter().enumerate() {
-        let key = format!("{section}[{i}].loss_factor");
-        if let Some(name) = item.tie() {
-            if loss(item).is_some() {
-                return Err(err(
-                    key,
-                    format!("a tied {what} takes the loss factor of {name:?}: remove it"),
-                ));
-            }
-            all.push((key, leader));
-        } else {
-            leader = loss(item);
-            all.push((key, leader));
-        }
-    }
-    Ok(all)
 }

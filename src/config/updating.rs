@@ -1,6 +1,6 @@
 //! `[updating]`: the solver's settings and the updating parameters.
 
-use super::{err, Config, ConfigError, LossFactorConfig};
+use super::{err, Config, ConfigError};
 use serde::{Deserialize, Serialize};
 use splinewatch_core::updating::{LineSelection, Method, Parameter, ParameterKind, UpdateSettings, Weighting};
 
@@ -153,8 +153,8 @@ pub enum ParameterFamily {
     MemberStiffness,
     /// `damping.g<z>`: a damping-curve coefficient γ, a ratio.
     Damping,
-    /// `<support>.eta`: a spring field's, bearing's or line support's loss
-    /// factor η, a ratio.
+    /// `<support>.eta` or `<support>.<component>.eta`: a spring field's,
+    /// bearing's or support's loss factor η, a ratio.
     LossFactor,
 }
 
@@ -300,39 +300,24 @@ impl Config {
         Ok(out)
     }
 
-    /// `<name>.eta` for every updated `loss_factor`, a run of tied bearings
-    /// or supports sharing its leader's.
+    /// `<name>.eta` (or `<name>.<component>.eta`) for every updated
+    /// `loss_factor`: one per loss site, tied bearings or supports sharing
+    /// their leader's.
     fn loss_factor_parameters(&self) -> Result<Vec<Parameter>, ConfigError> {
-        let m = &self.model;
-        let names = self.spring_field_names();
-        let losses = self.loss_factors()?;
-        let mut out = Vec::new();
-        let mut field = 0;
-        while field < losses.len() {
-            // A bearing's or support's run: the tied ones after it.
-            let mut count = 1;
-            let bearing = field.checked_sub(m.springs.len()).filter(|&b| b < m.bearings.len());
-            let support = field.checked_sub(m.springs.len() + m.bearings.len());
-            if let Some(b) = bearing {
-                while m.bearings.get(b + count).is_some_and(|next| next.tie.is_some()) {
-                    count += 1;
-                }
-            } else if let Some(s) = support {
-                while m.supports.get(s + count).is_some_and(|next| next.tie.is_some()) {
-                    count += 1;
-                }
-            }
-            if let Some([lower, upper]) = losses[field].1.and_then(LossFactorConfig::updated) {
-                out.push(Parameter {
-                    name: format!("{}.eta", names[field]),
-                    kind: ParameterKind::LossFactor { field, count },
+        let sites = self.loss_sites()?;
+        Ok(sites
+            .iter()
+            .enumerate()
+            .filter_map(|(site, s)| {
+                let [lower, upper] = s.factor.updated()?;
+                Some(Parameter {
+                    name: format!("{}.eta", s.name),
+                    kind: ParameterKind::LossFactor { field: site, count: 1 },
                     lower,
                     upper,
-                });
-            }
-            field += count;
-        }
-        Ok(out)
+                })
+            })
+            .collect())
     }
 
     /// Every stiffness field with the number of fields tied to it after it,

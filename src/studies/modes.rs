@@ -179,13 +179,17 @@ fn mode_row(
         })
         .collect();
     let damping_ratio = damping.filter(|_| modes.kinds[i] != ModeKind::Rigid).map(|d| {
-        let loss: f64 = d
-            .loss_factors()
+        // Each spring coefficient's share: a loss factor may weigh some of
+        // a support's components only.
+        let shares: Vec<f64> = supports
+            .blocks
             .iter()
-            .zip(&support_shares)
-            .map(|(eta, s)| eta * s.share)
-            .sum();
-        d.zeta(modes.frequency_hz(i)) + 0.5 * loss
+            .zip(supports.stiffness)
+            .flat_map(|(b, k)| (0..b.len()).map(move |j| (&b[j..=j], &k[j..=j])))
+            .map(|(b, k)| modes.spring_energy_share(i, b, k))
+            .collect();
+        let sizes: Vec<usize> = supports.blocks.iter().map(Vec::len).collect();
+        d.zeta(modes.frequency_hz(i)) + 0.5 * d.support_loss(&shares, &sizes)
     });
     ModeRow {
         index: i + 1,

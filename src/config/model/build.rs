@@ -2,7 +2,7 @@
 //! shell, material, springs, stiffness fields, bearings and masses, damping.
 
 use super::*;
-use crate::config::tie::tied_loss_factors;
+use splinewatch_core::model::loss_sites::LossSites;
 
 impl Config {
     /// The cut-off when the model is truncated (`[model.solver]`), `None`
@@ -397,64 +397,17 @@ impl Config {
         }
         let curve = DampingCurve::new(d.degree, d.coefficients.clone(), d.f_start, d.f_end)
             .map_err(|e| err("model.damping", e))?;
-        let losses = self.loss_factors()?;
-        if losses.iter().all(|(_, eta)| eta.is_none()) {
+        let sites = self.loss_sites()?;
+        if sites.is_empty() {
             return Ok(curve);
         }
+        let factors = sites.iter().map(|s| s.factor.value()).collect();
+        let where_ =
+            LossSites::new(sites.into_iter().map(|s| s.coefficients).collect()).map_err(|e| err("model", e))?;
         curve
-            .with_loss_factors(
-                losses
-                    .into_iter()
-                    .map(|(_, eta)| eta.map_or(0.0, LossFactorConfig::value))
-                    .collect(),
-            )
+            .with_loss_factors(factors)
+            .and_then(|c| c.with_loss_sites(where_))
             .map_err(|e| err("model", e))
-    }
-
-    /// Each spring field's, bearing's and line support's `loss_factor` (the
-    /// model's order of spring fields) with its key; a tied bearing or
-    /// support takes its leader's and may not give its own. A value must be finite and
-    /// non-negative, within its bounds when updated, and needs
-    /// `[model.damping]` (the curve it adds to).
-    pub fn loss_factors(&self) -> Result<Vec<(String, Option<LossFactorConfig>)>, ConfigError> {
-        let m = &self.model;
-        let mut all: Vec<(String, Option<LossFactorConfig>)> = m
-            .springs
-            .iter()
-            .enumerate()
-            .map(|(i, s)| (format!("model.springs[{i}].loss_factor"), s.loss_factor))
-            .collect();
-        all.extend(tied_loss_factors(&m.bearings, "model.bearings", "bearing", |b| {
-            b.loss_factor
-        })?);
-        all.extend(tied_loss_factors(&m.supports, "model.supports", "support", |s| {
-            s.loss_factor
-        })?);
-        for (key, eta) in &all {
-            let Some(eta) = eta else { continue };
-            let value = eta.value();
-            if !(value.is_finite() && value >= 0.0) {
-                return Err(err(
-                    key,
-                    format!("{value} must be a finite loss factor >= 0 (0.1 = 10 %)"),
-                ));
-            }
-            if let Some([lo, hi]) = eta.updated() {
-                if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && lo < hi) {
-                    return Err(err(key, format!("bounds [{lo}, {hi}] must satisfy 0 <= lower < upper")));
-                }
-                if !(lo..=hi).contains(&value) {
-                    return Err(err(key, format!("value {value} lies outside its bounds [{lo}, {hi}]")));
-                }
-            }
-            if m.damping.is_none() {
-                return Err(err(
-                    key,
-                    "needs [model.damping]: the support's damping adds to the curve's",
-                ));
-            }
-        }
-        Ok(all)
     }
 }
 

@@ -26,7 +26,7 @@ use std::collections::BTreeMap;
 mod build;
 mod member_stiffness;
 mod sensors;
-mod substructure;
+pub(crate) mod substructure;
 #[cfg(test)]
 mod tests;
 

@@ -4,6 +4,7 @@
 
 use super::super::patches::{default_true, face_tau, locate, material_table, BearingUpdate, FaceConfig};
 use super::*;
+use crate::config::ComponentLossFactor;
 use splinewatch_core::model::beam::{BeamError, Section};
 use splinewatch_core::model::elastic_supports::{ElasticSupport, ElasticSupportError, SupportComponent};
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet, MemberError};
@@ -358,9 +359,12 @@ pub struct SupportConfig {
     /// whose strain energy sits in it are damped more, by
     /// `½ η × (its share of the mode's strain energy)` on top of
     /// `[model.damping]`'s ζ(f). A number is held; `{ value, bounds }` is
-    /// updated (parameter `<name>.eta`).
+    /// updated (parameter `<name>.eta`); `{ y = 0.3, z = 0.05 }` acts on
+    /// the components named only, each its own (parameter
+    /// `<name>.<component>.eta` when updated: an abutment's soil damping
+    /// its lateral motion, not its bearing's vertical one).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub loss_factor: Option<LossFactorConfig>,
+    pub loss_factor: Option<ComponentLossFactor>,
     /// Another support's name, just before this one in `[[model.supports]]`
     /// (or before supports tied to it): this one takes its updating
     /// parameters and its loss factor (one soil under both abutments). It

@@ -440,7 +440,8 @@ fn a_channel_pointing_the_other_way_enters_with_the_opposite_sign() {
 
 /// Loss factors: a held one enters the damping, an updated one becomes
 /// `<name>.eta` (a ratio, its own family); a run of tied bearings shares
-/// its leader's, and a tied bearing may not give its own.
+/// its leader's (one loss site over the run's springs), and a tied bearing
+/// may not give its own.
 #[test]
 fn loss_factors_enter_the_damping_and_the_parameters() {
     let base = include_str!("../../../config/examples/deck-on-bent.toml");
@@ -487,15 +488,26 @@ fn loss_factors_enter_the_damping_and_the_parameters() {
         .filter(|p| p.name.ends_with(".eta"))
         .collect();
     assert_eq!(eta.len(), 1, "{eta:?}");
-    let ParameterKind::LossFactor { field, count } = eta[0].kind else {
-        panic!("{eta:?}")
-    };
-    let losses = config.build_damping().unwrap().loss_factors().to_vec();
-    assert!(
-        count >= 2 && losses[field..field + count].iter().all(|&l| l == 0.3),
-        "{losses:?}"
-    );
-    assert_eq!(losses.iter().filter(|&&l| l > 0.0).count(), count);
+    assert_eq!(eta[0].kind, ParameterKind::LossFactor { field: 0, count: 1 });
+    assert_eq!(config.build_damping().unwrap().loss_factors(), &[0.3]);
+    // The leader and the bearings tied to it, three springs each.
+    let sites = config.loss_sites().unwrap();
+    let run = 1 + config
+        .model
+        .bearings
+        .iter()
+        .filter(|b| b.tie.as_deref() == Some("west_south"))
+        .count();
+    let springs: usize = config.model.springs.iter().map(|s| s.stiffness.len()).sum();
+    let first = springs
+        + 3 * config
+            .model
+            .bearings
+            .iter()
+            .position(|b| b.name == "west_south")
+            .unwrap();
+    assert!(run >= 2);
+    assert_eq!(sites[0].coefficients, (first..first + 3 * run).collect::<Vec<_>>());
     let own = with_leader.replacen(leader, &format!("{leader}\nloss_factor = 0.1"), 1);
     let message = Config::from_toml(&own).unwrap().validate().unwrap_err().to_string();
     assert!(
@@ -542,8 +554,14 @@ fn supports_tie_into_one_soil() {
     );
     assert_eq!(
         named("west_abutment.eta"),
-        Some(ParameterKind::LossFactor { field, count: 2 })
+        Some(ParameterKind::LossFactor { field: 0, count: 1 })
     );
+    // One loss site over both supports' four components.
+    let first: usize =
+        cfg.model.springs.iter().map(|s| s.stiffness.len()).sum::<usize>() + 3 * cfg.model.bearings.len();
+    let sites = cfg.loss_sites().unwrap();
+    assert_eq!(sites.len(), 1);
+    assert_eq!(sites[0].coefficients, (first..first + 8).collect::<Vec<_>>());
     assert!(
         parameters.iter().all(|p| !p.name.starts_with("east_abutment")),
         "{parameters:?}"

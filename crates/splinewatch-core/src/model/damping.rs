@@ -8,15 +8,18 @@
 //! so the FRF code never forms it except for the direct verification path.
 //!
 //! Loss factors on the supports (modal strain energy, Johnson & Kienholz
-//! 1982): support `s` (a spring field, bearing or line support, in the
-//! model's order of spring fields) may carry a loss factor `η_s`, and mode
+//! 1982): site `s` (by default a whole spring field, bearing or line
+//! support, in the model's order of spring fields; or any set of spring
+//! coefficients, [`LossSites`]: one component of a support, or of several)
+//! may carry a loss factor `η_s`, and mode
 //! `i` then gets `ζ_i = ζ(f_i) + ½ Σ_s η_s e_{i,s}`, `e_{i,s}` the share of
-//! the mode's strain energy in support `s` (`φ_iᵀ K_s φ_i / ω_i²`): modes
+//! the mode's strain energy in site `s` (`φ_iᵀ K_s φ_i / ω_i²`): modes
 //! whose energy sits in the abutments are damped more. It is the first
 //! order of the complex modes of `K + j Σ_s η_s K_s`: exact to `O(η²)` when
 //! the hysteretic matrix couples modes far apart in frequency only weakly
 //! (`|η φ_iᵀ K_s φ_k| ≪ |λ_i − λ_k|`), as the verification checks.
 
+use super::loss_sites::LossSites;
 use crate::geometry::knots::{KnotError, KnotVector, MAX_DEGREE};
 use thiserror::Error;
 
@@ -30,6 +33,8 @@ pub enum DampingError {
     Coefficient { index: usize, value: f64 },
     #[error("loss factor {index} must be finite and non-negative, got {value}")]
     LossFactor { index: usize, value: f64 },
+    #[error("{factors} loss factors for {sites} loss sites: one factor per site")]
+    LossSiteCount { factors: usize, sites: usize },
 }
 
 /// A validated damping curve ζ(f).
@@ -39,8 +44,10 @@ pub struct DampingCurve {
     f_start: f64,
     f_end: f64,
     gamma: Vec<f64>,
-    /// `η_s` per spring field; empty without support damping.
+    /// `η_s` per loss site; empty without support damping.
     loss_factors: Vec<f64>,
+    /// Where each `η_s` acts; `None`: one site per spring field.
+    loss_sites: Option<LossSites>,
 }
 
 impl DampingCurve {
@@ -56,6 +63,7 @@ impl DampingCurve {
             f_end,
             gamma: Vec::new(),
             loss_factors: Vec::new(),
+            loss_sites: None,
         };
         curve.with_coefficients(gamma)
     }
@@ -79,14 +87,21 @@ impl DampingCurve {
         &self.gamma
     }
 
-    /// The same curve with loss factors `η_s`, one per spring field of the
-    /// model (empty: none); any count is taken here, the model checks it
-    /// against its spring fields.
+    /// The same curve with loss factors `η_s`, one per loss site (empty:
+    /// none). Without [`Self::with_loss_sites`] a site is a spring field of
+    /// the model and any count is taken here: the model checks it against
+    /// its spring fields.
     pub fn with_loss_factors(&self, loss_factors: Vec<f64>) -> Result<Self, DampingError> {
         if let Some(index) = loss_factors.iter().position(|g| !(g.is_finite() && *g >= 0.0)) {
             return Err(DampingError::LossFactor {
                 index,
                 value: loss_factors[index],
+            });
+        }
+        if let Some(sites) = self.loss_sites.as_ref().filter(|s| s.len() != loss_factors.len()) {
+            return Err(DampingError::LossSiteCount {
+                factors: loss_factors.len(),
+                sites: sites.len(),
             });
         }
         Ok(Self {
@@ -95,9 +110,51 @@ impl DampingCurve {
         })
     }
 
-    /// `η_s` per spring field (empty without support damping).
+    /// The same curve with its loss factors acting on `sites` (one site per
+    /// loss factor) instead of one spring field each.
+    pub fn with_loss_sites(&self, sites: LossSites) -> Result<Self, DampingError> {
+        if sites.len() != self.loss_factors.len() {
+            return Err(DampingError::LossSiteCount {
+                factors: self.loss_factors.len(),
+                sites: sites.len(),
+            });
+        }
+        Ok(Self {
+            loss_sites: Some(sites),
+            ..self.clone()
+        })
+    }
+
+    /// `η_s` per loss site (empty without support damping).
     pub fn loss_factors(&self) -> &[f64] {
         &self.loss_factors
+    }
+
+    /// Where the loss factors act, for a model whose spring fields have
+    /// `field_sizes` coefficients: the sites given, or one per field.
+    pub fn loss_sites(&self, field_sizes: &[usize]) -> LossSites {
+        self.loss_sites
+            .clone()
+            .unwrap_or_else(|| LossSites::per_field(field_sizes))
+    }
+
+    /// Twice the supports' share of a mode's damping, `Σ_s η_s e_s`, from
+    /// its strain-energy share `shares[j]` in each spring coefficient
+    /// (`field_sizes` as [`Self::loss_sites`]).
+    #[track_caller]
+    pub fn support_loss(&self, shares: &[f64], field_sizes: &[usize]) -> f64 {
+        let sites = self.loss_sites(field_sizes);
+        self.loss_factors
+            .iter()
+            .enumerate()
+            .map(|(s, eta)| eta * sites.coefficients(s).iter().map(|&j| shares[j]).sum::<f64>())
+            .sum()
+    }
+
+    /// The column of loss site `site`'s `η` among the damping parameters
+    /// ([`Self::parameter_count`]).
+    pub fn loss_factor_column(&self, site: usize) -> usize {
+        self.gamma.len() + site
     }
 
     /// Every damping parameter: the curve's `γ_z`, then the loss factors
@@ -223,5 +280,35 @@ mod tests {
             lossy.with_coefficients(vec![0.02; 2]).unwrap().loss_factors(),
             &[0.1, 0.0]
         );
+        let one_site = LossSites::new(vec![vec![2]]).unwrap();
+        assert!(matches!(
+            lossy.with_loss_sites(one_site.clone()),
+            Err(DampingError::LossSiteCount { factors: 2, sites: 1 })
+        ));
+        let sited = curve
+            .with_loss_factors(vec![0.3])
+            .unwrap()
+            .with_loss_sites(one_site)
+            .unwrap();
+        assert!(matches!(
+            sited.with_loss_factors(vec![0.1, 0.2]),
+            Err(DampingError::LossSiteCount { factors: 2, sites: 1 })
+        ));
+    }
+
+    #[test]
+    fn the_support_loss_weighs_each_sites_coefficients() {
+        let curve = DampingCurve::new(1, vec![0.01; 2], 0.0, 80.0).unwrap();
+        let shares = [0.1, 0.2, 0.3, 0.4];
+        // One site per field: fields of 1 and 3 coefficients.
+        let per_field = curve.with_loss_factors(vec![0.5, 0.2]).unwrap();
+        assert!((per_field.support_loss(&shares, &[1, 3]) - (0.05 + 0.2 * 0.9)).abs() < 1e-15);
+        // The second and last coefficients only.
+        let sited = curve
+            .with_loss_factors(vec![0.4])
+            .unwrap()
+            .with_loss_sites(LossSites::new(vec![vec![1, 3]]).unwrap())
+            .unwrap();
+        assert!((sited.support_loss(&shares, &[1, 3]) - 0.4 * 0.6).abs() < 1e-15);
     }
 }

@@ -8,7 +8,8 @@
 //! - [`constraints`]: rigid edge supports as the dof reduction `δ = T q`;
 //! - [`springs`]: B-spline spring fields on a face and their `∂K/∂κ_j` (eq. 19–22);
 //! - [`stiffness_field`]: B-spline multipliers of the deck's stiffness and their `∂K/∂θ_k`;
-//! - [`damping`]: the damping curve ζ(f) (eq. 25–29);
+//! - [`damping`]: the damping curve ζ(f) (eq. 25–29) and the supports' loss factors;
+//! - [`loss_sites`]: which spring coefficients each loss factor weighs;
 //! - [`patch`]: a shell with its material and added mass;
 //! - [`dofs`]: the numbering of the generalised dofs, node by node, and what each dof is;
 //! - [`joints`]: rigid joints between patches by penalty coupling;
@@ -29,6 +30,7 @@ pub mod damping;
 pub mod dofs;
 pub mod elastic_supports;
 pub mod joints;
+pub mod loss_sites;
 pub mod material;
 pub mod member_stiffness;
 pub mod members;

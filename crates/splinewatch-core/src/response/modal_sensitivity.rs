@@ -54,7 +54,6 @@ impl FrfModel {
         let sensors = self.sensor_count();
         let mut eigenvalue = Mat::zeros(modes.len(), blocks.len());
         let mut damping_ratio = Mat::zeros(modes.len(), blocks.len());
-        let field_of = self.spring_field_of_flat();
         let mut amplitude = Vec::with_capacity(modes.len());
         for (row, &i) in modes.iter().enumerate() {
             let mut da = Mat::zeros(sensors, blocks.len());
@@ -78,7 +77,7 @@ impl FrfModel {
                 eigenvalue[(row, j)] = coupling(i);
                 let on_springs: Vec<(usize, f64)> = pos.iter().copied().zip(w.iter().copied()).collect();
                 damping_ratio[(row, j)] = state.zeta_eigenvalue_slope(i) * coupling(i)
-                    + state.support_zeta_slope(i, Some((field_of[j], &on_springs)), coupling);
+                    + state.support_zeta_slope(i, Some((j, &on_springs)), coupling);
             }
             amplitude.push(da);
         }

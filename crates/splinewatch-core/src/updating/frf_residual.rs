@@ -314,7 +314,15 @@ impl<'a> UpdateProblem<'a> {
         let columns: Option<Vec<Vec<c64>>> = jacobian.then(|| {
             self.parameters
                 .iter()
-                .map(|par| parameter_column(self.model, par.kind, &frfs.dh_dkappa, &frfs.dh_dtheta, &frfs.dh_dgamma))
+                .map(|par| {
+                    parameter_column(
+                        self.model,
+                        par.kind,
+                        &frfs.dh_dkappa,
+                        &frfs.dh_dtheta,
+                        (&self.damping, &frfs.dh_dgamma),
+                    )
+                })
                 .collect()
         });
         let columns: Option<Vec<&[c64]>> = columns.as_ref().map(|c| c.iter().map(Vec::as_slice).collect());
@@ -423,15 +431,15 @@ impl<'a> UpdateProblem<'a> {
 
 /// `∂h/∂p` of a parameter of kind `kind` from the sensitivities to every
 /// spring coefficient (`dkappa`, flat order), stiffness-field coefficient
-/// (`dtheta`) and damping parameter (`dgamma`: the curve's coefficients,
-/// then one loss factor per spring field when the damping has them): a tied
-/// parameter's is the sum of its springs'.
+/// (`dtheta`) and damping parameter of `damping` (`dgamma`: the curve's
+/// coefficients, then one loss factor per loss site when the damping has
+/// them): a tied parameter's is the sum of its springs'.
 pub(super) fn parameter_column(
     model: &FrfModel,
     kind: ParameterKind,
     dkappa: &[Vec<c64>],
     dtheta: &[Vec<c64>],
-    dgamma: &[Vec<c64>],
+    (damping, dgamma): (&DampingCurve, &[Vec<c64>]),
 ) -> Vec<c64> {
     match kind {
         ParameterKind::Spring { .. } | ParameterKind::SpringRun { .. } => summed(
@@ -446,7 +454,7 @@ pub(super) fn parameter_column(
         ),
         ParameterKind::Damping { coefficient } => dgamma[coefficient].clone(),
         ParameterKind::LossFactor { field, count } => {
-            let first = model.loss_factor_index(dgamma.len(), field);
+            let first = damping.loss_factor_column(field);
             summed(dgamma[first..first + count].iter().map(Vec::as_slice))
         }
     }

@@ -202,7 +202,7 @@ pub fn modal_residue(
                     columns.into_iter().for_each(|j| stiffness_rows(field_sens, j));
                 }
                 StiffnessColumns::LossFactor(field, count) => {
-                    let first = model.loss_factor_index(gradient.len(), field);
+                    let first = state.loss_factor_column(field);
                     jac[(row0 + 1 + n, c)] = gradient[first..first + count].iter().sum::<f64>() / x.damping_std;
                 }
                 StiffnessColumns::Damping(coefficient) => {

@@ -293,7 +293,15 @@ impl<'a> TransmissibilityProblem<'a> {
             );
             self.parameters
                 .iter()
-                .map(|par| self.combine(&parameter_column(self.model, par.kind, &s.dkappa, &s.dtheta, &s.dgamma)))
+                .map(|par| {
+                    self.combine(&parameter_column(
+                        self.model,
+                        par.kind,
+                        &s.dkappa,
+                        &s.dtheta,
+                        (&self.damping, &s.dgamma),
+                    ))
+                })
                 .collect::<Vec<_>>()
         });
         let columns: Option<Vec<&[c64]>> = derivatives.as_ref().map(|d| d.iter().map(Vec::as_slice).collect());

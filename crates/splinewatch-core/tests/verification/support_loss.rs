@@ -7,6 +7,7 @@ use faer::{c64, Mat, Side};
 use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
+use splinewatch_core::model::loss_sites::LossSites;
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
@@ -33,31 +34,45 @@ fn deck_with_fields(fields: Vec<StiffnessField>) -> (FrfModel, Vec<Vec<f64>>) {
     (FrfModel::new(model.assemble().unwrap(), &sensors).unwrap(), kappa)
 }
 
+/// The abutments' components: west, then east (`x`, `y`, `z`, `ry`).
+fn abutment_components(vertical: f64, rotation: f64) -> Vec<(SupportComponent, f64)> {
+    vec![
+        (SupportComponent::Translation(0), 2e9),
+        (SupportComponent::Translation(1), 1e9),
+        (SupportComponent::Translation(2), vertical),
+        (SupportComponent::Rotation(1), rotation),
+    ]
+}
+
 /// The deck of [`deck_on_abutments`] and its three sensors.
 fn deck_model(fields: Vec<StiffnessField>) -> (ShellModel, Vec<SensorPoint>) {
+    use splinewatch_core::model::constraints::Edge;
+    deck_on_supports(
+        fields,
+        vec![
+            ("west", Edge::Xi0, abutment_components(3e8, 2e8)),
+            ("east", Edge::Xi1, abutment_components(5e8, 6e7)),
+        ],
+    )
+}
+
+/// A line support along an edge of the deck: its name, edge and components.
+type LineSupport<'a> = (
+    &'a str,
+    splinewatch_core::model::constraints::Edge,
+    Vec<(SupportComponent, f64)>,
+);
+
+/// The deck on line supports along its ends.
+fn deck_on_supports(fields: Vec<StiffnessField>, supports: Vec<LineSupport<'_>>) -> (ShellModel, Vec<SensorPoint>) {
     let shell = Shell::rectangular_plate(12.0, 3.0, 0.3, [3, 3], [8, 4]).unwrap();
     let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
     let mut model = ShellModel::new(shell, material);
     model.stiffness_fields = fields;
-    let abutment = |name: &str, edge, vertical: f64, rotation: f64| {
-        ElasticSupport::along_edge(
-            name,
-            (0, edge),
-            GLOBAL,
-            vec![
-                (SupportComponent::Translation(0), 2e9),
-                (SupportComponent::Translation(1), 1e9),
-                (SupportComponent::Translation(2), vertical),
-                (SupportComponent::Rotation(1), rotation),
-            ],
-        )
-        .unwrap()
-    };
-    use splinewatch_core::model::constraints::Edge;
-    model.elastic_supports = vec![
-        abutment("west", Edge::Xi0, 3e8, 2e8),
-        abutment("east", Edge::Xi1, 5e8, 6e7),
-    ];
+    model.elastic_supports = supports
+        .into_iter()
+        .map(|(name, edge, components)| ElasticSupport::along_edge(name, (0, edge), GLOBAL, components).unwrap())
+        .collect();
     let sensors: Vec<SensorPoint> = [
         (0.3, 0.2, [0.0, 0.0, 1.0]),
         (0.71, 0.8, [0.0, 1.0, 0.0]),
@@ -75,17 +90,21 @@ fn deck_model(fields: Vec<StiffnessField>) -> (ShellModel, Vec<SensorPoint>) {
     (model, sensors)
 }
 
-/// `Σ_s η_s K_s`, the supports' hysteretic stiffness, on the generalised dofs.
+/// `Σ_j η_j κ_j B_j`, the supports' hysteretic stiffness, on the
+/// generalised dofs, with `eta[j]` the loss factor of spring coefficient
+/// `j` (flat over the fields).
 fn hysteretic(frf: &FrfModel, kappa: &[Vec<f64>], eta: &[f64]) -> Mat<f64> {
     let n = frf.dense().unwrap().mass.nrows();
     let mut d = Mat::<f64>::zeros(n, n);
+    let mut flat = 0;
     for (s, blocks) in frf.spring_blocks().iter().enumerate() {
         for (j, block) in blocks.iter().enumerate() {
             for (a, &da) in block.dofs.iter().enumerate() {
                 for (b, &db) in block.dofs.iter().enumerate() {
-                    d[(da, db)] += eta[s] * kappa[s][j] * block.values[(a, b)];
+                    d[(da, db)] += eta[flat] * kappa[s][j] * block.values[(a, b)];
                 }
             }
+            flat += 1;
         }
     }
     d
@@ -101,16 +120,40 @@ fn hysteretic(frf: &FrfModel, kappa: &[Vec<f64>], eta: &[f64]) -> Mat<f64> {
 #[test]
 fn loss_factors_damp_each_mode_as_the_complex_modes_of_the_hysteretic_model() {
     let (frf, kappa) = deck_on_abutments();
-    let eta = [0.2, 0.1];
     let curve = DampingCurve::new(1, vec![0.0, 0.0], 0.0, 100.0)
         .unwrap()
-        .with_loss_factors(eta.to_vec())
+        .with_loss_factors(vec![0.2, 0.1])
         .unwrap();
-    let state = frf.modal_state(&kappa, &curve).unwrap();
+    // Four components per abutment.
+    let eta: Vec<f64> = [[0.2; 4], [0.1; 4]].concat();
+    check_against_complex_modes(&frf, &kappa, &curve, &eta);
+}
+
+/// Loss factors on some components only (loss sites): 0.2 on the west
+/// abutment's vertical and rotational springs, 0.15 on the east one's
+/// rotational springs, none elsewhere; the same check as whole supports'.
+#[test]
+fn loss_factors_on_some_components_damp_as_the_complex_modes() {
+    let (frf, kappa) = deck_on_abutments();
+    let sites = LossSites::new(vec![vec![2, 3], vec![7]]).unwrap();
+    let curve = DampingCurve::new(1, vec![0.0, 0.0], 0.0, 100.0)
+        .unwrap()
+        .with_loss_factors(vec![0.2, 0.15])
+        .unwrap()
+        .with_loss_sites(sites)
+        .unwrap();
+    let eta = [0.0, 0.0, 0.2, 0.2, 0.0, 0.0, 0.0, 0.15];
+    check_against_complex_modes(&frf, &kappa, &curve, &eta);
+}
+
+/// The complex-modes check of the two tests above: `curve`'s loss factors
+/// act on spring coefficient `j` with `eta[j]`.
+fn check_against_complex_modes(frf: &FrfModel, kappa: &[Vec<f64>], curve: &DampingCurve, eta: &[f64]) {
+    let state = frf.modal_state(kappa, curve).unwrap();
     let dense = frf.dense().unwrap();
     let reduction = &dense.reduction;
-    let k = reduction.reduce(&dense.stiffness_with(&kappa).unwrap());
-    let d = reduction.reduce(&hysteretic(&frf, &kappa, &eta));
+    let k = reduction.reduce(&dense.stiffness_with(kappa).unwrap());
+    let d = reduction.reduce(&hysteretic(frf, kappa, eta));
     let m = reduction.reduce(&dense.mass);
     // M^{-1/2} (K + jD) M^{-1/2}: the same eigenvalues.
     let eigen = m.self_adjoint_eigen(Side::Lower).unwrap();
@@ -128,13 +171,22 @@ fn loss_factors_damp_each_mode_as_the_complex_modes_of_the_hysteretic_model() {
     let mut worst: f64 = 0.0;
     for &i in &bending {
         let lambda = state.modes.omega2[i];
-        // Modes' own shares against the independent strain-energy fractions.
-        for (s, blocks) in frf.spring_blocks().iter().enumerate() {
-            let share = state.modes.spring_energy_share(i, blocks, &kappa[s]);
+        // Modes' own shares against the independent strain-energy fractions,
+        // summed over each site's coefficients.
+        let shares: Vec<f64> = frf
+            .spring_blocks()
+            .iter()
+            .zip(kappa)
+            .flat_map(|(blocks, k)| (0..blocks.len()).map(move |j| (&blocks[j..=j], &k[j..=j])))
+            .map(|(b, k)| state.modes.spring_energy_share(i, b, k))
+            .collect();
+        let sites = curve.loss_sites(&frf.spring_field_sizes());
+        for s in 0..sites.len() {
+            let share: f64 = sites.coefficients(s).iter().map(|&j| shares[j]).sum();
             let found = state.support_energy(i, s).unwrap();
             assert!(
                 (found - share).abs() <= 1e-12 * share.max(1.0),
-                "mode {i} support {s}: {found} vs {share}"
+                "mode {i} site {s}: {found} vs {share}"
             );
         }
         let expected = c64::new(lambda, 2.0 * lambda * state.zeta[i]);
@@ -480,4 +532,106 @@ fn loss_factors_on_a_truncated_model_are_close_to_exact() {
         assert!(e < 1e-6, "∂H/∂η_{s}: relative error {e:e}");
     }
     eprintln!("loss factors on the truncated model: worst relative column error {worst:.1e}");
+}
+
+/// A loss factor on some components of a support is the physics of that
+/// support cut in two with the loss factor on the part holding those
+/// components, one per spring field (the case the checks above verify
+/// against the complex modes and central differences): the two models' ζ_i,
+/// `∂ζ_i/∂κ_j` and the FRFs' sensitivities to every spring coefficient,
+/// damping coefficient and loss factor agree to round-off (1e-9 relative:
+/// the two assemble the same K in another order).
+#[test]
+fn a_loss_factor_on_some_components_acts_as_a_support_cut_in_two() {
+    use splinewatch_core::model::constraints::Edge;
+    let west = abutment_components(3e8, 2e8);
+    let east = abutment_components(5e8, 6e7);
+    let curve = DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0).unwrap();
+    // West's y and z (coefficients 1, 2) at 0.15, east's ry (7) at 0.08.
+    let (whole_model, sensors) = deck_model(Vec::new());
+    let whole = FrfModel::new(whole_model.assemble().unwrap(), &sensors).unwrap();
+    let sited = curve
+        .with_loss_factors(vec![0.15, 0.08])
+        .unwrap()
+        .with_loss_sites(LossSites::new(vec![vec![1, 2], vec![7]]).unwrap())
+        .unwrap();
+    // West (x, ry), west's soil (y, z), east (x, y, z), east's soil (ry).
+    let (cut_model, _) = deck_on_supports(
+        Vec::new(),
+        vec![
+            ("west", Edge::Xi0, vec![west[0], west[3]]),
+            ("west_soil", Edge::Xi0, west[1..3].to_vec()),
+            ("east", Edge::Xi1, east[..3].to_vec()),
+            ("east_soil", Edge::Xi1, east[3..].to_vec()),
+        ],
+    );
+    let cut = FrfModel::new(cut_model.assemble().unwrap(), &sensors).unwrap();
+    let per_field = curve.with_loss_factors(vec![0.0, 0.15, 0.0, 0.08]).unwrap();
+    // The whole model's spring coefficient j is the cut one's `moved[j]`.
+    let moved = [0, 2, 3, 1, 4, 5, 6, 7];
+    let a = whole.modal_state(&whole_model.spring_coefficients(), &sited).unwrap();
+    let b = cut.modal_state(&cut_model.spring_coefficients(), &per_field).unwrap();
+    let bending = first_bending(&a, 8);
+    assert_eq!(bending, first_bending(&b, 8));
+    let mut worst: f64 = 0.0;
+    let mut compare = |found: f64, expected: f64, scale: f64, what: &str| {
+        let e = (found - expected).abs() / scale;
+        worst = worst.max(e);
+        assert!(e < 1e-9, "{what}: {found} vs {expected}");
+    };
+    for &i in &bending {
+        compare(a.zeta[i], b.zeta[i], b.zeta[i], &format!("ζ_{i}"));
+    }
+    // The supports must matter on these modes (else the check is empty).
+    assert!(bending.iter().any(|&i| a.support_zeta(i) > 0.01));
+    let (sa, sb) = (
+        whole.modal_sensitivities(&a, &bending),
+        cut.modal_sensitivities(&b, &bending),
+    );
+    for (row, &i) in bending.iter().enumerate() {
+        let scale = (0..8).map(|j| sb.damping_ratio[(row, j)].abs()).fold(0.0, f64::max);
+        for (j, &m) in moved.iter().enumerate() {
+            let what = format!("∂ζ_{i}/∂κ_{j}");
+            compare(sa.damping_ratio[(row, j)], sb.damping_ratio[(row, m)], scale, &what);
+        }
+    }
+    let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0, 63.0];
+    let (ea, eb) = (
+        whole.evaluate(&a, accelerances(&freqs), true),
+        cut.evaluate(&b, accelerances(&freqs), true),
+    );
+    let mut columns: Vec<(&[c64], &[c64], String)> = moved
+        .iter()
+        .enumerate()
+        .map(|(j, &m)| {
+            (
+                ea.dh_dkappa[j].as_slice(),
+                eb.dh_dkappa[m].as_slice(),
+                format!("∂H/∂κ_{j}"),
+            )
+        })
+        .collect();
+    let nz = curve.coefficients().len();
+    for z in 0..nz {
+        columns.push((&ea.dh_dgamma[z], &eb.dh_dgamma[z], format!("∂H/∂γ_{z}")));
+    }
+    for (site, field) in [(0, 1), (1, 3)] {
+        let what = format!("∂H/∂η of site {site}");
+        columns.push((&ea.dh_dgamma[nz + site], &eb.dh_dgamma[nz + field], what));
+    }
+    let norm = |c: &[c64]| c.iter().map(|v| v.norm_sqr()).sum::<f64>().sqrt();
+    for (found, expected, what) in columns {
+        if norm(expected) == 0.0 {
+            // A component the sensors do not see (the deck's in-plane
+            // stiffness along it): both vanish.
+            assert_eq!(norm(found), 0.0, "{what}");
+            continue;
+        }
+        let e = column_error(found, expected);
+        worst = worst.max(e);
+        assert!(e < 1e-9, "{what}: relative error {e:e}");
+    }
+    let h = column_error(&ea.h, &eb.h);
+    assert!(h < 1e-9, "H: relative error {h:e}");
+    eprintln!("loss sites against the support cut in two: worst relative difference {worst:.1e}");
 }

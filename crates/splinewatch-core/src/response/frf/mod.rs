@@ -66,9 +66,11 @@ pub enum FrfError {
     #[error("{0} needs every mode (the dense model); this model is truncated")]
     DenseOnly(&'static str),
     #[error(
-        "{found} loss factors for {expected} spring fields (one per spring field, bearing and line support, or none)"
+        "{found} loss factors for {expected} loss sites (one per site: by default per spring field, bearing and line support; or none)"
     )]
     LossFactorCount { found: usize, expected: usize },
+    #[error("{0}")]
+    LossSites(#[from] crate::model::loss_sites::LossSitesError),
 }
 
 /// Which FRF is measured: displacement, velocity or acceleration per force.
@@ -173,10 +175,18 @@ impl ModalState {
         self.residual.as_ref()
     }
 
-    /// The share of mode `i`'s strain energy in spring field `s`
-    /// (`e_{i,s}`), when the damping has loss factors.
+    /// The share of mode `i`'s strain energy in loss site `s` (`e_{i,s}`;
+    /// by default spring field `s`), when the damping has loss factors.
     pub fn support_energy(&self, i: usize, s: usize) -> Option<f64> {
         self.loss.as_ref().map(|l| l.energy[(i, s)])
+    }
+
+    /// The column of loss site `site`'s `η` in [`Self::zeta_gradient`].
+    #[track_caller]
+    pub fn loss_factor_column(&self, site: usize) -> usize {
+        let sites = self.loss.as_ref().map_or(0, |l| l.energy.ncols());
+        assert!(site < sites, "no such loss site");
+        self.zeta_basis.ncols() - sites + site
     }
 
     /// The supports' share of `ζ_i` (`½ Σ_s η_s e_{i,s}`; zero without
@@ -358,23 +368,6 @@ impl FrfModel {
         let blocks = self.spring_blocks();
         assert!(coefficient < blocks[field].len(), "spring coefficient out of range");
         blocks[..field].iter().map(Vec::len).sum::<usize>() + coefficient
-    }
-
-    /// The spring field of every flat spring coefficient (the order of
-    /// [`FrfModel::flat_spring_index`]).
-    pub fn spring_field_of_flat(&self) -> Vec<usize> {
-        self.spring_blocks()
-            .iter()
-            .enumerate()
-            .flat_map(|(s, b)| std::iter::repeat_n(s, b.len()))
-            .collect()
-    }
-
-    /// Index of spring field `field`'s loss factor among `damping_parameters`
-    /// damping parameters (the curve's coefficients, then one loss factor per
-    /// spring field: the order of `FrfEvaluation::dh_dgamma`).
-    pub fn loss_factor_index(&self, damping_parameters: usize, field: usize) -> usize {
-        damping_parameters - self.spring_blocks().len() + field
     }
 
     /// Index of stiffness-field coefficient `coefficient` of field `field`
@@ -576,31 +569,47 @@ impl FrfModel {
         Ok(Self::with_source(source, self.sensor_rows.clone()))
     }
 
-    /// One loss factor per spring field, or none.
-    fn check_loss_factors(&self, damping: &DampingCurve) -> Result<(), FrfError> {
-        let (found, expected) = (damping.loss_factors().len(), self.spring_blocks().len());
-        if found != 0 && found != expected {
+    /// The spring fields' coefficient counts.
+    pub fn spring_field_sizes(&self) -> Vec<usize> {
+        self.spring_blocks().iter().map(Vec::len).collect()
+    }
+
+    /// For each spring coefficient (flat), the loss site of `damping` it is
+    /// in; `damping`'s loss factors, if any, must be one per site (by
+    /// default one per spring field) and its sites within the model.
+    fn loss_site_of(&self, damping: &DampingCurve) -> Result<Vec<Option<usize>>, FrfError> {
+        let sites = damping.loss_sites(&self.spring_field_sizes());
+        let (found, expected) = (damping.loss_factors().len(), sites.len());
+        if found == 0 {
+            return Ok(vec![None; self.spring_coefficient_count()]);
+        }
+        if found != expected {
             return Err(FrfError::LossFactorCount { found, expected });
         }
-        Ok(())
+        Ok(sites.site_of(self.spring_coefficient_count())?)
+    }
+
+    /// One loss factor per loss site, or none.
+    fn check_loss_factors(&self, damping: &DampingCurve) -> Result<(), FrfError> {
+        self.loss_site_of(damping).map(|_| ())
     }
 
     /// Builds the modal state from modes already computed at spring
     /// coefficients `kappa`. `damping`'s loss factors, if any, must be one
-    /// per spring field (the constructors that solve the modes check it).
+    /// per loss site, within the model (the constructors that solve the
+    /// modes check it).
     #[track_caller]
     pub fn modal_state_from(&self, modes: Modes, kappa: &[Vec<f64>], damping: &DampingCurve) -> ModalState {
         let nm = modes.len();
         let nz = damping.coefficients().len();
         let factors = damping.loss_factors();
-        assert!(
-            factors.is_empty() || factors.len() == self.spring_blocks().len(),
-            "one loss factor per spring field"
-        );
+        let site_of = self
+            .loss_site_of(damping)
+            .expect("one loss factor per loss site, within the model");
         let omega: Vec<f64> = modes.omega2.iter().map(|w2| w2.max(0.0).sqrt()).collect();
         let phi_springs = dense_rows(&modes.shapes, &self.spring_dofs);
-        let loss =
-            (!factors.is_empty()).then(|| support_loss::SupportLoss::new(self, &modes, &phi_springs, kappa, factors));
+        let loss = (!factors.is_empty())
+            .then(|| support_loss::SupportLoss::new(self, &modes, &phi_springs, kappa, (factors, site_of)));
         let mut zeta = vec![0.0; nm];
         let mut zeta_basis = Mat::<f64>::zeros(nm, nz + factors.len());
         let mut damping_rate_slope = vec![0.0; nm];

@@ -2,7 +2,8 @@
 //! by each mode's strain energy in them (modal strain energy, Johnson &
 //! Kienholz 1982; [`crate::model::damping`]).
 //!
-//! With `K_s = Σ_{j∈s} κ_j B_j` (`B_j = ∂K/∂κ_j`, `K` linear in `κ`) and
+//! With `K_s = Σ_{j∈s} κ_j B_j` over the spring coefficients `j` of loss
+//! site `s` ([`crate::model::loss_sites`]; `B_j = ∂K/∂κ_j`, `K` linear in `κ`) and
 //! mass-normalised modes, `P_{i,s} = φ_iᵀ K_s φ_i`, `e_{i,s} = P_{i,s}/λ_i`
 //! and `ζ_i = ζ(f_i) + Q_i / (2 λ_i)`, `Q_i = Σ_s η_s P_{i,s}`.
 //!
@@ -10,8 +11,9 @@
 //! modal expansion as in [`crate::response::modal_sensitivity`]):
 //! - `∂ζ_i/∂η_s = ½ e_{i,s}`;
 //! - through `λ_i` alone: `∂ζ_i/∂λ_i ∋ −Q_i / (2 λ_i²)`;
-//! - with `λ_i` held, through `K_s` and `φ_i` (a coefficient `κ_j` of field
-//!   `s(j)`, or a stiffness-field coefficient with `∂K_s = 0`):
+//! - with `λ_i` held, through `K_s` and `φ_i` (a coefficient `κ_j` of site
+//!   `s(j)`, with `η_{s(j)} = 0` in no site, or a stiffness-field
+//!   coefficient with `∂K_s = 0`):
 //!   `∂Q_i = η_{s(j)} φ_iᵀ B_j φ_i + 2 Σ_{k≠i} G_{ik} C_{ki} / (λ_i − λ_k)`,
 //!   `G = Φᵀ (Σ_s η_s K_s) Φ`, `C = Φᵀ (∂K) Φ`; the sum runs over the
 //!   state's modes, so it is exact on the dense model (every mode); on a
@@ -32,10 +34,12 @@ use faer::Mat;
 /// The supports' share of every mode's strain energy and their loss factors.
 #[derive(Debug, Clone)]
 pub(super) struct SupportLoss {
-    /// `e_{i,s}`: modes × spring fields.
+    /// `e_{i,s}`: modes × loss sites.
     pub(super) energy: Mat<f64>,
     /// `η_s`.
     factors: Vec<f64>,
+    /// The loss site of each spring coefficient (flat), if any.
+    site_of: Vec<Option<usize>>,
     /// `Q_i = Σ_s η_s P_{i,s}` per mode.
     pub(super) weighted: Vec<f64>,
     /// `G = Φᵀ (Σ_s η_s K_s) Φ` over the state's modes (empty when every
@@ -60,37 +64,40 @@ struct Discarded {
 
 impl SupportLoss {
     /// The energies of `modes` (shapes on the spring dofs `phi_springs`)
-    /// at spring coefficients `kappa`, with loss factors `factors`.
+    /// at spring coefficients `kappa`, with loss factors `factors` on the
+    /// sites `site_of` gives each spring coefficient.
     pub(super) fn new(
         model: &FrfModel,
         modes: &Modes,
         phi_springs: &Mat<f64>,
         kappa: &[Vec<f64>],
-        factors: &[f64],
+        (factors, site_of): (&[f64], Vec<Option<usize>>),
     ) -> Self {
         let nm = modes.len();
         let fields = model.spring_blocks();
         let positions = model.spring_block_positions();
         let lossy = factors.iter().any(|&eta| eta > 0.0);
-        let mut energy = Mat::<f64>::zeros(nm, fields.len());
+        let mut energy = Mat::<f64>::zeros(nm, factors.len());
         let mut coupling = if lossy { Mat::zeros(nm, nm) } else { Mat::zeros(0, 0) };
         let units = if lossy { phi_springs.nrows() } else { 0 };
         let mut hysteretic = Mat::<f64>::zeros(units, units);
         let mut flat = 0;
         for (s, blocks) in fields.iter().enumerate() {
             for (j, block) in blocks.iter().enumerate() {
+                let Some(site) = site_of[flat + j] else { continue };
                 let pos = &positions[flat + j];
                 let shapes = Mat::from_fn(pos.len(), nm, |b, i| phi_springs[(pos[b], i)]);
                 let product = &block.values * &shapes;
                 let k = kappa[s][j];
                 for i in 0..nm {
-                    energy[(i, s)] += k * (0..pos.len()).map(|b| shapes[(b, i)] * product[(b, i)]).sum::<f64>();
+                    energy[(i, site)] += k * (0..pos.len()).map(|b| shapes[(b, i)] * product[(b, i)]).sum::<f64>();
                 }
-                if lossy && factors[s] > 0.0 {
-                    coupling += (factors[s] * k) * (shapes.transpose() * &product);
+                let eta = factors[site];
+                if lossy && eta > 0.0 {
+                    coupling += (eta * k) * (shapes.transpose() * &product);
                     for (a, &pa) in pos.iter().enumerate() {
                         for (b, &pb) in pos.iter().enumerate() {
-                            hysteretic[(pa, pb)] += factors[s] * k * block.values[(a, b)];
+                            hysteretic[(pa, pb)] += eta * k * block.values[(a, b)];
                         }
                     }
                 }
@@ -99,14 +106,14 @@ impl SupportLoss {
         }
         let mut weighted = vec![0.0; nm];
         for i in 0..nm {
-            weighted[i] = (0..fields.len()).map(|s| factors[s] * energy[(i, s)]).sum();
+            weighted[i] = (0..factors.len()).map(|s| factors[s] * energy[(i, s)]).sum();
             let lambda = modes.omega2[i];
             let scale = if modes.kinds[i] == ModeKind::Rigid || lambda <= 0.0 {
                 0.0
             } else {
                 1.0 / lambda
             };
-            for s in 0..fields.len() {
+            for s in 0..factors.len() {
                 energy[(i, s)] *= scale;
             }
             if scale == 0.0 {
@@ -116,6 +123,7 @@ impl SupportLoss {
         Self {
             energy,
             factors: factors.to_vec(),
+            site_of,
             weighted,
             coupling,
             hysteretic,
@@ -194,9 +202,9 @@ impl SupportLoss {
         dq / (2.0 * lambda[i])
     }
 
-    /// `η_s`.
-    pub(super) fn factor(&self, s: usize) -> f64 {
-        self.factors[s]
+    /// `η_{s(j)}` of spring coefficient `j` (flat; zero in no site).
+    pub(super) fn factor_of(&self, j: usize) -> f64 {
+        self.site_of[j].map_or(0.0, |s| self.factors[s])
     }
 }
 
@@ -227,11 +235,10 @@ impl FrfModel {
         let Some(loss) = &state.loss else {
             return out;
         };
-        let field_of = self.spring_field_of_flat();
         let all: Vec<_> = self.spring_blocks().iter().flatten().collect();
         let nm = state.modes.len();
         for (c, &j) in blocks.iter().enumerate() {
-            let eta = loss.factor(field_of[j]);
+            let eta = loss.factor_of(j);
             if eta == 0.0 && loss.coupling.nrows() == 0 {
                 continue;
             }
@@ -252,11 +259,11 @@ impl FrfModel {
 
 impl ModalState {
     /// `∂ζ_i` with `λ_i` held for a stiffness change `∂K` that couples the
-    /// modes by `coupling(k) = C_{ki}` and is a coefficient of a spring
-    /// field (`None`: a stiffness field, which leaves the supports alone):
+    /// modes by `coupling(k) = C_{ki}` and is a spring coefficient's
+    /// (`None`: a stiffness field's, which leaves the supports alone):
     /// the loss factors' share moving with the shape.
-    /// `spring` is the spring field and `∂K φ_i` on the spring dofs
-    /// (`(index in U, value)`) for a spring coefficient.
+    /// `spring` is the spring coefficient (flat) and `∂K φ_i` on the spring
+    /// dofs (`(index in U, value)`) for a spring coefficient.
     pub(crate) fn support_zeta_slope(
         &self,
         i: usize,
@@ -264,7 +271,7 @@ impl ModalState {
         coupling: impl Fn(usize) -> f64,
     ) -> f64 {
         self.loss.as_ref().map_or(0.0, |l| {
-            let direct = spring.map_or(0.0, |(s, _)| l.factor(s) * coupling(i));
+            let direct = spring.map_or(0.0, |(j, _)| l.factor_of(j) * coupling(i));
             l.zeta_slope(&self.modes, i, direct, coupling, spring.map(|(_, b)| b))
         })
     }
