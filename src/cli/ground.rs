@@ -390,7 +390,6 @@ pub struct IdentifyArgs {
 /// sensor) against every deck acceleration sensor it holds.
 pub fn identify(a: IdentifyArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    a.output.check(&cfg)?;
     let blocks = read_records_said(&cfg, &a.record, a.start)?;
     let recorded = |i: usize| recorded(&cfg, &blocks, i);
     let (force, inputs): (Option<usize>, Vec<usize>) = if cfg.has_ground_sensors() {

@@ -17,24 +17,10 @@ pub struct ModesOutput {
     /// Also write the modes JSON to this file (for `update --modes`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Write the stabilisation diagram and the modes with ±1σ (the fitted ones too) to a Rerun `.rrd` file.
+    /// Write the stabilisation diagram and the modes with ±1σ (the fitted ones too) to a Rerun
+    /// `.rrd` file; with a `[model]` also the deck, its sensors and the model's views.
     #[arg(long)]
     pub rerun_save: Option<PathBuf>,
-}
-
-impl ModesOutput {
-    /// Refuses, before any work, what the config cannot give: the Rerun
-    /// file draws the identification with the model's deck and sensors.
-    pub(super) fn check(&self, cfg: &Config) -> Result<()> {
-        if let (Some(path), false) = (&self.rerun_save, cfg.has_model()) {
-            bail!(
-                "--rerun-save {}: the Rerun file draws the modes on the model's deck, and the config has no \
-                 [model]; --out or --json write the modes",
-                path.display()
-            );
-        }
-        Ok(())
-    }
 }
 
 /// The model an identification is compared with (`oma`, `identify`).
@@ -59,14 +45,7 @@ pub(super) fn write_identified(
 ) -> Result<()> {
     let (rerun_save, out, json) = (output.rerun_save.as_deref(), output.out.as_deref(), output.json);
     if let Some(path) = rerun_save {
-        let targets = crate::outputs::rerun::RerunTargets {
-            save: Some(path.to_path_buf()),
-            connect: None,
-        };
-        let mut rerun = crate::outputs::rerun::RerunOutput::open(cfg, &targets)?;
-        rerun.log_oma(report)?;
-        rerun.log_fitted(report, fitted)?;
-        rerun.finish()?;
+        save_rerun(cfg, path, report, fitted)?;
     }
     let mut file = report.modes_file();
     file.modes = crate::service::frequency_domain::merged(file.modes, fitted);
@@ -135,4 +114,29 @@ pub(super) fn write_identified(
         );
     }
     Ok(())
+}
+
+/// The identification in a Rerun file at `path`: with a `[model]` on the
+/// model's stream (the deck, its sensors, the model's views); without one
+/// (a station's starter config) the identification alone.
+fn save_rerun(
+    cfg: &Config,
+    path: &std::path::Path,
+    report: &crate::pipeline::oma::OmaReport,
+    fitted: &[crate::io::modes_json::ModeEntry],
+) -> Result<()> {
+    if cfg.has_model() {
+        let targets = crate::outputs::rerun::RerunTargets {
+            save: Some(path.to_path_buf()),
+            connect: None,
+        };
+        let mut rerun = crate::outputs::rerun::RerunOutput::open(cfg, &targets)?;
+        rerun.log_oma(report)?;
+        rerun.log_fitted(report, fitted)?;
+        rerun.finish()
+    } else {
+        let mut rerun = crate::outputs::rerun::IdentificationFile::save(path)?;
+        rerun.log(report, fitted)?;
+        rerun.close()
+    }
 }

@@ -560,7 +560,6 @@ pub struct OmaArgs {
 /// `splinewatch oma`: output-only modal identification of a recorded span.
 pub fn oma(a: OmaArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    a.output.check(&cfg)?;
     let blocks = read_recordings(&cfg, &a.inputs)?;
     let (from, to) = span_bounds(&blocks, &a.from, &a.to)?;
     let report = crate::pipeline::oma::identify_span(&cfg, &blocks, from, to, a.output.rerun_save.is_some())?;

@@ -11,6 +11,7 @@ mod frequency_domain;
 mod frf;
 mod ground;
 mod loss_factor;
+mod loss_sites;
 mod materials;
 mod metrics;
 mod model;
@@ -32,7 +33,8 @@ pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
 pub use frequency_domain::{FrequencyDomainConfig, FrequencyDomainPlan, MAX_FITTED_MODES};
 pub use frf::FrfConfig;
 pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};
-pub use loss_factor::{ComponentLossFactor, LossFactorConfig, LossFactorTable, LossSite};
+pub use loss_factor::{ComponentLossFactor, LossFactorConfig, LossFactorTable};
+pub use loss_sites::LossSite;
 pub use metrics::MetricsConfig;
 pub use model::{
     ConstraintConfig, DampingConfig, DirectionConfig, DiscretizationConfig, EdgeConfig, GeometryConfig, ModelConfig,

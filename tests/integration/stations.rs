@@ -169,9 +169,37 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         out.contains("4 support groups (east_abutment, free_field, middle_bent_column, west_abutment)"),
         "{out}"
     );
-    let o = splinewatch(&["identify", "--config", config.to_str().unwrap(), &records[1], "--json"]);
+    let identified_rrd = dir.join("identify.rrd");
+    let o = splinewatch(&[
+        "identify",
+        "--config",
+        config.to_str().unwrap(),
+        &records[1],
+        "--json",
+        "--rerun-save",
+        identified_rrd.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
+    // `--rerun-save` without a model: the identification alone (diagram,
+    // singular values, SRIM's and the fitted modes), no deck, read back with
+    // Rerun's own decoder.
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&identified_rrd).unwrap()).unwrap();
+    for entity in [
+        "/oma/stabilisation",
+        "/oma/singular_values",
+        "/oma/modes/1/frequency_hz",
+        "/oma/stabilisation/fitted",
+        "/oma/fitted/1/damping_percent",
+    ] {
+        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
+    }
+    assert!(
+        !summary.entities.iter().any(|e| e.starts_with("/deck")),
+        "{:?}",
+        summary.entities
+    );
+    assert!(summary.footer);
     // The starter's `[oma] resample_hz = 50`: the 100 Hz record identified
     // at half its rate (exactly its points over the same span).
     assert!(

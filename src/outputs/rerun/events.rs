@@ -6,9 +6,9 @@
 //! Without a model the same points go to a recording of their own
 //! ([`EventTimeline`]).
 
-use super::{rerun_error, set_measurement_time, RerunOutput};
+use super::{rerun_error, saved_recording, set_measurement_time, RerunOutput};
 use anyhow::{anyhow, Result};
-use rerun::blueprint::{Blueprint, BlueprintActivation, Horizontal, Spatial2DView, TimeSeriesView, Vertical};
+use rerun::blueprint::{Blueprint, Horizontal, Spatial2DView, TimeSeriesView, Vertical};
 use std::path::Path;
 
 /// One event's figures.
@@ -62,12 +62,6 @@ pub struct EventTimeline {
 impl EventTimeline {
     /// A recording saved to `path`, with its layout.
     pub fn save(path: &Path) -> Result<Self> {
-        let rec = rerun::RecordingStreamBuilder::new("splinewatch")
-            .buffered()
-            .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
-        crate::io::files::create_output_file(path)?;
-        let sink = rerun::sink::FileSink::new(path).map_err(|e| anyhow!("Rerun file {}: {e}", path.display()))?;
-        rec.set_sink(Box::new(sink));
         let layout = Blueprint::new(Horizontal::new([
             Vertical::new([
                 TimeSeriesView::new("Ground peak, deck peak and RMS (m/s²)")
@@ -87,10 +81,9 @@ impl EventTimeline {
                 .with_origin("/events/frequency/identified")
                 .into(),
         ]));
-        layout
-            .send(&rec, BlueprintActivation::default())
-            .map_err(|e| anyhow!("Rerun blueprint: {e}"))?;
-        Ok(Self { rec })
+        Ok(Self {
+            rec: saved_recording(path, &layout)?,
+        })
     }
 }
 

@@ -42,6 +42,7 @@ pub mod prediction;
 mod rrd;
 mod update;
 
+pub use oma::IdentificationFile;
 pub use rrd::{inspect_rrd, RrdSummary};
 
 use crate::config::{frf_setup, Config, FrfSetup};
@@ -302,6 +303,22 @@ impl RerunOutput {
         drop(self.rec);
         Ok(())
     }
+}
+
+/// A recording saved to `path` alone (no viewer) with `layout` sent: the
+/// recordings of a config without a model ([`events::EventTimeline`],
+/// [`IdentificationFile`]).
+fn saved_recording(path: &Path, layout: &rerun::blueprint::Blueprint) -> Result<rerun::RecordingStream> {
+    let rec = rerun::RecordingStreamBuilder::new("splinewatch")
+        .buffered()
+        .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
+    crate::io::files::create_output_file(path)?;
+    let sink = rerun::sink::FileSink::new(path).map_err(|e| anyhow!("Rerun file {}: {e}", path.display()))?;
+    rec.set_sink(Box::new(sink));
+    layout
+        .send(&rec, rerun::blueprint::BlueprintActivation::default())
+        .map_err(|e| anyhow!("Rerun blueprint: {e}"))?;
+    Ok(rec)
 }
 
 /// `rec`'s `measurement_time` at `time_ns` (clamped to what Rerun holds).

@@ -6,11 +6,15 @@
 //! pipeline window also the trends by paired model mode and the identified
 //! and model shapes at the sensors.
 
-use super::{rerun_error, RerunOutput};
+use super::update::log_band;
+use super::{rerun_error, saved_recording, set_measurement_time, RerunOutput};
 use crate::io::modes_json::ModeEntry;
 use crate::pipeline::oma::OmaReport;
 use crate::pipeline::{WindowModes, WindowReport};
-use anyhow::Result;
+use anyhow::{anyhow, Result};
+use rerun::blueprint::{BarChartView, Blueprint, Horizontal, Spatial2DView, TimeSeriesView, Vertical};
+use std::collections::BTreeSet;
+use std::path::Path;
 
 impl RerunOutput {
     /// Logs `report` at its span's start time.
@@ -20,43 +24,12 @@ impl RerunOutput {
     }
 
     /// Logs the modes fitted in the frequency domain (`[oma.frequency_domain]`)
-    /// beside `report`'s, at its span's start time: on the stabilisation
-    /// diagram a vertical line at each fitted frequency over the diagram's
-    /// orders (green) with its ±1σ (pale green), and each mode's frequency
-    /// and damping with ±1σ under `oma/fitted/<k>` (by frequency).
+    /// beside `report`'s, at its span's start time: each a vertical line on
+    /// the stabilisation diagram (±1σ paler) and its frequency and damping
+    /// under `oma/fitted/<k>`.
     pub fn log_fitted(&mut self, report: &OmaReport, fitted: &[ModeEntry]) -> Result<()> {
-        if fitted.is_empty() {
-            return Ok(());
-        }
         self.set_time(report.start_ns);
-        let top = report.result.diagram.iter().map(|p| p.order).max().unwrap_or(1).max(1) as f32;
-        let mut strips: Vec<Vec<[f32; 2]>> = Vec::new();
-        let mut colors = Vec::new();
-        for m in fitted {
-            let sigma = m.frequency_std_hz.unwrap_or(0.0);
-            for (f, color) in [
-                (m.frequency_hz, rerun::Color::from_rgb(40, 160, 60)),
-                (m.frequency_hz - sigma, rerun::Color::from_rgb(160, 210, 160)),
-                (m.frequency_hz + sigma, rerun::Color::from_rgb(160, 210, 160)),
-            ] {
-                strips.push(vec![[f as f32, 0.0], [f as f32, top]]);
-                colors.push(color);
-            }
-        }
-        self.rec
-            .log(
-                "oma/stabilisation/fitted",
-                &rerun::LineStrips2D::new(strips).with_colors(colors),
-            )
-            .map_err(rerun_error)?;
-        for (k, m) in fitted.iter().enumerate() {
-            self.log_frequency_and_damping(
-                &format!("oma/fitted/{}", k + 1),
-                (m.frequency_hz, m.frequency_std_hz),
-                (m.damping_ratio, m.damping_std),
-            )?;
-        }
-        Ok(())
+        log_fitted(&self.rec, &mut self.named, report, fitted)
     }
 
     /// Logs an output-only window's identification at the window's end (FRF
@@ -140,68 +113,175 @@ impl RerunOutput {
         Ok(())
     }
 
-    /// The diagram, singular values and modes of one identification.
     fn log_identification(&mut self, report: &OmaReport) -> Result<()> {
-        let poles = &report.result.diagram;
-        let positions: Vec<[f32; 2]> = poles.iter().map(|p| [p.frequency_hz as f32, p.order as f32]).collect();
-        let colors: Vec<rerun::Color> = poles
-            .iter()
-            .map(|p| match (p.mode, p.stable) {
-                (Some(_), _) => rerun::Color::from_rgb(230, 120, 20),
-                (None, true) => rerun::Color::from_rgb(30, 110, 200),
-                (None, false) => rerun::Color::from_rgb(170, 170, 170),
-            })
-            .collect();
-        self.rec
-            .log(
-                "oma/stabilisation",
-                &rerun::Points2D::new(positions)
-                    .with_colors(colors)
-                    .with_radii([rerun::Radius::new_ui_points(2.0)]),
-            )
-            .map_err(rerun_error)?;
-        if let Some(line) = first_singular_value_line(report) {
-            self.rec
-                .log(
-                    "oma/stabilisation/first_singular_value",
-                    &rerun::LineStrips2D::new([line]).with_colors([rerun::Color::from_rgb(90, 90, 90)]),
-                )
-                .map_err(rerun_error)?;
-        }
-        let singular: Vec<f64> = report.result.singular_values.iter().take(200).copied().collect();
-        self.rec
-            .log("oma/singular_values", &rerun::BarChart::new(singular))
-            .map_err(rerun_error)?;
-        for (k, m) in report.result.modes.iter().enumerate() {
-            self.log_frequency_and_damping(
-                &format!("oma/modes/{}", k + 1),
-                (m.frequency_hz, m.frequency_std_hz),
-                (m.damping_ratio, m.damping_std),
-            )?;
-        }
-        Ok(())
+        log_identification(&self.rec, &mut self.named, report)
     }
 
-    /// A mode's `frequency_hz` and `damping_percent` under `base`, each with
-    /// ±1σ (a missing std drawn as 0): (value, std) of the frequency in Hz
-    /// and of the damping ratio.
     fn log_frequency_and_damping(
         &mut self,
         base: &str,
-        (frequency_hz, frequency_std_hz): (f64, Option<f64>),
-        (damping_ratio, damping_std): (f64, Option<f64>),
+        frequency: (f64, Option<f64>),
+        damping: (f64, Option<f64>),
     ) -> Result<()> {
-        self.log_band(
-            &format!("{base}/frequency_hz"),
-            frequency_hz,
-            frequency_std_hz.unwrap_or(0.0),
-        )?;
-        self.log_band(
-            &format!("{base}/damping_percent"),
-            100.0 * damping_ratio,
-            100.0 * damping_std.unwrap_or(0.0),
-        )
+        log_frequency_and_damping(&self.rec, &mut self.named, base, frequency, damping)
     }
+}
+
+/// An identification alone, for a config without a `[model]` (`identify`
+/// or `oma --rerun-save` on a station's starter config): the stabilisation
+/// diagram over the first singular value, the Hankel matrix's singular
+/// values and the modes with ±1σ (and the fitted ones), no deck and no
+/// model views.
+pub struct IdentificationFile {
+    rec: rerun::RecordingStream,
+    named: BTreeSet<String>,
+}
+
+impl IdentificationFile {
+    /// A recording saved to `path`, with its layout.
+    pub fn save(path: &Path) -> Result<Self> {
+        let layout = Blueprint::new(Horizontal::new([
+            Spatial2DView::new("Stabilisation diagram (order × Hz) over the spectral matrix's first singular value")
+                .with_origin("/oma/stabilisation")
+                .into(),
+            Vertical::new([
+                TimeSeriesView::new("Identified modes: frequency (Hz) and damping (%), ±1σ")
+                    .with_origin("/oma")
+                    .with_contents(["/oma/modes/**", "/oma/fitted/**"])
+                    .into(),
+                BarChartView::new("Hankel matrix's singular values")
+                    .with_origin("/oma/singular_values")
+                    .into(),
+            ])
+            .into(),
+        ]));
+        Ok(Self {
+            rec: saved_recording(path, &layout)?,
+            named: BTreeSet::new(),
+        })
+    }
+
+    /// Logs `report` and the modes fitted beside it at its span's start.
+    pub fn log(&mut self, report: &OmaReport, fitted: &[ModeEntry]) -> Result<()> {
+        set_measurement_time(&self.rec, report.start_ns);
+        log_identification(&self.rec, &mut self.named, report)?;
+        log_fitted(&self.rec, &mut self.named, report, fitted)
+    }
+
+    /// Flushes and closes the recording (the `.rrd` gets its footer).
+    pub fn close(self) -> Result<()> {
+        self.rec
+            .flush_blocking()
+            .map_err(|e| anyhow!("flushing the Rerun output: {e}"))
+    }
+}
+
+/// The diagram, singular values and modes of one identification on `rec`,
+/// at the time already set.
+fn log_identification(rec: &rerun::RecordingStream, named: &mut BTreeSet<String>, report: &OmaReport) -> Result<()> {
+    let poles = &report.result.diagram;
+    let positions: Vec<[f32; 2]> = poles.iter().map(|p| [p.frequency_hz as f32, p.order as f32]).collect();
+    let colors: Vec<rerun::Color> = poles
+        .iter()
+        .map(|p| match (p.mode, p.stable) {
+            (Some(_), _) => rerun::Color::from_rgb(230, 120, 20),
+            (None, true) => rerun::Color::from_rgb(30, 110, 200),
+            (None, false) => rerun::Color::from_rgb(170, 170, 170),
+        })
+        .collect();
+    rec.log(
+        "oma/stabilisation",
+        &rerun::Points2D::new(positions)
+            .with_colors(colors)
+            .with_radii([rerun::Radius::new_ui_points(2.0)]),
+    )
+    .map_err(rerun_error)?;
+    if let Some(line) = first_singular_value_line(report) {
+        rec.log(
+            "oma/stabilisation/first_singular_value",
+            &rerun::LineStrips2D::new([line]).with_colors([rerun::Color::from_rgb(90, 90, 90)]),
+        )
+        .map_err(rerun_error)?;
+    }
+    let singular: Vec<f64> = report.result.singular_values.iter().take(200).copied().collect();
+    rec.log("oma/singular_values", &rerun::BarChart::new(singular))
+        .map_err(rerun_error)?;
+    for (k, m) in report.result.modes.iter().enumerate() {
+        log_frequency_and_damping(
+            rec,
+            named,
+            &format!("oma/modes/{}", k + 1),
+            (m.frequency_hz, m.frequency_std_hz),
+            (m.damping_ratio, m.damping_std),
+        )?;
+    }
+    Ok(())
+}
+
+/// The modes fitted in the frequency domain (`[oma.frequency_domain]`)
+/// beside `report`'s, on `rec` at the time already set: on the
+/// stabilisation diagram a vertical line at each fitted frequency over the
+/// diagram's orders (green) with its ±1σ (pale green), and each mode's
+/// frequency and damping with ±1σ under `oma/fitted/<k>` (by frequency).
+fn log_fitted(
+    rec: &rerun::RecordingStream,
+    named: &mut BTreeSet<String>,
+    report: &OmaReport,
+    fitted: &[ModeEntry],
+) -> Result<()> {
+    if fitted.is_empty() {
+        return Ok(());
+    }
+    let top = report.result.diagram.iter().map(|p| p.order).max().unwrap_or(1).max(1) as f32;
+    let mut strips: Vec<Vec<[f32; 2]>> = Vec::new();
+    let mut colors = Vec::new();
+    for m in fitted {
+        let sigma = m.frequency_std_hz.unwrap_or(0.0);
+        for (f, color) in [
+            (m.frequency_hz, rerun::Color::from_rgb(40, 160, 60)),
+            (m.frequency_hz - sigma, rerun::Color::from_rgb(160, 210, 160)),
+            (m.frequency_hz + sigma, rerun::Color::from_rgb(160, 210, 160)),
+        ] {
+            strips.push(vec![[f as f32, 0.0], [f as f32, top]]);
+            colors.push(color);
+        }
+    }
+    rec.log(
+        "oma/stabilisation/fitted",
+        &rerun::LineStrips2D::new(strips).with_colors(colors),
+    )
+    .map_err(rerun_error)?;
+    for (k, m) in fitted.iter().enumerate() {
+        log_frequency_and_damping(
+            rec,
+            named,
+            &format!("oma/fitted/{}", k + 1),
+            (m.frequency_hz, m.frequency_std_hz),
+            (m.damping_ratio, m.damping_std),
+        )?;
+    }
+    Ok(())
+}
+
+/// A mode's `frequency_hz` and `damping_percent` under `base`, each with
+/// ±1σ (a missing std drawn as 0): (value, std) of the frequency in Hz
+/// and of the damping ratio.
+fn log_frequency_and_damping(
+    rec: &rerun::RecordingStream,
+    named: &mut BTreeSet<String>,
+    base: &str,
+    (frequency_hz, frequency_std_hz): (f64, Option<f64>),
+    (damping_ratio, damping_std): (f64, Option<f64>),
+) -> Result<()> {
+    let path = format!("{base}/frequency_hz");
+    log_band(rec, named, &path, (frequency_hz, frequency_std_hz.unwrap_or(0.0)))?;
+    let path = format!("{base}/damping_percent");
+    log_band(
+        rec,
+        named,
+        &path,
+        (100.0 * damping_ratio, 100.0 * damping_std.unwrap_or(0.0)),
+    )
 }
 
 /// The first singular value of the spectral matrix over the diagram's

@@ -8,6 +8,32 @@ use crate::pipeline::UpdateReport;
 use anyhow::Result;
 use splinewatch_core::model::damping::DampingCurve;
 
+/// `value` and `value ± sigma` as three series under `path` on `rec`,
+/// their names and colours logged once per recording (`named`: the paths
+/// already given them).
+pub(super) fn log_band(
+    rec: &rerun::RecordingStream,
+    named: &mut std::collections::BTreeSet<String>,
+    path: &str,
+    (value, sigma): (f64, f64),
+) -> Result<()> {
+    if named.insert(path.to_string()) {
+        rec.log_static(
+            path,
+            &rerun::SeriesLines::new()
+                .with_names(["value", "+1σ", "−1σ"])
+                .with_colors([
+                    rerun::Color::from_rgb(30, 110, 200),
+                    rerun::Color::from_rgb(150, 180, 220),
+                    rerun::Color::from_rgb(150, 180, 220),
+                ]),
+        )
+        .map_err(rerun_error)?;
+    }
+    rec.log(path, &rerun::Scalars::new([value, value + sigma, value - sigma]))
+        .map_err(rerun_error)
+}
+
 impl RerunOutput {
     /// Value and ±1σ of every parameter, and the relative residual.
     pub(super) fn log_parameters(&mut self, report: &UpdateReport) -> Result<()> {
@@ -27,24 +53,7 @@ impl RerunOutput {
     /// A trend with its ±1σ band at `path`: three series, named and
     /// coloured once per file.
     pub(super) fn log_band(&mut self, path: &str, value: f64, sigma: f64) -> Result<()> {
-        if self.named.insert(path.to_string()) {
-            self.rec
-                .log_static(
-                    path,
-                    &rerun::SeriesLines::new()
-                        .with_names(["value", "+1σ", "−1σ"])
-                        .with_colors([
-                            rerun::Color::from_rgb(30, 110, 200),
-                            rerun::Color::from_rgb(150, 180, 220),
-                            rerun::Color::from_rgb(150, 180, 220),
-                        ]),
-                )
-                .map_err(rerun_error)?;
-        }
-        self.rec
-            .log(path, &rerun::Scalars::new([value, value + sigma, value - sigma]))
-            .map_err(rerun_error)?;
-        Ok(())
+        log_band(&self.rec, &mut self.named, path, (value, sigma))
     }
 
     /// ζ(f) over its band, in %, and the control coefficients.
