@@ -1,6 +1,6 @@
-//! The model's loss sites: every `loss_factor` of the springs, bearings and
-//! supports with the spring coefficients it weighs
-//! ([`splinewatch_core::model::loss_sites`]).
+//! The model's loss sites: every `loss_factor` of the springs, bearings,
+//! supports, stiffness fields and beams with the spring or stiffness-field
+//! coefficients it weighs ([`splinewatch_core::model::loss_sites`]).
 
 use super::loss_factor::{ComponentLossFactor, LossFactorConfig};
 use super::tie::Tied;
@@ -8,16 +8,29 @@ use super::{err, Config, ConfigError};
 use std::collections::BTreeMap;
 
 /// One loss factor of the model: its value, and the spring coefficients
-/// (flat over the model's spring fields: springs, bearings, supports) whose
-/// strain energy it weighs.
+/// (flat over the model's spring fields: springs, bearings, supports) and
+/// stiffness-field coefficients (flat over the deck's fields, then the
+/// beams' multipliers) whose strain energy it weighs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LossSite {
-    /// The updating parameter's prefix: `<support>` or `<support>.<component>`.
+    /// The updating parameter's prefix: `<support>`, `<support>.<component>`,
+    /// `<field>` or `<beam>`.
     pub name: String,
     /// Where it is given (`model.supports[0].loss_factor.y`).
     pub key: String,
     pub factor: LossFactorConfig,
-    pub coefficients: Vec<usize>,
+    pub springs: Vec<usize>,
+    pub fields: Vec<usize>,
+}
+
+impl LossSite {
+    /// The core's site.
+    pub fn core(&self) -> splinewatch_core::model::loss_sites::LossSite {
+        splinewatch_core::model::loss_sites::LossSite {
+            springs: self.springs.clone(),
+            fields: self.fields.clone(),
+        }
+    }
 }
 
 impl Config {
@@ -39,7 +52,8 @@ impl Config {
                     name: spring.name.clone(),
                     key: format!("model.springs[{i}].loss_factor"),
                     factor,
-                    coefficients: (offset..offset + count).collect(),
+                    springs: (offset..offset + count).collect(),
+                    fields: Vec::new(),
                 });
             }
             offset += count;
@@ -58,6 +72,7 @@ impl Config {
             loss: &|s| s.loss_factor.as_ref(),
         };
         supports.add_sites(&m.supports, offset, &mut sites)?;
+        self.add_field_sites(&mut sites)?;
         for site in &sites {
             site.factor.check(&site.key)?;
             if m.damping.is_none() {
@@ -69,6 +84,80 @@ impl Config {
         }
         Ok(sites)
     }
+
+    /// The stiffness fields' and beams' loss sites, on their multipliers'
+    /// coefficients (the deck's fields in order, then one per beam giving
+    /// `stiffness`); a tied field or beam joins its leader's site.
+    fn add_field_sites(&self, sites: &mut Vec<LossSite>) -> Result<(), ConfigError> {
+        let m = &self.model;
+        let mut offset = 0;
+        let mut leader: Option<usize> = None;
+        for (i, field) in m.stiffness_fields.iter().enumerate() {
+            let count = field.knots_xi.len().saturating_sub(field.degree_xi + 1)
+                * field.knots_eta.len().saturating_sub(field.degree_eta + 1);
+            let key = format!("model.stiffness_fields[{i}].loss_factor");
+            add_field_site(
+                sites,
+                &mut leader,
+                (field, key),
+                field.loss_factor,
+                offset..offset + count,
+            )?;
+            offset += count;
+        }
+        leader = None;
+        for (b, beam) in m.beams.iter().enumerate() {
+            let key = format!("model.beams[{b}].loss_factor");
+            if beam.stiffness.is_none() {
+                if beam.loss_factor.is_some() {
+                    return Err(err(
+                        key,
+                        "needs `stiffness`: the loss factor damps the part of the member's stiffness it scales \
+                         (`stiffness = { update = false }` holds it at 1)",
+                    ));
+                }
+                continue;
+            }
+            add_field_site(sites, &mut leader, (beam, key), beam.loss_factor, offset..offset + 1)?;
+            offset += 1;
+        }
+        Ok(())
+    }
+}
+
+/// The site of `entry`'s `loss_factor` over the field coefficients
+/// `coefficients`: a new one, or for a tied entry its leader's (`leader`:
+/// the site of the last entry not tied, if it has one).
+fn add_field_site<T: Tied>(
+    sites: &mut Vec<LossSite>,
+    leader: &mut Option<usize>,
+    (entry, key): (&T, String),
+    loss_factor: Option<LossFactorConfig>,
+    coefficients: std::ops::Range<usize>,
+) -> Result<(), ConfigError> {
+    if let Some(name) = entry.tie() {
+        if loss_factor.is_some() {
+            return Err(err(
+                key,
+                format!("a tied entry takes the loss factor of {name:?}: remove it"),
+            ));
+        }
+        if let Some(site) = *leader {
+            sites[site].fields.extend(coefficients);
+        }
+        return Ok(());
+    }
+    *leader = loss_factor.map(|factor| {
+        sites.push(LossSite {
+            name: entry.name().to_string(),
+            key,
+            factor,
+            springs: Vec::new(),
+            fields: coefficients.collect(),
+        });
+        sites.len() - 1
+    });
+    Ok(())
 }
 
 /// A loss factor of a bearing or support: on one component (`None`: all),
@@ -103,7 +192,7 @@ impl<T: Tied> Entries<'_, T> {
                 }
                 for &(site, component) in &leader {
                     sites[site]
-                        .coefficients
+                        .springs
                         .extend(self.coefficients(offset, &components, component));
                 }
             } else {
@@ -119,7 +208,8 @@ impl<T: Tied> Entries<'_, T> {
                         name: component.map_or_else(|| item.name().to_string(), |c| format!("{}.{c}", item.name())),
                         key,
                         factor,
-                        coefficients: self.coefficients(offset, &components, component),
+                        springs: self.coefficients(offset, &components, component),
+                        fields: Vec::new(),
                     });
                 }
             }
@@ -201,10 +291,7 @@ mod tests {
         let springs: usize = m.springs.iter().map(|s| s.stiffness.len()).sum::<usize>() + 3 * m.bearings.len();
         // x, y, z, ry: y is the second, ry the fourth; two abutments.
         let sites = config.loss_sites().unwrap();
-        let found: Vec<(&str, Vec<usize>)> = sites
-            .iter()
-            .map(|s| (s.name.as_str(), s.coefficients.clone()))
-            .collect();
+        let found: Vec<(&str, Vec<usize>)> = sites.iter().map(|s| (s.name.as_str(), s.springs.clone())).collect();
         assert_eq!(
             found,
             vec![
@@ -260,7 +347,7 @@ mod tests {
         let springs: usize = m.springs.iter().map(|s| s.stiffness.len()).sum::<usize>() + 3 * m.bearings.len();
         let sites = config.loss_sites().unwrap();
         assert_eq!(sites.len(), 1);
-        assert_eq!(sites[0].coefficients, vec![springs + 1, springs + 5]);
+        assert_eq!(sites[0].springs, vec![springs + 1, springs + 5]);
     }
 
     /// Each bad per-component table is refused by its key, nothing built.
@@ -308,5 +395,75 @@ mod tests {
             message.contains(".loss_factor.z") && message.contains("(it has kx, ky, kz)"),
             "{message}"
         );
+    }
+
+    /// A loss factor on a deck's stiffness field and on a bent's columns
+    /// (their multipliers' part of the stiffness): each a site on its
+    /// coefficients in the assembled models' order (the deck's fields, then
+    /// one per beam giving `stiffness`), the tied column joining its
+    /// leader's; a beam without `stiffness`, or a tied one giving its own,
+    /// refused by key.
+    #[test]
+    fn stiffness_fields_and_beams_take_a_loss_factor_on_their_part() {
+        let field = "\n[[model.stiffness_fields]]\nname = \"deck\"\npatch = \"top_slab.span1\"\nknots_xi = [0.0, 0.0, 1.0, 1.0]\ndegree_xi = 1\nknots_eta = [0.0, 1.0]\ndegree_eta = 0\nupdate = false\nloss_factor = 0.02\n";
+        let south = "name = \"bent.south\"\n";
+        let north = "name = \"bent.north\"\n";
+        let columns = |south_extra: &str, north_extra: &str| {
+            BRIDGE.replacen(south, &format!("{south}{south_extra}"), 1).replacen(
+                north,
+                &format!("{north}{north_extra}"),
+                1,
+            ) + field
+        };
+        let text = columns(
+            "stiffness = { bounds = [0.3, 1.5] }\nloss_factor = { value = 0.05, bounds = [0.0, 0.3] }\n",
+            "stiffness = {}\ntie = \"bent.south\"\n",
+        );
+        let config = Config::from_toml(&text).unwrap();
+        config.validate().unwrap();
+        let theta = config.build_model().unwrap().field_coefficients();
+        // The deck's field (2 × 1 coefficients), then the two columns'.
+        assert_eq!(theta.iter().map(Vec::len).collect::<Vec<_>>(), vec![2, 1, 1]);
+        let sites = config.loss_sites().unwrap();
+        let found: Vec<(&str, &[usize])> = sites
+            .iter()
+            .filter(|s| s.springs.is_empty())
+            .map(|s| (s.name.as_str(), s.fields.as_slice()))
+            .collect();
+        assert_eq!(found, vec![("deck", &[0, 1][..]), ("bent.south", &[2, 3][..])]);
+        let eta: Vec<String> = config
+            .build_parameters()
+            .unwrap()
+            .into_iter()
+            .filter(|p| p.name.ends_with(".eta"))
+            .map(|p| p.name)
+            .collect();
+        assert!(eta.contains(&"bent.south.eta".to_string()), "{eta:?}");
+        assert!(!eta.iter().any(|n| n == "deck.eta"), "held: {eta:?}");
+        let damping = config.build_damping().unwrap();
+        assert!(damping.has_field_sites());
+        for (text, key, why) in [
+            (
+                columns("loss_factor = 0.05\n", ""),
+                "model.beams[0].loss_factor",
+                "needs `stiffness`",
+            ),
+            (
+                columns(
+                    "stiffness = { bounds = [0.3, 1.5] }\nloss_factor = 0.05\n",
+                    "stiffness = {}\ntie = \"bent.south\"\nloss_factor = 0.05\n",
+                ),
+                "model.beams[1].loss_factor",
+                "takes the loss factor of \"bent.south\"",
+            ),
+            (
+                columns("", "").replace("loss_factor = 0.02", "loss_factor = -0.02"),
+                "model.stiffness_fields[0].loss_factor",
+                "must be a finite loss factor >= 0",
+            ),
+        ] {
+            let message = Config::from_toml(&text).unwrap().validate().unwrap_err().to_string();
+            assert!(message.contains(key) && message.contains(why), "{message}");
+        }
     }
 }

@@ -155,6 +155,7 @@ impl Environment {
                     bounds: None,
                     update: false,
                     tie: None,
+                    loss_factor: None,
                 }));
         }
         truth

@@ -2,6 +2,7 @@
 //! shell, material, springs, stiffness fields, bearings and masses, damping.
 
 use super::*;
+use crate::config::LossSite;
 use splinewatch_core::model::loss_sites::LossSites;
 
 impl Config {
@@ -402,8 +403,7 @@ impl Config {
             return Ok(curve);
         }
         let factors = sites.iter().map(|s| s.factor.value()).collect();
-        let where_ =
-            LossSites::new(sites.into_iter().map(|s| s.coefficients).collect()).map_err(|e| err("model", e))?;
+        let where_ = LossSites::new(sites.iter().map(LossSite::core).collect()).map_err(|e| err("model", e))?;
         curve
             .with_loss_factors(factors)
             .and_then(|c| c.with_loss_sites(where_))

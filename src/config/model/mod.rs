@@ -362,9 +362,16 @@ pub struct StiffnessFieldConfig {
     /// `[[model.stiffness_fields]]` (or before fields tied to it): this one
     /// takes its updating parameters (one modulus over several patches).
     /// Both are updated, with as many coefficients, the same start values
-    /// and `scales`; it gives no `bounds` of its own.
+    /// and `scales`; it gives no `bounds` or `loss_factor` of its own.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tie: Option<String>,
+    /// The loss factor η of the part of the patch's stiffness the field
+    /// scales (a cracked or jointed deck's own hysteresis): modes whose
+    /// strain energy sits in it are damped by `½ η × its share`, on top of
+    /// `[model.damping]`'s ζ(f). A number is held; `{ value, bounds }` is
+    /// updated (parameter `<name>.eta`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loss_factor: Option<LossFactorConfig>,
 }
 
 impl crate::config::tie::Tied for StiffnessFieldConfig {

@@ -49,9 +49,17 @@ pub struct BeamConfig {
     /// Another beam's name, just before this one in `[[model.beams]]` (or
     /// before beams tied to it): this one takes its `stiffness` parameter
     /// (one cracked-section factor for every column of a bent). Both give
-    /// `stiffness` with the same `value` and `scales`; this one no `bounds`.
+    /// `stiffness` with the same `value` and `scales`; this one no `bounds`
+    /// or `loss_factor`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tie: Option<String>,
+    /// The loss factor η of the part of the member's stiffness `stiffness`
+    /// scales (a column's cracking hysteresis; needs `stiffness`): modes
+    /// whose strain energy sits in it are damped by `½ η × its share`, on
+    /// top of `[model.damping]`'s ζ(f). A number is held;
+    /// `{ value, bounds }` is updated (parameter `<name>.eta`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loss_factor: Option<crate::config::LossFactorConfig>,
 }
 
 /// `stiffness = { value, scales, bounds, update }` of a `[[model.beams]]`

@@ -507,7 +507,7 @@ fn loss_factors_enter_the_damping_and_the_parameters() {
             .position(|b| b.name == "west_south")
             .unwrap();
     assert!(run >= 2);
-    assert_eq!(sites[0].coefficients, (first..first + 3 * run).collect::<Vec<_>>());
+    assert_eq!(sites[0].springs, (first..first + 3 * run).collect::<Vec<_>>());
     let own = with_leader.replacen(leader, &format!("{leader}\nloss_factor = 0.1"), 1);
     let message = Config::from_toml(&own).unwrap().validate().unwrap_err().to_string();
     assert!(
@@ -561,7 +561,7 @@ fn supports_tie_into_one_soil() {
         cfg.model.springs.iter().map(|s| s.stiffness.len()).sum::<usize>() + 3 * cfg.model.bearings.len();
     let sites = cfg.loss_sites().unwrap();
     assert_eq!(sites.len(), 1);
-    assert_eq!(sites[0].coefficients, (first..first + 8).collect::<Vec<_>>());
+    assert_eq!(sites[0].springs, (first..first + 8).collect::<Vec<_>>());
     assert!(
         parameters.iter().all(|p| !p.name.starts_with("east_abutment")),
         "{parameters:?}"

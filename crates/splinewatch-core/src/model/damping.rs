@@ -138,16 +138,28 @@ impl DampingCurve {
             .unwrap_or_else(|| LossSites::per_field(field_sizes))
     }
 
+    /// Whether a loss factor weighs stiffness-field coefficients (a patch's
+    /// or a beam member's part of the stiffness).
+    pub fn has_field_sites(&self) -> bool {
+        self.loss_sites.as_ref().is_some_and(LossSites::has_fields)
+    }
+
     /// Twice the supports' share of a mode's damping, `Σ_s η_s e_s`, from
-    /// its strain-energy share `shares[j]` in each spring coefficient
+    /// its strain-energy share `springs[j]` in each spring coefficient and
+    /// `fields[k]` in each stiffness-field coefficient's part
     /// (`field_sizes` as [`Self::loss_sites`]).
     #[track_caller]
-    pub fn support_loss(&self, shares: &[f64], field_sizes: &[usize]) -> f64 {
+    pub fn support_loss(&self, (springs, fields): (&[f64], &[f64]), field_sizes: &[usize]) -> f64 {
         let sites = self.loss_sites(field_sizes);
         self.loss_factors
             .iter()
             .enumerate()
-            .map(|(s, eta)| eta * sites.coefficients(s).iter().map(|&j| shares[j]).sum::<f64>())
+            .map(|(s, eta)| {
+                let site = sites.site(s);
+                let energy = site.springs.iter().map(|&j| springs[j]).sum::<f64>()
+                    + site.fields.iter().map(|&k| fields[k]).sum::<f64>();
+                eta * energy
+            })
             .sum()
     }
 
@@ -223,6 +235,7 @@ impl DampingCurve {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::loss_sites::LossSite;
 
     #[test]
     fn slope_is_the_derivative_of_zeta_and_zero_outside_the_band() {
@@ -280,7 +293,7 @@ mod tests {
             lossy.with_coefficients(vec![0.02; 2]).unwrap().loss_factors(),
             &[0.1, 0.0]
         );
-        let one_site = LossSites::new(vec![vec![2]]).unwrap();
+        let one_site = LossSites::new(vec![LossSite::springs(vec![2])]).unwrap();
         assert!(matches!(
             lossy.with_loss_sites(one_site.clone()),
             Err(DampingError::LossSiteCount { factors: 2, sites: 1 })
@@ -302,13 +315,15 @@ mod tests {
         let shares = [0.1, 0.2, 0.3, 0.4];
         // One site per field: fields of 1 and 3 coefficients.
         let per_field = curve.with_loss_factors(vec![0.5, 0.2]).unwrap();
-        assert!((per_field.support_loss(&shares, &[1, 3]) - (0.05 + 0.2 * 0.9)).abs() < 1e-15);
-        // The second and last coefficients only.
+        assert!((per_field.support_loss((&shares, &[]), &[1, 3]) - (0.05 + 0.2 * 0.9)).abs() < 1e-15);
+        // The second and last coefficients only, and a stiffness field's
+        // second coefficient.
         let sited = curve
-            .with_loss_factors(vec![0.4])
+            .with_loss_factors(vec![0.4, 0.1])
             .unwrap()
-            .with_loss_sites(LossSites::new(vec![vec![1, 3]]).unwrap())
+            .with_loss_sites(LossSites::new(vec![LossSite::springs(vec![1, 3]), LossSite::fields(vec![1])]).unwrap())
             .unwrap();
-        assert!((sited.support_loss(&shares, &[1, 3]) - 0.4 * 0.6).abs() < 1e-15);
+        let found = sited.support_loss((&shares, &[0.5, 0.7]), &[1, 3]);
+        assert!((found - (0.4 * 0.6 + 0.1 * 0.7)).abs() < 1e-15);
     }
 }

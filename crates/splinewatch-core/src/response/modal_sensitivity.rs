@@ -24,7 +24,7 @@
 //! responses `g_s`.
 
 use crate::model::damping::DampingCurve;
-use crate::response::frf::{FrfModel, FrfRequest, ModalState};
+use crate::response::frf::{FrfModel, FrfRequest, ModalState, StiffnessChange};
 use crate::solvers::modal::ModeKind;
 use faer::{c64, Mat};
 use std::f64::consts::PI;
@@ -77,7 +77,7 @@ impl FrfModel {
                 eigenvalue[(row, j)] = coupling(i);
                 let on_springs: Vec<(usize, f64)> = pos.iter().copied().zip(w.iter().copied()).collect();
                 damping_ratio[(row, j)] = state.zeta_eigenvalue_slope(i) * coupling(i)
-                    + state.support_zeta_slope(i, Some((j, &on_springs)), coupling);
+                    + state.support_zeta_slope(i, StiffnessChange::Spring(j, &on_springs), coupling);
             }
             amplitude.push(da);
         }
@@ -173,7 +173,7 @@ fn field_derivatives(
         for (row, &i) in modes.iter().enumerate() {
             eigenvalue[(row, j)] = c.modes[(i, i)];
             damping_ratio[(row, j)] = state.zeta_eigenvalue_slope(i) * c.modes[(i, i)]
-                + state.support_zeta_slope(i, None, |k| c.modes[(k, i)]);
+                + state.support_zeta_slope(i, StiffnessChange::Field(j), |k| c.modes[(k, i)]);
             expand(state, i, |k| c.modes[(k, i)], &mut amplitude[row], j);
             if let (true, Some(r), Some(residual)) = (discarded, &c.residual, state.residual()) {
                 let shifted = state.modes.omega2[i] - residual.shift();
@@ -243,7 +243,7 @@ impl FrfModel {
             })
             .collect();
         let support_slopes = Mat::from_fn(nm, nk, |i, k| {
-            state.support_zeta_slope(i, None, |m| couplings[k].modes[(m, i)])
+            state.support_zeta_slope(i, StiffnessChange::Field(k), |m| couplings[k].modes[(m, i)])
         });
         // The frequency-independent factors of every (coefficient, pair),
         // mode by mode: ∂(a_r a_s), ∂λ, the damping term's ζ∂ω + ω ζ' ∂ω,

@@ -113,6 +113,29 @@ impl Modes {
         energy / self.omega2[i]
     }
 
+    /// Each mode's share of its strain energy in each stiffness-field
+    /// coefficient's part of the stiffness, `θ_k φ_iᵀ B_k φ_i / ω_i²`
+    /// (`B_k = ∂K/∂θ_k`, `K` linear in θ; fields flattened), with
+    /// `times(k, Φ) = B_k Φ` on the generalised dofs: modes × coefficients,
+    /// zero for a rigid mode.
+    pub fn field_energy_shares(&self, theta: &[Vec<f64>], times: impl Fn(usize, &Mat<f64>) -> Mat<f64>) -> Mat<f64> {
+        let theta: Vec<f64> = theta.iter().flatten().copied().collect();
+        let mut out = Mat::zeros(self.len(), theta.len());
+        for (k, &t) in theta.iter().enumerate() {
+            let product = times(k, &self.shapes);
+            for i in 0..self.len() {
+                if self.kinds[i] == ModeKind::Rigid || self.omega2[i] <= 0.0 {
+                    continue;
+                }
+                let energy: f64 = (0..self.shapes.nrows())
+                    .map(|r| self.shapes[(r, i)] * product[(r, i)])
+                    .sum();
+                out[(i, k)] = t * energy / self.omega2[i];
+            }
+        }
+        out
+    }
+
     /// Where mode `i` moves the deck: its energy along, across, vertical
     /// and in torsion ([`super::mode_motion`]).
     pub fn motion(&self, axes: &DeckAxes, i: usize) -> MotionShares {

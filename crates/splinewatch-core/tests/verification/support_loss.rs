@@ -7,7 +7,7 @@ use faer::{c64, Mat, Side};
 use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
-use splinewatch_core::model::loss_sites::LossSites;
+use splinewatch_core::model::loss_sites::{LossSite, LossSites};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
@@ -126,7 +126,7 @@ fn loss_factors_damp_each_mode_as_the_complex_modes_of_the_hysteretic_model() {
         .unwrap();
     // Four components per abutment.
     let eta: Vec<f64> = [[0.2; 4], [0.1; 4]].concat();
-    check_against_complex_modes(&frf, &kappa, &curve, &eta);
+    check_against_complex_modes(&frf, &kappa, &curve, (&eta, &[]));
 }
 
 /// Loss factors on some components only (loss sites): 0.2 on the west
@@ -135,7 +135,7 @@ fn loss_factors_damp_each_mode_as_the_complex_modes_of_the_hysteretic_model() {
 #[test]
 fn loss_factors_on_some_components_damp_as_the_complex_modes() {
     let (frf, kappa) = deck_on_abutments();
-    let sites = LossSites::new(vec![vec![2, 3], vec![7]]).unwrap();
+    let sites = LossSites::new(vec![LossSite::springs(vec![2, 3]), LossSite::springs(vec![7])]).unwrap();
     let curve = DampingCurve::new(1, vec![0.0, 0.0], 0.0, 100.0)
         .unwrap()
         .with_loss_factors(vec![0.2, 0.15])
@@ -143,17 +143,29 @@ fn loss_factors_on_some_components_damp_as_the_complex_modes() {
         .with_loss_sites(sites)
         .unwrap();
     let eta = [0.0, 0.0, 0.2, 0.2, 0.0, 0.0, 0.0, 0.15];
-    check_against_complex_modes(&frf, &kappa, &curve, &eta);
+    check_against_complex_modes(&frf, &kappa, &curve, (&eta, &[]));
 }
 
-/// The complex-modes check of the two tests above: `curve`'s loss factors
-/// act on spring coefficient `j` with `eta[j]`.
-fn check_against_complex_modes(frf: &FrfModel, kappa: &[Vec<f64>], curve: &DampingCurve, eta: &[f64]) {
+/// The complex-modes check of the tests above: `curve`'s loss factors act
+/// on spring coefficient `j` with `eta[j]` and on stiffness-field
+/// coefficient `k`'s part with `eta_fields[k]` (the model's own field
+/// coefficients).
+fn check_against_complex_modes(
+    frf: &FrfModel,
+    kappa: &[Vec<f64>],
+    curve: &DampingCurve,
+    (eta, eta_fields): (&[f64], &[f64]),
+) {
     let state = frf.modal_state(kappa, curve).unwrap();
     let dense = frf.dense().unwrap();
     let reduction = &dense.reduction;
-    let k = reduction.reduce(&dense.stiffness_with(kappa).unwrap());
-    let d = reduction.reduce(&hysteretic(frf, kappa, eta));
+    let theta: Vec<f64> = dense.field_coefficients.iter().flatten().copied().collect();
+    let k = reduction.reduce(&dense.stiffness_with_fields(kappa, &dense.field_coefficients).unwrap());
+    let mut full = hysteretic(frf, kappa, eta);
+    for (matrix, (e, t)) in dense.field_matrices.iter().flatten().zip(eta_fields.iter().zip(&theta)) {
+        full += (e * t) * matrix;
+    }
+    let d = reduction.reduce(&full);
     let m = reduction.reduce(&dense.mass);
     // M^{-1/2} (K + jD) M^{-1/2}: the same eigenvalues.
     let eigen = m.self_adjoint_eigen(Side::Lower).unwrap();
@@ -180,9 +192,14 @@ fn check_against_complex_modes(frf: &FrfModel, kappa: &[Vec<f64>], curve: &Dampi
             .flat_map(|(blocks, k)| (0..blocks.len()).map(move |j| (&blocks[j..=j], &k[j..=j])))
             .map(|(b, k)| state.modes.spring_energy_share(i, b, k))
             .collect();
+        let field_shares = state.modes.field_energy_shares(&dense.field_coefficients, |k, x| {
+            dense.field_matrices.iter().flatten().nth(k).unwrap() * x
+        });
         let sites = curve.loss_sites(&frf.spring_field_sizes());
         for s in 0..sites.len() {
-            let share: f64 = sites.coefficients(s).iter().map(|&j| shares[j]).sum();
+            let site = sites.site(s);
+            let share: f64 = site.springs.iter().map(|&j| shares[j]).sum::<f64>()
+                + site.fields.iter().map(|&k| field_shares[(i, k)]).sum::<f64>();
             let found = state.support_energy(i, s).unwrap();
             assert!(
                 (found - share).abs() <= 1e-12 * share.max(1.0),
@@ -263,7 +280,15 @@ fn first_bending(state: &ModalState, count: usize) -> Vec<usize> {
 #[test]
 fn loss_factor_sensitivities_match_central_differences() {
     let (frf, kappa) = deck_on_abutments();
-    let curve = lossy_curve();
+    let worst = check_spring_and_loss_sensitivities(&frf, &kappa, &lossy_curve());
+    eprintln!("loss factors: worst relative column error {worst:.1e}");
+}
+
+/// The central-difference checks of the test above for `curve` on `frf`
+/// (its own stiffness-field coefficients): the worst relative error.
+fn check_spring_and_loss_sensitivities(frf: &FrfModel, kappa: &[Vec<f64>], curve: &DampingCurve) -> f64 {
+    let kappa = kappa.to_vec();
+    let curve = curve.clone();
     let state = frf.modal_state(&kappa, &curve).unwrap();
     let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0, 63.0];
     let request = accelerances(&freqs);
@@ -296,7 +321,12 @@ fn loss_factor_sensitivities_match_central_differences() {
                     let st = at_kappa(d);
                     bending.iter().map(|&i| c64::new(st.zeta[i], 0.0)).collect()
                 },
-                1e-3 * kappa[s][j],
+                // A step of 1 %: with a loss factor on the deck's stiffness
+                // each ζ_i carries the field's energy share, whose membrane
+                // part cancels to ~1e-11 relative in the eigen-solve; at 0.1 %
+                // that noise alone reached 1e-5 (it falls with the step, so
+                // no term is missing; Richardson's O(h⁴) is ~1e-8 here).
+                1e-2 * kappa[s][j],
             );
             for (row, fd) in zeta_fd.iter().enumerate() {
                 let analytic = modal.damping_ratio[(row, flat)];
@@ -325,7 +355,7 @@ fn loss_factor_sensitivities_match_central_differences() {
         worst = worst.max(e);
         assert!(e < 1e-6, "∂H/∂η_{s}: relative error {e:e}");
     }
-    eprintln!("loss factors: worst relative column error {worst:.1e}");
+    worst
 }
 
 /// The deck's stiffness-field sensitivities with loss factors on the
@@ -335,10 +365,21 @@ fn loss_factor_sensitivities_match_central_differences() {
 /// per column as the springs'.
 #[test]
 fn loss_factors_follow_the_deck_stiffness_in_its_sensitivities() {
+    let worst = check_field_sensitivities(&lossy_curve());
+    eprintln!("loss factors and deck stiffness: worst relative error {worst:.1e}");
+}
+
+/// The deck with one stiffness field (six coefficients) on two abutments.
+fn deck_with_one_field(theta: Vec<f64>) -> (FrfModel, Vec<Vec<f64>>) {
     let knots = |n| KnotVector::uniform(1, n, 0.0, 1.0).unwrap();
-    let field = StiffnessField::new(knots(3), knots(2), vec![1.0; 6]).unwrap();
-    let (frf, kappa) = deck_with_fields(vec![field]);
-    let curve = lossy_curve();
+    deck_with_fields(vec![StiffnessField::new(knots(3), knots(2), theta).unwrap()])
+}
+
+/// The central-difference checks of the test above for `curve`: the worst
+/// relative error.
+fn check_field_sensitivities(curve: &DampingCurve) -> f64 {
+    let (frf, kappa) = deck_with_one_field(vec![1.0; 6]);
+    let curve = curve.clone();
     let theta = vec![vec![1.0, 0.9, 1.1, 0.8, 1.05, 1.2]];
     let state = frf.modal_state_with_fields(&kappa, &theta, &curve).unwrap();
     let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0, 63.0];
@@ -368,7 +409,49 @@ fn loss_factors_follow_the_deck_stiffness_in_its_sensitivities() {
             assert!(e < 1e-5, "∂ζ/∂θ_{k} mode {}: {found} vs {}", bending[row], fd.re);
         }
     }
-    eprintln!("loss factors and deck stiffness: worst relative error {worst:.1e}");
+    worst
+}
+
+/// A loss factor on the deck's own stiffness (a stiffness field's part,
+/// `K_s = Σ_k θ_k ∂K/∂θ_k`) beside one on the west abutment: the damping
+/// against the complex modes of `K + j (η_w K_w + η_d K_d)` (as the
+/// supports' above, 5 %), and every sensitivity against central
+/// differences (`∂H/∂κ`, `∂ζ/∂κ`, `∂H/∂η`, `∂H/∂θ`, `∂ζ/∂θ`, the
+/// tolerances above): with `∂K_s/∂θ_k ≠ 0` the field's own coefficient
+/// enters `∂ζ_i/∂θ_k` directly.
+#[test]
+fn a_loss_factor_on_the_decks_stiffness_damps_and_differentiates_exactly() {
+    let theta = vec![1.0, 0.9, 1.1, 0.8, 1.05, 1.2];
+    let (frf, kappa) = deck_with_one_field(theta);
+    let sites = LossSites::new(vec![
+        LossSite::springs((0..4).collect()),
+        LossSite::fields((0..6).collect()),
+    ])
+    .unwrap();
+    let with_sites = |curve: DampingCurve, eta: Vec<f64>| {
+        curve
+            .with_loss_factors(eta)
+            .unwrap()
+            .with_loss_sites(sites.clone())
+            .unwrap()
+    };
+    let flat = DampingCurve::new(1, vec![0.0, 0.0], 0.0, 100.0).unwrap();
+    let eta_springs = [[0.2; 4], [0.0; 4]].concat();
+    check_against_complex_modes(
+        &frf,
+        &kappa,
+        &with_sites(flat, vec![0.2, 0.1]),
+        (&eta_springs, &[0.1; 6]),
+    );
+    let curve = with_sites(
+        DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0).unwrap(),
+        vec![0.15, 0.08],
+    );
+    let springs = check_spring_and_loss_sensitivities(&frf, &kappa, &curve);
+    let fields = check_field_sensitivities(&curve);
+    eprintln!(
+        "a loss factor on the deck's stiffness: worst relative error {springs:.1e} (springs), {fields:.1e} (fields)"
+    );
 }
 
 /// The modal residue with loss factors among the parameters: its damping
@@ -553,7 +636,7 @@ fn a_loss_factor_on_some_components_acts_as_a_support_cut_in_two() {
     let sited = curve
         .with_loss_factors(vec![0.15, 0.08])
         .unwrap()
-        .with_loss_sites(LossSites::new(vec![vec![1, 2], vec![7]]).unwrap())
+        .with_loss_sites(LossSites::new(vec![LossSite::springs(vec![1, 2]), LossSite::springs(vec![7])]).unwrap())
         .unwrap();
     // West (x, ry), west's soil (y, z), east (x, y, z), east's soil (ry).
     let (cut_model, _) = deck_on_supports(

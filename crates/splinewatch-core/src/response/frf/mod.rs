@@ -20,6 +20,7 @@
 
 use crate::linalg::dense_rows;
 use crate::model::damping::DampingCurve;
+use crate::model::loss_sites::SiteOf;
 use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
@@ -39,6 +40,7 @@ mod direct;
 mod evaluate;
 mod sensors;
 mod support_loss;
+pub(crate) use support_loss::StiffnessChange;
 mod truncated;
 
 pub use sensors::{sensor_rows, sensor_rows_of, BeamSensor, Sensor, SensorPoint};
@@ -144,6 +146,8 @@ pub struct ModalState {
     loss: Option<support_loss::SupportLoss>,
     /// The spring coefficients the modes were solved at.
     kappa: Vec<Vec<f64>>,
+    /// The stiffness-field coefficients the modes were solved at.
+    theta: Vec<Vec<f64>>,
     /// `a_{s,i}`: `n_sensors × n_modes`.
     amplitudes: Mat<f64>,
     /// Mode shapes on the spring dofs `U`: `|U| × n_modes`.
@@ -456,7 +460,7 @@ impl FrfModel {
         match &self.source {
             Source::Dense(assembled) => {
                 let modes = assembled.modes_with_fields(kappa, theta)?;
-                Ok(self.modal_state_from(modes, kappa, damping))
+                Ok(self.modal_state_from(modes, (kappa, theta), damping))
             }
             Source::Truncated { .. } => Ok(self.modal_state_with_loads(kappa, theta, damping, &[])?.0),
         }
@@ -512,7 +516,7 @@ impl FrfModel {
         };
         self.check_loss_factors(damping)?;
         let shift = SparseModel::shift_for(*cutoff_hz);
-        let mut state = self.modal_state_from(modes, kappa, damping);
+        let mut state = self.modal_state_from(modes, (kappa, theta), damping);
         if let (Some(loss), Some(responses)) = (state.loss.as_mut(), at_springs) {
             loss.add_discarded(&state.modes, &state.phi_springs, &self.spring_dofs, &responses, shift);
         }
@@ -574,19 +578,24 @@ impl FrfModel {
         self.spring_blocks().iter().map(Vec::len).collect()
     }
 
-    /// For each spring coefficient (flat), the loss site of `damping` it is
-    /// in; `damping`'s loss factors, if any, must be one per site (by
-    /// default one per spring field) and its sites within the model.
-    fn loss_site_of(&self, damping: &DampingCurve) -> Result<Vec<Option<usize>>, FrfError> {
+    /// For each spring and stiffness-field coefficient (flat), the loss
+    /// site of `damping` it is in; `damping`'s loss factors, if any, must be
+    /// one per site (by default one per spring field) and its sites within
+    /// the model.
+    fn loss_site_of(&self, damping: &DampingCurve) -> Result<SiteOf, FrfError> {
         let sites = damping.loss_sites(&self.spring_field_sizes());
+        let counts = (self.spring_coefficient_count(), self.field_coefficient_count());
         let (found, expected) = (damping.loss_factors().len(), sites.len());
         if found == 0 {
-            return Ok(vec![None; self.spring_coefficient_count()]);
+            return Ok(SiteOf {
+                springs: vec![None; counts.0],
+                fields: vec![None; counts.1],
+            });
         }
         if found != expected {
             return Err(FrfError::LossFactorCount { found, expected });
         }
-        Ok(sites.site_of(self.spring_coefficient_count())?)
+        Ok(sites.site_of(counts.0, counts.1)?)
     }
 
     /// One loss factor per loss site, or none.
@@ -595,11 +604,16 @@ impl FrfModel {
     }
 
     /// Builds the modal state from modes already computed at spring
-    /// coefficients `kappa`. `damping`'s loss factors, if any, must be one
-    /// per loss site, within the model (the constructors that solve the
-    /// modes check it).
+    /// coefficients `kappa` and stiffness-field coefficients `theta`.
+    /// `damping`'s loss factors, if any, must be one per loss site, within
+    /// the model (the constructors that solve the modes check it).
     #[track_caller]
-    pub fn modal_state_from(&self, modes: Modes, kappa: &[Vec<f64>], damping: &DampingCurve) -> ModalState {
+    pub fn modal_state_from(
+        &self,
+        modes: Modes,
+        (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
+        damping: &DampingCurve,
+    ) -> ModalState {
         let nm = modes.len();
         let nz = damping.coefficients().len();
         let factors = damping.loss_factors();
@@ -609,7 +623,7 @@ impl FrfModel {
         let omega: Vec<f64> = modes.omega2.iter().map(|w2| w2.max(0.0).sqrt()).collect();
         let phi_springs = dense_rows(&modes.shapes, &self.spring_dofs);
         let loss = (!factors.is_empty())
-            .then(|| support_loss::SupportLoss::new(self, &modes, &phi_springs, kappa, (factors, site_of)));
+            .then(|| support_loss::SupportLoss::new(self, &modes, &phi_springs, (kappa, theta), (factors, site_of)));
         let mut zeta = vec![0.0; nm];
         let mut zeta_basis = Mat::<f64>::zeros(nm, nz + factors.len());
         let mut damping_rate_slope = vec![0.0; nm];
@@ -646,6 +660,7 @@ impl FrfModel {
             damping_rate_slope,
             loss,
             kappa: kappa.to_vec(),
+            theta: theta.to_vec(),
             amplitudes,
             phi_springs,
             omega,
@@ -656,7 +671,7 @@ impl FrfModel {
     /// `state`'s modes as a state of this model (the same structure with
     /// other sensor rows, [`Self::with_extra_rows`]) on `damping`.
     pub fn restate(&self, state: &ModalState, damping: &DampingCurve) -> ModalState {
-        self.modal_state_from(state.modes.clone(), &state.kappa, damping)
+        self.modal_state_from(state.modes.clone(), (&state.kappa, &state.theta), damping)
     }
 }
 

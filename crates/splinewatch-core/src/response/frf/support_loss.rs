@@ -28,6 +28,7 @@
 //!   are skipped as there.
 
 use super::{FrfModel, ModalState};
+use crate::model::loss_sites::SiteOf;
 use crate::solvers::modal::{ModeKind, Modes};
 use faer::Mat;
 
@@ -38,8 +39,8 @@ pub(super) struct SupportLoss {
     pub(super) energy: Mat<f64>,
     /// `η_s`.
     factors: Vec<f64>,
-    /// The loss site of each spring coefficient (flat), if any.
-    site_of: Vec<Option<usize>>,
+    /// The loss site of each spring and stiffness-field coefficient (flat), if any.
+    site_of: SiteOf,
     /// `Q_i = Σ_s η_s P_{i,s}` per mode.
     pub(super) weighted: Vec<f64>,
     /// `G = Φᵀ (Σ_s η_s K_s) Φ` over the state's modes (empty when every
@@ -64,14 +65,15 @@ struct Discarded {
 
 impl SupportLoss {
     /// The energies of `modes` (shapes on the spring dofs `phi_springs`)
-    /// at spring coefficients `kappa`, with loss factors `factors` on the
-    /// sites `site_of` gives each spring coefficient.
+    /// at spring coefficients `kappa` and stiffness-field coefficients
+    /// `theta`, with loss factors `factors` on the sites `site_of` gives
+    /// each coefficient.
     pub(super) fn new(
         model: &FrfModel,
         modes: &Modes,
         phi_springs: &Mat<f64>,
-        kappa: &[Vec<f64>],
-        (factors, site_of): (&[f64], Vec<Option<usize>>),
+        (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
+        (factors, site_of): (&[f64], SiteOf),
     ) -> Self {
         let nm = modes.len();
         let fields = model.spring_blocks();
@@ -84,7 +86,9 @@ impl SupportLoss {
         let mut flat = 0;
         for (s, blocks) in fields.iter().enumerate() {
             for (j, block) in blocks.iter().enumerate() {
-                let Some(site) = site_of[flat + j] else { continue };
+                let Some(site) = site_of.springs[flat + j] else {
+                    continue;
+                };
                 let pos = &positions[flat + j];
                 let shapes = Mat::from_fn(pos.len(), nm, |b, i| phi_springs[(pos[b], i)]);
                 let product = &block.values * &shapes;
@@ -103,6 +107,19 @@ impl SupportLoss {
                 }
             }
             flat += blocks.len();
+        }
+        // Stiffness-field sites: `P = θ_k Φᵀ (∂K/∂θ_k) Φ` over every dof
+        // (not on the spring dofs alone: no part in `hysteretic`).
+        for (k, &theta_k) in theta.iter().flatten().enumerate() {
+            let Some(site) = site_of.fields[k] else { continue };
+            let product = theta_k * (modes.shapes.transpose() * model.field_times(k, &modes.shapes));
+            for i in 0..nm {
+                energy[(i, site)] += product[(i, i)];
+            }
+            let eta = factors[site];
+            if lossy && eta > 0.0 {
+                coupling += eta * &product;
+            }
         }
         let mut weighted = vec![0.0; nm];
         for i in 0..nm {
@@ -204,7 +221,12 @@ impl SupportLoss {
 
     /// `η_{s(j)}` of spring coefficient `j` (flat; zero in no site).
     pub(super) fn factor_of(&self, j: usize) -> f64 {
-        self.site_of[j].map_or(0.0, |s| self.factors[s])
+        self.site_of.springs[j].map_or(0.0, |s| self.factors[s])
+    }
+
+    /// `η_{s(k)}` of stiffness-field coefficient `k` (flat; zero in no site).
+    fn field_factor_of(&self, k: usize) -> f64 {
+        self.site_of.fields[k].map_or(0.0, |s| self.factors[s])
     }
 }
 
@@ -258,21 +280,22 @@ impl FrfModel {
 }
 
 impl ModalState {
-    /// `∂ζ_i` with `λ_i` held for a stiffness change `∂K` that couples the
-    /// modes by `coupling(k) = C_{ki}` and is a spring coefficient's
-    /// (`None`: a stiffness field's, which leaves the supports alone):
-    /// the loss factors' share moving with the shape.
-    /// `spring` is the spring coefficient (flat) and `∂K φ_i` on the spring
-    /// dofs (`(index in U, value)`) for a spring coefficient.
+    /// `∂ζ_i` with `λ_i` held for a stiffness change `∂K` (`change`) that
+    /// couples the modes by `coupling(k) = C_{ki}`: the loss factors' share
+    /// moving with the shape, and with `K_s` when the coefficient is in a
+    /// loss site.
     pub(crate) fn support_zeta_slope(
         &self,
         i: usize,
-        spring: Option<(usize, &[(usize, f64)])>,
+        change: StiffnessChange<'_>,
         coupling: impl Fn(usize) -> f64,
     ) -> f64 {
         self.loss.as_ref().map_or(0.0, |l| {
-            let direct = spring.map_or(0.0, |(j, _)| l.factor_of(j) * coupling(i));
-            l.zeta_slope(&self.modes, i, direct, coupling, spring.map(|(_, b)| b))
+            let (eta, on_springs) = match change {
+                StiffnessChange::Spring(j, on_springs) => (l.factor_of(j), Some(on_springs)),
+                StiffnessChange::Field(k) => (l.field_factor_of(k), None),
+            };
+            l.zeta_slope(&self.modes, i, eta * coupling(i), coupling, on_springs)
         })
     }
 
@@ -285,4 +308,17 @@ impl ModalState {
         }
         (self.damping_rate_slope[i] - self.zeta[i] / omega) / (2.0 * omega)
     }
+}
+
+/// A stiffness change whose effect on the loss factors' share of `ζ_i` is
+/// asked ([`ModalState::support_zeta_slope`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum StiffnessChange<'a> {
+    /// Spring coefficient `j` (flat), with `∂K φ_i` on the spring dofs
+    /// (`(index in U, value)`: the discarded modes' part on a truncated
+    /// model).
+    Spring(usize, &'a [(usize, f64)]),
+    /// Stiffness-field coefficient `k` (flat); its discarded modes' part is
+    /// left out (it reaches beyond the spring dofs).
+    Field(usize),
 }
