@@ -718,3 +718,56 @@ fn a_loss_factor_on_some_components_acts_as_a_support_cut_in_two() {
     assert!(h < 1e-9, "H: relative error {h:e}");
     eprintln!("loss sites against the support cut in two: worst relative difference {worst:.1e}");
 }
+
+/// A loss factor on the deck's stiffness field on a truncated model (modes
+/// below 60 Hz, the field's part from its sparse operators): each kept
+/// mode's ζ_i equals the dense model's for the same mode (1e-8: the two
+/// eigen-solvers' agreement), and `∂H/∂η` of the field's site is exact
+/// against central differences of the truncated model's own evaluation
+/// (1e-6).
+#[test]
+fn a_loss_factor_on_the_decks_stiffness_holds_on_a_truncated_model() {
+    let knots = |n| KnotVector::uniform(1, n, 0.0, 1.0).unwrap();
+    let field = StiffnessField::new(knots(3), knots(2), vec![1.0, 0.9, 1.1, 0.8, 1.05, 1.2]).unwrap();
+    let (model, sensors) = deck_model(vec![field]);
+    let kappa = model.spring_coefficients();
+    let truncated = FrfModel::truncated(&model, &sensors, 60.0).unwrap();
+    let dense = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
+    let sites = LossSites::new(vec![
+        LossSite::springs((0..4).collect()),
+        LossSite::fields((0..6).collect()),
+    ])
+    .unwrap();
+    let curve = DampingCurve::new(2, vec![0.01, 0.03, 0.005, 0.02], 0.0, 120.0)
+        .unwrap()
+        .with_loss_factors(vec![0.15, 0.08])
+        .unwrap()
+        .with_loss_sites(sites)
+        .unwrap();
+    let (kept, all) = (
+        truncated.modal_state(&kappa, &curve).unwrap(),
+        dense.modal_state(&kappa, &curve).unwrap(),
+    );
+    // The bending modes below the cut-off (five), the same in both.
+    let bending = first_bending(&kept, 6);
+    assert!(bending.len() >= 4 && bending == first_bending(&all, bending.len()));
+    for &i in &bending {
+        let (found, expected) = (kept.zeta[i], all.zeta[i]);
+        assert!(
+            (found - expected).abs() <= 1e-8 * expected,
+            "ζ_{i}: {found} vs {expected}"
+        );
+    }
+    let freqs = [3.0, 7.7, 12.4, 19.0, 26.5, 41.0];
+    let request = accelerances(&freqs);
+    let eval = truncated.evaluate(&kept, request, true);
+    let nz = curve.coefficients().len();
+    let at = |d: f64| {
+        let lossy = curve.with_loss_factors(vec![0.15, 0.08 + d]).unwrap();
+        truncated
+            .evaluate(&truncated.modal_state(&kappa, &lossy).unwrap(), request, false)
+            .h
+    };
+    let e = column_error(&eval.dh_dgamma[nz + 1], &richardson(at, 1e-4));
+    assert!(e < 1e-6, "∂H/∂η of the field's site: relative error {e:e}");
+}
