@@ -514,8 +514,9 @@ fn srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator() {
 /// stds within 1e-3 relative (two formulas: splinewatch's projected
 /// Jacobian, scipy's whole one). SRIM finds no mode on these channels: said,
 /// and the fit's mode is the record's, marked `pole_residue` in the modes
-/// file and "fit" in the table; with the bridge's model it is drawn in the
-/// Rerun file (without a model, `--rerun-save` is refused before any work). A band above half the rate, or a segment
+/// file and "fit" in the table; it is drawn in the Rerun file, alone
+/// without a model and with the deck's views with the bridge's. A band
+/// above half the rate, or a segment
 /// that leaves one Welch average, with SRIM finding nothing either, is
 /// refused naming the key once.
 #[test]
@@ -571,7 +572,8 @@ fn identify_fits_the_transverse_mode_as_scipy_does() {
         assert_eq!(shape.len(), 3, "{name}: the outputs fitted");
         assert!(shape.iter().any(|s| s["re"] == 1.0 && s["im"] == 0.0), "{shape:?}");
     }
-    // A Rerun file needs the model's deck: refused before any work without one.
+    // Without a model the Rerun file holds the identification alone: here
+    // the fitted mode (SRIM found none), no deck.
     let rrd = dir.join("fitted.rrd");
     let o = splinewatch(&[
         "identify",
@@ -581,13 +583,17 @@ fn identify_fits_the_transverse_mode_as_scipy_does() {
         "--rerun-save",
         rrd.to_str().unwrap(),
     ]);
-    let stderr = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && o.stdout.is_empty() && !rrd.exists(), "{stderr}");
-    assert_eq!(stderr.matches("--rerun-save").count(), 1, "{stderr}");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
+    for entity in ["/oma/stabilisation/fitted", "/oma/fitted/1/frequency_hz"] {
+        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
+    }
     assert!(
-        stderr.contains("the config has no [model]") && !stderr.contains("samples"),
-        "{stderr}"
+        !summary.entities.iter().any(|e| e.starts_with("/deck")),
+        "{:?}",
+        summary.entities
     );
+    assert!(summary.footer);
     // With the bridge's model the fitted mode is drawn: its lines on the
     // stabilisation diagram, its f and ζ with ±1σ.
     let bridge = dir.join("bridge-fitted.toml");
