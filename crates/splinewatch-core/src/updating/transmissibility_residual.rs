@@ -289,7 +289,7 @@ impl<'a> TransmissibilityProblem<'a> {
                 &damping,
                 &self.model_pairs,
                 &self.frequencies,
-                Some(&springs),
+                Some((&springs, super::updates_fields(&self.parameters))),
             );
             self.parameters
                 .iter()

@@ -424,6 +424,19 @@ impl FrfModel {
         }
     }
 
+    /// `Xᵀ (∂K/∂θ_k) X` on the generalised dofs (a truncated model's over
+    /// the coefficient's own entries only).
+    #[track_caller]
+    pub(crate) fn field_quadratic(&self, k: usize, x: &Mat<f64>) -> Mat<f64> {
+        match &self.source {
+            Source::Dense(_) => x.transpose() * self.field_times(k, x),
+            Source::Truncated { model, .. } => {
+                let matrix = model.field_products.iter().flatten().nth(k);
+                matrix.expect("no such stiffness-field coefficient").quadratic(x)
+            }
+        }
+    }
+
     /// A unit load at each spring dof (sparse rows on the generalised
     /// dofs) when `damping` has loss factors, none otherwise: the loads
     /// whose responses give a truncated model the discarded modes' part of

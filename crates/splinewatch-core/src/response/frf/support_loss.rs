@@ -112,7 +112,7 @@ impl SupportLoss {
         // (not on the spring dofs alone: no part in `hysteretic`).
         for (k, &theta_k) in theta.iter().flatten().enumerate() {
             let Some(site) = site_of.fields[k] else { continue };
-            let product = theta_k * (modes.shapes.transpose() * model.field_times(k, &modes.shapes));
+            let product = theta_k * model.field_quadratic(k, &modes.shapes);
             for i in 0..nm {
                 energy[(i, site)] += product[(i, i)];
             }

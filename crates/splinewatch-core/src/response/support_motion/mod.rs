@@ -354,10 +354,11 @@ impl SupportMotion {
 
     /// [`Self::sensitivities`], the loads' modal state given, of the spring
     /// coefficients `springs` (flat
-    /// indices, [`FrfModel::flat_spring_index`]) only, every one when
-    /// `None`; the others' vectors are left empty (an update needs its
+    /// indices, [`FrfModel::flat_spring_index`]) only, and of the
+    /// stiffness-field coefficients when `fields`; every one when `None`;
+    /// the others' vectors are left empty (an update needs its
     /// parameters', and the influence change of each costs a sum over the
-    /// modes at every line and pair).
+    /// modes at every line and pair; a held field's, over every mode and dof).
     #[allow(clippy::too_many_arguments)] // as sensitivities, and the selection
     pub fn sensitivities_for(
         &self,
@@ -368,8 +369,10 @@ impl SupportMotion {
         damping: &DampingCurve,
         pairs: &[(usize, usize)],
         frequencies_hz: &[f64],
-        springs: Option<&[usize]>,
+        wanted: Option<(&[usize], bool)>,
     ) -> TransmissibilitySensitivities {
+        let springs = wanted.map(|(springs, _)| springs);
+        let fields = wanted.is_none_or(|(_, fields)| fields);
         let sensors = frf.sensor_count();
         let load_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(r, c)| (r, sensors + c)).collect();
         let request = FrfRequest {
@@ -396,7 +399,7 @@ impl SupportMotion {
             .map(|(flat, v)| if wanted(flat) { scaled(v) } else { Vec::new() })
             .collect();
         let dgamma: Vec<Vec<c64>> = evaluation.dh_dgamma.into_iter().map(scaled).collect();
-        let mut dtheta: Vec<Vec<c64>> = if frf.field_coefficient_count() > 0 {
+        let mut dtheta: Vec<Vec<c64>> = if fields && frf.field_coefficient_count() > 0 {
             loads
                 .field_frf_sensitivities(load_state, damping, request)
                 .into_iter()
