@@ -419,11 +419,21 @@ pub fn write_modes(report: &ModesReport, json: bool, out: &mut impl Write) -> Re
 mod tests {
     use crate::config::Config;
 
+    /// A line support along the deck-on-bent example's west end.
+    const WEST_ABUTMENT: &str = "
+[[model.supports]]
+name = \"west_abutment\"
+edge = { patch = \"span1\", edge = \"xi0\" }
+support = \"west\"
+stiffness = { y = 2e8, ry = 5e8 }
+update = false
+";
+
     /// Every support is listed where it acts, with its components.
     #[test]
     fn the_model_s_description_lists_every_support_where_it_acts() {
         let text = format!(
-            "{}{}",
+            "{}{}{}",
             include_str!("../../config/examples/deck-on-bent.toml"),
             r#"
 [[model.supports]]
@@ -432,14 +442,8 @@ at = [30.0, 4.0, -0.2]
 support = "west"
 stiffness = { z = 2e9, ry = 1e9 }
 update = false
-
-[[model.supports]]
-name = "west_abutment"
-edge = { patch = "span1", edge = "xi0" }
-support = "west"
-stiffness = { y = 2e8, ry = 5e8 }
-update = false
-"#
+"#,
+            WEST_ABUTMENT
         );
         let lines = super::describe_patches(&Config::from_toml(&text).unwrap().build_model().unwrap());
         let supports: Vec<&str> = lines
@@ -466,15 +470,8 @@ update = false
             "name = \"bent.south\"\n",
             "name = \"bent.south\"\nstiffness = { update = false }\nloss_factor = 0.1\n",
             1,
-        ) + r#"
-[[model.supports]]
-name = "west_abutment"
-edge = { patch = "span1", edge = "xi0" }
-support = "west"
-stiffness = { y = 2e8, ry = 5e8 }
-update = false
-loss_factor = { y = 0.3 }
-"#;
+        ) + WEST_ABUTMENT
+            + "loss_factor = { y = 0.3 }\n";
         let config = Config::from_toml(&text).unwrap();
         config.validate().unwrap();
         let (report, _) = super::compute_modes(&config, 12, None).unwrap();

@@ -4,7 +4,7 @@
 //! record (the model against the bridge, beside the "deck = nearest ground"
 //! baseline); ground inputs in `check-config`; bad input.
 
-use crate::common::{fresh_dir, painter_street_record as record, splinewatch};
+use crate::common::{assert_rrd_without_deck, fresh_dir, painter_street_record as record, splinewatch};
 use std::path::Path;
 
 const CONFIG: &str = "config/painter-street.toml";
@@ -584,16 +584,7 @@ fn identify_fits_the_transverse_mode_as_scipy_does() {
         rrd.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
-    for entity in ["/oma/stabilisation/fitted", "/oma/fitted/1/frequency_hz"] {
-        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
-    }
-    assert!(
-        !summary.entities.iter().any(|e| e.starts_with("/deck")),
-        "{:?}",
-        summary.entities
-    );
-    assert!(summary.footer);
+    assert_rrd_without_deck(&rrd, &["/oma/stabilisation/fitted", "/oma/fitted/1/frequency_hz"]);
     // With the bridge's model the fitted mode is drawn: its lines on the
     // stabilisation diagram, its f and ζ with ±1σ.
     let bridge = dir.join("bridge-fitted.toml");

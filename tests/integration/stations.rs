@@ -1,7 +1,7 @@
 //! Strong-motion stations' archives as the CESMD distributes them: the
 //! recorders of a station put on one time line, whatever their clocks.
 
-use super::common::{fresh_dir, painter_street_record, splinewatch};
+use super::common::{assert_rrd_without_deck, fresh_dir, painter_street_record, splinewatch};
 use super::import::{channels, root, write_naming_config, Channel};
 use splinewatch::io::wire::parse_timestamp;
 use std::path::Path;
@@ -184,22 +184,16 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
     // `--rerun-save` without a model: the identification alone (diagram,
     // singular values, SRIM's and the fitted modes), no deck, read back with
     // Rerun's own decoder.
-    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&identified_rrd).unwrap()).unwrap();
-    for entity in [
-        "/oma/stabilisation",
-        "/oma/singular_values",
-        "/oma/modes/1/frequency_hz",
-        "/oma/stabilisation/fitted",
-        "/oma/fitted/1/damping_percent",
-    ] {
-        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
-    }
-    assert!(
-        !summary.entities.iter().any(|e| e.starts_with("/deck")),
-        "{:?}",
-        summary.entities
+    assert_rrd_without_deck(
+        &identified_rrd,
+        &[
+            "/oma/stabilisation",
+            "/oma/singular_values",
+            "/oma/modes/1/frequency_hz",
+            "/oma/stabilisation/fitted",
+            "/oma/fitted/1/damping_percent",
+        ],
     );
-    assert!(summary.footer);
     // The starter's `[oma] resample_hz = 50`: the 100 Hz record identified
     // at half its rate (exactly its points over the same span).
     assert!(
@@ -318,16 +312,10 @@ fn station_writes_a_starter_config_that_identify_runs_with() {
         &records[1],
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(&rrd).unwrap()).unwrap();
-    for entity in ["/events/pga_ground", "/events/frequency/identified", "/events/verdict"] {
-        assert!(summary.entities.contains(entity), "{entity} in {:?}", summary.entities);
-    }
-    assert!(
-        !summary.entities.iter().any(|e| e.starts_with("/deck")),
-        "{:?}",
-        summary.entities
+    assert_rrd_without_deck(
+        &rrd,
+        &["/events/pga_ground", "/events/frequency/identified", "/events/verdict"],
     );
-    assert!(summary.footer);
     // `predict` without a model forecasts by the state's realization, with
     // the figures `events` gave the same record; without `--state` it says
     // what it needs.

@@ -220,3 +220,19 @@ pub fn json_lines(stdout: &[u8]) -> Vec<serde_json::Value> {
         .map(|l| serde_json::from_str(l).unwrap())
         .collect()
 }
+
+/// The Rerun file at `path`, read back with Rerun's own decoder: it has
+/// its footer, holds every one of `entities`, and no `/deck` entity (a
+/// recording of a config without a model).
+pub fn assert_rrd_without_deck(path: &std::path::Path, entities: &[&str]) {
+    let summary = splinewatch::outputs::rerun::inspect_rrd(&std::fs::read(path).unwrap()).unwrap();
+    for entity in entities {
+        assert!(summary.entities.contains(*entity), "{entity} in {:?}", summary.entities);
+    }
+    assert!(
+        !summary.entities.iter().any(|e| e.starts_with("/deck")),
+        "{:?}",
+        summary.entities
+    );
+    assert!(summary.footer, "{} has no footer", path.display());
+}
