@@ -397,6 +397,46 @@ mod tests {
         );
     }
 
+    /// Painter Street's whole bridge with `south` and `north` added to its
+    /// columns' entries and a held stiffness field (η = 0.02) on one slab.
+    fn columns(south: &str, north: &str) -> String {
+        let field = "\n[[model.stiffness_fields]]\nname = \"deck\"\npatch = \"top_slab.span1\"\nknots_xi = [0.0, 0.0, 1.0, 1.0]\ndegree_xi = 1\nknots_eta = [0.0, 1.0]\ndegree_eta = 0\nupdate = false\nloss_factor = 0.02\n";
+        let (s, n) = ("name = \"bent.south\"\n", "name = \"bent.north\"\n");
+        BRIDGE
+            .replacen(s, &format!("{s}{south}"), 1)
+            .replacen(n, &format!("{n}{north}"), 1)
+            + field
+    }
+
+    /// Two held columns tied share one loss factor (no stiffness
+    /// parameter); one held and one updated are refused by key.
+    #[test]
+    fn held_columns_tied_share_their_loss_factor() {
+        let held = columns(
+            "stiffness = { update = false }\nloss_factor = 0.05\n",
+            "stiffness = { update = false }\ntie = \"bent.south\"\n",
+        );
+        let config = Config::from_toml(&held).unwrap();
+        config.validate().unwrap();
+        let sites = config.loss_sites().unwrap();
+        let columns_site = sites.iter().find(|s| s.name == "bent.south").unwrap();
+        assert_eq!(columns_site.fields, vec![2, 3]);
+        assert!(config
+            .build_parameters()
+            .unwrap()
+            .iter()
+            .all(|p| !p.name.starts_with("bent.")));
+        let mixed = columns(
+            "stiffness = { update = false }\nloss_factor = 0.05\n",
+            "stiffness = {}\ntie = \"bent.south\"\n",
+        );
+        let message = Config::from_toml(&mixed).unwrap().validate().unwrap_err().to_string();
+        assert!(
+            message.contains("model.beams[1]") && message.contains("update both beams or neither"),
+            "{message}"
+        );
+    }
+
     /// A loss factor on a deck's stiffness field and on a bent's columns
     /// (their multipliers' part of the stiffness): each a site on its
     /// coefficients in the assembled models' order (the deck's fields, then
@@ -405,16 +445,6 @@ mod tests {
     /// refused by key.
     #[test]
     fn stiffness_fields_and_beams_take_a_loss_factor_on_their_part() {
-        let field = "\n[[model.stiffness_fields]]\nname = \"deck\"\npatch = \"top_slab.span1\"\nknots_xi = [0.0, 0.0, 1.0, 1.0]\ndegree_xi = 1\nknots_eta = [0.0, 1.0]\ndegree_eta = 0\nupdate = false\nloss_factor = 0.02\n";
-        let south = "name = \"bent.south\"\n";
-        let north = "name = \"bent.north\"\n";
-        let columns = |south_extra: &str, north_extra: &str| {
-            BRIDGE.replacen(south, &format!("{south}{south_extra}"), 1).replacen(
-                north,
-                &format!("{north}{north_extra}"),
-                1,
-            ) + field
-        };
         let text = columns(
             "stiffness = { bounds = [0.3, 1.5] }\nloss_factor = { value = 0.05, bounds = [0.0, 0.3] }\n",
             "stiffness = {}\ntie = \"bent.south\"\n",

@@ -32,8 +32,11 @@ impl BeamConfig {
                 "a tied beam takes the bounds of {:?}: remove its own",
                 leader.name
             ))
-        } else if !(own.update && lead.update) {
-            Some("both beams must be updated (update = true)".into())
+        } else if own.update != lead.update {
+            Some(format!(
+                "update both beams or neither, as {:?} (held ones tied share their loss factor)",
+                leader.name
+            ))
         } else if own.value != lead.value || own.scales != lead.scales {
             Some(format!(
                 "give the same `value` and `scales` as {:?} ({} of {:?})",

@@ -48,9 +48,10 @@ pub struct BeamConfig {
     pub stiffness: Option<BeamStiffnessConfig>,
     /// Another beam's name, just before this one in `[[model.beams]]` (or
     /// before beams tied to it): this one takes its `stiffness` parameter
-    /// (one cracked-section factor for every column of a bent). Both give
-    /// `stiffness` with the same `value` and `scales`; this one no `bounds`
-    /// or `loss_factor`.
+    /// (one cracked-section factor for every column of a bent) and its
+    /// `loss_factor`. Both give `stiffness` with the same `value` and
+    /// `scales`, both updated or both held (then they share the loss factor
+    /// alone); this one no `bounds` or `loss_factor`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tie: Option<String>,
     /// The loss factor η of the part of the member's stiffness `stiffness`
