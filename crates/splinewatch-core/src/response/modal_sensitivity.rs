@@ -26,7 +26,8 @@
 use crate::model::damping::DampingCurve;
 use crate::response::frf::{FrfModel, FrfRequest, ModalState, StiffnessChange};
 use crate::solvers::modal::ModeKind;
-use faer::{c64, Mat};
+use faer::linalg::matmul::matmul;
+use faer::{c64, Accum, Mat, Par};
 use std::f64::consts::PI;
 
 /// Derivatives of selected modes with respect to every spring coefficient
@@ -227,78 +228,142 @@ impl FrfModel {
         let omega: Vec<f64> = (0..nm).map(|i| state.modes.omega2[i].max(0.0).sqrt()).collect();
         let nk = sens.eigenvalue.ncols();
         let mut out = vec![vec![c64::new(0.0, 0.0); np * nf]; nk];
-        // ∂ω_i and ∂ζ_i = ζ'(f_i) ∂f_i of every mode for every coefficient.
-        let d_omega = Mat::from_fn(nm, nk, |i, k| {
-            if omega[i] > 0.0 {
-                sens.eigenvalue[(i, k)] / (2.0 * omega[i])
-            } else {
-                0.0
-            }
-        });
-        let slope: Vec<f64> = (0..nm)
-            .map(|i| match state.modes.kinds[i] {
-                // Rigid modes carry no damping (eq. 28 is not applied to them).
-                ModeKind::Rigid => 0.0,
-                _ => damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI),
+        let damping_terms = damping_terms(state, damping, &sens, &couplings, &omega);
+        let omega_lines: Vec<f64> = request.frequencies_hz.iter().map(|hz| 2.0 * PI * hz).collect();
+        // q_i(f), line-major (`f * nm + i`); `split` makes a modes × lines
+        // pair of real and imaginary parts.
+        let q: Vec<c64> = (0..nf * nm)
+            .map(|n| {
+                let (w, i) = (omega_lines[n / nm], n % nm);
+                c64::new(omega[i] * omega[i] - w * w, 2.0 * state.zeta[i] * omega[i] * w).inv()
             })
             .collect();
-        let support_slopes = Mat::from_fn(nm, nk, |i, k| {
-            state.support_zeta_slope(i, StiffnessChange::Field(k), |m| couplings[k].modes[(m, i)])
+        let split = |z: &[c64]| {
+            [
+                Mat::from_fn(nm, nf, |i, f| z[f * nm + i].re),
+                Mat::from_fn(nm, nf, |i, f| z[f * nm + i].im),
+            ]
+        };
+        let q_parts = split(&q);
+        let residual = state.residual();
+        let truncated = |k: usize| couplings[k].residual.as_ref().filter(|_| residual.is_some());
+        // The sums over the modes as real-by-complex products:
+        // `Σ_i ∂(a_r a_s)_i q_i` for every (coefficient, pair) at once, and
+        // per coefficient `Σ_i a_ri a_si q_i² (∂λ_i + 2j ω ∂(ζ_i ω_i))`.
+        // On a truncated model the kept–discarded couplings
+        // `−Σ_i q_i (a_ri (P_0 + γ P_1)_si + a_si (P_0 + γ P_1)_ri)` join the
+        // first sum: their `P_0` part directly, their `P_1` part as `γ · Σ_i`.
+        let d_amplitudes = Mat::from_fn(nk * np, nm, |row, i| {
+            let (k, (r, s)) = (row / np, request.pairs[row % np]);
+            let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
+            let direct = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
+            truncated(k).map_or(direct, |c| {
+                direct - ar * c.with_modes[0][(s, i)] - as_ * c.with_modes[0][(r, i)]
+            })
         });
-        // The frequency-independent factors of every (coefficient, pair),
-        // mode by mode: ∂(a_r a_s), ∂λ, the damping term's ζ∂ω + ω ζ' ∂ω,
-        // and a_r a_s (the loop over frequencies then reads them in order).
-        let mut terms = vec![[0.0; 4]; nk * np * nm];
-        for k in 0..nk {
+        let first = real_times_complex(&d_amplitudes, &q_parts);
+        let towards_residual = residual.map(|_| {
+            let p1 = Mat::from_fn(nk * np, nm, |row, i| {
+                let (k, (r, s)) = (row / np, request.pairs[row % np]);
+                truncated(k).map_or(0.0, |c| {
+                    state.amplitude(r, i) * c.with_modes[1][(s, i)] + state.amplitude(s, i) * c.with_modes[1][(r, i)]
+                })
+            });
+            real_times_complex(&p1, &q_parts)
+        });
+        let pair_amplitudes = Mat::from_fn(np, nm, |p, i| {
+            let (r, s) = request.pairs[p];
+            state.amplitude(r, i) * state.amplitude(s, i)
+        });
+        let second: Vec<[Mat<f64>; 2]> = (0..nk)
+            .map(|k| {
+                let v: Vec<c64> = (0..nf * nm)
+                    .map(|n| {
+                        let (f, i) = (n / nm, n % nm);
+                        q[n] * q[n] * c64::new(sens.eigenvalue[(i, k)], 2.0 * omega_lines[f] * damping_terms[(i, k)])
+                    })
+                    .collect();
+                real_times_complex(&pair_amplitudes, &split(&v))
+            })
+            .collect();
+        for (k, dh) in out.iter_mut().enumerate() {
             for (p, &(r, s)) in request.pairs.iter().enumerate() {
-                let row = &mut terms[(k * np + p) * nm..(k * np + p + 1) * nm];
-                for (i, term) in row.iter_mut().enumerate() {
-                    let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
-                    let da = sens.amplitude[i][(r, k)] * as_ + ar * sens.amplitude[i][(s, k)];
-                    let dw = d_omega[(i, k)];
-                    // ∂(ζ_i ω_i): the curve's and the supports' loss
-                    // factors' share (crate::model::damping), whose shape
-                    // part is `support_zeta_slope`.
-                    let support = 2.0 * state.support_zeta(i);
-                    let damping_term =
-                        (state.zeta[i] - support) * dw + omega[i] * slope[i] * dw + omega[i] * support_slopes[(i, k)];
-                    *term = [da, sens.eigenvalue[(i, k)], damping_term, ar * as_];
-                }
-            }
-        }
-        let mut q = vec![c64::new(0.0, 0.0); nm];
-        for (f, &hz) in request.frequencies_hz.iter().enumerate() {
-            let w = 2.0 * PI * hz;
-            let factor = request.quantity.factor(w);
-            for i in 0..nm {
-                q[i] = c64::new(omega[i] * omega[i] - w * w, 2.0 * state.zeta[i] * omega[i] * w).inv();
-            }
-            for (k, dh) in out.iter_mut().enumerate() {
-                for (p, &(r, s)) in request.pairs.iter().enumerate() {
-                    let mut sum = c64::new(0.0, 0.0);
-                    let row = &terms[(k * np + p) * nm..(k * np + p + 1) * nm];
-                    for (&q, &[da, d_lambda, damping_term, a_rs]) in q.iter().zip(row) {
-                        let d_denominator = c64::new(d_lambda, 2.0 * w * damping_term);
-                        sum += q * (c64::new(da, 0.0) - q * d_denominator * a_rs);
-                    }
-                    if let (Some(c), Some(residual)) = (&couplings[k].residual, state.residual()) {
+                for (f, &w) in omega_lines.iter().enumerate() {
+                    let (row, line) = (k * np + p, p * nf + f);
+                    let [first_re, first_im] = &first;
+                    let [second_re, second_im] = &second[k];
+                    let mut sum = c64::new(first_re[(row, f)], first_im[(row, f)])
+                        - c64::new(second_re[(p, f)], second_im[(p, f)]);
+                    if let (Some(c), Some(residual), Some([p1_re, p1_im])) = (truncated(k), residual, &towards_residual)
+                    {
                         let gamma = residual.expansion_factor(w);
-                        for i in 0..nm {
-                            let (ar, as_) = (state.amplitude(r, i), state.amplitude(s, i));
-                            // φ_iᵀ (∂K/∂θ) ρ_sensor(ω).
-                            let towards =
-                                |sensor: usize| gamma * c.with_modes[1][(sensor, i)] + c.with_modes[0][(sensor, i)];
-                            sum -= q[i] * (towards(s) * ar + towards(r) * as_);
-                        }
+                        sum -= gamma * c64::new(p1_re[(row, f)], p1_im[(row, f)]);
+                        // The discarded modes' own part.
                         let [s00, s01, s11] = &c.with_residual;
                         sum -= gamma * gamma * s11[(r, s)] + gamma * (s01[(r, s)] + s01[(s, r)]) + s00[(r, s)];
                     }
-                    dh[p * nf + f] = sum * factor;
+                    dh[line] = sum * request.quantity.factor(w);
                 }
             }
         }
         out
     }
+}
+
+/// `∂(ζ_i ω_i)/∂θ_k` of every mode for every coefficient (modes ×
+/// coefficients): `∂ω_i`, and `∂ζ_i = ζ'(f_i) ∂f_i` plus the supports'
+/// loss factors' share.
+fn damping_terms(
+    state: &ModalState,
+    damping: &DampingCurve,
+    sens: &ModalSensitivities,
+    couplings: &[FieldCouplings],
+    omega: &[f64],
+) -> Mat<f64> {
+    let (nm, nk) = (omega.len(), sens.eigenvalue.ncols());
+    // ∂ω_i and ∂ζ_i = ζ'(f_i) ∂f_i of every mode for every coefficient.
+    let d_omega = Mat::from_fn(nm, nk, |i, k| {
+        if omega[i] > 0.0 {
+            sens.eigenvalue[(i, k)] / (2.0 * omega[i])
+        } else {
+            0.0
+        }
+    });
+    let slope: Vec<f64> = (0..nm)
+        .map(|i| match state.modes.kinds[i] {
+            // Rigid modes carry no damping (eq. 28 is not applied to them).
+            ModeKind::Rigid => 0.0,
+            _ => damping.slope(omega[i] / (2.0 * PI)) / (2.0 * PI),
+        })
+        .collect();
+    let support_slopes = Mat::from_fn(nm, nk, |i, k| {
+        state.support_zeta_slope(i, StiffnessChange::Field(k), |m| couplings[k].modes[(m, i)])
+    });
+    // ∂(ζ_i ω_i): the curve's and the supports' loss factors' share
+    // (crate::model::damping), whose shape part is `support_zeta_slope`.
+    Mat::from_fn(nm, nk, |i, k| {
+        let support = 2.0 * state.support_zeta(i);
+        (state.zeta[i] - support) * d_omega[(i, k)]
+            + omega[i] * slope[i] * d_omega[(i, k)]
+            + omega[i] * support_slopes[(i, k)]
+    })
+}
+
+/// `real · (re + j im)` as its real and imaginary parts: two real products.
+fn real_times_complex(real: &Mat<f64>, [re, im]: &[Mat<f64>; 2]) -> [Mat<f64>; 2] {
+    let times = |part: &Mat<f64>| {
+        let mut product = Mat::zeros(real.nrows(), part.ncols());
+        matmul(
+            product.as_mut(),
+            Accum::Replace,
+            real.as_ref(),
+            part.as_ref(),
+            1.0,
+            Par::Seq,
+        );
+        product
+    };
+    [times(re), times(im)]
 }
 
 /// Adds to column `j` of `da` the modal expansion of `∂a_{·,i}`:
