@@ -243,12 +243,16 @@ const ACCEL_SERIES: &str = "points of accel data equally spaced at";
 /// Whether `line` holds `marker` (lower case), whatever the line's case
 /// (ASCII, without allocating: it runs on every line of a record).
 fn has(line: &str, marker: &str) -> bool {
-    let marker = marker.as_bytes();
-    marker.is_empty()
-        || line
-            .as_bytes()
-            .windows(marker.len())
-            .any(|w| w.eq_ignore_ascii_case(marker))
+    let (line, marker) = (line.as_bytes(), marker.as_bytes());
+    let Some(&first) = marker.first() else {
+        return true;
+    };
+    // Compare a window only where its first byte matches (data lines hold
+    // digits and signs: most never get that far).
+    line.len() >= marker.len()
+        && (0..=line.len() - marker.len()).any(|at| {
+            line[at].to_ascii_lowercase() == first && line[at..at + marker.len()].eq_ignore_ascii_case(marker)
+        })
 }
 
 /// One channel's section of a file.
