@@ -122,11 +122,8 @@ fn a_portal_frame_matches_opensees() {
     let worst = worst_relative_error(ours, &reference);
     eprintln!("portal frame: ours {ours:.4?}\n opensees {reference:.4?}\n worst {worst:.2e}");
     assert!(worst < 1e-8, "worst relative error {worst:.2e}");
-    let sparse = SparseModel::assemble(&model)
-        .unwrap()
-        .modes_below(&[], &[], 1.2 * reference[reference.len() - 1])
-        .unwrap();
-    for (a, b) in sparse.frequencies_hz().iter().zip(ours) {
+    let sparse = sparse_frequencies(&model, 1.2 * reference[reference.len() - 1]);
+    for (a, b) in sparse.iter().zip(ours) {
         assert!((a / b - 1.0).abs() < 1e-9, "sparse {a} dense {b}");
     }
     assert!(sparse.len() >= reference.len());
@@ -157,21 +154,25 @@ fn a_portal_on_footing_springs_matches_opensees() {
     let worst = worst_relative_error(ours, &reference);
     eprintln!("portal on footings: ours {ours:.4?}\n opensees {reference:.4?}\n worst {worst:.2e}");
     assert!(worst < 1e-8, "worst relative error {worst:.2e}");
-    let sparse_model = SparseModel::assemble(&model).unwrap();
-    let sparse = sparse_model
-        .modes_below(
-            &kappa,
-            &sparse_model.field_coefficients,
-            1.2 * reference[reference.len() - 1],
-        )
-        .unwrap();
-    for (a, b) in sparse.frequencies_hz().iter().zip(ours) {
+    let sparse = sparse_frequencies(&model, 1.2 * reference[reference.len() - 1]);
+    for (a, b) in sparse.iter().zip(ours) {
         assert!((a / b - 1.0).abs() < 1e-9, "sparse {a} dense {b}");
     }
     // The footings matter: the sway mode 10 % below the portal's on a fixed
     // and a pinned base.
     let (_, held) = frame("portal");
     assert!(reference[0] < 0.95 * held[0], "{} vs {}", reference[0], held[0]);
+}
+
+/// The sparse path's frequencies below `top` Hz, at the model's own spring
+/// and field coefficients.
+fn sparse_frequencies(model: &ShellModel, top: f64) -> Vec<f64> {
+    let sparse = SparseModel::assemble(model).unwrap();
+    let kappa = model.spring_coefficients();
+    sparse
+        .modes_below(&kappa, &sparse.field_coefficients, top)
+        .unwrap()
+        .frequencies_hz()
 }
 
 /// The fixture's deck on a bent: two slab patches meeting at the bent, its
@@ -272,11 +273,8 @@ fn deck_on_bent_case(name: &str, net: [usize; 2]) -> (ShellModel, Vec<f64>) {
 #[test]
 fn a_deck_on_a_bent_with_a_rigid_cap_matches_opensees() {
     let (model, reference) = deck_on_bent([12, 6]);
-    let sparse = SparseModel::assemble(&model)
-        .unwrap()
-        .modes_below(&[], &[], 1.2 * reference[reference.len() - 1])
-        .unwrap();
-    let ours = &sparse.frequencies_hz()[..reference.len()];
+    let sparse = sparse_frequencies(&model, 1.2 * reference[reference.len() - 1]);
+    let ours = &sparse[..reference.len()];
     let worst = worst_relative_error(ours, &reference);
     eprintln!("deck on bent: ours {ours:.4?}\n opensees {reference:.4?}\n worst {worst:.2e}");
     assert!(worst < 1e-2, "worst relative error {worst:.2e}");
@@ -301,19 +299,12 @@ fn a_deck_on_a_bent_with_a_rigid_cap_matches_opensees() {
 #[test]
 fn a_deck_on_integral_abutment_springs_matches_opensees() {
     let (model, reference) = deck_on_bent_case("deck_on_abutment_springs", [12, 6]);
-    let kappa = model.spring_coefficients();
-    let sparse_model = SparseModel::assemble(&model).unwrap();
-    let sparse = sparse_model
-        .modes_below(
-            &kappa,
-            &sparse_model.field_coefficients,
-            1.2 * reference[reference.len() - 1],
-        )
-        .unwrap();
-    let ours = &sparse.frequencies_hz()[..reference.len()];
+    let sparse = sparse_frequencies(&model, 1.2 * reference[reference.len() - 1]);
+    let ours = &sparse[..reference.len()];
     let worst = worst_relative_error(ours, &reference);
     eprintln!("deck on abutment springs: ours {ours:.4?}\n opensees {reference:.4?}\n worst {worst:.2e}");
     assert!(worst < 1e-2, "worst relative error {worst:.2e}");
+    let kappa = model.spring_coefficients();
     let dense = model.assemble().unwrap().modes_with(&kappa).unwrap().frequencies_hz();
     for (a, b) in ours.iter().zip(&dense) {
         assert!((a / b - 1.0).abs() < 1e-8, "sparse {a} dense {b}");
