@@ -58,9 +58,14 @@ impl Publisher {
             Encoding::Cbor => zenoh::bytes::Encoding::APPLICATION_CBOR,
             Encoding::Json => zenoh::bytes::Encoding::APPLICATION_JSON,
         };
+        // Blocking while the link is congested: zenoh's default for a put
+        // drops the message silently under congestion, which lost a message
+        // now and then when the daemon fell behind (the demo then waited
+        // out its drain limit, the message never taken).
         self.session
             .put(&key, wire::encode(block, self.encoding))
             .encoding(zenc)
+            .congestion_control(zenoh::qos::CongestionControl::Block)
             .wait()
             .map_err(|e| anyhow!("cannot publish on {key}: {e}"))
     }
