@@ -109,7 +109,7 @@ impl FrfModel {
         (0..self.field_coefficient_count())
             .map(|k| match everywhere {
                 None => FieldCouplings {
-                    modes: phi.transpose() * self.field_times(k, phi),
+                    modes: self.field_quadratic(k, phi),
                     residual: None,
                 },
                 Some([rho0, rho1]) => {
@@ -119,7 +119,7 @@ impl FrfModel {
                     basis.subcols_mut(0, nm).copy_from(phi);
                     basis.subcols_mut(nm, ns).copy_from(rho0);
                     basis.subcols_mut(nm + ns, ns).copy_from(rho1);
-                    let all = basis.transpose() * self.field_times(k, &basis);
+                    let all = self.field_quadratic(k, &basis);
                     let block = |row: usize, col: usize, rows: usize, cols: usize| {
                         all.submatrix(row, col, rows, cols).to_owned()
                     };
