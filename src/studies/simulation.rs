@@ -186,7 +186,10 @@ pub fn simulate(
     let mut temperature_rng = ChaCha8Rng::seed_from_u64(o.seed ^ 0x7e3a_0001);
     let update_blocks = ((scenario.update_seconds / o.block_seconds).round() as usize).max(1);
     let dt = 1.0 / (o.fs * o.oversample as f64);
-    let sensors = setup.model.sensor_count();
+    // The accelerations are formed for the sensors written only, not for
+    // the unmeasured sources' points after them (a traffic lane has 33):
+    // the outputs cost modes × sensors a sample.
+    let sensors = accel_sensors.iter().max().map_or(0, |&s| s + 1);
     let mut state = state_at(0.0)?;
     let mut sim = ModalSimulator::with_inputs(&state, sensors, &forcing.inputs, dt);
     let names: Vec<String> = config.sensors.iter().map(|s| s.name.clone()).collect();
