@@ -36,7 +36,7 @@ use crate::model::damping::DampingCurve;
 use crate::model::supports::SupportGroups;
 use crate::model::ShellModel;
 use crate::response::frf::{FrfModel, ModalState};
-use crate::response::support_motion::{GroundInput, SupportMotion};
+use crate::response::support_motion::{GroundInput, SensitivitySelection, SupportMotion};
 use faer::c64;
 
 /// How the model's transmissibilities make the measured values.
@@ -289,7 +289,10 @@ impl<'a> TransmissibilityProblem<'a> {
                 &damping,
                 &self.model_pairs,
                 &self.frequencies,
-                Some((&springs, super::updates_fields(&self.parameters))),
+                SensitivitySelection {
+                    springs: Some(&springs),
+                    fields: super::updates_fields(&self.parameters),
+                },
             );
             self.parameters
                 .iter()

@@ -74,6 +74,25 @@ pub struct SupportMotion {
     dofs: DofMap,
 }
 
+/// Which coefficients [`SupportMotion::sensitivities_for`] differentiates
+/// by.
+#[derive(Debug, Clone, Copy)]
+pub struct SensitivitySelection<'a> {
+    /// The spring coefficients (flat indices,
+    /// [`FrfModel::flat_spring_index`]); every one when `None`.
+    pub springs: Option<&'a [usize]>,
+    /// The stiffness fields' coefficients, all of them or none.
+    pub fields: bool,
+}
+
+impl SensitivitySelection<'_> {
+    /// Every spring and field coefficient.
+    pub const EVERY: Self = Self {
+        springs: None,
+        fields: true,
+    };
+}
+
 /// `∂T/∂p` of every `(sensor, input)` pair, pair-major as the FRFs.
 #[derive(Debug, Clone)]
 pub struct TransmissibilitySensitivities {
@@ -348,17 +367,15 @@ impl SupportMotion {
             damping,
             pairs,
             frequencies_hz,
-            None,
+            SensitivitySelection::EVERY,
         )
     }
 
-    /// [`Self::sensitivities`], the loads' modal state given, of the spring
-    /// coefficients `springs` (flat
-    /// indices, [`FrfModel::flat_spring_index`]) only, and of the
-    /// stiffness-field coefficients when `fields`; every one when `None`;
-    /// the others' vectors are left empty (an update needs its
-    /// parameters', and the influence change of each costs a sum over the
-    /// modes at every line and pair; a held field's, over every mode and dof).
+    /// [`Self::sensitivities`], the loads' modal state given, of the
+    /// coefficients `wanted` selects; the others' vectors are left empty
+    /// (an update needs its parameters', and the influence change of each
+    /// costs a sum over the modes at every line and pair; a held field's,
+    /// over every mode and dof).
     #[allow(clippy::too_many_arguments)] // as sensitivities, and the selection
     pub fn sensitivities_for(
         &self,
@@ -369,10 +386,9 @@ impl SupportMotion {
         damping: &DampingCurve,
         pairs: &[(usize, usize)],
         frequencies_hz: &[f64],
-        wanted: Option<(&[usize], bool)>,
+        wanted: SensitivitySelection<'_>,
     ) -> TransmissibilitySensitivities {
-        let springs = wanted.map(|(springs, _)| springs);
-        let fields = wanted.is_none_or(|(_, fields)| fields);
+        let SensitivitySelection { springs, fields } = wanted;
         let sensors = frf.sensor_count();
         let load_pairs: Vec<(usize, usize)> = pairs.iter().map(|&(r, c)| (r, sensors + c)).collect();
         let request = FrfRequest {
