@@ -22,9 +22,9 @@ def channel(event, number):
     return None if found is None else (np.asarray(found.accel.data, float), found.accel["time_step"])
 
 
-def h1_peak(path):
+def h1_peak(path, segment_seconds=8.0):
     """(peak of |H1| 3 -> 7 over 2-6 Hz in Hz, channel 3's peak in cm/s2, fs),
-    or None without channel 3 or 7."""
+    or None without channel 3 or 7; Welch segments of `segment_seconds`."""
     event = quakeio.read(str(path), exclusions=["*filter*"])
     base, top = channel(event, 3), channel(event, 7)
     if base is None or top is None:
@@ -32,7 +32,7 @@ def h1_peak(path):
     (x, dt), (y, _) = base, top
     n = min(len(x), len(y))
     fs = 1.0 / dt
-    segment = int(round(8.0 * fs))
+    segment = int(round(segment_seconds * fs))
     f, pxx = signal.welch(x[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
     _, pxy = signal.csd(x[:n], y[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
     h1 = pxy / pxx
