@@ -64,8 +64,7 @@ def main():
         mode = fitted[0] if fitted else None
         srim = [m for m in line.get("modes", []) if m.get("method") is None and mode is not None
                 and abs(m["frequency_hz"] - mode["frequency_hz"]) <= 0.05 * mode["frequency_hz"]]
-        peak, ground, _ = h1_peak(Path(args.records) / name)
-        long_peak, _, _ = h1_peak(Path(args.records) / name, segment_seconds=16.0)
+        (peak, long_peak), ground, _ = h1_peak(Path(args.records) / name, segment_seconds=(8.0, 16.0))
         gap = None if mode is None else (mode["frequency_hz"] - peak) / peak
         long_gap = None if mode is None else (mode["frequency_hz"] - long_peak) / long_peak
         rows.append((name, ground / 100.0, peak, mode, gap, len(srim), long_peak, long_gap))

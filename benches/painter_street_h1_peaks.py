@@ -24,7 +24,8 @@ def channel(event, number):
 
 def h1_peak(path, segment_seconds=8.0):
     """(peak of |H1| 3 -> 7 over 2-6 Hz in Hz, channel 3's peak in cm/s2, fs),
-    or None without channel 3 or 7; Welch segments of `segment_seconds`."""
+    or None without channel 3 or 7; Welch segments of `segment_seconds`, or
+    one peak per length when it is a tuple (the record read once)."""
     event = quakeio.read(str(path), exclusions=["*filter*"])
     base, top = channel(event, 3), channel(event, 7)
     if base is None or top is None:
@@ -32,12 +33,17 @@ def h1_peak(path, segment_seconds=8.0):
     (x, dt), (y, _) = base, top
     n = min(len(x), len(y))
     fs = 1.0 / dt
-    segment = int(round(segment_seconds * fs))
-    f, pxx = signal.welch(x[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
-    _, pxy = signal.csd(x[:n], y[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
-    h1 = pxy / pxx
-    band = (f >= 2.0) & (f <= 6.0)
-    return float(f[band][np.argmax(np.abs(h1[band]))]), float(np.abs(x).max()), fs
+
+    def peak(seconds):
+        segment = int(round(seconds * fs))
+        f, pxx = signal.welch(x[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
+        _, pxy = signal.csd(x[:n], y[:n], fs, window="hann", nperseg=segment, noverlap=segment // 2)
+        h1 = pxy / pxx
+        band = (f >= 2.0) & (f <= 6.0)
+        return float(f[band][np.argmax(np.abs(h1[band]))])
+
+    peaks = tuple(map(peak, segment_seconds)) if isinstance(segment_seconds, tuple) else peak(segment_seconds)
+    return peaks, float(np.abs(x).max()), fs
 
 
 def main():

@@ -284,9 +284,6 @@ fn a_deck_on_a_bent_with_a_rigid_cap_matches_opensees() {
     }
 }
 
-/// A free slab on a free column, tied by a rigid body: six rigid modes and
-/// no more. A wrong weight in the ties (a lever arm, a director rotation's
-/// sign) would strain the structure under a rigid motion and leave fewer.
 /// The same deck on integral abutments: both ends on line springs in five
 /// components (x, y, z, rx, ry per metre, each its own value; OpenSees:
 /// `zeroLength` elements at the edge nodes, each the per-metre stiffness
@@ -318,6 +315,9 @@ fn a_deck_on_integral_abutment_springs_matches_opensees() {
     );
 }
 
+/// A free slab on a free column, tied by a rigid body: six rigid modes and
+/// no more. A wrong weight in the ties (a lever arm, a director rotation's
+/// sign) would strain the structure under a rigid motion and leave fewer.
 #[test]
 fn a_rigid_body_keeps_the_six_rigid_motions_of_a_free_structure() {
     let (mut model, _) = deck_on_bent([6, 4]);

@@ -14,12 +14,15 @@ use splinewatch_core::response::simulate::{band_limit, ModalSimulator};
 use splinewatch_core::solvers::modal::ModeKind;
 
 const FS: f64 = 256.0;
+/// The paper's vertical accelerometers ([`sinello_sensors`]); the force
+/// points follow them as sensors `SENSORS..`.
+const SENSORS: usize = 12;
 const OVERSAMPLE: usize = 4;
 /// Unmeasured force points (x, y) in metres, away from the sensors.
 const FORCE_XY: [(f64, f64); 4] = [(2.0, 1.0), (7.5, 6.5), (13.0, 3.5), (10.0, 8.2)];
 
 /// The modal state of the model with the force points appended to the
-/// sensors (sensors 12–15).
+/// sensors (sensors `SENSORS..`).
 fn ambient_state() -> ModalState {
     let mut points = sinello_sensors();
     points.extend(FORCE_XY.iter().map(|&(x, y)| SensorPoint {
@@ -34,7 +37,7 @@ fn ambient_state() -> ModalState {
     model.modal_state(&true_kappa(), &damping).unwrap()
 }
 
-/// `seconds` of accelerations at the twelve sensors.
+/// `seconds` of accelerations at the `SENSORS` sensors.
 fn ambient_record(state: &ModalState, seconds: f64, seed: u64) -> Vec<Vec<f64>> {
     let n = (seconds * FS) as usize;
     let fine = n * OVERSAMPLE;
@@ -45,12 +48,12 @@ fn ambient_record(state: &ModalState, seconds: f64, seed: u64) -> Vec<Vec<f64>> 
             f
         })
         .collect();
-    // Accelerations at the twelve sensors only, not at the force points.
-    let inputs: Vec<usize> = (12..12 + FORCE_XY.len()).collect();
-    let mut sim = ModalSimulator::with_inputs(state, 12, &inputs, 1.0 / (FS * OVERSAMPLE as f64));
-    let mut acc = vec![0.0; 12];
+    // Accelerations at the sensors only, not at the force points.
+    let inputs: Vec<usize> = (SENSORS..SENSORS + FORCE_XY.len()).collect();
+    let mut sim = ModalSimulator::with_inputs(state, SENSORS, &inputs, 1.0 / (FS * OVERSAMPLE as f64));
+    let mut acc = vec![0.0; SENSORS];
     let mut f_now = vec![0.0; FORCE_XY.len()];
-    let mut out: Vec<Vec<f64>> = (0..12).map(|_| Vec::with_capacity(n)).collect();
+    let mut out: Vec<Vec<f64>> = (0..SENSORS).map(|_| Vec::with_capacity(n)).collect();
     for k in 0..fine {
         for (f, src) in f_now.iter_mut().zip(&forces) {
             *f = src[k];
@@ -84,7 +87,7 @@ fn exact_modes(state: &ModalState) -> Vec<(f64, Vec<f64>)> {
         .map(|i| {
             (
                 state.modes.frequency_hz(i),
-                (0..12).map(|s| state.amplitude(s, i)).collect(),
+                (0..SENSORS).map(|s| state.amplitude(s, i)).collect(),
             )
         })
         .collect()
