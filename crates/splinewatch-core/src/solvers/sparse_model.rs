@@ -8,7 +8,8 @@
 //! [`crate::solvers::dense_model::AssembledModel`] stays the dense reference for small
 //! models and the tests.
 
-use crate::linalg::bitwise_equal;
+mod blocks;
+
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
 use crate::model::patch::Patch;
@@ -18,10 +19,11 @@ use crate::model::springs::LowRankBlock;
 use crate::model::ShellModel;
 use crate::solvers::dense_model::ModelError;
 use crate::solvers::modal::Modes;
-use crate::solvers::partial_eigen::{PartialModes, PartialSettings, Responses, ShiftInvert};
+use crate::solvers::partial_eigen::{PartialSettings, Responses};
+use blocks::{decoupled_blocks, Block};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// A derivative matrix `∂K/∂p` on the reduced pattern: its non-zero entries
 /// only (a spring coefficient reaches a strip of the deck).
@@ -98,132 +100,6 @@ pub struct SparseModel {
     blocks: Vec<Block>,
 }
 
-/// A set of free coordinates no matrix of the model couples to the others
-/// (a flat deck on normal springs: its in-plane and its out-of-plane dofs):
-/// its eigenpairs are the pencil's, found on a factor of its own size (the
-/// sparse counterpart of the dense `ModalSolver`'s blocks).
-#[derive(Debug, Clone)]
-struct Block {
-    /// Free coordinates, ascending.
-    dofs: Vec<usize>,
-    pattern: Arc<Pattern>,
-    /// Per entry of `pattern`, the position of the same entry in the model's.
-    positions: Vec<usize>,
-    eigen: ShiftInvert,
-    /// The last solve's stiffness values, settings and modes.
-    last: LastSolve,
-}
-
-/// A block's last partial solve: a block no changed parameter reaches (a
-/// flat deck's in-plane dofs under vertical springs) has the same
-/// stiffness at every evaluation of an update, so its modes are taken
-/// from here instead of solved again. Exact: the inputs are compared bit
-/// for bit, and the same inputs give the same modes.
-#[derive(Debug, Default)]
-struct LastSolve(Mutex<Option<Solved>>);
-
-/// A block's solve: its inputs (stiffness values, settings, load columns)
-/// and outputs (modes, static responses).
-#[derive(Debug)]
-struct Solved {
-    stiffness: Vec<f64>,
-    settings: PartialSettings,
-    loads: Option<faer::Mat<f64>>,
-    modes: PartialModes,
-    responses: Option<Responses>,
-}
-
-impl Clone for LastSolve {
-    fn clone(&self) -> Self {
-        Self::default()
-    }
-}
-
-impl Block {
-    fn restrict(&self, m: &SparseSymmetric) -> SparseSymmetric {
-        m.restrict(&self.pattern, &self.positions)
-    }
-
-    /// The block's modes for the restricted `k`, `m` (the model's mass)
-    /// and, for `loads`, the static responses at the solve's shift.
-    fn solve(
-        &self,
-        k: &SparseSymmetric,
-        m: &SparseSymmetric,
-        settings: &PartialSettings,
-        loads: Option<&faer::Mat<f64>>,
-    ) -> Result<(PartialModes, Option<Responses>), ModelError> {
-        let same_loads = |a: Option<&faer::Mat<f64>>, b: Option<&faer::Mat<f64>>| match (a, b) {
-            (None, None) => true,
-            (Some(a), Some(b)) => {
-                a.ncols() == b.ncols() && (0..a.ncols()).all(|c| bitwise_equal(a.col_as_slice(c), b.col_as_slice(c)))
-            }
-            _ => false,
-        };
-        let mut last = self.last.0.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
-        if let Some(solved) = last.as_ref() {
-            if solved.settings == *settings
-                && bitwise_equal(&solved.stiffness, k.values())
-                && same_loads(solved.loads.as_ref(), loads)
-            {
-                return Ok((solved.modes.clone(), solved.responses.clone()));
-            }
-        }
-        let (modes, responses) = self
-            .eigen
-            .solve_with_responses(k, m, settings, 0, loads)
-            .map_err(ModelError::PartialEigen)?;
-        *last = Some(Solved {
-            stiffness: k.values().to_vec(),
-            settings: *settings,
-            loads: loads.cloned(),
-            modes: modes.clone(),
-            responses: responses.clone(),
-        });
-        Ok((modes, responses))
-    }
-}
-
-/// The connected components of the coupling graph of the free coordinates
-/// (an entry couples when any of the model's matrices is non-zero there).
-fn decoupled_blocks(pattern: &Arc<Pattern>, coupled: &[bool]) -> Result<Vec<Block>, ModelError> {
-    let n = pattern.dim();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn root(parent: &mut [usize], mut i: usize) -> usize {
-        while parent[i] != i {
-            parent[i] = parent[parent[i]];
-            i = parent[i];
-        }
-        i
-    }
-    for c in 0..n {
-        for e in pattern.col_ptr()[c]..pattern.col_ptr()[c + 1] {
-            if coupled[e] {
-                let (a, b) = (root(&mut parent, c), root(&mut parent, pattern.row_idx()[e]));
-                parent[a.max(b)] = a.min(b);
-            }
-        }
-    }
-    let mut components: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-    for d in 0..n {
-        components.entry(root(&mut parent, d)).or_default().push(d);
-    }
-    components
-        .into_values()
-        .map(|dofs| {
-            let (sub, positions) = pattern.restricted(&dofs).map_err(sparse_error)?;
-            let sub = Arc::new(sub);
-            Ok(Block {
-                eigen: ShiftInvert::new(&sub).map_err(ModelError::PartialEigen)?,
-                last: LastSolve::default(),
-                dofs,
-                pattern: sub,
-                positions,
-            })
-        })
-        .collect()
-}
-
 /// Per stiffness field and coefficient, `Tᵀ ∂K/∂θ_k T` on `pattern` and
 /// `∂K/∂θ_k`'s non-zeros on the generalised dofs (`full`).
 #[allow(
@@ -278,7 +154,7 @@ fn field_matrices(
     Ok((terms, products))
 }
 
-fn sparse_error(e: SparseError) -> ModelError {
+pub(super) fn sparse_error(e: SparseError) -> ModelError {
     ModelError::Shell(shell::ShellError::Sparse(e))
 }
 
@@ -717,63 +593,4 @@ fn check_counts(terms: &[Vec<SparseTerm>], given: &[Vec<f64>], springs: bool) ->
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::knots::KnotVector;
-    use crate::model::material::OrthotropicMaterial;
-    use crate::model::shell::Shell;
-    use crate::model::springs::{Face, SpringDirection, SpringField};
-
-    /// A plate on two B-spline spring fields: the
-    /// sparse model's K(κ) equals the dense one's reduced (1e-12), and its
-    /// modes below 60 Hz the dense solver's (ω² 1e-9, every one found).
-    #[test]
-    fn the_sparse_model_matches_the_dense_one() {
-        let shell = Shell::rectangular_plate(20.0, 8.0, 0.5, [3, 3], [12, 6]).unwrap();
-        let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
-        // The paper's supports: vertical springs on strips at both ends,
-        // quadratic across the width (no rigid constraint: the in-plane
-        // rigid modes stay, three zero eigenvalues).
-        let spring = |start: f64, end: f64, k: f64| {
-            SpringField::new(
-                KnotVector::new(vec![start, end], 0).unwrap(),
-                KnotVector::new(vec![0.0, 0.0, 0.0, 0.5, 1.0, 1.0, 1.0], 2).unwrap(),
-                vec![k, 2.0 * k, 1.5 * k, 0.8 * k],
-                SpringDirection::fixed([0.0, 0.0, 1.0]).unwrap(),
-                Face::Bottom,
-            )
-            .unwrap()
-        };
-        let model = ShellModel {
-            springs: vec![spring(0.0, 0.05, 1e9), spring(0.95, 1.0, 3e9)],
-            stiffness_fields: Vec::new(),
-            member_stiffness: Vec::new(),
-            constraints: Vec::new(),
-            ..ShellModel::new(shell, material)
-        };
-        let dense = model.assemble().unwrap();
-        let sparse = SparseModel::assemble(&model).unwrap();
-        let kappa = vec![vec![1.2e9, 0.7e9, 2.0e9, 1.0e9], vec![3.0e9, 1.0e9, 0.5e9, 2.5e9]];
-        let kd = dense.stiffness_with(&kappa).unwrap();
-        let ks = sparse.stiffness_with_fields(&kappa, &[]).unwrap().to_dense();
-        let top = (0..kd.nrows()).map(|i| kd[(i, i)].abs()).fold(0.0, f64::max);
-        for i in 0..kd.nrows() {
-            for j in 0..kd.ncols() {
-                assert!((ks[(i, j)] - kd[(i, j)]).abs() <= 1e-12 * top, "({i}, {j})");
-            }
-        }
-        let reference = dense.modes_with(&kappa).unwrap();
-        let found = sparse.modes_below(&kappa, &[], 60.0).unwrap();
-        let expected = reference.frequencies_hz().iter().filter(|&&f| f <= 60.0).count();
-        assert_eq!(found.len(), expected);
-        for i in 0..expected {
-            let (a, b) = (found.omega2[i], reference.omega2[i]);
-            if b < 1e-6 * reference.omega2[expected - 1] {
-                assert!(a.abs() < 1e-6 * reference.omega2[expected - 1], "rigid mode {i}: {a}");
-                continue;
-            }
-            assert!((a - b).abs() <= 1e-9 * b, "mode {i}: {a} vs {b}");
-            assert_eq!(found.kinds[i], reference.kinds[i], "mode {i}");
-        }
-    }
-}
+mod tests;
