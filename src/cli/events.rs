@@ -14,13 +14,14 @@
 
 use crate::config::{load_config, Config, EventAmplitude, GroundInputPlan};
 use crate::io::console::{errln, outln};
+use crate::io::monitoring_json::StatusMessage;
 use crate::io::wire::format_timestamp;
 use crate::outputs::notify::Notifier;
 use crate::outputs::rerun::events::{EventLog, EventTimeline};
 use crate::outputs::results::ResultsWriter;
 use crate::service::events::burst::split;
 use crate::service::events::{
-    forecast_medians, identify, load, log_rerun, messages, process_identified, status_message, Chain, EventLine, Loaded,
+    emit, forecast_medians, identify, load, log_rerun, process_identified, Chain, EventLine, EventSink, Loaded,
 };
 use crate::service::records::read_records;
 use anyhow::{bail, Context, Result};
@@ -82,13 +83,16 @@ pub fn events(a: EventsArgs) -> Result<()> {
     let unreadable = loaded.iter().filter(|l| l.unreadable()).count();
     // In time order; events that could not be read keep their place at the end.
     loaded.sort_by_key(|l| l.start_ns().unwrap_or(i128::MAX));
-    let mut writer = a
-        .out
-        .as_deref()
-        .map(|p| ResultsWriter::create_for(p, &cfg))
-        .transpose()?;
-    let mut notifier = Notifier::for_config(&cfg, None).context("starting the notifier")?;
-    let mut rerun = a.rerun_save.as_ref().map(|path| open_rerun(&cfg, path)).transpose()?;
+    let mut outputs = CommandOutputs {
+        writer: a
+            .out
+            .as_deref()
+            .map(|p| ResultsWriter::create_for(p, &cfg))
+            .transpose()?,
+        notifier: Notifier::for_config(&cfg, None).context("starting the notifier")?,
+        rerun: a.rerun_save.as_ref().map(|path| open_rerun(&cfg, path)).transpose()?,
+        json: a.json,
+    };
     if !a.json {
         outln!("event\tstart\tpga_ground\tpeak_deck\tmodes\tmodel_mode_hz\tforecast_nrmse\tbaseline_nrmse\tverdict");
     }
@@ -115,36 +119,12 @@ pub fn events(a: EventsArgs) -> Result<()> {
         for l in loaded {
             let identified = || identified.recv().unwrap_or_else(|_| identify(cfg, l));
             let line = process_identified(cfg, l, identified, &mut chain);
-            let (time, bodies) = messages(&line)?;
-            for (topic, json) in bodies {
-                if let Some(w) = writer.as_mut() {
-                    w.write_json(topic, time, &json)?;
-                }
-                if let Some(n) = notifier.as_mut() {
-                    n.record(topic, &json);
-                }
-            }
-            if let (Some(n), Some(v)) = (notifier.as_mut(), &line.verdict) {
-                let status = status_message(&line, v);
-                n.observe(&status, &serde_json::to_vec(&status)?);
-            }
-            if let Some(r) = rerun.as_mut() {
-                log_rerun(r.as_mut(), &line, cfg.events().amplitude)?;
-            }
-            print_line(&line, a.json)?;
+            emit(&line, cfg.events().amplitude, &mut outputs)?;
             lines.push(line);
         }
         Ok(())
     })?;
-    if let Some(r) = rerun {
-        r.close()?;
-    }
-    if let Some(n) = notifier.as_mut() {
-        n.finish();
-    }
-    if let Some(w) = writer {
-        w.finish()?;
-    }
+    outputs.finish()?;
     if let Some(p) = &a.state {
         chain.save(p)?;
     }
@@ -162,6 +142,61 @@ pub fn events(a: EventsArgs) -> Result<()> {
         super::events_plot::frequency_vs_amplitude(&mode_points(&lines, amplitude), band, amplitude, dir)?;
     }
     Ok(())
+}
+
+/// Where `events` sends each event: `--out`'s results file, the owner's
+/// notifier, `--rerun-save`'s recording and the terminal.
+struct CommandOutputs {
+    writer: Option<ResultsWriter<std::io::BufWriter<std::fs::File>>>,
+    notifier: Option<Notifier>,
+    rerun: Option<Box<dyn EventLog>>,
+    json: bool,
+}
+
+impl EventSink for CommandOutputs {
+    fn message(&mut self, topic: &'static str, time_ns: i128, json: Vec<u8>) -> Result<()> {
+        if let Some(w) = self.writer.as_mut() {
+            w.write_json(topic, time_ns, &json)?;
+        }
+        if let Some(n) = self.notifier.as_mut() {
+            n.record(topic, &json);
+        }
+        Ok(())
+    }
+
+    fn status(&mut self, status: &StatusMessage, json: &[u8]) -> Result<()> {
+        if let Some(n) = self.notifier.as_mut() {
+            n.observe(status, json);
+        }
+        Ok(())
+    }
+
+    fn rerun(&mut self, line: &EventLine, kind: EventAmplitude) -> Result<()> {
+        match self.rerun.as_mut() {
+            Some(r) => log_rerun(r.as_mut(), line, kind),
+            None => Ok(()),
+        }
+    }
+
+    fn line(&mut self, line: &EventLine) -> Result<()> {
+        print_line(line, self.json)
+    }
+}
+
+impl CommandOutputs {
+    /// Closes the recording, the notifier and the results file, in that order.
+    fn finish(mut self) -> Result<()> {
+        if let Some(r) = self.rerun {
+            r.close()?;
+        }
+        if let Some(n) = self.notifier.as_mut() {
+            n.finish();
+        }
+        if let Some(w) = self.writer {
+            w.finish()?;
+        }
+        Ok(())
+    }
 }
 
 /// The Rerun recording `--rerun-save` writes: the whole stream with a

@@ -6,7 +6,7 @@
 
 use super::modes_json::ModeEntry;
 use super::monitoring_json::{AlarmMessage, StatusMessage};
-use super::results_topics::{Provenance, EVENT_TOPICS, MONITORING_TOPICS, PROVENANCE_METADATA, TOPICS};
+use super::results_topics::{Provenance, EVENT_SUMMARY, EVENT_TOPICS, MONITORING_TOPICS, PROVENANCE_METADATA, TOPICS};
 use serde::Deserialize;
 use splinewatch_core::updating::ParameterEstimate;
 use std::collections::BTreeSet;
@@ -177,7 +177,7 @@ impl ResultsContents {
     /// reads; others are ignored).
     pub fn add(&mut self, suffix: &str, data: &[u8]) -> Result<(), serde_json::Error> {
         match suffix {
-            "events/summary" => self.events.push(serde_json::from_slice(data)?),
+            EVENT_SUMMARY => self.events.push(serde_json::from_slice(data)?),
             "monitoring/status" => self.statuses.push(serde_json::from_slice(data)?),
             "monitoring/alarm" => self.alarms.push(serde_json::from_slice(data)?),
             "updating/parameters" => self.updates.push(serde_json::from_slice(data)?),
@@ -192,7 +192,7 @@ impl ResultsContents {
     pub fn reads(suffix: &str) -> bool {
         matches!(
             suffix,
-            "events/summary"
+            EVENT_SUMMARY
                 | "monitoring/status"
                 | "monitoring/alarm"
                 | "updating/parameters"

@@ -55,16 +55,20 @@ pub const MONITORING_TOPICS: [(&str, &str); 2] = [
     ),
 ];
 
+/// An event's summary: its `events --json` line, one per event.
+pub const EVENT_SUMMARY: &str = "events/summary";
+/// An event's verdict, one per judged event.
+pub const EVENT_VERDICT: &str = "events/verdict";
+
 /// Topics of `splinewatch events` (registered when first written, as the
-/// monitoring ones): one `events/summary` per event (the `events --json`
-/// line) and one `events/verdict` per judged event.
+/// monitoring ones): [`EVENT_SUMMARY`] and [`EVENT_VERDICT`].
 pub const EVENT_TOPICS: [(&str, &str); 2] = [
     (
-        "events/summary",
+        EVENT_SUMMARY,
         r#"{"type":"object","required":["event","start","pga_ground","peak_deck","modes","parameters","forecast","verdict","skipped"],"properties":{"event":{"type":"string"},"number":{"type":"integer","minimum":0},"start":{"type":["string","null"],"format":"date-time"},"pga_ground":{"type":["number","null"]},"peak_deck":{"type":["number","null"]},"rms_deck":{"type":["number","null"]},"modes":{"type":"array","items":{"type":"object","properties":{"frequency_hz":{"type":"number"},"damping_ratio":{"type":"number"},"frequency_std_hz":{"type":["number","null"]},"damping_std":{"type":["number","null"]},"shape":{"type":"array"}}}},"parameters":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"},"std":{"type":["number","null"]},"lower":{"type":"number"},"upper":{"type":"number"}}}},"forecast":{"type":["object","null"]},"forecast_model":{"type":"array","items":{"type":"object","properties":{"name":{"type":"string"},"value":{"type":"number"}}}},"forecast_channels":{"type":"array","items":{"type":"string"}},"verdict":{"type":["object","null"]},"skipped":{"type":["string","null"]},"update":{"type":["object","null"],"properties":{"model_mode_hz":{"type":["number","null"]},"model_mode_std_hz":{"type":["number","null"]},"relative_residual":{"type":"number"},"iterations":{"type":"integer"},"converged":{"type":"boolean"},"stop_reason":{"type":"string"},"evaluations":{"type":"integer"},"relative_offset":{"type":["number","null"]},"combined_inputs":{"type":"array","items":{"type":"string"}},"residues":{"type":"string","enum":["frf","modes","both"]},"paired_modes":{"type":"array","items":{"type":"object","properties":{"identified_hz":{"type":"number"},"model_hz":{"type":"number"},"mac":{"type":"number"}}}}}},"notes":{"type":"array","items":{"type":"string"}}}}"#,
     ),
     (
-        "events/verdict",
+        EVENT_VERDICT,
         r#"{"type":"object","required":["state","outside","bands"],"properties":{"state":{"type":"string","enum":["insufficient history","normal","alarm"]},"outside":{"type":"array","items":{"type":"string"}},"bands":{"type":"array","items":{"type":"object","properties":{"feature":{"type":"string"},"value":{"type":["number","null"]},"band":{"type":["object","null"],"properties":{"predicted":{"type":"number"},"lower":{"type":"number"},"upper":{"type":"number"},"events":{"type":"integer"}}}}}}}}"#,
     ),
 ];

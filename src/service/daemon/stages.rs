@@ -518,51 +518,15 @@ impl Daemon {
     /// An event's `events/summary` and `events/verdict` (results file and
     /// zenoh), the owner's notification, Rerun, the log and the counters.
     fn report_event(&mut self, line: crate::service::events::EventLine, link: &ZenohLink) {
-        use crate::service::events::{log_rerun, messages, status_message};
         let health = self.pipeline.health_mut();
         if line.skipped.is_some() {
             health.events_skipped += 1;
         } else {
             health.events_processed += 1;
         }
-        match messages(&line) {
-            Ok((time, bodies)) => {
-                for (topic, json) in bodies {
-                    self.send_json(link, topic, time, json);
-                }
-                self.last_time = self.last_time.max(time);
-            }
-            Err(e) => {
-                tracing::error!(message = "cannot serialise an event", event = %line.event, error = %format!("{e:#}"))
-            }
-        }
-        self.results.flush();
-        if let (Some(n), Some(v)) = (self.notifier.as_mut(), &line.verdict) {
-            let status = status_message(&line, v);
-            if let Ok(json) = serde_json::to_vec(&status) {
-                n.observe(&status, &json);
-            }
-        }
-        if let Some(v) = self.viewer.as_mut() {
-            count_output_error(
-                log_rerun(
-                    v,
-                    &line,
-                    self.events.as_ref().map(EventWorker::amplitude).unwrap_or_default(),
-                ),
-                &mut self.pipeline.health_mut().rerun_errors,
-                100,
-                "Rerun",
-            );
-        }
-        match (&line.skipped, &line.verdict) {
-            (Some(reason), _) => tracing::warn!(message = "event skipped", event = %line.event, reason = %reason),
-            (None, Some(v)) if v.state == "alarm" => {
-                tracing::error!(message = "ALARM: the event changed the structure", event = %line.event, outside = ?v.outside)
-            }
-            (None, v) => {
-                tracing::info!(message = "event judged", event = %line.event, pga_ground = ?line.pga_ground, modes = line.modes.len(), verdict = v.as_ref().map_or("-", |v| v.state.as_str()))
-            }
+        let kind = self.events.as_ref().map(EventWorker::amplitude).unwrap_or_default();
+        if let Err(e) = crate::service::events::emit(&line, kind, &mut EventReport { daemon: self, link }) {
+            tracing::error!(message = "cannot serialise an event", event = %line.event, error = %format!("{e:#}"));
         }
     }
 
@@ -636,5 +600,55 @@ fn count_output_error(result: Result<()>, counter: &mut u64, every: u64, what: &
         if *counter % every == 1 {
             tracing::warn!(message = "output failed; the daemon goes on", output = what, errors = *counter, error = %format!("{e:#}"));
         }
+    }
+}
+
+/// Where the daemon sends an event ([`crate::service::events::emit`]): the
+/// results file and zenoh, the owner's notifier, the viewer, and the log.
+/// Nothing here stops the daemon: an output that fails is counted.
+struct EventReport<'a> {
+    daemon: &'a mut Daemon,
+    link: &'a ZenohLink,
+}
+
+impl crate::service::events::EventSink for EventReport<'_> {
+    fn message(&mut self, topic: &'static str, time_ns: i128, json: Vec<u8>) -> Result<()> {
+        self.daemon.send_json(self.link, topic, time_ns, json);
+        self.daemon.last_time = self.daemon.last_time.max(time_ns);
+        self.daemon.results.flush();
+        Ok(())
+    }
+
+    fn status(&mut self, status: &crate::io::monitoring_json::StatusMessage, json: &[u8]) -> Result<()> {
+        if let Some(n) = self.daemon.notifier.as_mut() {
+            n.observe(status, json);
+        }
+        Ok(())
+    }
+
+    fn rerun(&mut self, line: &crate::service::events::EventLine, kind: crate::config::EventAmplitude) -> Result<()> {
+        let daemon = &mut *self.daemon;
+        if let Some(v) = daemon.viewer.as_mut() {
+            count_output_error(
+                crate::service::events::log_rerun(v, line, kind),
+                &mut daemon.pipeline.health_mut().rerun_errors,
+                100,
+                "Rerun",
+            );
+        }
+        Ok(())
+    }
+
+    fn line(&mut self, line: &crate::service::events::EventLine) -> Result<()> {
+        match (&line.skipped, &line.verdict) {
+            (Some(reason), _) => tracing::warn!(message = "event skipped", event = %line.event, reason = %reason),
+            (None, Some(v)) if v.state == "alarm" => {
+                tracing::error!(message = "ALARM: the event changed the structure", event = %line.event, outside = ?v.outside)
+            }
+            (None, v) => {
+                tracing::info!(message = "event judged", event = %line.event, pga_ground = ?line.pga_ground, modes = line.modes.len(), verdict = v.as_ref().map_or("-", |v| v.state.as_str()))
+            }
+        }
+        Ok(())
     }
 }

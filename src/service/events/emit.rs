@@ -1,6 +1,38 @@
-//! An event's line as results messages, a status message and Rerun series.
+//! An event's line as results messages, a status message and Rerun series,
+//! sent by one emitter to the command's or the daemon's outputs.
 
 use super::*;
+use crate::io::results_topics::{EVENT_SUMMARY, EVENT_VERDICT};
+
+/// Where an event goes: the results (file, and zenoh from the daemon), the
+/// owner's notifier, the Rerun timeline, and the reader's line (the
+/// command's table row or JSON line, the daemon's log). [`emit`] sends
+/// every event to them in one order, from `events` and the daemon alike.
+pub trait EventSink {
+    /// A results message on `topic` (under the results prefix) at `time_ns`.
+    fn message(&mut self, topic: &'static str, time_ns: i128, json: Vec<u8>) -> Result<()>;
+    /// The owner's status message of a judged event (`[monitoring.notify]`).
+    fn status(&mut self, status: &StatusMessage, json: &[u8]) -> Result<()>;
+    /// The event on the Rerun timeline, its amplitude measured as `kind`.
+    fn rerun(&mut self, line: &EventLine, kind: EventAmplitude) -> Result<()>;
+    /// The event's line for the reader.
+    fn line(&mut self, line: &EventLine) -> Result<()>;
+}
+
+/// Sends `line` to `sink`: its results messages, its status message when
+/// judged, its Rerun point, then its line.
+pub fn emit(line: &EventLine, kind: EventAmplitude, sink: &mut impl EventSink) -> Result<()> {
+    let (time, bodies) = messages(line)?;
+    for (topic, json) in bodies {
+        sink.message(topic, time, json)?;
+    }
+    if let Some(v) = &line.verdict {
+        let status = status_message(line, v);
+        sink.status(&status, &serde_json::to_vec(&status)?)?;
+    }
+    sink.rerun(line, kind)?;
+    sink.line(line)
+}
 
 /// An event's results: the time they are filed at and each topic suffix
 /// with its JSON body.
@@ -14,9 +46,9 @@ pub fn messages(line: &EventLine) -> Result<EventMessages> {
         .as_deref()
         .and_then(crate::io::wire::parse_timestamp)
         .unwrap_or(0);
-    let mut out = vec![(SUMMARY_TOPIC, serde_json::to_vec(line)?)];
+    let mut out = vec![(EVENT_SUMMARY, serde_json::to_vec(line)?)];
     if let Some(v) = &line.verdict {
-        out.push((VERDICT_TOPIC, serde_json::to_vec(v)?));
+        out.push((EVENT_VERDICT, serde_json::to_vec(v)?));
     }
     Ok((time, out))
 }

@@ -22,7 +22,7 @@ mod realization;
 
 pub use chain::Chain;
 use chain::{feature_of_parameter, Named};
-pub use emit::{forecast_medians, log_rerun, messages, status_message, EventMessages};
+pub use emit::{emit, forecast_medians, log_rerun, messages, status_message, EventMessages, EventSink};
 pub use line::{BandLine, EventLine, UpdateLine, VerdictLine};
 pub use loading::{load, Loaded};
 pub use realization::predict_by_realization;
@@ -43,10 +43,6 @@ use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::updating::{ParameterEstimate, StopReason};
 use std::path::Path;
 use std::sync::Arc;
-
-/// The topics an event writes under the results prefix.
-pub const SUMMARY_TOPIC: &str = "events/summary";
-pub const VERDICT_TOPIC: &str = "events/verdict";
 
 /// The chain on one event; a failing stage skips the event with its reason.
 pub fn process(cfg: &Config, loaded: &Loaded, chain: &mut Chain) -> EventLine {
@@ -107,6 +103,62 @@ pub fn process_identified(
     line
 }
 
+/// The event's amplitudes (stage 1).
+struct Measured {
+    pga_ground: f64,
+    peak_deck: f64,
+    /// Over the strong motion ([`significant_span`] of the ground).
+    rms_deck: f64,
+}
+
+fn measure(event: &Event, plan: &[GroundInputPlan]) -> Measured {
+    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
+    let ground = ground_sensors(plan);
+    let peak =
+        |channels: &mut dyn Iterator<Item = usize>| channels.flat_map(channel).fold(0.0f64, |a, v| a.max(v.abs()));
+    let samples = channel(event.deck[0]).len();
+    let (i0, i1) = significant_span(ground.iter().map(|&i| channel(i)), samples);
+    let square: f64 = event
+        .deck
+        .iter()
+        .map(|&i| channel(i)[i0..i1].iter().map(|v| v * v).sum::<f64>())
+        .sum();
+    Measured {
+        pga_ground: peak(&mut ground.iter().copied()),
+        peak_deck: peak(&mut event.deck.iter().copied()),
+        rms_deck: (square / ((i1 - i0) * event.deck.len()) as f64).sqrt(),
+    }
+}
+
+/// The event's identified modes and what their identification said
+/// (stage 2); `failed`: why it found none.
+struct Identification {
+    modes: Vec<ModeEntry>,
+    notes: Vec<String>,
+    failed: Option<String>,
+}
+
+/// The forecast by the model of the events before this one (stage 3).
+struct Forecast {
+    /// The parameters its model had.
+    model: Vec<NamedValue>,
+    report: PredictionReport,
+    /// The deck channels its headline medians are taken over.
+    channels: Vec<String>,
+    /// Its model's modes (matched with the identified ones).
+    state: ModalState,
+}
+
+/// The update on the event's record (stage 4).
+struct Updated {
+    line: UpdateLine,
+    parameters: Vec<ParameterEstimate>,
+    notes: Vec<String>,
+}
+
+/// The stages in order, each returning its outcome; the line is written
+/// here alone. A stage's error skips the event with what the stages before
+/// it found.
 fn run_chain(
     cfg: &Config,
     event: &Event,
@@ -115,28 +167,10 @@ fn run_chain(
     chain: &mut Chain,
     line: &mut EventLine,
 ) -> Result<()> {
-    let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
-    let ground = ground_sensors(plan);
-    let pga = ground
-        .iter()
-        .flat_map(|&i| channel(i))
-        .fold(0.0f64, |a, v| a.max(v.abs()));
-    line.pga_ground = Some(pga);
-    line.peak_deck = Some(
-        event
-            .deck
-            .iter()
-            .flat_map(|&i| channel(i))
-            .fold(0.0f64, |a, v| a.max(v.abs())),
-    );
-    let samples = channel(event.deck[0]).len();
-    let (i0, i1) = significant_span(ground.iter().map(|&i| channel(i)), samples);
-    let square: f64 = event
-        .deck
-        .iter()
-        .map(|&i| channel(i)[i0..i1].iter().map(|v| v * v).sum::<f64>())
-        .sum();
-    line.rms_deck = Some((square / ((i1 - i0) * event.deck.len()) as f64).sqrt());
+    let measured = measure(event, plan);
+    line.pga_ground = Some(measured.pga_ground);
+    line.peak_deck = Some(measured.peak_deck);
+    line.rms_deck = Some(measured.rms_deck);
     let amplitude = line.amplitude(cfg.events().amplitude).expect("both measured");
     // The update needs the modes when it fits them (`[events] residues`);
     // otherwise the identification is taken after it, so that one running
@@ -144,39 +178,74 @@ fn run_chain(
     // Without a model there is nothing to overlap: modes first as well.
     let modes_first = cfg.events().residues != Residues::Frf && cfg.has_model();
     if modes_first {
-        take_identification(identified, line)?;
+        add_identification(line, take_identification(identified)?);
     }
     // Without a model the event is forecast by the previous event's
     // realization, identified and judged on its modes.
-    let updated = if cfg.has_model() {
-        forecast_and_update(cfg, (event, plan), chain, line, amplitude)
+    let forecast_state = if cfg.has_model() {
+        // A failed update keeps the forecast made before it.
+        let staged = (|| -> Result<(Option<ModalState>, Updated)> {
+            let forecast = forecast(cfg, (event, plan), chain, amplitude, line.start.clone())?;
+            let forecast_state = forecast.map(|f| {
+                line.forecast_model = f.model;
+                line.forecast_channels = f.channels;
+                line.forecast = Some(f.report);
+                f.state
+            });
+            Ok((
+                forecast_state,
+                update(cfg, (event, plan), chain, &line.event, &line.modes)?,
+            ))
+        })();
+        if !modes_first {
+            add_identification(line, take_identification(identified)?);
+        }
+        let (forecast_state, updated) = staged?;
+        line.notes.extend(updated.notes);
+        line.update = Some(updated.line);
+        line.parameters = updated.parameters;
+        forecast_state
     } else {
-        realization::forecast_and_realize(cfg, (event, plan), chain, line).map(|()| None)
+        let (realized, finished) =
+            realization::forecast_and_realize(cfg, (event, plan), chain, (&line.event, &line.start));
+        line.notes.extend(realized.notes);
+        line.forecast = realized.forecast;
+        add_identification(line, take_identification(identified)?);
+        finished?;
+        None
     };
-    if !modes_first {
-        take_identification(identified, line)?;
-    }
-    let forecast_state = updated?;
     if cfg.has_model() && !line.modes.is_empty() {
-        match_with_forecast_model(cfg, chain, line, forecast_state)?;
+        match_with_forecast_model(cfg, chain, &mut line.modes, forecast_state)?;
     }
-    judge_event(cfg, chain, line, amplitude);
+    line.verdict = Some(judge_event(cfg, chain, (&line.modes, &line.parameters), amplitude));
     Ok(())
 }
 
-/// The event's modes into `line`; a record whose identification finds no
-/// mode is still forecast and updated (on its record alone): said first in
-/// `notes`.
-fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>, line: &mut EventLine) -> Result<()> {
+/// The identification's outcome in `line`: its failure first in the notes.
+fn add_identification(line: &mut EventLine, identification: Identification) {
+    line.modes = identification.modes;
+    line.notes.extend(identification.notes);
+    if let Some(e) = identification.failed {
+        line.notes.insert(0, e);
+    }
+}
+
+/// The event's modes; a record whose identification finds no mode is
+/// still forecast and updated (on its record alone).
+fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>) -> Result<Identification> {
     match identified.take().and_then(|identify| identify()) {
-        Some(Ok((modes, notes))) => {
-            line.modes = modes;
-            line.notes.extend(notes);
-        }
-        Some(Err(e)) => line.notes.insert(0, e),
+        Some(Ok((modes, notes))) => Ok(Identification {
+            modes,
+            notes,
+            failed: None,
+        }),
+        Some(Err(e)) => Ok(Identification {
+            modes: Vec::new(),
+            notes: Vec::new(),
+            failed: Some(e),
+        }),
         None => bail!("the event was not read"),
     }
-    Ok(())
 }
 
 /// Each identified mode with the model mode nearest it by shape in the
@@ -187,7 +256,7 @@ fn take_identification(identified: &mut Option<impl FnOnce() -> Identified>, lin
 fn match_with_forecast_model(
     cfg: &Config,
     chain: &mut Chain,
-    line: &mut EventLine,
+    modes: &mut [ModeEntry],
     forecast: Option<ModalState>,
 ) -> Result<()> {
     let parts = chain.parts(cfg)?;
@@ -196,45 +265,45 @@ fn match_with_forecast_model(
         None => crate::studies::parameters::modal_state_in(&parts.setup, &parts.parameters, &[])
             .context("the config's model's modes")?,
     };
-    crate::studies::mode_match::match_modes(cfg, &state, &parts.setup.sensor_names, &mut line.modes)
+    crate::studies::mode_match::match_modes(cfg, &state, &parts.setup.sensor_names, modes)
         .context("the identified modes against the forecast's model")
 }
 
-/// The event forecast by the model of the events before it (none for the
-/// first), then the update on its own record; the forecast's modal state.
-fn forecast_and_update(
+/// The event forecast by the model of the events before it; none for the
+/// first.
+fn forecast(
     cfg: &Config,
     (event, plan): (&Event, &[GroundInputPlan]),
     chain: &mut Chain,
-    line: &mut EventLine,
     amplitude: f64,
-) -> Result<Option<ModalState>> {
+    start: Option<String>,
+) -> Result<Option<Forecast>> {
+    if chain.parameters.is_empty() {
+        return Ok(None);
+    }
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
-    // The forecast: the model of the events before this one.
-    let mut forecast_state = None;
-    if !chain.parameters.is_empty() {
-        let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, amplitude);
-        let parts = chain.parts(cfg)?;
-        let mut forecaster = GroundModel::at(&parts, &parameters).context("the forecast's model")?;
-        line.forecast_model = parameters
+    let parameters = chain.forecast_parameters(cfg.events().forecast, cfg.events().min_events, amplitude);
+    let parts = chain.parts(cfg)?;
+    let mut forecaster = GroundModel::at(&parts, &parameters).context("the forecast's model")?;
+    forecaster.plan = plan.to_vec();
+    let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
+    prediction.report.start = start;
+    let channels = prediction
+        .report
+        .channels
+        .iter()
+        .map(|c| c.sensor.clone())
+        .filter(|s| fitted(cfg, s))
+        .collect();
+    Ok(Some(Forecast {
+        model: parameters
             .into_iter()
             .map(|(name, value)| NamedValue { name, value })
-            .collect();
-        forecaster.plan = plan.to_vec();
-        let mut prediction = predict_event(cfg, &forecaster, &event.deck, channel, event.fs);
-        prediction.report.start = line.start.clone();
-        line.forecast_channels = prediction
-            .report
-            .channels
-            .iter()
-            .map(|c| c.sensor.clone())
-            .filter(|s| fitted(cfg, s))
-            .collect();
-        line.forecast = Some(prediction.report);
-        forecast_state = Some(forecaster.state);
-    }
-    update_event(cfg, event, plan, chain, line)?;
-    Ok(forecast_state)
+            .collect(),
+        report: prediction.report,
+        channels,
+        state: forecaster.state,
+    }))
 }
 
 /// Whether the update fits deck sensor `name` (`[events] outputs`; every
@@ -244,15 +313,16 @@ fn fitted(cfg: &Config, name: &String) -> bool {
     outputs.is_empty() || outputs.contains(name)
 }
 
-/// The update on the event's transmissibilities, warm-started from the
-/// previous event's values.
-fn update_event(
+/// The update on the event's transmissibilities (and its identified
+/// `modes`, when `[events] residues` fits them), warm-started from the
+/// previous event's values; the chain keeps the result.
+fn update(
     cfg: &Config,
-    event: &Event,
-    plan: &[GroundInputPlan],
+    (event, plan): (&Event, &[GroundInputPlan]),
     chain: &mut Chain,
-    line: &mut EventLine,
-) -> Result<()> {
+    name: &str,
+    modes: &[ModeEntry],
+) -> Result<Updated> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
     let signals = ground_signals(plan, channel);
     let fitted: Vec<usize> = event
@@ -263,7 +333,7 @@ fn update_event(
         .collect();
     let deck_series: Vec<Vec<f64>> = fitted.iter().map(|&i| channel(i).to_vec()).collect();
     let parts = chain.parts(cfg)?;
-    let modes = ModesFile::of(line.modes.clone())
+    let modes = ModesFile::of(modes.to_vec())
         .to_observed(&parts.setup.sensor_names)
         .context("the identified modes")?;
     let record = EventSignals {
@@ -276,7 +346,7 @@ fn update_event(
     };
     let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |it| {
         tracing::debug!(
-            event = %line.event,
+            event = %name,
             iteration = it.iteration,
             relative_residual = it.relative_residual,
             step = it.step_norm,
@@ -286,8 +356,9 @@ fn update_event(
             "update iteration"
         )
     })?;
+    let mut notes = Vec::new();
     if cfg.events().residues == Residues::Both && !modes.is_empty() && updated.pairs.is_empty() {
-        line.notes.push(format!(
+        notes.push(format!(
             "none of the {} identified modes paired with a model mode (MAC ≥ {} within {} % in frequency): \
              the update fitted the record alone",
             modes.len(),
@@ -295,21 +366,8 @@ fn update_event(
             100.0 * cfg.updating.max_frequency_gap
         ));
     }
-    line.update = Some(UpdateLine {
-        model_mode_hz: updated.dominant_hz,
-        model_mode_std_hz: updated.dominant_std_hz,
-        relative_residual: updated.result.relative_residual,
-        iterations: updated.result.iterations.len().saturating_sub(1),
-        converged: updated.result.converged,
-        stop_reason: updated.result.stop_reason,
-        evaluations: updated.evaluations,
-        relative_offset: updated.result.relative_offset,
-        combined_inputs: updated.combined,
-        residues: cfg.events().residues.as_str(),
-        paired_modes: updated.pairs,
-    });
-    line.parameters = updated.result.parameters.clone();
-    chain.parameters = line
+    chain.parameters = updated
+        .result
         .parameters
         .iter()
         .map(|p| Named {
@@ -317,7 +375,23 @@ fn update_event(
             value: p.value,
         })
         .collect();
-    Ok(())
+    Ok(Updated {
+        line: UpdateLine {
+            model_mode_hz: updated.dominant_hz,
+            model_mode_std_hz: updated.dominant_std_hz,
+            relative_residual: updated.result.relative_residual,
+            iterations: updated.result.iterations.len().saturating_sub(1),
+            converged: updated.result.converged,
+            stop_reason: updated.result.stop_reason,
+            evaluations: updated.evaluations,
+            relative_offset: updated.result.relative_offset,
+            combined_inputs: updated.combined,
+            residues: cfg.events().residues.as_str(),
+            paired_modes: updated.pairs,
+        },
+        parameters: updated.result.parameters,
+        notes,
+    })
 }
 
 /// A parameter this close to a bound (share of its range) is held there by
@@ -326,20 +400,23 @@ const BOUND_SHARE: f64 = 1e-4;
 
 /// The features judged: each tracked mode's identified frequency, then
 /// each updated parameter's log10 value (`None`: not identified).
-fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<Option<f64>>) {
+fn features(
+    chain: &Chain,
+    (modes, parameters): (&[ModeEntry], &[ParameterEstimate]),
+    max_gap: f64,
+) -> (Vec<String>, Vec<Option<f64>>) {
     let mut names = Vec::new();
     let mut values = Vec::new();
     for (k, &f) in chain.tracked_hz.iter().enumerate() {
         names.push(format!("mode{}_hz", k + 1));
-        let nearest = line
-            .modes
+        let nearest = modes
             .iter()
             .map(|m| m.frequency_hz)
             .min_by(|a, b| (a - f).abs().total_cmp(&(b - f).abs()))
             .filter(|m| (m - f).abs() <= max_gap * f);
         values.push(nearest);
     }
-    for p in &line.parameters {
+    for p in parameters {
         names.push(feature_of_parameter(&p.name));
         let margin = BOUND_SHARE * (p.upper - p.lower);
         let bounded = p.value <= p.lower + margin || p.value >= p.upper - margin;
@@ -348,13 +425,19 @@ fn features(chain: &Chain, line: &EventLine, max_gap: f64) -> (Vec<String>, Vec<
     (names, values)
 }
 
-/// The verdict on `line`'s features against the bands the earlier events
-/// give at its `amplitude` (`[events] amplitude`).
-fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, amplitude: f64) {
+/// The verdict (stage 5) on the event's features (its identified `modes`
+/// and updated `parameters`) against the bands the earlier events give at
+/// its `amplitude` (`[events] amplitude`).
+fn judge_event(
+    cfg: &Config,
+    chain: &mut Chain,
+    (modes, parameters): (&[ModeEntry], &[ParameterEstimate]),
+    amplitude: f64,
+) -> VerdictLine {
     if chain.tracked_hz.is_empty() {
-        chain.tracked_hz = line.modes.iter().map(|m| m.frequency_hz).collect();
+        chain.tracked_hz = modes.iter().map(|m| m.frequency_hz).collect();
     }
-    let (names, values) = features(chain, line, cfg.updating.max_frequency_gap);
+    let (names, values) = features(chain, (modes, parameters), cfg.updating.max_frequency_gap);
     let x = amplitude.max(1e-12).log10();
     let columns: Vec<Vec<(f64, f64)>> = names.iter().map(|n| chain.history_of(n)).collect();
     let history: Vec<Vec<f64>> = (0..chain.amplitudes.len())
@@ -373,7 +456,7 @@ fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, amplitude:
         Verdict::Alarm { features } => features.iter().map(|&f| names[f].clone()).collect(),
         _ => Vec::new(),
     };
-    line.verdict = Some(VerdictLine {
+    let judged = VerdictLine {
         state: verdict.name().to_string(),
         outside,
         bands: names
@@ -385,13 +468,14 @@ fn judge_event(cfg: &Config, chain: &mut Chain, line: &mut EventLine, amplitude:
                 band,
             })
             .collect(),
-    });
+    };
     // An alarmed event does not teach the bands: a lasting change keeps
     // alarming until the owner starts a new history.
     if !matches!(verdict, Verdict::Alarm { .. }) {
         chain.push_features(x, &names, values);
         chain.amplitude = Some(cfg.events().amplitude);
     }
+    judged
 }
 
 #[cfg(test)]
@@ -471,7 +555,7 @@ mod tests {
             estimate("low", 0.001_000_1),
             estimate("free", 0.299),
         ];
-        let (names, values) = features(&chain, &line, 0.1);
+        let (names, values) = features(&chain, (&line.modes, &line.parameters), 0.1);
         assert_eq!(names.len(), 3);
         assert_eq!(values[0], None);
         assert_eq!(values[1], None);

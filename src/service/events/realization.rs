@@ -24,15 +24,35 @@ pub(super) struct SavedRealization {
     realization: Realization,
 }
 
-/// The event forecast by the previous event's realization (none for the
-/// first, or when the channels differ: said in the notes), then this
-/// event's realization kept (when it cannot be identified, said, and the
-/// previous one kept).
+/// What the stage without a model found: the forecast and what it said.
+#[derive(Debug, Default)]
+pub(super) struct Realized {
+    pub(super) forecast: Option<PredictionReport>,
+    pub(super) notes: Vec<String>,
+}
+
+/// The event (`name`, starting at `start`) forecast by the previous
+/// event's realization (none for the first, or when the channels differ:
+/// said in the notes), then this event's realization kept (when it cannot
+/// be identified, said, and the previous one kept): what it found, and
+/// whether it finished.
 pub(super) fn forecast_and_realize(
     cfg: &Config,
     (event, plan): (&Event, &[GroundInputPlan]),
     chain: &mut Chain,
-    line: &mut EventLine,
+    (name, start): (&str, &Option<String>),
+) -> (Realized, Result<()>) {
+    let mut realized = Realized::default();
+    let finished = realize_into(cfg, (event, plan), chain, (name, start), &mut realized);
+    (realized, finished)
+}
+
+fn realize_into(
+    cfg: &Config,
+    (event, plan): (&Event, &[GroundInputPlan]),
+    chain: &mut Chain,
+    (name, start): (&str, &Option<String>),
+    realized: &mut Realized,
 ) -> Result<()> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
     let signals = ground_signals(plan, channel);
@@ -41,7 +61,7 @@ pub(super) fn forecast_and_realize(
     let input_names: Vec<String> = plan.iter().map(|p| p.name.clone()).collect();
     let output_names: Vec<String> = event.deck.iter().map(|&i| cfg.sensors[i].name.clone()).collect();
     if let Some(saved) = &chain.realization {
-        forecast(cfg, saved, (event, plan), &inputs, line)?;
+        forecast(cfg, saved, (event, plan), &inputs, (start, realized))?;
     }
     let record = at_identification_rate(cfg, &inputs, &outputs, event.fs);
     let (settings, _) = cfg.oma_settings_at(record.fs)?;
@@ -55,13 +75,13 @@ pub(super) fn forecast_and_realize(
     ) {
         Ok(realization) => {
             chain.realization = Some(SavedRealization {
-                event: line.event.clone(),
+                event: name.to_string(),
                 inputs: input_names,
                 outputs: output_names,
                 realization,
             });
         }
-        Err(e) => line.notes.push(format!(
+        Err(e) => realized.notes.push(format!(
             "no realization of order {order} from this record ({e}): the next event is forecast by {}",
             chain
                 .realization
@@ -80,14 +100,14 @@ fn forecast(
     saved: &SavedRealization,
     (event, plan): (&Event, &[GroundInputPlan]),
     inputs: &[&[f64]],
-    line: &mut EventLine,
+    (start, realized): (&Option<String>, &mut Realized),
 ) -> Result<()> {
     match prediction_by(cfg, saved, (event, plan), inputs)? {
-        Err(why) => line.notes.push(format!("not forecast: {why}")),
+        Err(why) => realized.notes.push(format!("not forecast: {why}")),
         Ok((mut prediction, notes)) => {
-            prediction.report.start = line.start.clone();
-            line.notes.extend(notes);
-            line.forecast = Some(prediction.report);
+            prediction.report.start = start.clone();
+            realized.notes.extend(notes);
+            realized.forecast = Some(prediction.report);
         }
     }
     Ok(())
