@@ -644,7 +644,7 @@ pub fn fleet(a: FleetArgs) -> Result<()> {
                     last_update: summary.last_update,
                     monitoring: summary.monitoring,
                     health: summary.health,
-                    parameters: summary.parameters.into_iter().map(|p| (p.name, p.value)).collect(),
+                    parameters: summary.parameters,
                 }
             })
             .collect();

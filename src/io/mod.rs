@@ -11,6 +11,7 @@ pub mod import;
 pub mod matrix_market;
 pub mod modes_json;
 pub mod monitoring_json;
+pub mod named_value;
 pub mod recording;
 pub mod recover;
 pub mod results_file;

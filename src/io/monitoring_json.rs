@@ -13,21 +13,9 @@
 //! `"pca_fallback"` when a temperature was missing). Readers ignore keys
 //! they do not know.
 
+use super::named_value::NamedValue;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-
-/// A feature's value; `null` (NaN in memory) when the window lacks it (an
-/// identified frequency whose mode was not found).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct NamedValue {
-    pub name: String,
-    #[serde(deserialize_with = "nan_for_null")]
-    pub value: f64,
-}
-
-fn nan_for_null<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-    Option::<f64>::deserialize(d).map(|v| v.unwrap_or(f64::NAN))
-}
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Residual {

@@ -5,7 +5,8 @@
 
 use super::Pipeline;
 use crate::config::{FrfSetup, MonitoringConfig};
-use crate::io::monitoring_json::{AlarmMessage, NamedValue, Residual, StatusMessage};
+use crate::io::monitoring_json::{AlarmMessage, Residual, StatusMessage};
+use crate::io::named_value::NamedValue;
 use crate::io::wire::ChannelBlock;
 use splinewatch_core::monitoring::chart::Flag;
 use splinewatch_core::monitoring::{Monitor, MonitorState, Observation, Status};

@@ -4,6 +4,7 @@
 //! on the sensors' geometry (studies::exchange).
 
 use crate::io::frf_json::FrfFile;
+use crate::io::named_value::NamedValue;
 use crate::studies::exchange::IdentifiedMode;
 use anyhow::{bail, Context, Result};
 use serde::Deserialize;
@@ -13,7 +14,7 @@ use splinewatch_core::c64;
 #[derive(Debug, Clone, Default)]
 pub struct WindowResults {
     pub window: u64,
-    pub parameters: Vec<(String, f64)>,
+    pub parameters: Vec<NamedValue>,
     pub measured: Option<FrfFile>,
     pub model: Option<FrfFile>,
     pub identified: Vec<IdentifiedMode>,
@@ -22,12 +23,6 @@ pub struct WindowResults {
 #[derive(Deserialize)]
 struct ParametersMessage {
     parameters: Vec<NamedValue>,
-}
-
-#[derive(Deserialize)]
-struct NamedValue {
-    name: String,
-    value: f64,
 }
 
 #[derive(Deserialize)]
@@ -99,7 +94,7 @@ pub fn window_results(bytes: &[u8], prefix: &str, window: Option<u64>) -> Result
         let context = || format!("window {w}: {t}");
         if *t == parameters {
             let m: ParametersMessage = serde_json::from_slice(data).with_context(context)?;
-            out.parameters = m.parameters.into_iter().map(|p| (p.name, p.value)).collect();
+            out.parameters = m.parameters;
         } else if *t == oma {
             let m: OmaMessage = serde_json::from_slice(data).with_context(context)?;
             out.identified = m

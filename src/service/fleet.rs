@@ -8,6 +8,7 @@
 //! the replies by span: a span that is alive (or expected) but did not
 //! answer is reported as such, never left out.
 
+use crate::io::named_value::NamedValue;
 use anyhow::{anyhow, Result};
 use serde::Serialize;
 use serde_json::Value;
@@ -138,12 +139,6 @@ pub struct SpanSummary {
     pub monitoring: Option<String>,
     /// `ok`, or what the health counters report (failures, drops, errors).
     pub health: String,
-}
-
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct NamedValue {
-    pub name: String,
-    pub value: f64,
 }
 
 impl SpanStatus {

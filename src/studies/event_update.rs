@@ -32,6 +32,7 @@
 use super::ground_motion::GroundParts;
 use super::parameters::values_by_name;
 use crate::config::{Config, EventInputs, GroundInputPlan, Residues};
+use crate::io::named_value::NamedValue;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use splinewatch_core::c64;
@@ -107,7 +108,7 @@ pub fn update_on_event(
     config: &Config,
     parts: &GroundParts,
     signals: &EventSignals<'_>,
-    start: &[(String, f64)],
+    start: &[NamedValue],
     progress: &mut dyn FnMut(&IterationRecord),
 ) -> Result<EventUpdate> {
     if signals.deck.is_empty() || signals.inputs.is_empty() {

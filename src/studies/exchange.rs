@@ -4,6 +4,7 @@
 
 use crate::config::Config;
 use crate::io::frf_json::FrfFile;
+use crate::io::named_value::NamedValue;
 use crate::io::uff::write::{UffMode, UffWriter};
 use crate::io::uff::UffPoint;
 use anyhow::{bail, Context, Result};
@@ -71,7 +72,7 @@ pub struct UffContent<'a> {
     /// 55, normal modes), at `parameters` (name, value) over the config's
     /// values; `None`: no model modes.
     pub model_modes_below_hz: Option<f64>,
-    pub parameters: &'a [(String, f64)],
+    pub parameters: &'a [NamedValue],
     /// Identified modes (dataset 55, complex modes).
     pub identified: &'a [IdentifiedMode],
 }
@@ -103,7 +104,7 @@ pub fn uff_file(config: &Config, content: &UffContent<'_>) -> Result<String> {
 
 /// The model's elastic modes up to `below_hz` with `parameters` set, their
 /// mass-normalised shapes at the sensors and ζ(f).
-fn model_modes(config: &Config, parameters: &[(String, f64)], below_hz: f64) -> Result<Vec<UffMode>> {
+fn model_modes(config: &Config, parameters: &[NamedValue], below_hz: f64) -> Result<Vec<UffMode>> {
     let (setup, state) = super::parameters::modal_state_of(config, parameters)?;
     let sensors = setup.sensor_names.len();
     Ok((0..state.modes.len())

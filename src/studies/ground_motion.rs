@@ -14,6 +14,7 @@
 
 use super::parameters::values_by_name;
 use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan};
+use crate::io::named_value::NamedValue;
 use anyhow::{bail, Result};
 use splinewatch_core::model::supports::SupportGroups;
 use splinewatch_core::model::ShellModel;
@@ -36,12 +37,12 @@ pub struct GroundModel {
 impl GroundModel {
     /// At the config's values, with the `named` updating parameters set
     /// (an update's result).
-    pub fn new(config: &Config, named: &[(String, f64)]) -> Result<Self> {
+    pub fn new(config: &Config, named: &[NamedValue]) -> Result<Self> {
         Self::at(&GroundParts::new(config)?, named)
     }
 
     /// The model of `parts` with the `named` updating parameters set.
-    pub fn at(parts: &GroundParts, named: &[(String, f64)]) -> Result<Self> {
+    pub fn at(parts: &GroundParts, named: &[NamedValue]) -> Result<Self> {
         let GroundParts {
             setup,
             shell,

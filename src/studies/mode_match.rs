@@ -6,6 +6,7 @@
 
 use crate::config::Config;
 use crate::io::modes_json::{ModeEntry, ModelMatch, ModesFile};
+use crate::io::named_value::NamedValue;
 use anyhow::Result;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::updating::modal_residual::{nearest_by_shape, pair_modes};
@@ -13,7 +14,7 @@ use splinewatch_core::updating::modal_residual::{nearest_by_shape, pair_modes};
 /// Sets every mode of `file` its [`ModelMatch`] against `config`'s model
 /// with the `named` updating parameters set (every other one at the
 /// config's value). `file`'s sensors must be the config's deck sensors.
-pub fn match_with_model(config: &Config, file: &mut ModesFile, named: &[(String, f64)]) -> Result<()> {
+pub fn match_with_model(config: &Config, file: &mut ModesFile, named: &[NamedValue]) -> Result<()> {
     let (setup, state) = super::parameters::modal_state_of(config, named)?;
     match_modes(config, &state, &setup.sensor_names, &mut file.modes)
 }

@@ -5,6 +5,7 @@
 use crate::config::{frf_setup, Config};
 use crate::io::frf_json::FrfFile;
 use crate::io::modes_json::ModesFile;
+use crate::io::named_value::NamedValue;
 use crate::io::uff;
 use anyhow::{Context, Result};
 use serde::Deserialize;
@@ -34,14 +35,18 @@ pub fn start_values(text: &str, parameters: &[Parameter], base: &[f64]) -> Resul
 
 /// The `{name, value}` pairs of a result's `"parameters"` list (`update
 /// --json` output, the daemon's state file).
-pub fn named_values(text: &str) -> Result<Vec<(String, f64)>> {
+pub fn named_values(text: &str) -> Result<Vec<NamedValue>> {
     let start: StartFile = serde_json::from_str(text).context("not a result JSON with a \"parameters\" list")?;
-    Ok(start.parameters.into_iter().map(|p| (p.name, p.value)).collect())
+    Ok(start
+        .parameters
+        .into_iter()
+        .map(|p| NamedValue::new(p.name, p.value))
+        .collect())
 }
 
 /// The updating parameters named in a file: an `update --json` result or a
 /// state file.
-pub fn named_values_of_file(path: &std::path::Path) -> Result<Vec<(String, f64)>> {
+pub fn named_values_of_file(path: &std::path::Path) -> Result<Vec<NamedValue>> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     named_values(&text).with_context(|| path.display().to_string())
 }

@@ -5,6 +5,7 @@
 use super::html::{self, escape};
 use super::words::Priority;
 use super::Report;
+use crate::io::named_value::NamedValue;
 use std::fmt::Write;
 
 /// What a span answered (its daemon's `latest` replies, summarised).
@@ -18,7 +19,7 @@ pub struct FleetSpan {
     pub monitoring: Option<String>,
     /// `ok` or the health counters that are not zero.
     pub health: String,
-    pub parameters: Vec<(String, f64)>,
+    pub parameters: Vec<NamedValue>,
 }
 
 impl FleetSpan {
@@ -82,7 +83,7 @@ pub fn render(spans: &[FleetSpan], asked_at: &str) -> Report {
                     &s.parameters
                         .iter()
                         .take(4)
-                        .map(|(n, v)| format!("{n} {}", html::number(Some(*v), 4)))
+                        .map(|p| format!("{} {}", p.name, html::number(Some(p.value), 4)))
                         .collect::<Vec<_>>()
                         .join(", "),
                 ),
@@ -132,7 +133,7 @@ mod tests {
             last_update: None,
             monitoring: monitoring.map(str::to_string),
             health: health.into(),
-            parameters: vec![("east.k2".into(), 2.4e8)],
+            parameters: vec![NamedValue::new("east.k2", 2.4e8)],
         }
     }
 

@@ -9,6 +9,7 @@
 use super::{rerun_error, saved_recording, set_measurement_time, RerunOutput};
 use anyhow::{anyhow, Result};
 use rerun::blueprint::{Blueprint, Horizontal, Spatial2DView, TimeSeriesView, Vertical};
+use splinewatch_core::updating::ParameterEstimate;
 use std::path::Path;
 
 /// One event's figures.
@@ -21,7 +22,7 @@ pub struct EventPoint<'a> {
     /// identified frequencies' abscissa.
     pub amplitude: f64,
     /// `(name, value)` of each updated parameter.
-    pub parameters: &'a [(String, f64)],
+    pub parameters: &'a [ParameterEstimate],
     pub identified_hz: &'a [f64],
     pub model_mode_hz: Option<f64>,
     /// Median NRMSE of the forecast and of the baseline.
@@ -108,8 +109,8 @@ fn log_points(rec: &rerun::RecordingStream, event: &EventPoint<'_>) -> Result<()
     if let Some(rms) = event.rms_deck {
         scalar("events/rms_deck", rms)?;
     }
-    for (name, value) in event.parameters {
-        scalar(&format!("events/parameters/{name}"), *value)?;
+    for p in event.parameters {
+        scalar(&format!("events/parameters/{}", p.name), p.value)?;
     }
     if let Some(f) = event.model_mode_hz {
         scalar("events/frequency/model", f)?;

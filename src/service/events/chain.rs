@@ -7,7 +7,7 @@ use super::*;
 #[derive(Debug, Default, Serialize, Deserialize)]
 pub struct Chain {
     /// The last update's values (`predict --state` reads this list).
-    pub(super) parameters: Vec<Named>,
+    pub(super) parameters: Vec<NamedValue>,
     /// The modes tracked from event to event: the first event's identified frequencies.
     pub(super) tracked_hz: Vec<f64>,
     /// log10 of each earlier (not alarmed) event's amplitude, m/s².
@@ -34,12 +34,6 @@ pub struct Chain {
     /// others (not saved).
     #[serde(skip)]
     pub(super) parts: Option<Arc<GroundParts>>,
-}
-
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub(super) struct Named {
-    pub(super) name: String,
-    pub(super) value: f64,
 }
 
 impl Chain {
@@ -109,8 +103,8 @@ impl Chain {
         Ok(parts)
     }
 
-    pub(super) fn named(&self) -> Vec<(String, f64)> {
-        self.parameters.iter().map(|p| (p.name.clone(), p.value)).collect()
+    pub(super) fn named(&self) -> Vec<NamedValue> {
+        self.parameters.clone()
     }
 
     /// The earlier events' `(log10 peak, value)` of feature `name` (NaN
@@ -160,22 +154,17 @@ impl Chain {
     /// against log10 peak the verdict fits, once there are `min_events`
     /// of them; their geometric mean before; the last value when no
     /// earlier event gave it with a std).
-    pub(super) fn forecast_parameters(
-        &self,
-        forecast: EventForecast,
-        min_events: usize,
-        pga: f64,
-    ) -> Vec<(String, f64)> {
+    pub(super) fn forecast_parameters(&self, forecast: EventForecast, min_events: usize, pga: f64) -> Vec<NamedValue> {
         let last = self.named();
         if forecast == EventForecast::Last {
             return last;
         }
         let x = pga.max(1e-12).log10();
         last.into_iter()
-            .map(|(name, value)| {
+            .map(|NamedValue { name, value }| {
                 let history = self.history_of(&feature_of_parameter(&name));
                 let value = expected(&history, x, min_events).map_or(value, |y| 10f64.powf(y));
-                (name, value)
+                NamedValue { name, value }
             })
             .collect()
     }

@@ -126,7 +126,6 @@ pub fn log_rerun(
     let Some(time_ns) = crate::io::wire::parse_timestamp(start) else {
         return Ok(());
     };
-    let parameters: Vec<(String, f64)> = line.parameters.iter().map(|p| (p.name.clone(), p.value)).collect();
     let identified: Vec<f64> = line.modes.iter().map(|m| m.frequency_hz).collect();
     r.log_event(&crate::outputs::rerun::events::EventPoint {
         time_ns,
@@ -134,7 +133,7 @@ pub fn log_rerun(
         peak_deck: peak,
         rms_deck: line.rms_deck,
         amplitude: line.amplitude(kind).unwrap_or(pga),
-        parameters: &parameters,
+        parameters: &line.parameters,
         identified_hz: &identified,
         model_mode_hz: line.update.as_ref().and_then(|u| u.model_mode_hz),
         forecast: forecast_medians(line),

@@ -20,8 +20,8 @@ mod line;
 mod loading;
 mod realization;
 
+use chain::feature_of_parameter;
 pub use chain::Chain;
-use chain::{feature_of_parameter, Named};
 pub use emit::{emit, forecast_medians, log_rerun, messages, status_message, EventMessages, EventSink};
 pub use line::{BandLine, EventLine, UpdateLine, VerdictLine};
 pub use loading::{load, Loaded};
@@ -31,7 +31,8 @@ use super::frequency_domain::identify_record;
 use super::records::Event;
 use crate::config::{ground_sensors, ground_signals, Config, EventAmplitude, EventForecast, GroundInputPlan, Residues};
 use crate::io::modes_json::{ModeEntry, ModesFile};
-use crate::io::monitoring_json::{NamedValue, StatusMessage};
+use crate::io::monitoring_json::StatusMessage;
+use crate::io::named_value::NamedValue;
 use crate::io::wire::format_timestamp;
 use crate::studies::event_update::{update_on_event, EventSignals, PairedMode};
 use crate::studies::ground_motion::{GroundModel, GroundParts};
@@ -296,10 +297,7 @@ fn forecast(
         .filter(|s| fitted(cfg, s))
         .collect();
     Ok(Some(Forecast {
-        model: parameters
-            .into_iter()
-            .map(|(name, value)| NamedValue { name, value })
-            .collect(),
+        model: parameters,
         report: prediction.report,
         channels,
         state: forecaster.state,
@@ -370,7 +368,7 @@ fn update(
         .result
         .parameters
         .iter()
-        .map(|p| Named {
+        .map(|p| NamedValue {
             name: p.name.clone(),
             value: p.value,
         })
@@ -486,7 +484,7 @@ mod tests {
         Chain {
             parameters: parameters
                 .iter()
-                .map(|&(name, value)| Named {
+                .map(|&(name, value)| NamedValue {
                     name: name.to_string(),
                     value,
                 })
@@ -524,14 +522,14 @@ mod tests {
             chain.push_features(x, &names, vec![Some(8.5 - 0.5 * x), None]);
             let by = |forecast, min_events, pga: f64| chain.forecast_parameters(forecast, min_events, pga);
             let trend = by(EventForecast::Trend, 5, 10f64.powf(0.5));
-            let k = trend[0].1.log10();
+            let k = trend[0].value.log10();
             if e + 1 < 5 {
                 let mean = amplitudes[..=e].iter().map(|x| 8.5 - 0.5 * x).sum::<f64>() / (e + 1) as f64;
                 assert!((k - mean).abs() < 1e-12, "event {e}: {k} vs {mean}");
             } else {
                 assert!((k - (8.5 - 0.25)).abs() < 1e-12, "{k}");
             }
-            assert_eq!(trend[1], ("zeta".to_string(), 0.08));
+            assert_eq!(trend[1], NamedValue::new("zeta", 0.08));
             assert_eq!(by(EventForecast::Last, 5, 1.0), chain.named());
         }
     }
