@@ -137,7 +137,7 @@ pub fn update_on_event(
     };
     settings.weighting = measured.weighting;
     let problem = TransmissibilityProblem::new(
-        (&setup.model, &parts.shell, &parts.groups),
+        (&setup.model, &parts.grounded),
         measured.plan.iter().map(|p| p.input).collect(),
         measured.combination.clone(),
         setup.kappa.clone(),
@@ -260,9 +260,7 @@ fn fit_modes(
     let inputs: Vec<_> = signals.plan.iter().map(|p| p.input).collect();
     let state = &solution.state;
     let motion = SupportMotion::new(
-        &setup.model,
-        &parts.shell,
-        &parts.groups,
+        (&setup.model, &parts.grounded),
         &kappa,
         &problem.fields_at(&p),
         state,

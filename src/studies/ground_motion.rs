@@ -19,7 +19,7 @@ use anyhow::{bail, Result};
 use splinewatch_core::model::supports::SupportGroups;
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::ModalState;
-use splinewatch_core::response::support_motion::SupportMotion;
+use splinewatch_core::response::support_motion::{GroundedStructure, SupportMotion};
 use splinewatch_core::updating::{base_values, fields_at, model_at, Parameter};
 
 /// The model at one parameter point, ready to be driven by its grounds.
@@ -45,8 +45,7 @@ impl GroundModel {
     pub fn at(parts: &GroundParts, named: &[NamedValue]) -> Result<Self> {
         let GroundParts {
             setup,
-            shell,
-            groups,
+            grounded,
             plan,
             parameters,
         } = parts;
@@ -56,15 +55,16 @@ impl GroundModel {
         let (kappa, damping) = model_at(parameters, &setup.kappa, &setup.damping, &values)?;
         let theta = fields_at(parameters, &theta0, &values);
         let inputs: Vec<_> = plan.iter().map(|p| p.input).collect();
-        let (state, motion) =
-            SupportMotion::with_state(&setup.model, shell, groups, (&kappa, &theta, &damping), &inputs)
-                .map_err(|e| anyhow::anyhow!("the model's modes and support motion: {e}"))?;
+        let (state, motion) = SupportMotion::with_state((&setup.model, grounded), (&kappa, &theta, &damping), &inputs)
+            .map_err(|e| anyhow::anyhow!("the model's modes and support motion: {e}"))?;
         Ok(Self {
             plan: plan.clone(),
             state,
             motion,
             outputs: setup.sensor_names.clone(),
-            anchors: groups.names().iter().cloned().zip(groups.anchors(shell)).collect(),
+            anchors: (grounded.groups().names().iter().cloned())
+                .zip(grounded.groups().anchors(grounded.structure()))
+                .collect(),
         })
     }
 
@@ -115,8 +115,9 @@ impl GroundModel {
 #[derive(Debug)]
 pub struct GroundParts {
     pub setup: FrfSetup,
-    pub shell: ShellModel,
-    pub groups: SupportGroups,
+    /// The structure on its support groups, their constraint lifts found
+    /// once.
+    pub grounded: GroundedStructure,
     /// The config's ground inputs (every one: a record's own is kept to
     /// the sensors it holds).
     pub plan: Vec<GroundInputPlan>,
@@ -128,8 +129,8 @@ impl GroundParts {
         let (shell, groups, plan) = ground_setup(config)?;
         Ok(Self {
             setup: frf_setup(config)?,
-            shell,
-            groups,
+            grounded: GroundedStructure::new(shell, groups)
+                .map_err(|e| anyhow::anyhow!("the model's supports: {e}"))?,
             plan,
             parameters: config.build_parameters()?,
         })

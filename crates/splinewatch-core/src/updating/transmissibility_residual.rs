@@ -33,10 +33,8 @@ use super::{
     UpdateError, UpdateResult, UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
-use crate::model::supports::SupportGroups;
-use crate::model::ShellModel;
 use crate::response::frf::{FrfModel, ModalState};
-use crate::response::support_motion::{GroundInput, SensitivitySelection, SupportMotion};
+use crate::response::support_motion::{GroundInput, GroundedStructure, SensitivitySelection, SupportMotion};
 use faer::c64;
 
 /// How the model's transmissibilities make the measured values.
@@ -55,8 +53,7 @@ pub enum Combination {
 #[derive(Debug, Clone)]
 pub struct TransmissibilityProblem<'a> {
     model: &'a FrfModel,
-    shell: &'a ShellModel,
-    groups: &'a SupportGroups,
+    grounded: &'a GroundedStructure,
     inputs: Vec<GroundInput>,
     combination: Combination,
     kappa: Vec<Vec<f64>>,
@@ -91,12 +88,12 @@ pub struct Extra {
 }
 
 impl<'a> TransmissibilityProblem<'a> {
-    /// The model `model` (built from `shell`) driven by `inputs`; the
+    /// The model `model` (of the structure `grounded`) driven by `inputs`; the
     /// measured FRFs' `output` indexes the model's sensors, their `input`
     /// the measured inputs of `combination` (see [`Combination`]).
     #[allow(clippy::too_many_arguments)] // the model, its supports and inputs, the start and the data
     pub fn new(
-        (model, shell, groups): (&'a FrfModel, &'a ShellModel, &'a SupportGroups),
+        (model, grounded): (&'a FrfModel, &'a GroundedStructure),
         inputs: Vec<GroundInput>,
         combination: Combination,
         kappa: Vec<Vec<f64>>,
@@ -106,6 +103,9 @@ impl<'a> TransmissibilityProblem<'a> {
         settings: UpdateSettings,
     ) -> Result<Self, UpdateError> {
         check_parameters(&parameters, &kappa, model, &damping)?;
+        grounded
+            .check_inputs(&inputs)
+            .map_err(|e| UpdateError::Data(format!("support motion: {e}")))?;
         let measured_inputs = match &combination {
             Combination::Sum(groups) => {
                 if let Some(c) = groups
@@ -161,8 +161,7 @@ impl<'a> TransmissibilityProblem<'a> {
         let sqrt_weights = sqrt_weights(measured, &lines, settings.weighting)?;
         Ok(Self {
             model,
-            shell,
-            groups,
+            grounded,
             inputs,
             combination,
             kappa,
@@ -244,14 +243,9 @@ impl<'a> TransmissibilityProblem<'a> {
     pub(super) fn evaluate(&self, p: &[f64], jacobian: bool) -> Result<Evaluated<Extra>, UpdateError> {
         let (kappa, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
         let theta = fields_at(&self.parameters, self.model.field_coefficients(), p);
-        let (state, motion) = SupportMotion::with_state(
-            self.model,
-            self.shell,
-            self.groups,
-            (&kappa, &theta, &damping),
-            &self.inputs,
-        )
-        .map_err(|e| UpdateError::Data(format!("support motion: {e}")))?;
+        let (state, motion) =
+            SupportMotion::with_state((self.model, self.grounded), (&kappa, &theta, &damping), &self.inputs)
+                .map_err(|e| UpdateError::Data(format!("support motion: {e}")))?;
         self.evaluate_motion(p, state, motion, jacobian)
     }
 
@@ -284,7 +278,7 @@ impl<'a> TransmissibilityProblem<'a> {
             let s = motion.sensitivities_for(
                 self.model,
                 (&loads, &load_state),
-                self.groups,
+                self.grounded.groups(),
                 &state,
                 &damping,
                 &self.model_pairs,
@@ -369,9 +363,7 @@ impl<'a> TransmissibilityProblem<'a> {
         let (kappa, damping) = model_at(&self.parameters, &self.kappa, &self.damping, start)?;
         let theta = fields_at(&self.parameters, self.model.field_coefficients(), start);
         SupportMotion::reanalysed(
-            self.model,
-            self.shell,
-            self.groups,
+            (self.model, self.grounded),
             (&kappa, &theta),
             (&self.inputs, &self.model.loss_factor_loads(&damping)),
             &varied,

@@ -8,6 +8,7 @@ use splinewatch_core::model::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::{ModalState, SensorPoint};
 use splinewatch_core::response::modal_sensitivity::ModalSensitivities;
+use splinewatch_core::response::support_motion::GroundedStructure;
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::updating::{Parameter, ParameterKind};
 
@@ -237,4 +238,9 @@ pub fn in_parallel<T: Send>(count: u64, job: impl Fn(u64) -> T + Sync) -> Vec<T>
         }
     });
     slots.into_iter().map(|v| v.expect("every record identified")).collect()
+}
+
+/// `model` on `groups`, as [`SupportMotion`](splinewatch_core::response::support_motion::SupportMotion) takes them.
+pub fn grounded(model: &ShellModel, groups: &splinewatch_core::model::supports::SupportGroups) -> GroundedStructure {
+    GroundedStructure::new(model.clone(), groups.clone()).unwrap()
 }

@@ -10,9 +10,9 @@ use super::common::{
 use faer::c64;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::supports::SupportGroups;
-use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::Quantity;
 use splinewatch_core::response::frf::{FrfModel, SensorPoint};
+use splinewatch_core::response::support_motion::GroundedStructure;
 use splinewatch_core::response::support_motion::{GroundInput, SupportMotion};
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet};
 use splinewatch_core::updating::joint::JointTransmissibilityProblem;
@@ -23,9 +23,9 @@ use splinewatch_core::updating::{ModalUpdateProblem, ResidualModel, UpdateSettin
 const INPUTS: [GroundInput; 2] = [GroundInput { group: 1, axis: 2 }, GroundInput { group: 2, axis: 2 }];
 
 struct Deck {
-    shell: ShellModel,
     frf: FrfModel,
-    groups: SupportGroups,
+    /// The deck on its grounds: still, west, east.
+    grounded: GroundedStructure,
 }
 
 /// The Sinello deck with its two spring strips on two grounds (west, east).
@@ -35,7 +35,10 @@ fn deck() -> Deck {
     let frf = FrfModel::new(shell.assemble().unwrap(), &sensors).unwrap();
     let names = vec!["still".to_string(), "west".to_string(), "east".to_string()];
     let groups = SupportGroups::new(names, vec![1, 2], vec![], &shell).unwrap();
-    Deck { shell, frf, groups }
+    Deck {
+        frf,
+        grounded: GroundedStructure::new(shell, groups).unwrap(),
+    }
 }
 
 fn damping() -> DampingCurve {
@@ -46,7 +49,7 @@ fn damping() -> DampingCurve {
 /// (the sum of the model inputs it combines).
 fn transmissibilities(d: &Deck, kappa: &[Vec<f64>], combined: &[Vec<usize>], lines: &[f64]) -> Vec<Vec<Vec<c64>>> {
     let state = d.frf.modal_state(kappa, &damping()).unwrap();
-    let motion = SupportMotion::new(&d.frf, &d.shell, &d.groups, kappa, &[], &state, &INPUTS).unwrap();
+    let motion = SupportMotion::new((&d.frf, &d.grounded), kappa, &[], &state, &INPUTS).unwrap();
     (0..d.frf.sensor_count())
         .map(|s| {
             combined
@@ -103,7 +106,7 @@ fn the_truncated_model_recovers_the_springs_through_its_ritz_basis() {
     let dense = deck();
     let sensors: Vec<SensorPoint> = sinello_sensors()[..4].to_vec();
     let d = Deck {
-        frf: FrfModel::truncated(&dense.shell, &sensors, 150.0).unwrap(),
+        frf: FrfModel::truncated(dense.grounded.structure(), &sensors, 150.0).unwrap(),
         ..dense
     };
     let reduced = d.frf.with_reanalysis((&true_kappa(), &[]), &[], &[0, 4]).unwrap();
@@ -134,7 +137,7 @@ fn recovers_the_springs_from_40_percent_low(d: &Deck, updated: &[usize]) {
         .collect();
     let parameters: Vec<_> = updated.iter().map(|&j| spring_parameters()[j].clone()).collect();
     let problem = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
+        (&d.frf, &d.grounded),
         INPUTS.to_vec(),
         Combination::Sum(combined),
         start_kappa.clone(),
@@ -187,7 +190,7 @@ fn combined_noisy_transmissibilities_give_the_springs_with_their_spread() {
         .map(|k| k.iter().map(|v| 1.3 * v).collect())
         .collect();
     let problem = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
+        (&d.frf, &d.grounded),
         INPUTS.to_vec(),
         Combination::Sum(combined),
         start_kappa.clone(),
@@ -219,7 +222,7 @@ fn inputs_that_name_nothing_are_refused() {
     let set = measured_set(transmissibilities(&d, &true_kappa(), &[vec![0]], &lines), &lines, None);
     let make = |combined: Vec<Vec<usize>>| {
         TransmissibilityProblem::new(
-            (&d.frf, &d.shell, &d.groups),
+            (&d.frf, &d.grounded),
             INPUTS.to_vec(),
             Combination::Sum(combined),
             true_kappa(),
@@ -284,7 +287,7 @@ fn a_tied_pair_of_springs_is_one_parameter() {
     parameters.push(tied_second_coefficients());
     let start_kappa: Vec<Vec<f64>> = truth.iter().map(|k| k.iter().map(|v| 0.7 * v).collect()).collect();
     let problem = TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
+        (&d.frf, &d.grounded),
         INPUTS.to_vec(),
         Combination::Sum(combined),
         start_kappa.clone(),
@@ -402,7 +405,7 @@ fn spectra_problem<'a>(
     start: &[Vec<f64>],
 ) -> TransmissibilityProblem<'a> {
     TransmissibilityProblem::new(
-        (&d.frf, &d.shell, &d.groups),
+        (&d.frf, &d.grounded),
         INPUTS.to_vec(),
         Combination::Spectra(spectra),
         start.to_vec(),

@@ -2,6 +2,7 @@
 //! consistent mass, `tests/fixtures/make_opensees_frames.py`): the members
 //! cut into the same elements in both programs.
 
+use super::common::grounded;
 use splinewatch_core::model::beam::{BeamMaterial, Section, StiffnessPart};
 use splinewatch_core::model::bearings::PatchPoint;
 use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
@@ -380,7 +381,7 @@ fn assert_three_grounds_translate_rigidly(
 ) {
     for axis in 0..3 {
         let inputs: Vec<GroundInput> = (0..3).map(|group| GroundInput { group, axis }).collect();
-        let motion = SupportMotion::new(frf, model, groups, kappa, &[], state, &inputs).unwrap();
+        let motion = SupportMotion::new((frf, &grounded(model, groups)), kappa, &[], state, &inputs).unwrap();
         for (s, sensor) in sensors.iter().enumerate() {
             let sum: f64 = (0..3).map(|g| motion.quasi_static(s, g)).sum();
             let rigid = sensor.direction[axis];
@@ -507,7 +508,7 @@ fn check_truncated_ground(model: &ShellModel, cracked: bool) {
     let pairs: Vec<(usize, usize)> = (0..sensors.len()).flat_map(|r| (0..3).map(move |c| (r, c))).collect();
     let run = |frf: &FrfModel| {
         let (state, motion) =
-            SupportMotion::with_state(frf, model, &groups, (&[], &theta, &damping()), &inputs).unwrap();
+            SupportMotion::with_state((frf, &grounded(model, &groups)), (&[], &theta, &damping()), &inputs).unwrap();
         let loads = frf.with_extra_rows(motion.load_rows(frf));
         let load_state = loads.modal_state_with_fields(&[], &theta, &damping()).unwrap();
         let t = motion.transmissibility_with_residual(frf, &loads, &load_state, &pairs, &lines);
@@ -592,11 +593,11 @@ fn line_support_sensitivities_on_a_bent_match_central_differences() {
         .collect();
     let transmissibility = |kappa: &[Vec<f64>]| {
         let state = frf.modal_state(kappa, &damping()).unwrap();
-        let motion = SupportMotion::new(&frf, &model, &groups, kappa, &[], &state, &inputs).unwrap();
+        let motion = SupportMotion::new((&frf, &grounded(&model, &groups)), kappa, &[], &state, &inputs).unwrap();
         motion.transmissibility(&state, &pairs, &lines)
     };
     let state = frf.modal_state(&kappa, &damping()).unwrap();
-    let motion = SupportMotion::new(&frf, &model, &groups, &kappa, &[], &state, &inputs).unwrap();
+    let motion = SupportMotion::new((&frf, &grounded(&model, &groups)), &kappa, &[], &state, &inputs).unwrap();
     let loads = frf.with_extra_rows(motion.load_rows(&frf));
     let analytic = motion.sensitivities(&frf, &loads, &groups, &state, &damping(), &pairs, &lines);
     let nf = lines.len();

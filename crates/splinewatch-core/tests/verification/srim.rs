@@ -3,6 +3,7 @@
 //! different band-limited random vertical accelerations (the measured
 //! inputs), twelve vertical deck accelerometers, 2 % noise, one minute.
 
+use super::common::grounded;
 use super::common::{gaussian, in_parallel, sinello_model, sinello_sensors, true_kappa};
 use splinewatch_core::identification::oma::OmaSettings;
 use splinewatch_core::identification::srim::identify_io;
@@ -26,7 +27,7 @@ pub(super) fn shaken_deck(seconds: f64, seed: u64) -> (Vec<Vec<f64>>, Vec<Vec<f6
     let state = model.modal_state(&kappa, &damping).unwrap();
     let groups = SupportGroups::new(vec!["west".into(), "east".into()], vec![0, 1], vec![], &shell_model).unwrap();
     let inputs = [GroundInput { group: 0, axis: 2 }, GroundInput { group: 1, axis: 2 }];
-    let motion = SupportMotion::new(&model, &shell_model, &groups, &kappa, &[], &state, &inputs).unwrap();
+    let motion = SupportMotion::new((&model, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
     let n = (seconds * FS) as usize;
     let fine = n * OVERSAMPLE;
     let ground: Vec<Vec<f64>> = (0..2)

@@ -2,9 +2,10 @@
 //! forms, the relative formulation solved directly, superposition of groups
 //! and the time recursion.
 
-use super::common::{clamped_curved_panel, sinello_model, sinello_sensors, true_kappa};
+use super::common::{clamped_curved_panel, grounded, sinello_model, sinello_sensors, true_kappa};
 use faer::c64;
 use splinewatch_core::geometry::knots::KnotVector;
+use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::shell::Shell;
@@ -12,7 +13,7 @@ use splinewatch_core::model::stiffness_field::StiffnessField;
 use splinewatch_core::model::supports::{SupportError, SupportGroups};
 use splinewatch_core::model::ShellModel;
 use splinewatch_core::response::frf::{FrfModel, ModalState, Quantity, SensorPoint};
-use splinewatch_core::response::support_motion::{GroundInput, SupportMotion};
+use splinewatch_core::response::support_motion::{GroundInput, GroundedStructure, SupportMotion};
 use splinewatch_core::solvers::modal::ModeKind;
 use std::f64::consts::PI;
 
@@ -91,7 +92,7 @@ fn a_rigid_deck_on_springs_has_the_single_dof_transmissibility() {
     let damping = damping();
     let state = model.modal_state(&kappa, &damping).unwrap();
     let groups = SupportGroups::uniform(&plate);
-    let motion = SupportMotion::new(&model, &plate, &groups, &kappa, &[], &state, &[VERTICAL]).unwrap();
+    let motion = SupportMotion::new((&model, &grounded(&plate, &groups)), &kappa, &[], &state, &[VERTICAL]).unwrap();
     let bounce = (0..state.modes.len())
         .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid)
         .max_by(|&a, &b| {
@@ -151,7 +152,14 @@ fn the_absolute_formulation_gives_the_relative_one_on_the_sinello_deck_and_a_cla
         let groups = SupportGroups::uniform(&shell_model);
         for axis in axes {
             let input = GroundInput { group: 0, axis };
-            let motion = SupportMotion::new(&model, &shell_model, &groups, &kappa, &[], &state, &[input]).unwrap();
+            let motion = SupportMotion::new(
+                (&model, &grounded(&shell_model, &groups)),
+                &kappa,
+                &[],
+                &state,
+                &[input],
+            )
+            .unwrap();
             // Γ = R: the quasi-static response is the rigid translation, and the
             // participations are Φᵀ M R.
             let n = state.modes.shapes.nrows();
@@ -210,11 +218,9 @@ fn the_groups_of_a_deck_add_up_to_uniform_excitation() {
     let names = vec!["edge".to_string(), "west".to_string(), "east".to_string()];
     let groups = SupportGroups::new(names, vec![1, 2], vec![0], &shell_model).unwrap();
     let inputs: Vec<GroundInput> = (0..3).map(|group| GroundInput { group, axis: 2 }).collect();
-    let motion = SupportMotion::new(&model, &shell_model, &groups, &kappa, &[], &state, &inputs).unwrap();
+    let motion = SupportMotion::new((&model, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
     let uniform = SupportMotion::new(
-        &model,
-        &shell_model,
-        &SupportGroups::uniform(&shell_model),
+        (&model, &grounded(&shell_model, &SupportGroups::uniform(&shell_model))),
         &kappa,
         &[],
         &state,
@@ -236,15 +242,39 @@ fn the_groups_of_a_deck_add_up_to_uniform_excitation() {
     }
     // A ground input naming no group is refused, not indexed.
     let bad = SupportMotion::new(
-        &model,
-        &shell_model,
-        &groups,
+        (&model, &grounded(&shell_model, &groups)),
         &kappa,
         &[],
         &state,
         &[GroundInput { group: 3, axis: 2 }],
     );
     assert!(matches!(bad, Err(SupportError::Input { group: 3, .. })), "{bad:?}");
+}
+
+/// Two clamped edges meeting at a corner, each on its own ground: the
+/// corner cannot follow both, and the grounded structure is refused once,
+/// naming the two groups, before any evaluation.
+#[test]
+fn a_node_held_by_two_grounds_is_refused() {
+    let mut panel = clamped_curved_panel();
+    panel.constraints.push(EdgeConstraint {
+        edge: Edge::Xi0,
+        kind: SupportKind::Clamped,
+        patch: 0,
+    });
+    let names = vec!["springs".to_string(), "south".to_string(), "west".to_string()];
+    let springs = vec![0; panel.spring_field_count()];
+    let groups = SupportGroups::new(names, springs, vec![1, 2], &panel).unwrap();
+    match GroundedStructure::new(panel, groups) {
+        Err(e @ SupportError::TwoGrounds { .. }) => {
+            let message = e.to_string();
+            assert!(
+                message.contains("\"south\"") && message.contains("\"west\""),
+                "{message}"
+            );
+        }
+        other => panic!("a corner on two grounds was accepted or refused otherwise: {other:?}"),
+    }
 }
 
 #[test]
@@ -258,7 +288,14 @@ fn ground_motion_along_an_axis_no_support_holds_leaves_the_deck_still() {
     let input = GroundInput { group: 0, axis: 0 };
     // Uniform x motion has no ground force at all: Γ = 0 is the (trivial)
     // answer, and the deck does not follow.
-    let motion = SupportMotion::new(&model, &shell_model, &groups, &kappa, &[], &state, &[input]).unwrap();
+    let motion = SupportMotion::new(
+        (&model, &grounded(&shell_model, &groups)),
+        &kappa,
+        &[],
+        &state,
+        &[input],
+    )
+    .unwrap();
     assert!((0..12).all(|s| motion.quasi_static(s, 0).abs() < 1e-12));
 }
 
@@ -270,7 +307,14 @@ fn the_recursion_driven_by_the_ground_reaches_the_transmissibility() {
     let kappa = true_kappa();
     let state = model.modal_state(&kappa, &damping()).unwrap();
     let groups = SupportGroups::uniform(&shell_model);
-    let motion = SupportMotion::new(&model, &shell_model, &groups, &kappa, &[], &state, &[VERTICAL]).unwrap();
+    let motion = SupportMotion::new(
+        (&model, &grounded(&shell_model, &groups)),
+        &kappa,
+        &[],
+        &state,
+        &[VERTICAL],
+    )
+    .unwrap();
     let (f, fs) = (7.0, 2048.0);
     let mut sim = motion.simulator(&state, 1.0 / fs);
     let n = (60.0 * fs) as usize;
@@ -336,11 +380,19 @@ fn transmissibility_sensitivities_match_central_differences() {
     let pairs: Vec<(usize, usize)> = (0..3).flat_map(|r| (0..3).map(move |c| (r, c))).collect();
     let transmissibility = |kappa: &[Vec<f64>], theta: &[Vec<f64>], gamma: &[f64]| {
         let state = frf.modal_state_with_fields(kappa, theta, &curve(gamma)).unwrap();
-        let motion = SupportMotion::new(&frf, &shell_model, &groups, kappa, theta, &state, &inputs).unwrap();
+        let motion =
+            SupportMotion::new((&frf, &grounded(&shell_model, &groups)), kappa, theta, &state, &inputs).unwrap();
         motion.transmissibility(&state, &pairs, &lines)
     };
     let state = frf.modal_state_with_fields(&kappa, &theta, &curve(&gamma)).unwrap();
-    let motion = SupportMotion::new(&frf, &shell_model, &groups, &kappa, &theta, &state, &inputs).unwrap();
+    let motion = SupportMotion::new(
+        (&frf, &grounded(&shell_model, &groups)),
+        &kappa,
+        &theta,
+        &state,
+        &inputs,
+    )
+    .unwrap();
     let loads = frf.with_extra_rows(motion.load_rows(&frf));
     let analytic = motion.sensitivities(&frf, &loads, &groups, &state, &curve(&gamma), &pairs, &lines);
     let nf = lines.len();
@@ -421,7 +473,7 @@ fn the_truncated_path_agrees_with_every_mode() {
     let pairs: Vec<(usize, usize)> = (0..sensors.len()).flat_map(|r| (0..2).map(move |c| (r, c))).collect();
     let run = |frf: &FrfModel| {
         let state = frf.modal_state(&kappa, &damping()).unwrap();
-        let motion = SupportMotion::new(frf, &shell_model, &groups, &kappa, &[], &state, &inputs).unwrap();
+        let motion = SupportMotion::new((frf, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
         let loads = frf.with_extra_rows(motion.load_rows(frf));
         let load_state = loads.modal_state(&kappa, &damping()).unwrap();
         let t = motion.transmissibility_with_residual(frf, &loads, &load_state, &pairs, &lines);
@@ -441,7 +493,7 @@ fn the_truncated_path_agrees_with_every_mode() {
     let nf = lines.len();
     // The dense path's two evaluations are the same sum.
     let state = dense.modal_state(&kappa, &damping()).unwrap();
-    let motion = SupportMotion::new(&dense, &shell_model, &groups, &kappa, &[], &state, &inputs).unwrap();
+    let motion = SupportMotion::new((&dense, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
     let direct = motion.transmissibility(&state, &pairs, &lines);
     assert!(max_relative_error(&t_dense, &direct) <= 1e-10);
     let mut worst = (0.0f64, 0.0f64);
@@ -462,9 +514,13 @@ fn the_truncated_path_agrees_with_every_mode() {
     // (the ground forces' static responses from the modes' factorisation).
     for frf in [&dense, &truncated] {
         let state = frf.modal_state(&kappa, &damping()).unwrap();
-        let motion = SupportMotion::new(frf, &shell_model, &groups, &kappa, &[], &state, &inputs).unwrap();
-        let (one_state, one_motion) =
-            SupportMotion::with_state(frf, &shell_model, &groups, (&kappa, &[], &damping()), &inputs).unwrap();
+        let motion = SupportMotion::new((frf, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
+        let (one_state, one_motion) = SupportMotion::with_state(
+            (frf, &grounded(&shell_model, &groups)),
+            (&kappa, &[], &damping()),
+            &inputs,
+        )
+        .unwrap();
         assert_eq!(one_state.modes.omega2, state.modes.omega2);
         for (r, c) in pairs.iter().copied() {
             assert_eq!(

@@ -103,6 +103,7 @@ impl Assembly for LiftedColumns<'_> {
 
 /// The nodes on constrained edges and at held beam bases, and the ground
 /// each follows (`ℓ`).
+#[derive(Debug, Clone)]
 pub(super) struct GroundLifts {
     pub(super) dofs: DofMap,
     /// Per node, the group whose ground it follows, if a support holds it.

@@ -36,16 +36,17 @@
 //! `T_r(ω) = N_r Γ + ω² Σ_i a_{r,i} L_i / D_i(ω)`, `D_i` of eq. (31).
 
 mod ground_forces;
+mod grounded;
 
 use crate::model::damping::DampingCurve;
 use crate::model::dofs::DofMap;
 use crate::model::supports::{SupportError, SupportGroups};
-use crate::model::ShellModel;
 use crate::response::frf::{FrfModel, FrfRequest, ModalState, Quantity};
 use crate::response::simulate::ModalSimulator;
 use crate::solvers::modal::ModeKind;
 use faer::{c64, Mat};
 use ground_forces::{ground_force, truncated_forces, GroundLifts};
+pub use grounded::GroundedStructure;
 use std::f64::consts::PI;
 
 /// A load as a sparse row on the generalised dofs `(dof, value)`.
@@ -106,31 +107,30 @@ pub struct TransmissibilitySensitivities {
 
 impl SupportMotion {
     /// The motion for `inputs` of the model `frf` (dense, or truncated: see
-    /// `truncated_influence`) with spring coefficients `kappa` and
-    /// stiffness-field coefficients `theta` at which `state` was solved.
+    /// `truncated_influence`) of the structure `grounded`, with spring
+    /// coefficients `kappa` and stiffness-field coefficients `theta` at
+    /// which `state` was solved.
     pub fn new(
-        frf: &FrfModel,
-        model: &ShellModel,
-        groups: &SupportGroups,
+        (frf, grounded): (&FrfModel, &GroundedStructure),
         kappa: &[Vec<f64>],
         theta: &[Vec<f64>],
         state: &ModalState,
         inputs: &[GroundInput],
     ) -> Result<Self, SupportError> {
-        check_inputs(frf, kappa, groups, inputs)?;
-        let lifts = GroundLifts::new(model, groups)?;
+        check_inputs(frf, kappa, grounded, inputs)?;
+        let (lifts, groups) = (grounded.lifts(), grounded.groups());
         let influence = match frf.dense() {
-            Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, &lifts),
+            Some(assembled) => dense_influence(assembled, groups, kappa, theta, state, inputs, lifts),
             None => {
-                let forces = truncated_forces(frf, model, groups, (kappa, theta), inputs, &lifts)?;
+                let forces = truncated_forces(frf, grounded.structure(), groups, (kappa, theta), inputs, lifts)?;
                 let (model, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
                 let (_, responses) = model
                     .modes_and_responses(kappa, theta, cutoff_hz, &forces)
                     .map_err(|e| SupportError::Solve(e.to_string()))?;
-                truncated_influence(state, &forces, &responses, cutoff_hz, (&lifts, inputs))
+                truncated_influence(state, &forces, &responses, cutoff_hz, (lifts, inputs))
             }
         };
-        Ok(Self::from_influence(frf, state, inputs, influence, lifts.dofs))
+        Ok(Self::from_influence(frf, state, inputs, influence, lifts.dofs.clone()))
     }
 
     /// The modal state at `kappa`, `theta` and `damping`
@@ -139,35 +139,33 @@ impl SupportMotion {
     /// static responses to the ground forces come from the modes' own
     /// factorisation instead of a second solve.
     pub fn with_state(
-        frf: &FrfModel,
-        model: &ShellModel,
-        groups: &SupportGroups,
+        (frf, grounded): (&FrfModel, &GroundedStructure),
         (kappa, theta, damping): (&[Vec<f64>], &[Vec<f64>], &DampingCurve),
         inputs: &[GroundInput],
     ) -> Result<(ModalState, Self), SupportError> {
-        check_inputs(frf, kappa, groups, inputs)?;
-        let lifts = GroundLifts::new(model, groups)?;
+        check_inputs(frf, kappa, grounded, inputs)?;
+        let (lifts, groups) = (grounded.lifts(), grounded.groups());
         let solve_error = |e: crate::response::frf::FrfError| SupportError::Solve(e.to_string());
         let (state, influence) = match frf.dense() {
             Some(assembled) => {
                 let state = frf
                     .modal_state_with_fields(kappa, theta, damping)
                     .map_err(solve_error)?;
-                let influence = dense_influence(assembled, groups, kappa, theta, &state, inputs, &lifts);
+                let influence = dense_influence(assembled, groups, kappa, theta, &state, inputs, lifts);
                 (state, influence)
             }
             None => {
-                let forces = truncated_forces(frf, model, groups, (kappa, theta), inputs, &lifts)?;
+                let forces = truncated_forces(frf, grounded.structure(), groups, (kappa, theta), inputs, lifts)?;
                 let (state, responses) = frf
                     .modal_state_with_loads(kappa, theta, damping, &forces)
                     .map_err(solve_error)?;
                 let (_, cutoff_hz) = frf.sparse().expect("a model is dense or truncated");
                 let responses = responses.expect("a truncated model gives the loads' responses");
-                let influence = truncated_influence(&state, &forces, &responses, cutoff_hz, (&lifts, inputs));
+                let influence = truncated_influence(&state, &forces, &responses, cutoff_hz, (lifts, inputs));
                 (state, influence)
             }
         };
-        let motion = Self::from_influence(frf, &state, inputs, influence, lifts.dofs);
+        let motion = Self::from_influence(frf, &state, inputs, influence, lifts.dofs.clone());
         Ok((state, motion))
     }
 
@@ -178,9 +176,7 @@ impl SupportMotion {
     /// projection wherever only those springs move
     /// ([`FrfModel::with_reanalysis`]); a dense model as it is.
     pub fn reanalysed(
-        frf: &FrfModel,
-        model: &ShellModel,
-        groups: &SupportGroups,
+        (frf, grounded): (&FrfModel, &GroundedStructure),
         (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
         (inputs, extra): (&[GroundInput], &[LoadRow]),
         varied: &[usize],
@@ -188,9 +184,15 @@ impl SupportMotion {
         if frf.dense().is_some() {
             return Ok(frf.clone());
         }
-        check_inputs(frf, kappa, groups, inputs)?;
-        let lifts = GroundLifts::new(model, groups)?;
-        let mut forces = truncated_forces(frf, model, groups, (kappa, theta), inputs, &lifts)?;
+        check_inputs(frf, kappa, grounded, inputs)?;
+        let mut forces = truncated_forces(
+            frf,
+            grounded.structure(),
+            grounded.groups(),
+            (kappa, theta),
+            inputs,
+            grounded.lifts(),
+        )?;
         forces.extend_from_slice(extra);
         frf.with_reanalysis((kappa, theta), &forces, varied)
             .map_err(|e| SupportError::Solve(e.to_string()))
@@ -605,13 +607,13 @@ fn static_by_modes(state: &ModalState, force: &[f64]) -> Vec<f64> {
     x
 }
 
-/// The inputs name groups and axes that exist, and `kappa` holds a vector
-/// per spring field of `frf` (a short one would silently leave springs
-/// out of the ground's forces).
+/// The inputs name groups and axes of `grounded` that exist, and `kappa`
+/// holds a vector per spring field of `frf` (a short one would silently
+/// leave springs out of the ground's forces).
 fn check_inputs(
     frf: &FrfModel,
     kappa: &[Vec<f64>],
-    groups: &SupportGroups,
+    grounded: &GroundedStructure,
     inputs: &[GroundInput],
 ) -> Result<(), SupportError> {
     let fields = frf.spring_blocks().len();
@@ -622,17 +624,7 @@ fn check_inputs(
             expected: fields,
         });
     }
-    for (index, i) in inputs.iter().enumerate() {
-        if i.group >= groups.names().len() || i.axis > 2 {
-            return Err(SupportError::Input {
-                index,
-                group: i.group,
-                axis: i.axis,
-                count: groups.names().len(),
-            });
-        }
-    }
-    Ok(())
+    grounded.check_inputs(inputs)
 }
 
 /// `Γ` on the dense path: `ℓ + Σ_i φ_i P_i / λ_i` over every mode.
