@@ -323,9 +323,11 @@ mod tests {
             ]
         );
         assert_eq!(
-            crate::config::parameter_family("west_abutment.y.eta"),
-            crate::config::ParameterFamily::LossFactor
+            config.parameter_family("west_abutment.y.eta"),
+            Some(crate::config::ParameterFamily::LossFactor)
         );
+        // A component the support does not have is no parameter of it.
+        assert_eq!(config.parameter_family("west_abutment.kz.eta"), None);
     }
 
     /// A tied support's components join its leader's sites: one η per

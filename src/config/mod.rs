@@ -50,7 +50,7 @@ pub use schema::config_schema;
 pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
 #[cfg(feature = "daemon")]
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
-pub use updating::{parameter_family, ParameterFamily, Residues, UpdatingConfig};
+pub use updating::{ParameterFamily, Residues, UpdatingConfig};
 pub use web::{WebConfig, WebTlsConfig};
 pub use zenoh::ZenohConfig;
 

@@ -158,25 +158,8 @@ pub enum ParameterFamily {
     LossFactor,
 }
 
-/// The family of the parameter named `name`.
-pub fn parameter_family(name: &str) -> ParameterFamily {
-    let last = name.rsplit('.').next().unwrap_or("");
-    if name.starts_with("damping.") {
-        ParameterFamily::Damping
-    } else if last == "eta" {
-        ParameterFamily::LossFactor
-    } else if last == "stiffness" {
-        ParameterFamily::MemberStiffness
-    } else if matches!(last, "kx" | "ky" | "kz") {
-        ParameterFamily::Bearing
-    } else if matches!(last, "x" | "y" | "z" | "rx" | "ry" | "rz") {
-        ParameterFamily::ElasticSupport
-    } else if last.len() > 1 && last.starts_with('s') && last[1..].bytes().all(|b| b.is_ascii_digit()) {
-        ParameterFamily::StiffnessField
-    } else {
-        ParameterFamily::Spring
-    }
-}
+/// The components a `[[model.supports]]` entry may update.
+const SUPPORT_COMPONENTS: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
 impl Config {
     /// The unit of updating parameter `name`: spring coefficients κ
@@ -186,10 +169,10 @@ impl Config {
     /// damping curve's γ (`damping.g<z>`), loss factors (`<support>.eta`)
     /// and stiffness-field multipliers θ (`<field>.s<j>`) are ratios.
     pub fn parameter_unit(&self, name: &str) -> &'static str {
-        match parameter_family(name) {
-            ParameterFamily::Spring => "N/m³",
-            ParameterFamily::Bearing => "N/m",
-            ParameterFamily::ElasticSupport => {
+        match self.parameter_family(name) {
+            Some(ParameterFamily::Spring) => "N/m³",
+            Some(ParameterFamily::Bearing) => "N/m",
+            Some(ParameterFamily::ElasticSupport) => {
                 let (support, component) = name.rsplit_once('.').unwrap_or((name, ""));
                 let along_edge = self
                     .model
@@ -205,6 +188,50 @@ impl Config {
                 }
             }
             _ => "-",
+        }
+    }
+
+    /// The family of updating parameter `name`, from the entry it is
+    /// attached to (the spring field, bearing, support, stiffness field or
+    /// beam its name starts with, or the damping curve) and a component that
+    /// entry has, not from how the name ends; `None` when no entry of the
+    /// config gives it.
+    pub fn parameter_family(&self, name: &str) -> Option<ParameterFamily> {
+        let m = &self.model;
+        let (entry, component) = name.rsplit_once('.')?;
+        let numbered = |prefix: char| {
+            component
+                .strip_prefix(prefix)
+                .is_some_and(|j| !j.is_empty() && j.bytes().all(|b| b.is_ascii_digit()))
+        };
+        let spring = |n: &str| m.springs.iter().any(|s| s.name == n);
+        let bearing = |n: &str| m.bearings.iter().any(|b| b.name == n);
+        let support = |n: &str| m.supports.iter().any(|s| s.name == n);
+        let field = |n: &str| m.stiffness_fields.iter().any(|f| f.name == n);
+        let beam = |n: &str| m.beams.iter().any(|b| b.name == n);
+        if component == "eta" {
+            // `<entry>.eta`, or `<support>.<component>.eta` (`<bearing>.<axis>.eta`).
+            let lossy = |n: &str| spring(n) || bearing(n) || support(n) || field(n) || beam(n);
+            let by_component = entry.rsplit_once('.').is_some_and(|(owner, c)| {
+                (support(owner) && SUPPORT_COMPONENTS.contains(&c))
+                    || (bearing(owner) && super::patches::BEARING_AXES.contains(&c))
+            });
+            return (lossy(entry) || by_component).then_some(ParameterFamily::LossFactor);
+        }
+        if entry == "damping" && m.damping.is_some() && numbered('g') {
+            Some(ParameterFamily::Damping)
+        } else if spring(entry) && numbered('k') {
+            Some(ParameterFamily::Spring)
+        } else if bearing(entry) && super::patches::BEARING_AXES.contains(&component) {
+            Some(ParameterFamily::Bearing)
+        } else if support(entry) && SUPPORT_COMPONENTS.contains(&component) {
+            Some(ParameterFamily::ElasticSupport)
+        } else if field(entry) && numbered('s') {
+            Some(ParameterFamily::StiffnessField)
+        } else if beam(entry) && component == "stiffness" {
+            Some(ParameterFamily::MemberStiffness)
+        } else {
+            None
         }
     }
 }
@@ -466,5 +493,62 @@ impl Config {
             initial_damping: u.initial_damping,
             threads,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use splinewatch_core::updating::ParameterKind;
+
+    /// Every parameter of every bundled config has the family of what it is
+    /// built on: the family found from the entry its name starts with agrees
+    /// with the kind `build_parameters` gives it (κ fields in the order
+    /// spring fields, bearings, supports).
+    #[test]
+    fn each_parameter_has_the_family_of_what_it_is_attached_to() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut seen = std::collections::BTreeSet::new();
+        for dir in ["config", "config/examples"] {
+            for entry in std::fs::read_dir(root.join(dir)).unwrap() {
+                let path = entry.unwrap().path();
+                if path.extension().is_none_or(|e| e != "toml") {
+                    continue;
+                }
+                let config = Config::from_toml(&std::fs::read_to_string(&path).unwrap()).unwrap();
+                let (springs, bearings) = (config.model.springs.len(), config.model.bearings.len());
+                for p in config.build_parameters().unwrap() {
+                    let family = config.parameter_family(&p.name);
+                    let expected = match p.kind {
+                        ParameterKind::Spring { field, .. } | ParameterKind::SpringRun { field, .. } => {
+                            if field < springs {
+                                ParameterFamily::Spring
+                            } else if field < springs + bearings {
+                                ParameterFamily::Bearing
+                            } else {
+                                ParameterFamily::ElasticSupport
+                            }
+                        }
+                        ParameterKind::Stiffness { field, .. } | ParameterKind::StiffnessRun { field, .. } => {
+                            if field < config.model.stiffness_fields.len() {
+                                ParameterFamily::StiffnessField
+                            } else {
+                                ParameterFamily::MemberStiffness
+                            }
+                        }
+                        ParameterKind::Damping { .. } => ParameterFamily::Damping,
+                        ParameterKind::LossFactor { .. } => ParameterFamily::LossFactor,
+                    };
+                    assert_eq!(family, Some(expected), "{}: {}", path.display(), p.name);
+                    seen.insert(format!("{expected:?}"));
+                }
+            }
+        }
+        // The bundled configs update springs, bearings, supports, beams,
+        // the damping curve and loss factors.
+        assert!(seen.len() >= 5, "only {seen:?}");
+        let config = Config::from_toml(include_str!("../../config/painter-street-bridge.toml")).unwrap();
+        assert_eq!(config.parameter_family("no_such_support.ry"), None);
+        assert_eq!(config.parameter_family("damping"), None);
     }
 }

@@ -100,6 +100,8 @@ pub struct RerunOutput {
     file_start_ns: Option<i128>,
     /// Names of the spring fields (their parameters are `<name>.k<j>`).
     spring_names: Vec<String>,
+    /// Each updating parameter's trend group ([`update::parameter_group`]).
+    parameter_groups: std::collections::BTreeMap<String, &'static str>,
     /// `[monitoring]`: temperature and feature values of the latest windows.
     scatter: std::collections::VecDeque<(f64, Vec<f64>)>,
     /// Whether the config has `[monitoring]` (the blueprint shows its charts).
@@ -142,6 +144,14 @@ impl RerunOutput {
             first_fields: None,
             file_start_ns: None,
             spring_names: config.model.springs.iter().map(|s| s.name.clone()).collect(),
+            parameter_groups: config
+                .build_parameters()?
+                .into_iter()
+                .map(|p| {
+                    let group = update::parameter_group(config.parameter_family(&p.name));
+                    (p.name, group)
+                })
+                .collect(),
             scatter: Default::default(),
             monitoring: config.monitoring.is_some(),
         };

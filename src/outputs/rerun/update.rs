@@ -38,7 +38,8 @@ impl RerunOutput {
     /// Value and ±1σ of every parameter, and the relative residual.
     pub(super) fn log_parameters(&mut self, report: &UpdateReport) -> Result<()> {
         for p in &report.result.parameters {
-            let path = format!("parameters/{}/{}", parameter_group(&p.name), p.name);
+            let group = self.parameter_groups.get(&p.name).copied().unwrap_or("other");
+            let path = format!("parameters/{group}/{}", p.name);
             self.log_band(&path, p.value, p.std.unwrap_or(0.0))?;
         }
         self.rec
@@ -237,19 +238,21 @@ impl RerunOutput {
     }
 }
 
-/// The trend group of a parameter: `springs` (`<spring>.k<j>`), `bearings`,
-/// `supports` (line supports' components), `fields`
+/// The trend group of a parameter of `family`: `springs` (`<spring>.k<j>`),
+/// `bearings`, `supports` (line supports' components), `fields`
 /// (stiffness multipliers `<field>.s<j>`), `members` (`<beam>.stiffness`),
-/// `damping` (`damping.g<z>`) or
-/// `loss_factors` (`<support>.eta`).
-pub(super) fn parameter_group(name: &str) -> &'static str {
-    match crate::config::parameter_family(name) {
-        crate::config::ParameterFamily::Spring => "springs",
-        crate::config::ParameterFamily::Bearing => "bearings",
-        crate::config::ParameterFamily::ElasticSupport => "supports",
-        crate::config::ParameterFamily::StiffnessField => "fields",
-        crate::config::ParameterFamily::MemberStiffness => "members",
-        crate::config::ParameterFamily::Damping => "damping",
-        crate::config::ParameterFamily::LossFactor => "loss_factors",
+/// `damping` (`damping.g<z>`), `loss_factors` (`<support>.eta`), or
+/// `other` for a name the config does not give.
+pub(super) fn parameter_group(family: Option<crate::config::ParameterFamily>) -> &'static str {
+    use crate::config::ParameterFamily;
+    match family {
+        Some(ParameterFamily::Spring) => "springs",
+        Some(ParameterFamily::Bearing) => "bearings",
+        Some(ParameterFamily::ElasticSupport) => "supports",
+        Some(ParameterFamily::StiffnessField) => "fields",
+        Some(ParameterFamily::MemberStiffness) => "members",
+        Some(ParameterFamily::Damping) => "damping",
+        Some(ParameterFamily::LossFactor) => "loss_factors",
+        None => "other",
     }
 }
