@@ -107,7 +107,7 @@ impl Chain {
         self.parameters.clone()
     }
 
-    /// The earlier events' `(log10 peak, value)` of feature `name` (NaN
+    /// The earlier events' `(log10 amplitude, value)` of feature `name` (NaN
     /// where an event did not measure it).
     pub(super) fn history_of(&self, name: &str) -> Vec<(f64, f64)> {
         let column = self.feature_names.iter().position(|n| n == name);
@@ -148,18 +148,23 @@ impl Chain {
         self.features.push(values);
     }
 
-    /// The parameters an event of amplitude `pga` is forecast by
+    /// The parameters an event of `amplitude` (`[events] amplitude`) is forecast by
     /// (`[events] forecast`): the last update's, or per parameter the
-    /// value the earlier events expect at `pga` (the line of log10 value
-    /// against log10 peak the verdict fits, once there are `min_events`
+    /// value the earlier events expect at `amplitude` (the line of log10 value
+    /// against log10 amplitude the verdict fits, once there are `min_events`
     /// of them; their geometric mean before; the last value when no
     /// earlier event gave it with a std).
-    pub(super) fn forecast_parameters(&self, forecast: EventForecast, min_events: usize, pga: f64) -> Vec<NamedValue> {
+    pub(super) fn forecast_parameters(
+        &self,
+        forecast: EventForecast,
+        min_events: usize,
+        amplitude: f64,
+    ) -> Vec<NamedValue> {
         let last = self.named();
         if forecast == EventForecast::Last {
             return last;
         }
-        let x = pga.max(1e-12).log10();
+        let x = amplitude.max(1e-12).log10();
         last.into_iter()
             .map(|NamedValue { name, value }| {
                 let history = self.history_of(&feature_of_parameter(&name));

@@ -520,7 +520,7 @@ mod tests {
         let amplitudes = [-1.0, -0.75, -0.5, -0.25, 0.0];
         for (e, &x) in amplitudes.iter().enumerate() {
             chain.push_features(x, &names, vec![Some(8.5 - 0.5 * x), None]);
-            let by = |forecast, min_events, pga: f64| chain.forecast_parameters(forecast, min_events, pga);
+            let by = |forecast, min_events, amplitude: f64| chain.forecast_parameters(forecast, min_events, amplitude);
             let trend = by(EventForecast::Trend, 5, 10f64.powf(0.5));
             let k = trend[0].value.log10();
             if e + 1 < 5 {
