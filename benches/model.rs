@@ -18,13 +18,13 @@ use splinewatch_core::model::joints::find_joints;
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::Shell;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::solvers::sparse_model::SparseModel;
 
 const SINELLO: &str = include_str!("../config/sinello.toml");
 const OVERPASS: &str = include_str!("../config/overpass.toml");
 
-fn model(net: [usize; 2]) -> ShellModel {
+fn model(net: [usize; 2]) -> BridgeModel {
     let text = SINELLO.replace(
         "control_points = [13, 5]",
         &format!("control_points = [{}, {}]", net[0], net[1]),
@@ -62,7 +62,7 @@ fn modes_below_160_hz(bencher: divan::Bencher, net: [usize; 2]) {
 
 /// The overpass with every net refined (ξ 28 → 50, η doubled): 4 100
 /// control points, 20 500 dofs.
-fn overpass_refined() -> ShellModel {
+fn overpass_refined() -> BridgeModel {
     let text = OVERPASS
         .replace("control_points = [28, 12]", "control_points = [50, 24]")
         .replace("control_points = [28, 8]", "control_points = [50, 16]")
@@ -74,10 +74,10 @@ fn overpass_refined() -> ShellModel {
 /// thick, cubic, `net` control points (4 100: 20 500 dofs), arc `width`,
 /// both ends clamped: curved, so membrane and bending couple as in folded
 /// patches.
-fn panel(net: [usize; 2], width: f64) -> ShellModel {
+fn panel(net: [usize; 2], width: f64) -> BridgeModel {
     let shell = Shell::cylindrical_panel(80.8, 30.0, width / 30.0, 0.5, [3, 3], net).unwrap();
     let material = OrthotropicMaterial::isotropic(28e9, 0.2, 2400.0).unwrap();
-    ShellModel {
+    BridgeModel {
         constraints: [Edge::Xi0, Edge::Xi1]
             .map(|edge| EdgeConstraint {
                 edge,
@@ -85,7 +85,7 @@ fn panel(net: [usize; 2], width: f64) -> ShellModel {
                 patch: 0,
             })
             .to_vec(),
-        ..ShellModel::new(shell, material)
+        ..BridgeModel::new(shell, material)
     }
 }
 
@@ -118,7 +118,7 @@ fn deck_20k_dofs_assembled_and_modes_below_40_hz(bencher: divan::Bencher, deck: 
 /// `net` points each, joined where they meet (penalty coupling,
 /// `joints::find_joints`): the cost of the patches alone, the deck's shape
 /// and size unchanged.
-fn split_panel(pieces: usize, net: [usize; 2], width: f64) -> ShellModel {
+fn split_panel(pieces: usize, net: [usize; 2], width: f64) -> BridgeModel {
     let length = 80.8 / pieces as f64;
     let material = OrthotropicMaterial::isotropic(28e9, 0.2, 2400.0).unwrap();
     let piece = Shell::cylindrical_panel(length, 30.0, width / 30.0, 0.5, [3, 3], net).unwrap();
@@ -130,7 +130,7 @@ fn split_panel(pieces: usize, net: [usize; 2], width: f64) -> ShellModel {
         .collect();
     let joints = find_joints(&patches, 1e-3);
     assert_eq!(joints.len(), pieces - 1, "one joint between neighbours");
-    ShellModel {
+    BridgeModel {
         patches,
         joints,
         constraints: [(Edge::Xi0, 0), (Edge::Xi1, pieces - 1)]
@@ -140,7 +140,7 @@ fn split_panel(pieces: usize, net: [usize; 2], width: f64) -> ShellModel {
                 patch,
             })
             .to_vec(),
-        ..ShellModel::new(piece, material)
+        ..BridgeModel::new(piece, material)
     }
 }
 

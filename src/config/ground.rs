@@ -10,7 +10,7 @@
 
 use super::{err, Config, ConfigError, DirectionConfig};
 use splinewatch_core::model::supports::{SupportGroups, DEFAULT_GROUP};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::support_motion::GroundInput;
 
 const AXES: [&str; 3] = ["x", "y", "z"];
@@ -115,7 +115,7 @@ impl Config {
     /// The support group of every spring field, bearing, constraint and
     /// held beam base of `model` (built from this config), groups in order
     /// of first mention.
-    pub fn support_groups(&self, model: &ShellModel) -> Result<SupportGroups, ConfigError> {
+    pub fn support_groups(&self, model: &BridgeModel) -> Result<SupportGroups, ConfigError> {
         let m = &self.model;
         let named = |s: &Option<String>| s.clone().unwrap_or_else(|| DEFAULT_GROUP.to_string());
         let springs: Vec<String> = m

@@ -77,7 +77,7 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
         .map(|(_, p)| *p)
         .chain(extra.iter().map(|&p| Sensor::Shell(p)))
         .collect();
-    let dense = |model: &splinewatch_core::model::ShellModel| -> Result<FrfModel> {
+    let dense = |model: &splinewatch_core::model::BridgeModel| -> Result<FrfModel> {
         Ok(FrfModel::new(
             model.assemble().context("assembling the model")?,
             &points,

@@ -253,7 +253,7 @@ impl Config {
                 |coefficient| ParameterKind::Spring { field, coefficient },
             )?);
         }
-        // Bearings follow the spring fields among κ (`ShellModel::spring_coefficients`).
+        // Bearings follow the spring fields among κ (`BridgeModel::spring_coefficients`).
         let springs = self.model.springs.len();
         let runs = self.bearing_runs()?;
         for (b, count) in runs {

@@ -17,7 +17,7 @@ use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan
 use crate::io::named_value::NamedValue;
 use anyhow::{bail, Result};
 use splinewatch_core::model::supports::SupportGroups;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::response::support_motion::{GroundedStructure, SupportMotion};
 use splinewatch_core::updating::{base_values, fields_at, model_at, Parameter};
@@ -138,7 +138,7 @@ impl GroundParts {
 }
 
 /// The shell model, its support groups and the config's ground inputs.
-fn ground_setup(config: &Config) -> Result<(ShellModel, SupportGroups, Vec<GroundInputPlan>)> {
+fn ground_setup(config: &Config) -> Result<(BridgeModel, SupportGroups, Vec<GroundInputPlan>)> {
     if !config.has_ground_sensors() {
         bail!("config: sensors: no ground sensor (a [[sensors]] entry with support = \"<group>\"): nothing drives the deck");
     }

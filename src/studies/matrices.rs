@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 use serde::Serialize;
 use splinewatch_core::model::dofs::DofKind;
 use splinewatch_core::model::sparse::SparseSymmetric;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::solvers::sparse_model::SparseModel;
 use std::io::{BufWriter, Write};
 use std::path::Path;
@@ -90,8 +90,8 @@ pub struct MatrixIndex {
 
 /// Who owns each vector of κ and then of θ, with its kind: κ holds the
 /// spring fields' coefficients, then the bearings', then the line
-/// supports' (`ShellModel::spring_coefficients`); θ the stiffness fields',
-/// then the beams' multipliers (`ShellModel::field_coefficients`).
+/// supports' (`BridgeModel::spring_coefficients`); θ the stiffness fields',
+/// then the beams' multipliers (`BridgeModel::field_coefficients`).
 fn coefficient_owners(config: &Config) -> Vec<(&str, &'static str)> {
     let m = &config.model;
     let springs = m.springs.iter().map(|s| (s.name.as_str(), "spring"));
@@ -195,7 +195,7 @@ fn lower_nnz(m: &SparseSymmetric) -> usize {
         .sum()
 }
 
-fn dof_entries(sparse: &SparseModel, model: &ShellModel) -> Vec<DofEntry> {
+fn dof_entries(sparse: &SparseModel, model: &BridgeModel) -> Vec<DofEntry> {
     let dofs = model.dof_map();
     // Per global control point: its patch and its number there.
     let owners: Vec<(usize, usize)> = model

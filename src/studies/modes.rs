@@ -9,7 +9,7 @@ use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::elastic_supports::SupportSite;
 use splinewatch_core::model::members::BeamBase;
 use splinewatch_core::model::springs::LowRankBlock;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::sensor_rows_of;
 use splinewatch_core::solvers::modal::{ModeKind, Modes};
 use splinewatch_core::solvers::mode_motion::{DeckAxes, Motion, MotionShares};
@@ -270,7 +270,7 @@ struct Sensors {
 }
 
 impl Sensors {
-    fn of(config: &Config, model: &ShellModel) -> Result<Self> {
+    fn of(config: &Config, model: &BridgeModel) -> Result<Self> {
         let (names, points): (Vec<String>, Vec<_>) = config.build_sensors(model)?.into_iter().unzip();
         let rows = sensor_rows_of(model, &points).context("the sensors' rows")?;
         Ok(Self { names, rows })
@@ -302,7 +302,7 @@ impl Sensors {
 /// The patches and joints of a deck of several patches (patch, edge, the
 /// other patch, length), the beams, the rigid bodies and the supports
 /// (where, which components), one line each; nothing for one patch alone.
-pub fn describe_patches(model: &ShellModel) -> Vec<String> {
+pub fn describe_patches(model: &BridgeModel) -> Vec<String> {
     if model.patches.len() < 2
         && model.beams.is_empty()
         && model.rigid_bodies.is_empty()

@@ -1,4 +1,4 @@
-//! `[model]` built into the core's `ShellModel`: names checked, patches,
+//! `[model]` built into the core's `BridgeModel`: names checked, patches,
 //! shell, material, springs, stiffness fields, bearings and masses, damping.
 
 use super::*;
@@ -42,10 +42,10 @@ impl Config {
         }
     }
 
-    /// Validates the model section into a [`ShellModel`].
+    /// Validates the model section into a [`BridgeModel`].
     /// The model for the dense path: refuses a net above
     /// [`MAX_DENSE_CONTROL_POINTS`] with the way out.
-    pub fn build_dense_model(&self) -> Result<ShellModel, ConfigError> {
+    pub fn build_dense_model(&self) -> Result<BridgeModel, ConfigError> {
         let model = self.build_model()?;
         let total = model.control_point_count();
         if total > MAX_DENSE_CONTROL_POINTS {
@@ -64,7 +64,7 @@ impl Config {
         Ok(model)
     }
 
-    pub fn build_model(&self) -> Result<ShellModel, ConfigError> {
+    pub fn build_model(&self) -> Result<BridgeModel, ConfigError> {
         let patches = self.build_model_patches()?;
         let m = &self.model;
         let index = |name: &Option<String>, key: String| patch_index(&patches, name.as_deref(), &key);
@@ -110,7 +110,7 @@ impl Config {
         let beams = self.build_beams()?;
         let rigid_bodies = self.build_rigid_bodies(&patches, &beams)?;
         let elastic_supports = self.build_supports(&patches, &beams)?;
-        let model = ShellModel {
+        let model = BridgeModel {
             joints: find_joints(&patches, m.joint_tolerance),
             joint_penalty: m.joint_penalty,
             patches,
@@ -135,7 +135,7 @@ impl Config {
     }
 
     /// The names of the model's spring fields in the assembled order of
-    /// `∂K/∂κ` ([`splinewatch_core::model::ShellModel::spring_coefficients`]):
+    /// `∂K/∂κ` ([`splinewatch_core::model::BridgeModel::spring_coefficients`]):
     /// the `[[model.springs]]`, then the bearings, then the line supports.
     pub fn spring_field_names(&self) -> Vec<String> {
         let m = &self.model;
@@ -236,7 +236,7 @@ impl Config {
 
     /// Every patch of a deck of several is joined to another or carries a
     /// support (constraint, spring field or bearing).
-    fn check_every_patch_held(&self, model: &ShellModel) -> Result<(), ConfigError> {
+    fn check_every_patch_held(&self, model: &BridgeModel) -> Result<(), ConfigError> {
         if model.patches.len() < 2 {
             return Ok(());
         }

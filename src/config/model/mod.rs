@@ -19,7 +19,7 @@ use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::{Shell, ShellError};
 use splinewatch_core::model::springs::{Face, SpringDirection, SpringField};
 use splinewatch_core::model::stiffness_field::{StiffnessField, StiffnessScale};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::SensorPoint;
 use std::collections::BTreeMap;
 

@@ -7,7 +7,7 @@ use splinewatch_core::response::frf::{BeamSensor, Sensor};
 impl Config {
     /// The sensors as model points, in config order, with their names: on
     /// a patch, or on the beam `beam` names.
-    pub fn build_sensors(&self, model: &ShellModel) -> Result<Vec<(String, Sensor)>, ConfigError> {
+    pub fn build_sensors(&self, model: &BridgeModel) -> Result<Vec<(String, Sensor)>, ConfigError> {
         let mut out = Vec::with_capacity(self.sensors.len());
         for (i, s) in self.sensors.iter().enumerate().take(self.deck_sensor_count()) {
             let key = |k: &str| format!("sensors[{i}].{k}");
@@ -29,7 +29,7 @@ impl Config {
     }
 
     /// Sensor `i` on a patch.
-    fn shell_sensor(&self, model: &ShellModel, i: usize) -> Result<SensorPoint, ConfigError> {
+    fn shell_sensor(&self, model: &BridgeModel, i: usize) -> Result<SensorPoint, ConfigError> {
         let s = &self.sensors[i];
         let key = |k: &str| format!("sensors[{i}].{k}");
         if let Some(offset) = s.offset {
@@ -94,7 +94,7 @@ impl Config {
 
     /// Sensor `i` on beam `beam`: at `x, y, z`, within 0.5 m of the
     /// member's section (its axis point nearest moves it rigidly).
-    fn beam_sensor(&self, model: &ShellModel, i: usize, beam: &str) -> Result<BeamSensor, ConfigError> {
+    fn beam_sensor(&self, model: &BridgeModel, i: usize, beam: &str) -> Result<BeamSensor, ConfigError> {
         let s = &self.sensors[i];
         let key = |k: &str| format!("sensors[{i}].{k}");
         let members = model.beams.members();
@@ -153,7 +153,7 @@ impl Config {
     /// patch; `x, y, z` at the nearest point of the named or nearest patch
     /// (within 0.5 m, beyond the half thickness or the `offset`); `x, y`
     /// on a single patch, located in plan.
-    fn sensor_position(&self, model: &ShellModel, i: usize) -> Result<(usize, f64, f64), ConfigError> {
+    fn sensor_position(&self, model: &BridgeModel, i: usize) -> Result<(usize, f64, f64), ConfigError> {
         let s = &self.sensors[i];
         let key = |k: &str| format!("sensors[{i}].{k}");
         let patches = &model.patches;

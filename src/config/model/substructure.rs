@@ -279,7 +279,7 @@ impl Config {
 
     /// Surfaces a rigid body holding what a support or another body holds,
     /// with the body's key.
-    pub(super) fn check_rigid_bodies(&self, model: &ShellModel) -> Result<(), ConfigError> {
+    pub(super) fn check_rigid_bodies(&self, model: &BridgeModel) -> Result<(), ConfigError> {
         match model.reduction() {
             Err(ModelError::Rigid(e)) => {
                 let name = match &e {

@@ -4,7 +4,7 @@
 use super::GRID;
 use splinewatch_core::geometry::vec3::Vec3;
 use splinewatch_core::model::elastic_supports::SupportSite;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::Sensor;
 
 pub(super) fn f32x3(v: Vec3) -> [f32; 3] {
@@ -13,7 +13,7 @@ pub(super) fn f32x3(v: Vec3) -> [f32; 3] {
 
 /// Where sensor `s` is drawn: a patch sensor on the top face, a beam
 /// sensor at its point.
-pub(super) fn sensor_position(model: &ShellModel, s: &Sensor) -> [f32; 3] {
+pub(super) fn sensor_position(model: &BridgeModel, s: &Sensor) -> [f32; 3] {
     match s {
         Sensor::Shell(p) => f32x3(model.patches[p.patch].shell.position(p.xi, p.eta, 1.0)),
         Sensor::Beam(b) => f32x3(b.at),
@@ -46,7 +46,7 @@ pub(super) struct DeckGrid {
 }
 
 impl DeckGrid {
-    pub(super) fn new(model: &ShellModel) -> Self {
+    pub(super) fn new(model: &BridgeModel) -> Self {
         let axis = |n: usize, knots: &mut dyn Iterator<Item = f64>| -> Vec<f64> {
             let mut v: Vec<f64> = (0..n).map(|k| k as f64 / (n - 1) as f64).collect();
             v.extend(knots.filter(|u| (0.0..=1.0).contains(u)));
@@ -104,7 +104,7 @@ impl DeckGrid {
     }
 
     /// Σ over spring fields of the stiffness per unit area at each vertex.
-    pub(super) fn spring_field(&self, model: &ShellModel, kappa: &[Vec<f64>]) -> Vec<f64> {
+    pub(super) fn spring_field(&self, model: &BridgeModel, kappa: &[Vec<f64>]) -> Vec<f64> {
         self.params
             .iter()
             .map(|&(patch, x, y)| {
@@ -120,7 +120,7 @@ impl DeckGrid {
     }
 
     /// The stiffness multiplier `1 + Σ_fields (θ_f(ξ,η) − 1)` at each vertex.
-    pub(super) fn stiffness_multiplier(&self, model: &ShellModel, theta: &[Vec<f64>]) -> Vec<f64> {
+    pub(super) fn stiffness_multiplier(&self, model: &BridgeModel, theta: &[Vec<f64>]) -> Vec<f64> {
         self.params
             .iter()
             .map(|&(patch, x, y)| {
@@ -137,7 +137,7 @@ impl DeckGrid {
 
     /// Displacement along the surface normal at each vertex of the shape
     /// with generalised dof values `shape(dof)`.
-    pub(super) fn normal_displacement(&self, model: &ShellModel, shape: impl Fn(usize) -> f64) -> Vec<f64> {
+    pub(super) fn normal_displacement(&self, model: &BridgeModel, shape: impl Fn(usize) -> f64) -> Vec<f64> {
         let dofs = model.dof_map();
         self.params
             .iter()
@@ -184,7 +184,7 @@ const EDGE_SAMPLES: usize = 16;
 /// or on springs).
 pub(super) fn log_model(
     rec: &rerun::RecordingStream,
-    model: &ShellModel,
+    model: &BridgeModel,
     grid: &DeckGrid,
 ) -> Result<(), rerun::RecordingStreamError> {
     let colours: Vec<rerun::Color> = grid
@@ -253,7 +253,11 @@ pub(super) fn log_model(
 }
 
 /// `deck/model/beams` and `deck/model/beam_bases` (nothing without beams).
-fn log_beams(rec: &rerun::RecordingStream, model: &ShellModel, radius: f32) -> Result<(), rerun::RecordingStreamError> {
+fn log_beams(
+    rec: &rerun::RecordingStream,
+    model: &BridgeModel,
+    radius: f32,
+) -> Result<(), rerun::RecordingStreamError> {
     let beams = &model.beams;
     if beams.is_empty() {
         return Ok(());

@@ -49,7 +49,7 @@ use crate::config::{frf_setup, Config, FrfSetup};
 use crate::pipeline::{Health, UpdateOutcome};
 use anyhow::{anyhow, Result};
 use deck::DeckGrid;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::Sensor;
 use std::path::{Path, PathBuf};
 
@@ -79,7 +79,7 @@ type FieldReference = (Vec<Vec<f64>>, Vec<Vec<f64>>);
 pub struct RerunOutput {
     rec: rerun::RecordingStream,
     setup: FrfSetup,
-    model: ShellModel,
+    model: BridgeModel,
     grid: DeckGrid,
     updates: i64,
     /// Parameter series already given their static names and colours.

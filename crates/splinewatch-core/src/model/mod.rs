@@ -20,7 +20,7 @@
 //! - [`bearings`]: discrete elastic bearings and point masses;
 //! - [`supports`]: the support groups, which ground each support moves with.
 //!
-//! [`ShellModel`] gathers them; the solvers assemble it
+//! [`BridgeModel`] gathers them; the solvers assemble it
 //! ([`crate::solvers::dense_model`], [`crate::solvers::sparse_model`]).
 
 pub mod beam;
@@ -55,11 +55,13 @@ use shell::{Frame, Shell};
 use springs::SpringField;
 use stiffness_field::StiffnessField;
 
-/// Physics and discretisation of a deck of one or many patches, validated.
+/// A bridge's physics and discretisation, validated: the deck's shell
+/// patches, beam members (columns, piers), rigid bodies, and the supports
+/// that hold them (spring fields, bearings, elastic supports, constraints).
 /// Springs, stiffness fields, constraints, bearings and masses each name
 /// their patch by index.
 #[derive(Debug, Clone)]
-pub struct ShellModel {
+pub struct BridgeModel {
     pub patches: Vec<Patch>,
     pub springs: Vec<SpringField>,
     /// Stiffness multiplier fields of the deck (none: the nominal material).
@@ -86,7 +88,7 @@ pub struct ShellModel {
     pub rigid_bodies: Vec<RigidBody>,
 }
 
-impl Default for ShellModel {
+impl Default for BridgeModel {
     /// Nothing: no patch, no beam (a frame of beams alone starts here).
     fn default() -> Self {
         Self {
@@ -106,7 +108,7 @@ impl Default for ShellModel {
     }
 }
 
-impl ShellModel {
+impl BridgeModel {
     /// One patch named `"deck"`, nothing else attached.
     pub fn new(shell: Shell, material: OrthotropicMaterial) -> Self {
         Self {

@@ -12,7 +12,7 @@
 
 use crate::geometry::vec3::Vec3;
 use crate::model::elastic_supports::SupportSite;
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 use thiserror::Error;
 
 /// The group every support belongs to unless told otherwise.
@@ -53,7 +53,7 @@ pub enum SupportError {
 }
 
 /// The support group of every spring field, bearing and edge constraint of
-/// a [`ShellModel`], validated against it.
+/// a [`BridgeModel`], validated against it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SupportGroups {
     names: Vec<String>,
@@ -73,7 +73,7 @@ impl SupportGroups {
         names: Vec<String>,
         of_springs: Vec<usize>,
         of_constraints: Vec<usize>,
-        model: &ShellModel,
+        model: &BridgeModel,
     ) -> Result<Self, SupportError> {
         for (k, name) in names.iter().enumerate() {
             if name.is_empty() || names[..k].contains(name) {
@@ -112,7 +112,7 @@ impl SupportGroups {
     /// The same groups with `of_beam_bases`, a group per beam member (its
     /// base follows that group's ground; a free base's entry is unused).
     /// Until given, every base follows group 0.
-    pub fn with_beam_bases(mut self, of_beam_bases: Vec<usize>, model: &ShellModel) -> Result<Self, SupportError> {
+    pub fn with_beam_bases(mut self, of_beam_bases: Vec<usize>, model: &BridgeModel) -> Result<Self, SupportError> {
         let what = "beam members";
         let expected = model.beams.members().len();
         if of_beam_bases.len() != expected {
@@ -135,7 +135,7 @@ impl SupportGroups {
     }
 
     /// Every support on one ground named [`DEFAULT_GROUP`].
-    pub fn uniform(model: &ShellModel) -> Self {
+    pub fn uniform(model: &BridgeModel) -> Self {
         Self {
             names: vec![DEFAULT_GROUP.to_string()],
             of_springs: vec![0; model.spring_field_count()],
@@ -169,7 +169,7 @@ impl SupportGroups {
     /// line supports' control points and of its held beam bases; `None` for
     /// a group of spring fields or edge constraints only): the support a
     /// deck point lies nearest, for a "deck moves with its ground" baseline.
-    pub fn anchors(&self, model: &ShellModel) -> Vec<Option<Vec3>> {
+    pub fn anchors(&self, model: &BridgeModel) -> Vec<Option<Vec3>> {
         let mut points: Vec<Vec<Vec3>> = vec![Vec::new(); self.names.len()];
         let fields = model.springs.len();
         for (b, bearing) in model.bearings.iter().enumerate() {

@@ -6,7 +6,7 @@
 //! [`AssembledModel`] keeps `K_f`, `M`, every `∂K/∂κ_j` and `∂K/∂θ_k` so that
 //! a change of coefficients (the updating loop) costs only the weighted sums,
 //! and its prepared eigen-solver ([`ModalSolver`]), built on the first solve.
-//! [`ShellModel::assemble`] is defined here, beside what it builds.
+//! [`BridgeModel::assemble`] is defined here, beside what it builds.
 
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
@@ -21,7 +21,7 @@ use crate::model::sparse::SparseError;
 use crate::model::springs::{LowRankBlock, SpringError, SpringField};
 use crate::model::stiffness_field::StiffnessField;
 use crate::model::stiffness_field::StiffnessFieldError;
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 use crate::solvers::modal::{ModalError, ModalSolver, Modes};
 use faer::Mat;
 use std::sync::OnceLock;
@@ -71,7 +71,7 @@ pub enum ModelError {
     },
 }
 
-/// Assembled matrices of a [`ShellModel`].
+/// Assembled matrices of a [`BridgeModel`].
 #[derive(Debug, Clone)]
 pub struct AssembledModel {
     /// The patches, for the sensors' rows (global dofs by
@@ -99,7 +99,7 @@ pub struct AssembledModel {
     modal: OnceLock<Result<ModalSolver, ModalError>>,
 }
 
-impl ShellModel {
+impl BridgeModel {
     /// The global `K_f`, `M`, `∂K/∂κ`, `∂K/∂θ` and `T`: each patch's eq.
     /// (16)–(17) on its own dofs ([`crate::model::patch`]), the beams'
     /// elements, then the non-structural and point masses, the joints' penalty, the spring

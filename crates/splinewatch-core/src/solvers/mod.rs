@@ -2,7 +2,7 @@
 //!
 //! May import: `model`, `geometry`, `linalg`.
 //!
-//! - [`dense_model`]: `AssembledModel` (dense `K_f`, `M`, `∂K/∂κ_j`, `∂K/∂θ_k`) and `ShellModel::assemble`;
+//! - [`dense_model`]: `AssembledModel` (dense `K_f`, `M`, `∂K/∂κ_j`, `∂K/∂θ_k`) and `BridgeModel::assemble`;
 //! - [`modal`]: the prepared dense eigen-solver (`ModalSolver`) and the reference `solve`;
 //! - [`mode_motion`]: where a mode moves the deck (along, across, vertical, torsion);
 //! - [`sparse_model`]: the sparse, reduced model and the modes below a cut-off;

@@ -266,7 +266,7 @@ mod tests {
     use crate::model::material::OrthotropicMaterial;
     use crate::model::shell::Shell;
     use crate::model::springs::{Face, SpringDirection, SpringField};
-    use crate::model::ShellModel;
+    use crate::model::BridgeModel;
 
     /// A plate on vertical spring strips at both ends (the paper's supports).
     fn plate() -> SparseModel {
@@ -282,12 +282,12 @@ mod tests {
             )
             .unwrap()
         };
-        let model = ShellModel {
+        let model = BridgeModel {
             springs: vec![spring(0.0, 0.05), spring(0.95, 1.0)],
             stiffness_fields: Vec::new(),
             member_stiffness: Vec::new(),
             constraints: Vec::new(),
-            ..ShellModel::new(Shell::clone(&shell), material)
+            ..BridgeModel::new(Shell::clone(&shell), material)
         };
         SparseModel::assemble(&model).unwrap()
     }

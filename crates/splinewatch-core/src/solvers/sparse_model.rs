@@ -16,7 +16,7 @@ use crate::model::patch::Patch;
 use crate::model::shell::{self, Frame, Offset};
 use crate::model::sparse::{NonZeros, Pattern, SparseAccumulator, SparseError, SparseSymmetric};
 use crate::model::springs::LowRankBlock;
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 use crate::solvers::dense_model::ModelError;
 use crate::solvers::modal::Modes;
 use crate::solvers::partial_eigen::{PartialSettings, Responses};
@@ -107,7 +107,7 @@ pub struct SparseModel {
     reason = "the two forms of the same matrices, per field and coefficient"
 )]
 fn field_matrices(
-    model: &ShellModel,
+    model: &BridgeModel,
     dofs: &DofMap,
     full: &Arc<Pattern>,
     reduction: &DofReduction,
@@ -165,7 +165,7 @@ pub(super) fn sparse_error(e: SparseError) -> ModelError {
 /// body's reference node with everything its held nodes couple to (the
 /// pattern `Tᵀ A T` needs).
 fn model_pattern(
-    model: &ShellModel,
+    model: &BridgeModel,
     dofs: &DofMap,
     joints: &[BTreeMap<(usize, usize), f64>],
 ) -> Result<Pattern, ModelError> {
@@ -247,9 +247,9 @@ fn add_entries(
 
 /// `K_f` and `M` on the generalised dofs (`full`): every patch's eq.
 /// (16)–(17), the non-structural and point masses, the joints' penalty
-/// (`joints`: each joint's entries), as [`ShellModel::assemble`] does dense.
+/// (`joints`: each joint's entries), as [`BridgeModel::assemble`] does dense.
 fn assemble_matrices(
-    model: &ShellModel,
+    model: &BridgeModel,
     dofs: &DofMap,
     full: &Arc<Pattern>,
     joints: &[BTreeMap<(usize, usize), f64>],
@@ -284,8 +284,8 @@ fn assemble_matrices(
 impl SparseModel {
     /// The sparse model of `model`: one or several patches, joints,
     /// springs, bearings, masses and stiffness fields, as
-    /// [`ShellModel::assemble`] builds dense.
-    pub fn assemble(model: &ShellModel) -> Result<Self, ModelError> {
+    /// [`BridgeModel::assemble`] builds dense.
+    pub fn assemble(model: &BridgeModel) -> Result<Self, ModelError> {
         model.check_patch_indices()?;
         let dofs = model.dof_map();
         let joints: Vec<_> = model

@@ -5,7 +5,7 @@ use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::springs::{Face, SpringDirection, SpringField};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{ModalState, SensorPoint};
 use splinewatch_core::response::modal_sensitivity::ModalSensitivities;
 use splinewatch_core::response::support_motion::GroundedStructure;
@@ -55,13 +55,13 @@ pub fn true_kappa() -> Vec<Vec<f64>> {
     vec![vec![0.4e9, 1.5e9, 1.8e9, 0.6e9], vec![1.5e9, 0.4e9, 0.5e9, 1.8e9]]
 }
 
-pub fn sinello_model() -> ShellModel {
-    ShellModel {
+pub fn sinello_model() -> BridgeModel {
+    BridgeModel {
         springs: sinello_springs(),
         stiffness_fields: vec![],
         member_stiffness: Vec::new(),
         constraints: vec![],
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
             sinello_material(),
         )
@@ -102,8 +102,8 @@ pub fn sinello_sensors() -> Vec<SensorPoint> {
 
 /// A clamped cylindrical panel on the Sinello springs: curved, so nothing
 /// decouples (2 × 3 m, R = 3 m, 0.6 rad, 5 cm, 7 × 6 cubic net).
-pub fn clamped_curved_panel() -> ShellModel {
-    ShellModel {
+pub fn clamped_curved_panel() -> BridgeModel {
+    BridgeModel {
         springs: sinello_springs(),
         stiffness_fields: vec![],
         member_stiffness: Vec::new(),
@@ -112,7 +112,7 @@ pub fn clamped_curved_panel() -> ShellModel {
             kind: SupportKind::Clamped,
             patch: 0,
         }],
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::cylindrical_panel(2.0, 3.0, 0.6, 0.05, [3, 3], [7, 6]).unwrap(),
             sinello_material(),
         )
@@ -241,6 +241,6 @@ pub fn in_parallel<T: Send>(count: u64, job: impl Fn(u64) -> T + Sync) -> Vec<T>
 }
 
 /// `model` on `groups`, as [`SupportMotion`](splinewatch_core::response::support_motion::SupportMotion) takes them.
-pub fn grounded(model: &ShellModel, groups: &splinewatch_core::model::supports::SupportGroups) -> GroundedStructure {
+pub fn grounded(model: &BridgeModel, groups: &splinewatch_core::model::supports::SupportGroups) -> GroundedStructure {
     GroundedStructure::new(model.clone(), groups.clone()).unwrap()
 }

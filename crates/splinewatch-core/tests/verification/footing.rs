@@ -6,7 +6,7 @@
 use splinewatch_core::model::beam::{BeamMaterial, Section};
 use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::solvers::modal::Modes;
 use splinewatch_core::solvers::sparse_model::SparseModel;
 
@@ -19,7 +19,7 @@ fn material() -> BeamMaterial {
 
 /// A vertical 1.524 m column in `elements` elements, its base held as
 /// `base`, on the six-component springs `footing` at its base if given.
-fn column(elements: usize, base: BeamBase, footing: Option<Vec<(SupportComponent, f64)>>) -> ShellModel {
+fn column(elements: usize, base: BeamBase, footing: Option<Vec<(SupportComponent, f64)>>) -> BridgeModel {
     let section = Section::circle(1.524, 0.2).unwrap();
     let member = BeamMember::new(
         "column",
@@ -33,12 +33,12 @@ fn column(elements: usize, base: BeamBase, footing: Option<Vec<(SupportComponent
     .unwrap();
     let beams = BeamNet::new(vec![member], 1e-6).unwrap();
     let base_node = beams.member_nodes(0)[0];
-    ShellModel {
+    BridgeModel {
         beams,
         elastic_supports: footing
             .map(|c| vec![ElasticSupport::at_beam_nodes("footing", vec![base_node], GLOBAL, c).unwrap()])
             .unwrap_or_default(),
-        ..ShellModel::default()
+        ..BridgeModel::default()
     }
 }
 
@@ -59,12 +59,12 @@ fn footing(stiff: f64, k_z: f64) -> Vec<(SupportComponent, f64)> {
         .collect()
 }
 
-fn modes(model: &ShellModel) -> Modes {
+fn modes(model: &BridgeModel) -> Modes {
     model.assemble().unwrap().modes().unwrap()
 }
 
 /// The first mode whose top moves mostly along the column's axis.
-fn first_axial_hz(model: &ShellModel, modes: &Modes) -> f64 {
+fn first_axial_hz(model: &BridgeModel, modes: &Modes) -> f64 {
     let dofs = model.dof_map();
     let top = *model.beams.member_nodes(0).last().unwrap();
     let first = dofs.node_dofs(dofs.beam_node(top)).start;

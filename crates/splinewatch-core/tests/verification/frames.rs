@@ -16,7 +16,7 @@ use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::rigid::{RigidBody, RigidError};
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::supports::SupportGroups;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfModel, ModalState, SensorPoint};
 use splinewatch_core::response::support_motion::{GroundInput, SupportMotion};
 use splinewatch_core::solvers::dense_model::ModelError;
@@ -64,7 +64,7 @@ fn section(s: &serde_json::Value) -> Section {
 }
 
 /// The fixture's frame `case` as beam members, and OpenSees's frequencies.
-pub(crate) fn frame(case: &str) -> (ShellModel, Vec<f64>) {
+pub(crate) fn frame(case: &str) -> (BridgeModel, Vec<f64>) {
     frame_with(case, |_, section, material| (section, material))
 }
 
@@ -73,7 +73,7 @@ pub(crate) fn frame(case: &str) -> (ShellModel, Vec<f64>) {
 pub(crate) fn frame_with(
     case: &str,
     properties: impl Fn(&str, Section, BeamMaterial) -> (Section, BeamMaterial),
-) -> (ShellModel, Vec<f64>) {
+) -> (BridgeModel, Vec<f64>) {
     let fixture = fixture();
     let (young, poisson, density) = material(&fixture);
     let nominal = BeamMaterial::isotropic(young, poisson, density).unwrap();
@@ -102,9 +102,9 @@ pub(crate) fn frame_with(
             .unwrap()
         })
         .collect();
-    let model = ShellModel {
+    let model = BridgeModel {
         beams: BeamNet::new(members, 1e-6).unwrap(),
-        ..ShellModel::default()
+        ..BridgeModel::default()
     };
     (model, numbers(&case["frequency_hz"]))
 }
@@ -167,7 +167,7 @@ fn a_portal_on_footing_springs_matches_opensees() {
 
 /// The sparse path's frequencies below `top` Hz, at the model's own spring
 /// and field coefficients.
-fn sparse_frequencies(model: &ShellModel, top: f64) -> Vec<f64> {
+fn sparse_frequencies(model: &BridgeModel, top: f64) -> Vec<f64> {
     let sparse = SparseModel::assemble(model).unwrap();
     let kappa = model.spring_coefficients();
     sparse
@@ -179,13 +179,13 @@ fn sparse_frequencies(model: &ShellModel, top: f64) -> Vec<f64> {
 /// The fixture's deck on a bent: two slab patches meeting at the bent, its
 /// ends simply supported, the bent's cap a rigid body holding both patches'
 /// edges there and the two column tops (0.5 m below the mid-surface).
-fn deck_on_bent(net: [usize; 2]) -> (ShellModel, Vec<f64>) {
+fn deck_on_bent(net: [usize; 2]) -> (BridgeModel, Vec<f64>) {
     deck_on_bent_case("deck_on_bent", net)
 }
 
 /// The fixture's case `name`, a deck on a bent: its ends held, or on line
 /// springs where the case gives `abutment_springs` (per metre, global axes).
-fn deck_on_bent_case(name: &str, net: [usize; 2]) -> (ShellModel, Vec<f64>) {
+fn deck_on_bent_case(name: &str, net: [usize; 2]) -> (BridgeModel, Vec<f64>) {
     let fixture = fixture();
     let case = &fixture["cases"][name];
     let value = |key: &str| case[key].as_f64().unwrap();
@@ -251,14 +251,14 @@ fn deck_on_bent_case(name: &str, net: [usize; 2]) -> (ShellModel, Vec<f64>) {
                 .unwrap(),
         )
     };
-    let model = ShellModel {
+    let model = BridgeModel {
         joints: find_joints(&patches, 1e-3),
         constraints,
         elastic_supports,
         patches,
         beams,
         rigid_bodies: vec![cap],
-        ..ShellModel::default()
+        ..BridgeModel::default()
     };
     (model, numbers(&case["extrapolated_hz"]))
 }
@@ -374,7 +374,7 @@ fn the_grounds_of_a_deck_on_a_bent_add_up_to_a_rigid_translation() {
 /// every one of `sensors` rigidly (1e-9), and the third (the footings')
 /// alone moves some sensor.
 fn assert_three_grounds_translate_rigidly(
-    (frf, model, groups): (&FrfModel, &ShellModel, &SupportGroups),
+    (frf, model, groups): (&FrfModel, &BridgeModel, &SupportGroups),
     kappa: &[Vec<f64>],
     state: &ModalState,
     sensors: &[SensorPoint],
@@ -467,7 +467,7 @@ pub(crate) fn damping() -> DampingCurve {
 }
 
 /// The deck on a bent's three grounds: each end's, and the columns' bases'.
-fn three_grounds(model: &ShellModel) -> SupportGroups {
+fn three_grounds(model: &BridgeModel) -> SupportGroups {
     let names = ["west", "east", "bent"].map(String::from).to_vec();
     SupportGroups::new(names, vec![], vec![0, 1], model)
         .unwrap()
@@ -497,7 +497,7 @@ fn a_bent_s_ground_drives_the_truncated_model_as_the_dense_one() {
     }
 }
 
-fn check_truncated_ground(model: &ShellModel, cracked: bool) {
+fn check_truncated_ground(model: &BridgeModel, cracked: bool) {
     let sensors = deck_sensors();
     let dense = FrfModel::new(model.assemble().unwrap(), &sensors).unwrap();
     let truncated = FrfModel::truncated(model, &sensors, 60.0).unwrap();
@@ -571,7 +571,7 @@ fn line_support_sensitivities_on_a_bent_match_central_differences() {
         ];
         ElasticSupport::along_edge(name, (patch, edge), axes, components).unwrap()
     };
-    let model = ShellModel {
+    let model = BridgeModel {
         constraints: vec![],
         elastic_supports: vec![abutment("west", 0, Edge::Xi0), abutment("east", 1, Edge::Xi1)],
         ..bare

@@ -7,7 +7,7 @@ use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity, SensorPoint};
 
 fn damping() -> DampingCurve {
@@ -108,7 +108,7 @@ fn reciprocity_of_the_direct_path() {
 fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
     // A simply supported square plate: the first mode (1,1) is 2.5 times
     // below the next ones, so near it the driving-point FRF is SDOF-like.
-    let plate = ShellModel {
+    let plate = BridgeModel {
         springs: vec![],
         stiffness_fields: vec![],
         member_stiffness: Vec::new(),
@@ -120,7 +120,7 @@ fn receptance_phase_goes_from_0_to_minus_180_through_an_isolated_resonance() {
                 patch: 0,
             })
             .collect(),
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(4.0, 4.0, 0.1, [3, 3], [10, 10]).unwrap(),
             OrthotropicMaterial::isotropic(30e9, 0.2, 2400.0).unwrap(),
         )

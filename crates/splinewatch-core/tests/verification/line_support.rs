@@ -6,17 +6,17 @@ use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::elastic_supports::{ElasticSupport, SupportComponent};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::solvers::modal::ModeKind;
 
 const GLOBAL: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 /// A 10 m × 2 m × 0.2 m strip, its ends `ξ = 0, 1` held as `kind`, with a
 /// rotation spring `k` (N m/rad per metre) about y on each end.
-fn strip(kind: SupportKind, k: Option<f64>) -> ShellModel {
+fn strip(kind: SupportKind, k: Option<f64>) -> BridgeModel {
     let shell = Shell::rectangular_plate(10.0, 2.0, 0.2, [3, 3], [14, 5]).unwrap();
     let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
-    let mut model = ShellModel::new(shell, material);
+    let mut model = BridgeModel::new(shell, material);
     model.constraints = [Edge::Xi0, Edge::Xi1]
         .map(|edge| EdgeConstraint { edge, kind, patch: 0 })
         .to_vec();
@@ -31,7 +31,7 @@ fn strip(kind: SupportKind, k: Option<f64>) -> ShellModel {
 }
 
 /// The first `count` bending frequencies.
-fn bending(model: &ShellModel, count: usize) -> Vec<f64> {
+fn bending(model: &BridgeModel, count: usize) -> Vec<f64> {
     let modes = model.assemble().unwrap().modes().unwrap();
     (0..modes.len())
         .filter(|&i| modes.kinds[i] == ModeKind::Bending)
@@ -95,7 +95,7 @@ fn a_plate_on_a_point_support_moves_as_a_rigid_body_on_springs() {
     assert!((centre[0] - a / 2.0).abs() < 1e-12 && (centre[1] - b / 2.0).abs() < 1e-12);
     let k = [2.0e3, 3.0e3, 4.0e3, 5.0e3, 6.0e3];
     let components = SupportComponent::ALL[..5].iter().copied().zip(k).collect();
-    let mut model = ShellModel::new(shell, material);
+    let mut model = BridgeModel::new(shell, material);
     model.elastic_supports = vec![ElasticSupport::at_point("pot", at, GLOBAL, components).unwrap()];
     let modes = model.assemble().unwrap().modes().unwrap();
     let mut found: Vec<f64> = (0..modes.len())
@@ -138,7 +138,7 @@ fn the_sparse_path_takes_point_supports_as_the_dense_one() {
     use splinewatch_core::solvers::sparse_model::SparseModel;
     let shell = Shell::rectangular_plate(6.0, 3.0, 0.2, [3, 3], [8, 6]).unwrap();
     let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
-    let mut model = ShellModel::new(shell, material);
+    let mut model = BridgeModel::new(shell, material);
     model.elastic_supports = [("west", 0.2), ("east", 0.8)]
         .map(|(name, xi)| {
             let at = PatchPoint {

@@ -7,7 +7,7 @@ use super::frames::{damping, fixture, frame, frame_with, material};
 use splinewatch_core::model::beam::{BeamMaterial, Section, StiffnessPart};
 use splinewatch_core::model::member_stiffness::MemberStiffness;
 use splinewatch_core::model::members::{BeamBase, BeamMember, BeamNet};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{BeamSensor, FrfError, FrfModel, FrfRequest, Quantity, Sensor};
 use splinewatch_core::solvers::sparse_model::SparseModel;
 use splinewatch_core::updating::modal_residual::frequency_gradient;
@@ -157,9 +157,9 @@ fn sensors_on_a_column_measure_its_deflection_and_its_face() {
         BeamBase::Fixed,
     )
     .unwrap();
-    let model = ShellModel {
+    let model = BridgeModel {
         beams: BeamNet::new(vec![column], 1e-6).unwrap(),
-        ..ShellModel::default()
+        ..BridgeModel::default()
     };
     let (y, z) = ([0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
     let s = 0.5 * length;

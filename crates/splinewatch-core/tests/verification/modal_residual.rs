@@ -152,10 +152,10 @@ fn modal_residue_jacobian_matches_central_differences() {
 fn modal_residue_jacobian_for_a_stiffness_field_matches_central_differences() {
     use splinewatch_core::geometry::knots::KnotVector;
     use splinewatch_core::model::stiffness_field::StiffnessField;
-    use splinewatch_core::model::ShellModel;
+    use splinewatch_core::model::BridgeModel;
     let knots = |d, n| KnotVector::uniform(d, n, 0.0, 1.0).unwrap();
     let field = StiffnessField::new(knots(1, 4), knots(1, 2), vec![1.0; 8]).unwrap();
-    let deck = ShellModel {
+    let deck = BridgeModel {
         stiffness_fields: vec![field],
         member_stiffness: Vec::new(),
         ..sinello_model()

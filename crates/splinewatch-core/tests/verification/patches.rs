@@ -10,7 +10,7 @@ use splinewatch_core::model::joints::{find_joints, Joint};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::patch::Patch;
 use splinewatch_core::model::shell::Shell;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::solvers::sparse_model::SparseModel;
 
@@ -26,7 +26,7 @@ fn corners(value: &serde_json::Value) -> [Vec3; 4] {
 /// The fixture's deck as B-spline patches (degree 3, the nets given per
 /// patch), knots inserted at `lines` (η values, twice: C¹ where a web meets
 /// the slab), both ξ ends clamped.
-fn deck(case: &str, nets: &[[usize; 2]], lines: &[Vec<f64>], penalty: f64) -> (ShellModel, Vec<f64>) {
+fn deck(case: &str, nets: &[[usize; 2]], lines: &[Vec<f64>], penalty: f64) -> (BridgeModel, Vec<f64>) {
     let fixture = fixture();
     let patches = fixture["cases"][case]["patches"].as_array().unwrap();
     let shells = patches
@@ -41,9 +41,9 @@ fn deck(case: &str, nets: &[[usize; 2]], lines: &[Vec<f64>], penalty: f64) -> (S
 }
 
 /// [`deck`] from the patches' shells.
-fn deck_of(case_name: &str, shells: Vec<Shell>, lines: &[Vec<f64>], penalty: f64) -> (ShellModel, Vec<f64>) {
+fn deck_of(case_name: &str, shells: Vec<Shell>, lines: &[Vec<f64>], penalty: f64) -> (BridgeModel, Vec<f64>) {
     let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
-    let mut model = ShellModel::new(
+    let mut model = BridgeModel::new(
         Shell::rectangular_plate(1.0, 1.0, 1.0, [1, 1], [2, 2]).unwrap(),
         material.clone(),
     );
@@ -95,7 +95,7 @@ fn reference(case: &str) -> Vec<f64> {
 /// of several patches with joints
 /// ([`the_sparse_path_matches_the_dense_one_on_several_patches`]), and both
 /// assemble with the same element and joint kernels.
-fn first_frequencies(model: &ShellModel, count: usize) -> Vec<f64> {
+fn first_frequencies(model: &BridgeModel, count: usize) -> Vec<f64> {
     let sparse = SparseModel::assemble(model).unwrap();
     let mut cutoff_hz = 20.0;
     let modes = loop {
@@ -120,7 +120,7 @@ fn worst(ours: &[f64], reference: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-fn slab_and_webs(penalty: f64) -> (ShellModel, Vec<f64>) {
+fn slab_and_webs(penalty: f64) -> (BridgeModel, Vec<f64>) {
     // The webs hang from the slab's interior lines y = ±2 m: η = 1/6, 5/6.
     let nets = [[23, 14], [23, 6], [23, 6]];
     let lines = [vec![1.0 / 6.0, 5.0 / 6.0], vec![], vec![]];
@@ -194,7 +194,7 @@ fn a_box_section_matches_opensees() {
 }
 
 /// The curved deck's three patches swept along the arc through nine points.
-fn curved_swept_deck() -> ShellModel {
+fn curved_swept_deck() -> BridgeModel {
     let (radius, angle) = (50.0, 25f64.to_radians());
     let arc: Vec<Vec3> = (0..9)
         .map(|i| {

@@ -8,7 +8,7 @@ use splinewatch_core::model::constraints::{Edge, EdgeConstraint, SupportKind};
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::{StiffnessField, StiffnessScale};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::solvers::modal::ModeKind;
 use std::f64::consts::PI;
 
@@ -38,13 +38,13 @@ fn bending_rigidities(mat: &OrthotropicMaterial, h: f64) -> [f64; 4] {
 }
 
 /// A rectangular plate, degree 4 on a 20 × 14 net, hard simply supported on all edges.
-fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial) -> ShellModel {
-    ShellModel {
+fn simply_supported_plate(a: f64, b: f64, h: f64, material: &OrthotropicMaterial) -> BridgeModel {
+    BridgeModel {
         springs: vec![],
         stiffness_fields: Vec::new(),
         member_stiffness: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(a, b, h, [4, 4], [20, 14]).unwrap(),
             material.clone(),
         )
@@ -101,7 +101,7 @@ fn kirchhoff_navier_hz(mat: &OrthotropicMaterial, a: f64, b: f64, h: f64, count:
     out
 }
 
-fn bending_frequencies(model: &ShellModel, count: usize) -> Vec<f64> {
+fn bending_frequencies(model: &BridgeModel, count: usize) -> Vec<f64> {
     let modes = model.assemble().unwrap().modes().unwrap();
     (0..modes.len())
         .filter(|&i| modes.kinds[i] == ModeKind::Bending)
@@ -151,12 +151,12 @@ fn sparse_path_at_20000_dofs_matches_navier() {
     use splinewatch_core::solvers::sparse_model::SparseModel;
     let (a, b, h) = (16.0, 9.0, 1.6);
     let mat = sinello_material();
-    let model = ShellModel {
+    let model = BridgeModel {
         springs: vec![],
         stiffness_fields: Vec::new(),
         member_stiffness: Vec::new(),
         constraints: all_edges(SupportKind::SimplySupported),
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(a, b, h, [3, 3], [80, 50]).unwrap(),
             mat.clone(),
         )
@@ -223,14 +223,14 @@ const DONNELL_MATERIAL: (f64, f64, f64) = (70e9, 0.3, 2700.0);
 const DONNELL_PANEL: (f64, f64, f64, f64) = (1.0, 2.0, 0.5, 0.01);
 
 /// The Donnell panel (R/h = 200), shear-diaphragm supports on every edge.
-fn donnell_panel(stiffness_fields: Vec<StiffnessField>) -> ShellModel {
+fn donnell_panel(stiffness_fields: Vec<StiffnessField>) -> BridgeModel {
     let (e, nu, rho) = DONNELL_MATERIAL;
     let (length, radius, angle, h) = DONNELL_PANEL;
-    ShellModel {
+    BridgeModel {
         springs: vec![],
         stiffness_fields,
         constraints: all_edges(SupportKind::ShearDiaphragm),
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::cylindrical_panel(length, radius, angle, h, [4, 4], [16, 16]).unwrap(),
             OrthotropicMaterial::isotropic(e, nu, rho).unwrap(),
         )
@@ -281,7 +281,7 @@ fn section_fields(scales: [StiffnessScale; 3]) -> Vec<StiffnessField> {
 fn section_scales_match_navier_mindlin() {
     let (a, b, h) = (16.0, 9.0, 1.6);
     let mat = sinello_material();
-    let model = ShellModel {
+    let model = BridgeModel {
         stiffness_fields: section_fields([StiffnessScale::Bending, StiffnessScale::Shear, StiffnessScale::Membrane]),
         member_stiffness: Vec::new(),
         ..simply_supported_plate(a, b, h, &mat)
@@ -332,12 +332,12 @@ fn section_scales_on_a_panel_match_donnell() {
 
 #[test]
 fn free_plate_has_six_rigid_modes() {
-    let model = ShellModel {
+    let model = BridgeModel {
         springs: vec![],
         stiffness_fields: Vec::new(),
         member_stiffness: Vec::new(),
         constraints: vec![],
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
             sinello_material(),
         )
@@ -350,12 +350,12 @@ fn free_plate_has_six_rigid_modes() {
 
 #[test]
 fn vertical_springs_leave_three_in_plane_rigid_modes() {
-    let model = ShellModel {
+    let model = BridgeModel {
         springs: sinello_springs(),
         stiffness_fields: Vec::new(),
         member_stiffness: Vec::new(),
         constraints: vec![],
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
             sinello_material(),
         )
@@ -380,12 +380,12 @@ fn vertical_springs_leave_three_in_plane_rigid_modes() {
 fn sinello_deck_has_thirty_modes_below_80_hz() {
     // The documented geometry assumption (16 m × 9 m × 1.6 m) reproduces the
     // paper's statement: 30 flexible modes below 80 Hz, 18 of them bending.
-    let model = ShellModel {
+    let model = BridgeModel {
         springs: sinello_springs(),
         stiffness_fields: Vec::new(),
         member_stiffness: Vec::new(),
         constraints: vec![],
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
             sinello_material(),
         )
@@ -462,12 +462,12 @@ fn material_angle_rotates_the_orthotropy() {
         ..base
     };
     let freqs = |p: OrthotropicParameters| {
-        let model = ShellModel {
+        let model = BridgeModel {
             springs: vec![],
             stiffness_fields: Vec::new(),
             member_stiffness: Vec::new(),
             constraints: all_edges(SupportKind::SimplySupported),
-            ..ShellModel::new(
+            ..BridgeModel::new(
                 Shell::rectangular_plate(4.0, 3.0, 0.2, [3, 3], [8, 7]).unwrap(),
                 OrthotropicMaterial::new(p).unwrap(),
             )

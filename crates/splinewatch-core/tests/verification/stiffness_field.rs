@@ -12,7 +12,7 @@ use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use splinewatch_core::model::stiffness_field::StiffnessField;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfModel, FrfRequest, Quantity};
 use splinewatch_core::solvers::modal::{self, ModeKind};
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet, UpdateProblem};
@@ -28,8 +28,8 @@ fn field(degree: [usize; 2], count: [usize; 2]) -> StiffnessField {
     .unwrap()
 }
 
-fn with_fields(fields: Vec<StiffnessField>) -> ShellModel {
-    ShellModel {
+fn with_fields(fields: Vec<StiffnessField>) -> BridgeModel {
+    BridgeModel {
         stiffness_fields: fields,
         member_stiffness: Vec::new(),
         ..sinello_model()

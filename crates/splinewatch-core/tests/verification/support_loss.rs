@@ -11,7 +11,7 @@ use splinewatch_core::model::loss_sites::{LossSite, LossSites};
 use splinewatch_core::model::material::OrthotropicMaterial;
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfModel, FrfRequest, ModalState, Quantity, SensorPoint};
 use splinewatch_core::solvers::modal::ModeKind;
 use splinewatch_core::updating::modal_residual::{modal_residue, pair_modes, ObservedMode};
@@ -45,7 +45,7 @@ fn abutment_components(vertical: f64, rotation: f64) -> Vec<(SupportComponent, f
 }
 
 /// The deck of [`deck_on_abutments`] and its three sensors.
-fn deck_model(fields: Vec<StiffnessField>) -> (ShellModel, Vec<SensorPoint>) {
+fn deck_model(fields: Vec<StiffnessField>) -> (BridgeModel, Vec<SensorPoint>) {
     use splinewatch_core::model::constraints::Edge;
     deck_on_supports(
         fields,
@@ -64,10 +64,10 @@ type LineSupport<'a> = (
 );
 
 /// The deck on line supports along its ends.
-fn deck_on_supports(fields: Vec<StiffnessField>, supports: Vec<LineSupport<'_>>) -> (ShellModel, Vec<SensorPoint>) {
+fn deck_on_supports(fields: Vec<StiffnessField>, supports: Vec<LineSupport<'_>>) -> (BridgeModel, Vec<SensorPoint>) {
     let shell = Shell::rectangular_plate(12.0, 3.0, 0.3, [3, 3], [8, 4]).unwrap();
     let material = OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap();
-    let mut model = ShellModel::new(shell, material);
+    let mut model = BridgeModel::new(shell, material);
     model.stiffness_fields = fields;
     model.elastic_supports = supports
         .into_iter()

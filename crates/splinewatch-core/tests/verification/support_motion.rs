@@ -11,7 +11,7 @@ use splinewatch_core::model::material::{OrthotropicMaterial, OrthotropicParamete
 use splinewatch_core::model::shell::Shell;
 use splinewatch_core::model::stiffness_field::StiffnessField;
 use splinewatch_core::model::supports::{SupportError, SupportGroups};
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfModel, ModalState, Quantity, SensorPoint};
 use splinewatch_core::response::support_motion::{GroundInput, GroundedStructure, SupportMotion};
 use splinewatch_core::solvers::modal::ModeKind;
@@ -73,9 +73,9 @@ fn a_rigid_deck_on_springs_has_the_single_dof_transmissibility() {
         shear_correction: 5.0 / 6.0,
     })
     .unwrap();
-    let plate = ShellModel {
+    let plate = BridgeModel {
         springs: sinello_model().springs,
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(16.0, 9.0, 1.6, [4, 4], [13, 5]).unwrap(),
             material,
         )
@@ -358,7 +358,7 @@ fn the_recursion_driven_by_the_ground_reaches_the_transmissibility() {
 fn transmissibility_sensitivities_match_central_differences() {
     let knots = |n| KnotVector::uniform(1, n, 0.0, 1.0).unwrap();
     let field = StiffnessField::new(knots(2), knots(2), vec![1.0; 4]).unwrap();
-    let shell_model = ShellModel {
+    let shell_model = BridgeModel {
         stiffness_fields: vec![field],
         member_stiffness: Vec::new(),
         ..sinello_model()

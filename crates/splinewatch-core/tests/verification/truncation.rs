@@ -8,7 +8,7 @@ use splinewatch_core::c64;
 use splinewatch_core::geometry::knots::KnotVector;
 use splinewatch_core::model::damping::DampingCurve;
 use splinewatch_core::model::stiffness_field::StiffnessField;
-use splinewatch_core::model::ShellModel;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfEvaluation, FrfModel, FrfRequest, ModalState, Quantity};
 use splinewatch_core::response::modal_sensitivity::ModalSensitivities;
 use splinewatch_core::updating::frf_residual::{MeasuredFrf, MeasuredSet, UpdateProblem};
@@ -188,7 +188,7 @@ fn a_truncated_update_recovers_the_springs() {
 
 /// The deck in eight regions (ξ in quarters, η in halves, degree 0), one
 /// of them 30 % softer: a point where every θ matters.
-fn regions() -> (ShellModel, Vec<f64>) {
+fn regions() -> (BridgeModel, Vec<f64>) {
     let regions = StiffnessField::new(
         KnotVector::new(vec![0.0, 0.25, 0.5, 0.75, 1.0], 0).unwrap(),
         KnotVector::new(vec![0.0, 0.5, 1.0], 0).unwrap(),
@@ -197,7 +197,7 @@ fn regions() -> (ShellModel, Vec<f64>) {
     .unwrap();
     let mut theta = vec![1.0; 8];
     theta[5] = 0.7;
-    let model = ShellModel {
+    let model = BridgeModel {
         stiffness_fields: vec![regions],
         member_stiffness: Vec::new(),
         ..sinello_model()

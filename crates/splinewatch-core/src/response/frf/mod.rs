@@ -22,7 +22,7 @@ use crate::linalg::dense_rows;
 use crate::model::damping::DampingCurve;
 use crate::model::loss_sites::SiteOf;
 use crate::model::springs::LowRankBlock;
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 use crate::solvers::dense_model::{AssembledModel, ModelError};
 use crate::solvers::modal::{ModalError, ModeKind, Modes};
 use crate::solvers::partial_eigen::Responses;
@@ -173,7 +173,7 @@ impl FrfModel {
     /// others by their residual ([`crate::solvers::truncation`]): for models too
     /// large for the dense path.
     pub fn truncated(
-        model: &ShellModel,
+        model: &BridgeModel,
         sensors: &[impl Into<Sensor> + Copy],
         cutoff_hz: f64,
     ) -> Result<Self, FrfError> {

@@ -131,7 +131,7 @@ pub(super) fn rows(
 
 /// The rows of `sensors` on `model`'s patches and beams.
 pub fn sensor_rows_of(
-    model: &crate::model::ShellModel,
+    model: &crate::model::BridgeModel,
     sensors: &[impl Into<Sensor> + Copy],
 ) -> Result<Vec<Vec<(usize, f64)>>, FrfError> {
     rows(&model.patches, &model.beams, sensors)

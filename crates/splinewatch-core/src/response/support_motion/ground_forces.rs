@@ -7,7 +7,7 @@ use super::GroundInput;
 use crate::model::dofs::DofMap;
 use crate::model::shell::Assembly;
 use crate::model::supports::{SupportError, SupportGroups};
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 use crate::response::frf::FrfModel;
 use faer::Mat;
 
@@ -21,7 +21,7 @@ use faer::Mat;
 /// moving group with one is refused.
 pub(super) fn truncated_forces(
     frf: &FrfModel,
-    model: &ShellModel,
+    model: &BridgeModel,
     groups: &SupportGroups,
     (kappa, theta): (&[Vec<f64>], &[Vec<f64>]),
     inputs: &[GroundInput],
@@ -113,7 +113,7 @@ pub(super) struct GroundLifts {
 impl GroundLifts {
     /// The held nodes of `model`; a node held by two groups' supports is
     /// refused (it cannot follow two grounds).
-    pub(super) fn new(model: &ShellModel, groups: &SupportGroups) -> Result<Self, SupportError> {
+    pub(super) fn new(model: &BridgeModel, groups: &SupportGroups) -> Result<Self, SupportError> {
         let dofs = model.dof_map();
         let mut owner: Vec<Option<usize>> = vec![None; dofs.node_count()];
         let mut claim = |node: usize, g: usize| match owner[node] {

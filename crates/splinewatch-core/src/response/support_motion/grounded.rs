@@ -6,12 +6,12 @@
 use super::ground_forces::GroundLifts;
 use super::GroundInput;
 use crate::model::supports::{SupportError, SupportGroups};
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 
 /// The structure, its support groups and their constraint lifts.
 #[derive(Debug, Clone)]
 pub struct GroundedStructure {
-    structure: ShellModel,
+    structure: BridgeModel,
     groups: SupportGroups,
     lifts: GroundLifts,
 }
@@ -19,7 +19,7 @@ pub struct GroundedStructure {
 impl GroundedStructure {
     /// `structure` on `groups`; a node held by two groups' supports is
     /// refused (it cannot follow two grounds).
-    pub fn new(structure: ShellModel, groups: SupportGroups) -> Result<Self, SupportError> {
+    pub fn new(structure: BridgeModel, groups: SupportGroups) -> Result<Self, SupportError> {
         let lifts = GroundLifts::new(&structure, &groups)?;
         Ok(Self {
             structure,
@@ -28,7 +28,7 @@ impl GroundedStructure {
         })
     }
 
-    pub fn structure(&self) -> &ShellModel {
+    pub fn structure(&self) -> &BridgeModel {
         &self.structure
     }
 

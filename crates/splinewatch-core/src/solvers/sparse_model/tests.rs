@@ -24,12 +24,12 @@ fn the_sparse_model_matches_the_dense_one() {
         )
         .unwrap()
     };
-    let model = ShellModel {
+    let model = BridgeModel {
         springs: vec![spring(0.0, 0.05, 1e9), spring(0.95, 1.0, 3e9)],
         stiffness_fields: Vec::new(),
         member_stiffness: Vec::new(),
         constraints: Vec::new(),
-        ..ShellModel::new(shell, material)
+        ..BridgeModel::new(shell, material)
     };
     let dense = model.assemble().unwrap();
     let sparse = SparseModel::assemble(&model).unwrap();

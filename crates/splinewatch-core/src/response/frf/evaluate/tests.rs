@@ -4,7 +4,7 @@ use crate::model::damping::DampingCurve;
 use crate::model::material::{OrthotropicMaterial, OrthotropicParameters};
 use crate::model::shell::Shell;
 use crate::model::springs::{Face, SpringDirection, SpringField};
-use crate::model::ShellModel;
+use crate::model::BridgeModel;
 use crate::response::frf::{Quantity, SensorPoint};
 
 /// A square isotropic plate on four equal edge strips of springs:
@@ -16,7 +16,7 @@ fn square_plate_on_springs() -> (FrfModel, Vec<Vec<f64>>) {
 }
 
 /// The plate of [`square_plate_on_springs`] and its three sensors.
-fn square_plate() -> (ShellModel, Vec<SensorPoint>) {
+fn square_plate() -> (BridgeModel, Vec<SensorPoint>) {
     let material = OrthotropicMaterial::new(OrthotropicParameters {
         e1: 3.0e10,
         e2: 3.0e10,
@@ -38,12 +38,12 @@ fn square_plate() -> (ShellModel, Vec<SensorPoint>) {
         strip(knots(0.0, 1.0), knots(0.0, 0.05)),
         strip(knots(0.0, 1.0), knots(0.95, 1.0)),
     ];
-    let model = ShellModel {
+    let model = BridgeModel {
         springs,
         stiffness_fields: vec![],
         member_stiffness: Vec::new(),
         constraints: vec![],
-        ..ShellModel::new(
+        ..BridgeModel::new(
             Shell::rectangular_plate(6.0, 6.0, 0.15, [3, 3], [7, 7]).unwrap(),
             material,
         )
