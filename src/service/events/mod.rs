@@ -174,9 +174,9 @@ fn run_chain(
     line.rms_deck = Some(measured.rms_deck);
     let amplitude = line.amplitude(cfg.events().amplitude).expect("both measured");
     // The update needs the modes when it fits them (`[events] residues`);
-    // otherwise the identification is taken after it, so that one running
-    // on another thread overlaps the forecast and the update.
-    // Without a model there is nothing to overlap: modes first as well.
+    // otherwise, and without a model, the identification is taken after
+    // the forecast and the update (or the realization), so that one running
+    // on another thread overlaps them.
     let modes_first = cfg.events().residues != Residues::Frf && cfg.has_model();
     if modes_first {
         add_identification(line, take_identification(identified)?);
