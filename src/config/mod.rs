@@ -47,7 +47,7 @@ pub use output::{OutputConfig, RawRecordingConfig};
 pub use patches::FaceConfig;
 pub use schedule::ScheduleConfig;
 pub use schema::config_schema;
-pub use setup::{frf_setup, frf_setup_with_points, FrfSetup};
+pub use setup::{frf_setup, frf_setup_of, frf_setup_with_points, solver_model, FrfSetup};
 #[cfg(feature = "daemon")]
 pub use tls::{CertificateSummary, TlsFile, TlsReport, EXPIRY_WARNING_DAYS};
 pub use updating::{ParameterFamily, Residues, UpdatingConfig};

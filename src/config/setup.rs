@@ -4,6 +4,7 @@ use super::Config;
 use anyhow::{Context, Result};
 use splinewatch_core::c64;
 use splinewatch_core::model::damping::DampingCurve;
+use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::{FrfModel, FrfRequest, Sensor, SensorPoint};
 use splinewatch_core::solvers::truncation::TruncationReport;
 
@@ -61,12 +62,25 @@ pub fn frf_setup(config: &Config) -> Result<FrfSetup> {
 /// As [`frf_setup`], with `extra` points appended to the model's sensor list
 /// (after the configured sensors; the simulator's unmeasured force points).
 pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<FrfSetup> {
-    let cutoff_hz = config.modal_cutoff_hz()?;
-    let model = match cutoff_hz {
+    frf_setup_of(config, &solver_model(config)?, extra)
+}
+
+/// The configured model as its solver takes it: any size for the modes
+/// below a cut-off, a dense-sized one for every mode
+/// ([`Config::build_dense_model`]).
+pub fn solver_model(config: &Config) -> Result<BridgeModel> {
+    Ok(match config.modal_cutoff_hz()? {
         Some(_) => config.build_model()?,
         None => config.build_dense_model()?,
-    };
-    let sensors = config.build_sensors(&model)?;
+    })
+}
+
+/// [`frf_setup_with_points`] on `model`, built from `config` by
+/// [`solver_model`] (so that a caller who needs the model too builds it
+/// once).
+pub fn frf_setup_of(config: &Config, model: &BridgeModel, extra: &[SensorPoint]) -> Result<FrfSetup> {
+    let cutoff_hz = config.modal_cutoff_hz()?;
+    let sensors = config.build_sensors(model)?;
     if sensors.is_empty() {
         anyhow::bail!("config: sensors: at least one [[sensors]] table is required for FRFs");
     }
@@ -77,7 +91,7 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
         .map(|(_, p)| *p)
         .chain(extra.iter().map(|&p| Sensor::Shell(p)))
         .collect();
-    let dense = |model: &splinewatch_core::model::BridgeModel| -> Result<FrfModel> {
+    let dense = |model: &BridgeModel| -> Result<FrfModel> {
         Ok(FrfModel::new(
             model.assemble().context("assembling the model")?,
             &points,
@@ -85,11 +99,11 @@ pub fn frf_setup_with_points(config: &Config, extra: &[SensorPoint]) -> Result<F
     };
     let (frf_model, reference) = match cutoff_hz {
         Some(cutoff_hz) => {
-            let truncated = FrfModel::truncated(&model, &points, cutoff_hz).context("assembling the sparse model")?;
+            let truncated = FrfModel::truncated(model, &points, cutoff_hz).context("assembling the sparse model")?;
             let small = model.control_point_count() <= super::model::AUTO_TRUNCATED_CONTROL_POINTS;
-            (truncated, if small { Some(dense(&model)?) } else { None })
+            (truncated, if small { Some(dense(model)?) } else { None })
         }
-        None => (dense(&model)?, None),
+        None => (dense(model)?, None),
     };
     Ok(FrfSetup {
         model: frf_model,

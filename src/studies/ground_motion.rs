@@ -13,7 +13,7 @@
 //! mode); the discarded modes' dynamic share is left out.
 
 use super::parameters::values_by_name;
-use crate::config::{frf_setup, ground_signals, Config, FrfSetup, GroundInputPlan};
+use crate::config::{frf_setup_of, ground_signals, solver_model, Config, FrfSetup, GroundInputPlan};
 use crate::io::named_value::NamedValue;
 use anyhow::{bail, Result};
 use splinewatch_core::model::supports::SupportGroups;
@@ -126,9 +126,10 @@ pub struct GroundParts {
 
 impl GroundParts {
     pub fn new(config: &Config) -> Result<Self> {
+        // The model once, for the FRF model and the grounds.
         let (shell, groups, plan) = ground_setup(config)?;
         Ok(Self {
-            setup: frf_setup(config)?,
+            setup: frf_setup_of(config, &shell, &[])?,
             grounded: GroundedStructure::new(shell, groups)
                 .map_err(|e| anyhow::anyhow!("the model's supports: {e}"))?,
             plan,
@@ -142,7 +143,7 @@ fn ground_setup(config: &Config) -> Result<(BridgeModel, SupportGroups, Vec<Grou
     if !config.has_ground_sensors() {
         bail!("config: sensors: no ground sensor (a [[sensors]] entry with support = \"<group>\"): nothing drives the deck");
     }
-    let model = config.build_model()?;
+    let model = solver_model(config)?;
     let groups = config.support_groups(&model)?;
     let plan = config.ground_plan(&groups)?;
     Ok((model, groups, plan))

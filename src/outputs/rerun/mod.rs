@@ -45,7 +45,7 @@ mod update;
 pub use oma::IdentificationFile;
 pub use rrd::{inspect_rrd, RrdSummary};
 
-use crate::config::{frf_setup, Config, FrfSetup};
+use crate::config::{Config, FrfSetup};
 use crate::pipeline::{Health, UpdateOutcome};
 use anyhow::{anyhow, Result};
 use deck::DeckGrid;
@@ -120,8 +120,8 @@ impl RerunOutput {
         let rec = rerun::RecordingStreamBuilder::new("splinewatch")
             .buffered()
             .map_err(|e| anyhow!("cannot start the Rerun stream: {e}"))?;
-        let setup = frf_setup(config)?;
-        let model = config.build_model()?;
+        let model = crate::config::solver_model(config)?;
+        let setup = crate::config::frf_setup_of(config, &model, &[])?;
         let sensors = config.build_sensors(&model)?;
         let grid = DeckGrid::new(&model);
         let mut out = Self {
