@@ -24,6 +24,8 @@ pub struct Publisher {
     encoding: Encoding,
     speed: f64,
     origin: Option<(i128, std::time::Instant)>,
+    /// Called before each block; may block ([`Self::hold_back_with`]).
+    gate: Option<Box<dyn FnMut() + Send>>,
 }
 
 impl Publisher {
@@ -37,7 +39,15 @@ impl Publisher {
             encoding,
             speed,
             origin: None,
+            gate: None,
         })
+    }
+
+    /// Calls `gate` before each block: it may block, holding the publisher
+    /// back (the demo, while its daemon has updates waiting). The pace
+    /// resumes where it stopped rather than catching up in a burst.
+    pub fn hold_back_with(&mut self, gate: impl FnMut() + Send + 'static) {
+        self.gate = Some(Box::new(gate));
     }
 
     /// The publisher's zenoh session (e.g. to subscribe to results on the same link).
@@ -46,6 +56,13 @@ impl Publisher {
     }
 
     pub fn publish(&mut self, block: &wire::ChannelBlock) -> Result<()> {
+        if let Some(gate) = self.gate.as_mut() {
+            let held = std::time::Instant::now();
+            gate();
+            if let Some((_, start)) = self.origin.as_mut() {
+                *start += held.elapsed();
+            }
+        }
         if self.speed > 0.0 {
             let (t0, w0) = *self.origin.get_or_insert((block.start_ns, std::time::Instant::now()));
             let due = std::time::Duration::from_secs_f64(((block.start_ns - t0) as f64 / 1e9 / self.speed).max(0.0));

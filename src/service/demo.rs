@@ -104,15 +104,44 @@ pub fn demo_plan(cfg: &Config, duration: Option<f64>) -> Result<DemoPlan> {
 /// take the messages still on their way.
 pub const DRAIN_LIMIT: std::time::Duration = std::time::Duration::from_secs(60);
 
+/// How a live run's publisher keeps pace.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pacing {
+    /// At the run's speed alone: a daemon that falls behind skips and
+    /// counts updates, as on a site.
+    Clock,
+    /// At the run's speed, held back while the daemon has
+    /// [`HOLD_BACK_AT`] updates waiting or [`HOLD_BACK_MESSAGES`] messages
+    /// not yet taken: the demo's every window is updated whatever else
+    /// loads the host (slower then, never different).
+    Updates,
+}
+
+/// Waiting updates at which [`Pacing::Updates`] holds the publisher back
+/// (the daemon's queue skips beyond 16).
+const HOLD_BACK_AT: usize = 4;
+/// Messages on their way at which [`Pacing::Updates`] holds back.
+const HOLD_BACK_MESSAGES: u64 = 512;
+
 /// Runs the daemon on a free loopback port and `source` on a publisher
 /// connected to it (on a blocking thread), started once the daemon's
 /// subscribers are declared; stops the daemon once it has taken every
 /// message the source sent (or [`DRAIN_LIMIT`] passed) and the last
 /// windows' updates had time to run.
 pub fn run_with_source(
-    mut cfg: Config,
+    cfg: Config,
     out: &Path,
     speed: f64,
+    keep_updates: usize,
+    source: impl FnOnce(&Config, &mut Publisher) -> Result<u64> + Send + 'static,
+) -> Result<RunSummary> {
+    run_paced(cfg, out, (speed, Pacing::Clock), keep_updates, source)
+}
+
+fn run_paced(
+    mut cfg: Config,
+    out: &Path,
+    (speed, pacing): (f64, Pacing),
     keep_updates: usize,
     source: impl FnOnce(&Config, &mut Publisher) -> Result<u64> + Send + 'static,
 ) -> Result<RunSummary> {
@@ -153,8 +182,12 @@ pub fn run_with_source(
             daemon.await.context("the daemon panicked")??;
             bail!("the daemon stopped before it listened");
         }
+        let progress = taken.clone();
         let publisher = tokio::task::spawn_blocking(move || -> Result<u64> {
             let mut publisher = Publisher::open(&publisher_cfg, prefix, Encoding::Cbor, speed)?;
+            if pacing == Pacing::Updates {
+                publisher.hold_back_with(hold_back(progress));
+            }
             // Let the publisher's session connect before the first block.
             std::thread::sleep(std::time::Duration::from_millis(500));
             let sent = source(&source_cfg, &mut publisher)?;
@@ -166,14 +199,19 @@ pub fn run_with_source(
         // Drain: every message sent taken by the daemon, then time for the
         // last windows' updates (a waiting one is skipped at shutdown, with
         // its reason).
-        let all_taken = taken.wait_for(|n| n.is_some_and(|n| n >= sent));
+        let all_taken = taken.wait_for(|p| p.is_some_and(|p| p.taken >= sent));
         if tokio::time::timeout(DRAIN_LIMIT, all_taken).await.is_err() {
             tracing::warn!(
                 message = "the daemon had not taken every message sent; stopping it",
                 sent,
-                taken = taken.borrow().unwrap_or(0),
+                taken = taken.borrow().map_or(0, |p| p.taken),
                 waited_s = DRAIN_LIMIT.as_secs()
             );
+        }
+        if pacing == Pacing::Updates {
+            // Every window's update run, however loaded the host.
+            let none_waiting = taken.wait_for(|p| p.is_some_and(|p| p.updates_waiting == 0));
+            let _ = tokio::time::timeout(DRAIN_LIMIT, none_waiting).await;
         }
         tokio::time::sleep(std::time::Duration::from_millis(1500)).await;
         let _ = stop_tx.send(());
@@ -187,12 +225,29 @@ pub fn run_with_source(
     })
 }
 
+/// [`Pacing::Updates`]' gate: before each block, waits while the daemon
+/// is behind (never past the drain limit: a daemon that stopped taking
+/// messages is the drain's to report).
+fn hold_back(progress: tokio::sync::watch::Receiver<Option<daemon::Progress>>) -> impl FnMut() + Send + 'static {
+    let mut published = 0u64;
+    move || {
+        published += 1;
+        let since = std::time::Instant::now();
+        let behind = |p: &daemon::Progress| {
+            p.updates_waiting >= HOLD_BACK_AT || published.saturating_sub(p.taken) > HOLD_BACK_MESSAGES
+        };
+        while progress.borrow().as_ref().is_some_and(behind) && since.elapsed() < DRAIN_LIMIT {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+    }
+}
+
 /// Simulates the demo's bearing-damage scenario ([`demo_plan`]) and
 /// publishes it live.
 pub fn run_live(cfg: Config, plan: &DemoPlan, out: &Path, speed: f64, seed: u64) -> Result<RunSummary> {
     let duration = plan.duration;
     let scenario = parse_scenario(&plan.scenario)?;
-    run_with_source(cfg, out, speed, usize::MAX, move |cfg, publisher| {
+    run_paced(cfg, out, (speed, Pacing::Updates), usize::MAX, move |cfg, publisher| {
         let options = SimulationOptions {
             scenario: Some(scenario),
             ..SimulationOptions::random_excitation(cfg, duration, seed)
@@ -211,7 +266,7 @@ pub fn run_recording_live(config_path: &Path, recording: &Path, out: &Path, spee
     let cfg = load_config(config_path)?;
     let bytes = std::fs::read(recording).with_context(|| format!("cannot read {}", recording.display()))?;
     let (blocks, _) = read_recording(&bytes, &Limits::default())?;
-    run_with_source(cfg, out, speed, usize::MAX, move |_, publisher| {
+    run_paced(cfg, out, (speed, Pacing::Updates), usize::MAX, move |_, publisher| {
         for b in &blocks {
             publisher.publish(&b.block)?;
         }

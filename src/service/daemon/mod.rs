@@ -80,24 +80,41 @@ pub async fn run(config: Config, options: RunOptions, shutdown: impl Future<Outp
     run_observed(config, options, &tokio::sync::watch::channel(None).0, shutdown).await
 }
 
-/// [`run`], telling `taken` how many messages the daemon has taken from
-/// zenoh so far (queued, or dropped by the full ingest queue): first once
-/// its subscribers are declared (no message sent before can reach it),
-/// then after each message. A drop happens only while the queue is full,
-/// so the messages still queued behind it bring the count up to date. A publisher in the same process (the demo)
-/// starts on the first and drains on the count instead of on guessed times.
+/// How far a running daemon has got ([`run_observed`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Progress {
+    /// Messages taken from zenoh so far (queued, or dropped by the full
+    /// ingest queue).
+    pub taken: u64,
+    /// Updates waiting behind the running one.
+    pub updates_waiting: usize,
+}
+
+/// [`run`], telling `progress` how many messages the daemon has taken from
+/// zenoh so far (queued, or dropped by the full ingest queue) and how many
+/// updates wait: first once its subscribers are declared (no message sent
+/// before can reach it), then after each message and each finished update.
+/// A drop happens only while the queue is full, so the messages still
+/// queued behind it bring the count up to date. A publisher in the same
+/// process (the demo) starts on the first, drains on the count instead of
+/// on guessed times, and may hold back while updates wait.
 pub async fn run_observed(
     config: Config,
     options: RunOptions,
-    taken: &tokio::sync::watch::Sender<Option<u64>>,
+    progress: &tokio::sync::watch::Sender<Option<Progress>>,
     shutdown: impl Future<Output = ()>,
 ) -> Result<RunSummary> {
     let mut daemon = Daemon::start(&config, &options)?;
     let (link, mut messages) = ZenohLink::open(&config).await?;
     tracing::info!(message = "splinewatch running", prefix = %config.topic_prefix(), results = %options.results.display());
     notify_systemd(&[sd_notify::NotifyState::Ready]);
-    let taken_so_far = |daemon: &Daemon, link: &ZenohLink| Some(daemon.messages_received() + link.ingest_drops());
-    taken.send_replace(taken_so_far(&daemon, &link));
+    let so_far = |daemon: &Daemon, link: &ZenohLink| {
+        Some(Progress {
+            taken: daemon.messages_received() + link.ingest_drops(),
+            updates_waiting: daemon.worker.waiting(),
+        })
+    };
+    progress.send_replace(so_far(&daemon, &link));
     let mut health_timer = tokio::time::interval(std::time::Duration::from_secs(10));
     let mut event_timer = tokio::time::interval(std::time::Duration::from_secs(1));
     let events = daemon.events.is_some();
@@ -108,9 +125,12 @@ pub async fn run_observed(
             message = messages.recv() => {
                 let Some(message) = message else { break };
                 daemon.on_message(message, &link);
-                taken.send_replace(taken_so_far(&daemon, &link));
+                progress.send_replace(so_far(&daemon, &link));
             }
-            outcome = daemon.worker.finished(), if daemon.worker.is_busy() => daemon.on_outcome(outcome, &link)?,
+            outcome = daemon.worker.finished(), if daemon.worker.is_busy() => {
+                daemon.on_outcome(outcome, &link)?;
+                progress.send_replace(so_far(&daemon, &link));
+            }
             finished = async { daemon.events.as_mut().expect("guarded").finished().await },
                 if daemon.events.as_ref().is_some_and(|e| e.is_busy()) => daemon.on_event(finished, &link)?,
             _ = health_timer.tick() => {
