@@ -43,20 +43,19 @@ impl Config {
     /// `[model.damping]` (the curve it adds to).
     pub fn loss_sites(&self) -> Result<Vec<LossSite>, ConfigError> {
         let m = &self.model;
+        let order = super::kappa_order::KappaOrder::of(m);
         let mut sites = Vec::new();
-        let mut offset = 0;
         for (i, spring) in m.springs.iter().enumerate() {
-            let count = spring.stiffness.len();
+            let first = order.spring_coefficient(i);
             if let Some(factor) = spring.loss_factor {
                 sites.push(LossSite {
                     name: spring.name.clone(),
                     key: format!("model.springs[{i}].loss_factor"),
                     factor,
-                    springs: (offset..offset + count).collect(),
+                    springs: (first..first + spring.stiffness.len()).collect(),
                     fields: Vec::new(),
                 });
             }
-            offset += count;
         }
         let bearings = Entries {
             section: "model.bearings",
@@ -64,14 +63,14 @@ impl Config {
             components: &|_| super::patches::BEARING_AXES.to_vec(),
             loss: &|b: &super::patches::BearingConfig| b.loss_factor.as_ref(),
         };
-        offset = bearings.add_sites(&m.bearings, offset, &mut sites)?;
+        bearings.add_sites(&m.bearings, &|b| order.bearing_coefficient(b), &mut sites)?;
         let supports = Entries {
             section: "model.supports",
             what: "support",
             components: &|s: &super::model::substructure::SupportConfig| s.component_names(),
             loss: &|s| s.loss_factor.as_ref(),
         };
-        supports.add_sites(&m.supports, offset, &mut sites)?;
+        supports.add_sites(&m.supports, &|s| order.support_coefficient(s), &mut sites)?;
         self.add_field_sites(&mut sites)?;
         for site in &sites {
             site.factor.check(&site.key)?;
@@ -174,12 +173,18 @@ struct Entries<'a, T> {
 }
 
 impl<T: Tied> Entries<'_, T> {
-    /// Adds the sites of `items`, whose coefficients start at `offset`, to
-    /// `sites`; returns the offset after them.
-    fn add_sites(&self, items: &[T], mut offset: usize, sites: &mut Vec<LossSite>) -> Result<usize, ConfigError> {
+    /// Adds the sites of `items`, item `i`'s coefficients starting at
+    /// `first(i)`, to `sites`.
+    fn add_sites(
+        &self,
+        items: &[T],
+        first: &dyn Fn(usize) -> usize,
+        sites: &mut Vec<LossSite>,
+    ) -> Result<(), ConfigError> {
         // The sites of the last entry not tied, by component (None: whole).
         let mut leader: Vec<(usize, Option<&'static str>)> = Vec::new();
         for (i, item) in items.iter().enumerate() {
+            let offset = first(i);
             let key = format!("{}[{i}].loss_factor", self.section);
             let components = (self.components)(item);
             let own = (self.loss)(item);
@@ -213,9 +218,8 @@ impl<T: Tied> Entries<'_, T> {
                     });
                 }
             }
-            offset += components.len();
         }
-        Ok(offset)
+        Ok(())
     }
 
     /// The flat spring coefficients of `component` (None: every one) of an

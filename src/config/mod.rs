@@ -10,6 +10,7 @@ mod events;
 mod frequency_domain;
 mod frf;
 mod ground;
+mod kappa_order;
 mod loss_factor;
 mod loss_sites;
 mod materials;

@@ -253,8 +253,8 @@ impl Config {
                 |coefficient| ParameterKind::Spring { field, coefficient },
             )?);
         }
-        // Bearings follow the spring fields among κ (`BridgeModel::spring_coefficients`).
-        let springs = self.model.springs.len();
+        // The κ fields of bearings and supports (`KappaOrder`).
+        let order = super::kappa_order::KappaOrder::of(&self.model);
         let runs = self.bearing_runs()?;
         for (b, count) in runs {
             let bearing = &self.model.bearings[b];
@@ -270,12 +270,12 @@ impl Config {
                         name: format!("{}.{axis}", bearing.name),
                         kind: if count == 1 {
                             ParameterKind::Spring {
-                                field: springs + b,
+                                field: order.bearing_field(b),
                                 coefficient,
                             }
                         } else {
                             ParameterKind::SpringRun {
-                                field: springs + b,
+                                field: order.bearing_field(b),
                                 count,
                                 coefficient,
                             }
@@ -285,10 +285,8 @@ impl Config {
                     }),
             );
         }
-        // Line supports follow the bearings among κ.
-        let first_support = springs + self.model.bearings.len();
         for (s, count) in self.support_runs()? {
-            out.extend(self.model.supports[s].parameters(s, first_support + s, count)?);
+            out.extend(self.model.supports[s].parameters(s, order.support_field(s), count)?);
         }
         for (field, count) in self.stiffness_field_runs()? {
             let f = &self.model.stiffness_fields[field];
