@@ -158,9 +158,6 @@ pub enum ParameterFamily {
     LossFactor,
 }
 
-/// The components a `[[model.supports]]` entry may update.
-const SUPPORT_COMPONENTS: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
-
 impl Config {
     /// The unit of updating parameter `name`: spring coefficients κ
     /// (`<spring>.k<j>`) in N/m³ (eq. 19), bearings in N/m, supports along
@@ -207,14 +204,19 @@ impl Config {
         let spring = |n: &str| m.springs.iter().any(|s| s.name == n);
         let bearing = |n: &str| m.bearings.iter().any(|b| b.name == n);
         let support = |n: &str| m.supports.iter().any(|s| s.name == n);
+        // A component the support itself gives.
+        let support_component = |n: &str, c: &str| {
+            m.supports
+                .iter()
+                .any(|s| s.name == n && s.component_names().contains(&c))
+        };
         let field = |n: &str| m.stiffness_fields.iter().any(|f| f.name == n);
         let beam = |n: &str| m.beams.iter().any(|b| b.name == n);
         if component == "eta" {
             // `<entry>.eta`, or `<support>.<component>.eta` (`<bearing>.<axis>.eta`).
             let lossy = |n: &str| spring(n) || bearing(n) || support(n) || field(n) || beam(n);
             let by_component = entry.rsplit_once('.').is_some_and(|(owner, c)| {
-                (support(owner) && SUPPORT_COMPONENTS.contains(&c))
-                    || (bearing(owner) && super::patches::BEARING_AXES.contains(&c))
+                support_component(owner, c) || (bearing(owner) && super::patches::BEARING_AXES.contains(&c))
             });
             return (lossy(entry) || by_component).then_some(ParameterFamily::LossFactor);
         }
@@ -224,7 +226,7 @@ impl Config {
             Some(ParameterFamily::Spring)
         } else if bearing(entry) && super::patches::BEARING_AXES.contains(&component) {
             Some(ParameterFamily::Bearing)
-        } else if support(entry) && SUPPORT_COMPONENTS.contains(&component) {
+        } else if support_component(entry, component) {
             Some(ParameterFamily::ElasticSupport)
         } else if field(entry) && numbered('s') {
             Some(ParameterFamily::StiffnessField)
