@@ -591,3 +591,77 @@ fn no_page_speaks_of_its_making() {
     );
     assert_eq!(flat.find("this machine").map(|at| line_of[at]), Some(3));
 }
+
+/// Words that, a few words before a duration, make it a figure of speed.
+const TIMING_VERBS: &[&str] = &[
+    "took",
+    "takes",
+    "take",
+    "taking",
+    "runs",
+    "ran",
+    "replayed",
+    "published",
+    "pushed",
+    "assembles",
+    "assembled",
+    "solves",
+    "finishes",
+    "finished",
+    "costs",
+    "cost",
+    "compiles",
+    "needs",
+];
+
+/// The figures of speed a paragraph states: a number and a unit of time a
+/// few words after a timing verb ("replayed in 3.5 s"), not an amount of
+/// data ("needs 32 s of record").
+fn speed_figures(paragraph: &str) -> Vec<String> {
+    let words: Vec<&str> = paragraph.split_whitespace().collect();
+    let bare = |w: &str| w.trim_matches(|c: char| ",.;:()*`~≈".contains(c)).to_lowercase();
+    let mut found = Vec::new();
+    for i in 1..words.len() {
+        let unit = bare(words[i]);
+        let number = bare(words[i - 1]);
+        let is_time = ["ms", "µs", "s", "min", "seconds", "minutes"].contains(&unit.as_str());
+        let of_data = words.get(i + 1).is_some_and(|w| bare(w) == "of");
+        if !is_time || of_data || !number.starts_with(|c: char| c.is_ascii_digit()) {
+            continue;
+        }
+        let before = &words[i.saturating_sub(5)..i - 1];
+        if before.iter().any(|w| TIMING_VERBS.contains(&bare(w).as_str())) {
+            found.push(words[i.saturating_sub(5)..=i].join(" "));
+        }
+    }
+    found
+}
+
+#[test]
+fn every_figure_of_speed_lives_on_the_benchmarks_page() {
+    let mut found = Vec::new();
+    for (page, text) in pages() {
+        if page.ends_with("performance/benchmarks.md") {
+            continue;
+        }
+        // A page may round a benchmark's figure beside a link to it.
+        for paragraph in text.split("\n\n") {
+            if paragraph.contains("benchmarks.md") {
+                continue;
+            }
+            for figure in speed_figures(paragraph) {
+                found.push(format!("{}: {figure:?}", page.display()));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "figures of speed outside the benchmarks page (move them there, or link to it):\n{}",
+        found.join("\n")
+    );
+    // The check itself: it sees a timing and lets an amount of data through.
+    assert_eq!(speed_figures("the stream replayed in 3.5 s, peak").len(), 1);
+    assert_eq!(speed_figures("`events` took 8.5 s (two runs)").len(), 1);
+    assert!(speed_figures("eight batches needs 32 s of record").is_empty());
+    assert!(speed_figures("the grid starts within 0.015 s of it").is_empty());
+}
