@@ -178,9 +178,17 @@ fn invocation(line: &str) -> Option<(String, Vec<String>)> {
     .find_map(|p| line.strip_prefix(p))?;
     let mut words = rest.split_whitespace();
     let command = words.next()?.to_string();
+    // A synopsis's optional flags count too: `[--count N]`, `(--frf FILE`.
     let flags = words
+        .map(|w| w.trim_start_matches(['[', '(']))
         .filter(|w| w.starts_with("--"))
-        .map(|w| w.split('=').next().unwrap().to_string())
+        .map(|w| {
+            w.split('=')
+                .next()
+                .unwrap()
+                .trim_end_matches([']', ')', '…'])
+                .to_string()
+        })
         .collect();
     Some((command, flags))
 }
