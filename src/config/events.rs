@@ -1,4 +1,4 @@
-//! `[events]`: earthquake records processed one event at a time (issue 45):
+//! `[events]`: earthquake records processed one event at a time:
 //! `splinewatch events` and the daemon on a triggered logger.
 
 use super::{err, ConfigError, Residues};
@@ -28,16 +28,20 @@ pub struct EventsConfig {
     /// (default: every deck acceleration sensor the record holds).
     #[serde(default)]
     pub outputs: Vec<String>,
-    /// What an event's update fits: `"spectra"` (default; the record's
-    /// output spectra against every ground input's), `"combined"` (the H1
-    /// transmissibility from the mean of the ground inputs along the fitted
-    /// sensors' axes) or `"separate"` (a multi-input H1 from each); see
-    /// `studies::event_update`.
+    /// The response function an event's update fits: `"spectra"` (default;
+    /// the record's output spectra against every ground input's),
+    /// `"combined"` (the H1 transmissibility from the mean of the ground
+    /// inputs along the fitted sensors' axes) or `"separate"` (a
+    /// multi-input H1 from each); see `studies::event_update`.
     #[serde(default)]
-    pub inputs: EventInputs,
+    pub response_function: ResponseFunction,
+    /// The key this one was before (`inputs`): refused, naming the new.
+    #[serde(default, rename = "inputs", skip_serializing)]
+    #[schemars(skip)]
+    pub retired_inputs: Option<toml::Value>,
     /// What an event's update fits: `"frf"` (default; the seed's FRF
-    /// residues on the record's transmissibilities or spectra, as `inputs`
-    /// says), `"modes"` (the modes identified from the record, in their
+    /// residues on the record's transmissibilities or spectra, as
+    /// `response_function` says), `"modes"` (the modes identified from the record, in their
     /// std) or `"both"` (each block in its own std: `[updating] residues`'
     /// values, with this key of its own because `[updating] residues`
     /// follows a force sensor an earthquake record has not).
@@ -97,10 +101,10 @@ impl EventAmplitude {
     }
 }
 
-/// `[events] inputs`.
+/// `[events] response_function`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize, Serialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
-pub enum EventInputs {
+pub enum ResponseFunction {
     #[default]
     Spectra,
     Combined,
@@ -115,7 +119,8 @@ impl Default for EventsConfig {
             min_events: default_min_events(),
             false_alarm_rate: default_false_alarm_rate(),
             outputs: Vec::new(),
-            inputs: EventInputs::default(),
+            response_function: ResponseFunction::default(),
+            retired_inputs: None,
             residues: default_residues(),
             amplitude: EventAmplitude::default(),
             forecast: EventForecast::default(),
@@ -147,6 +152,12 @@ fn default_false_alarm_rate() -> f64 {
 impl EventsConfig {
     /// `deck`: the deck sensors' names, which `outputs` must name.
     pub fn check(&self, deck: &[&str]) -> Result<(), ConfigError> {
+        if self.retired_inputs.is_some() {
+            return Err(err(
+                "events.inputs",
+                "renamed: events.response_function, with the same values (\"spectra\", \"combined\", \"separate\")",
+            ));
+        }
         if let Some((k, bad)) = self
             .outputs
             .iter()
@@ -195,5 +206,31 @@ impl EventsConfig {
             ));
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::config::{Config, ResponseFunction};
+
+    /// `response_function` reads as written; the key it was before,
+    /// `inputs`, is refused once, naming the new one.
+    #[test]
+    fn the_retired_inputs_key_is_refused_naming_response_function() {
+        let base = include_str!("../../config/painter-street.toml");
+        let with = |line: &str| {
+            let header = base.find("\n[events]").expect("the bundled config has [events]") + 1;
+            let after = header + base[header..].find('\n').unwrap() + 1;
+            let text = format!("{}{line}\n{}", &base[..after], &base[after..]);
+            let cfg = Config::from_toml(&text)?;
+            cfg.validate().map(|()| cfg)
+        };
+        let cfg = with("response_function = \"combined\"").unwrap();
+        assert_eq!(cfg.events().response_function, ResponseFunction::Combined);
+        let refused = with("inputs = \"combined\"").unwrap_err().to_string();
+        assert!(
+            refused.contains("events.inputs") && refused.contains("events.response_function"),
+            "{refused}"
+        );
     }
 }

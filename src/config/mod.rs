@@ -30,7 +30,7 @@ mod updating;
 mod web;
 mod zenoh;
 
-pub use events::{EventAmplitude, EventForecast, EventInputs, EventsConfig};
+pub use events::{EventAmplitude, EventForecast, EventsConfig, ResponseFunction};
 pub use frequency_domain::{FrequencyDomainConfig, FrequencyDomainPlan, MAX_FITTED_MODES};
 pub use frf::FrfConfig;
 pub use ground::{ground_sensors, ground_signals, restrict_plan, GroundInputPlan};

@@ -31,7 +31,7 @@
 
 use super::ground_motion::GroundParts;
 use super::parameters::values_by_name;
-use crate::config::{Config, EventInputs, GroundInputPlan, Residues};
+use crate::config::{Config, GroundInputPlan, Residues, ResponseFunction};
 use crate::io::named_value::NamedValue;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
@@ -131,9 +131,9 @@ pub fn update_on_event(
     if residues == Residues::Modes {
         return fit_modes(parts, signals, settings, &start, pairing, progress);
     }
-    let measured = match config.events().inputs {
-        EventInputs::Spectra => record_spectra(signals)?,
-        EventInputs::Combined | EventInputs::Separate => transmissibilities(config, signals)?,
+    let measured = match config.events().response_function {
+        ResponseFunction::Spectra => record_spectra(signals)?,
+        ResponseFunction::Combined | ResponseFunction::Separate => transmissibilities(config, signals)?,
     };
     settings.weighting = measured.weighting;
     let problem = TransmissibilityProblem::new(
@@ -408,7 +408,7 @@ fn transmissibilities(config: &Config, signals: &EventSignals<'_>) -> Result<Mea
     let mean: Vec<f64> = (0..samples)
         .map(|t| inputs.iter().map(|x| x[t]).sum::<f64>() / inputs.len() as f64)
         .collect();
-    let combine_all = config.events().inputs == EventInputs::Combined && inputs.len() > 1;
+    let combine_all = config.events().response_function == ResponseFunction::Combined && inputs.len() > 1;
     let input_views: Vec<&[f64]> = if combine_all {
         vec![mean.as_slice()]
     } else {

@@ -40,6 +40,7 @@ pub mod shell;
 pub mod sparse;
 pub mod springs;
 pub mod stiffness_field;
+pub mod support;
 pub mod supports;
 
 use bearings::{Bearing, PointMass};
@@ -131,22 +132,10 @@ impl BridgeModel {
         self.dof_map().control_point_count()
     }
 
-    /// The spring coefficients κ of eq. (22): each spring field's, then each
-    /// bearing's `[k_x, k_y, k_z]`, then each elastic support's components
-    /// (the assembled model's order).
+    /// The spring coefficients κ of eq. (22), one vector per support in
+    /// [`Self::supports`]' order (the assembled model's).
     pub fn spring_coefficients(&self) -> Vec<Vec<f64>> {
-        self.springs
-            .iter()
-            .map(|s| s.stiffness().to_vec())
-            .chain(self.bearings.iter().map(|b| b.stiffness().to_vec()))
-            .chain(self.elastic_supports.iter().map(|s| s.stiffness().to_vec()))
-            .collect()
-    }
-
-    /// How many vectors [`Self::spring_coefficients`] holds: spring fields,
-    /// bearings and elastic supports.
-    pub fn spring_field_count(&self) -> usize {
-        self.springs.len() + self.bearings.len() + self.elastic_supports.len()
+        self.supports().map(|s| s.stiffness().to_vec()).collect()
     }
 
     /// The start coefficients θ of every stiffness field, then of every

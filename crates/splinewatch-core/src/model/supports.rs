@@ -11,7 +11,6 @@
 //! group is uniform excitation.
 
 use crate::geometry::vec3::Vec3;
-use crate::model::elastic_supports::SupportSite;
 use crate::model::BridgeModel;
 use thiserror::Error;
 
@@ -57,7 +56,7 @@ pub enum SupportError {
 #[derive(Debug, Clone, PartialEq)]
 pub struct SupportGroups {
     names: Vec<String>,
-    /// Per spring field, then per bearing, then per line support (the
+    /// Per support, in [`BridgeModel::supports`]' order (the
     /// assembled model's order of `∂K/∂κ` fields).
     of_springs: Vec<usize>,
     of_constraints: Vec<usize>,
@@ -66,8 +65,8 @@ pub struct SupportGroups {
 }
 
 impl SupportGroups {
-    /// `of_springs`: a group per spring field, then per bearing, then per
-    /// line support;
+    /// `of_springs`: a group per support, in [`BridgeModel::supports`]'
+    /// order;
     /// `of_constraints`: a group per edge constraint.
     pub fn new(
         names: Vec<String>,
@@ -80,7 +79,7 @@ impl SupportGroups {
                 return Err(SupportError::Name(name.clone()));
             }
         }
-        let springs = model.spring_field_count();
+        let springs = model.support_count();
         for (what, given, expected) in [
             ("spring fields, bearings and line supports", &of_springs, springs),
             ("edge constraints", &of_constraints, model.constraints.len()),
@@ -138,7 +137,7 @@ impl SupportGroups {
     pub fn uniform(model: &BridgeModel) -> Self {
         Self {
             names: vec![DEFAULT_GROUP.to_string()],
-            of_springs: vec![0; model.spring_field_count()],
+            of_springs: vec![0; model.support_count()],
             of_constraints: vec![0; model.constraints.len()],
             of_beam_bases: vec![0; model.beams.members().len()],
         }
@@ -171,24 +170,10 @@ impl SupportGroups {
     /// deck point lies nearest, for a "deck moves with its ground" baseline.
     pub fn anchors(&self, model: &BridgeModel) -> Vec<Option<Vec3>> {
         let mut points: Vec<Vec<Vec3>> = vec![Vec::new(); self.names.len()];
-        let fields = model.springs.len();
-        for (b, bearing) in model.bearings.iter().enumerate() {
-            let at = bearing.at();
-            let shell = &model.patches[at.patch].shell;
-            points[self.of_springs[fields + b]].push(shell.position(at.xi, at.eta, at.tau));
-        }
-        let first_line = fields + model.bearings.len();
-        for (s, support) in model.elastic_supports.iter().enumerate() {
-            let at: Vec<Vec3> = match support.site() {
-                SupportSite::Edge { patch, edge } => {
-                    let shell = &model.patches[*patch].shell;
-                    let net = shell.surface().points();
-                    edge.control_points(shell).iter().map(|&c| net[c]).collect()
-                }
-                SupportSite::Point(at) => vec![model.patches[at.patch].shell.position(at.xi, at.eta, at.tau)],
-                SupportSite::BeamNodes(nodes) => nodes.iter().map(|&n| model.beams.position(n)).collect(),
-            };
-            points[self.of_springs[first_line + s]].push(centroid(&at));
+        for (j, support) in model.supports().enumerate() {
+            if let Some(held) = support.holds(model) {
+                points[self.of_springs[j]].push(centroid(&held));
+            }
         }
         for (node, member) in model.beams.base_nodes() {
             points[self.of_beam_bases[member]].push(model.beams.position(node));

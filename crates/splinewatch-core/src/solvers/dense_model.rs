@@ -11,16 +11,17 @@
 use crate::model::bearings::BearingError;
 use crate::model::constraints::DofReduction;
 use crate::model::dofs::DofMap;
-use crate::model::elastic_supports::{ElasticSupport, ElasticSupportError};
+use crate::model::elastic_supports::ElasticSupportError;
 use crate::model::member_stiffness::MemberStiffnessError;
 use crate::model::members::BeamNet;
 use crate::model::patch::Patch;
 use crate::model::rigid::RigidError;
 use crate::model::shell::{self, Frame, Offset, ShellError};
 use crate::model::sparse::SparseError;
-use crate::model::springs::{LowRankBlock, SpringError, SpringField};
+use crate::model::springs::{LowRankBlock, SpringError};
 use crate::model::stiffness_field::StiffnessField;
 use crate::model::stiffness_field::StiffnessFieldError;
+use crate::model::support::Support;
 use crate::model::BridgeModel;
 use crate::solvers::modal::{ModalError, ModalSolver, Modes};
 use faer::Mat;
@@ -172,31 +173,35 @@ impl BridgeModel {
             })
     }
 
-    /// `∂K/∂κ_j` on global dofs: every spring field's coefficients, then
-    /// every bearing's `k_x, k_y, k_z`, then every line support's
-    /// components.
+    /// `∂K/∂κ_j` on global dofs, per support in [`BridgeModel::supports`]'
+    /// order: a spring field's coefficients, a bearing's `k_x, k_y, k_z`, an
+    /// elastic support's components.
     pub(crate) fn spring_blocks(&self, dofs: &DofMap) -> Result<Vec<Vec<LowRankBlock>>, ModelError> {
-        let mut spring_blocks = Vec::with_capacity(self.spring_field_count());
-        for (index, s) in self.springs.iter().enumerate() {
-            let (p, offset) = self.patch_at(s.patch(), dofs)?;
-            let blocks = s
-                .coefficient_matrices(&p.shell)
-                .map_err(|source| ModelError::Spring { index, source })?;
-            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
-        }
-        for (index, b) in self.bearings.iter().enumerate() {
-            let (p, offset) = self.patch_at(b.at().patch, dofs)?;
-            let blocks = b
-                .coefficient_matrices(&p.shell)
-                .map_err(|source| ModelError::Bearing { index, source })?;
-            spring_blocks.push(blocks.into_iter().map(|b| b.shifted(offset)).collect());
-        }
-        for s in &self.elastic_supports {
-            spring_blocks.push(s.matrices(dofs, |patch| {
-                self.patch_at(patch, dofs).map(|(p, offset)| (&p.shell, offset))
-            })?);
-        }
-        Ok(spring_blocks)
+        self.supports()
+            .map(|support| {
+                let shifted =
+                    |blocks: Vec<LowRankBlock>, offset| blocks.into_iter().map(|b| b.shifted(offset)).collect();
+                Ok(match support {
+                    Support::Field(index, s) => {
+                        let (p, offset) = self.patch_at(s.patch(), dofs)?;
+                        let blocks = s
+                            .coefficient_matrices(&p.shell)
+                            .map_err(|source| ModelError::Spring { index, source })?;
+                        shifted(blocks, offset)
+                    }
+                    Support::Bearing(index, b) => {
+                        let (p, offset) = self.patch_at(b.at().patch, dofs)?;
+                        let blocks = b
+                            .coefficient_matrices(&p.shell)
+                            .map_err(|source| ModelError::Bearing { index, source })?;
+                        shifted(blocks, offset)
+                    }
+                    Support::Elastic(_, s) => s.matrices(dofs, |patch| {
+                        self.patch_at(patch, dofs).map(|(p, offset)| (&p.shell, offset))
+                    })?,
+                })
+            })
+            .collect()
     }
 
     /// Every point mass's block on global dofs.
@@ -238,13 +243,11 @@ impl BridgeModel {
     /// Every patch index of the attachments names a patch of the model.
     pub fn check_patch_indices(&self) -> Result<(), ModelError> {
         let used = self
-            .springs
+            .stiffness_fields
             .iter()
-            .map(SpringField::patch)
-            .chain(self.stiffness_fields.iter().map(StiffnessField::patch))
+            .map(StiffnessField::patch)
             .chain(self.constraints.iter().map(|c| c.patch))
-            .chain(self.bearings.iter().map(|b| b.at().patch))
-            .chain(self.elastic_supports.iter().filter_map(ElasticSupport::patch))
+            .chain(self.supports().filter_map(|s| s.patch()))
             .chain(self.masses.iter().map(|m| m.at().patch))
             .chain(self.joints.iter().flat_map(|j| [j.patch, j.other]));
         match used.into_iter().find(|&p| p >= self.patches.len()) {

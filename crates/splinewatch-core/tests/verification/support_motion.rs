@@ -263,7 +263,7 @@ fn a_node_held_by_two_grounds_is_refused() {
         patch: 0,
     });
     let names = vec!["springs".to_string(), "south".to_string(), "west".to_string()];
-    let springs = vec![0; panel.spring_field_count()];
+    let springs = vec![0; panel.support_count()];
     let groups = SupportGroups::new(names, springs, vec![1, 2], &panel).unwrap();
     match GroundedStructure::new(panel, groups) {
         Err(e @ SupportError::TwoGrounds { .. }) => {
