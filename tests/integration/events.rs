@@ -104,6 +104,10 @@ fn issue_45_events_process_real_records_in_time_order_and_skip_bad_ones_with_the
     let lines = crate::common::json_lines(&o.stdout);
     assert_eq!(lines.len(), 8, "{lines:?}");
     let used: Vec<&serde_json::Value> = lines.iter().filter(|l| l["skipped"].is_null()).collect();
+    // The two records' events as on record: a change meant to keep
+    // behaviour (a refactor) keeps them.
+    let owned: Vec<serde_json::Value> = used.iter().map(|&l| l.clone()).collect();
+    crate::common::assert_matches_record("painter-street/events-deck.jsonl", &owned);
     let names: Vec<&str> = used.iter().map(|l| l["event"].as_str().unwrap()).collect();
     assert_eq!(
         names,
@@ -733,4 +737,42 @@ fn issue_45_the_verdicts_amplitude_can_be_the_decks_rms_and_a_state_keeps_to_one
         "{stderr}"
     );
     assert_eq!(stderr.matches("judged on").count(), 1, "said once: {stderr}");
+}
+
+/// The whole bridge (`config/painter-street-bridge.toml`: columns, cap,
+/// integral abutments) on the two committed records: both events
+/// forecast and updated, the second forecast by the first's update, and
+/// every line as on record.
+#[test]
+fn the_whole_bridges_events_on_the_committed_records_are_those_on_record() {
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        "config/painter-street-bridge.toml",
+        "--json",
+        &record("RioDell_14Sep2012_71842255_ce89324p.zip"),
+        &record("ferndale_28jan2015_72387946_ce89324p.zip"),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines = crate::common::json_lines(&o.stdout);
+    assert_eq!(lines.len(), 2);
+    for line in &lines {
+        assert!(line["skipped"].is_null(), "{line}");
+        assert!(line["update"]["evaluations"].as_u64().is_some_and(|n| n > 0), "{line}");
+    }
+    // The second event is forecast by the first's update, on all eight
+    // deck channels.
+    let (first, second) = (&lines[0], &lines[1]);
+    assert_eq!(second["forecast"]["channels"].as_array().unwrap().len(), 8);
+    for (updated, used) in first["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(second["forecast_model"].as_array().unwrap())
+    {
+        assert_eq!(updated["name"], used["name"]);
+        let (a, b) = (updated["value"].as_f64().unwrap(), used["value"].as_f64().unwrap());
+        assert!((a - b).abs() <= 1e-12 * a.abs(), "{} {a} {b}", updated["name"]);
+    }
+    crate::common::assert_matches_record("painter-street/events-bridge.jsonl", &lines);
 }

@@ -236,3 +236,53 @@ pub fn assert_rrd_without_deck(path: &std::path::Path, entities: &[&str]) {
     );
     assert!(summary.footer, "{} has no footer", path.display());
 }
+
+/// `lines` against the JSON lines on record in `tests/fixtures/<name>`:
+/// the same keys, strings and booleans, and every number within 1e-6 of
+/// it relative (1e-12 absolute), so that a change meant to keep behaviour
+/// shows it did (on another CPU's vector width the last bits may differ).
+/// `SPLINEWATCH_BLESS=1` writes the record instead, after a change of the
+/// numerics that was meant.
+pub fn assert_matches_record(name: &str, lines: &[serde_json::Value]) {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures")
+        .join(name);
+    if std::env::var("SPLINEWATCH_BLESS").is_ok_and(|v| v == "1") {
+        let text: String = lines.iter().map(|l| format!("{l}\n")).collect();
+        std::fs::write(&path, text).unwrap();
+        return;
+    }
+    let recorded = json_lines(&std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())));
+    assert_eq!(recorded.len(), lines.len(), "{}: the number of lines", path.display());
+    for (k, (was, now)) in recorded.iter().zip(lines).enumerate() {
+        if let Some(at) = first_difference(was, now, String::new()) {
+            panic!(
+                "{} line {}: {at} differs from the record (SPLINEWATCH_BLESS=1 rewrites it after a change meant to move the numerics)",
+                path.display(),
+                k + 1
+            );
+        }
+    }
+}
+
+/// Where `now` first differs from `was` (a JSON path), numbers compared
+/// as [`assert_matches_record`] says.
+fn first_difference(was: &serde_json::Value, now: &serde_json::Value, at: String) -> Option<String> {
+    use serde_json::Value;
+    match (was, now) {
+        (Value::Number(a), Value::Number(b)) => {
+            let (a, b) = (a.as_f64()?, b.as_f64()?);
+            ((a - b).abs() > 1e-12 + 1e-6 * a.abs().max(b.abs())).then(|| format!("{at}: {a} then, {b} now"))
+        }
+        (Value::Array(a), Value::Array(b)) if a.len() == b.len() => a
+            .iter()
+            .zip(b)
+            .enumerate()
+            .find_map(|(i, (x, y))| first_difference(x, y, format!("{at}[{i}]"))),
+        (Value::Object(a), Value::Object(b)) if a.len() == b.len() => a.iter().find_map(|(key, x)| match b.get(key) {
+            Some(y) => first_difference(x, y, format!("{at}.{key}")),
+            None => Some(format!("{at}.{key}: gone")),
+        }),
+        _ => (was != now).then(|| format!("{at}: {was} then, {now} now")),
+    }
+}
