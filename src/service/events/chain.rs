@@ -103,8 +103,9 @@ impl Chain {
         Ok(parts)
     }
 
-    pub(super) fn named(&self) -> Vec<NamedValue> {
-        self.parameters.clone()
+    /// The last update's values (none before the first update).
+    pub(super) fn named(&self) -> &[NamedValue] {
+        &self.parameters
     }
 
     /// The earlier events' `(log10 amplitude, value)` of feature `name` (NaN
@@ -160,7 +161,7 @@ impl Chain {
         min_events: usize,
         amplitude: f64,
     ) -> Vec<NamedValue> {
-        let last = self.named();
+        let last = self.named().to_vec();
         if forecast == EventForecast::Last {
             return last;
         }

@@ -342,7 +342,7 @@ fn update(
         fs: event.fs,
         modes: &modes,
     };
-    let updated = update_on_event(cfg, &parts, &record, &chain.named(), &mut |it| {
+    let updated = update_on_event(cfg, &parts, &record, chain.named(), &mut |it| {
         tracing::debug!(
             event = %name,
             iteration = it.iteration,
