@@ -1,6 +1,7 @@
 //! Where each support's spring coefficients κ lie in the assembled model,
-//! decided here alone and in the order `BridgeModel::spring_coefficients`
-//! chains them: the spring fields, then the bearings, then the supports
+//! written down here alone on the config's side, before the model is
+//! built, in the order the core's `BridgeModel::supports` gives them: the
+//! spring fields, then the bearings, then the supports
 //! (`[[model.supports]]`), each in config order.
 
 use super::model::ModelConfig;

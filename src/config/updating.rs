@@ -503,8 +503,8 @@ mod tests {
 
     /// Every parameter of every bundled config has the family of what it is
     /// built on: the family found from the entry its name starts with agrees
-    /// with the kind `build_parameters` gives it (κ fields in the order
-    /// spring fields, bearings, supports).
+    /// with the kind `build_parameters` gives it (κ fields where
+    /// `KappaOrder` puts them).
     #[test]
     fn each_parameter_has_the_family_of_what_it_is_attached_to() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -516,14 +516,14 @@ mod tests {
                     continue;
                 }
                 let config = Config::from_toml(&std::fs::read_to_string(&path).unwrap()).unwrap();
-                let (springs, bearings) = (config.model.springs.len(), config.model.bearings.len());
+                let order = crate::config::kappa_order::KappaOrder::of(&config.model);
                 for p in config.build_parameters().unwrap() {
                     let family = config.parameter_family(&p.name);
                     let expected = match p.kind {
                         ParameterKind::Spring { field, .. } | ParameterKind::SpringRun { field, .. } => {
-                            if field < springs {
+                            if field < order.bearing_field(0) {
                                 ParameterFamily::Spring
-                            } else if field < springs + bearings {
+                            } else if field < order.support_field(0) {
                                 ParameterFamily::Bearing
                             } else {
                                 ParameterFamily::ElasticSupport

@@ -170,23 +170,23 @@ fn run_paced(
     let runtime = tokio::runtime::Builder::new_multi_thread().enable_all().build()?;
     runtime.block_on(async move {
         let (stop_tx, stop_rx) = tokio::sync::oneshot::channel::<()>();
-        let (taken_tx, mut taken) = tokio::sync::watch::channel(None);
+        let (progress_tx, mut progress) = tokio::sync::watch::channel(None);
         let daemon = tokio::spawn(async move {
-            daemon::run_observed(cfg, options, &taken_tx, async {
+            daemon::run_observed(cfg, options, &progress_tx, async {
                 let _ = stop_rx.await;
             })
             .await
         });
-        if taken.wait_for(Option::is_some).await.is_err() {
+        if progress.wait_for(Option::is_some).await.is_err() {
             // The daemon stopped before it listened: its error says why.
             daemon.await.context("the daemon panicked")??;
             bail!("the daemon stopped before it listened");
         }
-        let progress = taken.clone();
+        let gate_progress = progress.clone();
         let publisher = tokio::task::spawn_blocking(move || -> Result<u64> {
             let mut publisher = Publisher::open(&publisher_cfg, prefix, Encoding::Cbor, speed)?;
             if pacing == Pacing::Updates {
-                publisher.hold_back_with(hold_back(progress));
+                publisher.hold_back_with(hold_back(gate_progress));
             }
             // Let the publisher's session connect before the first block.
             std::thread::sleep(std::time::Duration::from_millis(500));
@@ -199,18 +199,18 @@ fn run_paced(
         // Drain: every message sent taken by the daemon, then time for the
         // last windows' updates (a waiting one is skipped at shutdown, with
         // its reason).
-        let all_taken = taken.wait_for(|p| p.is_some_and(|p| p.taken >= sent));
+        let all_taken = progress.wait_for(|p| p.is_some_and(|p| p.taken >= sent));
         if tokio::time::timeout(DRAIN_LIMIT, all_taken).await.is_err() {
             tracing::warn!(
                 message = "the daemon had not taken every message sent; stopping it",
                 sent,
-                taken = taken.borrow().map_or(0, |p| p.taken),
+                taken = progress.borrow().map_or(0, |p| p.taken),
                 waited_s = DRAIN_LIMIT.as_secs()
             );
         }
         if pacing == Pacing::Updates {
             // Every window's update run, however loaded the host.
-            let none_waiting = taken.wait_for(|p| p.is_some_and(|p| p.updates_waiting == 0));
+            let none_waiting = progress.wait_for(|p| p.is_some_and(|p| p.updates_waiting == 0));
             let _ = tokio::time::timeout(DRAIN_LIMIT, none_waiting).await;
         }
         tokio::time::sleep(std::time::Duration::from_millis(1500)).await;

@@ -19,6 +19,18 @@ use std::f64::consts::PI;
 
 const VERTICAL: GroundInput = GroundInput { group: 0, axis: 2 };
 
+/// The motion for `inputs` of `frf`, the model of `structure` on `groups`,
+/// at spring coefficients `kappa` (no stiffness field) where `state` was
+/// solved.
+fn ground_motion(
+    (frf, structure, groups): (&FrfModel, &BridgeModel, &SupportGroups),
+    kappa: &[Vec<f64>],
+    state: &ModalState,
+    inputs: &[GroundInput],
+) -> Result<SupportMotion, SupportError> {
+    SupportMotion::new((frf, &grounded(structure, groups)), kappa, &[], state, inputs)
+}
+
 fn damping() -> DampingCurve {
     DampingCurve::new(1, vec![0.02, 0.03], 0.0, 200.0).unwrap()
 }
@@ -92,7 +104,7 @@ fn a_rigid_deck_on_springs_has_the_single_dof_transmissibility() {
     let damping = damping();
     let state = model.modal_state(&kappa, &damping).unwrap();
     let groups = SupportGroups::uniform(&plate);
-    let motion = SupportMotion::new((&model, &grounded(&plate, &groups)), &kappa, &[], &state, &[VERTICAL]).unwrap();
+    let motion = ground_motion((&model, &plate, &groups), &kappa, &state, &[VERTICAL]).unwrap();
     let bounce = (0..state.modes.len())
         .filter(|&i| state.modes.kinds[i] != ModeKind::Rigid)
         .max_by(|&a, &b| {
@@ -152,14 +164,7 @@ fn the_absolute_formulation_gives_the_relative_one_on_the_sinello_deck_and_a_cla
         let groups = SupportGroups::uniform(&shell_model);
         for axis in axes {
             let input = GroundInput { group: 0, axis };
-            let motion = SupportMotion::new(
-                (&model, &grounded(&shell_model, &groups)),
-                &kappa,
-                &[],
-                &state,
-                &[input],
-            )
-            .unwrap();
+            let motion = ground_motion((&model, &shell_model, &groups), &kappa, &state, &[input]).unwrap();
             // Γ = R: the quasi-static response is the rigid translation, and the
             // participations are Φᵀ M R.
             let n = state.modes.shapes.nrows();
@@ -218,11 +223,10 @@ fn the_groups_of_a_deck_add_up_to_uniform_excitation() {
     let names = vec!["edge".to_string(), "west".to_string(), "east".to_string()];
     let groups = SupportGroups::new(names, vec![1, 2], vec![0], &shell_model).unwrap();
     let inputs: Vec<GroundInput> = (0..3).map(|group| GroundInput { group, axis: 2 }).collect();
-    let motion = SupportMotion::new((&model, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
-    let uniform = SupportMotion::new(
-        (&model, &grounded(&shell_model, &SupportGroups::uniform(&shell_model))),
+    let motion = ground_motion((&model, &shell_model, &groups), &kappa, &state, &inputs).unwrap();
+    let uniform = ground_motion(
+        (&model, &shell_model, &SupportGroups::uniform(&shell_model)),
         &kappa,
-        &[],
         &state,
         &[VERTICAL],
     )
@@ -241,10 +245,9 @@ fn the_groups_of_a_deck_add_up_to_uniform_excitation() {
         }
     }
     // A ground input naming no group is refused, not indexed.
-    let bad = SupportMotion::new(
-        (&model, &grounded(&shell_model, &groups)),
+    let bad = ground_motion(
+        (&model, &shell_model, &groups),
         &kappa,
-        &[],
         &state,
         &[GroundInput { group: 3, axis: 2 }],
     );
@@ -288,14 +291,7 @@ fn ground_motion_along_an_axis_no_support_holds_leaves_the_deck_still() {
     let input = GroundInput { group: 0, axis: 0 };
     // Uniform x motion has no ground force at all: Γ = 0 is the (trivial)
     // answer, and the deck does not follow.
-    let motion = SupportMotion::new(
-        (&model, &grounded(&shell_model, &groups)),
-        &kappa,
-        &[],
-        &state,
-        &[input],
-    )
-    .unwrap();
+    let motion = ground_motion((&model, &shell_model, &groups), &kappa, &state, &[input]).unwrap();
     assert!((0..12).all(|s| motion.quasi_static(s, 0).abs() < 1e-12));
 }
 
@@ -307,14 +303,7 @@ fn the_recursion_driven_by_the_ground_reaches_the_transmissibility() {
     let kappa = true_kappa();
     let state = model.modal_state(&kappa, &damping()).unwrap();
     let groups = SupportGroups::uniform(&shell_model);
-    let motion = SupportMotion::new(
-        (&model, &grounded(&shell_model, &groups)),
-        &kappa,
-        &[],
-        &state,
-        &[VERTICAL],
-    )
-    .unwrap();
+    let motion = ground_motion((&model, &shell_model, &groups), &kappa, &state, &[VERTICAL]).unwrap();
     let (f, fs) = (7.0, 2048.0);
     let mut sim = motion.simulator(&state, 1.0 / fs);
     let n = (60.0 * fs) as usize;
@@ -473,7 +462,7 @@ fn the_truncated_path_agrees_with_every_mode() {
     let pairs: Vec<(usize, usize)> = (0..sensors.len()).flat_map(|r| (0..2).map(move |c| (r, c))).collect();
     let run = |frf: &FrfModel| {
         let state = frf.modal_state(&kappa, &damping()).unwrap();
-        let motion = SupportMotion::new((frf, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
+        let motion = ground_motion((frf, &shell_model, &groups), &kappa, &state, &inputs).unwrap();
         let loads = frf.with_extra_rows(motion.load_rows(frf));
         let load_state = loads.modal_state(&kappa, &damping()).unwrap();
         let t = motion.transmissibility_with_residual(frf, &loads, &load_state, &pairs, &lines);
@@ -493,7 +482,7 @@ fn the_truncated_path_agrees_with_every_mode() {
     let nf = lines.len();
     // The dense path's two evaluations are the same sum.
     let state = dense.modal_state(&kappa, &damping()).unwrap();
-    let motion = SupportMotion::new((&dense, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
+    let motion = ground_motion((&dense, &shell_model, &groups), &kappa, &state, &inputs).unwrap();
     let direct = motion.transmissibility(&state, &pairs, &lines);
     assert!(max_relative_error(&t_dense, &direct) <= 1e-10);
     let mut worst = (0.0f64, 0.0f64);
@@ -514,7 +503,7 @@ fn the_truncated_path_agrees_with_every_mode() {
     // (the ground forces' static responses from the modes' factorisation).
     for frf in [&dense, &truncated] {
         let state = frf.modal_state(&kappa, &damping()).unwrap();
-        let motion = SupportMotion::new((frf, &grounded(&shell_model, &groups)), &kappa, &[], &state, &inputs).unwrap();
+        let motion = ground_motion((frf, &shell_model, &groups), &kappa, &state, &inputs).unwrap();
         let (one_state, one_motion) = SupportMotion::with_state(
             (frf, &grounded(&shell_model, &groups)),
             (&kappa, &[], &damping()),
