@@ -8,9 +8,11 @@
 //! the deck's generalised dofs), a constrained edge of the group follows
 //! `R u_g`, and so does a beam's held base
 //! ([`crate::response::support_motion`] derives the motion). One
-//! group is uniform excitation.
+//! group is uniform excitation. [`RigidMotion`] is the one statement of
+//! `R u_g` per support and ground input.
 
 use crate::geometry::vec3::Vec3;
+use crate::model::dofs::DofMap;
 use crate::model::BridgeModel;
 use thiserror::Error;
 
@@ -49,6 +51,48 @@ pub enum SupportError {
         axis: usize,
         count: usize,
     },
+}
+
+/// A measured ground input: group `group`'s ground acceleration along global
+/// axis `axis` (0 = x, 1 = y, 2 = z).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GroundInput {
+    pub group: usize,
+    pub axis: usize,
+}
+
+/// How the ground under one support (or one held node) moves when a
+/// [`GroundInput`] moves by one: rigidly along the input's axis when the
+/// support follows the input's group, not at all otherwise. Each support's
+/// spring acts on `u − u_g` and each held node follows `u_g`, with `u_g` at
+/// a dof given by [`Self::at`]; a ground rotation (rocking) would add its
+/// lever arm here, and nowhere else.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RigidMotion {
+    /// The axis it translates along, if it moves.
+    axis: Option<usize>,
+}
+
+impl RigidMotion {
+    /// The motion under `input` of the ground of group `group`.
+    pub fn of_group(group: usize, input: &GroundInput) -> Self {
+        Self {
+            axis: (group == input.group).then_some(input.axis),
+        }
+    }
+
+    /// Whether this ground moves at all.
+    pub fn moves(&self) -> bool {
+        self.axis.is_some()
+    }
+
+    /// `u_g` at `dof` (of `dofs`): one on the translations along the axis.
+    pub fn at(&self, dofs: &DofMap, dof: usize) -> f64 {
+        match self.axis {
+            Some(axis) if dofs.is_translation(dof, axis) => 1.0,
+            _ => 0.0,
+        }
+    }
 }
 
 /// The support group of every spring field, bearing and edge constraint of
@@ -152,6 +196,12 @@ impl SupportGroups {
         self.of_springs[k]
     }
 
+    /// The motion of support `k`'s ground (in [`BridgeModel::supports`]'
+    /// order) under `input`.
+    pub fn rigid_motion(&self, k: usize, input: &GroundInput) -> RigidMotion {
+        RigidMotion::of_group(self.of_springs[k], input)
+    }
+
     /// The group of edge constraint `k`.
     pub fn of_constraint(&self, k: usize) -> usize {
         self.of_constraints[k]
@@ -189,4 +239,33 @@ impl SupportGroups {
 fn centroid(points: &[Vec3]) -> Vec3 {
     let n = points.len() as f64;
     [0, 1, 2].map(|d| points.iter().map(|x| x[d]).sum::<f64>() / n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::material::OrthotropicMaterial;
+    use crate::model::shell::Shell;
+    use crate::model::Patch;
+
+    #[test]
+    fn a_ground_moves_the_translations_along_its_input_of_its_own_group_only() {
+        let shell = Shell::rectangular_plate(4.0, 2.0, 0.2, [2, 2], [3, 3]).unwrap();
+        let patch = Patch::new("p", shell, OrthotropicMaterial::isotropic(30e9, 0.2, 2500.0).unwrap()).unwrap();
+        // Nine 5-dof control points, then one 6-dof beam node.
+        let dofs = DofMap::of_model(&[patch], 1, 0);
+        let input = GroundInput { group: 1, axis: 2 };
+        let own = RigidMotion::of_group(1, &input);
+        assert!(own.moves());
+        let moved: Vec<f64> = (0..dofs.dof_count()).map(|d| own.at(&dofs, d)).collect();
+        for (dof, &u) in moved.iter().enumerate() {
+            assert_eq!(u, f64::from(u8::from(dofs.is_translation(dof, 2))), "dof {dof}");
+        }
+        // One per node: its z translation, on a control point and on the beam node.
+        assert_eq!(moved.iter().sum::<f64>(), 10.0);
+        assert_eq!(&moved[45..51], &[0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+        let other = RigidMotion::of_group(0, &input);
+        assert!(!other.moves());
+        assert!((0..dofs.dof_count()).all(|d| other.at(&dofs, d) == 0.0));
+    }
 }

@@ -6,7 +6,7 @@
 use super::GroundInput;
 use crate::model::dofs::DofMap;
 use crate::model::shell::Assembly;
-use crate::model::supports::{SupportError, SupportGroups};
+use crate::model::supports::{RigidMotion, SupportError, SupportGroups};
 use crate::model::BridgeModel;
 use crate::response::frf::FrfModel;
 use faer::Mat;
@@ -37,14 +37,16 @@ pub(super) fn truncated_forces(
         .map(|input| {
             let mut force = vec![0.0; n];
             for (field, (blocks, coefficients)) in frf.spring_blocks().iter().zip(kappa).enumerate() {
-                if groups.of_spring(field) != input.group {
+                let ground = groups.rigid_motion(field, input);
+                if !ground.moves() {
                     continue;
                 }
                 for (b, &k) in blocks.iter().zip(coefficients) {
                     for (a, &ra) in b.dofs.iter().enumerate() {
                         for (e, &re) in b.dofs.iter().enumerate() {
-                            if lifts.dofs.is_translation(re, input.axis) {
-                                force[ra] += k * b.values[(a, e)];
+                            let moved = ground.at(&lifts.dofs, re);
+                            if moved != 0.0 {
+                                force[ra] += k * b.values[(a, e)] * moved;
                             }
                         }
                     }
@@ -152,13 +154,9 @@ impl GroundLifts {
     /// constrained nodes.
     pub(super) fn lift(&self, input: &GroundInput) -> Vec<f64> {
         (0..self.dofs.dof_count())
-            .map(|dof| {
-                let own = self.owner[self.dofs.node_of(dof)] == Some(input.group);
-                if own && self.dofs.is_translation(dof, input.axis) {
-                    1.0
-                } else {
-                    0.0
-                }
+            .map(|dof| match self.owner[self.dofs.node_of(dof)] {
+                Some(group) => RigidMotion::of_group(group, input).at(&self.dofs, dof),
+                None => 0.0,
             })
             .collect()
     }
@@ -188,16 +186,11 @@ pub(super) fn ground_force(
         }
     }
     for (field, (blocks, coefficients)) in assembled.spring_blocks.iter().zip(kappa).enumerate() {
-        let own = groups.of_spring(field) == input.group;
+        let ground = groups.rigid_motion(field, input);
         for (b, &k) in blocks.iter().zip(coefficients) {
             for (a, &ra) in b.dofs.iter().enumerate() {
                 for (c, &rc) in b.dofs.iter().enumerate() {
-                    let rigid = if own && dofs.is_translation(rc, input.axis) {
-                        1.0
-                    } else {
-                        0.0
-                    };
-                    force[ra] += k * b.values[(a, c)] * (rigid - lift[rc]);
+                    force[ra] += k * b.values[(a, c)] * (ground.at(dofs, rc) - lift[rc]);
                 }
             }
         }

@@ -52,13 +52,7 @@ use std::f64::consts::PI;
 /// A load as a sparse row on the generalised dofs `(dof, value)`.
 type LoadRow = Vec<(usize, f64)>;
 
-/// A measured ground input: group `group`'s ground acceleration along global
-/// axis `axis` (0 = x, 1 = y, 2 = z).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct GroundInput {
-    pub group: usize,
-    pub axis: usize,
-}
+pub use crate::model::supports::GroundInput;
 
 /// The support motion of a modal state: per ground input its quasi-static
 /// response at the sensors and its modal participations.
@@ -438,19 +432,13 @@ impl SupportMotion {
                     continue;
                 }
                 let w = |c: usize| -> Vec<(usize, f64)> {
-                    let input = self.inputs[c];
-                    let own = groups.of_spring(field) == input.group;
+                    let ground = groups.rigid_motion(field, &self.inputs[c]);
                     b.dofs
                         .iter()
                         .enumerate()
                         .map(|(a, &ra)| {
                             let v = b.dofs.iter().enumerate().map(|(e, &re)| {
-                                let rigid = if own && self.dofs.is_translation(re, input.axis) {
-                                    1.0
-                                } else {
-                                    0.0
-                                };
-                                b.values[(a, e)] * (rigid - self.influence[(re, c)])
+                                b.values[(a, e)] * (ground.at(&self.dofs, re) - self.influence[(re, c)])
                             });
                             (ra, v.sum())
                         })
