@@ -55,7 +55,8 @@ pub struct TransmissibilityProblem<'a> {
     model: &'a FrfModel,
     grounded: &'a GroundedStructure,
     inputs: Vec<GroundInput>,
-    combination: Combination,
+    /// How the model pairs' values make the measured ones ([`Self::combine`]).
+    terms: CombineTerms,
     kappa: Vec<Vec<f64>>,
     damping: DampingCurve,
     parameters: Vec<Parameter>,
@@ -159,11 +160,12 @@ impl<'a> TransmissibilityProblem<'a> {
         }
         let frequencies = lines.iter().map(|&i| measured.frequencies_hz()[i]).collect();
         let sqrt_weights = sqrt_weights(measured, &lines, settings.weighting)?;
+        let terms = CombineTerms::new(&combination, measured, &model_pairs, &lines, inputs.len());
         Ok(Self {
             model,
             grounded,
             inputs,
-            combination,
+            terms,
             kappa,
             damping,
             parameters,
@@ -219,20 +221,18 @@ impl<'a> TransmissibilityProblem<'a> {
     fn combine(&self, per_pair: &[c64]) -> Vec<c64> {
         let nl = self.lines.len();
         let mut out = vec![c64::new(0.0, 0.0); nl * self.measured.frfs().len()];
-        for (b, frf) in self.measured.frfs().iter().enumerate() {
-            for c in model_inputs(&self.combination, frf.input, self.inputs.len()) {
-                let pair = self
-                    .model_pairs
-                    .iter()
-                    .position(|&q| q == (frf.output, c))
-                    .expect("listed in new");
-                for (l, &line) in self.lines.iter().enumerate() {
-                    let weight = match &self.combination {
-                        Combination::Sum(_) => c64::new(1.0, 0.0),
-                        Combination::Spectra(u) => u[c][line],
-                    };
-                    out[b * nl + l] += per_pair[pair * nl + l] * weight;
-                }
+        for &(b, pair, c) in &self.terms.terms {
+            let (out, values) = (&mut out[b * nl..][..nl], &per_pair[pair * nl..][..nl]);
+            match &self.terms.input_weights {
+                None => out
+                    .iter_mut()
+                    .zip(values)
+                    .for_each(|(o, v)| *o += v * c64::new(1.0, 0.0)),
+                Some(weights) => out
+                    .iter_mut()
+                    .zip(values)
+                    .zip(&weights[c])
+                    .for_each(|((o, v), w)| *o += v * w),
             }
         }
         out
@@ -374,6 +374,41 @@ impl<'a> TransmissibilityProblem<'a> {
 }
 
 /// The model inputs behind measured input `input`.
+/// [`TransmissibilityProblem::combine`]'s plan: `(measured FRF, model pair,
+/// model input)` per term, in the measured FRFs' order, and with spectra
+/// each model input's spectrum on the selected lines.
+#[derive(Debug, Clone)]
+struct CombineTerms {
+    terms: Vec<(usize, usize, usize)>,
+    input_weights: Option<Vec<Vec<c64>>>,
+}
+
+impl CombineTerms {
+    fn new(
+        combination: &Combination,
+        measured: &MeasuredSet,
+        model_pairs: &[(usize, usize)],
+        lines: &[usize],
+        count: usize,
+    ) -> Self {
+        let mut terms = Vec::new();
+        for (b, frf) in measured.frfs().iter().enumerate() {
+            for c in model_inputs(combination, frf.input, count) {
+                let pair = model_pairs
+                    .iter()
+                    .position(|&q| q == (frf.output, c))
+                    .expect("every measured FRF's pairs are listed");
+                terms.push((b, pair, c));
+            }
+        }
+        let input_weights = match combination {
+            Combination::Sum(_) => None,
+            Combination::Spectra(u) => Some(u.iter().map(|u| lines.iter().map(|&l| u[l]).collect()).collect()),
+        };
+        Self { terms, input_weights }
+    }
+}
+
 fn model_inputs(combination: &Combination, input: usize, count: usize) -> Vec<usize> {
     match combination {
         Combination::Sum(groups) => groups[input].clone(),

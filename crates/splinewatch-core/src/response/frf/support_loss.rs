@@ -160,14 +160,32 @@ impl SupportLoss {
         shift: f64,
     ) {
         let nu = spring_dofs.len();
+        // Column `a` holds dof `a`'s row of the kept shapes, contiguous.
+        let shapes = phi_springs.transpose().to_owned();
         let flexibility = |response: &Mat<f64>, power: i32| {
-            let r = Mat::from_fn(nu, nu, |a, b| {
-                response[(spring_dofs[a], b)]
-                    - (0..modes.len())
-                        .map(|i| phi_springs[(a, i)] * phi_springs[(b, i)] / (modes.omega2[i] - shift).powi(power))
-                        .sum::<f64>()
-            });
-            Mat::from_fn(nu, nu, |a, b| 0.5 * (r[(a, b)] + r[(b, a)]))
+            let denominators: Vec<f64> = modes.omega2.iter().map(|&l| (l - shift).powi(power)).collect();
+            let mut r = Mat::<f64>::zeros(nu, nu);
+            // The kept part is symmetric in (a, b): formed once per pair,
+            // the two responses averaged (the same sums as entry by entry).
+            for b in 0..nu {
+                let phi_b = shapes.col_as_slice(b);
+                for a in b..nu {
+                    let kept: f64 = shapes
+                        .col_as_slice(a)
+                        .iter()
+                        .zip(phi_b)
+                        .zip(&denominators)
+                        .map(|((pa, pb), d)| pa * pb / d)
+                        .sum();
+                    let (ab, ba) = (
+                        response[(spring_dofs[a], b)] - kept,
+                        response[(spring_dofs[b], a)] - kept,
+                    );
+                    r[(a, b)] = 0.5 * (ab + ba);
+                    r[(b, a)] = 0.5 * (ba + ab);
+                }
+            }
+            r
         };
         self.discarded = Some(Discarded {
             flexibility: [flexibility(&responses.0, 1), flexibility(&responses.1, 2)],
