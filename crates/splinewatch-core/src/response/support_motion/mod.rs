@@ -396,12 +396,13 @@ impl SupportMotion {
             Some(springs) => loads.evaluate_springs(load_state, request, springs),
             None => loads.evaluate(load_state, request, true),
         };
-        let nf = frequencies_hz.len();
-        let scaled = |v: Vec<c64>| -> Vec<c64> {
-            v.into_iter()
-                .enumerate()
-                .map(|(k, x)| x * (2.0 * PI * frequencies_hz[k % nf]).powi(2))
-                .collect()
+        // ω² per line, the receptances' factor to accelerances.
+        let omega2: Vec<f64> = frequencies_hz.iter().map(|&f| (2.0 * PI * f).powi(2)).collect();
+        let scaled = |mut v: Vec<c64>| -> Vec<c64> {
+            for pair in v.chunks_mut(omega2.len().max(1)) {
+                pair.iter_mut().zip(&omega2).for_each(|(x, &w2)| *x *= w2);
+            }
+            v
         };
         let wanted = |flat: usize| springs.is_none_or(|list| list.contains(&flat));
         let mut dkappa: Vec<Vec<c64>> = evaluation
