@@ -1,5 +1,6 @@
 //! The updating loop on the paper's 12-sensor case: one model evaluation
-//! (modes + 12 FRFs × 796 lines + 15 sensitivities) and a whole updating.
+//! (modes + 12 FRFs × 796 lines + 15 sensitivities) and a whole updating;
+//! and one earthquake's update of the whole Painter Street bridge.
 //! Run: `cargo bench --bench updating`.
 
 use splinewatch::studies::paper::{bundled_configs, run, EXPERIMENTS};
@@ -90,6 +91,38 @@ fn one_evaluation_with_a_stiffness_field(bencher: divan::Bencher) {
 fn whole_updating_12_sensors(bencher: divan::Bencher) {
     let (truth, model) = bundled_configs(root()).unwrap();
     bencher.bench(|| run(&truth, &model, &EXPERIMENTS[0]).unwrap());
+}
+
+/// One earthquake's update of the whole bridge
+/// (`config/painter-street-bridge.toml`: columns, cap, integral abutments;
+/// the abutments' `y`, `ry` and loss factors, the footings' `z` and ζ(f))
+/// on the committed 28 January 2015 Painter Street record, from the
+/// config's values: the Ritz-basis search and the finish on the complete
+/// model, as `events` runs it for each record (the model built once).
+#[divan::bench(sample_count = 5, sample_size = 1)]
+fn event_update_whole_bridge(bencher: divan::Bencher) {
+    use splinewatch::config::{ground_signals, load_config};
+    use splinewatch::service::records::{align_event, read_records};
+    use splinewatch::studies::event_update::{update_on_event, EventSignals};
+    use splinewatch::studies::ground_motion::GroundParts;
+    let cfg = load_config(&root().join("config/painter-street-bridge.toml")).unwrap();
+    let zip = root().join("tests/fixtures/painter-street/ferndale_28jan2015_72387946_ce89324p.zip");
+    let records = read_records(&cfg, &[zip], None).unwrap();
+    let parts = GroundParts::new(&cfg).unwrap();
+    let mut plan = parts.plan.clone();
+    let event = align_event(&cfg, &mut plan, &records.blocks).unwrap();
+    let channel = |i: usize| event.channels[i].as_deref().unwrap();
+    let inputs = ground_signals(&plan, channel);
+    let outputs: Vec<Vec<f64>> = event.deck.iter().map(|&i| channel(i).to_vec()).collect();
+    let signals = EventSignals {
+        plan: &plan,
+        inputs: &inputs,
+        deck: &event.deck,
+        outputs: &outputs,
+        fs: event.fs,
+        modes: &[],
+    };
+    bencher.bench(|| update_on_event(&cfg, &parts, &signals, &[], &mut |_| {}).unwrap());
 }
 
 fn main() {
