@@ -252,10 +252,14 @@ impl DofReduction {
     pub fn expand(&self, q: &Mat<f64>) -> Mat<f64> {
         assert_eq!(q.nrows(), self.free_count());
         let mut out = Mat::<f64>::zeros(self.full, q.ncols());
-        for (r, col) in self.columns.iter().enumerate() {
-            for &(d, t) in col {
-                for k in 0..q.ncols() {
-                    out[(d, k)] += t * q[(r, k)];
+        // Vector by vector (each a contiguous column); every entry takes the
+        // same terms in the same order as row by row.
+        for k in 0..q.ncols() {
+            let (reduced, full) = (q.col(k), out.col_as_slice_mut(k));
+            for (r, col) in self.columns.iter().enumerate() {
+                let value = reduced[r];
+                for &(d, t) in col {
+                    full[d] += t * value;
                 }
             }
         }

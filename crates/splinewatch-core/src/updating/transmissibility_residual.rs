@@ -258,7 +258,7 @@ impl<'a> TransmissibilityProblem<'a> {
         jacobian: bool,
     ) -> Result<Evaluated<Extra>, UpdateError> {
         let (_, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
-        let loads = self.model.with_extra_rows(motion.load_rows(self.model));
+        let loads = self.model.with_extra_rows(motion.load_rows());
         let load_state = loads.restate(&state, &damping);
         let per_pair = motion.transmissibility_with_residual(
             self.model,

@@ -509,7 +509,7 @@ fn check_truncated_ground(model: &BridgeModel, cracked: bool) {
     let run = |frf: &FrfModel| {
         let (state, motion) =
             SupportMotion::with_state((frf, &grounded(model, &groups)), (&[], &theta, &damping()), &inputs).unwrap();
-        let loads = frf.with_extra_rows(motion.load_rows(frf));
+        let loads = frf.with_extra_rows(motion.load_rows());
         let load_state = loads.modal_state_with_fields(&[], &theta, &damping()).unwrap();
         let t = motion.transmissibility_with_residual(frf, &loads, &load_state, &pairs, &lines);
         let statics: Vec<f64> = pairs.iter().map(|&(r, c)| motion.quasi_static(r, c)).collect();
@@ -598,7 +598,7 @@ fn line_support_sensitivities_on_a_bent_match_central_differences() {
     };
     let state = frf.modal_state(&kappa, &damping()).unwrap();
     let motion = SupportMotion::new((&frf, &grounded(&model, &groups)), &kappa, &[], &state, &inputs).unwrap();
-    let loads = frf.with_extra_rows(motion.load_rows(&frf));
+    let loads = frf.with_extra_rows(motion.load_rows());
     let analytic = motion.sensitivities(&frf, &loads, &groups, &state, &damping(), &pairs, &lines);
     let nf = lines.len();
     let mut flat = 0;

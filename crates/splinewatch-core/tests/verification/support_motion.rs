@@ -382,7 +382,7 @@ fn transmissibility_sensitivities_match_central_differences() {
         &inputs,
     )
     .unwrap();
-    let loads = frf.with_extra_rows(motion.load_rows(&frf));
+    let loads = frf.with_extra_rows(motion.load_rows());
     let analytic = motion.sensitivities(&frf, &loads, &groups, &state, &curve(&gamma), &pairs, &lines);
     let nf = lines.len();
     // f'(x) ≈ (−f(x+2h) + 8 f(x+h) − 8 f(x−h) + f(x−2h)) / 12h.
@@ -463,7 +463,7 @@ fn the_truncated_path_agrees_with_every_mode() {
     let run = |frf: &FrfModel| {
         let state = frf.modal_state(&kappa, &damping()).unwrap();
         let motion = ground_motion((frf, &shell_model, &groups), &kappa, &state, &inputs).unwrap();
-        let loads = frf.with_extra_rows(motion.load_rows(frf));
+        let loads = frf.with_extra_rows(motion.load_rows());
         let load_state = loads.modal_state(&kappa, &damping()).unwrap();
         let t = motion.transmissibility_with_residual(frf, &loads, &load_state, &pairs, &lines);
         let statics: Vec<f64> = pairs.iter().map(|&(r, c)| motion.quasi_static(r, c)).collect();

@@ -65,6 +65,8 @@ pub struct SupportMotion {
     participation: Mat<f64>,
     /// `Γ` of every input on the generalised dofs: dofs × inputs.
     influence: Mat<f64>,
+    /// `M Γ_c` of every input, its non-zero entries (the load rows).
+    inertial_loads: Vec<Vec<(usize, f64)>>,
     /// The numbering of those dofs (which are translations along which axis).
     dofs: DofMap,
 }
@@ -205,6 +207,7 @@ impl SupportMotion {
         let nm = state.modes.len();
         let mut quasi_static = Mat::<f64>::zeros(frf.sensor_count(), inputs.len());
         let mut participation = Mat::<f64>::zeros(nm, inputs.len());
+        let mut inertial_loads = Vec::with_capacity(inputs.len());
         for c in 0..inputs.len() {
             let gamma: Vec<f64> = (0..n).map(|d| influence[(d, c)]).collect();
             for (r, row) in frf.sensor_rows().iter().enumerate() {
@@ -214,12 +217,14 @@ impl SupportMotion {
             for i in 0..nm {
                 participation[(i, c)] = (0..n).map(|d| shapes[(d, i)] * mass_gamma[d]).sum();
             }
+            inertial_loads.push(mass_gamma.into_iter().enumerate().filter(|(_, v)| *v != 0.0).collect());
         }
         Self {
             inputs: inputs.to_vec(),
             quasi_static,
             participation,
             influence,
+            inertial_loads,
             dofs,
         }
     }
@@ -313,21 +318,13 @@ impl SupportMotion {
         )
     }
 
-    /// The inertial loads `(M Γ_c)ᵀ` of every input as dense rows, to append
-    /// to the model's sensors ([`FrfModel::with_extra_rows`]): the
+    /// The inertial loads `(M Γ_c)ᵀ` of every input (`M` the mass of the
+    /// model this motion was made on) as rows of their non-zero entries, to
+    /// append to that model's sensors ([`FrfModel::with_extra_rows`]): the
     /// transmissibility's dynamic part is `ω²` times the receptance from that
-    /// row to the deck sensors.
-    pub fn load_rows(&self, frf: &FrfModel) -> Vec<Vec<(usize, f64)>> {
-        (0..self.inputs.len())
-            .map(|c| {
-                let gamma: Vec<f64> = (0..self.influence.nrows()).map(|d| self.influence[(d, c)]).collect();
-                frf.mass_times(&gamma)
-                    .into_iter()
-                    .enumerate()
-                    .filter(|(_, v)| *v != 0.0)
-                    .collect()
-            })
-            .collect()
+    /// row to the deck sensors. Formed once, with the participations.
+    pub fn load_rows(&self) -> Vec<Vec<(usize, f64)>> {
+        self.inertial_loads.clone()
     }
 
     /// `∂T_r/∂p` for every spring coefficient, stiffness-field coefficient
