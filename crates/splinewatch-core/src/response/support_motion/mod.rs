@@ -66,7 +66,7 @@ pub struct SupportMotion {
     /// `Γ` of every input on the generalised dofs: dofs × inputs.
     influence: Mat<f64>,
     /// `M Γ_c` of every input, its non-zero entries (the load rows).
-    inertial_loads: Vec<Vec<(usize, f64)>>,
+    inertial_loads: Vec<LoadRow>,
     /// The numbering of those dofs (which are translations along which axis).
     dofs: DofMap,
 }
@@ -323,7 +323,7 @@ impl SupportMotion {
     /// append to that model's sensors ([`FrfModel::with_extra_rows`]): the
     /// transmissibility's dynamic part is `ω²` times the receptance from that
     /// row to the deck sensors. Formed once, with the participations.
-    pub fn load_rows(&self) -> Vec<Vec<(usize, f64)>> {
+    pub fn load_rows(&self) -> Vec<LoadRow> {
         self.inertial_loads.clone()
     }
 
