@@ -356,7 +356,7 @@ pub fn describe_patches(model: &BridgeModel) -> Vec<String> {
                 format!("along {} edge {}", model.patches[*patch].name(), edge_name(*edge))
             }
             SupportSite::Point(at) => {
-                let [x, y, z] = model.patches[at.patch].shell.position(at.xi, at.eta, at.tau);
+                let [x, y, z] = model.position_of(*at);
                 format!("at ({x:.3}, {y:.3}, {z:.3}) m on {}", model.patches[at.patch].name())
             }
             SupportSite::BeamNodes(nodes) => format!("at {} beam bases", nodes.len()),

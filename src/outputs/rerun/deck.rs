@@ -228,9 +228,7 @@ pub(super) fn log_model(
             .with_colors([rerun::Color::from_rgb(40, 40, 40)])
             .with_radii([rerun::Radius::new_ui_points(0.6)]),
     )?;
-    let at = |p: splinewatch_core::model::bearings::PatchPoint| {
-        f32x3(model.patches[p.patch].shell.position(p.xi, p.eta, p.tau))
-    };
+    let at = |p: splinewatch_core::model::bearings::PatchPoint| f32x3(model.position_of(p));
     let radius = (grid.span / 150.0) as f32;
     rec.log_static(
         "deck/model/bearings",

@@ -127,6 +127,11 @@ impl BridgeModel {
         self.dof_map().dof_count()
     }
 
+    /// Where `at` lies, in global coordinates (metres).
+    pub fn position_of(&self, at: bearings::PatchPoint) -> crate::geometry::vec3::Vec3 {
+        self.patches[at.patch].shell.position(at.xi, at.eta, at.tau)
+    }
+
     /// The shell patches' control points (beam nodes not counted).
     pub fn control_point_count(&self) -> usize {
         self.dof_map().control_point_count()

@@ -53,17 +53,14 @@ impl<'a> Support<'a> {
     pub fn holds(&self, model: &BridgeModel) -> Option<Vec<Vec3>> {
         match self {
             Self::Field(..) => None,
-            Self::Bearing(_, b) => {
-                let at = b.at();
-                Some(vec![model.patches[at.patch].shell.position(at.xi, at.eta, at.tau)])
-            }
+            Self::Bearing(_, b) => Some(vec![model.position_of(b.at())]),
             Self::Elastic(_, s) => Some(match s.site() {
                 SupportSite::Edge { patch, edge } => {
                     let shell = &model.patches[*patch].shell;
                     let net = shell.surface().points();
                     edge.control_points(shell).iter().map(|&c| net[c]).collect()
                 }
-                SupportSite::Point(at) => vec![model.patches[at.patch].shell.position(at.xi, at.eta, at.tau)],
+                SupportSite::Point(at) => vec![model.position_of(*at)],
                 SupportSite::BeamNodes(nodes) => nodes.iter().map(|&n| model.beams.position(n)).collect(),
             }),
         }
@@ -86,6 +83,6 @@ impl BridgeModel {
 
     /// How many supports [`Self::supports`] gives.
     pub fn support_count(&self) -> usize {
-        self.springs.len() + self.bearings.len() + self.elastic_supports.len()
+        self.supports().count()
     }
 }
