@@ -110,7 +110,7 @@ fn event_update_whole_bridge(bencher: divan::Bencher) {
     let records = read_records(&cfg, &[zip], None).unwrap();
     let parts = GroundParts::new(&cfg).unwrap();
     let mut plan = parts.plan.clone();
-    let event = align_event(&cfg, &mut plan, &records.blocks).unwrap();
+    let event = align_event(&cfg, &mut plan, records.record).unwrap();
     let channel = |i: usize| event.channels[i].as_deref().unwrap();
     let inputs = ground_signals(&plan, channel);
     let outputs: Vec<Vec<f64>> = event.deck.iter().map(|&i| channel(i).to_vec()).collect();

@@ -23,7 +23,7 @@ use crate::service::events::burst::split;
 use crate::service::events::{
     emit, forecast_medians, identify, load, log_rerun, process_identified, Chain, EventLine, EventSink, Loaded,
 };
-use crate::service::records::read_records;
+use crate::service::records::{read_records, Record};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -269,10 +269,11 @@ fn load_inputs(cfg: &Config, plan: &[GroundInputPlan], inputs: &[PathBuf], start
     })
 }
 
-/// The events of one input: its record, or each burst of it when it holds
+/// The events of one input: its record, or each part of it when it holds
 /// several (a triggered logger's raw-input recording: silences longer than
-/// `[events] gap_seconds`), named `<file>@<start>`; what the import did to
-/// the record in each event's notes.
+/// `[events] gap_seconds`; any record: `[events] max_seconds`), named
+/// `<file>@<start>`; what the import did to the record in each event's
+/// notes.
 fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path, start: Option<i128>) -> Vec<Loaded> {
     let name = path
         .file_name()
@@ -282,21 +283,34 @@ fn load_input(cfg: &Config, plan: &[GroundInputPlan], path: &Path, start: Option
         Err(e) => return vec![load(cfg, plan, name, Err(e))],
     };
     let notes = records.notes;
-    let bursts = split(records.blocks, cfg.events().gap_seconds, cfg.events().max_seconds);
-    if bursts.is_empty() {
+    let (gap, max) = (cfg.events().gap_seconds, cfg.events().max_seconds);
+    let parts: Vec<(i128, Record)> = match records.record {
+        Record::Grid(grid) => {
+            let max_samples = (max * grid.fs).round() as usize;
+            grid.pieces(max_samples)
+                .into_iter()
+                .map(|g| (g.start_ns, Record::Grid(g)))
+                .collect()
+        }
+        Record::Blocks(blocks) => split(blocks, gap, max)
+            .into_iter()
+            .map(|b| (b.start_ns, Record::Blocks(b.blocks)))
+            .collect(),
+    };
+    if parts.is_empty() {
         // Said by the check: the record holds none of the config's channels.
-        return vec![load(cfg, plan, name, Ok(Vec::new()))];
+        return vec![load(cfg, plan, name, Ok(Record::Blocks(Vec::new())))];
     }
-    let several = bursts.len() > 1;
-    bursts
+    let several = parts.len() > 1;
+    parts
         .into_iter()
-        .map(|b| {
+        .map(|(start_ns, record)| {
             let event = if several {
-                format!("{name}@{}", format_timestamp(b.start_ns))
+                format!("{name}@{}", format_timestamp(start_ns))
             } else {
                 name.clone()
             };
-            load(cfg, plan, event, Ok(b.blocks)).noted(&notes)
+            load(cfg, plan, event, Ok(record)).noted(&notes)
         })
         .collect()
 }

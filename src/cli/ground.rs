@@ -3,11 +3,10 @@
 
 use crate::config::{load_config, Config, GroundInputPlan};
 use crate::io::console::{errln, outln};
-use crate::io::recording::{RecordedBlock, RecordingWriter};
+use crate::io::recording::RecordingWriter;
 use crate::io::wire::{ChannelBlock, ChannelQuantity, Encoding};
 use crate::outputs::rerun::prediction::PredictedChannel;
-use crate::pipeline::estimate::aligned_span;
-use crate::service::records::{align_event, read_records, recorded, Event};
+use crate::service::records::{align_event, read_records, Event, Record};
 use crate::studies::ground_motion::GroundModel;
 use crate::studies::predict::{predict as predict_event, Prediction};
 use anyhow::{bail, Context, Result};
@@ -50,20 +49,20 @@ pub struct PredictArgs {
     pub rerun_save: Option<PathBuf>,
 }
 
-/// The records' blocks ([`read_records`]), what the import did to them said
+/// The records' record ([`read_records`]), what the import did to it said
 /// on stderr.
-fn read_records_said(cfg: &Config, paths: &[PathBuf], start_ns: Option<i128>) -> Result<Vec<RecordedBlock>> {
+fn read_records_said(cfg: &Config, paths: &[PathBuf], start_ns: Option<i128>) -> Result<Record> {
     let records = read_records(cfg, paths, start_ns)?;
     for note in &records.notes {
         errln!("{note}");
     }
-    Ok(records.blocks)
+    Ok(records.record)
 }
 
 /// The record on one grid with the config's deck channels it holds (none:
 /// nothing to compare a prediction with).
-fn deck_event(cfg: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[RecordedBlock]) -> Result<Event> {
-    let event = align_event(cfg, plan, blocks)?;
+fn deck_event(cfg: &Config, plan: &mut Vec<GroundInputPlan>, record: Record) -> Result<Event> {
+    let event = align_event(cfg, plan, record)?;
     if event.deck.is_empty() {
         bail!("the record holds none of the config's deck sensors: nothing to compare the prediction with");
     }
@@ -86,8 +85,8 @@ fn predicted_event(cfg: &Config, a: &PredictArgs) -> Result<(Event, Prediction)>
             (None, None) => Vec::new(),
         };
         let mut model = GroundModel::new(cfg, &named)?;
-        let blocks = read_records_said(cfg, &a.record, a.start)?;
-        let event = deck_event(cfg, &mut model.plan, &blocks)?;
+        let record = read_records_said(cfg, &a.record, a.start)?;
+        let event = deck_event(cfg, &mut model.plan, record)?;
         let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
         let mut prediction = predict_event(cfg, &model, &event.deck, channel, event.fs);
         prediction.report.start = Some(crate::io::wire::format_timestamp(event.start_ns));
@@ -101,8 +100,8 @@ fn predicted_event(cfg: &Config, a: &PredictArgs) -> Result<(Event, Prediction)>
                 );
         };
         let mut plan = cfg.ground_plan_of_sensors()?;
-        let blocks = read_records_said(cfg, &a.record, a.start)?;
-        let event = deck_event(cfg, &mut plan, &blocks)?;
+        let record = read_records_said(cfg, &a.record, a.start)?;
+        let event = deck_event(cfg, &mut plan, record)?;
         let (prediction, notes) = crate::service::events::predict_by_realization(cfg, state, (&event, &plan))?;
         for note in notes {
             errln!("{note}");
@@ -232,8 +231,8 @@ pub fn simulate_ground(
         bail!("--noise must be >= 0, got {noise}");
     }
     let mut model = GroundModel::new(cfg, &[])?;
-    let blocks = read_records_said(cfg, record, None)?;
-    let event = align_event(cfg, &mut model.plan, &blocks)?;
+    let read = read_records_said(cfg, record, None)?;
+    let event = align_event(cfg, &mut model.plan, read)?;
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned above");
     let mut deck = model.respond(channel, event.fs);
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -390,8 +389,8 @@ pub struct IdentifyArgs {
 /// sensor) against every deck acceleration sensor it holds.
 pub fn identify(a: IdentifyArgs) -> Result<()> {
     let cfg = load_config(&a.config)?;
-    let blocks = read_records_said(&cfg, &a.record, a.start)?;
-    let recorded = |i: usize| recorded(&cfg, &blocks, i);
+    let record = read_records_said(&cfg, &a.record, a.start)?;
+    let recorded = |i: usize| record.recorded(&cfg, i);
     let (force, inputs): (Option<usize>, Vec<usize>) = if cfg.has_ground_sensors() {
         let ground: Vec<usize> = (cfg.deck_sensor_count()..cfg.sensors.len())
             .filter(|&i| recorded(i))
@@ -418,7 +417,7 @@ pub fn identify(a: IdentifyArgs) -> Result<()> {
         .map(|&i| (i, input_quantity))
         .chain(outputs.iter().map(|&i| (i, ChannelQuantity::Acceleration)))
         .collect();
-    let span = aligned_span(&cfg, &blocks, None, None, &wanted)?;
+    let span = record.span(&cfg, &wanted)?;
     let views: Vec<&[f64]> = span.channels.iter().map(Vec::as_slice).collect();
     let (input_views, output_views) = views.split_at(inputs.len());
     if let Some(path) = &a.transmissibility {

@@ -12,8 +12,9 @@ pub struct EventsConfig {
     /// seconds pass without one (the daemon).
     #[serde(default = "default_gap_seconds")]
     pub gap_seconds: f64,
-    /// The daemon judges a burst longer than this as one event and starts
-    /// the next (a logger that never stops does not grow its memory).
+    /// An event is at most this long: the daemon judges a longer burst as
+    /// one event and starts the next (a logger that never stops does not
+    /// grow its memory); `events` cuts a longer record into parts this long.
     #[serde(default = "default_max_seconds")]
     pub max_seconds: f64,
     /// Earlier events an event's verdict needs (its amplitude bands are

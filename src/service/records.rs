@@ -8,37 +8,103 @@ use crate::config::{ground_sensors, restrict_plan, Config, GroundInputPlan};
 use crate::io::console::errln;
 use crate::io::recording::{read_recording, RecordedBlock};
 use crate::io::wire::ChannelQuantity;
-use crate::pipeline::estimate::aligned_span;
-use crate::studies::import::{to_blocks, ImportOptions};
+use crate::pipeline::estimate::{aligned_span, AlignedSpan};
+use crate::studies::import::{to_grid, Grid, ImportOptions};
 use anyhow::{bail, Context, Result};
 use splinewatch_core::identification::resample::fourier_resample;
 use std::borrow::Cow;
 use std::path::PathBuf;
 
-/// Whether the record holds config sensor `i`'s acceleration.
-pub fn recorded(config: &Config, blocks: &[RecordedBlock], i: usize) -> bool {
-    let name = &config.sensors[i].name;
-    blocks
-        .iter()
-        .any(|b| &b.block.name == name && b.block.quantity == ChannelQuantity::Acceleration)
+/// An event's record as read: on its grid (station files, a logger's
+/// file), or as channel blocks still to be aligned (MCAP recordings, a
+/// logger's stream, files of several sources together).
+pub enum Record {
+    Grid(Grid),
+    Blocks(Vec<RecordedBlock>),
 }
 
-/// The channel blocks of an event's files and what reading them found.
+impl Record {
+    /// Whether the record holds config sensor `sensor`'s `quantity`.
+    pub fn holds(&self, config: &Config, sensor: usize, quantity: ChannelQuantity) -> bool {
+        match self {
+            Record::Grid(grid) => grid.channel(sensor, quantity).is_some(),
+            Record::Blocks(blocks) => {
+                let name = &config.sensors[sensor].name;
+                blocks
+                    .iter()
+                    .any(|b| &b.block.name == name && b.block.quantity == quantity)
+            }
+        }
+    }
+
+    /// Whether the record holds config sensor `i`'s acceleration.
+    pub fn recorded(&self, config: &Config, i: usize) -> bool {
+        self.holds(config, i, ChannelQuantity::Acceleration)
+    }
+
+    /// Its first sample's time (ns since the epoch); `None` when empty.
+    pub fn start_ns(&self) -> Option<i128> {
+        match self {
+            Record::Grid(grid) => Some(grid.start_ns),
+            Record::Blocks(blocks) => blocks.iter().map(|r| r.block.start_ns).min(),
+        }
+    }
+
+    /// The channels `wanted` (sensor index, quantity) over the span they
+    /// share: a grid's as read, blocks aligned ([`aligned_span`]).
+    pub fn span(self, config: &Config, wanted: &[(usize, ChannelQuantity)]) -> Result<AlignedSpan> {
+        let mut grid = match self {
+            Record::Blocks(blocks) => return aligned_span(config, &blocks, None, None, wanted),
+            Record::Grid(grid) => grid,
+        };
+        let channels = wanted
+            .iter()
+            .map(|&(sensor, quantity)| {
+                let Some(at) = grid
+                    .channels
+                    .iter()
+                    .position(|c| c.sensor == sensor && c.quantity == quantity)
+                else {
+                    bail!(
+                        "no {} of {} in the record",
+                        quantity.wire_name(),
+                        config.sensors[sensor].name
+                    );
+                };
+                // Moved out, or copied when asked twice.
+                Ok(if wanted.iter().filter(|w| **w == (sensor, quantity)).count() > 1 {
+                    grid.channels[at].data.clone()
+                } else {
+                    std::mem::take(&mut grid.channels[at].data)
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(AlignedSpan {
+            start_ns: grid.start_ns,
+            samples: channels.first().map_or(0, Vec::len),
+            fs: grid.fs,
+            channels,
+        })
+    }
+}
+
+/// An event's record and what reading it found.
 pub struct Records {
-    pub blocks: Vec<RecordedBlock>,
+    pub record: Record,
     /// What the import did to the data, a sentence each (a recorder placed
     /// by its channels' motion, channels cut to the span all share).
     pub notes: Vec<String>,
 }
 
-/// Every channel block of the records: V2 files and station zips are
-/// imported (together: one event), MCAP recordings read. `start_ns`, when
-/// given, is the first sample's time of the V2 and logger files (over
-/// their own; `--start`); an MCAP recording keeps its times.
+/// The record of an event's files: V2 files and station zips are imported
+/// together (one grid), a logger's file on its own grid, MCAP recordings
+/// read as blocks; several sources together are blocks to be aligned.
+/// `start_ns`, when given, is the first sample's time of the V2 and logger
+/// files (over their own; `--start`); an MCAP recording keeps its times.
 pub fn read_records(config: &Config, paths: &[PathBuf], start_ns: Option<i128>) -> Result<Records> {
     let limits = crate::pipeline::block_limits(config);
-    let prefix = config.topic_prefix();
     let mut v2 = Vec::new();
+    let mut grids = Vec::new();
     let mut blocks = Vec::new();
     let mut notes = Vec::new();
     for path in paths {
@@ -72,7 +138,7 @@ pub fn read_records(config: &Config, paths: &[PathBuf], start_ns: Option<i128>) 
                 crate::io::import::read_csv(text, &Default::default())
             }
             .with_context(|| path.display().to_string())?;
-            blocks.extend(imported_blocks(config, series, &prefix, start_ns).with_context(|| {
+            grids.push(imported_grid(config, series, start_ns).with_context(|| {
                 format!(
                     "{}: give --start, or convert it with `splinewatch import` (--fs, --start) first",
                     path.display()
@@ -85,31 +151,37 @@ pub fn read_records(config: &Config, paths: &[PathBuf], start_ns: Option<i128>) 
     if !v2.is_empty() {
         let series = crate::io::cosmos_v2::read_v2(&v2)?;
         notes.extend(series.notes.iter().cloned());
-        blocks.extend(imported_blocks(config, series, &prefix, start_ns)?);
+        grids.push(imported_grid(config, series, start_ns)?);
     }
-    Ok(Records { blocks, notes })
+    let record = if blocks.is_empty() && grids.len() == 1 {
+        Record::Grid(grids.pop().expect("one"))
+    } else {
+        // Several sources: each grid as the blocks `import` writes, aligned
+        // with the others where they overlap.
+        let prefix = config.topic_prefix();
+        for grid in &grids {
+            let cut = grid.blocks(config, IMPORT_BLOCK_SECONDS)?;
+            blocks.extend(cut.into_iter().map(|block| RecordedBlock::at_its_start(block, &prefix)));
+        }
+        Record::Blocks(blocks)
+    };
+    Ok(Records { record, notes })
 }
 
-/// A file's columns as the config's channel blocks (as `import` makes them).
-fn imported_blocks(
-    config: &Config,
-    series: crate::io::import::ImportedSeries,
-    prefix: &str,
-    start_ns: Option<i128>,
-) -> Result<Vec<RecordedBlock>> {
+/// The blocks' length when a file's grid joins other sources (as `import`
+/// writes them by default).
+const IMPORT_BLOCK_SECONDS: f64 = 10.0;
+
+/// A file's columns on the config's sensors (as `import` maps them).
+fn imported_grid(config: &Config, series: crate::io::import::ImportedSeries, start_ns: Option<i128>) -> Result<Grid> {
     let options = ImportOptions {
         fs: None,
         start_ns,
-        block_seconds: 10.0,
+        block_seconds: IMPORT_BLOCK_SECONDS,
         strict: false,
         units: None,
     };
-    let imported = to_blocks(config, series, &options)?;
-    Ok(imported
-        .blocks
-        .into_iter()
-        .map(|block| RecordedBlock::at_its_start(block, prefix))
-        .collect())
+    Ok(to_grid(config, series, &options)?.0)
 }
 
 /// The record's channels on one grid: the ground sensors the model reads
@@ -127,8 +199,8 @@ pub struct Event {
 
 /// The record's channels on one grid for the ground inputs of `plan`
 /// (kept to the ground sensors the record holds, the changes said).
-pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[RecordedBlock]) -> Result<Event> {
-    let recorded = |i: usize| recorded(config, blocks, i);
+pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, record: Record) -> Result<Event> {
+    let recorded = |i: usize| record.recorded(config, i);
     let (restricted, notes) = restrict_plan(plan, recorded, |i| config.sensors[i].name.clone());
     *plan = restricted;
     let notes: Vec<String> = notes.into_iter().map(|note| format!("ground input {note}")).collect();
@@ -145,7 +217,7 @@ pub fn align_event(config: &Config, plan: &mut Vec<GroundInputPlan>, blocks: &[R
         .chain(&deck)
         .map(|&i| (i, ChannelQuantity::Acceleration))
         .collect();
-    let span = aligned_span(config, blocks, None, None, &wanted)?;
+    let span = record.span(config, &wanted)?;
     let mut channels = vec![None; config.sensors.len()];
     for ((i, _), data) in wanted.iter().zip(span.channels) {
         channels[*i] = Some(data);
@@ -244,5 +316,83 @@ pub fn rate_text(fs: f64) -> String {
         format!("{}", fs.round())
     } else {
         format!("{fs:.3}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::studies::import::GridChannel;
+
+    fn config() -> Config {
+        Config::from_toml(include_str!("../../config/painter-street.toml")).unwrap()
+    }
+
+    /// Three accelerations at 100 Hz, 23.45 s, starting off the whole second.
+    fn grid() -> Grid {
+        let channel = |sensor: usize| GridChannel {
+            sensor,
+            quantity: ChannelQuantity::Acceleration,
+            data: (0..2345).map(|k| ((k * (sensor + 3)) as f64 * 0.37).sin()).collect(),
+        };
+        Grid {
+            fs: 100.0,
+            start_ns: 1_421_000_000_123_000_000,
+            channels: vec![channel(0), channel(3), channel(12)],
+        }
+    }
+
+    #[test]
+    fn a_grid_spans_as_its_blocks_aligned() {
+        let cfg = config();
+        let prefix = cfg.topic_prefix();
+        let blocks: Vec<RecordedBlock> = grid()
+            .blocks(&cfg, 10.0)
+            .unwrap()
+            .into_iter()
+            .map(|b| RecordedBlock::at_its_start(b, &prefix))
+            .collect();
+        let wanted = [(12, ChannelQuantity::Acceleration), (0, ChannelQuantity::Acceleration)];
+        let as_grid = Record::Grid(grid()).span(&cfg, &wanted).unwrap();
+        let as_blocks = Record::Blocks(blocks).span(&cfg, &wanted).unwrap();
+        assert_eq!(
+            (as_grid.start_ns, as_grid.samples, as_grid.fs),
+            (as_blocks.start_ns, 2345, 100.0)
+        );
+        assert_eq!(as_grid.samples, as_blocks.samples);
+        assert_eq!(as_grid.channels, as_blocks.channels);
+        assert_eq!(as_grid.channels[0], grid().channels[2].data);
+    }
+
+    #[test]
+    fn a_grid_says_what_it_holds_and_refuses_what_it_does_not() {
+        let cfg = config();
+        let record = Record::Grid(grid());
+        assert!(record.recorded(&cfg, 3) && !record.recorded(&cfg, 4));
+        assert!(!record.holds(&cfg, 3, ChannelQuantity::Force));
+        assert_eq!(record.start_ns(), Some(grid().start_ns));
+        let error = record
+            .span(&cfg, &[(4, ChannelQuantity::Acceleration)])
+            .expect_err("no such channel");
+        assert!(error.to_string().contains(&cfg.sensors[4].name), "{error}");
+        assert_eq!(Record::Blocks(Vec::new()).start_ns(), None);
+    }
+
+    #[test]
+    fn a_long_grid_is_cut_into_pieces_that_lose_nothing() {
+        let whole = grid();
+        let pieces = grid().pieces(1000);
+        let lengths: Vec<usize> = pieces.iter().map(Grid::samples).collect();
+        assert_eq!(lengths, [1000, 1000, 345]);
+        for (k, piece) in pieces.iter().enumerate() {
+            assert_eq!(piece.start_ns, whole.time_ns(1000 * k));
+            assert_eq!(piece.channels.len(), 3);
+        }
+        for (c, channel) in whole.channels.iter().enumerate() {
+            let joined: Vec<f64> = pieces.iter().flat_map(|p| p.channels[c].data.clone()).collect();
+            assert_eq!(joined, channel.data);
+        }
+        assert_eq!(grid().pieces(2345).len(), 1);
+        assert_eq!(grid().pieces(0).len(), 2345, "at least a sample a piece");
     }
 }

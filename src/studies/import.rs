@@ -38,11 +38,92 @@ pub struct Imported {
     pub skipped: Vec<String>,
 }
 
-/// One mapped column: sensor name, quantity, samples in SI units.
-struct Mapped {
-    sensor: usize,
-    quantity: ChannelQuantity,
-    data: Vec<f64>,
+/// A file's columns on their one sample grid: each a config sensor's
+/// quantity, in SI, all from the same first sample at the same rate.
+#[derive(Debug, Clone)]
+pub struct Grid {
+    pub fs: f64,
+    /// The first sample's time, ns since the epoch.
+    pub start_ns: i128,
+    /// Force first, then the sensors in config order.
+    pub channels: Vec<GridChannel>,
+}
+
+/// One column of a [`Grid`].
+#[derive(Debug, Clone)]
+pub struct GridChannel {
+    /// Index into `[[sensors]]`.
+    pub sensor: usize,
+    pub quantity: ChannelQuantity,
+    pub data: Vec<f64>,
+}
+
+impl Grid {
+    /// Samples per channel.
+    pub fn samples(&self) -> usize {
+        self.channels.first().map_or(0, |c| c.data.len())
+    }
+
+    /// Sample `k`'s time (ns since the epoch).
+    pub fn time_ns(&self, k: usize) -> i128 {
+        self.start_ns + (k as f64 * 1e9 / self.fs).round() as i128
+    }
+
+    /// Sensor `sensor`'s `quantity`, when the grid holds it.
+    pub fn channel(&self, sensor: usize, quantity: ChannelQuantity) -> Option<&GridChannel> {
+        self.channels
+            .iter()
+            .find(|c| c.sensor == sensor && c.quantity == quantity)
+    }
+
+    /// Consecutive pieces of at most `max_samples` each (the last may be
+    /// shorter): a record longer than an event may be is judged in parts.
+    pub fn pieces(self, max_samples: usize) -> Vec<Grid> {
+        let (samples, max) = (self.samples(), max_samples.max(1));
+        if samples <= max {
+            return vec![self];
+        }
+        (0..samples)
+            .step_by(max)
+            .map(|first| Grid {
+                fs: self.fs,
+                start_ns: self.time_ns(first),
+                channels: self
+                    .channels
+                    .iter()
+                    .map(|c| GridChannel {
+                        data: c.data[first..(first + max).min(samples)].to_vec(),
+                        ..*c
+                    })
+                    .collect(),
+            })
+            .collect()
+    }
+
+    /// The grid as wire-format channel blocks of `block_seconds` in time
+    /// order (per block interval, the channels in the grid's order).
+    pub fn blocks(&self, config: &Config, block_seconds: f64) -> Result<Vec<ChannelBlock>> {
+        if !(block_seconds.is_finite() && block_seconds > 0.0) {
+            bail!("--block-seconds must be positive, got {block_seconds}");
+        }
+        let samples = self.samples();
+        let block_len = ((block_seconds * self.fs).round() as usize).max(1);
+        let mut blocks = Vec::with_capacity(self.channels.len() * samples.div_ceil(block_len));
+        for first in (0..samples).step_by(block_len) {
+            let last = (first + block_len).min(samples);
+            for c in &self.channels {
+                blocks.push(ChannelBlock {
+                    name: config.sensors[c.sensor].name.clone(),
+                    quantity: c.quantity,
+                    unit: c.quantity.unit().into(),
+                    fs: self.fs,
+                    start_ns: self.time_ns(first),
+                    data: c.data[first..last].to_vec(),
+                });
+            }
+        }
+        Ok(blocks)
+    }
 }
 
 /// The series as channel blocks in time order (per block interval: force
@@ -51,6 +132,17 @@ pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOption
     if !(options.block_seconds.is_finite() && options.block_seconds > 0.0) {
         bail!("--block-seconds must be positive, got {}", options.block_seconds);
     }
+    let (grid, skipped) = to_grid(config, series, options)?;
+    Ok(Imported {
+        blocks: grid.blocks(config, options.block_seconds)?,
+        skipped,
+    })
+}
+
+/// The series on its grid, mapped to the config's sensors in SI (force
+/// first, then the sensors in config order), and the columns skipped
+/// because they name no sensor.
+pub fn to_grid(config: &Config, series: ImportedSeries, options: &ImportOptions) -> Result<(Grid, Vec<String>)> {
     let fs = sampling_rate(series.fs, options.fs)?;
     let start_ns = match (options.start_ns, series.start_ns) {
         (Some(t), _) => t + (series.offset_seconds * 1e9).round() as i128,
@@ -60,7 +152,7 @@ pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOption
     if let Some(u) = &options.units {
         unit_quantity(u).with_context(|| format!("--units {u:?}: {}", unknown_unit(u)))?;
     }
-    let mut mapped = Vec::new();
+    let mut channels = Vec::new();
     let mut skipped = Vec::new();
     for mut c in series.channels {
         if c.unit.is_none() {
@@ -68,18 +160,18 @@ pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOption
         }
         let name = c.name.clone();
         match map_channel(config, c, options.strict)? {
-            Some(m) => mapped.push(m),
+            Some(m) => channels.push(m),
             None => skipped.push(name),
         }
     }
-    if mapped.is_empty() {
+    if channels.is_empty() {
         bail!(
             "no column names a [[sensors]] entry of the config (columns: {})",
             skipped.join(", ")
         );
     }
-    for (i, m) in mapped.iter().enumerate() {
-        if mapped[..i]
+    for (i, m) in channels.iter().enumerate() {
+        if channels[..i]
             .iter()
             .any(|o| o.sensor == m.sensor && o.quantity == m.quantity)
         {
@@ -90,41 +182,26 @@ pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOption
             );
         }
     }
-    let samples = mapped.first().map_or(0, |m| m.data.len());
+    let samples = channels.first().map_or(0, |m| m.data.len());
     if samples == 0 {
         bail!("the file holds no samples");
     }
-    if let Some(m) = mapped.iter().find(|m| m.data.len() != samples) {
+    if let Some(m) = channels.iter().find(|m| m.data.len() != samples) {
         bail!(
             "channel {:?} has {} samples, the first one {samples}: every channel must cover the same span",
             config.sensors[m.sensor].name,
             m.data.len()
         );
     }
-    mapped.sort_by_key(|m| (m.quantity != ChannelQuantity::Force, m.sensor));
-    let block_len = ((options.block_seconds * fs).round() as usize).max(1);
-    let mut blocks = Vec::with_capacity(mapped.len() * samples.div_ceil(block_len));
-    for first in (0..samples).step_by(block_len) {
-        let last = (first + block_len).min(samples);
-        for m in &mapped {
-            blocks.push(ChannelBlock {
-                name: config.sensors[m.sensor].name.clone(),
-                quantity: m.quantity,
-                unit: m.quantity.unit().into(),
-                fs,
-                start_ns: start_ns + (first as f64 * 1e9 / fs).round() as i128,
-                data: m.data[first..last].to_vec(),
-            });
-        }
-    }
+    channels.sort_by_key(|m| (m.quantity != ChannelQuantity::Force, m.sensor));
     tracing::info!(
         message = "imported",
-        channels = mapped.len(),
+        channels = channels.len(),
         samples,
         fs,
         start = %format_timestamp(start_ns)
     );
-    Ok(Imported { blocks, skipped })
+    Ok((Grid { fs, start_ns, channels }, skipped))
 }
 
 fn sampling_rate(file: Option<f64>, flag: Option<f64>) -> Result<f64> {
@@ -187,7 +264,7 @@ fn unknown_unit(unit: &str) -> String {
 
 /// The sensor and quantity of column `c`, in SI; `None` when it names no
 /// sensor and `strict` is off (the caller lists it as skipped).
-fn map_channel(config: &Config, c: ImportedChannel, strict: bool) -> Result<Option<Mapped>> {
+fn map_channel(config: &Config, c: ImportedChannel, strict: bool) -> Result<Option<GridChannel>> {
     let (base, suffix) = match c.name.rsplit_once(':') {
         Some((b, q)) => (b, Some(q)),
         None => (c.name.as_str(), None),
@@ -258,5 +335,5 @@ fn map_channel(config: &Config, c: ImportedChannel, strict: bool) -> Result<Opti
         ),
     };
     let data = c.data.into_iter().map(|v| v * scale).collect();
-    Ok(Some(Mapped { sensor, quantity, data }))
+    Ok(Some(GridChannel { sensor, quantity, data }))
 }

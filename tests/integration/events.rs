@@ -7,6 +7,7 @@
 //! results file, the state and the figure written.
 
 use crate::common::{fresh_dir, painter_street_record as record, results_by_topic, splinewatch};
+use splinewatch::service::records::Record;
 use std::path::Path;
 
 const CONFIG: &str = "config/painter-street.toml";
@@ -52,6 +53,48 @@ fn csv(path: &Path, seconds: f64, channels: &[u32], edit: impl Fn(u32, &mut [f64
         text.push('\n');
     }
     std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn events_judges_a_record_longer_than_max_seconds_in_parts_and_loses_none() {
+    let dir = fresh_dir("events-parts");
+    let config = dir.join("config.toml");
+    let text = std::fs::read_to_string(CONFIG).unwrap();
+    std::fs::write(
+        &config,
+        text.replacen("\n[events]", "\n[events]\nmax_seconds = 40.0", 1),
+    )
+    .unwrap();
+    // A dead channel: each part is checked and said, without an update.
+    let record = dir.join("long.csv");
+    csv(&record, 85.0, &CHANNELS, |c, x| {
+        if c == 9 {
+            x.fill(0.0);
+        }
+    });
+    let o = splinewatch(&[
+        "events",
+        "--config",
+        config.to_str().unwrap(),
+        "--json",
+        record.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lines = crate::common::json_lines(&o.stdout);
+    let said: Vec<(&str, &str)> = lines
+        .iter()
+        .map(|l| (l["event"].as_str().unwrap(), l["skipped"].as_str().unwrap()))
+        .collect();
+    assert_eq!(said.len(), 3, "40 + 40 + 5 s: {said:?}");
+    for ((name, reason), start) in said.iter().zip(["00:00:00Z", "00:00:40Z", "00:01:20Z"]) {
+        assert_eq!(*name, format!("long.csv@2020-01-01T{start}"));
+        let expected = if start == "00:01:20Z" {
+            "5.0 s (500 samples at 100 Hz), shorter than"
+        } else {
+            "ch9: a dead channel"
+        };
+        assert!(reason.contains(expected), "{name}: {reason}");
+    }
 }
 
 #[test]
@@ -490,11 +533,16 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
     .unwrap();
     for r in records {
         let path = std::path::PathBuf::from(record(r));
-        let burst = splinewatch::service::records::read_records(&cfg, &[path], None)
+        let Record::Grid(grid) = splinewatch::service::records::read_records(&cfg, &[path], None)
             .unwrap()
-            .blocks;
+            .record
+        else {
+            panic!("a station's zip is read onto one grid");
+        };
+        // As the logger sends it: 10-s blocks.
+        let burst = grid.blocks(&cfg, 10.0).unwrap();
         for b in &burst {
-            writer.write_block(&cfg.topic_prefix(), &b.block).unwrap();
+            writer.write_block(&cfg.topic_prefix(), b).unwrap();
         }
         blocks.push(burst);
     }
@@ -503,7 +551,7 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
         let mut sent = 0;
         for burst in &blocks {
             for b in burst {
-                publisher.publish(&b.block)?;
+                publisher.publish(b)?;
                 sent += 1;
                 // Under the ingest queue's bound (a logger's pace, not a flood).
                 std::thread::sleep(std::time::Duration::from_millis(3));

@@ -450,23 +450,18 @@ fn srim_at_mdofs_settings_is_mdofs_method_with_splinewatchs_estimator() {
             );
         }
         let path = std::path::PathBuf::from(record(peer["record"].as_str().unwrap()));
-        let blocks = splinewatch::service::records::read_records(&cfg, &[path], None)
+        let record = splinewatch::service::records::read_records(&cfg, &[path], None)
             .unwrap()
-            .blocks;
+            .record;
         let wanted: Vec<(usize, ChannelQuantity)> = inputs
             .iter()
             .chain(&outputs)
             .map(|&i| (i, ChannelQuantity::Acceleration))
             .collect();
-        let span = splinewatch::pipeline::estimate::aligned_span(&cfg, &blocks, None, None, &wanted).unwrap();
-        // The same record: quakeio keeps one sample more of the 2015 record
-        // (8511) than the span every channel of ours covers (8510).
+        let span = record.span(&cfg, &wanted).unwrap();
+        // The same record, sample for sample: quakeio reads it onto the same grid.
         assert_eq!(span.fs, peer["fs"].as_f64().unwrap());
-        assert!(
-            (span.samples as i64 - peer["samples"].as_i64().unwrap()).abs() <= 1,
-            "{}",
-            span.samples
-        );
+        assert_eq!(span.samples as i64, peer["samples"].as_i64().unwrap());
         let views: Vec<&[f64]> = span.channels.iter().map(Vec::as_slice).collect();
         let (u, y) = views.split_at(inputs.len());
         let information = InformationMatrix::new(y, u, horizon, 1).unwrap();

@@ -14,6 +14,7 @@ use crate::io::recording::RecordedBlock;
 use crate::io::wire::{format_timestamp, ChannelBlock, ChannelQuantity};
 use crate::service::events::burst::{Burst, Bursts};
 use crate::service::events::{load, process, Chain, EventLine};
+use crate::service::records::Record;
 use anyhow::{bail, Result};
 use std::collections::VecDeque;
 use std::path::PathBuf;
@@ -121,7 +122,7 @@ impl EventWorker {
         self.running = Some(tokio::task::spawn_blocking(move || {
             let name = format_timestamp(burst.start_ns);
             let loaded = match chain.plan(&config) {
-                Ok(plan) => load(&config, &plan, name, Ok(burst.blocks)),
+                Ok(plan) => load(&config, &plan, name, Ok(Record::Blocks(burst.blocks))),
                 Err(e) => load(&config, &[], name, Err(e)),
             };
             let line = process(&config, &loaded, &mut chain);

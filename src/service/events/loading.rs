@@ -1,14 +1,13 @@
 //! An event's record read, checked and put on one grid.
 
 use super::*;
-use crate::io::recording::RecordedBlock;
-use crate::service::records::align_event;
+use crate::service::records::{align_event, Record};
 
 /// An event read and put on one grid, or why it could not be.
 pub struct Loaded {
     pub name: String,
     pub(super) event: Result<(Event, Vec<GroundInputPlan>)>,
-    /// Its first sample's time when its blocks were read (an event skipped
+    /// Its first sample's time when its record was read (an event skipped
     /// for a missing or bad channel keeps its place in time).
     pub(super) first_sample_ns: Option<i128>,
 }
@@ -38,22 +37,19 @@ impl Loaded {
     }
 }
 
-/// The event `name` of `blocks` (or the error reading them) checked and
+/// The event `name` of `record` (or the error reading it) checked and
 /// aligned on the config's ground inputs `plan` ([`GroundParts::plan`]):
 /// every ground channel, the deck's, no dead or clipped channel, long
 /// enough.
-pub fn load(cfg: &Config, plan: &[GroundInputPlan], name: String, blocks: Result<Vec<RecordedBlock>>) -> Loaded {
-    let first_sample_ns = blocks
-        .as_ref()
-        .ok()
-        .and_then(|b| b.iter().map(|r| r.block.start_ns).min());
+pub fn load(cfg: &Config, plan: &[GroundInputPlan], name: String, record: Result<Record>) -> Loaded {
+    let first_sample_ns = record.as_ref().ok().and_then(Record::start_ns);
     let event = (|| {
-        let blocks = blocks?;
+        let record = record?;
         // A ground channel the record lacks is borrowed (the mean of the
         // groups measured along its axis, as `predict` does) and said in the
         // event's notes: the event is judged, not skipped.
         let mut plan = plan.to_vec();
-        let event = align_event(cfg, &mut plan, &blocks)?;
+        let event = align_event(cfg, &mut plan, record)?;
         if event.deck.is_empty() {
             bail!("the record holds none of the config's deck sensors");
         }
