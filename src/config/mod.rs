@@ -6,6 +6,7 @@
 //! `[[model.constraints]]`) is kept apart from discretisation
 //! (`[model.discretization]`); see the guide's configuration reference for every key.
 
+mod built_model;
 mod events;
 mod frequency_domain;
 mod frf;
@@ -119,6 +120,9 @@ pub struct Config {
     /// which the results files record; none for a config made in memory.
     #[serde(skip)]
     pub source: Option<ConfigSource>,
+    /// The model `model` describes, once built ([`Config::build_model`]).
+    #[serde(skip)]
+    built_model: built_model::BuiltModel,
 }
 
 /// Where a config came from: its path and its text as read.
@@ -364,6 +368,25 @@ mod tests {
             Ok(_) => panic!("expected an error"),
             Err(e) => e.to_string(),
         }
+    }
+
+    #[test]
+    fn a_validated_config_builds_its_model_once_and_never_a_stale_one() {
+        let mut config = Config::from_toml(SINELLO).unwrap();
+        assert!(!config.built_model.is_kept());
+        config.validate().unwrap();
+        assert!(config.built_model.is_kept(), "validating builds the model the run uses");
+        let fresh = |c: &Config| format!("{:?}", c.build_model_anew().unwrap());
+        let copy = config.clone();
+        assert_eq!(format!("{:?}", copy.build_model().unwrap()), fresh(&config));
+        // Changed after loading (as monitor, demo and soak do): its own model.
+        config.model.material.as_mut().unwrap().e1 *= 1.1;
+        let changed = format!("{:?}", config.build_model().unwrap());
+        assert_eq!(changed, fresh(&config));
+        assert_ne!(changed, fresh(&copy));
+        // A change outside [model] does not touch the model.
+        config.sensors.pop();
+        assert_eq!(format!("{:?}", config.build_model().unwrap()), changed);
     }
 
     #[test]

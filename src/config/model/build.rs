@@ -64,7 +64,15 @@ impl Config {
         Ok(model)
     }
 
+    /// The model `[model]` describes: built once per model section, then
+    /// copied (validating a config builds the model its run uses). It reads
+    /// `[model]` alone, which is what it is kept by.
     pub fn build_model(&self) -> Result<BridgeModel, ConfigError> {
+        let section = serde_json::to_string(&self.model).ok();
+        self.built_model.get_or_build(section, || self.build_model_anew())
+    }
+
+    pub(in crate::config) fn build_model_anew(&self) -> Result<BridgeModel, ConfigError> {
         let patches = self.build_model_patches()?;
         let m = &self.model;
         let index = |name: &Option<String>, key: String| patch_index(&patches, name.as_deref(), &key);
