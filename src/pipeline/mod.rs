@@ -115,6 +115,11 @@ pub struct Pipeline {
 }
 
 impl Pipeline {
+    /// The FRF model of the config, built once ([`crate::config::frf_setup`]).
+    pub fn frf_setup(&self) -> Arc<FrfSetup> {
+        Arc::clone(&self.setup)
+    }
+
     pub fn new(config: &Config, schedule: ScheduleConfig, state: Option<AcceptedParameters>) -> Result<Self> {
         let setup = Arc::new(crate::config::frf_setup(config)?);
         let parameters = config.build_parameters()?;

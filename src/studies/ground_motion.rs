@@ -21,6 +21,7 @@ use splinewatch_core::model::BridgeModel;
 use splinewatch_core::response::frf::ModalState;
 use splinewatch_core::response::support_motion::{GroundedStructure, SupportMotion};
 use splinewatch_core::updating::{base_values, fields_at, model_at, Parameter};
+use std::sync::Arc;
 
 /// The model at one parameter point, ready to be driven by its grounds.
 pub struct GroundModel {
@@ -114,7 +115,7 @@ impl GroundModel {
 /// [`super::event_update::update_on_event`]).
 #[derive(Debug)]
 pub struct GroundParts {
-    pub setup: FrfSetup,
+    pub setup: Arc<FrfSetup>,
     /// The structure on its support groups, their constraint lifts found
     /// once.
     pub grounded: GroundedStructure,
@@ -126,10 +127,21 @@ pub struct GroundParts {
 
 impl GroundParts {
     pub fn new(config: &Config) -> Result<Self> {
+        Self::sharing(config, None)
+    }
+
+    /// As [`Self::new`], with `setup`, the FRF model already built from the
+    /// same config (the daemon's pipeline's, [`crate::config::frf_setup`]),
+    /// shared instead of built again.
+    pub fn sharing(config: &Config, setup: Option<Arc<FrfSetup>>) -> Result<Self> {
         // The model once, for the FRF model and the grounds.
         let (shell, groups, plan) = ground_setup(config)?;
+        let setup = match setup {
+            Some(setup) => setup,
+            None => Arc::new(frf_setup_of(config, &shell, &[])?),
+        };
         Ok(Self {
-            setup: frf_setup_of(config, &shell, &[])?,
+            setup,
             grounded: GroundedStructure::new(shell, groups)
                 .map_err(|e| anyhow::anyhow!("the model's supports: {e}"))?,
             plan,

@@ -44,7 +44,13 @@ impl EventWorker {
     }
 
     /// `None` without an `[events]` section.
-    pub(super) fn start(config: &Config, state: Option<&std::path::Path>) -> Result<Option<Self>> {
+    /// `frf_model`: the pipeline's, built from the same config, which the
+    /// chain's model shares.
+    pub(super) fn start(
+        config: &Config,
+        state: Option<&std::path::Path>,
+        frf_model: Arc<crate::config::FrfSetup>,
+    ) -> Result<Option<Self>> {
         let Some(events) = &config.events_section else {
             return Ok(None);
         };
@@ -52,8 +58,9 @@ impl EventWorker {
             bail!("config: [events] needs ground sensors ([[sensors]] with support = \"<group>\"): an event's input is the ground's motion");
         }
         let file = state.and_then(|s| config.events_file(s));
-        let chain = Chain::resume(file.as_deref())?;
+        let mut chain = Chain::resume(file.as_deref())?;
         chain.check(config)?;
+        chain.share_frf_model(frf_model);
         if let Some(f) = &file {
             tracing::info!(message = "events: triggered-logger mode", chain = %f.display(), events_judged = chain.history_len(), gap_seconds = events.gap_seconds);
         }

@@ -71,6 +71,7 @@ impl Daemon {
             tracing::info!(message = "warm start from the state file", window = s.window, time = %s.time);
         }
         let mut pipeline = Pipeline::new(config, config.schedule.clone(), initial)?;
+        let frf_model = pipeline.frf_setup();
         if !options.rerun.is_empty() {
             pipeline.draw_spectra();
         }
@@ -111,7 +112,7 @@ impl Daemon {
             logged_rejections: BTreeMap::new(),
             said_waiting: false,
             notifier: Notifier::for_config(config, history.clone()).context("starting the notify thread")?,
-            events: EventWorker::start(config, options.state.as_deref())?,
+            events: EventWorker::start(config, options.state.as_deref(), frf_model)?,
             metrics: config
                 .metrics
                 .as_ref()

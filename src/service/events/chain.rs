@@ -34,6 +34,10 @@ pub struct Chain {
     /// others (not saved).
     #[serde(skip)]
     pub(super) parts: Option<Arc<GroundParts>>,
+    /// The FRF model of the same config built elsewhere (the daemon's
+    /// pipeline's), which the parts share (not saved).
+    #[serde(skip)]
+    pub(super) frf_model: Option<Arc<crate::config::FrfSetup>>,
 }
 
 impl Chain {
@@ -94,11 +98,17 @@ impl Chain {
         }
     }
 
+    /// Shares `setup`, the FRF model the daemon's pipeline built from the
+    /// same config, with the parts assembled for the first event.
+    pub fn share_frf_model(&mut self, setup: Arc<crate::config::FrfSetup>) {
+        self.frf_model = Some(setup);
+    }
+
     pub fn parts(&mut self, cfg: &Config) -> Result<Arc<GroundParts>> {
         if let Some(parts) = &self.parts {
             return Ok(Arc::clone(parts));
         }
-        let parts = Arc::new(GroundParts::new(cfg).context("the config's model")?);
+        let parts = Arc::new(GroundParts::sharing(cfg, self.frf_model.clone()).context("the config's model")?);
         self.parts = Some(Arc::clone(&parts));
         Ok(parts)
     }
@@ -179,4 +189,25 @@ impl Chain {
 /// The feature judged for updated parameter `name`.
 pub(super) fn feature_of_parameter(name: &str) -> String {
     format!("log10_{name}")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_chain_shares_the_frf_model_it_is_given() {
+        let cfg = Config::from_toml(include_str!("../../../config/painter-street.toml")).unwrap();
+        let setup = Arc::new(crate::config::frf_setup(&cfg).unwrap());
+        let mut chain = Chain::default();
+        chain.share_frf_model(Arc::clone(&setup));
+        let parts = chain.parts(&cfg).unwrap();
+        assert!(Arc::ptr_eq(&parts.setup, &setup), "shared, not built again");
+        assert!(Arc::ptr_eq(&chain.parts(&cfg).unwrap(), &parts), "assembled once");
+        // Without one, the chain builds its own of the same config.
+        let own = Chain::default().parts(&cfg).unwrap();
+        assert!(!Arc::ptr_eq(&own.setup, &setup));
+        assert_eq!(own.setup.sensor_names, setup.sensor_names);
+        assert_eq!(own.setup.kappa, setup.kappa);
+    }
 }
