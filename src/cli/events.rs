@@ -35,7 +35,8 @@ pub struct EventsArgs {
     #[arg(long)]
     pub config: PathBuf,
     /// One event each: a station's .zip, a folder of its .V2 files, a logger's CSV/UFF, or a raw-input MCAP
-    /// recording (a triggered logger's: each burst, silences longer than `[events] gap_seconds` apart, one event).
+    /// recording (a triggered logger's: each burst, silences longer than `[events] gap_seconds` apart, one event; a
+    /// record longer than `[events] max_seconds`: one event per part of that length).
     #[arg(required = true, num_args = 1..)]
     pub input: Vec<PathBuf>,
     /// The record's first sample, RFC 3339, over the time its files give (one input only).
