@@ -83,7 +83,7 @@ for line in open(sys.argv[1]):
             shown[which][0] += 1
             shown[which][1] += n["pairs"] and abs(n["frequency_gap"]) <= 0.05
         if which and n and n["pairs"]:
-            damping[which].append((m["damping_ratio"], n["damping_ratio"]))
+            damping[which].append((m["damping_ratio"], n["damping_ratio"], n["frequency_gap"]))
         cells.append(f"{f:.2f}{'v' if vertical else ''} -> {n['mode']}: {n['frequency_hz']:.2f} {n['mac']:.2f} {100 * n['frequency_gap']:+.0f}%{' pairs' if n['pairs'] else ''}" if n else f"{f:.2f}: -")
     print(f"{d['start'][:10]:10s} {d['event'][:28]:28s} " + "; ".join(cells))
 for which, (seen, paired) in shown.items():
@@ -96,5 +96,32 @@ for which, pairs in damping.items():
         model = [100 * p[1] for p in pairs]
         print(f"{which} mode's damping where paired: identified {min(ident):.1f}-{max(ident):.1f} %, "
               f"the forecast's model {min(model):.1f}-{max(model):.1f} %")
+# Whether the model's damping grows with its frequency's miss: each paired
+# mode's gap against the forecast model's damping, and Spearman's rank
+# correlation of the two (ties share their mean rank).
+def ranks(x):
+    order = sorted(range(len(x)), key=lambda i: x[i])
+    r = [0.0] * len(x)
+    i = 0
+    while i < len(order):
+        j = i
+        while j + 1 < len(order) and x[order[j + 1]] == x[order[i]]:
+            j += 1
+        for k in range(i, j + 1):
+            r[order[k]] = (i + j) / 2 + 1
+        i = j + 1
+    return r
+def spearman(a, b):
+    ra, rb = ranks(a), ranks(b)
+    ma, mb = statistics.mean(ra), statistics.mean(rb)
+    cov = sum((x - ma) * (y - mb) for x, y in zip(ra, rb))
+    return cov / (sum((x - ma) ** 2 for x in ra) * sum((y - mb) ** 2 for y in rb)) ** 0.5
+for which, pairs in damping.items():
+    if len(pairs) >= 3:
+        pairs = sorted(pairs, key=lambda p: abs(p[2]))
+        cells = ", ".join(f"{100 * p[2]:+.1f} % {100 * p[1]:.1f} %" for p in pairs)
+        rho = spearman([abs(p[2]) for p in pairs], [p[1] for p in pairs])
+        print(f"{which} mode where paired, frequency gap and the model's damping: {cells}; "
+              f"Spearman's rank correlation of |gap| and damping {rho:.2f} ({len(pairs)} events)")
 PY
 echo "wall time of the events run: $(python3 -c "print(f'{$end - $start:.1f} s')")"
