@@ -9,7 +9,7 @@ use crate::io::console::errln;
 use crate::io::recording::{read_recording, RecordedBlock};
 use crate::io::wire::ChannelQuantity;
 use crate::pipeline::estimate::{aligned_span, AlignedSpan};
-use crate::studies::import::{to_grid, Grid, ImportOptions};
+use crate::studies::import::{to_grid, BlockLength, Grid, ImportOptions};
 use anyhow::{bail, Context, Result};
 use splinewatch_core::identification::resample::fourier_resample;
 use std::borrow::Cow;
@@ -27,7 +27,7 @@ impl Record {
     /// Whether the record holds config sensor `sensor`'s `quantity`.
     pub fn holds(&self, config: &Config, sensor: usize, quantity: ChannelQuantity) -> bool {
         match self {
-            Record::Grid(grid) => grid.channel(sensor, quantity).is_some(),
+            Record::Grid(grid) => grid.channel_index(sensor, quantity).is_some(),
             Record::Blocks(blocks) => {
                 let name = &config.sensors[sensor].name;
                 blocks
@@ -60,11 +60,7 @@ impl Record {
         let channels = wanted
             .iter()
             .map(|&(sensor, quantity)| {
-                let Some(at) = grid
-                    .channels
-                    .iter()
-                    .position(|c| c.sensor == sensor && c.quantity == quantity)
-                else {
+                let Some(at) = grid.channel_index(sensor, quantity) else {
                     bail!(
                         "no {} of {} in the record",
                         quantity.wire_name(),
@@ -160,7 +156,7 @@ pub fn read_records(config: &Config, paths: &[PathBuf], start_ns: Option<i128>) 
         // with the others where they overlap.
         let prefix = config.topic_prefix();
         for grid in &grids {
-            let cut = grid.blocks(config, IMPORT_BLOCK_SECONDS)?;
+            let cut = grid.blocks(config, BlockLength::seconds(JOINED_BLOCK_SECONDS)?);
             blocks.extend(cut.into_iter().map(|block| RecordedBlock::at_its_start(block, &prefix)));
         }
         Record::Blocks(blocks)
@@ -168,16 +164,16 @@ pub fn read_records(config: &Config, paths: &[PathBuf], start_ns: Option<i128>) 
     Ok(Records { record, notes })
 }
 
-/// The blocks' length when a file's grid joins other sources (as `import`
-/// writes them by default).
-const IMPORT_BLOCK_SECONDS: f64 = 10.0;
+/// The blocks' length when a file's grid joins other sources: `[events]
+/// max_seconds` cuts their bursts at these blocks' bounds.
+const JOINED_BLOCK_SECONDS: f64 = 10.0;
 
 /// A file's columns on the config's sensors (as `import` maps them).
 fn imported_grid(config: &Config, series: crate::io::import::ImportedSeries, start_ns: Option<i128>) -> Result<Grid> {
     let options = ImportOptions {
         fs: None,
         start_ns,
-        block_seconds: IMPORT_BLOCK_SECONDS,
+        block_seconds: JOINED_BLOCK_SECONDS,
         strict: false,
         units: None,
     };
@@ -347,8 +343,7 @@ mod tests {
         let cfg = config();
         let prefix = cfg.topic_prefix();
         let blocks: Vec<RecordedBlock> = grid()
-            .blocks(&cfg, 10.0)
-            .unwrap()
+            .blocks(&cfg, BlockLength::seconds(10.0).unwrap())
             .into_iter()
             .map(|b| RecordedBlock::at_its_start(b, &prefix))
             .collect();

@@ -69,11 +69,12 @@ impl Grid {
         self.start_ns + (k as f64 * 1e9 / self.fs).round() as i128
     }
 
-    /// Sensor `sensor`'s `quantity`, when the grid holds it.
-    pub fn channel(&self, sensor: usize, quantity: ChannelQuantity) -> Option<&GridChannel> {
+    /// Where sensor `sensor`'s `quantity` is among the channels, when the
+    /// grid holds it.
+    pub fn channel_index(&self, sensor: usize, quantity: ChannelQuantity) -> Option<usize> {
         self.channels
             .iter()
-            .find(|c| c.sensor == sensor && c.quantity == quantity)
+            .position(|c| c.sensor == sensor && c.quantity == quantity)
     }
 
     /// Consecutive pieces of at most `max_samples` each (the last may be
@@ -100,14 +101,11 @@ impl Grid {
             .collect()
     }
 
-    /// The grid as wire-format channel blocks of `block_seconds` in time
-    /// order (per block interval, the channels in the grid's order).
-    pub fn blocks(&self, config: &Config, block_seconds: f64) -> Result<Vec<ChannelBlock>> {
-        if !(block_seconds.is_finite() && block_seconds > 0.0) {
-            bail!("--block-seconds must be positive, got {block_seconds}");
-        }
+    /// The grid as wire-format channel blocks of `length` in time order
+    /// (per block interval, the channels in the grid's order).
+    pub fn blocks(&self, config: &Config, length: BlockLength) -> Vec<ChannelBlock> {
         let samples = self.samples();
-        let block_len = ((block_seconds * self.fs).round() as usize).max(1);
+        let block_len = ((length.0 * self.fs).round() as usize).max(1);
         let mut blocks = Vec::with_capacity(self.channels.len() * samples.div_ceil(block_len));
         for first in (0..samples).step_by(block_len) {
             let last = (first + block_len).min(samples);
@@ -122,19 +120,31 @@ impl Grid {
                 });
             }
         }
-        Ok(blocks)
+        blocks
+    }
+}
+
+/// How long each block of a recording is: a positive number of seconds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockLength(f64);
+
+impl BlockLength {
+    /// `seconds` (`--block-seconds`), refused unless positive and finite.
+    pub fn seconds(seconds: f64) -> Result<Self> {
+        if !(seconds.is_finite() && seconds > 0.0) {
+            bail!("--block-seconds must be positive, got {seconds}");
+        }
+        Ok(Self(seconds))
     }
 }
 
 /// The series as channel blocks in time order (per block interval: force
 /// first, then the sensors in config order).
 pub fn to_blocks(config: &Config, series: ImportedSeries, options: &ImportOptions) -> Result<Imported> {
-    if !(options.block_seconds.is_finite() && options.block_seconds > 0.0) {
-        bail!("--block-seconds must be positive, got {}", options.block_seconds);
-    }
+    let length = BlockLength::seconds(options.block_seconds)?;
     let (grid, skipped) = to_grid(config, series, options)?;
     Ok(Imported {
-        blocks: grid.blocks(config, options.block_seconds)?,
+        blocks: grid.blocks(config, length),
         skipped,
     })
 }

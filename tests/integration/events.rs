@@ -540,7 +540,7 @@ fn issue_45_the_daemon_cuts_a_triggered_loggers_bursts_into_events_as_the_comman
             panic!("a station's zip is read onto one grid");
         };
         // As the logger sends it: 10-s blocks.
-        let burst = grid.blocks(&cfg, 10.0).unwrap();
+        let burst = grid.blocks(&cfg, splinewatch::studies::import::BlockLength::seconds(10.0).unwrap());
         for b in &burst {
             writer.write_block(&cfg.topic_prefix(), b).unwrap();
         }
