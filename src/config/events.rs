@@ -48,6 +48,15 @@ pub struct EventsConfig {
     /// follows a force sensor an earthquake record has not).
     #[serde(default = "default_residues")]
     pub residues: Residues,
+    /// What the update of a chain's first event fits (the values of
+    /// `residues`; default: as `residues`). The first update starts from the
+    /// config's values, every later one from the update before it, so where
+    /// the first settles the chain stays: `"both"` anchors it on the modes
+    /// identified from its record, so that it does not settle in another
+    /// valley of the record's fit (a model whose vertical modes are 5 % off,
+    /// on the Painter Street records).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_residues: Option<Residues>,
     /// The event's amplitude, the operational variable of its verdict and
     /// of the `"trend"` forecast: `"pga_ground"` (default; the largest
     /// absolute ground acceleration of the record) or `"rms_deck"` (the RMS
@@ -123,6 +132,7 @@ impl Default for EventsConfig {
             response_function: ResponseFunction::default(),
             retired_inputs: None,
             residues: default_residues(),
+            first_residues: None,
             amplitude: EventAmplitude::default(),
             forecast: EventForecast::default(),
             realization_order: default_realization_order(),
@@ -151,6 +161,15 @@ fn default_false_alarm_rate() -> f64 {
 }
 
 impl EventsConfig {
+    /// What an event's update fits: `first_residues` for a chain's first
+    /// update (none before it), `residues` for the others.
+    pub fn residues_of(&self, first: bool) -> Residues {
+        match (first, self.first_residues) {
+            (true, Some(residues)) => residues,
+            _ => self.residues,
+        }
+    }
+
     /// `deck`: the deck sensors' names, which `outputs` must name.
     pub fn check(&self, deck: &[&str]) -> Result<(), ConfigError> {
         if self.retired_inputs.is_some() {
@@ -212,7 +231,7 @@ impl EventsConfig {
 
 #[cfg(test)]
 mod tests {
-    use crate::config::{Config, ResponseFunction};
+    use crate::config::{Config, Residues, ResponseFunction};
 
     /// `response_function` reads as written; the key it was before,
     /// `inputs`, is refused once, naming the new one.
@@ -233,5 +252,24 @@ mod tests {
             refused.contains("events.inputs") && refused.contains("events.response_function"),
             "{refused}"
         );
+    }
+
+    /// `first_residues` applies to a chain's first update only and, unset,
+    /// is `residues`; a value it does not know is refused naming the key.
+    #[test]
+    fn first_residues_applies_to_the_first_update_only() {
+        let base = include_str!("../../config/painter-street.toml");
+        let with = |line: &str| {
+            let header = base.find("\n[events]").expect("the bundled config has [events]") + 1;
+            let after = header + base[header..].find('\n').unwrap() + 1;
+            Config::from_toml(&format!("{}{line}\n{}", &base[..after], &base[after..]))
+        };
+        let unset = with("").unwrap();
+        assert_eq!(unset.events().residues_of(true), unset.events().residues);
+        let set = with("first_residues = \"both\"").unwrap();
+        assert_eq!(set.events().residues_of(true), Residues::Both);
+        assert_eq!(set.events().residues_of(false), Residues::Frf);
+        let refused = with("first_residues = \"shapes\"").unwrap_err().to_string();
+        assert!(refused.contains("first_residues"), "{refused}");
     }
 }

@@ -20,7 +20,8 @@
 //! input costs one. The lines are `[updating] band` (default: `[frf]
 //! band`), decimated and excluded as `[updating]` says.
 //!
-//! `[events] residues` says what is fitted: `"frf"` (default) the above;
+//! `[events] residues` (`first_residues` for a chain's first event) says
+//! what is fitted: `"frf"` (default) the above;
 //! `"modes"` the modes identified from the record (SRIM), in their std, as
 //! `update --modes` does; `"both"` the above and the modes together, each in
 //! its own std ([`splinewatch_core::updating::joint`]): H1 transmissibilities
@@ -103,12 +104,13 @@ struct Measured {
 
 /// Updates the config's parameters on one record, started from `start`
 /// (named values of the previous event's update; the config's values for
-/// the others), fitting what `[events] residues` says.
+/// the others), fitting `residues` (`[events] residues`, or
+/// `first_residues` for a chain's first event).
 pub fn update_on_event(
     config: &Config,
     parts: &GroundParts,
     signals: &EventSignals<'_>,
-    start: &[NamedValue],
+    (start, residues): (&[NamedValue], Residues),
     progress: &mut dyn FnMut(&IterationRecord),
 ) -> Result<EventUpdate> {
     if signals.deck.is_empty() || signals.inputs.is_empty() {
@@ -127,7 +129,6 @@ pub fn update_on_event(
     let base = base_values(parameters, &setup.kappa, &theta0, &setup.damping);
     let start = values_by_name(parameters, &base, start, "start parameter")?;
     let pairing = (config.updating.min_mac, config.updating.max_frequency_gap);
-    let residues = config.events().residues;
     if residues == Residues::Modes {
         return fit_modes(parts, signals, settings, &start, pairing, progress);
     }

@@ -789,8 +789,9 @@ fn issue_45_the_verdicts_amplitude_can_be_the_decks_rms_and_a_state_keeps_to_one
 
 /// The whole bridge (`config/painter-street-bridge.toml`: columns, cap,
 /// integral abutments) on the two committed records: both events
-/// forecast and updated, the second forecast by the first's update, and
-/// every line as on record.
+/// forecast and updated, the second forecast by the first's update, the
+/// first fitting its record and its modes (`first_residues = "both"`), the
+/// second its record alone (`residues`), and every line as on record.
 #[test]
 fn the_whole_bridges_events_on_the_committed_records_are_those_on_record() {
     let o = splinewatch(&[
@@ -812,6 +813,8 @@ fn the_whole_bridges_events_on_the_committed_records_are_those_on_record() {
     // deck channels.
     let (first, second) = (&lines[0], &lines[1]);
     assert_eq!(second["forecast"]["channels"].as_array().unwrap().len(), 8);
+    assert_eq!(first["update"]["residues"], "both");
+    assert_eq!(second["update"]["residues"], "frf");
     for (updated, used) in first["parameters"]
         .as_array()
         .unwrap()

@@ -90,7 +90,7 @@ pub struct UpdateLine {
     /// The Bates–Watts relative offset at the solution.
     pub relative_offset: Option<f64>,
     pub combined_inputs: Vec<String>,
-    /// What the update fitted (`[events] residues`).
+    /// What the update fitted (`[events] residues`, or `first_residues` on a chain's first event).
     pub residues: &'static str,
     /// The identified modes it fitted, with the model's they paired with.
     pub paired_modes: Vec<PairedMode>,

@@ -177,7 +177,8 @@ fn run_chain(
     // otherwise, and without a model, the identification is taken after
     // the forecast and the update (or the realization), so that one running
     // on another thread overlaps them.
-    let modes_first = cfg.events().residues != Residues::Frf && cfg.has_model();
+    let residues = cfg.events().residues_of(chain.parameters.is_empty());
+    let modes_first = residues != Residues::Frf && cfg.has_model();
     if modes_first {
         add_identification(line, take_identification(identified)?);
     }
@@ -195,7 +196,7 @@ fn run_chain(
             });
             Ok((
                 forecast_state,
-                update(cfg, (event, plan), chain, &line.event, &line.modes)?,
+                update(cfg, (event, plan), chain, (&line.event, residues), &line.modes)?,
             ))
         })();
         if !modes_first {
@@ -312,13 +313,14 @@ fn fitted(cfg: &Config, name: &String) -> bool {
 }
 
 /// The update on the event's transmissibilities (and its identified
-/// `modes`, when `[events] residues` fits them), warm-started from the
-/// previous event's values; the chain keeps the result.
+/// `modes`, when `residues` fits them: `[events] residues`, or
+/// `first_residues` for the chain's first), warm-started from the previous
+/// event's values; the chain keeps the result.
 fn update(
     cfg: &Config,
     (event, plan): (&Event, &[GroundInputPlan]),
     chain: &mut Chain,
-    name: &str,
+    (name, residues): (&str, Residues),
     modes: &[ModeEntry],
 ) -> Result<Updated> {
     let channel = |i: usize| event.channels[i].as_deref().expect("aligned");
@@ -342,7 +344,7 @@ fn update(
         fs: event.fs,
         modes: &modes,
     };
-    let updated = update_on_event(cfg, &parts, &record, chain.named(), &mut |it| {
+    let updated = update_on_event(cfg, &parts, &record, (chain.named(), residues), &mut |it| {
         tracing::debug!(
             event = %name,
             iteration = it.iteration,
@@ -355,7 +357,7 @@ fn update(
         )
     })?;
     let mut notes = Vec::new();
-    if cfg.events().residues == Residues::Both && !modes.is_empty() && updated.pairs.is_empty() {
+    if residues == Residues::Both && !modes.is_empty() && updated.pairs.is_empty() {
         notes.push(format!(
             "none of the {} identified modes paired with a model mode (MAC ≥ {} within {} % in frequency): \
              the update fitted the record alone",
@@ -384,7 +386,7 @@ fn update(
             evaluations: updated.evaluations,
             relative_offset: updated.result.relative_offset,
             combined_inputs: updated.combined,
-            residues: cfg.events().residues.as_str(),
+            residues: residues.as_str(),
             paired_modes: updated.pairs,
         },
         parameters: updated.result.parameters,
