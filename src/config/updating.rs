@@ -39,8 +39,9 @@ pub struct UpdatingConfig {
     /// root mean square over the parameters (Bates & Watts' relative offset).
     #[serde(default = "default_offset_tolerance")]
     pub offset_tolerance: f64,
-    /// Threads for the FRF evaluation (results do not depend on it); default:
-    /// the available cores, at most 4.
+    /// Threads over the frequency lines of each evaluation (FRFs,
+    /// transmissibilities, a record's spectra, their sensitivities; results
+    /// do not depend on it); default: the available cores, at most 4.
     pub threads: Option<usize>,
     #[serde(default = "default_method")]
     #[schemars(with = "super::schema::MethodDef")]

@@ -33,9 +33,10 @@ use super::{
     UpdateError, UpdateResult, UpdateSettings,
 };
 use crate::model::damping::DampingCurve;
-use crate::response::frf::{FrfModel, ModalState};
+use crate::response::frf::{FrfModel, LineRuns, ModalState};
 use crate::response::support_motion::{GroundInput, GroundedStructure, SensitivitySelection, SupportMotion};
 use faer::c64;
+use std::ops::Range;
 
 /// How the model's transmissibilities make the measured values.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,6 +87,15 @@ pub struct Extra {
     pub(super) state: ModalState,
     pub(super) motion: SupportMotion,
     pub(super) h: Vec<c64>,
+}
+
+/// A parameter point's model, shared by the threads of an evaluation.
+struct LinePoint<'p> {
+    state: &'p ModalState,
+    motion: &'p SupportMotion,
+    loads: &'p FrfModel,
+    load_state: &'p ModalState,
+    damping: &'p DampingCurve,
 }
 
 impl<'a> TransmissibilityProblem<'a> {
@@ -215,11 +225,12 @@ impl<'a> TransmissibilityProblem<'a> {
         relative_residuals(self.measured, &self.lines, h)
     }
 
-    /// The model pairs' values `per_pair` (`[pair * n_lines + line]`) made
-    /// into the measured FRFs' layout: summed, or weighted by the inputs'
-    /// spectra ([`Combination`]).
-    fn combine(&self, per_pair: &[c64]) -> Vec<c64> {
-        let nl = self.lines.len();
+    /// The model pairs' values `per_pair` (`[pair * n + k]` on the `n`
+    /// selected lines `run`) made into the measured FRFs' layout
+    /// (`[frf * n + k]`): summed, or weighted by the inputs' spectra
+    /// ([`Combination`]).
+    fn combine(&self, per_pair: &[c64], run: Range<usize>) -> Vec<c64> {
+        let nl = run.len();
         let mut out = vec![c64::new(0.0, 0.0); nl * self.measured.frfs().len()];
         for &(b, pair, c) in &self.terms.terms {
             let (out, values) = (&mut out[b * nl..][..nl], &per_pair[pair * nl..][..nl]);
@@ -231,7 +242,7 @@ impl<'a> TransmissibilityProblem<'a> {
                 Some(weights) => out
                     .iter_mut()
                     .zip(values)
-                    .zip(&weights[c])
+                    .zip(&weights[c][run.clone()])
                     .for_each(|((o, v), w)| *o += v * w),
             }
         }
@@ -249,7 +260,9 @@ impl<'a> TransmissibilityProblem<'a> {
         self.evaluate_motion(p, state, motion, jacobian)
     }
 
-    /// The residual (and Jacobian) at `p` from its modal state and motion.
+    /// The residual (and Jacobian) at `p` from its modal state and motion:
+    /// the lines in runs on up to `threads` threads ([`LineRuns`]; the same
+    /// bits whatever their number).
     pub(super) fn evaluate_motion(
         &self,
         p: &[f64],
@@ -260,47 +273,30 @@ impl<'a> TransmissibilityProblem<'a> {
         let (_, damping) = model_at(&self.parameters, &self.kappa, &self.damping, p)?;
         let loads = self.model.with_extra_rows(motion.load_rows());
         let load_state = loads.restate(&state, &damping);
-        let per_pair = motion.transmissibility_with_residual(
-            self.model,
-            &loads,
-            &load_state,
-            &self.model_pairs,
-            &self.frequencies,
-        );
-        let h = self.combine(&per_pair);
-        let derivatives = jacobian.then(|| {
-            let springs: Vec<usize> = self
-                .parameters
+        let springs: Option<Vec<usize>> = jacobian.then(|| {
+            self.parameters
                 .iter()
                 .flat_map(|p| p.kind.springs())
                 .map(|(f, c)| self.model.flat_spring_index(f, c))
-                .collect();
-            let s = motion.sensitivities_for(
-                self.model,
-                (&loads, &load_state),
-                self.grounded.groups(),
-                &state,
-                &damping,
-                &self.model_pairs,
-                &self.frequencies,
-                SensitivitySelection {
-                    springs: Some(&springs),
-                    fields: super::updates_fields(&self.parameters),
-                },
-            );
-            self.parameters
-                .iter()
-                .map(|par| {
-                    self.combine(&parameter_column(
-                        self.model,
-                        par.kind,
-                        &s.dkappa,
-                        &s.dtheta,
-                        (&self.damping, &s.dgamma),
-                    ))
-                })
-                .collect::<Vec<_>>()
+                .collect()
         });
+        let runs = LineRuns::new(self.frequencies.len(), self.settings.threads);
+        let at = LinePoint {
+            state: &state,
+            motion: &motion,
+            loads: &loads,
+            load_state: &load_state,
+            damping: &damping,
+        };
+        let parts = runs.map(|run| self.on_lines(run, &at, springs.as_deref()));
+        let mut values = Vec::with_capacity(parts.len());
+        let mut columns = vec![Vec::with_capacity(parts.len()); if jacobian { self.parameters.len() } else { 0 }];
+        for (h, part_columns) in parts {
+            values.push(h);
+            columns.iter_mut().zip(part_columns).for_each(|(c, v)| c.push(v));
+        }
+        let h = runs.merge(values);
+        let derivatives: Option<Vec<Vec<c64>>> = jacobian.then(|| columns.into_iter().map(|c| runs.merge(c)).collect());
         let columns: Option<Vec<&[c64]>> = derivatives.as_ref().map(|d| d.iter().map(Vec::as_slice).collect());
         let (residual, jacobian) = weighted_residues(
             self.measured,
@@ -315,6 +311,48 @@ impl<'a> TransmissibilityProblem<'a> {
             jacobian,
             extra: Extra { state, motion, h },
         })
+    }
+
+    /// The model's values on the selected lines `run` (`[frf * n + k]`)
+    /// and, given the parameters' `springs` (flat indices), every
+    /// parameter's column of them.
+    fn on_lines(&self, run: Range<usize>, at: &LinePoint<'_>, springs: Option<&[usize]>) -> (Vec<c64>, Vec<Vec<c64>>) {
+        let frequencies = &self.frequencies[run.clone()];
+        let per_pair = at.motion.transmissibility_with_residual(
+            self.model,
+            at.loads,
+            at.load_state,
+            &self.model_pairs,
+            frequencies,
+        );
+        let h = self.combine(&per_pair, run.clone());
+        let Some(springs) = springs else {
+            return (h, Vec::new());
+        };
+        let s = at.motion.sensitivities_for(
+            self.model,
+            (at.loads, at.load_state),
+            self.grounded.groups(),
+            at.state,
+            at.damping,
+            &self.model_pairs,
+            frequencies,
+            SensitivitySelection {
+                springs: Some(springs),
+                fields: super::updates_fields(&self.parameters),
+            },
+        );
+        let columns = self
+            .parameters
+            .iter()
+            .map(|par| {
+                self.combine(
+                    &parameter_column(self.model, par.kind, &s.dkappa, &s.dtheta, (&self.damping, &s.dgamma)),
+                    run.clone(),
+                )
+            })
+            .collect();
+        (h, columns)
     }
 
     /// Runs the updating from `start` (warm start: the previous event's

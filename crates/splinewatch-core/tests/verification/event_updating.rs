@@ -266,6 +266,41 @@ fn the_record_spectra_of_two_grounds_give_the_springs() {
     assert!((0.008..0.012).contains(&r), "relative residual {r}");
 }
 
+/// The lines of an evaluation run on several threads in whole blocks
+/// (`LineRuns`): the update on the record spectra above with one thread and
+/// with three (100 lines, four blocks) stops at the same values, the same
+/// standard deviations and the same residual, bit for bit.
+#[test]
+fn the_update_on_several_threads_is_the_sequential_one_bit_for_bit() {
+    let d = deck();
+    let (set, spectra) = record_spectra(&d, &true_kappa(), 0.01, 46);
+    let start_kappa = scaled_kappa(1.3);
+    let bits = |threads: usize| -> Vec<u64> {
+        let problem = TransmissibilityProblem::new(
+            (&d.frf, &d.grounded),
+            INPUTS.to_vec(),
+            Combination::Spectra(spectra.clone()),
+            start_kappa.clone(),
+            damping(),
+            spring_parameters(),
+            &set,
+            UpdateSettings {
+                threads,
+                ..UpdateSettings::default()
+            },
+        )
+        .unwrap();
+        let result = problem.solve(&start_kappa.concat(), &mut |_| {}).unwrap().result;
+        result
+            .parameters
+            .iter()
+            .flat_map(|p| [p.value.to_bits(), p.std.unwrap_or(f64::NAN).to_bits()])
+            .chain([result.relative_residual.to_bits(), result.iterations.len() as u64])
+            .collect()
+    };
+    assert_eq!(bits(1), bits(3));
+}
+
 /// A tied parameter (`SpringRun`: the same coefficient of consecutive spring
 /// fields set together) is one unknown whose sensitivity is the sum of its
 /// springs': the second coefficient of both strips tied at 1.0e9 N/m³, the

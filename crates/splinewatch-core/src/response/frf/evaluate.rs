@@ -1,7 +1,7 @@
 //! Modal superposition of FRFs and their sensitivities (eq. 31–33), in
 //! blocks of [`FREQUENCY_BLOCK`] lines on one or more threads.
 
-use super::{FrfEvaluation, FrfModel, FrfRequest, ModalState, FREQUENCY_BLOCK};
+use super::{FrfEvaluation, FrfModel, FrfRequest, LineRuns, ModalState, FREQUENCY_BLOCK};
 use crate::model::springs::LowRankBlock;
 use faer::linalg::matmul::matmul;
 use faer::{c64, Accum, Mat, Par};
@@ -99,58 +99,16 @@ impl FrfModel {
         wanted: (Wanted<'_>, &[usize]),
         threads: usize,
     ) -> FrfEvaluation {
-        let nf = request.frequencies_hz.len();
-        let blocks = nf.div_ceil(FREQUENCY_BLOCK);
-        let threads = threads.clamp(1, blocks.max(1));
+        let runs = LineRuns::new(request.frequencies_hz.len(), threads);
         let prepared = self.prepare(state, request, wanted);
-        if threads == 1 {
-            return self.evaluate_lines(&prepared, request);
-        }
-        let per_thread = blocks.div_ceil(threads) * FREQUENCY_BLOCK;
-        let ranges: Vec<(usize, usize)> = (0..nf)
-            .step_by(per_thread)
-            .map(|a| (a, (a + per_thread).min(nf)))
-            .collect();
-        let parts: Vec<FrfEvaluation> = std::thread::scope(|scope| {
-            let handles: Vec<_> = ranges
-                .iter()
-                .map(|&(a, b)| {
-                    let part = FrfRequest {
-                        frequencies_hz: &request.frequencies_hz[a..b],
-                        ..request
-                    };
-                    let prepared = &prepared;
-                    scope.spawn(move || self.evaluate_lines(prepared, part))
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| h.join().unwrap_or_else(|e| std::panic::resume_unwind(e)))
-                .collect()
+        let parts = runs.map(|run| {
+            let part = FrfRequest {
+                frequencies_hz: &request.frequencies_hz[run],
+                ..request
+            };
+            self.evaluate_lines(&prepared, part)
         });
-        // Reassemble the pair-major layouts `[pair * n_f + line]`.
-        let np = request.pairs.len();
-        let merge = |column: &dyn Fn(&FrfEvaluation) -> &Vec<c64>| -> Vec<c64> {
-            let mut all = vec![c64::new(0.0, 0.0); np * nf];
-            for ((a, b), part) in ranges.iter().zip(&parts) {
-                let n = b - a;
-                for p in 0..np {
-                    all[p * nf + a..p * nf + b].copy_from_slice(&column(part)[p * n..(p + 1) * n]);
-                }
-            }
-            all
-        };
-        let first = &parts[0];
-        FrfEvaluation {
-            h: merge(&|e| &e.h),
-            dh_dkappa: (0..first.dh_dkappa.len())
-                .map(|j| merge(&|e| &e.dh_dkappa[j]))
-                .collect(),
-            dh_dtheta: Vec::new(),
-            dh_dgamma: (0..first.dh_dgamma.len())
-                .map(|z| merge(&|e| &e.dh_dgamma[z]))
-                .collect(),
-        }
+        merge_evaluations(&runs, parts)
     }
 
     /// The frequency-independent factors of an evaluation, computed once and
@@ -652,6 +610,35 @@ impl Split {
                 Par::Seq,
             );
         }
+    }
+}
+
+/// The runs' evaluations as one, in the pair-major layouts
+/// `[pair * n_f + line]`.
+fn merge_evaluations(runs: &LineRuns, mut parts: Vec<FrfEvaluation>) -> FrfEvaluation {
+    if parts.len() == 1 {
+        return parts.pop().expect("one part");
+    }
+    let mut h = Vec::with_capacity(parts.len());
+    let mut dh_dkappa = vec![Vec::with_capacity(parts.len()); parts[0].dh_dkappa.len()];
+    let mut dh_dtheta = vec![Vec::with_capacity(parts.len()); parts[0].dh_dtheta.len()];
+    let mut dh_dgamma = vec![Vec::with_capacity(parts.len()); parts[0].dh_dgamma.len()];
+    for part in parts {
+        h.push(part.h);
+        for (all, v) in [
+            (&mut dh_dkappa, part.dh_dkappa),
+            (&mut dh_dtheta, part.dh_dtheta),
+            (&mut dh_dgamma, part.dh_dgamma),
+        ] {
+            all.iter_mut().zip(v).for_each(|(a, v)| a.push(v));
+        }
+    }
+    let merged = |all: Vec<Vec<Vec<c64>>>| all.into_iter().map(|p| runs.merge(p)).collect();
+    FrfEvaluation {
+        h: runs.merge(h),
+        dh_dkappa: merged(dh_dkappa),
+        dh_dtheta: merged(dh_dtheta),
+        dh_dgamma: merged(dh_dgamma),
     }
 }
 

@@ -38,12 +38,14 @@ use thiserror::Error;
 
 mod direct;
 mod evaluate;
+mod line_runs;
 mod modal_state;
 mod sensors;
 mod support_loss;
 pub(crate) use support_loss::StiffnessChange;
 mod truncated;
 
+pub use line_runs::LineRuns;
 pub use modal_state::ModalState;
 pub use sensors::{sensor_rows, sensor_rows_of, BeamSensor, Sensor, SensorPoint};
 
